@@ -1,0 +1,237 @@
+//! The "uber" BSDF (after G3D's SuperBSDF used by the ISPM paper): Lambertian + glossy GGX
+//! specular with optional Schlick Fresnel (a perfect mirror at roughness 0) + smooth glass.
+//!
+//! Lobes and their energy, for a viewing direction with cosine `c` and `F = F_s(c)`:
+//! - specular: reflectance `F` (Schlick with `F0 = specular`, or constant `specular` when
+//!   `fresnel` is off); a delta mirror at roughness 0, GGX with height-correlated Smith
+//!   masking otherwise;
+//! - diffuse: `ρL/π · (1 - F_s(ci))(1 - F_s(co)) / (1 - F_avg)`, which is reciprocal and
+//!   reflects exactly `(1 - F)·ρL` ([`fresnel::schlick_average`] gives `F_avg` in closed form);
+//! - glass: `(1 - F)·T`, split between delta reflection and refraction by the dielectric
+//!   Fresnel term of index `ior`.
+//!
+//! With `diffuse + transmission <= 1` the albedo is at most 1 for every direction (tested).
+//! Directions are local to the shading frame (+z = normal), both pointing away from the
+//! surface: `wo` towards the viewer (or the previous photon vertex), `wi` towards the light.
+//! The same formulas are implemented in WGSL for the GPU passes.
+
+pub mod fresnel;
+pub mod microfacet;
+
+use crate::sampling::{cosine_hemisphere, Rng};
+use glam::Vec3;
+use std::f32::consts::FRAC_1_PI;
+
+/// Roughness below which the specular lobe is treated as a perfect mirror.
+pub const MIRROR_ROUGHNESS: f32 = 1e-3;
+
+/// Parameters of the uber BSDF. All colours are linear RGB reflectances in [0, 1].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Material {
+    /// Lambertian albedo ρL.
+    pub diffuse: Vec3,
+    /// Specular reflectance at normal incidence ρS (F0).
+    pub specular: Vec3,
+    /// Perceptual roughness in [0, 1]; GGX α = roughness². 0 is a perfect mirror.
+    pub roughness: f32,
+    /// Whether the specular reflectance rises towards grazing angles (Schlick).
+    pub fresnel: bool,
+    /// Transmittance T of the smooth glass lobe.
+    pub transmission: Vec3,
+    /// Index of refraction of the glass lobe (inside over outside).
+    pub ior: f32,
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Material {
+            diffuse: Vec3::splat(0.8),
+            specular: Vec3::ZERO,
+            roughness: 0.0,
+            fresnel: false,
+            transmission: Vec3::ZERO,
+            ior: 1.5,
+        }
+    }
+}
+
+/// Which lobe produced a sample.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Lobe {
+    Diffuse,
+    Glossy,
+    Mirror,
+    GlassReflect,
+    GlassRefract,
+}
+
+impl Lobe {
+    /// Delta lobes can't be evaluated or reached by next-event estimation.
+    pub fn is_delta(self) -> bool {
+        matches!(self, Lobe::Mirror | Lobe::GlassReflect | Lobe::GlassRefract)
+    }
+}
+
+/// A sampled scattering direction.
+#[derive(Clone, Copy, Debug)]
+pub struct BsdfSample {
+    /// The new direction, local frame.
+    pub wi: Vec3,
+    /// `f·|cos θi| / pdf`, or the delta lobe's weight.
+    pub weight: Vec3,
+    /// Density of `wi` over solid angle for non-delta lobes (all non-delta lobes combined);
+    /// the discrete probability of the lobe for delta ones.
+    pub pdf: f32,
+    pub lobe: Lobe,
+}
+
+fn avg(v: Vec3) -> f32 {
+    (v.x + v.y + v.z) / 3.0
+}
+
+impl Material {
+    pub fn alpha(&self) -> f32 {
+        self.roughness * self.roughness
+    }
+    pub fn is_mirror(&self) -> bool {
+        self.roughness < MIRROR_ROUGHNESS
+    }
+    pub fn has_specular(&self) -> bool {
+        self.specular.max_element() > 0.0
+    }
+    pub fn has_transmission(&self) -> bool {
+        self.transmission.max_element() > 0.0
+    }
+    /// True when every lobe is a delta lobe (nothing for next-event estimation to evaluate).
+    pub fn is_purely_specular(&self) -> bool {
+        self.diffuse.max_element() <= 0.0 && (!self.has_specular() || self.is_mirror())
+    }
+
+    /// Specular Fresnel term F_s(cos).
+    pub fn fresnel_spec(&self, cos: f32) -> Vec3 {
+        if self.fresnel {
+            fresnel::schlick(self.specular, cos)
+        } else {
+            self.specular
+        }
+    }
+
+    fn fresnel_avg(&self) -> Vec3 {
+        if self.fresnel {
+            fresnel::schlick_average(self.specular)
+        } else {
+            self.specular
+        }
+    }
+
+    /// Probabilities of choosing (specular, diffuse, glass) given the viewing cosine.
+    fn lobe_probabilities(&self, cos_o: f32) -> [f32; 3] {
+        let f = self.fresnel_spec(cos_o);
+        let ws = avg(f);
+        let wd = avg((Vec3::ONE - f) * self.diffuse);
+        let wg = avg((Vec3::ONE - f) * self.transmission);
+        let total = ws + wd + wg;
+        if total <= 0.0 {
+            return [0.0; 3];
+        }
+        [ws / total, wd / total, wg / total]
+    }
+
+    /// The non-delta part of the BSDF, f(wo, wi). Two-sided: evaluated in the hemisphere of `wo`.
+    pub fn eval(&self, wo: Vec3, wi: Vec3) -> Vec3 {
+        if wo.z * wi.z <= 0.0 {
+            return Vec3::ZERO;
+        }
+        let (wo, wi) = if wo.z < 0.0 { (-wo, -wi) } else { (wo, wi) };
+        let mut f = Vec3::ZERO;
+        let one_minus_avg = Vec3::ONE - self.fresnel_avg();
+        if self.diffuse.max_element() > 0.0 {
+            let num = (Vec3::ONE - self.fresnel_spec(wo.z)) * (Vec3::ONE - self.fresnel_spec(wi.z));
+            let coupling = Vec3::select(one_minus_avg.cmpgt(Vec3::splat(1e-6)), num / one_minus_avg, Vec3::ZERO);
+            f += self.diffuse * FRAC_1_PI * coupling;
+        }
+        if self.has_specular() && !self.is_mirror() {
+            let h = (wo + wi).normalize();
+            let alpha = self.alpha();
+            let dg = microfacet::d(h, alpha) * microfacet::g2(wo, wi, alpha) / (4.0 * wo.z * wi.z);
+            f += self.fresnel_spec(wi.dot(h)) * dg;
+        }
+        f
+    }
+
+    /// Density of [`Material::sample`] producing the non-delta direction `wi`.
+    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        if wo.z * wi.z <= 0.0 {
+            return 0.0;
+        }
+        let (wo, wi) = if wo.z < 0.0 { (-wo, -wi) } else { (wo, wi) };
+        let [ps, pd, _] = self.lobe_probabilities(wo.z);
+        let mut pdf = pd * wi.z * FRAC_1_PI;
+        if !self.is_mirror() && ps > 0.0 {
+            let h = (wo + wi).normalize();
+            pdf += ps * microfacet::pdf_reflected(wo, h, self.alpha());
+        }
+        pdf
+    }
+
+    /// Importance-samples a direction. `None` when the sample is absorbed (no lobe has any
+    /// energy, or a GGX sample fell below the horizon).
+    pub fn sample(&self, wo: Vec3, rng: &mut Rng) -> Option<BsdfSample> {
+        let flip = wo.z < 0.0;
+        let sign = if flip { -1.0 } else { 1.0 };
+        let wo_up = wo * sign;
+        let [ps, pd, pg] = self.lobe_probabilities(wo_up.z);
+        let u = rng.next_f32();
+        let u2 = rng.next_2d();
+        if u < ps + pd {
+            if u < ps && self.is_mirror() {
+                let wi = Vec3::new(-wo.x, -wo.y, wo.z);
+                let weight = self.fresnel_spec(wo_up.z) / ps;
+                return Some(BsdfSample { wi, weight, pdf: ps, lobe: Lobe::Mirror });
+            }
+            let (wi_up, lobe) = if u < ps {
+                let h = microfacet::sample_h(u2, self.alpha());
+                let wi = 2.0 * wo_up.dot(h) * h - wo_up;
+                (wi, Lobe::Glossy)
+            } else {
+                (cosine_hemisphere(u2), Lobe::Diffuse)
+            };
+            if wi_up.z <= 0.0 {
+                return None;
+            }
+            let wi = wi_up * sign;
+            let pdf = self.pdf(wo, wi);
+            if pdf <= 0.0 {
+                return None;
+            }
+            let weight = self.eval(wo, wi) * wi_up.z / pdf;
+            return Some(BsdfSample { wi, weight, pdf, lobe });
+        }
+        if pg <= 0.0 {
+            return None;
+        }
+        // Smooth glass: the geometric side decides whether we enter or leave.
+        let tint = self.transmission * (Vec3::ONE - self.fresnel_spec(wo_up.z)) / pg;
+        let eta = if flip { 1.0 / self.ior } else { self.ior };
+        let (fr, cos_t) = fresnel::dielectric(wo_up.z, eta);
+        if u2.x < fr {
+            let wi = Vec3::new(-wo.x, -wo.y, wo.z);
+            Some(BsdfSample { wi, weight: tint, pdf: pg * fr, lobe: Lobe::GlassReflect })
+        } else {
+            // Refract: wi = -wo/eta + (cos_i/eta - cos_t) n, on the other side.
+            let wt_up = -wo_up / eta + (wo_up.z / eta - cos_t) * Vec3::Z;
+            let wi = (wt_up * sign).normalize();
+            Some(BsdfSample { wi, weight: tint, pdf: pg * (1.0 - fr), lobe: Lobe::GlassRefract })
+        }
+    }
+
+    /// The scatter probability ρs = ∫ f cos dωi for viewing direction `wo` (exact for the
+    /// diffuse, mirror and glass lobes; the GGX lobe's is bounded by its Fresnel term).
+    pub fn scatter_probability(&self, wo: Vec3) -> Vec3 {
+        let f = self.fresnel_spec(wo.z.abs());
+        f + (Vec3::ONE - f) * (self.diffuse + self.transmission)
+    }
+}
+
+#[cfg(test)]
+mod tests;

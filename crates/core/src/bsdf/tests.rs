@@ -1,0 +1,245 @@
+//! Energy conservation, reciprocity and chi-square tests of the uber BSDF.
+
+use super::*;
+use crate::sampling::{uniform_sphere, Rng};
+use std::f64::consts::PI;
+
+fn dir(cos_theta: f32, phi: f32) -> Vec3 {
+    let s = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
+    Vec3::new(s * phi.cos(), s * phi.sin(), cos_theta)
+}
+
+/// Mean sample weight over `n` samples: an unbiased estimate of the albedo, with its standard error.
+fn albedo_by_sampling(m: &Material, wo: Vec3, n: usize, seed: u64) -> (Vec3, Vec3) {
+    let mut rng = Rng::new(seed, 1, 0);
+    let mut sum = glam::DVec3::ZERO;
+    let mut sum2 = glam::DVec3::ZERO;
+    for _ in 0..n {
+        if let Some(s) = m.sample(wo, &mut rng) {
+            let w = s.weight.as_dvec3();
+            sum += w;
+            sum2 += w * w;
+        }
+    }
+    let mean = sum / n as f64;
+    let var = (sum2 / n as f64 - mean * mean).max(glam::DVec3::ZERO);
+    (mean.as_vec3(), (var / n as f64).sqrt().as_vec3())
+}
+
+fn material_grid() -> Vec<Material> {
+    let mut out = Vec::new();
+    for &d in &[0.0f32, 0.5, 1.0] {
+        for &s in &[0.0f32, 0.04, 0.5, 1.0] {
+            for &r in &[0.0f32, 0.2, 0.6, 1.0] {
+                for &fresnel in &[false, true] {
+                    for &t in &[0.0f32, 1.0 - d] {
+                        out.push(Material {
+                            diffuse: Vec3::splat(d),
+                            specular: Vec3::splat(s),
+                            roughness: r,
+                            fresnel,
+                            transmission: Vec3::splat(t),
+                            ior: 1.5,
+                        });
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn albedo_never_exceeds_one() {
+    for (i, m) in material_grid().iter().enumerate() {
+        for &c in &[1.0f32, 0.7, 0.3, 0.05] {
+            let wo = dir(c, 0.3);
+            let (a, se) = albedo_by_sampling(m, wo, 20_000, i as u64);
+            // 1 plus four standard errors of the estimate (plus float slack): a real excess
+            // of more than a fraction of a percent fails.
+            let limit = Vec3::ONE + 4.0 * se + Vec3::splat(1e-4);
+            assert!(a.cmple(limit).all(), "material {m:?} cos {c}: albedo {a} (se {se})");
+        }
+    }
+}
+
+#[test]
+fn lambertian_albedo_is_exact() {
+    let m = Material { diffuse: Vec3::new(0.2, 0.5, 0.9), ..Default::default() };
+    let mut rng = Rng::new(5, 0, 0);
+    for _ in 0..1000 {
+        let wo = uniform_sphere(rng.next_2d());
+        let s = m.sample(wo, &mut rng).expect("a Lambertian sample is never absorbed");
+        // Each cosine-weighted sample carries exactly the albedo.
+        assert!((s.weight - m.diffuse).abs().max_element() < 1e-5);
+        assert!(s.wi.z * wo.z > 0.0, "two-sided: the sample stays on the viewer's side");
+    }
+    // And ∫ f cos dω = ρL by quadrature, independent of the sampler.
+    let wo = dir(0.6, 1.0);
+    let n = 400;
+    let mut sum = Vec3::ZERO;
+    for i in 0..n {
+        for j in 0..n {
+            let z = (i as f32 + 0.5) / n as f32;
+            let phi = (j as f32 + 0.5) / n as f32 * std::f32::consts::TAU;
+            let wi = dir(z, phi);
+            sum += m.eval(wo, wi) * z * (std::f32::consts::TAU / (n * n) as f32);
+        }
+    }
+    assert!((sum - m.diffuse).abs().max_element() < 1e-3, "{sum}");
+    assert!((m.scatter_probability(wo) - m.diffuse).abs().max_element() < 1e-6);
+}
+
+#[test]
+fn mirror_and_glass_conserve_energy_exactly() {
+    let mirror = Material { diffuse: Vec3::ZERO, specular: Vec3::splat(0.9), ..Default::default() };
+    let glass = Material { diffuse: Vec3::ZERO, transmission: Vec3::ONE, ior: 1.5, ..Default::default() };
+    for &c in &[1.0f32, 0.5, 0.1] {
+        let (a, _) = albedo_by_sampling(&mirror, dir(c, 0.0), 1000, 1);
+        assert!((a - Vec3::splat(0.9)).abs().max_element() < 1e-5);
+        let (a, _) = albedo_by_sampling(&glass, dir(c, 0.0), 1000, 1);
+        assert!((a - Vec3::ONE).abs().max_element() < 1e-5);
+        // From inside, beyond the critical angle, everything reflects.
+        let (a, _) = albedo_by_sampling(&glass, dir(-c, 0.0), 1000, 1);
+        assert!((a - Vec3::ONE).abs().max_element() < 1e-5);
+    }
+}
+
+#[test]
+fn non_delta_part_is_reciprocal() {
+    let mut rng = Rng::new(9, 0, 0);
+    for m in material_grid() {
+        for _ in 0..50 {
+            let a = uniform_sphere(rng.next_2d());
+            let b = uniform_sphere(rng.next_2d());
+            let (f1, f2) = (m.eval(a, b), m.eval(b, a));
+            let scale = f1.max_element().max(f2.max_element()).max(1e-6);
+            assert!((f1 - f2).abs().max_element() / scale < 1e-4, "{m:?}: {f1} vs {f2}");
+        }
+    }
+}
+
+/// Standard normal upper tail via erfc (Numerical Recipes' erfcc, |error| < 1.2e-7).
+fn normal_upper_tail(z: f64) -> f64 {
+    let x = z / std::f64::consts::SQRT_2;
+    let t = 1.0 / (1.0 + 0.5 * x.abs());
+    let y = t
+        * (-x * x - 1.265_512_23
+            + t * (1.000_023_68
+                + t * (0.374_091_96
+                    + t * (0.096_784_18
+                        + t * (-0.186_288_06
+                            + t * (0.278_868_07
+                                + t * (-1.135_203_98
+                                    + t * (1.488_515_87 + t * (-0.822_152_23 + t * 0.170_872_77)))))))))
+            .exp();
+    let erfc = if x >= 0.0 { y } else { 2.0 - y };
+    0.5 * erfc
+}
+
+/// p-value of a chi-square statistic with `k` degrees of freedom (Wilson–Hilferty).
+fn chi2_p_value(chi2: f64, k: f64) -> f64 {
+    let z = ((chi2 / k).powf(1.0 / 3.0) - (1.0 - 2.0 / (9.0 * k))) / (2.0 / (9.0 * k)).sqrt();
+    normal_upper_tail(z)
+}
+
+/// Pearson chi-square test of `sampler.sample` against `reference.pdf` over a (cos θ, φ)
+/// grid of the sphere; returns the p-value.
+fn chi_square(sampler: &Material, reference: &Material, wo: Vec3, seed: u64) -> f64 {
+    const NZ: usize = 16;
+    const NP: usize = 32;
+    const SUB: usize = 24;
+    let n = 400_000usize;
+    let mut observed = vec![0.0f64; NZ * NP];
+    let mut rng = Rng::new(seed, 0, 0);
+    for _ in 0..n {
+        if let Some(s) = sampler.sample(wo, &mut rng) {
+            if s.lobe.is_delta() {
+                continue;
+            }
+            let z = s.wi.z.clamp(-1.0, 1.0);
+            let phi = s.wi.y.atan2(s.wi.x).rem_euclid(std::f32::consts::TAU);
+            let iz = (((z + 1.0) * 0.5 * NZ as f32) as usize).min(NZ - 1);
+            let ip = ((phi / std::f32::consts::TAU * NP as f32) as usize).min(NP - 1);
+            observed[iz * NP + ip] += 1.0;
+        }
+    }
+    let mut expected = vec![0.0f64; NZ * NP];
+    for iz in 0..NZ {
+        for ip in 0..NP {
+            let mut e = 0.0;
+            for a in 0..SUB {
+                for b in 0..SUB {
+                    let z = -1.0 + 2.0 * (iz as f64 + (a as f64 + 0.5) / SUB as f64) / NZ as f64;
+                    let phi = 2.0 * PI * (ip as f64 + (b as f64 + 0.5) / SUB as f64) / NP as f64;
+                    let wi = dir(z as f32, phi as f32);
+                    e += reference.pdf(wo, wi) as f64;
+                }
+            }
+            let cell = (2.0 / NZ as f64) * (2.0 * PI / NP as f64) / (SUB * SUB) as f64;
+            expected[iz * NP + ip] = e * cell * n as f64;
+        }
+    }
+    // Pool cells with small expectations (pbrt's rule: below 5 counts).
+    let (mut chi2, mut dof) = (0.0f64, 0usize);
+    let (mut pool_o, mut pool_e) = (0.0f64, 0.0f64);
+    for (o, e) in observed.iter().zip(&expected) {
+        if *e < 5.0 {
+            pool_o += o;
+            pool_e += e;
+        } else {
+            chi2 += (o - e) * (o - e) / e;
+            dof += 1;
+        }
+    }
+    if pool_e >= 5.0 {
+        chi2 += (pool_o - pool_e) * (pool_o - pool_e) / pool_e;
+        dof += 1;
+    } else {
+        assert!(pool_o < 20.0, "samples where the pdf says there are none: {pool_o}");
+    }
+    chi2_p_value(chi2, (dof - 1) as f64)
+}
+
+#[test]
+fn sampling_matches_pdf_chi_square() {
+    let cases = [
+        Material { diffuse: Vec3::splat(0.7), ..Default::default() },
+        Material { diffuse: Vec3::ZERO, specular: Vec3::splat(0.9), roughness: 0.5, ..Default::default() },
+        Material { diffuse: Vec3::ZERO, specular: Vec3::splat(0.9), roughness: 0.3, fresnel: true, ..Default::default() },
+        Material {
+            diffuse: Vec3::new(0.6, 0.3, 0.2),
+            specular: Vec3::splat(0.04),
+            roughness: 0.4,
+            fresnel: true,
+            ..Default::default()
+        },
+        Material { diffuse: Vec3::splat(0.3), specular: Vec3::splat(0.3), roughness: 0.8, ..Default::default() },
+        Material {
+            diffuse: Vec3::splat(0.3),
+            specular: Vec3::splat(0.2),
+            roughness: 0.5,
+            transmission: Vec3::splat(0.5),
+            ..Default::default()
+        },
+    ];
+    let views = [dir(0.9, 0.4), dir(0.4, 2.0), dir(-0.6, 4.0)];
+    let tests = (cases.len() * views.len()) as f64;
+    // Šidák-corrected 1% significance over all tests.
+    let alpha = 1.0 - (1.0 - 0.01f64).powf(1.0 / tests);
+    for (i, m) in cases.iter().enumerate() {
+        for (j, wo) in views.iter().enumerate() {
+            let p = chi_square(m, m, *wo, (i * 10 + j) as u64);
+            assert!(p > alpha, "material {i} view {j}: p = {p:e}");
+        }
+    }
+}
+
+#[test]
+fn chi_square_detects_a_wrong_pdf() {
+    // Guard against a test that cannot fail: samples of one roughness checked against the
+    // pdf of a slightly different one must be rejected.
+    let m = Material { diffuse: Vec3::ZERO, specular: Vec3::splat(0.9), roughness: 0.5, ..Default::default() };
+    let wrong = Material { roughness: 0.45, ..m };
+    assert!(chi_square(&m, &wrong, dir(0.7, 0.0), 3) < 1e-6);
+}

@@ -1,0 +1,42 @@
+//! The crate's error type.
+
+use thiserror::Error;
+
+/// Everything that can go wrong in gi's core, each variant a category the Python layer maps
+/// to its own exception type.
+#[derive(Debug, Error)]
+pub enum Error {
+    /// A scene description is malformed: `field` is a JSON path such as `objects[2].material`.
+    #[error("{source_name}: {field}: {message}")]
+    Scene {
+        /// The scene file (or built-in name) the error was found in.
+        source_name: String,
+        /// Path of the offending field inside the description.
+        field: String,
+        /// What is wrong with it.
+        message: String,
+    },
+    /// A render setting is out of range.
+    #[error("invalid setting `{name}`: {message}")]
+    Setting {
+        /// The setting's name, as in the API.
+        name: &'static str,
+        /// What is wrong with it.
+        message: String,
+    },
+    /// The render was cancelled by its progress callback.
+    #[error("render cancelled")]
+    Cancelled,
+}
+
+/// Result alias for gi.
+pub type Result<T> = std::result::Result<T, Error>;
+
+impl Error {
+    pub(crate) fn scene(source_name: &str, field: impl Into<String>, message: impl Into<String>) -> Self {
+        Error::Scene { source_name: source_name.to_string(), field: field.into(), message: message.into() }
+    }
+    pub(crate) fn setting(name: &'static str, message: impl Into<String>) -> Self {
+        Error::Setting { name, message: message.into() }
+    }
+}

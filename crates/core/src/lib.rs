@@ -1,0 +1,18 @@
+//! gi core: scene model, the uber BSDF, CPU ray tracing (obvhs) and the reference
+//! renderer. Later techniques (GPU rasterization, ISPM, photon maps) build on these.
+//!
+//! Conventions: metres; linear RGB; point/spot intensity in W/sr per channel; right-handed
+//! world; pixel (0, 0) is the top-left of the image.
+
+pub mod bsdf;
+pub mod error;
+pub mod image;
+pub mod render;
+pub mod sampling;
+pub mod scene;
+pub mod trace;
+
+pub use error::{Error, Result};
+pub use image::Image;
+pub use render::{render, Method, Progress, RenderOutput, RenderStats, Settings};
+pub use scene::Scene;

@@ -1,0 +1,140 @@
+//! Rendering a frame: settings, the method dispatch, outputs and statistics.
+
+mod reference;
+
+use crate::error::{Error, Result};
+use crate::image::Image;
+use crate::scene::Scene;
+use std::str::FromStr;
+
+/// A rendering technique.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Method {
+    /// The CPU reference: path tracing with next-event estimation plus light tracing for
+    /// caustic paths. Unbiased; the ground truth for every other method.
+    Path,
+}
+
+impl Method {
+    pub const ALL: &'static [Method] = &[Method::Path];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Path => "path",
+        }
+    }
+}
+
+impl FromStr for Method {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        Method::ALL.iter().copied().find(|m| m.name() == s).ok_or_else(|| {
+            let names: Vec<_> = Method::ALL.iter().map(|m| m.name()).collect();
+            Error::setting("method", format!("unknown method `{s}` (available: {})", names.join(", ")))
+        })
+    }
+}
+
+/// Render settings. Sizes of `None` use the scene camera's.
+#[derive(Clone, Debug)]
+pub struct Settings {
+    pub method: Method,
+    /// Camera samples per pixel (method `path`).
+    pub spp: u32,
+    pub width: Option<u32>,
+    pub height: Option<u32>,
+    pub seed: u64,
+    /// Maximum number of scattering events on a path (1 = direct light only).
+    pub max_depth: u32,
+    /// Light paths for caustics (method `path`); `None` = one per camera sample.
+    pub light_paths: Option<u64>,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Settings { method: Method::Path, spp: 64, width: None, height: None, seed: 0, max_depth: 64, light_paths: None }
+    }
+}
+
+/// Upper bounds that keep absurd requests from exhausting memory or running for days.
+pub const MAX_SPP: u32 = 1 << 20;
+pub const MAX_LIGHT_PATHS: u64 = 1 << 36;
+
+impl Settings {
+    pub fn validate(&self) -> Result<()> {
+        if self.spp == 0 || self.spp > MAX_SPP {
+            return Err(Error::setting("spp", format!("must be in 1..={MAX_SPP}")));
+        }
+        for (name, v) in [("width", self.width), ("height", self.height)] {
+            if let Some(v) = v {
+                if v == 0 || v > 16384 {
+                    return Err(Error::setting(if name == "width" { "width" } else { "height" }, "must be in 1..=16384"));
+                }
+            }
+        }
+        if self.max_depth == 0 || self.max_depth > 1024 {
+            return Err(Error::setting("max_depth", "must be in 1..=1024"));
+        }
+        if let Some(n) = self.light_paths {
+            if n > MAX_LIGHT_PATHS {
+                return Err(Error::setting("light_paths", format!("must be at most {MAX_LIGHT_PATHS}")));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Timings and counts of one render.
+#[derive(Clone, Debug, Default)]
+pub struct RenderStats {
+    /// (stage name, seconds), in execution order.
+    pub stages: Vec<(String, f64)>,
+    pub total_seconds: f64,
+    pub samples_per_pixel: u32,
+    pub camera_paths: u64,
+    pub light_paths: u64,
+    pub triangles: u64,
+}
+
+/// A rendered frame: radiance and auxiliary images, all `width × height`.
+#[derive(Clone, Debug)]
+pub struct RenderOutput {
+    /// Pixel radiance, W·sr⁻¹·m⁻² per channel (the box-filtered mean over each pixel).
+    pub radiance: Image,
+    /// First-hit scatter probability (reflectance) as seen from the camera.
+    pub albedo: Image,
+    /// First-hit shading normal, facing the camera; zero on a miss.
+    pub normal: Image,
+    /// First-hit world position; zero on a miss.
+    pub position: Image,
+    /// First-hit view-space depth (distance along the camera's axis), 0 on a miss.
+    pub depth: Vec<f32>,
+    /// The light-traced (caustic) part of `radiance`, already included in it.
+    pub caustics: Image,
+    pub stats: RenderStats,
+}
+
+/// Receives progress; return `false` to cancel the render.
+pub trait Progress: Sync {
+    fn update(&self, stage: &str, fraction: f64) -> bool;
+}
+
+/// No progress reporting.
+pub struct Silent;
+impl Progress for Silent {
+    fn update(&self, _: &str, _: f64) -> bool {
+        true
+    }
+}
+
+/// Renders `scene` with `settings`.
+pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Result<RenderOutput> {
+    settings.validate()?;
+    let camera = scene
+        .camera
+        .with_size(settings.width.unwrap_or(scene.camera.width), settings.height.unwrap_or(scene.camera.height));
+    let scene = Scene { camera, ..scene.clone() };
+    match settings.method {
+        Method::Path => reference::render(&scene, settings, progress),
+    }
+}

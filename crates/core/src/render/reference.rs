@@ -1,0 +1,137 @@
+//! Method `path`: the reference renderer (path tracing + light tracing for caustics).
+
+use super::{Progress, RenderOutput, RenderStats, Settings};
+use crate::error::{Error, Result};
+use crate::image::Image;
+use crate::sampling::Rng;
+use crate::scene::Scene;
+use crate::trace::light_tracer::{self, LightTraceSettings};
+use crate::trace::path::{self, PathSettings};
+use crate::trace::SceneBvh;
+use glam::Vec3;
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::time::Instant;
+
+/// Light paths per parallel work item.
+const LIGHT_CHUNK: u64 = 1 << 14;
+
+pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Result<RenderOutput> {
+    let t0 = Instant::now();
+    let mut stats = RenderStats { triangles: scene.triangles.len() as u64, ..Default::default() };
+
+    let t = Instant::now();
+    let bvh = SceneBvh::build(scene);
+    stats.stages.push(("bvh build".into(), t.elapsed().as_secs_f64()));
+
+    let (w, h) = (scene.camera.width, scene.camera.height);
+    let spp = settings.spp;
+    let ps = PathSettings { max_depth: settings.max_depth, rr_depth: 3 };
+    let light_paths = if light_tracer::scene_has_delta_surfaces(scene) && settings.max_depth >= 2 {
+        settings.light_paths.unwrap_or(spp as u64 * w as u64 * h as u64)
+    } else {
+        0
+    };
+    // Progress counts camera rows and light-path chunks together.
+    let light_chunks = light_paths.div_ceil(LIGHT_CHUNK);
+    let work_total = (h as u64 + light_chunks).max(1) as f64;
+    let done = AtomicU64::new(0);
+    let cancelled = AtomicBool::new(false);
+    let tick = || {
+        let d = done.fetch_add(1, Ordering::Relaxed) + 1;
+        if !progress.update("path", d as f64 / work_total) {
+            cancelled.store(true, Ordering::Relaxed);
+        }
+    };
+
+    // Camera paths, one row per work item.
+    let t = Instant::now();
+    let cam = &scene.camera;
+    let rows: Vec<Vec<(Vec3, path::FirstHit)>> = (0..h)
+        .into_par_iter()
+        .map(|y| {
+            if cancelled.load(Ordering::Relaxed) {
+                return Vec::new();
+            }
+            let row = (0..w)
+                .map(|x| {
+                    let pixel = (y * w + x) as u64;
+                    let mut sum = Vec3::ZERO;
+                    for s in 0..spp {
+                        let mut rng = Rng::new(settings.seed, pixel, s as u64);
+                        let j = rng.next_2d();
+                        let dir = cam.direction(x as f32 + j.x, y as f32 + j.y);
+                        sum += path::radiance(scene, &bvh, cam.position, dir, &mut rng, &ps);
+                    }
+                    // Auxiliary images through the pixel centre are noise-free.
+                    let first = path::first_hit(scene, &bvh, cam.position, cam.direction(x as f32 + 0.5, y as f32 + 0.5));
+                    (sum / spp as f32, first)
+                })
+                .collect();
+            tick();
+            row
+        })
+        .collect();
+    stats.stages.push(("camera paths".into(), t.elapsed().as_secs_f64()));
+    if cancelled.load(Ordering::Relaxed) {
+        return Err(Error::Cancelled);
+    }
+
+    // Light paths for caustics, one image per rayon fold, summed.
+    let t = Instant::now();
+    let weights = light_tracer::light_weights(scene);
+    let lts = LightTraceSettings { max_depth: settings.max_depth, rr_depth: 3 };
+    let caustics = (0..light_chunks)
+        .into_par_iter()
+        .fold(
+            || Image::new(w, h),
+            |mut img, chunk| {
+                if cancelled.load(Ordering::Relaxed) {
+                    return img;
+                }
+                let end = ((chunk + 1) * LIGHT_CHUNK).min(light_paths);
+                for i in chunk * LIGHT_CHUNK..end {
+                    let mut rng = Rng::new(settings.seed, u64::MAX - 1, i);
+                    light_tracer::trace_path(scene, &bvh, &weights, &mut rng, light_paths, &lts, &mut img);
+                }
+                tick();
+                img
+            },
+        )
+        .reduce(
+            || Image::new(w, h),
+            |mut a, b| {
+                a.pixels.iter_mut().zip(&b.pixels).for_each(|(x, y)| *x += *y);
+                a
+            },
+        );
+    stats.stages.push(("light paths".into(), t.elapsed().as_secs_f64()));
+    if cancelled.load(Ordering::Relaxed) {
+        return Err(Error::Cancelled);
+    }
+
+    let mut out = RenderOutput {
+        radiance: Image::new(w, h),
+        albedo: Image::new(w, h),
+        normal: Image::new(w, h),
+        position: Image::new(w, h),
+        depth: vec![0.0; (w * h) as usize],
+        caustics,
+        stats,
+    };
+    for (y, row) in rows.into_iter().enumerate() {
+        for (x, (l, fh)) in row.into_iter().enumerate() {
+            let i = y * w as usize + x;
+            out.radiance.pixels[i] = l + out.caustics.pixels[i];
+            out.albedo.pixels[i] = fh.albedo;
+            out.normal.pixels[i] = fh.normal;
+            out.position.pixels[i] = fh.position;
+            out.depth[i] = fh.depth;
+        }
+    }
+    out.stats.samples_per_pixel = spp;
+    out.stats.camera_paths = spp as u64 * w as u64 * h as u64;
+    out.stats.light_paths = light_paths;
+    out.stats.total_seconds = t0.elapsed().as_secs_f64();
+    Ok(out)
+}

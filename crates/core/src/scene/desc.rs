@@ -1,0 +1,182 @@
+//! The JSON scene description (serde). Every field has a unit and a default; unknown fields
+//! are errors. See `docs/scene-format.md` for the documented schema.
+
+use serde::Deserialize;
+
+pub type V3 = [f32; 3];
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneDesc {
+    pub camera: CameraDesc,
+    #[serde(default)]
+    pub lights: Vec<LightDesc>,
+    #[serde(default)]
+    pub materials: std::collections::BTreeMap<String, MaterialDesc>,
+    #[serde(default)]
+    pub objects: Vec<ObjectDesc>,
+}
+
+/// Pinhole camera.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraDesc {
+    /// Eye position, metres.
+    pub position: V3,
+    /// Point looked at, metres.
+    pub look_at: V3,
+    #[serde(default = "default_up")]
+    pub up: V3,
+    /// Vertical field of view, degrees.
+    #[serde(default = "default_fov")]
+    pub fov: f32,
+    #[serde(default = "default_size")]
+    pub width: u32,
+    #[serde(default = "default_size")]
+    pub height: u32,
+}
+
+fn default_up() -> V3 {
+    [0.0, 1.0, 0.0]
+}
+fn default_fov() -> f32 {
+    40.0
+}
+fn default_size() -> u32 {
+    512
+}
+
+/// A light: intensity in W/sr per RGB channel.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
+pub enum LightDesc {
+    Point {
+        position: V3,
+        intensity: V3,
+    },
+    Spot {
+        position: V3,
+        direction: V3,
+        intensity: V3,
+        /// Half-angle (degrees) inside which the intensity is full.
+        #[serde(default = "default_inner")]
+        inner_angle: f32,
+        /// Half-angle (degrees) beyond which there is no light.
+        #[serde(default = "default_outer")]
+        outer_angle: f32,
+    },
+}
+
+fn default_inner() -> f32 {
+    25.0
+}
+fn default_outer() -> f32 {
+    30.0
+}
+
+/// The uber BSDF's parameters (see `bsdf`).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialDesc {
+    #[serde(default = "default_diffuse")]
+    pub diffuse: V3,
+    #[serde(default)]
+    pub specular: V3,
+    #[serde(default)]
+    pub roughness: f32,
+    #[serde(default)]
+    pub fresnel: bool,
+    #[serde(default)]
+    pub transmission: V3,
+    #[serde(default = "default_ior")]
+    pub ior: f32,
+}
+
+fn default_diffuse() -> V3 {
+    [0.8; 3]
+}
+fn default_ior() -> f32 {
+    1.5
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectDesc {
+    pub shape: ShapeDesc,
+    #[serde(default)]
+    pub transform: TransformDesc,
+    /// Name of an entry of `materials`; may be omitted for mesh files that carry materials.
+    #[serde(default)]
+    pub material: Option<String>,
+}
+
+/// Geometry of an object, in its local frame (metres).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
+pub enum ShapeDesc {
+    /// A triangle mesh file (OBJ/MTL, PLY, glTF/GLB, STL), relative to the scene file.
+    Mesh { file: String },
+    /// A rectangle in the xz plane centred on the origin, normal +y.
+    Quad { size: [f32; 2] },
+    /// An axis-aligned box centred on the origin.
+    Box { size: V3 },
+    /// A geodesic sphere centred on the origin.
+    Sphere {
+        radius: f32,
+        #[serde(default = "default_subdivisions")]
+        subdivisions: u32,
+    },
+    /// An open or capped cylinder along +y from y = 0 to `height`.
+    Cylinder {
+        radius: f32,
+        height: f32,
+        #[serde(default = "default_segments")]
+        segments: u32,
+        #[serde(default)]
+        caps: bool,
+    },
+    /// A thick-walled tube (a ring) along +y from y = 0 to `height`.
+    Ring {
+        inner_radius: f32,
+        outer_radius: f32,
+        height: f32,
+        #[serde(default = "default_segments")]
+        segments: u32,
+    },
+}
+
+fn default_subdivisions() -> u32 {
+    4
+}
+fn default_segments() -> u32 {
+    128
+}
+
+/// Scale, then rotate (degrees about x, then y, then z), then translate.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TransformDesc {
+    #[serde(default)]
+    pub translate: V3,
+    #[serde(default)]
+    pub rotate: V3,
+    #[serde(default = "default_scale")]
+    pub scale: Scale,
+}
+
+impl Default for TransformDesc {
+    fn default() -> Self {
+        TransformDesc { translate: [0.0; 3], rotate: [0.0; 3], scale: default_scale() }
+    }
+}
+
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(untagged)]
+pub enum Scale {
+    Uniform(f32),
+    PerAxis(V3),
+}
+
+fn default_scale() -> Scale {
+    Scale::Uniform(1.0)
+}

@@ -1,0 +1,318 @@
+//! The scene: camera, lights, materials and one flat triangle soup in world space.
+
+pub mod builtin;
+pub mod camera;
+pub mod desc;
+pub mod light;
+pub mod primitives;
+
+pub use camera::Camera;
+pub use desc::SceneDesc;
+pub use light::Light;
+pub use primitives::TriMesh;
+
+use crate::bsdf::Material;
+use crate::error::{Error, Result};
+use desc::{LightDesc, MaterialDesc, Scale, ShapeDesc, V3};
+use glam::{EulerRot, Mat3, Mat4, Quat, Vec3};
+use std::collections::HashMap;
+
+/// Triangle mesh data supplied by the caller for `mesh` objects (loaded from files by the
+/// Python layer), keyed by the `file` string of the scene description.
+#[derive(Clone, Debug, Default)]
+pub struct MeshData {
+    pub mesh: TriMesh,
+    /// Optional per-triangle material from the file (e.g. OBJ + MTL): names and materials,
+    /// and an index into them per triangle. Used when the object names no material.
+    pub materials: Vec<(String, Material)>,
+    pub face_materials: Vec<u32>,
+}
+
+/// A renderable scene. Triangles are stored flat in world space.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    pub camera: Camera,
+    pub lights: Vec<Light>,
+    pub materials: Vec<Material>,
+    pub material_names: Vec<String>,
+    pub positions: Vec<Vec3>,
+    pub normals: Vec<Vec3>,
+    pub triangles: Vec<[u32; 3]>,
+    /// Material index per triangle.
+    pub triangle_materials: Vec<u32>,
+}
+
+fn finite3(v: V3) -> bool {
+    v.iter().all(|x| x.is_finite())
+}
+
+impl Scene {
+    /// Parses and validates a JSON scene description. `source_name` names the file (or
+    /// built-in) in error messages.
+    pub fn from_json(text: &str, source_name: &str, meshes: &HashMap<String, MeshData>) -> Result<Scene> {
+        let de = &mut serde_json::Deserializer::from_str(text);
+        let desc: SceneDesc = serde_path_to_error::deserialize(de).map_err(|e| {
+            let field = e.path().to_string();
+            Error::scene(source_name, if field == "." { "(root)".into() } else { field }, e.inner().to_string())
+        })?;
+        Scene::from_desc(&desc, source_name, meshes)
+    }
+
+    /// Builds a scene from a parsed description, validating every field.
+    pub fn from_desc(desc: &SceneDesc, source_name: &str, meshes: &HashMap<String, MeshData>) -> Result<Scene> {
+        let err = |field: String, msg: &str| Error::scene(source_name, field, msg);
+        let camera = camera_from_desc(&desc.camera).map_err(|(f, m)| err(format!("camera.{f}"), m))?;
+
+        let mut lights = Vec::new();
+        for (i, l) in desc.lights.iter().enumerate() {
+            lights.push(light_from_desc(l).map_err(|(f, m)| err(format!("lights[{i}].{f}"), m))?);
+        }
+
+        let mut materials = Vec::new();
+        let mut material_names = Vec::new();
+        let mut index_of: HashMap<String, u32> = HashMap::new();
+        for (name, m) in &desc.materials {
+            let mat = material_from_desc(m).map_err(|(f, msg)| err(format!("materials.{name}.{f}"), msg))?;
+            index_of.insert(name.clone(), materials.len() as u32);
+            materials.push(mat);
+            material_names.push(name.clone());
+        }
+
+        let mut scene = Scene {
+            camera,
+            lights,
+            materials,
+            material_names,
+            positions: Vec::new(),
+            normals: Vec::new(),
+            triangles: Vec::new(),
+            triangle_materials: Vec::new(),
+        };
+        for (i, obj) in desc.objects.iter().enumerate() {
+            let at = |f: &str| format!("objects[{i}].{f}");
+            let xf = transform_matrix(&obj.transform).map_err(|(f, m)| err(at(&format!("transform.{f}")), m))?;
+            let (mesh, file_materials) = match &obj.shape {
+                ShapeDesc::Mesh { file } => {
+                    let data = meshes
+                        .get(file)
+                        .ok_or_else(|| err(at("shape.file"), &format!("mesh `{file}` was not loaded")))?;
+                    (data.mesh.clone(), Some(data))
+                }
+                shape => (primitive(shape).map_err(|(f, m)| err(at(&format!("shape.{f}")), m))?, None),
+            };
+            validate_mesh(&mesh).map_err(|m| err(at("shape"), &m))?;
+            // Per-triangle materials: the object's own, else those of the file.
+            let tri_mats: Vec<u32> = match (&obj.material, file_materials) {
+                (Some(name), _) => {
+                    let id = *index_of
+                        .get(name)
+                        .ok_or_else(|| err(at("material"), &format!("no material named `{name}`")))?;
+                    vec![id; mesh.indices.len()]
+                }
+                (None, Some(data)) if !data.materials.is_empty() => {
+                    let base = scene.materials.len() as u32;
+                    for (name, m) in &data.materials {
+                        scene.materials.push(*m);
+                        scene.material_names.push(name.clone());
+                    }
+                    if data.face_materials.len() != mesh.indices.len()
+                        || data.face_materials.iter().any(|&f| f as usize >= data.materials.len())
+                    {
+                        return Err(err(at("shape.file"), "per-face materials do not match the mesh"));
+                    }
+                    data.face_materials.iter().map(|f| base + f).collect()
+                }
+                (None, _) => return Err(err(at("material"), "required (the shape carries no materials)")),
+            };
+            scene.append(&mesh, xf, &tri_mats);
+        }
+        Ok(scene)
+    }
+
+    fn append(&mut self, mesh: &TriMesh, xf: Mat4, tri_materials: &[u32]) {
+        let base = self.positions.len() as u32;
+        let normal_xf = Mat3::from_mat4(xf).inverse().transpose();
+        let flip = Mat3::from_mat4(xf).determinant() < 0.0;
+        self.positions.extend(mesh.positions.iter().map(|p| xf.transform_point3(*p)));
+        self.normals.extend(mesh.normals.iter().map(|n| (normal_xf * *n).normalize_or_zero()));
+        self.triangles.extend(mesh.indices.iter().map(|t| {
+            let t = t.map(|i| i + base);
+            if flip { [t[0], t[2], t[1]] } else { t }
+        }));
+        self.triangle_materials.extend_from_slice(tri_materials);
+    }
+
+    /// The three corners of triangle `t`.
+    pub fn triangle(&self, t: usize) -> [Vec3; 3] {
+        self.triangles[t].map(|i| self.positions[i as usize])
+    }
+
+    pub fn material_of(&self, t: usize) -> &Material {
+        &self.materials[self.triangle_materials[t] as usize]
+    }
+
+    /// Total power of all lights (W per channel).
+    pub fn total_power(&self) -> Vec3 {
+        self.lights.iter().map(|l| l.power()).sum()
+    }
+}
+
+type FieldError = (String, &'static str);
+
+fn camera_from_desc(c: &desc::CameraDesc) -> std::result::Result<Camera, (String, &'static str)> {
+    for (name, v) in [("position", c.position), ("look_at", c.look_at), ("up", c.up)] {
+        if !finite3(v) {
+            return Err((name.into(), "must be finite"));
+        }
+    }
+    let (pos, at, up) = (Vec3::from(c.position), Vec3::from(c.look_at), Vec3::from(c.up));
+    if (at - pos).length() < 1e-6 {
+        return Err(("look_at".into(), "must differ from position"));
+    }
+    if up.length() < 1e-6 || (at - pos).normalize().cross(up.normalize()).length() < 1e-4 {
+        return Err(("up".into(), "must be non-zero and not parallel to the viewing direction"));
+    }
+    if !(c.fov > 0.0 && c.fov < 179.0) {
+        return Err(("fov".into(), "must be in (0, 179) degrees"));
+    }
+    for (name, v) in [("width", c.width), ("height", c.height)] {
+        if v == 0 || v > 16384 {
+            return Err((name.into(), "must be in 1..=16384 pixels"));
+        }
+    }
+    Ok(Camera::new(pos, at, up, c.fov, c.width, c.height))
+}
+
+fn check_intensity(v: V3) -> std::result::Result<Vec3, FieldError> {
+    if !finite3(v) || v.iter().any(|x| *x < 0.0) {
+        return Err(("intensity".into(), "must be finite and non-negative"));
+    }
+    Ok(Vec3::from(v))
+}
+
+fn light_from_desc(l: &LightDesc) -> std::result::Result<Light, FieldError> {
+    match *l {
+        LightDesc::Point { position, intensity } => {
+            if !finite3(position) {
+                return Err(("position".into(), "must be finite"));
+            }
+            Ok(Light::Point { position: position.into(), intensity: check_intensity(intensity)? })
+        }
+        LightDesc::Spot { position, direction, intensity, inner_angle, outer_angle } => {
+            if !finite3(position) {
+                return Err(("position".into(), "must be finite"));
+            }
+            let d = Vec3::from(direction);
+            if !finite3(direction) || d.length() < 1e-6 {
+                return Err(("direction".into(), "must be finite and non-zero"));
+            }
+            if !(outer_angle > 0.0 && outer_angle < 90.0) {
+                return Err(("outer_angle".into(), "must be in (0, 90) degrees"));
+            }
+            if !(inner_angle >= 0.0 && inner_angle <= outer_angle) {
+                return Err(("inner_angle".into(), "must be in [0, outer_angle] degrees"));
+            }
+            Ok(Light::Spot {
+                position: position.into(),
+                direction: d.normalize(),
+                intensity: check_intensity(intensity)?,
+                cos_inner: inner_angle.to_radians().cos(),
+                cos_outer: outer_angle.to_radians().cos(),
+            })
+        }
+    }
+}
+
+fn material_from_desc(m: &MaterialDesc) -> std::result::Result<Material, FieldError> {
+    for (name, v) in [("diffuse", m.diffuse), ("specular", m.specular), ("transmission", m.transmission)] {
+        if !finite3(v) || v.iter().any(|x| !(0.0..=1.0).contains(x)) {
+            return Err((name.into(), "each channel must be in [0, 1]"));
+        }
+    }
+    if (0..3).any(|c| m.diffuse[c] + m.transmission[c] > 1.0 + 1e-6) {
+        return Err(("transmission".into(), "diffuse + transmission must not exceed 1 (energy conservation)"));
+    }
+    if !(0.0..=1.0).contains(&m.roughness) {
+        return Err(("roughness".into(), "must be in [0, 1]"));
+    }
+    if !(m.ior >= 1.0 && m.ior <= 4.0) {
+        return Err(("ior".into(), "must be in [1, 4]"));
+    }
+    Ok(Material {
+        diffuse: m.diffuse.into(),
+        specular: m.specular.into(),
+        roughness: m.roughness,
+        fresnel: m.fresnel,
+        transmission: m.transmission.into(),
+        ior: m.ior,
+    })
+}
+
+fn transform_matrix(t: &desc::TransformDesc) -> std::result::Result<Mat4, FieldError> {
+    if !finite3(t.translate) {
+        return Err(("translate".into(), "must be finite"));
+    }
+    if !finite3(t.rotate) {
+        return Err(("rotate".into(), "must be finite"));
+    }
+    let scale = match t.scale {
+        Scale::Uniform(s) => Vec3::splat(s),
+        Scale::PerAxis(s) => Vec3::from(s),
+    };
+    if !scale.is_finite() || scale.abs().min_element() < 1e-12 {
+        return Err(("scale".into(), "must be finite and non-zero"));
+    }
+    let [rx, ry, rz] = t.rotate.map(f32::to_radians);
+    // Rotate about x first, then y, then z: R = Rz·Ry·Rx.
+    let rot = Quat::from_euler(EulerRot::ZYX, rz, ry, rx);
+    Ok(Mat4::from_scale_rotation_translation(scale, rot, t.translate.into()))
+}
+
+fn primitive(shape: &ShapeDesc) -> std::result::Result<TriMesh, FieldError> {
+    let positive = |name: &str, v: f32| {
+        if v.is_finite() && v > 0.0 { Ok(v) } else { Err((name.to_string(), "must be positive and finite")) }
+    };
+    let segs = |s: u32| {
+        if (3..=4096).contains(&s) { Ok(s) } else { Err(("segments".to_string(), "must be in 3..=4096")) }
+    };
+    Ok(match *shape {
+        ShapeDesc::Mesh { .. } => unreachable!("mesh files are resolved by the caller"),
+        ShapeDesc::Quad { size } => primitives::quad([positive("size", size[0])?, positive("size", size[1])?]),
+        ShapeDesc::Box { size } => {
+            primitives::cuboid(Vec3::new(positive("size", size[0])?, positive("size", size[1])?, positive("size", size[2])?))
+        }
+        ShapeDesc::Sphere { radius, subdivisions } => {
+            if subdivisions > 7 {
+                return Err(("subdivisions".into(), "must be at most 7 (327,680 triangles)"));
+            }
+            primitives::sphere(positive("radius", radius)?, subdivisions)
+        }
+        ShapeDesc::Cylinder { radius, height, segments, caps } => {
+            primitives::cylinder(positive("radius", radius)?, positive("height", height)?, segs(segments)?, caps)
+        }
+        ShapeDesc::Ring { inner_radius, outer_radius, height, segments } => {
+            let inner = positive("inner_radius", inner_radius)?;
+            if !(outer_radius.is_finite() && outer_radius > inner) {
+                return Err(("outer_radius".into(), "must be finite and larger than inner_radius"));
+            }
+            primitives::ring(inner, outer_radius, positive("height", height)?, segs(segments)?)
+        }
+    })
+}
+
+fn validate_mesh(m: &TriMesh) -> std::result::Result<(), String> {
+    if m.indices.is_empty() {
+        return Err("mesh has no triangles".into());
+    }
+    if let Some(i) = m.positions.iter().position(|p| !p.is_finite()) {
+        return Err(format!("vertex {i} is not finite (NaN or infinity)"));
+    }
+    if m.normals.len() != m.positions.len() || m.normals.iter().any(|n| !n.is_finite()) {
+        return Err("normals must be finite, one per vertex".into());
+    }
+    let n = m.positions.len() as u32;
+    if let Some(t) = m.indices.iter().position(|t| t.iter().any(|&i| i >= n)) {
+        return Err(format!("triangle {t} indexes a vertex out of range"));
+    }
+    Ok(())
+}

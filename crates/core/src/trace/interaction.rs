@@ -1,0 +1,54 @@
+//! A ray's hit turned into a shading point.
+
+use super::Hit;
+use crate::bsdf::Material;
+use crate::sampling::Frame;
+use crate::scene::Scene;
+use glam::Vec3;
+
+/// Geometry and material at a ray hit.
+#[derive(Clone, Copy, Debug)]
+pub struct Interaction<'a> {
+    pub position: Vec3,
+    /// Geometric normal (from the winding; outward for closed meshes).
+    pub ng: Vec3,
+    /// Shading frame (interpolated vertex normal, same side as `ng`).
+    pub frame: Frame,
+    pub material: &'a Material,
+    pub triangle: u32,
+}
+
+impl<'a> Interaction<'a> {
+    pub fn new(scene: &'a Scene, hit: &Hit, dir: Vec3) -> Self {
+        let t = hit.triangle as usize;
+        let [i0, i1, i2] = scene.triangles[t].map(|i| i as usize);
+        let (p0, p1, p2) = (scene.positions[i0], scene.positions[i1], scene.positions[i2]);
+        let ng = (p1 - p0).cross(p2 - p0).normalize_or_zero();
+        let w = 1.0 - hit.u - hit.v;
+        let mut ns = (scene.normals[i0] * w + scene.normals[i1] * hit.u + scene.normals[i2] * hit.v).normalize_or_zero();
+        if ns == Vec3::ZERO || !ns.is_finite() {
+            ns = ng;
+        } else if ns.dot(ng) < 0.0 {
+            ns = -ns;
+        }
+        // Shading normals must not disagree with the geometry about which side the ray
+        // came from, or light leaks; fall back to the geometric normal there.
+        if dir.dot(ns) * dir.dot(ng) <= 0.0 {
+            ns = ng;
+        }
+        Interaction {
+            position: p0 * w + p1 * hit.u + p2 * hit.v,
+            ng,
+            frame: Frame::new(ns),
+            material: scene.material_of(t),
+            triangle: hit.triangle,
+        }
+    }
+
+    /// Ray origin for leaving the surface towards `dir` without re-hitting it.
+    #[inline]
+    pub fn spawn(&self, dir: Vec3) -> Vec3 {
+        let eps = 1e-4 * (1.0 + self.position.abs().max_element());
+        self.position + self.ng * eps * dir.dot(self.ng).signum()
+    }
+}

@@ -1,0 +1,10 @@
+//! CPU ray tracing: the obvhs BVH over the scene's triangles, surface interactions, the
+//! reference path tracer and the light tracer that completes it for caustic paths.
+
+pub mod bvh;
+pub mod interaction;
+pub mod light_tracer;
+pub mod path;
+
+pub use bvh::{Hit, SceneBvh};
+pub use interaction::Interaction;

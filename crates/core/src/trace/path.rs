@@ -1,0 +1,117 @@
+//! The reference path tracer: next-event estimation to every point and spot light, BSDF
+//! importance sampling and Russian roulette. A camera path can never reach a point light
+//! through a delta (mirror or glass) scattering, so paths whose first bounce from the light
+//! is specular are left to the light tracer ([`super::light_tracer`]).
+
+use super::{Interaction, SceneBvh};
+use crate::sampling::Rng;
+use crate::scene::Scene;
+use glam::Vec3;
+
+/// Path tracer settings.
+#[derive(Clone, Copy, Debug)]
+pub struct PathSettings {
+    /// Maximum number of surface interactions per path (1 = direct light only).
+    pub max_depth: u32,
+    /// Interactions before Russian roulette may end a path.
+    pub rr_depth: u32,
+}
+
+/// What the camera ray sees first, for the auxiliary images.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct FirstHit {
+    pub albedo: Vec3,
+    pub normal: Vec3,
+    pub position: Vec3,
+    /// Distance along the camera's forward axis (view-space z), 0 on a miss.
+    pub depth: f32,
+}
+
+/// Light arriving at `it` from every light by direct paths, times the BSDF towards `wo`
+/// (world space, pointing away from the surface).
+pub fn direct_light(scene: &Scene, bvh: &SceneBvh, it: &Interaction, wo: Vec3) -> Vec3 {
+    let m = it.material;
+    if m.is_purely_specular() {
+        return Vec3::ZERO;
+    }
+    let wo_l = it.frame.to_local(wo);
+    let mut sum = Vec3::ZERO;
+    for light in &scene.lights {
+        let to_light = light.position() - it.position;
+        let dist2 = to_light.length_squared();
+        let dist = dist2.sqrt();
+        let wi = to_light / dist;
+        // Reflection only: the light must be on the viewer's side of the geometry.
+        if wi.dot(it.ng) * wo.dot(it.ng) <= 0.0 {
+            continue;
+        }
+        let li = light.intensity_towards(-wi) / dist2;
+        if li == Vec3::ZERO {
+            continue;
+        }
+        let wi_l = it.frame.to_local(wi);
+        let f = m.eval(wo_l, wi_l);
+        if f == Vec3::ZERO {
+            continue;
+        }
+        let origin = it.spawn(wi);
+        if bvh.occluded(origin, wi, (light.position() - origin).length() * (1.0 - 1e-4)) {
+            continue;
+        }
+        sum += f * wi_l.z.abs() * li;
+    }
+    sum
+}
+
+/// What the ray `origin + t·dir` hits first.
+pub fn first_hit(scene: &Scene, bvh: &SceneBvh, origin: Vec3, dir: Vec3) -> FirstHit {
+    let Some(hit) = bvh.intersect(origin, dir, f32::INFINITY) else { return FirstHit::default() };
+    let it = Interaction::new(scene, &hit, dir);
+    let wo = -dir;
+    let n = if it.frame.n.dot(wo) < 0.0 { -it.frame.n } else { it.frame.n };
+    FirstHit {
+        albedo: it.material.scatter_probability(it.frame.to_local(wo)),
+        normal: n,
+        position: it.position,
+        depth: (it.position - scene.camera.position).dot(scene.camera.forward),
+    }
+}
+
+/// Radiance arriving at `origin` from direction `-dir`.
+pub fn radiance(scene: &Scene, bvh: &SceneBvh, origin: Vec3, dir: Vec3, rng: &mut Rng, s: &PathSettings) -> Vec3 {
+    let mut l = Vec3::ZERO;
+    let mut beta = Vec3::ONE;
+    let (mut o, mut d) = (origin, dir);
+    for depth in 0..s.max_depth {
+        let Some(hit) = bvh.intersect(o, d, f32::INFINITY) else { break };
+        let it = Interaction::new(scene, &hit, d);
+        let wo = -d;
+        // Next-event estimation.
+        l += beta * direct_light(scene, bvh, &it, wo);
+        if depth + 1 == s.max_depth {
+            break;
+        }
+        // Continue the path by sampling the BSDF.
+        let wo_l = it.frame.to_local(wo);
+        let Some(bs) = it.material.sample(wo_l, rng) else { break };
+        let wi = it.frame.to_world(bs.wi);
+        // The sample must agree with the geometry: reflections stay on the viewer's side,
+        // refractions cross.
+        let same_side = wi.dot(it.ng) * wo.dot(it.ng) > 0.0;
+        if same_side == matches!(bs.lobe, crate::bsdf::Lobe::GlassRefract) {
+            break;
+        }
+        beta *= bs.weight;
+        // Possibly terminate the path with Russian roulette.
+        if depth + 1 >= s.rr_depth {
+            let q = beta.max_element().min(0.95);
+            if q <= 0.0 || rng.next_f32() >= q {
+                break;
+            }
+            beta /= q;
+        }
+        o = it.spawn(wi);
+        d = wi;
+    }
+    l
+}
