@@ -24,6 +24,9 @@ pub enum Error {
         /// What is wrong with it.
         message: String,
     },
+    /// No usable GPU adapter, or a GPU operation failed.
+    #[error("GPU: {0}")]
+    Gpu(String),
     /// The render was cancelled by its progress callback.
     #[error("render cancelled")]
     Cancelled,
