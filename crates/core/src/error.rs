@@ -36,10 +36,21 @@ pub enum Error {
 pub type Result<T> = std::result::Result<T, Error>;
 
 impl Error {
-    pub(crate) fn scene(source_name: &str, field: impl Into<String>, message: impl Into<String>) -> Self {
-        Error::Scene { source_name: source_name.to_string(), field: field.into(), message: message.into() }
+    pub(crate) fn scene(
+        source_name: &str,
+        field: impl Into<String>,
+        message: impl Into<String>,
+    ) -> Self {
+        Error::Scene {
+            source_name: source_name.to_string(),
+            field: field.into(),
+            message: message.into(),
+        }
     }
     pub(crate) fn setting(name: &'static str, message: impl Into<String>) -> Self {
-        Error::Setting { name, message: message.into() }
+        Error::Setting {
+            name,
+            message: message.into(),
+        }
     }
 }

@@ -12,7 +12,11 @@ pub struct Image {
 
 impl Image {
     pub fn new(width: u32, height: u32) -> Self {
-        Self { width, height, pixels: vec![Vec3::ZERO; width as usize * height as usize] }
+        Self {
+            width,
+            height,
+            pixels: vec![Vec3::ZERO; width as usize * height as usize],
+        }
     }
 
     pub fn get(&self, x: u32, y: u32) -> Vec3 {

@@ -34,7 +34,10 @@ impl Rng {
     /// A generator for sequence `index` of stream `stream` under a user `seed`.
     pub fn new(seed: u64, stream: u64, index: u64) -> Self {
         let s = splitmix64(seed ^ splitmix64(stream.wrapping_add(0x9e37_79b9_7f4a_7c15)));
-        let mut rng = Rng { state: 0, inc: (splitmix64(index ^ s) << 1) | 1 };
+        let mut rng = Rng {
+            state: 0,
+            inc: (splitmix64(index ^ s) << 1) | 1,
+        };
         rng.next_u32();
         rng.state = rng.state.wrapping_add(s);
         rng.next_u32();
@@ -44,7 +47,9 @@ impl Rng {
     #[inline]
     pub fn next_u32(&mut self) -> u32 {
         let old = self.state;
-        self.state = old.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(self.inc);
+        self.state = old
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(self.inc);
         let xorshifted = (((old >> 18) ^ old) >> 27) as u32;
         let rot = (old >> 59) as u32;
         xorshifted.rotate_right(rot)
@@ -157,7 +162,9 @@ mod tests {
             let n = uniform_sphere(rng.next_2d());
             let f = Frame::new(n);
             assert!((f.t.length() - 1.0).abs() < 1e-4 && (f.b.length() - 1.0).abs() < 1e-4);
-            assert!(f.t.dot(f.b).abs() < 1e-4 && f.t.dot(n).abs() < 1e-4 && f.b.dot(n).abs() < 1e-4);
+            assert!(
+                f.t.dot(f.b).abs() < 1e-4 && f.t.dot(n).abs() < 1e-4 && f.b.dot(n).abs() < 1e-4
+            );
             let v = uniform_sphere(rng.next_2d());
             assert!((f.to_world(f.to_local(v)) - v).length() < 1e-4);
         }

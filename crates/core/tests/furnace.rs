@@ -18,8 +18,14 @@ fn furnace(albedo: f32, intensity: f32, radius: f32) -> Scene {
 fn check(albedo: f32) {
     let (i, r) = (2.0f32, 1.0f32);
     let scene = furnace(albedo, i, r);
-    let settings =
-        Settings { method: Method::Path, spp: 32, width: Some(48), height: Some(48), seed: 7, ..Default::default() };
+    let settings = Settings {
+        method: Method::Path,
+        spp: 32,
+        width: Some(48),
+        height: Some(48),
+        seed: 7,
+        ..Default::default()
+    };
     let out = render(&scene, &settings, &gi_core::render::Silent).unwrap();
     let expected = albedo * i / (std::f32::consts::PI * r * r * (1.0 - albedo));
     let mean = out.radiance.mean();
@@ -28,7 +34,12 @@ fn check(albedo: f32) {
     // 73k paths is below 0.3% (ρ = 0.8, where paths are longest).
     for c in 0..3 {
         let rel = (mean[c] - expected) / expected;
-        assert!(rel.abs() < 0.01, "albedo {albedo}: channel {c} mean {} vs analytic {expected} ({:+.3}%)", mean[c], rel * 100.0);
+        assert!(
+            rel.abs() < 0.01,
+            "albedo {albedo}: channel {c} mean {} vs analytic {expected} ({:+.3}%)",
+            mean[c],
+            rel * 100.0
+        );
     }
 }
 

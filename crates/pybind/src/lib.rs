@@ -1,1 +1,20 @@
+//! Python bindings of gi (`gi._gi`): thin wrappers over `gi_core`; the Python package `gi`
+//! adds scene-file loading, image output and the CLI.
 
+mod errors;
+mod render;
+mod scene;
+
+use pyo3::prelude::*;
+
+#[pymodule]
+fn _gi(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    errors::register(m)?;
+    m.add_class::<scene::PyScene>()?;
+    m.add_function(wrap_pyfunction!(scene::builtin_scenes, m)?)?;
+    m.add_function(wrap_pyfunction!(scene::builtin_json, m)?)?;
+    m.add_function(wrap_pyfunction!(render::render, m)?)?;
+    m.add_function(wrap_pyfunction!(render::methods, m)?)?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}

@@ -147,7 +147,11 @@ impl Material {
         let one_minus_avg = Vec3::ONE - self.fresnel_avg();
         if self.diffuse.max_element() > 0.0 {
             let num = (Vec3::ONE - self.fresnel_spec(wo.z)) * (Vec3::ONE - self.fresnel_spec(wi.z));
-            let coupling = Vec3::select(one_minus_avg.cmpgt(Vec3::splat(1e-6)), num / one_minus_avg, Vec3::ZERO);
+            let coupling = Vec3::select(
+                one_minus_avg.cmpgt(Vec3::splat(1e-6)),
+                num / one_minus_avg,
+                Vec3::ZERO,
+            );
             f += self.diffuse * FRAC_1_PI * coupling;
         }
         if self.has_specular() && !self.is_mirror() {
@@ -187,7 +191,12 @@ impl Material {
             if u < ps && self.is_mirror() {
                 let wi = Vec3::new(-wo.x, -wo.y, wo.z);
                 let weight = self.fresnel_spec(wo_up.z) / ps;
-                return Some(BsdfSample { wi, weight, pdf: ps, lobe: Lobe::Mirror });
+                return Some(BsdfSample {
+                    wi,
+                    weight,
+                    pdf: ps,
+                    lobe: Lobe::Mirror,
+                });
             }
             let (wi_up, lobe) = if u < ps {
                 let h = microfacet::sample_h(u2, self.alpha());
@@ -205,7 +214,12 @@ impl Material {
                 return None;
             }
             let weight = self.eval(wo, wi) * wi_up.z / pdf;
-            return Some(BsdfSample { wi, weight, pdf, lobe });
+            return Some(BsdfSample {
+                wi,
+                weight,
+                pdf,
+                lobe,
+            });
         }
         if pg <= 0.0 {
             return None;
@@ -216,12 +230,22 @@ impl Material {
         let (fr, cos_t) = fresnel::dielectric(wo_up.z, eta);
         if u2.x < fr {
             let wi = Vec3::new(-wo.x, -wo.y, wo.z);
-            Some(BsdfSample { wi, weight: tint, pdf: pg * fr, lobe: Lobe::GlassReflect })
+            Some(BsdfSample {
+                wi,
+                weight: tint,
+                pdf: pg * fr,
+                lobe: Lobe::GlassReflect,
+            })
         } else {
             // Refract: wi = -wo/eta + (cos_i/eta - cos_t) n, on the other side.
             let wt_up = -wo_up / eta + (wo_up.z / eta - cos_t) * Vec3::Z;
             let wi = (wt_up * sign).normalize();
-            Some(BsdfSample { wi, weight: tint, pdf: pg * (1.0 - fr), lobe: Lobe::GlassRefract })
+            Some(BsdfSample {
+                wi,
+                weight: tint,
+                pdf: pg * (1.0 - fr),
+                lobe: Lobe::GlassRefract,
+            })
         }
     }
 

@@ -58,21 +58,32 @@ fn albedo_never_exceeds_one() {
             // 1 plus four standard errors of the estimate (plus float slack): a real excess
             // of more than a fraction of a percent fails.
             let limit = Vec3::ONE + 4.0 * se + Vec3::splat(1e-4);
-            assert!(a.cmple(limit).all(), "material {m:?} cos {c}: albedo {a} (se {se})");
+            assert!(
+                a.cmple(limit).all(),
+                "material {m:?} cos {c}: albedo {a} (se {se})"
+            );
         }
     }
 }
 
 #[test]
 fn lambertian_albedo_is_exact() {
-    let m = Material { diffuse: Vec3::new(0.2, 0.5, 0.9), ..Default::default() };
+    let m = Material {
+        diffuse: Vec3::new(0.2, 0.5, 0.9),
+        ..Default::default()
+    };
     let mut rng = Rng::new(5, 0, 0);
     for _ in 0..1000 {
         let wo = uniform_sphere(rng.next_2d());
-        let s = m.sample(wo, &mut rng).expect("a Lambertian sample is never absorbed");
+        let s = m
+            .sample(wo, &mut rng)
+            .expect("a Lambertian sample is never absorbed");
         // Each cosine-weighted sample carries exactly the albedo.
         assert!((s.weight - m.diffuse).abs().max_element() < 1e-5);
-        assert!(s.wi.z * wo.z > 0.0, "two-sided: the sample stays on the viewer's side");
+        assert!(
+            s.wi.z * wo.z > 0.0,
+            "two-sided: the sample stays on the viewer's side"
+        );
     }
     // And ∫ f cos dω = ρL by quadrature, independent of the sampler.
     let wo = dir(0.6, 1.0);
@@ -92,8 +103,17 @@ fn lambertian_albedo_is_exact() {
 
 #[test]
 fn mirror_and_glass_conserve_energy_exactly() {
-    let mirror = Material { diffuse: Vec3::ZERO, specular: Vec3::splat(0.9), ..Default::default() };
-    let glass = Material { diffuse: Vec3::ZERO, transmission: Vec3::ONE, ior: 1.5, ..Default::default() };
+    let mirror = Material {
+        diffuse: Vec3::ZERO,
+        specular: Vec3::splat(0.9),
+        ..Default::default()
+    };
+    let glass = Material {
+        diffuse: Vec3::ZERO,
+        transmission: Vec3::ONE,
+        ior: 1.5,
+        ..Default::default()
+    };
     for &c in &[1.0f32, 0.5, 0.1] {
         let (a, _) = albedo_by_sampling(&mirror, dir(c, 0.0), 1000, 1);
         assert!((a - Vec3::splat(0.9)).abs().max_element() < 1e-5);
@@ -114,7 +134,10 @@ fn non_delta_part_is_reciprocal() {
             let b = uniform_sphere(rng.next_2d());
             let (f1, f2) = (m.eval(a, b), m.eval(b, a));
             let scale = f1.max_element().max(f2.max_element()).max(1e-6);
-            assert!((f1 - f2).abs().max_element() / scale < 1e-4, "{m:?}: {f1} vs {f2}");
+            assert!(
+                (f1 - f2).abs().max_element() / scale < 1e-4,
+                "{m:?}: {f1} vs {f2}"
+            );
         }
     }
 }
@@ -131,7 +154,8 @@ fn normal_upper_tail(z: f64) -> f64 {
                         + t * (-0.186_288_06
                             + t * (0.278_868_07
                                 + t * (-1.135_203_98
-                                    + t * (1.488_515_87 + t * (-0.822_152_23 + t * 0.170_872_77)))))))))
+                                    + t * (1.488_515_87
+                                        + t * (-0.822_152_23 + t * 0.170_872_77)))))))))
             .exp();
     let erfc = if x >= 0.0 { y } else { 2.0 - y };
     0.5 * erfc
@@ -196,7 +220,10 @@ fn chi_square(sampler: &Material, reference: &Material, wo: Vec3, seed: u64) -> 
         chi2 += (pool_o - pool_e) * (pool_o - pool_e) / pool_e;
         dof += 1;
     } else {
-        assert!(pool_o < 20.0, "samples where the pdf says there are none: {pool_o}");
+        assert!(
+            pool_o < 20.0,
+            "samples where the pdf says there are none: {pool_o}"
+        );
     }
     chi2_p_value(chi2, (dof - 1) as f64)
 }
@@ -204,9 +231,23 @@ fn chi_square(sampler: &Material, reference: &Material, wo: Vec3, seed: u64) -> 
 #[test]
 fn sampling_matches_pdf_chi_square() {
     let cases = [
-        Material { diffuse: Vec3::splat(0.7), ..Default::default() },
-        Material { diffuse: Vec3::ZERO, specular: Vec3::splat(0.9), roughness: 0.5, ..Default::default() },
-        Material { diffuse: Vec3::ZERO, specular: Vec3::splat(0.9), roughness: 0.3, fresnel: true, ..Default::default() },
+        Material {
+            diffuse: Vec3::splat(0.7),
+            ..Default::default()
+        },
+        Material {
+            diffuse: Vec3::ZERO,
+            specular: Vec3::splat(0.9),
+            roughness: 0.5,
+            ..Default::default()
+        },
+        Material {
+            diffuse: Vec3::ZERO,
+            specular: Vec3::splat(0.9),
+            roughness: 0.3,
+            fresnel: true,
+            ..Default::default()
+        },
         Material {
             diffuse: Vec3::new(0.6, 0.3, 0.2),
             specular: Vec3::splat(0.04),
@@ -214,7 +255,12 @@ fn sampling_matches_pdf_chi_square() {
             fresnel: true,
             ..Default::default()
         },
-        Material { diffuse: Vec3::splat(0.3), specular: Vec3::splat(0.3), roughness: 0.8, ..Default::default() },
+        Material {
+            diffuse: Vec3::splat(0.3),
+            specular: Vec3::splat(0.3),
+            roughness: 0.8,
+            ..Default::default()
+        },
         Material {
             diffuse: Vec3::splat(0.3),
             specular: Vec3::splat(0.2),
@@ -239,7 +285,15 @@ fn sampling_matches_pdf_chi_square() {
 fn chi_square_detects_a_wrong_pdf() {
     // Guard against a test that cannot fail: samples of one roughness checked against the
     // pdf of a slightly different one must be rejected.
-    let m = Material { diffuse: Vec3::ZERO, specular: Vec3::splat(0.9), roughness: 0.5, ..Default::default() };
-    let wrong = Material { roughness: 0.45, ..m };
+    let m = Material {
+        diffuse: Vec3::ZERO,
+        specular: Vec3::splat(0.9),
+        roughness: 0.5,
+        ..Default::default()
+    };
+    let wrong = Material {
+        roughness: 0.45,
+        ..m
+    };
     assert!(chi_square(&m, &wrong, dir(0.7, 0.0), 3) < 1e-6);
 }

@@ -28,10 +28,17 @@ impl Method {
 impl FromStr for Method {
     type Err = Error;
     fn from_str(s: &str) -> Result<Self> {
-        Method::ALL.iter().copied().find(|m| m.name() == s).ok_or_else(|| {
-            let names: Vec<_> = Method::ALL.iter().map(|m| m.name()).collect();
-            Error::setting("method", format!("unknown method `{s}` (available: {})", names.join(", ")))
-        })
+        Method::ALL
+            .iter()
+            .copied()
+            .find(|m| m.name() == s)
+            .ok_or_else(|| {
+                let names: Vec<_> = Method::ALL.iter().map(|m| m.name()).collect();
+                Error::setting(
+                    "method",
+                    format!("unknown method `{s}` (available: {})", names.join(", ")),
+                )
+            })
     }
 }
 
@@ -52,7 +59,15 @@ pub struct Settings {
 
 impl Default for Settings {
     fn default() -> Self {
-        Settings { method: Method::Path, spp: 64, width: None, height: None, seed: 0, max_depth: 64, light_paths: None }
+        Settings {
+            method: Method::Path,
+            spp: 64,
+            width: None,
+            height: None,
+            seed: 0,
+            max_depth: 64,
+            light_paths: None,
+        }
     }
 }
 
@@ -68,7 +83,10 @@ impl Settings {
         for (name, v) in [("width", self.width), ("height", self.height)] {
             if let Some(v) = v {
                 if v == 0 || v > 16384 {
-                    return Err(Error::setting(if name == "width" { "width" } else { "height" }, "must be in 1..=16384"));
+                    return Err(Error::setting(
+                        if name == "width" { "width" } else { "height" },
+                        "must be in 1..=16384",
+                    ));
                 }
             }
         }
@@ -77,7 +95,10 @@ impl Settings {
         }
         if let Some(n) = self.light_paths {
             if n > MAX_LIGHT_PATHS {
-                return Err(Error::setting("light_paths", format!("must be at most {MAX_LIGHT_PATHS}")));
+                return Err(Error::setting(
+                    "light_paths",
+                    format!("must be at most {MAX_LIGHT_PATHS}"),
+                ));
             }
         }
         Ok(())
@@ -130,10 +151,14 @@ impl Progress for Silent {
 /// Renders `scene` with `settings`.
 pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Result<RenderOutput> {
     settings.validate()?;
-    let camera = scene
-        .camera
-        .with_size(settings.width.unwrap_or(scene.camera.width), settings.height.unwrap_or(scene.camera.height));
-    let scene = Scene { camera, ..scene.clone() };
+    let camera = scene.camera.with_size(
+        settings.width.unwrap_or(scene.camera.width),
+        settings.height.unwrap_or(scene.camera.height),
+    );
+    let scene = Scene {
+        camera,
+        ..scene.clone()
+    };
     match settings.method {
         Method::Path => reference::render(&scene, settings, progress),
     }

@@ -18,17 +18,27 @@ const LIGHT_CHUNK: u64 = 1 << 14;
 
 pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Result<RenderOutput> {
     let t0 = Instant::now();
-    let mut stats = RenderStats { triangles: scene.triangles.len() as u64, ..Default::default() };
+    let mut stats = RenderStats {
+        triangles: scene.triangles.len() as u64,
+        ..Default::default()
+    };
 
     let t = Instant::now();
     let bvh = SceneBvh::build(scene);
-    stats.stages.push(("bvh build".into(), t.elapsed().as_secs_f64()));
+    stats
+        .stages
+        .push(("bvh build".into(), t.elapsed().as_secs_f64()));
 
     let (w, h) = (scene.camera.width, scene.camera.height);
     let spp = settings.spp;
-    let ps = PathSettings { max_depth: settings.max_depth, rr_depth: 3 };
+    let ps = PathSettings {
+        max_depth: settings.max_depth,
+        rr_depth: 3,
+    };
     let light_paths = if light_tracer::scene_has_delta_surfaces(scene) && settings.max_depth >= 2 {
-        settings.light_paths.unwrap_or(spp as u64 * w as u64 * h as u64)
+        settings
+            .light_paths
+            .unwrap_or(spp as u64 * w as u64 * h as u64)
     } else {
         0
     };
@@ -64,7 +74,12 @@ pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Re
                         sum += path::radiance(scene, &bvh, cam.position, dir, &mut rng, &ps);
                     }
                     // Auxiliary images through the pixel centre are noise-free.
-                    let first = path::first_hit(scene, &bvh, cam.position, cam.direction(x as f32 + 0.5, y as f32 + 0.5));
+                    let first = path::first_hit(
+                        scene,
+                        &bvh,
+                        cam.position,
+                        cam.direction(x as f32 + 0.5, y as f32 + 0.5),
+                    );
                     (sum / spp as f32, first)
                 })
                 .collect();
@@ -72,7 +87,9 @@ pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Re
             row
         })
         .collect();
-    stats.stages.push(("camera paths".into(), t.elapsed().as_secs_f64()));
+    stats
+        .stages
+        .push(("camera paths".into(), t.elapsed().as_secs_f64()));
     if cancelled.load(Ordering::Relaxed) {
         return Err(Error::Cancelled);
     }
@@ -80,7 +97,10 @@ pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Re
     // Light paths for caustics, one image per rayon fold, summed.
     let t = Instant::now();
     let weights = light_tracer::light_weights(scene);
-    let lts = LightTraceSettings { max_depth: settings.max_depth, rr_depth: 3 };
+    let lts = LightTraceSettings {
+        max_depth: settings.max_depth,
+        rr_depth: 3,
+    };
     let caustics = (0..light_chunks)
         .into_par_iter()
         .fold(
@@ -92,7 +112,15 @@ pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Re
                 let end = ((chunk + 1) * LIGHT_CHUNK).min(light_paths);
                 for i in chunk * LIGHT_CHUNK..end {
                     let mut rng = Rng::new(settings.seed, u64::MAX - 1, i);
-                    light_tracer::trace_path(scene, &bvh, &weights, &mut rng, light_paths, &lts, &mut img);
+                    light_tracer::trace_path(
+                        scene,
+                        &bvh,
+                        &weights,
+                        &mut rng,
+                        light_paths,
+                        &lts,
+                        &mut img,
+                    );
                 }
                 tick();
                 img
@@ -101,11 +129,16 @@ pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Re
         .reduce(
             || Image::new(w, h),
             |mut a, b| {
-                a.pixels.iter_mut().zip(&b.pixels).for_each(|(x, y)| *x += *y);
+                a.pixels
+                    .iter_mut()
+                    .zip(&b.pixels)
+                    .for_each(|(x, y)| *x += *y);
                 a
             },
         );
-    stats.stages.push(("light paths".into(), t.elapsed().as_secs_f64()));
+    stats
+        .stages
+        .push(("light paths".into(), t.elapsed().as_secs_f64()));
     if cancelled.load(Ordering::Relaxed) {
         return Err(Error::Cancelled);
     }

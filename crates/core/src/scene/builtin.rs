@@ -6,13 +6,21 @@ use std::collections::HashMap;
 
 /// (name, description, JSON text) of every built-in scene; the first is the default.
 pub const BUILTINS: &[(&str, &str, &str)] = &[
-    ("cornell", "Cornell box, one point light below the ceiling", include_str!("../../scenes/cornell.json")),
+    (
+        "cornell",
+        "Cornell box, one point light below the ceiling",
+        include_str!("../../scenes/cornell.json"),
+    ),
     (
         "cornell-glass",
         "Cornell box with a glass and a mirror sphere (refractive and reflective caustics)",
         include_str!("../../scenes/cornell-glass.json"),
     ),
-    ("caustic-ring", "mirror ring on a diffuse floor: cardioid caustic", include_str!("../../scenes/caustic-ring.json")),
+    (
+        "caustic-ring",
+        "mirror ring on a diffuse floor: cardioid caustic",
+        include_str!("../../scenes/caustic-ring.json"),
+    ),
     (
         "furnace",
         "closed diffuse sphere (R = 1, albedo 0.5), point light (I = 1) at its centre",
@@ -22,7 +30,10 @@ pub const BUILTINS: &[(&str, &str, &str)] = &[
 
 /// The JSON text of a built-in scene.
 pub fn json(name: &str) -> Option<&'static str> {
-    BUILTINS.iter().find(|(n, _, _)| *n == name).map(|(_, _, j)| *j)
+    BUILTINS
+        .iter()
+        .find(|(n, _, _)| *n == name)
+        .map(|(_, _, j)| *j)
 }
 
 /// Loads a built-in scene by name.

@@ -19,11 +19,26 @@ pub struct Camera {
 }
 
 impl Camera {
-    pub fn new(position: Vec3, look_at: Vec3, up: Vec3, fov_y: f32, width: u32, height: u32) -> Self {
+    pub fn new(
+        position: Vec3,
+        look_at: Vec3,
+        up: Vec3,
+        fov_y: f32,
+        width: u32,
+        height: u32,
+    ) -> Self {
         let forward = (look_at - position).normalize();
         let right = forward.cross(up).normalize();
         let up = right.cross(forward);
-        Camera { position, forward, right, up, fov_y, width, height }
+        Camera {
+            position,
+            forward,
+            right,
+            up,
+            fov_y,
+            width,
+            height,
+        }
     }
 
     /// The same camera with another image size.

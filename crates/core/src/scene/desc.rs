@@ -166,7 +166,11 @@ pub struct TransformDesc {
 
 impl Default for TransformDesc {
     fn default() -> Self {
-        TransformDesc { translate: [0.0; 3], rotate: [0.0; 3], scale: default_scale() }
+        TransformDesc {
+            translate: [0.0; 3],
+            rotate: [0.0; 3],
+            scale: default_scale(),
+        }
     }
 }
 

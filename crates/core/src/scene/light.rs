@@ -10,7 +10,13 @@ pub enum Light {
     /// Isotropic point light; emitted power 4π·I.
     Point { position: Vec3, intensity: Vec3 },
     /// Spot light: full intensity inside `cos_inner`, smooth falloff to zero at `cos_outer`.
-    Spot { position: Vec3, direction: Vec3, intensity: Vec3, cos_inner: f32, cos_outer: f32 },
+    Spot {
+        position: Vec3,
+        direction: Vec3,
+        intensity: Vec3,
+        cos_inner: f32,
+        cos_outer: f32,
+    },
 }
 
 /// An emitted photon: origin, direction and power (W).
@@ -44,9 +50,13 @@ impl Light {
     pub fn intensity_towards(&self, dir: Vec3) -> Vec3 {
         match *self {
             Light::Point { intensity, .. } => intensity,
-            Light::Spot { direction, intensity, cos_inner, cos_outer, .. } => {
-                intensity * Self::falloff(dir.dot(direction), cos_inner, cos_outer)
-            }
+            Light::Spot {
+                direction,
+                intensity,
+                cos_inner,
+                cos_outer,
+                ..
+            } => intensity * Self::falloff(dir.dot(direction), cos_inner, cos_outer),
         }
     }
 
@@ -54,7 +64,12 @@ impl Light {
     pub fn power(&self) -> Vec3 {
         match *self {
             Light::Point { intensity, .. } => 4.0 * PI * intensity,
-            Light::Spot { intensity, cos_inner, cos_outer, .. } => {
+            Light::Spot {
+                intensity,
+                cos_inner,
+                cos_outer,
+                ..
+            } => {
                 // ∫ falloff dω = 2π ∫ s(c) dc; smoothstep integrates to half its span.
                 intensity * 2.0 * PI * ((1.0 - cos_inner) + 0.5 * (cos_inner - cos_outer))
             }
@@ -64,14 +79,28 @@ impl Light {
     /// Emits one photon carrying power `power / n` on average when called `n` times.
     pub fn emit(&self, rng: &mut Rng) -> Emission {
         match *self {
-            Light::Point { position, intensity } => {
-                Emission { origin: position, direction: uniform_sphere(rng.next_2d()), power: 4.0 * PI * intensity }
-            }
-            Light::Spot { position, direction, cos_outer, .. } => {
+            Light::Point {
+                position,
+                intensity,
+            } => Emission {
+                origin: position,
+                direction: uniform_sphere(rng.next_2d()),
+                power: 4.0 * PI * intensity,
+            },
+            Light::Spot {
+                position,
+                direction,
+                cos_outer,
+                ..
+            } => {
                 let local = uniform_cone(rng.next_2d(), cos_outer);
                 let dir = Frame::new(direction).to_world(local);
                 let pdf = 1.0 / (2.0 * PI * (1.0 - cos_outer));
-                Emission { origin: position, direction: dir, power: self.intensity_towards(dir) / pdf }
+                Emission {
+                    origin: position,
+                    direction: dir,
+                    power: self.intensity_towards(dir) / pdf,
+                }
             }
         }
     }
@@ -97,6 +126,10 @@ mod tests {
             sum += l.emit(&mut rng).power / n as f32;
         }
         // Mean of bounded samples; the falloff band's variance gives a standard error < 0.3%.
-        assert!(((sum - l.power()) / l.power()).abs().max_element() < 0.01, "{sum} vs {}", l.power());
+        assert!(
+            ((sum - l.power()) / l.power()).abs().max_element() < 0.01,
+            "{sum} vs {}",
+            l.power()
+        );
     }
 }

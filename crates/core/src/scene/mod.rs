@@ -49,19 +49,32 @@ fn finite3(v: V3) -> bool {
 impl Scene {
     /// Parses and validates a JSON scene description. `source_name` names the file (or
     /// built-in) in error messages.
-    pub fn from_json(text: &str, source_name: &str, meshes: &HashMap<String, MeshData>) -> Result<Scene> {
+    pub fn from_json(
+        text: &str,
+        source_name: &str,
+        meshes: &HashMap<String, MeshData>,
+    ) -> Result<Scene> {
         let de = &mut serde_json::Deserializer::from_str(text);
         let desc: SceneDesc = serde_path_to_error::deserialize(de).map_err(|e| {
             let field = e.path().to_string();
-            Error::scene(source_name, if field == "." { "(root)".into() } else { field }, e.inner().to_string())
+            Error::scene(
+                source_name,
+                if field == "." { "(root)".into() } else { field },
+                e.inner().to_string(),
+            )
         })?;
         Scene::from_desc(&desc, source_name, meshes)
     }
 
     /// Builds a scene from a parsed description, validating every field.
-    pub fn from_desc(desc: &SceneDesc, source_name: &str, meshes: &HashMap<String, MeshData>) -> Result<Scene> {
+    pub fn from_desc(
+        desc: &SceneDesc,
+        source_name: &str,
+        meshes: &HashMap<String, MeshData>,
+    ) -> Result<Scene> {
         let err = |field: String, msg: &str| Error::scene(source_name, field, msg);
-        let camera = camera_from_desc(&desc.camera).map_err(|(f, m)| err(format!("camera.{f}"), m))?;
+        let camera =
+            camera_from_desc(&desc.camera).map_err(|(f, m)| err(format!("camera.{f}"), m))?;
 
         let mut lights = Vec::new();
         for (i, l) in desc.lights.iter().enumerate() {
@@ -72,7 +85,8 @@ impl Scene {
         let mut material_names = Vec::new();
         let mut index_of: HashMap<String, u32> = HashMap::new();
         for (name, m) in &desc.materials {
-            let mat = material_from_desc(m).map_err(|(f, msg)| err(format!("materials.{name}.{f}"), msg))?;
+            let mat = material_from_desc(m)
+                .map_err(|(f, msg)| err(format!("materials.{name}.{f}"), msg))?;
             index_of.insert(name.clone(), materials.len() as u32);
             materials.push(mat);
             material_names.push(name.clone());
@@ -90,23 +104,27 @@ impl Scene {
         };
         for (i, obj) in desc.objects.iter().enumerate() {
             let at = |f: &str| format!("objects[{i}].{f}");
-            let xf = transform_matrix(&obj.transform).map_err(|(f, m)| err(at(&format!("transform.{f}")), m))?;
+            let xf = transform_matrix(&obj.transform)
+                .map_err(|(f, m)| err(at(&format!("transform.{f}")), m))?;
             let (mesh, file_materials) = match &obj.shape {
                 ShapeDesc::Mesh { file } => {
-                    let data = meshes
-                        .get(file)
-                        .ok_or_else(|| err(at("shape.file"), &format!("mesh `{file}` was not loaded")))?;
+                    let data = meshes.get(file).ok_or_else(|| {
+                        err(at("shape.file"), &format!("mesh `{file}` was not loaded"))
+                    })?;
                     (data.mesh.clone(), Some(data))
                 }
-                shape => (primitive(shape).map_err(|(f, m)| err(at(&format!("shape.{f}")), m))?, None),
+                shape => (
+                    primitive(shape).map_err(|(f, m)| err(at(&format!("shape.{f}")), m))?,
+                    None,
+                ),
             };
             validate_mesh(&mesh).map_err(|m| err(at("shape"), &m))?;
             // Per-triangle materials: the object's own, else those of the file.
             let tri_mats: Vec<u32> = match (&obj.material, file_materials) {
                 (Some(name), _) => {
-                    let id = *index_of
-                        .get(name)
-                        .ok_or_else(|| err(at("material"), &format!("no material named `{name}`")))?;
+                    let id = *index_of.get(name).ok_or_else(|| {
+                        err(at("material"), &format!("no material named `{name}`"))
+                    })?;
                     vec![id; mesh.indices.len()]
                 }
                 (None, Some(data)) if !data.materials.is_empty() => {
@@ -116,13 +134,24 @@ impl Scene {
                         scene.material_names.push(name.clone());
                     }
                     if data.face_materials.len() != mesh.indices.len()
-                        || data.face_materials.iter().any(|&f| f as usize >= data.materials.len())
+                        || data
+                            .face_materials
+                            .iter()
+                            .any(|&f| f as usize >= data.materials.len())
                     {
-                        return Err(err(at("shape.file"), "per-face materials do not match the mesh"));
+                        return Err(err(
+                            at("shape.file"),
+                            "per-face materials do not match the mesh",
+                        ));
                     }
                     data.face_materials.iter().map(|f| base + f).collect()
                 }
-                (None, _) => return Err(err(at("material"), "required (the shape carries no materials)")),
+                (None, _) => {
+                    return Err(err(
+                        at("material"),
+                        "required (the shape carries no materials)",
+                    ))
+                }
             };
             scene.append(&mesh, xf, &tri_mats);
         }
@@ -133,11 +162,20 @@ impl Scene {
         let base = self.positions.len() as u32;
         let normal_xf = Mat3::from_mat4(xf).inverse().transpose();
         let flip = Mat3::from_mat4(xf).determinant() < 0.0;
-        self.positions.extend(mesh.positions.iter().map(|p| xf.transform_point3(*p)));
-        self.normals.extend(mesh.normals.iter().map(|n| (normal_xf * *n).normalize_or_zero()));
+        self.positions
+            .extend(mesh.positions.iter().map(|p| xf.transform_point3(*p)));
+        self.normals.extend(
+            mesh.normals
+                .iter()
+                .map(|n| (normal_xf * *n).normalize_or_zero()),
+        );
         self.triangles.extend(mesh.indices.iter().map(|t| {
             let t = t.map(|i| i + base);
-            if flip { [t[0], t[2], t[1]] } else { t }
+            if flip {
+                [t[0], t[2], t[1]]
+            } else {
+                t
+            }
         }));
         self.triangle_materials.extend_from_slice(tri_materials);
     }
@@ -159,18 +197,51 @@ impl Scene {
 
 type FieldError = (String, &'static str);
 
+/// Parses a JSON object of named materials (the `materials` section's format), as carried by
+/// mesh files (e.g. OBJ + MTL) whose loader turned them into descriptions.
+pub fn parse_materials(json: &str, source_name: &str) -> Result<Vec<(String, Material)>> {
+    let de = &mut serde_json::Deserializer::from_str(json);
+    let descs: std::collections::BTreeMap<String, MaterialDesc> =
+        serde_path_to_error::deserialize(de).map_err(|e| {
+            Error::scene(
+                source_name,
+                format!("materials.{}", e.path()),
+                e.inner().to_string(),
+            )
+        })?;
+    descs
+        .iter()
+        .map(|(name, d)| {
+            material_from_desc(d)
+                .map(|m| (name.clone(), m))
+                .map_err(|(f, msg)| Error::scene(source_name, format!("materials.{name}.{f}"), msg))
+        })
+        .collect()
+}
+
 fn camera_from_desc(c: &desc::CameraDesc) -> std::result::Result<Camera, (String, &'static str)> {
-    for (name, v) in [("position", c.position), ("look_at", c.look_at), ("up", c.up)] {
+    for (name, v) in [
+        ("position", c.position),
+        ("look_at", c.look_at),
+        ("up", c.up),
+    ] {
         if !finite3(v) {
             return Err((name.into(), "must be finite"));
         }
     }
-    let (pos, at, up) = (Vec3::from(c.position), Vec3::from(c.look_at), Vec3::from(c.up));
+    let (pos, at, up) = (
+        Vec3::from(c.position),
+        Vec3::from(c.look_at),
+        Vec3::from(c.up),
+    );
     if (at - pos).length() < 1e-6 {
         return Err(("look_at".into(), "must differ from position"));
     }
     if up.length() < 1e-6 || (at - pos).normalize().cross(up.normalize()).length() < 1e-4 {
-        return Err(("up".into(), "must be non-zero and not parallel to the viewing direction"));
+        return Err((
+            "up".into(),
+            "must be non-zero and not parallel to the viewing direction",
+        ));
     }
     if !(c.fov > 0.0 && c.fov < 179.0) {
         return Err(("fov".into(), "must be in (0, 179) degrees"));
@@ -192,13 +263,25 @@ fn check_intensity(v: V3) -> std::result::Result<Vec3, FieldError> {
 
 fn light_from_desc(l: &LightDesc) -> std::result::Result<Light, FieldError> {
     match *l {
-        LightDesc::Point { position, intensity } => {
+        LightDesc::Point {
+            position,
+            intensity,
+        } => {
             if !finite3(position) {
                 return Err(("position".into(), "must be finite"));
             }
-            Ok(Light::Point { position: position.into(), intensity: check_intensity(intensity)? })
+            Ok(Light::Point {
+                position: position.into(),
+                intensity: check_intensity(intensity)?,
+            })
         }
-        LightDesc::Spot { position, direction, intensity, inner_angle, outer_angle } => {
+        LightDesc::Spot {
+            position,
+            direction,
+            intensity,
+            inner_angle,
+            outer_angle,
+        } => {
             if !finite3(position) {
                 return Err(("position".into(), "must be finite"));
             }
@@ -224,13 +307,20 @@ fn light_from_desc(l: &LightDesc) -> std::result::Result<Light, FieldError> {
 }
 
 fn material_from_desc(m: &MaterialDesc) -> std::result::Result<Material, FieldError> {
-    for (name, v) in [("diffuse", m.diffuse), ("specular", m.specular), ("transmission", m.transmission)] {
+    for (name, v) in [
+        ("diffuse", m.diffuse),
+        ("specular", m.specular),
+        ("transmission", m.transmission),
+    ] {
         if !finite3(v) || v.iter().any(|x| !(0.0..=1.0).contains(x)) {
             return Err((name.into(), "each channel must be in [0, 1]"));
         }
     }
     if (0..3).any(|c| m.diffuse[c] + m.transmission[c] > 1.0 + 1e-6) {
-        return Err(("transmission".into(), "diffuse + transmission must not exceed 1 (energy conservation)"));
+        return Err((
+            "transmission".into(),
+            "diffuse + transmission must not exceed 1 (energy conservation)",
+        ));
     }
     if !(0.0..=1.0).contains(&m.roughness) {
         return Err(("roughness".into(), "must be in [0, 1]"));
@@ -265,37 +355,80 @@ fn transform_matrix(t: &desc::TransformDesc) -> std::result::Result<Mat4, FieldE
     let [rx, ry, rz] = t.rotate.map(f32::to_radians);
     // Rotate about x first, then y, then z: R = Rz·Ry·Rx.
     let rot = Quat::from_euler(EulerRot::ZYX, rz, ry, rx);
-    Ok(Mat4::from_scale_rotation_translation(scale, rot, t.translate.into()))
+    Ok(Mat4::from_scale_rotation_translation(
+        scale,
+        rot,
+        t.translate.into(),
+    ))
 }
 
 fn primitive(shape: &ShapeDesc) -> std::result::Result<TriMesh, FieldError> {
     let positive = |name: &str, v: f32| {
-        if v.is_finite() && v > 0.0 { Ok(v) } else { Err((name.to_string(), "must be positive and finite")) }
+        if v.is_finite() && v > 0.0 {
+            Ok(v)
+        } else {
+            Err((name.to_string(), "must be positive and finite"))
+        }
     };
     let segs = |s: u32| {
-        if (3..=4096).contains(&s) { Ok(s) } else { Err(("segments".to_string(), "must be in 3..=4096")) }
+        if (3..=4096).contains(&s) {
+            Ok(s)
+        } else {
+            Err(("segments".to_string(), "must be in 3..=4096"))
+        }
     };
     Ok(match *shape {
         ShapeDesc::Mesh { .. } => unreachable!("mesh files are resolved by the caller"),
-        ShapeDesc::Quad { size } => primitives::quad([positive("size", size[0])?, positive("size", size[1])?]),
-        ShapeDesc::Box { size } => {
-            primitives::cuboid(Vec3::new(positive("size", size[0])?, positive("size", size[1])?, positive("size", size[2])?))
+        ShapeDesc::Quad { size } => {
+            primitives::quad([positive("size", size[0])?, positive("size", size[1])?])
         }
-        ShapeDesc::Sphere { radius, subdivisions } => {
+        ShapeDesc::Box { size } => primitives::cuboid(Vec3::new(
+            positive("size", size[0])?,
+            positive("size", size[1])?,
+            positive("size", size[2])?,
+        )),
+        ShapeDesc::Sphere {
+            radius,
+            subdivisions,
+        } => {
             if subdivisions > 7 {
-                return Err(("subdivisions".into(), "must be at most 7 (327,680 triangles)"));
+                return Err((
+                    "subdivisions".into(),
+                    "must be at most 7 (327,680 triangles)",
+                ));
             }
             primitives::sphere(positive("radius", radius)?, subdivisions)
         }
-        ShapeDesc::Cylinder { radius, height, segments, caps } => {
-            primitives::cylinder(positive("radius", radius)?, positive("height", height)?, segs(segments)?, caps)
-        }
-        ShapeDesc::Ring { inner_radius, outer_radius, height, segments } => {
+        ShapeDesc::Cylinder {
+            radius,
+            height,
+            segments,
+            caps,
+        } => primitives::cylinder(
+            positive("radius", radius)?,
+            positive("height", height)?,
+            segs(segments)?,
+            caps,
+        ),
+        ShapeDesc::Ring {
+            inner_radius,
+            outer_radius,
+            height,
+            segments,
+        } => {
             let inner = positive("inner_radius", inner_radius)?;
             if !(outer_radius.is_finite() && outer_radius > inner) {
-                return Err(("outer_radius".into(), "must be finite and larger than inner_radius"));
+                return Err((
+                    "outer_radius".into(),
+                    "must be finite and larger than inner_radius",
+                ));
             }
-            primitives::ring(inner, outer_radius, positive("height", height)?, segs(segments)?)
+            primitives::ring(
+                inner,
+                outer_radius,
+                positive("height", height)?,
+                segs(segments)?,
+            )
         }
     })
 }

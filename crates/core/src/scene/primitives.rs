@@ -31,7 +31,12 @@ impl TriMesh {
 pub fn quad(size: [f32; 2]) -> TriMesh {
     let (x, z) = (size[0] * 0.5, size[1] * 0.5);
     let mut m = TriMesh::default();
-    m.push_quad([Vec3::new(-x, 0.0, -z), Vec3::new(-x, 0.0, z), Vec3::new(x, 0.0, z), Vec3::new(x, 0.0, -z)]);
+    m.push_quad([
+        Vec3::new(-x, 0.0, -z),
+        Vec3::new(-x, 0.0, z),
+        Vec3::new(x, 0.0, z),
+        Vec3::new(x, 0.0, -z),
+    ]);
     m
 }
 
@@ -39,12 +44,42 @@ pub fn cuboid(size: Vec3) -> TriMesh {
     let h = size * 0.5;
     let mut m = TriMesh::default();
     let c = |x: f32, y: f32, z: f32| Vec3::new(x * h.x, y * h.y, z * h.z);
-    m.push_quad([c(-1., -1., 1.), c(1., -1., 1.), c(1., 1., 1.), c(-1., 1., 1.)]); // +z
-    m.push_quad([c(1., -1., -1.), c(-1., -1., -1.), c(-1., 1., -1.), c(1., 1., -1.)]); // -z
-    m.push_quad([c(1., -1., 1.), c(1., -1., -1.), c(1., 1., -1.), c(1., 1., 1.)]); // +x
-    m.push_quad([c(-1., -1., -1.), c(-1., -1., 1.), c(-1., 1., 1.), c(-1., 1., -1.)]); // -x
-    m.push_quad([c(-1., 1., 1.), c(1., 1., 1.), c(1., 1., -1.), c(-1., 1., -1.)]); // +y
-    m.push_quad([c(-1., -1., -1.), c(1., -1., -1.), c(1., -1., 1.), c(-1., -1., 1.)]); // -y
+    m.push_quad([
+        c(-1., -1., 1.),
+        c(1., -1., 1.),
+        c(1., 1., 1.),
+        c(-1., 1., 1.),
+    ]); // +z
+    m.push_quad([
+        c(1., -1., -1.),
+        c(-1., -1., -1.),
+        c(-1., 1., -1.),
+        c(1., 1., -1.),
+    ]); // -z
+    m.push_quad([
+        c(1., -1., 1.),
+        c(1., -1., -1.),
+        c(1., 1., -1.),
+        c(1., 1., 1.),
+    ]); // +x
+    m.push_quad([
+        c(-1., -1., -1.),
+        c(-1., -1., 1.),
+        c(-1., 1., 1.),
+        c(-1., 1., -1.),
+    ]); // -x
+    m.push_quad([
+        c(-1., 1., 1.),
+        c(1., 1., 1.),
+        c(1., 1., -1.),
+        c(-1., 1., -1.),
+    ]); // +y
+    m.push_quad([
+        c(-1., -1., -1.),
+        c(1., -1., -1.),
+        c(1., -1., 1.),
+        c(-1., -1., 1.),
+    ]); // -y
     m
 }
 
@@ -52,18 +87,43 @@ pub fn cuboid(size: Vec3) -> TriMesh {
 pub fn sphere(radius: f32, subdivisions: u32) -> TriMesh {
     let t = (1.0 + 5f32.sqrt()) * 0.5;
     let mut verts: Vec<Vec3> = [
-        [-1., t, 0.], [1., t, 0.], [-1., -t, 0.], [1., -t, 0.],
-        [0., -1., t], [0., 1., t], [0., -1., -t], [0., 1., -t],
-        [t, 0., -1.], [t, 0., 1.], [-t, 0., -1.], [-t, 0., 1.],
+        [-1., t, 0.],
+        [1., t, 0.],
+        [-1., -t, 0.],
+        [1., -t, 0.],
+        [0., -1., t],
+        [0., 1., t],
+        [0., -1., -t],
+        [0., 1., -t],
+        [t, 0., -1.],
+        [t, 0., 1.],
+        [-t, 0., -1.],
+        [-t, 0., 1.],
     ]
     .iter()
     .map(|v| Vec3::from_array(*v).normalize())
     .collect();
     let mut faces: Vec<[u32; 3]> = vec![
-        [0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11],
-        [1, 5, 9], [5, 11, 4], [11, 10, 2], [10, 7, 6], [7, 1, 8],
-        [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8], [3, 8, 9],
-        [4, 9, 5], [2, 4, 11], [6, 2, 10], [8, 6, 7], [9, 8, 1],
+        [0, 11, 5],
+        [0, 5, 1],
+        [0, 1, 7],
+        [0, 7, 10],
+        [0, 10, 11],
+        [1, 5, 9],
+        [5, 11, 4],
+        [11, 10, 2],
+        [10, 7, 6],
+        [7, 1, 8],
+        [3, 9, 4],
+        [3, 4, 2],
+        [3, 2, 6],
+        [3, 6, 8],
+        [3, 8, 9],
+        [4, 9, 5],
+        [2, 4, 11],
+        [6, 2, 10],
+        [8, 6, 7],
+        [9, 8, 1],
     ];
     for _ in 0..subdivisions {
         let mut mid: HashMap<(u32, u32), u32> = HashMap::new();
@@ -82,7 +142,11 @@ pub fn sphere(radius: f32, subdivisions: u32) -> TriMesh {
         }
         faces = next;
     }
-    TriMesh { positions: verts.iter().map(|v| *v * radius).collect(), normals: verts, indices: faces }
+    TriMesh {
+        positions: verts.iter().map(|v| *v * radius).collect(),
+        normals: verts,
+        indices: faces,
+    }
 }
 
 /// Side wall of a cylinder of `radius` from y0 to y1, normals outward (or inward).
@@ -96,7 +160,12 @@ fn push_wall(m: &mut TriMesh, radius: f32, y0: f32, y1: f32, segments: u32, inwa
         m.push_vertex(n * radius + Vec3::Y * y1, n_out);
     }
     for i in 0..segments {
-        let (b0, t0, b1, t1) = (base + 2 * i, base + 2 * i + 1, base + 2 * i + 2, base + 2 * i + 3);
+        let (b0, t0, b1, t1) = (
+            base + 2 * i,
+            base + 2 * i + 1,
+            base + 2 * i + 2,
+            base + 2 * i + 3,
+        );
         if inward {
             m.indices.push([b0, t0, t1]);
             m.indices.push([b0, t1, b1]);
@@ -118,7 +187,12 @@ fn push_annulus(m: &mut TriMesh, r0: f32, r1: f32, y: f32, segments: u32, up: bo
         m.push_vertex(d * r1 + Vec3::Y * y, n);
     }
     for i in 0..segments {
-        let (i0, o0, i1, o1) = (base + 2 * i, base + 2 * i + 1, base + 2 * i + 2, base + 2 * i + 3);
+        let (i0, o0, i1, o1) = (
+            base + 2 * i,
+            base + 2 * i + 1,
+            base + 2 * i + 2,
+            base + 2 * i + 3,
+        );
         // A disc (r0 = 0) needs only the outer triangle of each segment.
         if up {
             m.indices.push([i0, o0, o1]);
@@ -174,7 +248,9 @@ mod tests {
         let s = sphere(1.0, 4);
         assert_eq!(s.indices.len(), 20 * 256);
         let v = volume(&s);
-        assert!(v > 0.99 * 4.0 / 3.0 * std::f32::consts::PI && v < 4.0 / 3.0 * std::f32::consts::PI);
+        assert!(
+            v > 0.99 * 4.0 / 3.0 * std::f32::consts::PI && v < 4.0 / 3.0 * std::f32::consts::PI
+        );
         let c = volume(&cylinder(1.0, 2.0, 256, true));
         assert!((c - 2.0 * std::f32::consts::PI).abs() < 0.01);
         let r = volume(&ring(1.0, 1.5, 1.0, 256));
@@ -183,12 +259,23 @@ mod tests {
 
     #[test]
     fn vertex_normals_agree_with_winding() {
-        for m in [cuboid(Vec3::ONE), sphere(2.0, 2), cylinder(1.0, 1.0, 16, true), ring(0.5, 1.0, 1.0, 16), quad([1.0, 1.0])] {
+        for m in [
+            cuboid(Vec3::ONE),
+            sphere(2.0, 2),
+            cylinder(1.0, 1.0, 16, true),
+            ring(0.5, 1.0, 1.0, 16),
+            quad([1.0, 1.0]),
+        ] {
             for t in &m.indices {
                 let [a, b, c] = t.map(|i| m.positions[i as usize]);
                 let ng = (b - a).cross(c - a);
                 for i in t {
-                    assert!(ng.dot(m.normals[*i as usize]) > 0.0, "{:?} {:?}", [a, b, c], m.normals[*i as usize]);
+                    assert!(
+                        ng.dot(m.normals[*i as usize]) > 0.0,
+                        "{:?} {:?}",
+                        [a, b, c],
+                        m.normals[*i as usize]
+                    );
                 }
             }
         }

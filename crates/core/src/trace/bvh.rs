@@ -3,7 +3,10 @@
 
 use crate::scene::Scene;
 use glam::{Vec3, Vec3A};
-use obvhs::{cwbvh::builder::build_cwbvh_from_tris, cwbvh::CwBvh, ray::Ray, triangle::Triangle, BvhBuildParams};
+use obvhs::{
+    cwbvh::builder::build_cwbvh_from_tris, cwbvh::CwBvh, ray::Ray, triangle::Triangle,
+    BvhBuildParams,
+};
 use std::time::Duration;
 
 /// A closest hit: distance, triangle index (into the scene) and barycentrics of v1 and v2.
@@ -62,20 +65,32 @@ impl SceneBvh {
         let triangles: Vec<Triangle> = (0..scene.triangles.len())
             .map(|t| {
                 let [a, b, c] = scene.triangle(t);
-                Triangle { v0: a.into(), v1: b.into(), v2: c.into() }
+                Triangle {
+                    v0: a.into(),
+                    v1: b.into(),
+                    v2: c.into(),
+                }
             })
             .collect();
         Self::from_triangles(&triangles)
     }
 
     pub fn from_triangles(triangles: &[Triangle]) -> Self {
-        let bvh = build_cwbvh_from_tris(triangles, BvhBuildParams::medium_build(), &mut Duration::default());
+        let bvh = build_cwbvh_from_tris(
+            triangles,
+            BvhBuildParams::medium_build(),
+            &mut Duration::default(),
+        );
         let ids: Vec<u32> = bvh.primitive_indices.clone();
         let tris = ids
             .iter()
             .map(|&i| {
                 let t = &triangles[i as usize];
-                Tri { v0: t.v0, e1: t.v1 - t.v0, e2: t.v2 - t.v0 }
+                Tri {
+                    v0: t.v0,
+                    e1: t.v1 - t.v0,
+                    e2: t.v2 - t.v0,
+                }
             })
             .collect();
         SceneBvh { bvh, tris, ids }
@@ -87,23 +102,31 @@ impl SceneBvh {
         let ray = Ray::new(origin.into(), dir.into(), 0.0, tmax);
         let mut best: Option<(u32, f32, f32, f32)> = None;
         let mut hit = obvhs::ray::RayHit::none();
-        self.bvh.ray_traverse(ray, &mut hit, |r, id| match self.tris[id].intersect(r) {
-            Some((t, u, v)) => {
-                best = Some((id as u32, t, u, v));
-                t
-            }
-            None => f32::INFINITY,
-        });
+        self.bvh
+            .ray_traverse(ray, &mut hit, |r, id| match self.tris[id].intersect(r) {
+                Some((t, u, v)) => {
+                    best = Some((id as u32, t, u, v));
+                    t
+                }
+                None => f32::INFINITY,
+            });
         // The traversal only reports hits closer than the running tmax, so the last one
         // recorded is the closest.
-        best.map(|(id, t, u, v)| Hit { t, triangle: self.ids[id as usize], u, v })
+        best.map(|(id, t, u, v)| Hit {
+            t,
+            triangle: self.ids[id as usize],
+            u,
+            v,
+        })
     }
 
     /// True when anything blocks the open segment (0, tmax) of the ray.
     #[inline]
     pub fn occluded(&self, origin: Vec3, dir: Vec3, tmax: f32) -> bool {
         let ray = Ray::new(origin.into(), dir.into(), 0.0, tmax);
-        !self.bvh.ray_traverse_miss(ray, |r, id| self.tris[id].intersect(r).map_or(f32::INFINITY, |h| h.0))
+        !self.bvh.ray_traverse_miss(ray, |r, id| {
+            self.tris[id].intersect(r).map_or(f32::INFINITY, |h| h.0)
+        })
     }
 }
 
@@ -120,12 +143,20 @@ mod tests {
         let tris: Vec<Tri> = (0..scene.triangles.len())
             .map(|t| {
                 let [a, b, c] = scene.triangle(t);
-                Tri { v0: a.into(), e1: (b - a).into(), e2: (c - a).into() }
+                Tri {
+                    v0: a.into(),
+                    e1: (b - a).into(),
+                    e2: (c - a).into(),
+                }
             })
             .collect();
         let mut rng = Rng::new(1, 0, 0);
         for _ in 0..2000 {
-            let o = Vec3::new(rng.next_f32() * 2.0 - 1.0, rng.next_f32() * 2.0, rng.next_f32() * 2.0 - 1.0);
+            let o = Vec3::new(
+                rng.next_f32() * 2.0 - 1.0,
+                rng.next_f32() * 2.0,
+                rng.next_f32() * 2.0 - 1.0,
+            );
             let d = uniform_sphere(rng.next_2d());
             let ray = Ray::new(o.into(), d.into(), 0.0, f32::INFINITY);
             let brute = tris

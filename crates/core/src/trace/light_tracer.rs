@@ -37,20 +37,36 @@ pub fn choose_light(weights: &[f32], u: f32) -> Option<(usize, f32)> {
 
 /// Power-proportional selection weights of the scene's lights (mean over channels).
 pub fn light_weights(scene: &Scene) -> Vec<f32> {
-    scene.lights.iter().map(|l| l.power().element_sum() / 3.0).collect()
+    scene
+        .lights
+        .iter()
+        .map(|l| l.power().element_sum() / 3.0)
+        .collect()
 }
 
 /// Traces light path `index` (of `total`) and splats its camera connections into `image`
 /// as pixel radiance (W·sr⁻¹·m⁻²).
-pub fn trace_path(scene: &Scene, bvh: &SceneBvh, weights: &[f32], rng: &mut Rng, total: u64, s: &LightTraceSettings, image: &mut Image) {
+pub fn trace_path(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    weights: &[f32],
+    rng: &mut Rng,
+    total: u64,
+    s: &LightTraceSettings,
+    image: &mut Image,
+) {
     let cam = &scene.camera;
-    let Some((li, p_light)) = choose_light(weights, rng.next_f32()) else { return };
+    let Some((li, p_light)) = choose_light(weights, rng.next_f32()) else {
+        return;
+    };
     let e = scene.lights[li].emit(rng);
     let mut power = e.power / (p_light * total as f32);
     let (mut o, mut d) = (e.origin, e.direction);
     let pixel_area = cam.pixel_area();
     for depth in 0..s.max_depth {
-        let Some(hit) = bvh.intersect(o, d, f32::INFINITY) else { return };
+        let Some(hit) = bvh.intersect(o, d, f32::INFINITY) else {
+            return;
+        };
         let it = Interaction::new(scene, &hit, d);
         let w_prev = -d;
         // Connect vertices after the first (specular) bounce to the camera.
@@ -60,20 +76,31 @@ pub fn trace_path(scene: &Scene, bvh: &SceneBvh, weights: &[f32], rng: &mut Rng,
                 let dist2 = to_cam.length_squared();
                 let wc = to_cam / dist2.sqrt();
                 if wc.dot(it.ng) * w_prev.dot(it.ng) > 0.0 {
-                    let f = it.material.eval(it.frame.to_local(wc), it.frame.to_local(w_prev));
+                    let f = it
+                        .material
+                        .eval(it.frame.to_local(wc), it.frame.to_local(w_prev));
                     let origin = it.spawn(wc);
-                    if f != Vec3::ZERO && !bvh.occluded(origin, wc, (cam.position - origin).length() * (1.0 - 1e-4)) {
+                    if f != Vec3::ZERO
+                        && !bvh.occluded(
+                            origin,
+                            wc,
+                            (cam.position - origin).length() * (1.0 - 1e-4),
+                        )
+                    {
                         // Flux → pixel radiance: f·|cos θx|/d² is the radiance's solid-angle
                         // density at the eye; dividing by the pixel's solid angle
                         // (A_pixel·cos³θc) averages it over the pixel.
-                        let contrib = power * f * wc.dot(it.ng).abs() / (dist2 * pixel_area * cos_cam.powi(3));
+                        let contrib = power * f * wc.dot(it.ng).abs()
+                            / (dist2 * pixel_area * cos_cam.powi(3));
                         let idx = py as usize * cam.width as usize + px as usize;
                         image.pixels[idx] += contrib;
                     }
                 }
             }
         }
-        let Some(bs) = it.material.sample(it.frame.to_local(w_prev), rng) else { return };
+        let Some(bs) = it.material.sample(it.frame.to_local(w_prev), rng) else {
+            return;
+        };
         // Only paths whose first bounce is specular belong to this estimator.
         if depth == 0 && !bs.lobe.is_delta() {
             return;
@@ -85,7 +112,8 @@ pub fn trace_path(scene: &Scene, bvh: &SceneBvh, weights: &[f32], rng: &mut Rng,
         }
         power *= bs.weight;
         if depth + 1 >= s.rr_depth {
-            let q = (power.max_element() / (e.power.max_element() / (p_light * total as f32))).min(0.95);
+            let q = (power.max_element() / (e.power.max_element() / (p_light * total as f32)))
+                .min(0.95);
             if q <= 0.0 || rng.next_f32() >= q {
                 return;
             }
@@ -98,5 +126,8 @@ pub fn trace_path(scene: &Scene, bvh: &SceneBvh, weights: &[f32], rng: &mut Rng,
 
 /// True when some surface of the scene has a delta lobe, i.e. light tracing has work to do.
 pub fn scene_has_delta_surfaces(scene: &Scene) -> bool {
-    scene.materials.iter().any(|m| m.has_transmission() || (m.has_specular() && m.is_mirror()))
+    scene
+        .materials
+        .iter()
+        .any(|m| m.has_transmission() || (m.has_specular() && m.is_mirror()))
 }

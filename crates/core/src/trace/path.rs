@@ -55,7 +55,11 @@ pub fn direct_light(scene: &Scene, bvh: &SceneBvh, it: &Interaction, wo: Vec3) -
             continue;
         }
         let origin = it.spawn(wi);
-        if bvh.occluded(origin, wi, (light.position() - origin).length() * (1.0 - 1e-4)) {
+        if bvh.occluded(
+            origin,
+            wi,
+            (light.position() - origin).length() * (1.0 - 1e-4),
+        ) {
             continue;
         }
         sum += f * wi_l.z.abs() * li;
@@ -65,10 +69,16 @@ pub fn direct_light(scene: &Scene, bvh: &SceneBvh, it: &Interaction, wo: Vec3) -
 
 /// What the ray `origin + t·dir` hits first.
 pub fn first_hit(scene: &Scene, bvh: &SceneBvh, origin: Vec3, dir: Vec3) -> FirstHit {
-    let Some(hit) = bvh.intersect(origin, dir, f32::INFINITY) else { return FirstHit::default() };
+    let Some(hit) = bvh.intersect(origin, dir, f32::INFINITY) else {
+        return FirstHit::default();
+    };
     let it = Interaction::new(scene, &hit, dir);
     let wo = -dir;
-    let n = if it.frame.n.dot(wo) < 0.0 { -it.frame.n } else { it.frame.n };
+    let n = if it.frame.n.dot(wo) < 0.0 {
+        -it.frame.n
+    } else {
+        it.frame.n
+    };
     FirstHit {
         albedo: it.material.scatter_probability(it.frame.to_local(wo)),
         normal: n,
@@ -78,12 +88,21 @@ pub fn first_hit(scene: &Scene, bvh: &SceneBvh, origin: Vec3, dir: Vec3) -> Firs
 }
 
 /// Radiance arriving at `origin` from direction `-dir`.
-pub fn radiance(scene: &Scene, bvh: &SceneBvh, origin: Vec3, dir: Vec3, rng: &mut Rng, s: &PathSettings) -> Vec3 {
+pub fn radiance(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    origin: Vec3,
+    dir: Vec3,
+    rng: &mut Rng,
+    s: &PathSettings,
+) -> Vec3 {
     let mut l = Vec3::ZERO;
     let mut beta = Vec3::ONE;
     let (mut o, mut d) = (origin, dir);
     for depth in 0..s.max_depth {
-        let Some(hit) = bvh.intersect(o, d, f32::INFINITY) else { break };
+        let Some(hit) = bvh.intersect(o, d, f32::INFINITY) else {
+            break;
+        };
         let it = Interaction::new(scene, &hit, d);
         let wo = -d;
         // Next-event estimation.
@@ -93,7 +112,9 @@ pub fn radiance(scene: &Scene, bvh: &SceneBvh, origin: Vec3, dir: Vec3, rng: &mu
         }
         // Continue the path by sampling the BSDF.
         let wo_l = it.frame.to_local(wo);
-        let Some(bs) = it.material.sample(wo_l, rng) else { break };
+        let Some(bs) = it.material.sample(wo_l, rng) else {
+            break;
+        };
         let wi = it.frame.to_world(bs.wi);
         // The sample must agree with the geometry: reflections stay on the viewer's side,
         // refractions cross.

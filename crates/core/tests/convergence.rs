@@ -1,0 +1,43 @@
+//! The path tracer converges at the Monte Carlo rate: error against a high-sample render
+//! of the same scene falls as 1/√spp.
+
+use gi_core::{render, render::Silent, scene::builtin, Settings};
+
+fn rmse(a: &gi_core::Image, b: &gi_core::Image) -> f64 {
+    let s: f64 = a
+        .pixels
+        .iter()
+        .zip(&b.pixels)
+        .map(|(x, y)| (*x - *y).length_squared() as f64)
+        .sum();
+    (s / (3 * a.pixels.len()) as f64).sqrt()
+}
+
+#[test]
+fn error_falls_as_inverse_sqrt_spp() {
+    let scene = builtin::load("cornell").unwrap();
+    let at = |spp: u32, seed: u64| {
+        let s = Settings {
+            spp,
+            width: Some(24),
+            height: Some(24),
+            seed,
+            ..Default::default()
+        };
+        render(&scene, &s, &Silent).unwrap().radiance
+    };
+    let reference = at(4096, 1000);
+    let errors: Vec<f64> = [4u32, 16, 64]
+        .iter()
+        .map(|&spp| rmse(&at(spp, spp as u64), &reference))
+        .collect();
+    for w in errors.windows(2) {
+        // 4× the samples halves the error; the reference's own noise (1/32 of the 4-spp
+        // error) and the spread of an RMSE over 1728 values keep the ratio within ±25%.
+        let ratio = w[0] / w[1];
+        assert!(
+            (1.5..=2.5).contains(&ratio),
+            "errors {errors:?}: ratio {ratio}"
+        );
+    }
+}

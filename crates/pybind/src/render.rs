@@ -1,0 +1,123 @@
+//! `render()`: runs a method with the GIL released and returns numpy arrays.
+
+use crate::errors::to_py;
+use crate::scene::PyScene;
+use gi_core::{Image, Method, Progress, Settings};
+use numpy::{IntoPyArray, PyArrayMethods};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
+
+/// Forwards progress to a Python callable `(stage: str, fraction: float) -> bool | None`
+/// at most every 100 ms, and cancels on Ctrl-C or when the callable returns `False`.
+struct PyProgress {
+    callback: Option<Py<PyAny>>,
+    last: Mutex<Option<Instant>>,
+    error: Mutex<Option<PyErr>>,
+}
+
+impl Progress for PyProgress {
+    fn update(&self, stage: &str, fraction: f64) -> bool {
+        {
+            let mut last = self.last.lock().unwrap_or_else(|p| p.into_inner());
+            let due =
+                last.is_none_or(|t| t.elapsed() >= Duration::from_millis(100)) || fraction >= 1.0;
+            if !due {
+                return true;
+            }
+            *last = Some(Instant::now());
+        }
+        Python::attach(|py| {
+            let result = py.check_signals().and_then(|_| match &self.callback {
+                Some(cb) => cb
+                    .call1(py, (stage, fraction))
+                    .map(|r| !r.bind(py).is(&*pyo3::types::PyBool::new(py, false))),
+                None => Ok(true),
+            });
+            match result {
+                Ok(go_on) => go_on,
+                Err(e) => {
+                    *self.error.lock().unwrap_or_else(|p| p.into_inner()) = Some(e);
+                    false
+                }
+            }
+        })
+    }
+}
+
+fn image_array<'py>(py: Python<'py>, img: Image) -> PyResult<Bound<'py, PyAny>> {
+    let (w, h) = (img.width as usize, img.height as usize);
+    let flat: Vec<f32> = bytemuck::cast_slice(&img.pixels).to_vec();
+    Ok(flat.into_pyarray(py).reshape([h, w, 3])?.into_any())
+}
+
+/// Renders `scene`; returns a dict of float32 arrays (radiance, albedo, normal, position,
+/// caustics: H×W×3; depth: H×W) and `stats`.
+#[pyfunction]
+#[pyo3(signature = (scene, method = "path", spp = 64, width = None, height = None, seed = 0, max_depth = 64, light_paths = None, progress = None))]
+#[allow(clippy::too_many_arguments)]
+pub fn render<'py>(
+    py: Python<'py>,
+    scene: &PyScene,
+    method: &str,
+    spp: u32,
+    width: Option<u32>,
+    height: Option<u32>,
+    seed: u64,
+    max_depth: u32,
+    light_paths: Option<u64>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let method: Method = method.parse().map_err(|e| to_py(py, e))?;
+    let settings = Settings {
+        method,
+        spp,
+        width,
+        height,
+        seed,
+        max_depth,
+        light_paths,
+        ..Default::default()
+    };
+    let reporter = PyProgress {
+        callback: progress,
+        last: Mutex::new(None),
+        error: Mutex::new(None),
+    };
+    let result = py.detach(|| gi_core::render(&scene.inner, &settings, &reporter));
+    if let Some(e) = reporter
+        .error
+        .lock()
+        .unwrap_or_else(|p| p.into_inner())
+        .take()
+    {
+        return Err(e);
+    }
+    let out = result.map_err(|e| to_py(py, e))?;
+    let d = PyDict::new(py);
+    let (w, h) = (out.radiance.width as usize, out.radiance.height as usize);
+    d.set_item("radiance", image_array(py, out.radiance)?)?;
+    d.set_item("albedo", image_array(py, out.albedo)?)?;
+    d.set_item("normal", image_array(py, out.normal)?)?;
+    d.set_item("position", image_array(py, out.position)?)?;
+    d.set_item("caustics", image_array(py, out.caustics)?)?;
+    d.set_item("depth", out.depth.into_pyarray(py).reshape([h, w])?)?;
+    let stats = PyDict::new(py);
+    let s = &out.stats;
+    stats.set_item("method", method.name())?;
+    stats.set_item("stages", s.stages.clone())?;
+    stats.set_item("total_seconds", s.total_seconds)?;
+    stats.set_item("samples_per_pixel", s.samples_per_pixel)?;
+    stats.set_item("camera_paths", s.camera_paths)?;
+    stats.set_item("light_paths", s.light_paths)?;
+    stats.set_item("triangles", s.triangles)?;
+    d.set_item("stats", stats)?;
+    Ok(d)
+}
+
+/// Names of the available methods.
+#[pyfunction]
+pub fn methods() -> Vec<&'static str> {
+    Method::ALL.iter().map(|m| m.name()).collect()
+}

@@ -1,0 +1,180 @@
+//! `Scene`: built-in scenes, and JSON descriptions with mesh arrays loaded by Python.
+
+use crate::errors::{to_py, SceneError};
+use gi_core::scene::{builtin, MeshData, TriMesh};
+use glam::Vec3;
+use numpy::{PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use std::collections::HashMap;
+
+/// A loaded, validated scene.
+#[pyclass(module = "gi._gi", name = "Scene", frozen)]
+pub struct PyScene {
+    pub inner: gi_core::Scene,
+    source: String,
+}
+
+fn vec3s(a: &PyReadonlyArray2<'_, f32>, what: &str, source: &str) -> PyResult<Vec<Vec3>> {
+    let view = a.as_array();
+    if view.ncols() != 3 {
+        return Err(SceneError::new_err(format!(
+            "{source}: {what} must have shape (N, 3), got {:?}",
+            view.shape()
+        )));
+    }
+    Ok(view
+        .rows()
+        .into_iter()
+        .map(|r| Vec3::new(r[0], r[1], r[2]))
+        .collect())
+}
+
+/// Converts one `meshes` entry: (vertices f32 (N,3), faces u32 (M,3), normals f32 (N,3) | None,
+/// materials JSON | None, face_materials u32 (M,) | None).
+fn mesh_from_py(key: &str, value: &Bound<'_, PyAny>, source: &str) -> PyResult<MeshData> {
+    type Entry<'py> = (
+        PyReadonlyArray2<'py, f32>,
+        PyReadonlyArray2<'py, u32>,
+        Option<PyReadonlyArray2<'py, f32>>,
+        Option<String>,
+        Option<PyReadonlyArray1<'py, u32>>,
+    );
+    let (v, f, n, mats, face_mats): Entry = value.extract().map_err(|e| {
+        SceneError::new_err(format!("{source}: mesh `{key}`: expected (vertices, faces, normals, materials, face_materials): {e}"))
+    })?;
+    let positions = vec3s(&v, "vertices", source)?;
+    let faces = f.as_array();
+    if faces.ncols() != 3 {
+        return Err(SceneError::new_err(format!(
+            "{source}: mesh `{key}`: faces must have shape (M, 3)"
+        )));
+    }
+    let indices: Vec<[u32; 3]> = faces
+        .rows()
+        .into_iter()
+        .map(|r| [r[0], r[1], r[2]])
+        .collect();
+    let normals = match n {
+        Some(n) => vec3s(&n, "normals", source)?,
+        None => {
+            // Area-weighted vertex normals from the faces.
+            let mut acc = vec![Vec3::ZERO; positions.len()];
+            for t in &indices {
+                if t.iter().all(|&i| (i as usize) < positions.len()) {
+                    let [a, b, c] = t.map(|i| positions[i as usize]);
+                    let ng = (b - a).cross(c - a);
+                    t.iter().for_each(|&i| acc[i as usize] += ng);
+                }
+            }
+            acc.into_iter().map(|n| n.normalize_or_zero()).collect()
+        }
+    };
+    let materials = match mats {
+        Some(json) => gi_core::scene::parse_materials(&json, source)
+            .map_err(|e| Python::attach(|py| to_py(py, e)))?,
+        None => Vec::new(),
+    };
+    let face_materials = face_mats.map(|a| a.as_array().to_vec()).unwrap_or_default();
+    Ok(MeshData {
+        mesh: TriMesh {
+            positions,
+            normals,
+            indices,
+        },
+        materials,
+        face_materials,
+    })
+}
+
+#[pymethods]
+impl PyScene {
+    /// Parses a JSON scene description. `meshes` maps each `mesh` object's `file` string to
+    /// its arrays (see `gi.scene` for the loader that fills it).
+    #[staticmethod]
+    #[pyo3(signature = (text, source = "<string>".to_string(), meshes = None))]
+    fn from_json(
+        py: Python<'_>,
+        text: &str,
+        source: String,
+        meshes: Option<&Bound<'_, PyDict>>,
+    ) -> PyResult<Self> {
+        let mut map = HashMap::new();
+        if let Some(meshes) = meshes {
+            for (k, v) in meshes.iter() {
+                let key: String = k.extract()?;
+                let data = mesh_from_py(&key, &v, &source)?;
+                map.insert(key, data);
+            }
+        }
+        let inner = py
+            .detach(|| gi_core::Scene::from_json(text, &source, &map))
+            .map_err(|e| to_py(py, e))?;
+        Ok(PyScene { inner, source })
+    }
+
+    /// Loads a built-in scene by name.
+    #[staticmethod]
+    fn builtin(py: Python<'_>, name: &str) -> PyResult<Self> {
+        let inner = builtin::load(name).map_err(|e| to_py(py, e))?;
+        Ok(PyScene {
+            inner,
+            source: name.to_string(),
+        })
+    }
+
+    /// The file or built-in name the scene came from.
+    #[getter]
+    fn source(&self) -> &str {
+        &self.source
+    }
+    #[getter]
+    fn width(&self) -> u32 {
+        self.inner.camera.width
+    }
+    #[getter]
+    fn height(&self) -> u32 {
+        self.inner.camera.height
+    }
+    #[getter]
+    fn triangle_count(&self) -> usize {
+        self.inner.triangles.len()
+    }
+    #[getter]
+    fn light_count(&self) -> usize {
+        self.inner.lights.len()
+    }
+    #[getter]
+    fn material_names(&self) -> Vec<String> {
+        self.inner.material_names.clone()
+    }
+    /// Total emitted power of all lights, W per channel.
+    #[getter]
+    fn total_power(&self) -> [f32; 3] {
+        self.inner.total_power().to_array()
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Scene(source={:?}, triangles={}, lights={}, size={}x{})",
+            self.source,
+            self.inner.triangles.len(),
+            self.inner.lights.len(),
+            self.inner.camera.width,
+            self.inner.camera.height
+        )
+    }
+}
+
+/// (name, description) of every built-in scene; the first is the default.
+#[pyfunction]
+pub fn builtin_scenes() -> Vec<(&'static str, &'static str)> {
+    builtin::BUILTINS.iter().map(|(n, d, _)| (*n, *d)).collect()
+}
+
+/// The JSON description of a built-in scene (a starting point for your own).
+#[pyfunction]
+pub fn builtin_json(name: &str) -> PyResult<&'static str> {
+    builtin::json(name)
+        .ok_or_else(|| SceneError::new_err(format!("no built-in scene named `{name}`")))
+}

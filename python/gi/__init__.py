@@ -1,0 +1,43 @@
+"""gi: global illumination by image-space photon mapping.
+
+>>> import gi
+>>> scene = gi.load_scene("cornell")            # a built-in name or a JSON scene file
+>>> result = gi.render(scene, method="path", spp=64)
+>>> result.radiance.shape                       # (height, width, 3) float32, W·sr⁻¹·m⁻²
+>>> gi.save_image("cornell.png", result.radiance)
+"""
+
+from gi._gi import (
+    GiError,
+    GpuError,
+    RenderCancelled,
+    Scene,
+    SceneError,
+    SettingError,
+    __version__,
+    builtin_json,
+    builtin_scenes,
+    methods,
+)
+from gi.io import read_image, save_image
+from gi.render import RenderResult, RenderStats, render
+from gi.scene import load_scene
+
+__all__ = [
+    "GiError",
+    "GpuError",
+    "RenderCancelled",
+    "RenderResult",
+    "RenderStats",
+    "Scene",
+    "SceneError",
+    "SettingError",
+    "__version__",
+    "builtin_json",
+    "builtin_scenes",
+    "load_scene",
+    "methods",
+    "read_image",
+    "render",
+    "save_image",
+]

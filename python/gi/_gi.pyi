@@ -1,0 +1,60 @@
+"""Type stubs of the native module ``gi._gi`` (checked by ``mypy.stubtest`` in the tests)."""
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+
+class GiError(Exception): ...
+class SceneError(GiError): ...
+class SettingError(GiError): ...
+class GpuError(GiError): ...
+class RenderCancelled(GiError): ...
+
+MeshArrays = tuple[
+    npt.NDArray[np.float32],
+    npt.NDArray[np.uint32],
+    npt.NDArray[np.float32] | None,
+    str | None,
+    npt.NDArray[np.uint32] | None,
+]
+
+class Scene:
+    @staticmethod
+    def from_json(
+        text: str, source: str = "<string>", meshes: dict[str, MeshArrays] | None = None
+    ) -> Scene: ...
+    @staticmethod
+    def builtin(name: str) -> Scene: ...
+    @property
+    def source(self) -> str: ...
+    @property
+    def width(self) -> int: ...
+    @property
+    def height(self) -> int: ...
+    @property
+    def triangle_count(self) -> int: ...
+    @property
+    def light_count(self) -> int: ...
+    @property
+    def material_names(self) -> list[str]: ...
+    @property
+    def total_power(self) -> tuple[float, float, float]: ...
+
+def builtin_scenes() -> list[tuple[str, str]]: ...
+def builtin_json(name: str) -> str: ...
+def methods() -> list[str]: ...
+def render(
+    scene: Scene,
+    method: str = "path",
+    spp: int = 64,
+    width: int | None = None,
+    height: int | None = None,
+    seed: int = 0,
+    max_depth: int = 64,
+    light_paths: int | None = None,
+    progress: Callable[[str, float], bool | None] | None = None,
+) -> dict[str, Any]: ...

@@ -1,0 +1,95 @@
+"""The ``gi`` command line."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import gi
+
+
+def _size(text: str) -> tuple[int, int]:
+    try:
+        w, h = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected WIDTHxHEIGHT, got {text!r}") from None
+    if w <= 0 or h <= 0:
+        raise argparse.ArgumentTypeError("width and height must be positive")
+    return w, h
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="gi", description="Global illumination renderer (ISPM).")
+    sub = p.add_subparsers(dest="command", required=True)
+    r = sub.add_parser("render", help="render a scene to an image")
+    r.add_argument("scene", help="built-in scene name (see `gi scenes`) or JSON scene file")
+    r.add_argument("-o", "--output", required=True, help="output image (.exr or .png)")
+    r.add_argument("--method", default="path", help="rendering method (see `gi methods`)")
+    r.add_argument("--spp", type=int, default=64, help="samples per pixel (default 64)")
+    r.add_argument("--size", type=_size, help="image size WIDTHxHEIGHT (default: the scene's)")
+    r.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    r.add_argument("--max-depth", type=int, default=64, help="maximum path length")
+    r.add_argument("--light-paths", type=int, help="light paths for caustics (default spp·pixels)")
+    r.add_argument("--exposure", type=float, default=0.0, help="PNG exposure in stops")
+    r.add_argument(
+        "--aov",
+        action="append",
+        default=[],
+        choices=["albedo", "normal", "position", "depth", "caustics"],
+        help="also write this auxiliary image next to the output (repeatable)",
+    )
+    r.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
+    sub.add_parser("scenes", help="list the built-in scenes")
+    sub.add_parser("methods", help="list the rendering methods")
+    return p
+
+
+def _render(args: argparse.Namespace) -> int:
+    scene = gi.load_scene(args.scene)
+    result = gi.render(
+        scene,
+        args.method,
+        spp=args.spp,
+        size=args.size,
+        seed=args.seed,
+        max_depth=args.max_depth,
+        light_paths=args.light_paths,
+        progress=not args.quiet,
+    )
+    out = Path(args.output)
+    gi.save_image(out, result.radiance, exposure=args.exposure)
+    for name in args.aov:
+        aov_path = out.with_name(f"{out.stem}.{name}{out.suffix}")
+        gi.save_image(aov_path, result.aov(name), exposure=0.0)
+    if not args.quiet:
+        s = result.stats
+        stages = ", ".join(f"{n} {t:.2f}s" for n, t in s.stages)
+        print(f"wrote {out} ({s.method}, {s.total_seconds:.2f}s: {stages})", file=sys.stderr)
+    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = _parser().parse_args(argv)
+    try:
+        if args.command == "scenes":
+            for name, desc in gi.builtin_scenes():
+                print(f"{name:15} {desc}")
+            return 0
+        if args.command == "methods":
+            print("\n".join(gi.methods()))
+            return 0
+        return _render(args)
+    except gi.GiError as e:
+        print(f"gi: error: {e}", file=sys.stderr)
+        return 2
+    except (OSError, ValueError) as e:
+        print(f"gi: error: {e}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("\ngi: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

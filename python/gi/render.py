@@ -1,0 +1,129 @@
+"""The typed rendering entry point over the native module."""
+
+from __future__ import annotations
+
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from gi import _gi
+from gi._gi import Scene
+
+ProgressCallback = Callable[[str, float], "bool | None"]
+
+
+@dataclass(frozen=True)
+class RenderStats:
+    """Timings (seconds) and counts of one render."""
+
+    method: str
+    total_seconds: float
+    stages: list[tuple[str, float]] = field(default_factory=list)
+    samples_per_pixel: int = 0
+    camera_paths: int = 0
+    light_paths: int = 0
+    triangles: int = 0
+
+
+@dataclass(frozen=True)
+class RenderResult:
+    """A rendered frame. Images are float32 ``(height, width, 3)`` in linear RGB.
+
+    ``radiance`` is in W·sr⁻¹·m⁻² (the pixel's box-filtered mean); ``caustics`` is the
+    light-traced part of it; ``albedo``, ``normal``, ``position`` and ``depth`` (view-space
+    distance along the camera axis, ``(height, width)``) describe the first surface seen
+    through each pixel centre.
+    """
+
+    radiance: np.ndarray
+    albedo: np.ndarray
+    normal: np.ndarray
+    position: np.ndarray
+    depth: np.ndarray
+    caustics: np.ndarray
+    stats: RenderStats
+
+    def aov(self, name: str) -> np.ndarray:
+        """An image by name: radiance, albedo, normal, position, depth or caustics."""
+        if name not in ("radiance", "albedo", "normal", "position", "depth", "caustics"):
+            raise KeyError(f"unknown image {name!r}")
+        return getattr(self, name)  # type: ignore[no-any-return]
+
+
+class ProgressBar:
+    """A one-line text progress bar on stderr, for the CLI and interactive use."""
+
+    def __init__(self, stream=None, width: int = 30) -> None:  # type: ignore[no-untyped-def]
+        self.stream = stream or sys.stderr
+        self.width = width
+        self.start = time.monotonic()
+
+    def __call__(self, stage: str, fraction: float) -> bool:
+        filled = int(self.width * min(max(fraction, 0.0), 1.0))
+        bar = "#" * filled + "-" * (self.width - filled)
+        elapsed = time.monotonic() - self.start
+        end = "\n" if fraction >= 1.0 else ""
+        self.stream.write(f"\r{stage:>8} [{bar}] {fraction * 100:5.1f}% {elapsed:6.1f}s{end}")
+        self.stream.flush()
+        return True
+
+
+def render(
+    scene: Scene,
+    method: str = "path",
+    *,
+    spp: int = 64,
+    size: tuple[int, int] | None = None,
+    seed: int = 0,
+    max_depth: int = 64,
+    light_paths: int | None = None,
+    progress: bool | ProgressCallback = False,
+) -> RenderResult:
+    """Renders ``scene`` with ``method`` (see :func:`gi.methods`).
+
+    ``size`` is ``(width, height)`` and defaults to the scene camera's. ``progress`` is a
+    callable ``(stage, fraction) -> bool | None`` (return ``False`` to cancel), or ``True``
+    for a text bar on stderr. The GIL is released while rendering; Ctrl-C cancels with
+    :class:`KeyboardInterrupt`.
+    """
+    callback: ProgressCallback | None
+    if progress is True:
+        callback = ProgressBar()
+    elif progress is False:
+        callback = None
+    else:
+        callback = progress
+    width, height = size if size is not None else (None, None)
+    out = _gi.render(
+        scene,
+        method=method,
+        spp=spp,
+        width=width,
+        height=height,
+        seed=seed,
+        max_depth=max_depth,
+        light_paths=light_paths,
+        progress=callback,
+    )
+    s = out["stats"]
+    stats = RenderStats(
+        method=s["method"],
+        total_seconds=s["total_seconds"],
+        stages=[(str(n), float(t)) for n, t in s["stages"]],
+        samples_per_pixel=s["samples_per_pixel"],
+        camera_paths=s["camera_paths"],
+        light_paths=s["light_paths"],
+        triangles=s["triangles"],
+    )
+    return RenderResult(
+        radiance=out["radiance"],
+        albedo=out["albedo"],
+        normal=out["normal"],
+        position=out["position"],
+        depth=out["depth"],
+        caustics=out["caustics"],
+        stats=stats,
+    )
