@@ -1,7 +1,7 @@
 """Type stubs of the native module ``gi._gi`` (checked by ``mypy.stubtest`` in the tests)."""
 
 from collections.abc import Callable
-from typing import Any
+from typing import Any, final
 
 import numpy as np
 import numpy.typing as npt
@@ -14,7 +14,7 @@ class SettingError(GiError): ...
 class GpuError(GiError): ...
 class RenderCancelled(GiError): ...
 
-MeshArrays = tuple[
+_MeshArrays = tuple[
     npt.NDArray[np.float32],
     npt.NDArray[np.uint32],
     npt.NDArray[np.float32] | None,
@@ -22,10 +22,11 @@ MeshArrays = tuple[
     npt.NDArray[np.uint32] | None,
 ]
 
+@final
 class Scene:
     @staticmethod
     def from_json(
-        text: str, source: str = "<string>", meshes: dict[str, MeshArrays] | None = None
+        text: str, source: str = ..., meshes: dict[str, _MeshArrays] | None = None
     ) -> Scene: ...
     @staticmethod
     def builtin(name: str) -> Scene: ...

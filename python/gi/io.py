@@ -8,7 +8,7 @@ import numpy as np
 
 
 def _oiio():  # type: ignore[no-untyped-def]
-    import OpenImageIO as oiio
+    import OpenImageIO as oiio  # noqa: N813 (the package's own usual alias)
 
     return oiio
 

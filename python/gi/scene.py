@@ -48,7 +48,9 @@ def load_scene(source: str | Path) -> Scene:
     except (OSError, UnicodeDecodeError) as e:
         raise _scene_error(file, "(file)", f"cannot read: {e}") from e
     except json.JSONDecodeError as e:
-        raise _scene_error(file, f"(line {e.lineno}, column {e.colno})", f"invalid JSON: {e.msg}") from e
+        raise _scene_error(
+            file, f"(line {e.lineno}, column {e.colno})", f"invalid JSON: {e.msg}"
+        ) from e
     meshes: dict[str, MeshEntry] = {}
     objects = desc.get("objects", []) if isinstance(desc, dict) else []
     for i, obj in enumerate(objects if isinstance(objects, list) else []):
@@ -104,7 +106,7 @@ def load_mesh(path: Path, scene_file: str, field: str) -> MeshEntry:
     if not path.is_file():
         raise _scene_error(scene_file, field, f"mesh file not found: {path}")
     try:
-        loaded = trimesh.load(str(path), force="scene")
+        loaded = trimesh.load(str(path), force="scene", process=False)
     except Exception as e:  # trimesh raises many types for bad files
         raise _scene_error(scene_file, field, f"cannot load mesh {path}: {e}") from e
     parts = []
@@ -123,7 +125,9 @@ def load_mesh(path: Path, scene_file: str, field: str) -> MeshEntry:
         v = trimesh.transform_points(np.asarray(geom.vertices, dtype=np.float64), transform)
         if not np.isfinite(v).all():
             bad = int(np.flatnonzero(~np.isfinite(v).all(axis=1))[0])
-            raise _scene_error(scene_file, field, f"{path}: vertex {bad} is not finite (NaN or infinity)")
+            raise _scene_error(
+                scene_file, field, f"{path}: vertex {bad} is not finite (NaN or infinity)"
+            )
         rot = np.asarray(transform, dtype=np.float64)[:3, :3]
         with np.errstate(invalid="ignore", divide="ignore"):
             n = np.asarray(geom.vertex_normals, dtype=np.float64) @ np.linalg.inv(rot)

@@ -1,0 +1,26 @@
+# The README's two commands: `make render` and `make test`. Both set up a fresh machine first.
+VENV := .venv
+BIN := $(VENV)/bin
+
+.PHONY: setup render test lint bench
+setup:
+	scripts/setup.sh
+
+render: setup
+	mkdir -p out
+	$(BIN)/gi render cornell -o out/cornell.exr --spp 64
+	$(BIN)/gi render cornell -o out/cornell.png --spp 64 -q
+	@echo "wrote out/cornell.exr and out/cornell.png"
+
+lint: setup
+	cargo fmt --all -- --check
+	cargo clippy --workspace --all-targets -- -D warnings
+	$(BIN)/ruff check python tests
+	$(BIN)/ruff format --check python tests
+
+test: lint
+	cargo test --workspace
+	$(BIN)/python -m pytest
+
+bench:
+	cargo bench -p gi-core

@@ -1,0 +1,73 @@
+"""The `gi` command line, run as a user would."""
+
+import subprocess
+import sys
+
+import numpy as np
+
+import gi
+
+
+def run(*args, cwd=None):
+    return subprocess.run(
+        [sys.executable, "-m", "gi.cli", *args],
+        capture_output=True,
+        text=True,
+        cwd=cwd,
+        timeout=300,
+    )
+
+
+def test_render_png_and_exr_with_aovs(tmp_path):
+    out = tmp_path / "c.exr"
+    p = run("render", "cornell", "-o", str(out), "--spp", "2", "--size", "32x24", "--aov", "albedo")
+    assert p.returncode == 0, p.stderr
+    img = gi.read_image(out)
+    assert img.shape == (24, 32, 3) and img.mean() > 0
+    assert (tmp_path / "c.albedo.exr").exists()
+    p = run(
+        "render", "cornell", "-o", str(tmp_path / "c.png"), "--spp", "1", "--size", "16x16", "-q"
+    )
+    assert p.returncode == 0 and p.stderr == ""
+    assert gi.read_image(tmp_path / "c.png").shape == (16, 16, 3)
+
+
+def test_progress_bar_shows(tmp_path):
+    p = run("render", "cornell", "-o", str(tmp_path / "c.png"), "--spp", "1", "--size", "16x16")
+    assert p.returncode == 0 and "100.0%" in p.stderr and "wrote" in p.stderr
+
+
+def test_scenes_lists_builtins():
+    p = run("scenes")
+    assert p.returncode == 0 and "cornell-glass" in p.stdout and "furnace" in p.stdout
+
+
+def test_errors_exit_non_zero_with_a_message(tmp_path):
+    p = run("render", str(tmp_path / "missing.json"), "-o", str(tmp_path / "x.png"))
+    assert p.returncode == 2 and "gi: error:" in p.stderr and "Traceback" not in p.stderr
+    p = run("render", "cornell", "-o", str(tmp_path / "x.png"), "--spp", "0")
+    assert p.returncode == 2 and "spp" in p.stderr
+    p = run("render", "cornell", "-o", str(tmp_path / "x.bmpx"), "--spp", "1", "--size", "4x4")
+    assert p.returncode == 2 and "unsupported" in p.stderr
+    p = run("render", "cornell", "-o", "x.png", "--size", "12")
+    assert p.returncode == 2 and "WIDTHxHEIGHT" in p.stderr
+
+
+def test_scene_file_with_relative_mesh(tmp_path):
+    import trimesh
+
+    (tmp_path / "meshes").mkdir()
+    trimesh.creation.icosphere(subdivisions=2, radius=0.3).export(tmp_path / "meshes" / "ball.stl")
+    desc = gi.builtin_json("cornell").replace(
+        '"objects": [',
+        '"objects": [{"shape": {"type": "mesh", "file": "meshes/ball.stl"}, '
+        '"transform": {"translate": [0, 1, 0]}, "material": "red"},',
+        1,
+    )
+    (tmp_path / "scene.json").write_text(desc)
+    out = tmp_path / "o.exr"
+    p = run(
+        "render", "scene.json", "-o", str(out), "--spp", "1", "--size", "16x16", "-q", cwd=tmp_path
+    )
+    assert p.returncode == 0, p.stderr
+    assert np.isfinite(gi.read_image(out)).all()
