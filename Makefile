@@ -8,9 +8,7 @@ setup:
 
 render: setup
 	mkdir -p out
-	$(BIN)/gi render cornell -o out/cornell.exr --spp 64
-	$(BIN)/gi render cornell -o out/cornell.png --spp 64 -q
-	@echo "wrote out/cornell.exr and out/cornell.png"
+	$(BIN)/gi render cornell -o out/cornell.exr -o out/cornell.png --spp 64
 
 lint: setup
 	cargo fmt --all -- --check

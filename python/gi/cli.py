@@ -24,7 +24,13 @@ def _parser() -> argparse.ArgumentParser:
     sub = p.add_subparsers(dest="command", required=True)
     r = sub.add_parser("render", help="render a scene to an image")
     r.add_argument("scene", help="built-in scene name (see `gi scenes`) or JSON scene file")
-    r.add_argument("-o", "--output", required=True, help="output image (.exr or .png)")
+    r.add_argument(
+        "-o",
+        "--output",
+        required=True,
+        action="append",
+        help="output image, .exr (float) or .png (sRGB); repeat for several",
+    )
     r.add_argument("--method", default="path", help="rendering method (see `gi methods`)")
     r.add_argument("--spp", type=int, default=64, help="samples per pixel (default 64)")
     r.add_argument("--size", type=_size, help="image size WIDTHxHEIGHT (default: the scene's)")
@@ -57,15 +63,19 @@ def _render(args: argparse.Namespace) -> int:
         light_paths=args.light_paths,
         progress=not args.quiet,
     )
-    out = Path(args.output)
-    gi.save_image(out, result.radiance, exposure=args.exposure)
-    for name in args.aov:
-        aov_path = out.with_name(f"{out.stem}.{name}{out.suffix}")
-        gi.save_image(aov_path, result.aov(name), exposure=0.0)
+    written = []
+    for out in map(Path, args.output):
+        gi.save_image(out, result.radiance, exposure=args.exposure)
+        written.append(out)
+        for name in args.aov:
+            aov_path = out.with_name(f"{out.stem}.{name}{out.suffix}")
+            gi.save_image(aov_path, result.aov(name), exposure=0.0)
+            written.append(aov_path)
     if not args.quiet:
         s = result.stats
         stages = ", ".join(f"{n} {t:.2f}s" for n, t in s.stages)
-        print(f"wrote {out} ({s.method}, {s.total_seconds:.2f}s: {stages})", file=sys.stderr)
+        files = ", ".join(map(str, written))
+        print(f"wrote {files} ({s.method}, {s.total_seconds:.2f}s: {stages})", file=sys.stderr)
     return 0
 
 

@@ -13,6 +13,7 @@ use std::collections::HashMap;
 pub struct PyScene {
     pub inner: gi_core::Scene,
     source: String,
+    bvh: std::sync::OnceLock<gi_core::trace::SceneBvh>,
 }
 
 fn vec3s(a: &PyReadonlyArray2<'_, f32>, what: &str, source: &str) -> PyResult<Vec<Vec3>> {
@@ -110,7 +111,11 @@ impl PyScene {
         let inner = py
             .detach(|| gi_core::Scene::from_json(text, &source, &map))
             .map_err(|e| to_py(py, e))?;
-        Ok(PyScene { inner, source })
+        Ok(PyScene {
+            inner,
+            source,
+            bvh: Default::default(),
+        })
     }
 
     /// Loads a built-in scene by name.
@@ -120,6 +125,7 @@ impl PyScene {
         Ok(PyScene {
             inner,
             source: name.to_string(),
+            bvh: Default::default(),
         })
     }
 
@@ -152,6 +158,65 @@ impl PyScene {
     #[getter]
     fn total_power(&self) -> [f32; 3] {
         self.inner.total_power().to_array()
+    }
+
+    /// World-space triangles: (vertices float32 (V, 3), faces uint32 (T, 3)).
+    fn mesh_arrays<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+        use numpy::{IntoPyArray, PyArrayMethods};
+        let v: Vec<f32> = bytemuck::cast_slice(&self.inner.positions).to_vec();
+        let f: Vec<u32> = self.inner.triangles.iter().flatten().copied().collect();
+        let (nv, nf) = (self.inner.positions.len(), self.inner.triangles.len());
+        Ok((
+            v.into_pyarray(py).reshape([nv, 3])?.into_any(),
+            f.into_pyarray(py).reshape([nf, 3])?.into_any(),
+        ))
+    }
+
+    /// Closest hits of rays against the scene's BVH (built on first use, then cached):
+    /// origins and unit directions float32 (N, 3) → (distance float32 (N,), inf on a miss;
+    /// triangle int64 (N,), -1 on a miss). The GIL is released; rays run in parallel.
+    fn intersect<'py>(
+        &self,
+        py: Python<'py>,
+        origins: PyReadonlyArray2<'py, f32>,
+        directions: PyReadonlyArray2<'py, f32>,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+        use numpy::IntoPyArray;
+        use rayon::prelude::*;
+        let o = vec3s(&origins, "origins", &self.source)?;
+        let d = vec3s(&directions, "directions", &self.source)?;
+        if o.len() != d.len() {
+            return Err(pyo3::exceptions::PyValueError::new_err(
+                "origins and directions differ in length",
+            ));
+        }
+        let (t, tri): (Vec<f32>, Vec<i64>) = py.detach(|| {
+            let bvh = self
+                .bvh
+                .get_or_init(|| gi_core::trace::SceneBvh::build(&self.inner));
+            o.par_iter()
+                .zip(d.par_iter())
+                .map(|(o, d)| match bvh.intersect(*o, *d, f32::INFINITY) {
+                    Some(h) => (h.t, h.triangle as i64),
+                    None => (f32::INFINITY, -1),
+                })
+                .unzip()
+        });
+        Ok((
+            t.into_pyarray(py).into_any(),
+            tri.into_pyarray(py).into_any(),
+        ))
+    }
+
+    /// Builds the ray-query BVH now (otherwise on the first `intersect`).
+    fn build_bvh(&self, py: Python<'_>) {
+        py.detach(|| {
+            self.bvh
+                .get_or_init(|| gi_core::trace::SceneBvh::build(&self.inner));
+        });
     }
 
     fn __repr__(&self) -> String {

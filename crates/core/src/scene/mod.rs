@@ -1,5 +1,6 @@
 //! The scene: camera, lights, materials and one flat triangle soup in world space.
 
+pub mod bench;
 pub mod builtin;
 pub mod camera;
 pub mod desc;
