@@ -39,7 +39,8 @@ def test_render_returns_float32_arrays_and_stats():
 
 
 def test_same_seed_same_image_other_seed_other_noise():
-    scene = gi.load_scene("cornell")
+    # cornell-glass exercises both the path tracer and the parallel light tracer.
+    scene = gi.load_scene("cornell-glass")
     a = gi.render(scene, spp=2, size=(16, 16), seed=5).radiance
     b = gi.render(scene, spp=2, size=(16, 16), seed=5).radiance
     c = gi.render(scene, spp=2, size=(16, 16), seed=6).radiance

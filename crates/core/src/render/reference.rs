@@ -94,48 +94,42 @@ pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Re
         return Err(Error::Cancelled);
     }
 
-    // Light paths for caustics, one image per rayon fold, summed.
+    // Light paths for caustics. Each chunk returns its camera connections, which are summed
+    // in chunk order so that the image is bit-for-bit the same for a seed on any schedule.
     let t = Instant::now();
     let weights = light_tracer::light_weights(scene);
     let lts = LightTraceSettings {
         max_depth: settings.max_depth,
         rr_depth: 3,
     };
-    let caustics = (0..light_chunks)
+    let splats: Vec<Vec<(u32, Vec3)>> = (0..light_chunks)
         .into_par_iter()
-        .fold(
-            || Image::new(w, h),
-            |mut img, chunk| {
-                if cancelled.load(Ordering::Relaxed) {
-                    return img;
-                }
-                let end = ((chunk + 1) * LIGHT_CHUNK).min(light_paths);
-                for i in chunk * LIGHT_CHUNK..end {
-                    let mut rng = Rng::new(settings.seed, u64::MAX - 1, i);
-                    light_tracer::trace_path(
-                        scene,
-                        &bvh,
-                        &weights,
-                        &mut rng,
-                        light_paths,
-                        &lts,
-                        &mut img,
-                    );
-                }
-                tick();
-                img
-            },
-        )
-        .reduce(
-            || Image::new(w, h),
-            |mut a, b| {
-                a.pixels
-                    .iter_mut()
-                    .zip(&b.pixels)
-                    .for_each(|(x, y)| *x += *y);
-                a
-            },
-        );
+        .map(|chunk| {
+            let mut splats = Vec::new();
+            if cancelled.load(Ordering::Relaxed) {
+                return splats;
+            }
+            let end = ((chunk + 1) * LIGHT_CHUNK).min(light_paths);
+            for i in chunk * LIGHT_CHUNK..end {
+                let mut rng = Rng::new(settings.seed, u64::MAX - 1, i);
+                light_tracer::trace_path(
+                    scene,
+                    &bvh,
+                    &weights,
+                    &mut rng,
+                    light_paths,
+                    &lts,
+                    &mut splats,
+                );
+            }
+            tick();
+            splats
+        })
+        .collect();
+    let mut caustics = Image::new(w, h);
+    for (pixel, value) in splats.into_iter().flatten() {
+        caustics.pixels[pixel as usize] += value;
+    }
     stats
         .stages
         .push(("light paths".into(), t.elapsed().as_secs_f64()));

@@ -6,7 +6,6 @@
 //! so the two estimates add up without double counting.
 
 use super::{Interaction, SceneBvh};
-use crate::image::Image;
 use crate::sampling::Rng;
 use crate::scene::Scene;
 use glam::Vec3;
@@ -44,8 +43,8 @@ pub fn light_weights(scene: &Scene) -> Vec<f32> {
         .collect()
 }
 
-/// Traces light path `index` (of `total`) and splats its camera connections into `image`
-/// as pixel radiance (W·sr⁻¹·m⁻²).
+/// Traces one of `total` light paths and appends its camera connections to `splats` as
+/// (pixel index, pixel radiance in W·sr⁻¹·m⁻²).
 pub fn trace_path(
     scene: &Scene,
     bvh: &SceneBvh,
@@ -53,7 +52,7 @@ pub fn trace_path(
     rng: &mut Rng,
     total: u64,
     s: &LightTraceSettings,
-    image: &mut Image,
+    splats: &mut Vec<(u32, Vec3)>,
 ) {
     let cam = &scene.camera;
     let Some((li, p_light)) = choose_light(weights, rng.next_f32()) else {
@@ -92,8 +91,7 @@ pub fn trace_path(
                         // (A_pixel·cos³θc) averages it over the pixel.
                         let contrib = power * f * wc.dot(it.ng).abs()
                             / (dist2 * pixel_area * cos_cam.powi(3));
-                        let idx = py as usize * cam.width as usize + px as usize;
-                        image.pixels[idx] += contrib;
+                        splats.push((py as u32 * cam.width + px as u32, contrib));
                     }
                 }
             }

@@ -1,0 +1,3 @@
+//! Photons (work in progress: merged with the photon tracer branch).
+pub mod differential;
+pub mod lbvh;
