@@ -7,6 +7,7 @@
 pub mod bsdf;
 pub mod error;
 pub mod image;
+pub mod photon;
 pub mod render;
 pub mod sampling;
 pub mod scene;
