@@ -240,3 +240,30 @@ fn photon_cornell_matches_path() {
     assert_eq!(photon.caustics.mean(), Vec3::ZERO);
     assert_eq!(photon.albedo, reference.albedo, "same first-hit AOVs");
 }
+
+/// Camera paths through mirror and glass: the image mean matches the reference (path
+/// tracing + light tracing for caustics) on the Cornell box with a glass and a mirror sphere.
+#[test]
+fn photon_cornell_glass_matches_path() {
+    let scene = builtin::load("cornell-glass").unwrap();
+    let size = Some(48);
+    let reference =
+        Settings { method: Method::Path, spp: 128, width: size, height: size, seed: 1, ..Default::default() };
+    let reference = render(&scene, &reference, &Silent).unwrap();
+    let photon = Settings {
+        method: Method::Photon,
+        spp: 4,
+        width: size,
+        height: size,
+        photons: 500_000,
+        seed: 2,
+        ..Default::default()
+    };
+    let photon = render(&scene, &photon, &Silent).unwrap();
+    assert!(photon.radiance.pixels.iter().all(|p| p.is_finite() && p.min_element() >= 0.0));
+    let (a, b) = (photon.radiance.mean(), reference.radiance.mean());
+    let mean_err = ((a - b) / b).abs();
+    let block_err = block_error(&photon.radiance, &reference.radiance, 4);
+    println!("image mean: photon {a} reference {b}; rel err {mean_err}; 4x4 blocks mean rel err {block_err}");
+    assert!(mean_err.max_element() < 0.03, "image mean rel err {mean_err}");
+}

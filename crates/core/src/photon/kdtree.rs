@@ -174,7 +174,7 @@ mod tests {
         let mut points: Vec<Vec3> =
             (0..5000).map(|_| Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32())).collect();
         points.extend((0..2000).map(|_| Vec3::new(rng.next_f32(), 0.5, rng.next_f32() * 0.1)));
-        points.extend_from_slice(&points[..50].to_vec());
+        points.extend_from_within(..50);
         let tree = KdTree::build(&points);
         assert_eq!(tree.len(), points.len());
         let mut out = Vec::new();
