@@ -50,7 +50,8 @@ impl KdTree {
     pub fn build(points: &[Vec3]) -> Self {
         let mut items: Vec<(Vec3, u32)> = points.iter().enumerate().map(|(i, p)| (*p, i as u32)).collect();
         let mut axes = vec![0u8; points.len()];
-        build_range(&mut items, &mut axes);
+        let bounds = points.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+        build_range(&mut items, &mut axes, bounds);
         let (points, indices) = items.into_iter().unzip();
         KdTree { points, indices, axes }
     }
@@ -121,12 +122,13 @@ impl<F: Fn(u32) -> bool> Query<F> {
     }
 }
 
-/// Arranges `items` as the implicit subtree of their range, recording split axes.
-fn build_range(items: &mut [(Vec3, u32)], axes: &mut [u8]) {
+/// Arranges `items` as the implicit subtree of their range, recording split axes. `bounds`
+/// (lower, upper corner) contains the items; each split cuts it at the median.
+fn build_range(items: &mut [(Vec3, u32)], axes: &mut [u8], bounds: (Vec3, Vec3)) {
     if items.len() <= LEAF {
         return;
     }
-    let (lo, hi) = items.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), (p, _)| (lo.min(*p), hi.max(*p)));
+    let (lo, hi) = bounds;
     let extent = hi - lo;
     let axis = if extent.x >= extent.y && extent.x >= extent.z {
         0
@@ -138,14 +140,18 @@ fn build_range(items: &mut [(Vec3, u32)], axes: &mut [u8]) {
     let mid = items.len() / 2;
     items.select_nth_unstable_by(mid, |a, b| a.0[axis].total_cmp(&b.0[axis]).then(a.1.cmp(&b.1)));
     axes[mid] = axis as u8;
+    let split = items[mid].0[axis];
+    let (mut left_hi, mut right_lo) = (hi, lo);
+    left_hi[axis] = split;
+    right_lo[axis] = split;
     let (left, rest) = items.split_at_mut(mid);
     let (left_axes, rest_axes) = axes.split_at_mut(mid);
     let (right, right_axes) = (&mut rest[1..], &mut rest_axes[1..]);
     if left.len() > PARALLEL_BUILD {
-        rayon::join(|| build_range(left, left_axes), || build_range(right, right_axes));
+        rayon::join(|| build_range(left, left_axes, (lo, left_hi)), || build_range(right, right_axes, (right_lo, hi)));
     } else {
-        build_range(left, left_axes);
-        build_range(right, right_axes);
+        build_range(left, left_axes, (lo, left_hi));
+        build_range(right, right_axes, (right_lo, hi));
     }
 }
 

@@ -46,6 +46,7 @@ pub fn emit_and_trace(scene: &Scene, bvh: &SceneBvh, n_photons: u64, s: &PhotonT
     let mut set = trace_chunks(n_photons, |i, out| {
         let mut rng = Rng::new(seed, STREAM_EMIT, i);
         let Some((li, p_light)) = choose_light(&weights, rng.next_f32()) else {
+            out.absorbed += 1;
             return;
         };
         let e = scene.lights[li].emit(&mut rng);
@@ -101,6 +102,10 @@ fn follow(scene: &Scene, bvh: &SceneBvh, ray: &PhotonRay, s: &PhotonTraceSetting
     let mut power = glam::Vec3::from(ray.power);
     let mut density = ray.path_density;
     let mut bounce = ray.bounce;
+    if power.max_element() <= 0.0 || !power.is_finite() {
+        out.absorbed += 1;
+        return;
+    }
     loop {
         let Some(hit) = bvh.intersect(o, d, f32::INFINITY) else {
             out.escaped += 1;
