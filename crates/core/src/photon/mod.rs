@@ -1,4 +1,168 @@
-//! Photons (work in progress: merged with the photon tracer branch).
+//! Photons: the records that photon tracing stores at surface hits, the rays that carry
+//! them between hits, and the CPU photon tracer and kd-tree that photon mapping builds on.
+//!
+//! Directions follow the BSDF convention: a photon's `incident` direction points *towards*
+//! where it came from (away from the surface). Power is in watts per RGB channel; the
+//! powers of all photons stored for one bounce index add up to the power that reaches that
+//! bounce (in expectation).
+
 pub mod differential;
+pub mod estimate;
 pub mod footprint;
+pub mod kdtree;
 pub mod lbvh;
+pub mod trace;
+
+use crate::bsdf::{Lobe, Material};
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+
+pub use estimate::Kernel;
+pub use kdtree::{KdTree, Neighbour};
+pub use trace::{continue_paths, emit_and_trace, PhotonTraceSettings};
+
+/// A stored photon, laid out for GPU upload (64 bytes; each `vec3` starts a 16-byte row).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Photon {
+    /// World-space hit position (m).
+    pub position: [f32; 3],
+    /// Number of scatterings before this hit (0 = direct light).
+    pub bounce: u32,
+    /// Unit direction towards where the photon came from.
+    pub incident: [f32; 3],
+    /// ISPM path density ρp: product over scatterings of ρL/1000 (Lambertian), ρS/10
+    /// (glossy), ρS (mirror) or T (glass); 1 for direct light. Dimensionless.
+    pub path_density: f32,
+    /// Power (W per channel).
+    pub power: [f32; 3],
+    pub _pad0: u32,
+    /// Unit (shading) normal of the surface hit, on the side the photon arrived from.
+    pub normal: [f32; 3],
+    pub _pad1: u32,
+}
+
+impl Photon {
+    pub fn position(&self) -> Vec3 {
+        Vec3::from(self.position)
+    }
+    pub fn incident(&self) -> Vec3 {
+        Vec3::from(self.incident)
+    }
+    pub fn power(&self) -> Vec3 {
+        Vec3::from(self.power)
+    }
+    pub fn normal(&self) -> Vec3 {
+        Vec3::from(self.normal)
+    }
+}
+
+/// A photon in flight, e.g. one that took its first bounce in the ISPM GPU bounce map
+/// (48 bytes, GPU layout).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct PhotonRay {
+    /// Ray origin (m), already offset off the surface it leaves.
+    pub origin: [f32; 3],
+    /// Scatterings so far: the bounce index the next hit is stored with.
+    pub bounce: u32,
+    /// Unit propagation direction.
+    pub direction: [f32; 3],
+    /// Path density ρp so far (1 for a photon fresh from a light).
+    pub path_density: f32,
+    /// Power (W per channel).
+    pub power: [f32; 3],
+    pub _pad: u32,
+}
+
+impl PhotonRay {
+    pub fn new(origin: Vec3, direction: Vec3, power: Vec3, path_density: f32, bounce: u32) -> Self {
+        PhotonRay {
+            origin: origin.into(),
+            bounce,
+            direction: direction.into(),
+            path_density,
+            power: power.into(),
+            _pad: 0,
+        }
+    }
+}
+
+/// The photons of one trace and what happened to the paths.
+#[derive(Clone, Debug, Default)]
+pub struct PhotonSet {
+    pub photons: Vec<Photon>,
+    /// Photon paths started (emitted from lights, or continued from given rays).
+    pub emitted: u64,
+    /// Stored photons per bounce index.
+    pub stored_per_bounce: Vec<u64>,
+    /// Paths ended by absorption (Russian roulette, a BSDF with no energy, or a sample on
+    /// the wrong side of the geometry).
+    pub absorbed: u64,
+    /// Paths that left the scene.
+    pub escaped: u64,
+    /// Paths cut at the bounce limit.
+    pub truncated: u64,
+}
+
+impl PhotonSet {
+    /// Total stored power (W per channel) per bounce index, in f64 for sums of millions.
+    pub fn power_per_bounce(&self) -> Vec<glam::DVec3> {
+        let mut sums = vec![glam::DVec3::ZERO; self.stored_per_bounce.len()];
+        for p in &self.photons {
+            sums[p.bounce as usize] += p.power().as_dvec3();
+        }
+        sums
+    }
+
+    /// Appends `other`, summing the counts.
+    pub fn append(&mut self, mut other: PhotonSet) {
+        self.photons.append(&mut other.photons);
+        self.emitted += other.emitted;
+        self.absorbed += other.absorbed;
+        self.escaped += other.escaped;
+        self.truncated += other.truncated;
+        if self.stored_per_bounce.len() < other.stored_per_bounce.len() {
+            self.stored_per_bounce.resize(other.stored_per_bounce.len(), 0);
+        }
+        for (a, b) in self.stored_per_bounce.iter_mut().zip(&other.stored_per_bounce) {
+            *a += b;
+        }
+    }
+
+    pub(crate) fn store(&mut self, photon: Photon) {
+        let b = photon.bounce as usize;
+        if self.stored_per_bounce.len() <= b {
+            self.stored_per_bounce.resize(b + 1, 0);
+        }
+        self.stored_per_bounce[b] += 1;
+        self.photons.push(photon);
+    }
+}
+
+fn mean(v: Vec3) -> f32 {
+    v.element_sum() / 3.0
+}
+
+/// The ISPM path-density factor of one scattering through `lobe` of `m` (section 4.3):
+/// ρL/1000 for Lambertian, ρS/10 for glossy, ρS for mirror and T for refraction (means over
+/// channels). Glass reflection counts as a mirror of the glass's transmittance.
+pub fn path_density_factor(m: &Material, lobe: Lobe) -> f32 {
+    match lobe {
+        Lobe::Diffuse => mean(m.diffuse) / 1000.0,
+        Lobe::Glossy => mean(m.specular) / 10.0,
+        Lobe::Mirror => mean(m.specular),
+        Lobe::GlassReflect | Lobe::GlassRefract => mean(m.transmission),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn gpu_layout() {
+        assert_eq!(std::mem::size_of::<Photon>(), 64);
+        assert_eq!(std::mem::size_of::<PhotonRay>(), 48);
+    }
+}

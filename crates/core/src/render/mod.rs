@@ -1,9 +1,11 @@
 //! Rendering a frame: settings, the method dispatch, outputs and statistics.
 
+mod photon_map;
 mod reference;
 
 use crate::error::{Error, Result};
 use crate::image::Image;
+pub use crate::photon::Kernel;
 use crate::scene::Scene;
 use std::str::FromStr;
 
@@ -13,14 +15,18 @@ pub enum Method {
     /// The CPU reference: path tracing with next-event estimation plus light tracing for
     /// caustic paths. Unbiased; the ground truth for every other method.
     Path,
+    /// Classic photon mapping (Jensen): k-nearest-neighbour radiance estimates from a
+    /// photon map of all bounces, direct light included. The baseline for ISPM.
+    Photon,
 }
 
 impl Method {
-    pub const ALL: &'static [Method] = &[Method::Path];
+    pub const ALL: &'static [Method] = &[Method::Path, Method::Photon];
 
     pub fn name(self) -> &'static str {
         match self {
             Method::Path => "path",
+            Method::Photon => "photon",
         }
     }
 }
@@ -55,6 +61,15 @@ pub struct Settings {
     pub max_depth: u32,
     /// Light paths for caustics (method `path`); `None` = one per camera sample.
     pub light_paths: Option<u64>,
+    /// Photons emitted from the lights (method `photon`).
+    pub photons: u64,
+    /// Photons per radiance estimate (method `photon`).
+    pub k: u32,
+    /// Maximum gather radius in metres (method `photon`); `None` = 5% of the scene's
+    /// bounding-box diagonal.
+    pub max_radius: Option<f32>,
+    /// Density estimation kernel (method `photon`).
+    pub kernel: Kernel,
 }
 
 impl Default for Settings {
@@ -67,6 +82,10 @@ impl Default for Settings {
             seed: 0,
             max_depth: 64,
             light_paths: None,
+            photons: 200_000,
+            k: 100,
+            max_radius: None,
+            kernel: Kernel::default(),
         }
     }
 }
@@ -74,6 +93,8 @@ impl Default for Settings {
 /// Upper bounds that keep absurd requests from exhausting memory or running for days.
 pub const MAX_SPP: u32 = 1 << 20;
 pub const MAX_LIGHT_PATHS: u64 = 1 << 36;
+pub const MAX_PHOTONS: u64 = 1_000_000_000;
+pub const MAX_K: u32 = 1 << 16;
 
 impl Settings {
     pub fn validate(&self) -> Result<()> {
@@ -99,6 +120,17 @@ impl Settings {
                     "light_paths",
                     format!("must be at most {MAX_LIGHT_PATHS}"),
                 ));
+            }
+        }
+        if self.photons == 0 || self.photons > MAX_PHOTONS {
+            return Err(Error::setting("photons", format!("must be in 1..={MAX_PHOTONS}")));
+        }
+        if self.k == 0 || self.k > MAX_K {
+            return Err(Error::setting("k", format!("must be in 1..={MAX_K}")));
+        }
+        if let Some(r) = self.max_radius {
+            if !(r.is_finite() && r > 0.0) {
+                return Err(Error::setting("max_radius", "must be a positive finite distance"));
             }
         }
         Ok(())
@@ -161,5 +193,6 @@ pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Re
     };
     match settings.method {
         Method::Path => reference::render(&scene, settings, progress),
+        Method::Photon => photon_map::render(&scene, settings, progress),
     }
 }
