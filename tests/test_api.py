@@ -105,3 +105,12 @@ def test_save_exr_round_trips_and_png_is_srgb(tmp_path):
     assert np.allclose(png, 188 / 255, atol=1 / 255)
     with pytest.raises(ValueError):
         gi.save_image(tmp_path / "a.xyz", img)
+
+
+def test_photon_method_matches_furnace():
+    # Classic photon mapping: 200k photons, k = 100 (Jensen); density-estimation bias on
+    # the smooth furnace is small, so 3% covers bias and noise.
+    r = gi.render(gi.load_scene("furnace"), "photon", spp=1, size=(24, 24), photons=200_000)
+    expected = 0.5 * 1.0 / (np.pi * 1.0 * 0.5)
+    assert r.radiance.mean() == pytest.approx(expected, rel=0.03)
+    assert r.stats.method == "photon" and "photon" in gi.methods()

@@ -123,6 +123,9 @@ def test_nan_in_description(write_scene, cornell_desc):
         ({"max_depth": 0}, "max_depth"),
         ({"light_paths": 10**15}, "light_paths"),
         ({"method": "magic"}, "method"),
+        ({"method": "photon", "photons": 0}, "photons"),
+        ({"method": "photon", "photons": 10**12}, "photons"),
+        ({"method": "photon", "kernel": "gaussian"}, "kernel"),
     ],
 )
 def test_absurd_settings(kwargs, setting):

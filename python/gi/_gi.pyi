@@ -62,5 +62,9 @@ def render(
     seed: int = 0,
     max_depth: int = 64,
     light_paths: int | None = None,
+    photons: int = 200_000,
+    k: int = 100,
+    max_radius: float | None = None,
+    kernel: str = "cone",
     progress: Callable[[str, float], bool | None] | None = None,
 ) -> dict[str, Any]: ...

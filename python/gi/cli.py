@@ -37,6 +37,12 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     r.add_argument("--max-depth", type=int, default=64, help="maximum path length")
     r.add_argument("--light-paths", type=int, help="light paths for caustics (default spp·pixels)")
+    r.add_argument("--photons", type=int, default=200_000, help="photons (method photon)")
+    r.add_argument("--k", type=int, default=100, help="nearest photons per estimate")
+    r.add_argument("--max-radius", type=float, help="photon search radius in metres")
+    r.add_argument(
+        "--kernel", default="cone", choices=["box", "cone", "epanechnikov"], help="photon kernel"
+    )
     r.add_argument("--exposure", type=float, default=0.0, help="PNG exposure in stops")
     r.add_argument(
         "--aov",
@@ -61,6 +67,10 @@ def _render(args: argparse.Namespace) -> int:
         seed=args.seed,
         max_depth=args.max_depth,
         light_paths=args.light_paths,
+        photons=args.photons,
+        k=args.k,
+        max_radius=args.max_radius,
+        kernel=args.kernel,
         progress=not args.quiet,
     )
     written = []

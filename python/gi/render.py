@@ -80,11 +80,19 @@ def render(
     seed: int = 0,
     max_depth: int = 64,
     light_paths: int | None = None,
+    photons: int = 200_000,
+    k: int = 100,
+    max_radius: float | None = None,
+    kernel: str = "cone",
     progress: bool | ProgressCallback = False,
 ) -> RenderResult:
     """Renders ``scene`` with ``method`` (see :func:`gi.methods`).
 
-    ``size`` is ``(width, height)`` and defaults to the scene camera's. ``progress`` is a
+    ``size`` is ``(width, height)`` and defaults to the scene camera's. ``spp`` is camera
+    samples per pixel; ``light_paths`` the caustic light paths of method ``path`` (default
+    one per camera sample). Method ``photon`` (classic photon mapping) emits ``photons``
+    photons and estimates radiance from the ``k`` nearest within ``max_radius`` (metres;
+    default 5% of the scene's diagonal) with a ``kernel`` of "box", "cone" or "epanechnikov". ``progress`` is a
     callable ``(stage, fraction) -> bool | None`` (return ``False`` to cancel), or ``True``
     for a text bar on stderr. The GIL is released while rendering; Ctrl-C cancels with
     :class:`KeyboardInterrupt`.
@@ -106,6 +114,10 @@ def render(
         seed=seed,
         max_depth=max_depth,
         light_paths=light_paths,
+        photons=photons,
+        k=k,
+        max_radius=max_radius,
+        kernel=kernel,
         progress=callback,
     )
     s = out["stats"]

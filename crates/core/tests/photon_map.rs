@@ -23,9 +23,9 @@ fn furnace(albedo: f32, intensity: f32) -> Scene {
 /// stored) and an exact scatter probability.
 fn closed_mixed_cornell() -> Scene {
     let mut v: serde_json::Value = serde_json::from_str(builtin::json("cornell").unwrap()).unwrap();
-    v["materials"]["coated"] =
-        serde_json::json!({"diffuse": [0.5, 0.3, 0.2], "specular": [0.2, 0.2, 0.2], "fresnel": true});
-    v["materials"]["half-mirror"] = serde_json::json!({"diffuse": [0.3, 0.3, 0.3], "specular": [0.5, 0.4, 0.3]});
+    v["materials"]["coated"] = serde_json::json!({"diffuse": [0.5, 0.3, 0.2], "specular": [0.2, 0.2, 0.2], "fresnel": true});
+    v["materials"]["half-mirror"] =
+        serde_json::json!({"diffuse": [0.3, 0.3, 0.3], "specular": [0.5, 0.4, 0.3]});
     let objects = v["objects"].as_array_mut().unwrap();
     objects[5]["material"] = serde_json::json!("coated");
     objects[6]["material"] = serde_json::json!("half-mirror");
@@ -38,8 +38,15 @@ fn closed_mixed_cornell() -> Scene {
 }
 
 fn check_path_counts(set: &PhotonSet) {
-    assert_eq!(set.escaped + set.absorbed + set.truncated, set.emitted, "every path ends exactly once");
-    assert_eq!(set.stored_per_bounce.iter().sum::<u64>(), set.photons.len() as u64);
+    assert_eq!(
+        set.escaped + set.absorbed + set.truncated,
+        set.emitted,
+        "every path ends exactly once"
+    );
+    assert_eq!(
+        set.stored_per_bounce.iter().sum::<u64>(),
+        set.photons.len() as u64
+    );
 }
 
 /// Furnace (closed sphere, ρ = 0.5): every photon hits the wall, survives each bounce with
@@ -52,17 +59,36 @@ fn furnace_power_per_bounce() {
     let (rho, n) = (0.5f64, 200_000u64);
     let scene = furnace(rho as f32, 1.0);
     let bvh = SceneBvh::build(&scene);
-    let set = emit_and_trace(&scene, &bvh, n, &PhotonTraceSettings { max_bounces: 6, store_direct: true }, 1);
+    let set = emit_and_trace(
+        &scene,
+        &bvh,
+        n,
+        &PhotonTraceSettings {
+            max_bounces: 6,
+            store_direct: true,
+        },
+        1,
+    );
     check_path_counts(&set);
     assert_eq!(set.escaped, 0);
-    assert_eq!(set.stored_per_bounce[0], n, "every photon hits the closed sphere");
+    assert_eq!(
+        set.stored_per_bounce[0], n,
+        "every photon hits the closed sphere"
+    );
     let phi = scene.total_power().as_dvec3();
     for (k, stored) in set.power_per_bounce().iter().enumerate().take(6) {
         let p = rho.powi(k as i32);
         let sigma = ((1.0 - p) / (n as f64 * p)).sqrt();
         let rel = (*stored / (phi * p) - DVec3::ONE).abs().max_element();
-        println!("bounce {k}: stored {stored:.5} expected {:.5} rel err {rel:.5} (σ {sigma:.5})", phi.x * p);
-        assert!(rel < 4.0 * sigma + 2e-3, "bounce {k}: {stored} vs {} (σ {sigma})", phi * p);
+        println!(
+            "bounce {k}: stored {stored:.5} expected {:.5} rel err {rel:.5} (σ {sigma:.5})",
+            phi.x * p
+        );
+        assert!(
+            rel < 4.0 * sigma + 2e-3,
+            "bounce {k}: {stored} vs {} (σ {sigma})",
+            phi * p
+        );
     }
 }
 
@@ -74,12 +100,23 @@ fn furnace_power_per_bounce() {
 fn mixed_materials_power_per_bounce() {
     let scene = closed_mixed_cornell();
     let bvh = SceneBvh::build(&scene);
-    let set = emit_and_trace(&scene, &bvh, 200_000, &PhotonTraceSettings { max_bounces: 5, store_direct: true }, 2);
+    let set = emit_and_trace(
+        &scene,
+        &bvh,
+        200_000,
+        &PhotonTraceSettings {
+            max_bounces: 5,
+            store_direct: true,
+        },
+        2,
+    );
     check_path_counts(&set);
     assert!(set.escaped < 20, "closed box, {} escaped", set.escaped);
     let phi = scene.total_power().as_dvec3();
     let per = set.power_per_bounce();
-    assert!((per[0] / phi - DVec3::ONE).abs().max_element() < 1e-3 + set.escaped as f64 / 200_000.0);
+    assert!(
+        (per[0] / phi - DVec3::ONE).abs().max_element() < 1e-3 + set.escaped as f64 / 200_000.0
+    );
     let mut expected = vec![DVec3::ZERO; per.len() + 1];
     let mut var = vec![DVec3::ZERO; per.len()];
     let mut misses = 0;
@@ -93,7 +130,9 @@ fn mixed_materials_power_per_bounce() {
             continue;
         };
         let it = Interaction::new(&scene, &hit, -n);
-        let rho_s = it.material.scatter_probability(it.frame.to_local(p.incident()));
+        let rho_s = it
+            .material
+            .scatter_probability(it.frame.to_local(p.incident()));
         expected[p.bounce as usize + 1] += (p.power() * rho_s).as_dvec3();
         var[p.bounce as usize] += (p.power() * p.power()).as_dvec3();
     }
@@ -101,7 +140,10 @@ fn mixed_materials_power_per_bounce() {
     for k in 1..=5 {
         let sigma = var[k].powf(0.5);
         let err = (per[k] - expected[k]).abs();
-        println!("bounce {k}: stored {:.5} expected {:.5} (σ {:.5})", per[k], expected[k], sigma);
+        println!(
+            "bounce {k}: stored {:.5} expected {:.5} (σ {:.5})",
+            per[k], expected[k], sigma
+        );
         assert!(
             err.cmple(4.0 * sigma + 1e-4 * expected[k]).all(),
             "bounce {k}: {} vs {} (σ {sigma})",
@@ -115,14 +157,27 @@ fn mixed_materials_power_per_bounce() {
 fn tracing_is_deterministic() {
     let scene = builtin::load("cornell-glass").unwrap();
     let bvh = SceneBvh::build(&scene);
-    let s = PhotonTraceSettings { max_bounces: 8, store_direct: false };
+    let s = PhotonTraceSettings {
+        max_bounces: 8,
+        store_direct: false,
+    };
     let a = emit_and_trace(&scene, &bvh, 20_000, &s, 5);
     let b = emit_and_trace(&scene, &bvh, 20_000, &s, 5);
     let c = emit_and_trace(&scene, &bvh, 20_000, &s, 6);
     check_path_counts(&a);
-    assert_eq!(a.stored_per_bounce.first(), Some(&0), "direct hits not stored");
-    assert!(a.photons.iter().all(|p| p.bounce >= 1 && p.path_density <= 1.0));
-    assert_eq!(bytemuck::cast_slice::<_, u8>(&a.photons), bytemuck::cast_slice::<_, u8>(&b.photons));
+    assert_eq!(
+        a.stored_per_bounce.first(),
+        Some(&0),
+        "direct hits not stored"
+    );
+    assert!(a
+        .photons
+        .iter()
+        .all(|p| p.bounce >= 1 && p.path_density <= 1.0));
+    assert_eq!(
+        bytemuck::cast_slice::<_, u8>(&a.photons),
+        bytemuck::cast_slice::<_, u8>(&b.photons)
+    );
     assert_ne!(a.photons, c.photons);
 }
 
@@ -137,7 +192,16 @@ fn continue_paths_from_rays() {
             PhotonRay::new(Vec3::ZERO, d, Vec3::splat(0.01), 5e-4, 1)
         })
         .collect();
-    let set = continue_paths(&scene, &bvh, &rays, &PhotonTraceSettings { max_bounces: 3, store_direct: false }, 0);
+    let set = continue_paths(
+        &scene,
+        &bvh,
+        &rays,
+        &PhotonTraceSettings {
+            max_bounces: 3,
+            store_direct: false,
+        },
+        0,
+    );
     check_path_counts(&set);
     assert_eq!(set.stored_per_bounce[..2], [0, 1000]);
     for p in set.photons.iter().filter(|p| p.bounce == 1) {
@@ -153,11 +217,28 @@ fn continue_paths_from_rays() {
 fn absurd_photon_counts_are_rejected() {
     let scene = furnace(0.5, 1.0);
     for photons in [0, 2_000_000_000] {
-        let s = Settings { method: Method::Photon, photons, ..Default::default() };
-        assert!(matches!(render(&scene, &s, &Silent), Err(Error::Setting { name: "photons", .. })));
+        let s = Settings {
+            method: Method::Photon,
+            photons,
+            ..Default::default()
+        };
+        assert!(matches!(
+            render(&scene, &s, &Silent),
+            Err(Error::Setting {
+                name: "photons",
+                ..
+            })
+        ));
     }
-    let s = Settings { method: Method::Photon, k: 0, ..Default::default() };
-    assert!(matches!(render(&scene, &s, &Silent), Err(Error::Setting { name: "k", .. })));
+    let s = Settings {
+        method: Method::Photon,
+        k: 0,
+        ..Default::default()
+    };
+    assert!(matches!(
+        render(&scene, &s, &Silent),
+        Err(Error::Setting { name: "k", .. })
+    ));
     assert_eq!("photon".parse::<Method>().unwrap(), Method::Photon);
 }
 
@@ -181,10 +262,18 @@ fn photon_furnace_matches_analytic() {
     let out = render(&scene, &settings, &Silent).unwrap();
     let expected = rho * i / (std::f32::consts::PI * (1.0 - rho));
     let mean = out.radiance.mean();
-    println!("furnace: mean {mean} vs {expected}; stages {:?}", out.stats.stages);
+    println!(
+        "furnace: mean {mean} vs {expected}; stages {:?}",
+        out.stats.stages
+    );
     for c in 0..3 {
         let rel = (mean[c] - expected) / expected;
-        assert!(rel.abs() < 0.03, "channel {c}: {} vs {expected} ({:+.2}%)", mean[c], rel * 100.0);
+        assert!(
+            rel.abs() < 0.03,
+            "channel {c}: {} vs {expected} ({:+.2}%)",
+            mean[c],
+            rel * 100.0
+        );
     }
 }
 
@@ -217,8 +306,14 @@ fn block_error(a: &gi_core::Image, b: &gi_core::Image, n: u32) -> Vec3 {
 fn photon_cornell_matches_path() {
     let scene = builtin::load("cornell").unwrap();
     let size = Some(64);
-    let reference =
-        Settings { method: Method::Path, spp: 256, width: size, height: size, seed: 1, ..Default::default() };
+    let reference = Settings {
+        method: Method::Path,
+        spp: 256,
+        width: size,
+        height: size,
+        seed: 1,
+        ..Default::default()
+    };
     let reference = render(&scene, &reference, &Silent).unwrap();
     let photon = Settings {
         method: Method::Photon,
@@ -235,8 +330,14 @@ fn photon_cornell_matches_path() {
     let mean_err = ((a - b) / b).abs();
     let block_err = block_error(&photon.radiance, &reference.radiance, 4);
     println!("image mean: photon {a} reference {b}; rel err {mean_err}; 4x4 blocks mean rel err {block_err}");
-    assert!(mean_err.max_element() < 0.03, "image mean rel err {mean_err}");
-    assert!(block_err.max_element() < 0.03, "4x4 block mean rel err {block_err}");
+    assert!(
+        mean_err.max_element() < 0.03,
+        "image mean rel err {mean_err}"
+    );
+    assert!(
+        block_err.max_element() < 0.03,
+        "4x4 block mean rel err {block_err}"
+    );
     assert_eq!(photon.caustics.mean(), Vec3::ZERO);
     assert_eq!(photon.albedo, reference.albedo, "same first-hit AOVs");
 }
@@ -247,8 +348,14 @@ fn photon_cornell_matches_path() {
 fn photon_cornell_glass_matches_path() {
     let scene = builtin::load("cornell-glass").unwrap();
     let size = Some(48);
-    let reference =
-        Settings { method: Method::Path, spp: 128, width: size, height: size, seed: 1, ..Default::default() };
+    let reference = Settings {
+        method: Method::Path,
+        spp: 128,
+        width: size,
+        height: size,
+        seed: 1,
+        ..Default::default()
+    };
     let reference = render(&scene, &reference, &Silent).unwrap();
     let photon = Settings {
         method: Method::Photon,
@@ -260,10 +367,17 @@ fn photon_cornell_glass_matches_path() {
         ..Default::default()
     };
     let photon = render(&scene, &photon, &Silent).unwrap();
-    assert!(photon.radiance.pixels.iter().all(|p| p.is_finite() && p.min_element() >= 0.0));
+    assert!(photon
+        .radiance
+        .pixels
+        .iter()
+        .all(|p| p.is_finite() && p.min_element() >= 0.0));
     let (a, b) = (photon.radiance.mean(), reference.radiance.mean());
     let mean_err = ((a - b) / b).abs();
     let block_err = block_error(&photon.radiance, &reference.radiance, 4);
     println!("image mean: photon {a} reference {b}; rel err {mean_err}; 4x4 blocks mean rel err {block_err}");
-    assert!(mean_err.max_element() < 0.03, "image mean rel err {mean_err}");
+    assert!(
+        mean_err.max_element() < 0.03,
+        "image mean rel err {mean_err}"
+    );
 }

@@ -55,7 +55,7 @@ fn image_array<'py>(py: Python<'py>, img: Image) -> PyResult<Bound<'py, PyAny>> 
 /// Renders `scene`; returns a dict of float32 arrays (radiance, albedo, normal, position,
 /// caustics: H×W×3; depth: H×W) and `stats`.
 #[pyfunction]
-#[pyo3(signature = (scene, method = "path", spp = 64, width = None, height = None, seed = 0, max_depth = 64, light_paths = None, progress = None))]
+#[pyo3(signature = (scene, method = "path", spp = 64, width = None, height = None, seed = 0, max_depth = 64, light_paths = None, photons = 200_000, k = 100, max_radius = None, kernel = "cone", progress = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn render<'py>(
     py: Python<'py>,
@@ -67,9 +67,14 @@ pub fn render<'py>(
     seed: u64,
     max_depth: u32,
     light_paths: Option<u64>,
+    photons: u64,
+    k: u32,
+    max_radius: Option<f32>,
+    kernel: &str,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let method: Method = method.parse().map_err(|e| to_py(py, e))?;
+    let kernel: gi_core::render::Kernel = kernel.parse().map_err(|e| to_py(py, e))?;
     let settings = Settings {
         method,
         spp,
@@ -78,7 +83,10 @@ pub fn render<'py>(
         seed,
         max_depth,
         light_paths,
-        ..Default::default()
+        photons,
+        k,
+        max_radius,
+        kernel,
     };
     let reporter = PyProgress {
         callback: progress,

@@ -51,9 +51,9 @@ impl Differentials {
     /// ∂d' = ∂d − 2[(d·n)∂n + ∂(d·n)·n].
     pub fn reflect(&mut self, d: Vec3, n: Vec3, dn: [Vec3; 2]) {
         let ddotn = d.dot(n);
-        for i in 0..2 {
-            let d_ddotn = self.dd[i].dot(n) + d.dot(dn[i]);
-            self.dd[i] -= 2.0 * (ddotn * dn[i] + d_ddotn * n);
+        for (dd, dn) in self.dd.iter_mut().zip(dn) {
+            let d_ddotn = dd.dot(n) + d.dot(dn);
+            *dd -= 2.0 * (ddotn * dn + d_ddotn * n);
         }
     }
 
@@ -68,9 +68,9 @@ impl Differentials {
         } else {
             0.0
         };
-        for i in 0..2 {
-            let d_ddotn = self.dd[i].dot(n) + d.dot(dn[i]);
-            self.dd[i] = eta * self.dd[i] - (mu * dn[i] + k * d_ddotn * n);
+        for (dd, dn) in self.dd.iter_mut().zip(dn) {
+            let d_ddotn = dd.dot(n) + d.dot(dn);
+            *dd = eta * *dd - (mu * dn + k * d_ddotn * n);
         }
     }
 

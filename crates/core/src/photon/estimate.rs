@@ -57,10 +57,17 @@ impl Kernel {
 impl FromStr for Kernel {
     type Err = Error;
     fn from_str(s: &str) -> Result<Self> {
-        Kernel::ALL.iter().copied().find(|k| k.name() == s).ok_or_else(|| {
-            let names: Vec<_> = Kernel::ALL.iter().map(|k| k.name()).collect();
-            Error::setting("kernel", format!("unknown kernel `{s}` (available: {})", names.join(", ")))
-        })
+        Kernel::ALL
+            .iter()
+            .copied()
+            .find(|k| k.name() == s)
+            .ok_or_else(|| {
+                let names: Vec<_> = Kernel::ALL.iter().map(|k| k.name()).collect();
+                Error::setting(
+                    "kernel",
+                    format!("unknown kernel `{s}` (available: {})", names.join(", ")),
+                )
+            })
     }
 }
 
@@ -84,12 +91,21 @@ pub struct PhotonMap {
 impl PhotonMap {
     pub fn build(photons: Vec<Photon>) -> Self {
         let positions: Vec<Vec3> = photons.iter().map(Photon::position).collect();
-        PhotonMap { tree: KdTree::build(&positions), photons }
+        PhotonMap {
+            tree: KdTree::build(&positions),
+            photons,
+        }
     }
 
     /// Radiance (W·sr⁻¹·m⁻² per channel) leaving `it` towards `wo` (world space, pointing
     /// away from the surface) by the non-delta lobes. `scratch` is reused between calls.
-    pub fn radiance(&self, it: &Interaction, wo: Vec3, g: &Gather, scratch: &mut Vec<Neighbour>) -> Vec3 {
+    pub fn radiance(
+        &self,
+        it: &Interaction,
+        wo: Vec3,
+        g: &Gather,
+        scratch: &mut Vec<Neighbour>,
+    ) -> Vec3 {
         if it.material.is_purely_specular() {
             return Vec3::ZERO;
         }
@@ -97,7 +113,11 @@ impl PhotonMap {
         let max_r2 = g.max_radius * g.max_radius;
         let accept = |i: u32| self.photons[i as usize].normal().dot(n) > NORMAL_AGREEMENT;
         self.tree.nearest(it.position, g.k, max_r2, accept, scratch);
-        let r2 = if scratch.len() == g.k { scratch.last().map_or(max_r2, |nb| nb.dist2) } else { max_r2 };
+        let r2 = if scratch.len() == g.k {
+            scratch.last().map_or(max_r2, |nb| nb.dist2)
+        } else {
+            max_r2
+        };
         if scratch.is_empty() || r2 <= 0.0 {
             return Vec3::ZERO;
         }
@@ -106,7 +126,9 @@ impl PhotonMap {
             .iter()
             .map(|nb| {
                 let p = &self.photons[nb.index as usize];
-                it.material.eval(wo_l, it.frame.to_local(p.incident())) * p.power() * g.kernel.weight(nb.dist2, r2)
+                it.material.eval(wo_l, it.frame.to_local(p.incident()))
+                    * p.power()
+                    * g.kernel.weight(nb.dist2, r2)
             })
             .sum()
     }

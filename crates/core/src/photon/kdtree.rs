@@ -30,7 +30,9 @@ impl PartialOrd for Neighbour {
 impl Ord for Neighbour {
     /// By distance, then index (a total order, so results are deterministic).
     fn cmp(&self, other: &Self) -> Ordering {
-        self.dist2.total_cmp(&other.dist2).then(self.index.cmp(&other.index))
+        self.dist2
+            .total_cmp(&other.dist2)
+            .then(self.index.cmp(&other.index))
     }
 }
 
@@ -48,12 +50,24 @@ pub struct KdTree {
 impl KdTree {
     /// Builds the tree over `points` (O(n log n), parallel near the root).
     pub fn build(points: &[Vec3]) -> Self {
-        let mut items: Vec<(Vec3, u32)> = points.iter().enumerate().map(|(i, p)| (*p, i as u32)).collect();
+        let mut items: Vec<(Vec3, u32)> = points
+            .iter()
+            .enumerate()
+            .map(|(i, p)| (*p, i as u32))
+            .collect();
         let mut axes = vec![0u8; points.len()];
-        let bounds = points.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+        let bounds = points
+            .iter()
+            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
+                (lo.min(*p), hi.max(*p))
+            });
         build_range(&mut items, &mut axes, bounds);
         let (points, indices) = items.into_iter().unzip();
-        KdTree { points, indices, axes }
+        KdTree {
+            points,
+            indices,
+            axes,
+        }
     }
 
     pub fn len(&self) -> usize {
@@ -66,12 +80,25 @@ impl KdTree {
 
     /// The up to `k` nearest points to `p` within squared distance `max_dist2` for which
     /// `accept(index)` holds, closest first, written to `out` (cleared first).
-    pub fn nearest(&self, p: Vec3, k: usize, max_dist2: f32, accept: impl Fn(u32) -> bool, out: &mut Vec<Neighbour>) {
+    pub fn nearest(
+        &self,
+        p: Vec3,
+        k: usize,
+        max_dist2: f32,
+        accept: impl Fn(u32) -> bool,
+        out: &mut Vec<Neighbour>,
+    ) {
         out.clear();
         if k == 0 || self.points.is_empty() {
             return;
         }
-        let mut q = Query { p, k, r2: max_dist2, heap: BinaryHeap::with_capacity(k + 1), accept };
+        let mut q = Query {
+            p,
+            k,
+            r2: max_dist2,
+            heap: BinaryHeap::with_capacity(k + 1),
+            accept,
+        };
         self.search(0, self.points.len(), &mut q);
         out.extend(q.heap.into_sorted_vec());
     }
@@ -86,7 +113,11 @@ impl KdTree {
         let mid = (lo + hi) / 2;
         let axis = self.axes[mid] as usize;
         let delta = q.p[axis] - self.points[mid][axis];
-        let (near, far) = if delta < 0.0 { ((lo, mid), (mid + 1, hi)) } else { ((mid + 1, hi), (lo, mid)) };
+        let (near, far) = if delta < 0.0 {
+            ((lo, mid), (mid + 1, hi))
+        } else {
+            ((mid + 1, hi), (lo, mid))
+        };
         self.search(near.0, near.1, q);
         q.offer(self.points[mid], self.indices[mid]);
         if delta * delta <= q.r2 {
@@ -138,7 +169,9 @@ fn build_range(items: &mut [(Vec3, u32)], axes: &mut [u8], bounds: (Vec3, Vec3))
         2
     };
     let mid = items.len() / 2;
-    items.select_nth_unstable_by(mid, |a, b| a.0[axis].total_cmp(&b.0[axis]).then(a.1.cmp(&b.1)));
+    items.select_nth_unstable_by(mid, |a, b| {
+        a.0[axis].total_cmp(&b.0[axis]).then(a.1.cmp(&b.1))
+    });
     axes[mid] = axis as u8;
     let split = items[mid].0[axis];
     let (mut left_hi, mut right_lo) = (hi, lo);
@@ -148,7 +181,10 @@ fn build_range(items: &mut [(Vec3, u32)], axes: &mut [u8], bounds: (Vec3, Vec3))
     let (left_axes, rest_axes) = axes.split_at_mut(mid);
     let (right, right_axes) = (&mut rest[1..], &mut rest_axes[1..]);
     if left.len() > PARALLEL_BUILD {
-        rayon::join(|| build_range(left, left_axes, (lo, left_hi)), || build_range(right, right_axes, (right_lo, hi)));
+        rayon::join(
+            || build_range(left, left_axes, (lo, left_hi)),
+            || build_range(right, right_axes, (right_lo, hi)),
+        );
     } else {
         build_range(left, left_axes, (lo, left_hi));
         build_range(right, right_axes, (right_lo, hi));
@@ -160,11 +196,20 @@ mod tests {
     use super::*;
     use crate::sampling::Rng;
 
-    fn brute(points: &[Vec3], p: Vec3, k: usize, max_dist2: f32, accept: impl Fn(u32) -> bool) -> Vec<Neighbour> {
+    fn brute(
+        points: &[Vec3],
+        p: Vec3,
+        k: usize,
+        max_dist2: f32,
+        accept: impl Fn(u32) -> bool,
+    ) -> Vec<Neighbour> {
         let mut all: Vec<Neighbour> = points
             .iter()
             .enumerate()
-            .map(|(i, q)| Neighbour { index: i as u32, dist2: q.distance_squared(p) })
+            .map(|(i, q)| Neighbour {
+                index: i as u32,
+                dist2: q.distance_squared(p),
+            })
             .filter(|n| n.dist2 <= max_dist2 && accept(n.index))
             .collect();
         all.sort();
@@ -177,16 +222,26 @@ mod tests {
     #[test]
     fn nearest_matches_brute_force() {
         let mut rng = Rng::new(3, 0, 0);
-        let mut points: Vec<Vec3> =
-            (0..5000).map(|_| Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32())).collect();
+        let mut points: Vec<Vec3> = (0..5000)
+            .map(|_| Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()))
+            .collect();
         points.extend((0..2000).map(|_| Vec3::new(rng.next_f32(), 0.5, rng.next_f32() * 0.1)));
         points.extend_from_within(..50);
         let tree = KdTree::build(&points);
         assert_eq!(tree.len(), points.len());
         let mut out = Vec::new();
         for qi in 0..300 {
-            let p = Vec3::new(rng.next_f32() * 1.2 - 0.1, rng.next_f32() * 1.2 - 0.1, rng.next_f32() * 1.2 - 0.1);
-            for (k, r2) in [(1, f32::INFINITY), (10, 0.01), (100, 0.05), (64, f32::INFINITY)] {
+            let p = Vec3::new(
+                rng.next_f32() * 1.2 - 0.1,
+                rng.next_f32() * 1.2 - 0.1,
+                rng.next_f32() * 1.2 - 0.1,
+            );
+            for (k, r2) in [
+                (1, f32::INFINITY),
+                (10, 0.01),
+                (100, 0.05),
+                (64, f32::INFINITY),
+            ] {
                 let odd = qi % 2 == 0;
                 let accept = |i: u32| !odd || i % 3 != 0;
                 tree.nearest(p, k, r2, accept, &mut out);
@@ -198,7 +253,10 @@ mod tests {
 
     #[test]
     fn empty_and_tiny() {
-        let mut out = vec![Neighbour { index: 9, dist2: 0.0 }];
+        let mut out = vec![Neighbour {
+            index: 9,
+            dist2: 0.0,
+        }];
         KdTree::build(&[]).nearest(Vec3::ZERO, 5, 1.0, |_| true, &mut out);
         assert!(out.is_empty());
         let tree = KdTree::build(&[Vec3::X, Vec3::Y]);

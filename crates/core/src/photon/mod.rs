@@ -123,9 +123,14 @@ impl PhotonSet {
         self.escaped += other.escaped;
         self.truncated += other.truncated;
         if self.stored_per_bounce.len() < other.stored_per_bounce.len() {
-            self.stored_per_bounce.resize(other.stored_per_bounce.len(), 0);
+            self.stored_per_bounce
+                .resize(other.stored_per_bounce.len(), 0);
         }
-        for (a, b) in self.stored_per_bounce.iter_mut().zip(&other.stored_per_bounce) {
+        for (a, b) in self
+            .stored_per_bounce
+            .iter_mut()
+            .zip(&other.stored_per_bounce)
+        {
             *a += b;
         }
     }

@@ -35,13 +35,22 @@ pub struct PhotonTraceSettings {
 
 impl Default for PhotonTraceSettings {
     fn default() -> Self {
-        PhotonTraceSettings { max_bounces: 16, store_direct: true }
+        PhotonTraceSettings {
+            max_bounces: 16,
+            store_direct: true,
+        }
     }
 }
 
 /// Emits `n_photons` photons from the scene's lights (each light chosen with probability
 /// proportional to its power, so each photon carries about total power / n) and traces them.
-pub fn emit_and_trace(scene: &Scene, bvh: &SceneBvh, n_photons: u64, s: &PhotonTraceSettings, seed: u64) -> PhotonSet {
+pub fn emit_and_trace(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    n_photons: u64,
+    s: &PhotonTraceSettings,
+    seed: u64,
+) -> PhotonSet {
     let weights = light_weights(scene);
     let mut set = trace_chunks(n_photons, |i, out| {
         let mut rng = Rng::new(seed, STREAM_EMIT, i);
@@ -88,8 +97,10 @@ fn trace_chunks(n: u64, path: impl Fn(u64, &mut PhotonSet) + Sync) -> PhotonSet 
             set
         })
         .collect();
-    let mut all =
-        PhotonSet { photons: Vec::with_capacity(sets.iter().map(|s| s.photons.len()).sum()), ..Default::default() };
+    let mut all = PhotonSet {
+        photons: Vec::with_capacity(sets.iter().map(|s| s.photons.len()).sum()),
+        ..Default::default()
+    };
     for set in sets {
         all.append(set);
     }
@@ -97,7 +108,14 @@ fn trace_chunks(n: u64, path: impl Fn(u64, &mut PhotonSet) + Sync) -> PhotonSet 
 }
 
 /// Follows one photon until it is absorbed, escapes or reaches the bounce limit.
-fn follow(scene: &Scene, bvh: &SceneBvh, ray: &PhotonRay, s: &PhotonTraceSettings, rng: &mut Rng, out: &mut PhotonSet) {
+fn follow(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    ray: &PhotonRay,
+    s: &PhotonTraceSettings,
+    rng: &mut Rng,
+    out: &mut PhotonSet,
+) {
     let (mut o, mut d) = (ray.origin.into(), glam::Vec3::from(ray.direction));
     let mut power = glam::Vec3::from(ray.power);
     let mut density = ray.path_density;

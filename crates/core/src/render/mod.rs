@@ -123,14 +123,20 @@ impl Settings {
             }
         }
         if self.photons == 0 || self.photons > MAX_PHOTONS {
-            return Err(Error::setting("photons", format!("must be in 1..={MAX_PHOTONS}")));
+            return Err(Error::setting(
+                "photons",
+                format!("must be in 1..={MAX_PHOTONS}"),
+            ));
         }
         if self.k == 0 || self.k > MAX_K {
             return Err(Error::setting("k", format!("must be in 1..={MAX_K}")));
         }
         if let Some(r) = self.max_radius {
             if !(r.is_finite() && r > 0.0) {
-                return Err(Error::setting("max_radius", "must be a positive finite distance"));
+                return Err(Error::setting(
+                    "max_radius",
+                    "must be a positive finite distance",
+                ));
             }
         }
         Ok(())

@@ -29,8 +29,12 @@ const DEFAULT_RADIUS_FRACTION: f32 = 0.05;
 
 pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Result<RenderOutput> {
     let t0 = Instant::now();
-    let mut stats = RenderStats { triangles: scene.triangles.len() as u64, ..Default::default() };
-    let mut stage = |name: &str, t: Instant| stats.stages.push((name.into(), t.elapsed().as_secs_f64()));
+    let mut stats = RenderStats {
+        triangles: scene.triangles.len() as u64,
+        ..Default::default()
+    };
+    let mut stage =
+        |name: &str, t: Instant| stats.stages.push((name.into(), t.elapsed().as_secs_f64()));
 
     let t = Instant::now();
     let bvh = SceneBvh::build(scene);
@@ -38,7 +42,10 @@ pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Re
 
     // Photon tracing: every bounce, direct light included.
     let t = Instant::now();
-    let pts = PhotonTraceSettings { max_bounces: settings.max_depth - 1, store_direct: true };
+    let pts = PhotonTraceSettings {
+        max_bounces: settings.max_depth - 1,
+        store_direct: true,
+    };
     let set = emit_and_trace(scene, &bvh, settings.photons, &pts, settings.seed);
     stage("photon trace", t);
     if !progress.update("photon trace", 1.0) {
@@ -52,7 +59,9 @@ pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Re
     let t = Instant::now();
     let gather = Gather {
         k: settings.k as usize,
-        max_radius: settings.max_radius.unwrap_or_else(|| DEFAULT_RADIUS_FRACTION * scene_diagonal(scene)),
+        max_radius: settings
+            .max_radius
+            .unwrap_or_else(|| DEFAULT_RADIUS_FRACTION * scene_diagonal(scene)),
         kernel: settings.kernel,
     };
     let rows = gather_rows(scene, &bvh, &map, &gather, settings, progress)?;
@@ -110,10 +119,24 @@ fn gather_rows(
                         let mut rng = Rng::new(settings.seed, pixel, s as u64);
                         let j = rng.next_2d();
                         let dir = cam.direction(x as f32 + j.x, y as f32 + j.y);
-                        sum += radiance(scene, bvh, map, gather, cam.position, dir, max_delta, &mut rng, scratch);
+                        sum += radiance(
+                            scene,
+                            bvh,
+                            map,
+                            gather,
+                            cam.position,
+                            dir,
+                            max_delta,
+                            &mut rng,
+                            scratch,
+                        );
                     }
-                    let first =
-                        path::first_hit(scene, bvh, cam.position, cam.direction(x as f32 + 0.5, y as f32 + 0.5));
+                    let first = path::first_hit(
+                        scene,
+                        bvh,
+                        cam.position,
+                        cam.direction(x as f32 + 0.5, y as f32 + 0.5),
+                    );
                     (sum / settings.spp as f32, first)
                 })
                 .collect();
@@ -178,8 +201,12 @@ fn radiance(
 
 /// Length of the scene's bounding-box diagonal (m).
 fn scene_diagonal(scene: &Scene) -> f32 {
-    let (lo, hi) =
-        scene.positions.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+    let (lo, hi) = scene
+        .positions
+        .iter()
+        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
+            (lo.min(*p), hi.max(*p))
+        });
     if lo.x > hi.x {
         return 1.0;
     }

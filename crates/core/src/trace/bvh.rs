@@ -51,6 +51,16 @@ impl Tri {
     }
 }
 
+/// An obvhs ray for the open segment (0, tmax).
+///
+/// obvhs picks the traversal octant with `d < 0` (false for -0.0) but inverts -0.0 to a
+/// huge *negative* value, and the mismatch makes rays such as (-1, -0, -0) miss everything.
+/// Adding +0.0 turns every -0.0 into +0.0 (IEEE 754) and leaves all other values alone.
+#[inline]
+fn make_ray(origin: Vec3, dir: Vec3, tmax: f32) -> Ray {
+    Ray::new(origin.into(), (dir + Vec3::ZERO).into(), 0.0, tmax)
+}
+
 /// The scene's triangles in BVH order, and the BVH.
 pub struct SceneBvh {
     bvh: CwBvh,
@@ -99,7 +109,7 @@ impl SceneBvh {
     /// Closest hit along `origin + t·dir`, t in (0, tmax).
     #[inline]
     pub fn intersect(&self, origin: Vec3, dir: Vec3, tmax: f32) -> Option<Hit> {
-        let ray = Ray::new(origin.into(), dir.into(), 0.0, tmax);
+        let ray = make_ray(origin, dir, tmax);
         let mut best: Option<(u32, f32, f32, f32)> = None;
         let mut hit = obvhs::ray::RayHit::none();
         self.bvh
@@ -123,7 +133,7 @@ impl SceneBvh {
     /// True when anything blocks the open segment (0, tmax) of the ray.
     #[inline]
     pub fn occluded(&self, origin: Vec3, dir: Vec3, tmax: f32) -> bool {
-        let ray = Ray::new(origin.into(), dir.into(), 0.0, tmax);
+        let ray = make_ray(origin, dir, tmax);
         !self.bvh.ray_traverse_miss(ray, |r, id| {
             self.tris[id].intersect(r).map_or(f32::INFINITY, |h| h.0)
         })
@@ -175,5 +185,49 @@ mod tests {
                 assert!(!bvh.occluded(o, d, t * 0.999));
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod axis_tests {
+    use super::*;
+
+    /// Rays along the coordinate axes (direction components exactly zero) must hit the
+    /// walls of a closed box from every origin, including origins on a slab plane.
+    #[test]
+    fn axis_aligned_rays_hit_closed_box() {
+        let mut json: serde_json::Value =
+            serde_json::from_str(crate::scene::builtin::json("cornell").unwrap()).unwrap();
+        // Close the front so every direction hits something.
+        json["objects"]
+            .as_array_mut()
+            .unwrap()
+            .push(serde_json::json!({
+                "shape": {"type": "quad", "size": [2, 2]},
+                "transform": {"rotate": [-90, 0, 0], "translate": [0, 1, 1]},
+                "material": "white"
+            }));
+        let scene = crate::Scene::from_json(&json.to_string(), "t", &Default::default()).unwrap();
+        let bvh = SceneBvh::build(&scene);
+        let dirs = [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z];
+        let mut misses = Vec::new();
+        for ox in [-0.9f32, -0.35, 0.0, 0.35, 0.6, 0.9] {
+            for oy in [0.01f32, 0.3, 0.6, 1.0, 1.2, 1.9] {
+                for oz in [-0.9f32, -0.35, 0.0, 0.3, 0.9] {
+                    let o = Vec3::new(ox, oy, oz);
+                    for d in dirs {
+                        if bvh.intersect(o, d, f32::INFINITY).is_none() {
+                            misses.push((o, d));
+                        }
+                    }
+                }
+            }
+        }
+        assert!(
+            misses.is_empty(),
+            "{} misses, e.g. {:?}",
+            misses.len(),
+            &misses[..misses.len().min(5)]
+        );
     }
 }
