@@ -92,8 +92,8 @@ def render(
     samples per pixel; ``light_paths`` the caustic light paths of method ``path`` (default
     one per camera sample). Method ``photon`` (classic photon mapping) emits ``photons``
     photons and estimates radiance from the ``k`` nearest within ``max_radius`` (metres;
-    default 5% of the scene's diagonal) with a ``kernel`` of "box", "cone" or "epanechnikov". ``progress`` is a
-    callable ``(stage, fraction) -> bool | None`` (return ``False`` to cancel), or ``True``
+    default 5% of the scene's diagonal) with a ``kernel`` of "box", "cone" or "epanechnikov".
+    ``progress`` is a callable ``(stage, fraction) -> bool | None`` (return ``False`` to cancel), or ``True``
     for a text bar on stderr. The GIL is released while rendering; Ctrl-C cancels with
     :class:`KeyboardInterrupt`.
     """
