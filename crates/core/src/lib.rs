@@ -6,7 +6,9 @@
 
 pub mod bsdf;
 pub mod error;
+pub mod gpu;
 pub mod image;
+pub mod raster;
 pub mod render;
 pub mod sampling;
 pub mod scene;

@@ -13,14 +13,18 @@ pub enum Method {
     /// The CPU reference: path tracing with next-event estimation plus light tracing for
     /// caustic paths. Unbiased; the ground truth for every other method.
     Path,
+    /// GPU rasterization of direct light only: eye G-buffer, shadow maps (PCF) and deferred
+    /// uber-BSDF shading, supersampled `spp` times per pixel.
+    Direct,
 }
 
 impl Method {
-    pub const ALL: &'static [Method] = &[Method::Path];
+    pub const ALL: &'static [Method] = &[Method::Path, Method::Direct];
 
     pub fn name(self) -> &'static str {
         match self {
             Method::Path => "path",
+            Method::Direct => "direct",
         }
     }
 }
@@ -48,11 +52,26 @@ pub struct Settings {
     pub max_depth: u32,
     /// Light paths for caustics (method `path`); `None` = one per camera sample.
     pub light_paths: Option<u64>,
+    /// GPU adapter: "cpu", "gpu" or a case-insensitive part of its name; `None` uses the
+    /// `GI_ADAPTER` environment variable, else a real GPU when present, else lavapipe.
+    pub adapter: Option<String>,
+    /// Shadow-map resolution in texels per side (GPU methods).
+    pub shadow_map_size: u32,
 }
 
 impl Default for Settings {
     fn default() -> Self {
-        Settings { method: Method::Path, spp: 64, width: None, height: None, seed: 0, max_depth: 64, light_paths: None }
+        Settings {
+            method: Method::Path,
+            spp: 64,
+            width: None,
+            height: None,
+            seed: 0,
+            max_depth: 64,
+            light_paths: None,
+            adapter: None,
+            shadow_map_size: 1024,
+        }
     }
 }
 
@@ -68,7 +87,10 @@ impl Settings {
         for (name, v) in [("width", self.width), ("height", self.height)] {
             if let Some(v) = v {
                 if v == 0 || v > 16384 {
-                    return Err(Error::setting(if name == "width" { "width" } else { "height" }, "must be in 1..=16384"));
+                    return Err(Error::setting(
+                        if name == "width" { "width" } else { "height" },
+                        "must be in 1..=16384",
+                    ));
                 }
             }
         }
@@ -79,6 +101,9 @@ impl Settings {
             if n > MAX_LIGHT_PATHS {
                 return Err(Error::setting("light_paths", format!("must be at most {MAX_LIGHT_PATHS}")));
             }
+        }
+        if !(16..=16384).contains(&self.shadow_map_size) {
+            return Err(Error::setting("shadow_map_size", "must be in 16..=16384"));
         }
         Ok(())
     }
@@ -136,5 +161,6 @@ pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Re
     let scene = Scene { camera, ..scene.clone() };
     match settings.method {
         Method::Path => reference::render(&scene, settings, progress),
+        Method::Direct => crate::raster::render_direct(&scene, settings, progress),
     }
 }
