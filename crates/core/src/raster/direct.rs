@@ -103,15 +103,15 @@ impl DirectPass {
         DirectPass { pipeline, scene_layout, gbuffer_layout, shadow_sampler }
     }
 
-    /// Records the pass, adding into `accum` (cleared first when `clear`).
+    /// Records the pass, adding into `accum` (cleared first when `clear`). The bind groups
+    /// are those of `scene_layout` and `gbuffer_layout`.
     pub fn record(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         accum: &wgpu::TextureView,
         clear: bool,
-        scene_group: &wgpu::BindGroup,
+        [scene_group, gbuffer_group]: [&wgpu::BindGroup; 2],
         view_offset: u32,
-        gbuffer_group: &wgpu::BindGroup,
         timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) {
         let load = if clear { wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT) } else { wgpu::LoadOp::Load };

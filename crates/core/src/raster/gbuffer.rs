@@ -130,16 +130,15 @@ impl GBufferPass {
         GBufferPass { pipeline, layout }
     }
 
-    /// Records the pass: clears the G-buffer and draws `vertex_count` vertices seen from the
-    /// view at `view_offset` in the bind group's view buffer.
+    /// Records the pass: clears the G-buffer and draws the geometry seen from the view at
+    /// `view_offset` in the bind group's view buffer.
     pub fn record(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         target: &GBuffer,
         bind_group: &wgpu::BindGroup,
         view_offset: u32,
-        vertices: &wgpu::Buffer,
-        vertex_count: u32,
+        geometry: &super::Geometry,
         timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) {
         let clear =
@@ -165,7 +164,7 @@ impl GBufferPass {
         });
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, bind_group, &[view_offset]);
-        pass.set_vertex_buffer(0, vertices.slice(..));
-        pass.draw(0..vertex_count, 0..1);
+        pass.set_vertex_buffer(0, geometry.vertices.slice(..));
+        pass.draw(0..geometry.count, 0..1);
     }
 }

@@ -34,6 +34,12 @@ impl Passes {
     }
 }
 
+/// The scene's triangles on the GPU: a non-indexed list of [`VertexRaw`].
+pub struct Geometry {
+    pub vertices: wgpu::Buffer,
+    pub count: u32,
+}
+
 /// A `View` uniform picked by dynamic offset.
 pub(crate) fn view_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
@@ -234,7 +240,10 @@ fn frame(
     let t = Instant::now();
     let storage = wgpu::BufferUsages::STORAGE;
     let verts = vertices(scene);
-    let vertex_buffer = buffer_init(ctx, "scene vertices", bytemuck::cast_slice(&verts), wgpu::BufferUsages::VERTEX);
+    let geometry = Geometry {
+        vertices: buffer_init(ctx, "scene vertices", bytemuck::cast_slice(&verts), wgpu::BufferUsages::VERTEX),
+        count: verts.len() as u32,
+    };
     let materials: Vec<_> = scene.materials.iter().map(|m| m.to_raw()).collect();
     let material_buffer = buffer_init(ctx, "materials", bytemuck::cast_slice(&materials), storage);
     let light_buffer = buffer_init(ctx, "lights", bytemuck::cast_slice(&shadows.lights), storage);
@@ -247,7 +256,6 @@ fn frame(
     let mut eye_views = vec![camera_view(scene, Vec2::splat(0.5), 0.0)];
     eye_views.extend(sample_positions(spp).into_iter().map(|j| camera_view(scene, j, 1.0 / spp as f32)));
     let eye_buffer = buffer_init(ctx, "eye views", bytemuck::cast_slice(&eye_views), wgpu::BufferUsages::UNIFORM);
-    let vertex_count = verts.len() as u32;
 
     // Render targets.
     let shadow_maps = device.create_texture(&wgpu::TextureDescriptor {
@@ -334,7 +342,7 @@ fn frame(
         let view = layer_view(layer);
         let offset = (layer as u64 * VIEW_SIZE) as u32;
         let ts = timer.pass("shadow maps");
-        passes.shadow.record(&mut encoder, &view, &shadow_group, offset, &vertex_buffer, vertex_count, ts);
+        passes.shadow.record(&mut encoder, &view, &shadow_group, offset, &geometry, ts);
     }
     timer.resolve(&mut encoder);
     ctx.queue.submit([encoder.finish()]);
@@ -349,15 +357,14 @@ fn frame(
         for s in done..done + batch {
             let offset = ((s as u64 + 1) * VIEW_SIZE) as u32;
             let ts = timer.pass("gbuffer");
-            passes.gbuffer.record(&mut encoder, &gbuf, &gbuffer_group, offset, &vertex_buffer, vertex_count, ts);
+            passes.gbuffer.record(&mut encoder, &gbuf, &gbuffer_group, offset, &geometry, ts);
             let ts = timer.pass("direct light");
             passes.direct.record(
                 &mut encoder,
                 &accum_view,
                 s == 0,
-                &direct_scene_group,
+                [&direct_scene_group, &direct_gbuffer_group],
                 offset,
-                &direct_gbuffer_group,
                 ts,
             );
         }
@@ -373,7 +380,7 @@ fn frame(
     if spp > 1 {
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("aov gbuffer") });
         let ts = timer.pass("gbuffer");
-        passes.gbuffer.record(&mut encoder, &gbuf, &gbuffer_group, 0, &vertex_buffer, vertex_count, ts);
+        passes.gbuffer.record(&mut encoder, &gbuf, &gbuffer_group, 0, &geometry, ts);
         timer.resolve(&mut encoder);
         ctx.queue.submit([encoder.finish()]);
         timer.collect(ctx)?;

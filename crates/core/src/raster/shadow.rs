@@ -149,8 +149,7 @@ impl ShadowPass {
         layer: &wgpu::TextureView,
         bind_group: &wgpu::BindGroup,
         view_offset: u32,
-        vertices: &wgpu::Buffer,
-        vertex_count: u32,
+        geometry: &super::Geometry,
         timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) {
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -167,7 +166,7 @@ impl ShadowPass {
         });
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, bind_group, &[view_offset]);
-        pass.set_vertex_buffer(0, vertices.slice(..));
-        pass.draw(0..vertex_count, 0..1);
+        pass.set_vertex_buffer(0, geometry.vertices.slice(..));
+        pass.draw(0..geometry.count, 0..1);
     }
 }
