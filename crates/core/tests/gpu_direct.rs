@@ -7,7 +7,10 @@
 //! - mean relative error per channel away from edges: Σ|direct − path| / Σ path < 2% over the
 //!   pixels kept by `common::edge_mask` (geometric and shadow edges dilated by 1 pixel;
 //!   PCF shadows are soft where the path tracer's are hard);
-//! - SSIM of luminance over the same pixels ≥ 0.98.
+//! - SSIM of luminance over the same pixels ≥ 0.995 (measured: 0.9998 or more).
+//!
+//! Measured on lavapipe: bias and relative error ≈ 0.1% on both scenes, 40–45% of the
+//! pixels kept.
 //!
 //! The path tracer has 256 jittered samples per pixel; with a point light its only noise is
 //! the sub-pixel position, which the rasterizer's 8×8 grid of samples also averages.
@@ -71,7 +74,7 @@ fn compare(name: &str, scene: &Scene) {
         mask.len()
     );
     eprintln!("{report}");
-    let ok = kept * 5 > mask.len() * 2 && bias.max_element() < 0.02 && rel_err.max_element() < 0.02 && ssim >= 0.98;
+    let ok = kept * 5 > mask.len() * 2 && bias.max_element() < 0.02 && rel_err.max_element() < 0.02 && ssim >= 0.995;
     if !ok {
         write_images(name, &path, &direct);
     }
@@ -128,7 +131,9 @@ fn direct_reports_stages() {
     let s = Settings { shadow_map_size: 256, ..settings(Method::Direct, 4) };
     let out = render(&scene, &s, &Silent).expect("direct render");
     let names: Vec<_> = out.stats.stages.iter().map(|(n, _)| n.as_str()).collect();
-    for stage in ["upload", "shadow maps", "gbuffer", "direct light", "readback"] {
+    let timed = gi_core::gpu::context(None).expect("adapter").timestamps;
+    let gpu_stages: &[&str] = if timed { &["shadow maps", "gbuffer", "direct light"] } else { &[] };
+    for stage in ["upload", "readback"].iter().chain(gpu_stages) {
         assert!(names.contains(&stage), "missing stage {stage} in {names:?}");
     }
     assert!(out.stats.stages.iter().all(|(_, t)| t.is_finite() && *t >= 0.0));

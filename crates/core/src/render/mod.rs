@@ -43,7 +43,7 @@ impl FromStr for Method {
 #[derive(Clone, Debug)]
 pub struct Settings {
     pub method: Method,
-    /// Camera samples per pixel (method `path`).
+    /// Camera samples per pixel (method `path`); sub-pixel raster samples (method `direct`).
     pub spp: u32,
     pub width: Option<u32>,
     pub height: Option<u32>,
