@@ -211,58 +211,6 @@ fn check_limits(ctx: &GpuContext, scene: &Scene, settings: &Settings, layers: u3
     Ok(())
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn sample_positions_average_to_the_pixel_centre() {
-        for spp in [1, 4, 16, 7, 100, 33] {
-            let p = sample_positions(spp);
-            assert_eq!(p.len(), spp as usize);
-            assert!(p.iter().all(|s| s.cmpge(Vec2::ZERO).all() && s.cmplt(Vec2::ONE).all()));
-            let mean = p.iter().copied().sum::<Vec2>() / spp as f32;
-            assert!((mean - Vec2::splat(0.5)).abs().max_element() < 0.5 / (spp as f32).sqrt() + 1e-6, "{spp}: {mean}");
-        }
-    }
-
-    /// The jittered camera maps the point seen through image position `pixel + jitter` to
-    /// the centre of `pixel`.
-    #[test]
-    fn camera_view_matches_camera_rays() {
-        let scene = crate::scene::builtin::load("cornell").expect("built-in scene");
-        let cam = scene.camera.with_size(64, 48);
-        let scene = Scene { camera: cam, ..scene };
-        let jitter = Vec2::new(0.2, 0.9);
-        let m = Mat4::from_cols_array_2d(&camera_view(&scene, jitter, 1.0).view_proj);
-        for (x, y) in [(0u32, 0u32), (10, 40), (63, 47)] {
-            let p = cam.position + cam.direction(x as f32 + jitter.x, y as f32 + jitter.y) * 2.0;
-            let c = m * p.extend(1.0);
-            let ndc = c.truncate() / c.w;
-            let px = Vec2::new((ndc.x + 1.0) * 0.5 * 64.0, (1.0 - ndc.y) * 0.5 * 48.0);
-            assert!((px - Vec2::new(x as f32 + 0.5, y as f32 + 0.5)).abs().max_element() < 1e-3, "{px}");
-            assert!((0.0..=1.0).contains(&ndc.z));
-        }
-    }
-
-    #[test]
-    fn octahedral_decode_inverts_encode() {
-        let mut rng = crate::sampling::Rng::new(1, 2, 3);
-        for _ in 0..1000 {
-            let n = crate::sampling::uniform_sphere(rng.next_2d());
-            // The WGSL encoder, transcribed.
-            let p = Vec2::new(n.x, n.y) / (n.x.abs() + n.y.abs() + n.z.abs());
-            let e = if n.z >= 0.0 {
-                p
-            } else {
-                (Vec2::ONE - Vec2::new(p.y.abs(), p.x.abs()))
-                    * Vec2::new(if p.x >= 0.0 { 1.0 } else { -1.0 }, if p.y >= 0.0 { 1.0 } else { -1.0 })
-            };
-            assert!((oct_decode(e) - n).length() < 1e-5);
-        }
-    }
-}
-
 /// Method `direct`: direct light from point and spot lights with shadow maps, rasterized.
 pub fn render_direct(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Result<RenderOutput> {
     let t0 = Instant::now();
@@ -469,4 +417,56 @@ fn frame(
     }
     out.stats.total_seconds = t0.elapsed().as_secs_f64();
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sample_positions_average_to_the_pixel_centre() {
+        for spp in [1, 4, 16, 7, 100, 33] {
+            let p = sample_positions(spp);
+            assert_eq!(p.len(), spp as usize);
+            assert!(p.iter().all(|s| s.cmpge(Vec2::ZERO).all() && s.cmplt(Vec2::ONE).all()));
+            let mean = p.iter().copied().sum::<Vec2>() / spp as f32;
+            assert!((mean - Vec2::splat(0.5)).abs().max_element() < 0.5 / (spp as f32).sqrt() + 1e-6, "{spp}: {mean}");
+        }
+    }
+
+    /// The jittered camera maps the point seen through image position `pixel + jitter` to
+    /// the centre of `pixel`.
+    #[test]
+    fn camera_view_matches_camera_rays() {
+        let scene = crate::scene::builtin::load("cornell").expect("built-in scene");
+        let cam = scene.camera.with_size(64, 48);
+        let scene = Scene { camera: cam, ..scene };
+        let jitter = Vec2::new(0.2, 0.9);
+        let m = Mat4::from_cols_array_2d(&camera_view(&scene, jitter, 1.0).view_proj);
+        for (x, y) in [(0u32, 0u32), (10, 40), (63, 47)] {
+            let p = cam.position + cam.direction(x as f32 + jitter.x, y as f32 + jitter.y) * 2.0;
+            let c = m * p.extend(1.0);
+            let ndc = c.truncate() / c.w;
+            let px = Vec2::new((ndc.x + 1.0) * 0.5 * 64.0, (1.0 - ndc.y) * 0.5 * 48.0);
+            assert!((px - Vec2::new(x as f32 + 0.5, y as f32 + 0.5)).abs().max_element() < 1e-3, "{px}");
+            assert!((0.0..=1.0).contains(&ndc.z));
+        }
+    }
+
+    #[test]
+    fn octahedral_decode_inverts_encode() {
+        let mut rng = crate::sampling::Rng::new(1, 2, 3);
+        for _ in 0..1000 {
+            let n = crate::sampling::uniform_sphere(rng.next_2d());
+            // The WGSL encoder, transcribed.
+            let p = Vec2::new(n.x, n.y) / (n.x.abs() + n.y.abs() + n.z.abs());
+            let e = if n.z >= 0.0 {
+                p
+            } else {
+                (Vec2::ONE - Vec2::new(p.y.abs(), p.x.abs()))
+                    * Vec2::new(if p.x >= 0.0 { 1.0 } else { -1.0 }, if p.y >= 0.0 { 1.0 } else { -1.0 })
+            };
+            assert!((oct_decode(e) - n).length() < 1e-5);
+        }
+    }
 }
