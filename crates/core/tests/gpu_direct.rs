@@ -134,7 +134,7 @@ fn direct_reports_stages() {
     let timed = gi_core::gpu::context(None).expect("adapter").timestamps;
     let gpu_stages: &[&str] = if timed { &["shadow maps", "gbuffer", "direct light"] } else { &[] };
     for stage in ["upload", "readback"].iter().chain(gpu_stages) {
-        assert!(names.contains(&stage), "missing stage {stage} in {names:?}");
+        assert!(names.contains(stage), "missing stage {stage} in {names:?}");
     }
     assert!(out.stats.stages.iter().all(|(_, t)| t.is_finite() && *t >= 0.0));
 }
