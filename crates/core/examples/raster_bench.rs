@@ -15,9 +15,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         None => 5,
     };
     let scene = builtin::load("cornell")?;
-    println!("{}\n", gi_core::gpu::adapter_report(None)?.lines().take(4).collect::<Vec<_>>().join("; "));
+    println!(
+        "{}\n",
+        gi_core::gpu::adapter_report(None)?
+            .lines()
+            .take(4)
+            .collect::<Vec<_>>()
+            .join("; ")
+    );
     let stages = ["shadow maps", "gbuffer", "direct light", "readback"];
-    println!("| resolution | {} | frame (wall) |", stages.map(|s| format!("{s} (ms)")).join(" | "));
+    println!(
+        "| resolution | {} | frame (wall) |",
+        stages.map(|s| format!("{s} (ms)")).join(" | ")
+    );
     println!("|---|{}---|", "---|".repeat(stages.len()));
     for (w, h) in [(640, 480), (1280, 720)] {
         let settings = Settings {
@@ -33,7 +43,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         for _ in 0..runs {
             let out = render(&scene, &settings, &Silent)?;
             for (i, stage) in stages.iter().enumerate() {
-                let t: f64 = out.stats.stages.iter().filter(|(n, _)| n == stage).map(|(_, t)| t).sum();
+                let t: f64 = out
+                    .stats
+                    .stages
+                    .iter()
+                    .filter(|(n, _)| n == stage)
+                    .map(|(_, t)| t)
+                    .sum();
                 samples[i].push(t * 1e3);
             }
             samples[stages.len()].push(out.stats.total_seconds * 1e3);

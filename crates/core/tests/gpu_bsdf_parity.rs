@@ -35,15 +35,46 @@ fn materials() -> Vec<Material> {
     let d = Vec3::new(0.73, 0.065, 0.05);
     let s = Vec3::new(0.04, 0.5, 0.9);
     let mut out = vec![
-        Material { diffuse: d, ..Default::default() },
-        Material { diffuse: Vec3::ZERO, specular: s, roughness: 0.0, ..Default::default() },
-        Material { diffuse: d, specular: s, roughness: 0.0, fresnel: true, ..Default::default() },
-        Material { diffuse: Vec3::splat(0.1), transmission: Vec3::splat(0.9), ior: 1.5, ..Default::default() },
+        Material {
+            diffuse: d,
+            ..Default::default()
+        },
+        Material {
+            diffuse: Vec3::ZERO,
+            specular: s,
+            roughness: 0.0,
+            ..Default::default()
+        },
+        Material {
+            diffuse: d,
+            specular: s,
+            roughness: 0.0,
+            fresnel: true,
+            ..Default::default()
+        },
+        Material {
+            diffuse: Vec3::splat(0.1),
+            transmission: Vec3::splat(0.9),
+            ior: 1.5,
+            ..Default::default()
+        },
     ];
     for roughness in [0.05, 0.2, 0.5, 1.0] {
         for fresnel in [false, true] {
-            out.push(Material { diffuse: Vec3::ZERO, specular: s, roughness, fresnel, ..Default::default() });
-            out.push(Material { diffuse: d, specular: Vec3::splat(0.04), roughness, fresnel, ..Default::default() });
+            out.push(Material {
+                diffuse: Vec3::ZERO,
+                specular: s,
+                roughness,
+                fresnel,
+                ..Default::default()
+            });
+            out.push(Material {
+                diffuse: d,
+                specular: Vec3::splat(0.04),
+                roughness,
+                fresnel,
+                ..Default::default()
+            });
         }
     }
     out
@@ -61,7 +92,9 @@ fn cases() -> Vec<Case> {
             let mut wo_l = uniform_sphere(rng.next_2d());
             let mut wi_l = uniform_sphere(rng.next_2d());
             match k % 6 {
-                0 => wo_l = Vec3::new(wo_l.x, wo_l.y, 0.0).normalize() * 0.999_999_5 + Vec3::Z * 1e-3,
+                0 => {
+                    wo_l = Vec3::new(wo_l.x, wo_l.y, 0.0).normalize() * 0.999_999_5 + Vec3::Z * 1e-3
+                }
                 1 => wi_l = Vec3::new(wi_l.x, wi_l.y, 0.0).normalize() * 0.99995 + Vec3::Z * 1e-2,
                 2 => {
                     // Near the mirror direction of wo.
@@ -74,8 +107,16 @@ fn cases() -> Vec<Case> {
                 // Mostly the same hemisphere, so that most cases are non-zero.
                 wi_l.z = wi_l.z.abs() * wo_l.z.signum();
             }
-            let (wo, wi) = (frame.to_world(wo_l.normalize()), frame.to_world(wi_l.normalize()));
-            out.push(Case { material, normal, wo, wi });
+            let (wo, wi) = (
+                frame.to_world(wo_l.normalize()),
+                frame.to_world(wi_l.normalize()),
+            );
+            out.push(Case {
+                material,
+                normal,
+                wo,
+                wi,
+            });
         }
     }
     out
@@ -100,7 +141,12 @@ fn sensitivity(c: &Case) -> Vec3 {
                 1 => (c.normal, c.wo, c.wi + d),
                 _ => (c.normal + d, c.wo, c.wi),
             };
-            let p = Case { normal: n.normalize(), wo: wo.normalize(), wi: wi.normalize(), ..*c };
+            let p = Case {
+                normal: n.normalize(),
+                wo: wo.normalize(),
+                wi: wi.normalize(),
+                ..*c
+            };
             s = s.max((cpu(&p) - base).abs());
         }
     }
@@ -140,7 +186,11 @@ fn gpu_eval(cases: &[Case]) -> Vec<Vec3> {
     let module = shaders::module(
         device,
         "bsdf parity shader",
-        &[shaders::COMMON, shaders::BSDF, include_str!("gpu_bsdf_parity.wgsl")],
+        &[
+            shaders::COMMON,
+            shaders::BSDF,
+            include_str!("gpu_bsdf_parity.wgsl"),
+        ],
     );
     let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
         label: Some("bsdf parity pipeline"),
@@ -154,11 +204,19 @@ fn gpu_eval(cases: &[Case]) -> Vec<Vec3> {
         label: Some("bsdf parity bind group"),
         layout: &pipeline.get_bind_group_layout(0),
         entries: &[
-            wgpu::BindGroupEntry { binding: 0, resource: input.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 1, resource: output.as_entire_binding() },
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: input.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: output.as_entire_binding(),
+            },
         ],
     });
-    let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("bsdf parity") });
+    let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+        label: Some("bsdf parity"),
+    });
     {
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("bsdf parity pass"),
@@ -171,7 +229,10 @@ fn gpu_eval(cases: &[Case]) -> Vec<Vec3> {
     encoder.copy_buffer_to_buffer(&output, 0, &readback, 0, size);
     ctx.queue.submit([encoder.finish()]);
     let bytes = ctx.read_buffer(&readback).expect("readback");
-    bytemuck::cast_slice::<u8, [f32; 4]>(&bytes).iter().map(|v| Vec3::new(v[0], v[1], v[2])).collect()
+    bytemuck::cast_slice::<u8, [f32; 4]>(&bytes)
+        .iter()
+        .map(|v| Vec3::new(v[0], v[1], v[2]))
+        .collect()
 }
 
 #[test]
@@ -187,10 +248,21 @@ fn wgsl_bsdf_matches_cpu() {
         }
         let tol = r.abs() * 1e-4 + Vec3::splat(1e-6) + 4.0 * sensitivity(c);
         if (*g - r).abs().cmpgt(tol).any() || !g.is_finite() {
-            failures
-                .push(format!("case {i}: {:?} n={} wo={} wi={}: gpu {g} cpu {r}", c.material, c.normal, c.wo, c.wi));
+            failures.push(format!(
+                "case {i}: {:?} n={} wo={} wi={}: gpu {g} cpu {r}",
+                c.material, c.normal, c.wo, c.wi
+            ));
         }
     }
-    assert!(nonzero > cases.len() / 3, "too few non-zero cases: {nonzero}");
-    assert!(failures.is_empty(), "{} of {} cases differ:\n{}", failures.len(), cases.len(), failures.join("\n"));
+    assert!(
+        nonzero > cases.len() / 3,
+        "too few non-zero cases: {nonzero}"
+    );
+    assert!(
+        failures.is_empty(),
+        "{} of {} cases differ:\n{}",
+        failures.len(),
+        cases.len(),
+        failures.join("\n")
+    );
 }

@@ -48,7 +48,15 @@ const SPOT_SCENE: &str = r#"{
 }"#;
 
 fn settings(method: Method, spp: u32) -> Settings {
-    Settings { method, spp, width: Some(SIZE), height: Some(SIZE), seed: 3, max_depth: 1, ..Default::default() }
+    Settings {
+        method,
+        spp,
+        width: Some(SIZE),
+        height: Some(SIZE),
+        seed: 3,
+        max_depth: 1,
+        ..Default::default()
+    }
 }
 
 fn compare(name: &str, scene: &Scene) {
@@ -61,7 +69,10 @@ fn compare(name: &str, scene: &Scene) {
     let mut sum_ref = glam::DVec3::ZERO;
     for (i, keep) in mask.iter().enumerate() {
         if *keep {
-            let (p, d) = (path.radiance.pixels[i].as_dvec3(), direct.radiance.pixels[i].as_dvec3());
+            let (p, d) = (
+                path.radiance.pixels[i].as_dvec3(),
+                direct.radiance.pixels[i].as_dvec3(),
+            );
             sum_abs += (d - p).abs();
             sum_ref += p;
         }
@@ -74,7 +85,10 @@ fn compare(name: &str, scene: &Scene) {
         mask.len()
     );
     eprintln!("{report}");
-    let ok = kept * 5 > mask.len() * 2 && bias.max_element() < 0.02 && rel_err.max_element() < 0.02 && ssim >= 0.995;
+    let ok = kept * 5 > mask.len() * 2
+        && bias.max_element() < 0.02
+        && rel_err.max_element() < 0.02
+        && ssim >= 0.995;
     if !ok {
         write_images(name, &path, &direct);
     }
@@ -91,10 +105,27 @@ fn check_aovs(path: &RenderOutput, direct: &RenderOutput) {
             continue;
         }
         let dp = (direct.position.pixels[i] - path.position.pixels[i]).length();
-        assert!(dp < 1e-3, "pixel {i}: position {} vs {}", direct.position.pixels[i], path.position.pixels[i]);
-        assert!(direct.normal.pixels[i].dot(path.normal.pixels[i]) > 0.999, "pixel {i}: normal");
-        assert!((direct.depth[i] - path.depth[i]).abs() < 1e-3, "pixel {i}: depth");
-        assert!((direct.albedo.pixels[i] - path.albedo.pixels[i]).abs().max_element() < 1e-3, "pixel {i}: albedo");
+        assert!(
+            dp < 1e-3,
+            "pixel {i}: position {} vs {}",
+            direct.position.pixels[i],
+            path.position.pixels[i]
+        );
+        assert!(
+            direct.normal.pixels[i].dot(path.normal.pixels[i]) > 0.999,
+            "pixel {i}: normal"
+        );
+        assert!(
+            (direct.depth[i] - path.depth[i]).abs() < 1e-3,
+            "pixel {i}: depth"
+        );
+        assert!(
+            (direct.albedo.pixels[i] - path.albedo.pixels[i])
+                .abs()
+                .max_element()
+                < 1e-3,
+            "pixel {i}: albedo"
+        );
     }
     assert_eq!(direct.caustics.mean(), glam::Vec3::ZERO);
 }
@@ -105,7 +136,11 @@ fn write_images(name: &str, path: &RenderOutput, direct: &RenderOutput) {
     for (d, p) in diff.pixels.iter_mut().zip(&path.radiance.pixels) {
         *d = (*d - *p).abs();
     }
-    for (suffix, img) in [("path", &path.radiance), ("direct", &direct.radiance), ("difference", &diff)] {
+    for (suffix, img) in [
+        ("path", &path.radiance),
+        ("direct", &direct.radiance),
+        ("difference", &diff),
+    ] {
         let file = dir.join(format!("{name}-{suffix}.pfm"));
         if let Err(e) = common::write_pfm(&file, img) {
             eprintln!("cannot write {}: {e}", file.display());
@@ -128,33 +163,62 @@ fn spot_scene_matches_path_tracer() {
 #[test]
 fn direct_reports_stages() {
     let scene = builtin::load("cornell").expect("built-in scene");
-    let s = Settings { shadow_map_size: 256, ..settings(Method::Direct, 4) };
+    let s = Settings {
+        shadow_map_size: 256,
+        ..settings(Method::Direct, 4)
+    };
     let out = render(&scene, &s, &Silent).expect("direct render");
     let names: Vec<_> = out.stats.stages.iter().map(|(n, _)| n.as_str()).collect();
     let timed = gi_core::gpu::context(None).expect("adapter").timestamps;
-    let gpu_stages: &[&str] = if timed { &["shadow maps", "gbuffer", "direct light"] } else { &[] };
+    let gpu_stages: &[&str] = if timed {
+        &["shadow maps", "gbuffer", "direct light"]
+    } else {
+        &[]
+    };
     for stage in ["upload", "readback"].iter().chain(gpu_stages) {
         assert!(names.contains(stage), "missing stage {stage} in {names:?}");
     }
-    assert!(out.stats.stages.iter().all(|(_, t)| t.is_finite() && *t >= 0.0));
+    assert!(out
+        .stats
+        .stages
+        .iter()
+        .all(|(_, t)| t.is_finite() && *t >= 0.0));
 }
 
 #[test]
 fn bad_adapter_is_a_gpu_error() {
     let scene = builtin::load("cornell").expect("built-in scene");
-    let s = Settings { adapter: Some("no-such-adapter-42".into()), ..settings(Method::Direct, 1) };
+    let s = Settings {
+        adapter: Some("no-such-adapter-42".into()),
+        ..settings(Method::Direct, 1)
+    };
     match render(&scene, &s, &Silent) {
         Err(Error::Gpu(msg)) => assert!(msg.contains("mesa-vulkan-drivers"), "{msg}"),
         other => panic!("expected Error::Gpu, got {:?}", other.map(|_| ())),
     }
-    assert!(matches!(gi_core::gpu::adapter_report(Some("no-such-adapter-42")), Err(Error::Gpu(_))));
+    assert!(matches!(
+        gi_core::gpu::adapter_report(Some("no-such-adapter-42")),
+        Err(Error::Gpu(_))
+    ));
     let report = gi_core::gpu::adapter_report(None).expect("an adapter (lavapipe in CI)");
-    assert!(report.contains("adapter:") && report.contains("backend:"), "{report}");
+    assert!(
+        report.contains("adapter:") && report.contains("backend:"),
+        "{report}"
+    );
 }
 
 #[test]
 fn bad_shadow_map_size_is_a_setting_error() {
     let scene = builtin::load("cornell").expect("built-in scene");
-    let s = Settings { shadow_map_size: 3, ..settings(Method::Direct, 1) };
-    assert!(matches!(render(&scene, &s, &Silent), Err(Error::Setting { name: "shadow_map_size", .. })));
+    let s = Settings {
+        shadow_map_size: 3,
+        ..settings(Method::Direct, 1)
+    };
+    assert!(matches!(
+        render(&scene, &s, &Silent),
+        Err(Error::Setting {
+            name: "shadow_map_size",
+            ..
+        })
+    ));
 }

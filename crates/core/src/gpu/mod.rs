@@ -66,7 +66,11 @@ impl Choice {
             Choice::Auto => Some(gpu_rank),
             Choice::Cpu => (info.device_type == Cpu).then_some(0),
             Choice::Gpu => (gpu_rank <= 2).then_some(gpu_rank),
-            Choice::Name(s) => info.name.to_lowercase().contains(s.as_str()).then_some(gpu_rank),
+            Choice::Name(s) => info
+                .name
+                .to_lowercase()
+                .contains(s.as_str())
+                .then_some(gpu_rank),
         }
     }
 }
@@ -82,16 +86,25 @@ fn instance() -> &'static wgpu::Instance {
 
 fn pick_adapter(choice: &Choice) -> Result<wgpu::Adapter> {
     let adapters = pollster::block_on(instance().enumerate_adapters(wgpu::Backends::PRIMARY));
-    let names: Vec<String> =
-        adapters.iter().map(|a| a.get_info()).map(|i| format!("{} ({:?})", i.name, i.device_type)).collect();
+    let names: Vec<String> = adapters
+        .iter()
+        .map(|a| a.get_info())
+        .map(|i| format!("{} ({:?})", i.name, i.device_type))
+        .collect();
     adapters
         .into_iter()
         .filter_map(|a| choice.rank(&a.get_info()).map(|r| (r, a)))
         .min_by_key(|(r, _)| *r)
         .map(|(_, a)| a)
         .ok_or_else(|| {
-            let found = if names.is_empty() { "none".to_string() } else { names.join(", ") };
-            Error::Gpu(format!("no GPU adapter matches {choice:?} (adapters found: {found}); {INSTALL_HINT}"))
+            let found = if names.is_empty() {
+                "none".to_string()
+            } else {
+                names.join(", ")
+            };
+            Error::Gpu(format!(
+                "no GPU adapter matches {choice:?} (adapters found: {found}); {INSTALL_HINT}"
+            ))
         })
 }
 
@@ -103,10 +116,18 @@ fn create_context(choice: &Choice) -> Result<GpuContext> {
     let info = adapter.get_info();
     let missing = REQUIRED - adapter.features();
     if !missing.is_empty() {
-        return Err(Error::Gpu(format!("adapter `{}` lacks features {missing:?}", info.name)));
+        return Err(Error::Gpu(format!(
+            "adapter `{}` lacks features {missing:?}",
+            info.name
+        )));
     }
     let timestamps = adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY);
-    let features = REQUIRED | if timestamps { wgpu::Features::TIMESTAMP_QUERY } else { wgpu::Features::empty() };
+    let features = REQUIRED
+        | if timestamps {
+            wgpu::Features::TIMESTAMP_QUERY
+        } else {
+            wgpu::Features::empty()
+        };
     // The adapter's own limits: the defaults cap textures at 8192 and color targets at 32 bytes.
     let desc = wgpu::DeviceDescriptor {
         label: Some("gi device"),
@@ -118,14 +139,24 @@ fn create_context(choice: &Choice) -> Result<GpuContext> {
         .map_err(|e| Error::Gpu(format!("cannot open device on `{}`: {e}", info.name)))?;
     // Errors inside a frame are caught by error scopes; anything else is reported, not a panic.
     device.on_uncaptured_error(Arc::new(|e| eprintln!("gi: uncaptured GPU error: {e}")));
-    Ok(GpuContext { adapter, device, queue, info, timestamps, passes: OnceLock::new() })
+    Ok(GpuContext {
+        adapter,
+        device,
+        queue,
+        info,
+        timestamps,
+        passes: OnceLock::new(),
+    })
 }
 
 /// The context for an adapter choice (`None` = `GI_ADAPTER` or automatic), created on first use.
 pub fn context(adapter: Option<&str>) -> Result<Arc<GpuContext>> {
     static CONTEXTS: OnceLock<Mutex<HashMap<Choice, Arc<GpuContext>>>> = OnceLock::new();
     let choice = Choice::parse(adapter);
-    let mut map = CONTEXTS.get_or_init(Default::default).lock().unwrap_or_else(|p| p.into_inner());
+    let mut map = CONTEXTS
+        .get_or_init(Default::default)
+        .lock()
+        .unwrap_or_else(|p| p.into_inner());
     if let Some(ctx) = map.get(&choice) {
         return Ok(ctx.clone());
     }
@@ -176,7 +207,10 @@ impl GpuContext {
 
     /// Waits for all submitted work.
     pub fn wait(&self) -> Result<()> {
-        self.device.poll(wgpu::PollType::wait_indefinitely()).map(|_| ()).map_err(|e| Error::Gpu(e.to_string()))
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map(|_| ())
+            .map_err(|e| Error::Gpu(e.to_string()))
     }
 
     /// Maps `buffer` (with `MAP_READ` usage) after the queue's work and copies out its bytes.
@@ -190,7 +224,10 @@ impl GpuContext {
         rx.recv()
             .map_err(|e| Error::Gpu(e.to_string()))?
             .map_err(|e| Error::Gpu(format!("buffer mapping failed: {e}")))?;
-        let bytes = slice.get_mapped_range().map_err(|e| Error::Gpu(e.to_string()))?.to_vec();
+        let bytes = slice
+            .get_mapped_range()
+            .map_err(|e| Error::Gpu(e.to_string()))?
+            .to_vec();
         buffer.unmap();
         Ok(bytes)
     }

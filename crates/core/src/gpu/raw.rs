@@ -52,13 +52,22 @@ impl Light {
     pub fn to_raw(&self) -> LightRaw {
         let mut raw = LightRaw::zeroed();
         match *self {
-            Light::Point { position, intensity } => {
+            Light::Point {
+                position,
+                intensity,
+            } => {
                 raw.position = position.into();
                 raw.intensity = intensity.into();
                 raw.cos_outer = -2.0;
                 raw.cos_inner = -1.0;
             }
-            Light::Spot { position, direction, intensity, cos_inner, cos_outer } => {
+            Light::Spot {
+                position,
+                direction,
+                intensity,
+                cos_inner,
+                cos_outer,
+            } => {
                 raw.kind = 1;
                 raw.position = position.into();
                 raw.direction = direction.into();
@@ -84,7 +93,12 @@ pub struct ViewRaw {
 
 impl ViewRaw {
     pub fn new(view_proj: Mat4, eye: Vec3, weight: f32) -> Self {
-        ViewRaw { view_proj: view_proj.to_cols_array_2d(), eye: eye.into(), weight, _pad: [0.0; 44] }
+        ViewRaw {
+            view_proj: view_proj.to_cols_array_2d(),
+            eye: eye.into(),
+            weight,
+            _pad: [0.0; 44],
+        }
     }
 }
 

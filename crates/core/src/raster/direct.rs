@@ -62,7 +62,11 @@ impl DirectPass {
             bind_group_layouts: &[Some(&scene_layout), Some(&gbuffer_layout)],
             immediate_size: 0,
         });
-        let module = shaders::module(device, "direct shader", &[shaders::COMMON, shaders::BSDF, shaders::DIRECT]);
+        let module = shaders::module(
+            device,
+            "direct shader",
+            &[shaders::COMMON, shaders::BSDF, shaders::DIRECT],
+        );
         let add = wgpu::BlendComponent {
             src_factor: wgpu::BlendFactor::One,
             dst_factor: wgpu::BlendFactor::One,
@@ -86,7 +90,10 @@ impl DirectPass {
                 compilation_options: Default::default(),
                 targets: &[Some(wgpu::ColorTargetState {
                     format: ACCUM,
-                    blend: Some(wgpu::BlendState { color: add, alpha: add }),
+                    blend: Some(wgpu::BlendState {
+                        color: add,
+                        alpha: add,
+                    }),
                     write_mask: wgpu::ColorWrites::ALL,
                 })],
             }),
@@ -100,7 +107,12 @@ impl DirectPass {
             compare: Some(wgpu::CompareFunction::LessEqual),
             ..Default::default()
         });
-        DirectPass { pipeline, scene_layout, gbuffer_layout, shadow_sampler }
+        DirectPass {
+            pipeline,
+            scene_layout,
+            gbuffer_layout,
+            shadow_sampler,
+        }
     }
 
     /// Records the pass, adding into `accum` (cleared first when `clear`). The bind groups
@@ -114,14 +126,21 @@ impl DirectPass {
         view_offset: u32,
         timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) {
-        let load = if clear { wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT) } else { wgpu::LoadOp::Load };
+        let load = if clear {
+            wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT)
+        } else {
+            wgpu::LoadOp::Load
+        };
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("direct light pass"),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {
                 view: accum,
                 depth_slice: None,
                 resolve_target: None,
-                ops: wgpu::Operations { load, store: wgpu::StoreOp::Store },
+                ops: wgpu::Operations {
+                    load,
+                    store: wgpu::StoreOp::Store,
+                },
             })],
             depth_stencil_attachment: None,
             timestamp_writes: timestamps,

@@ -51,7 +51,11 @@ pub struct GBuffer {
 
 impl GBuffer {
     pub fn new(device: &wgpu::Device, width: u32, height: u32) -> Self {
-        let size = wgpu::Extent3d { width, height, depth_or_array_layers: 1 };
+        let size = wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        };
         let make = |label: &str, format, usage| {
             device.create_texture(&wgpu::TextureDescriptor {
                 label: Some(label),
@@ -67,11 +71,25 @@ impl GBuffer {
         let usage = wgpu::TextureUsages::RENDER_ATTACHMENT
             | wgpu::TextureUsages::TEXTURE_BINDING
             | wgpu::TextureUsages::COPY_SRC;
-        let textures: Vec<_> = TARGETS.iter().map(|(label, format)| make(label, *format, usage)).collect();
-        let views = textures.iter().map(|t| t.create_view(&Default::default())).collect();
-        let depth =
-            make("gbuffer depth", DEPTH, wgpu::TextureUsages::RENDER_ATTACHMENT).create_view(&Default::default());
-        GBuffer { textures, views, depth }
+        let textures: Vec<_> = TARGETS
+            .iter()
+            .map(|(label, format)| make(label, *format, usage))
+            .collect();
+        let views = textures
+            .iter()
+            .map(|t| t.create_view(&Default::default()))
+            .collect();
+        let depth = make(
+            "gbuffer depth",
+            DEPTH,
+            wgpu::TextureUsages::RENDER_ATTACHMENT,
+        )
+        .create_view(&Default::default());
+        GBuffer {
+            textures,
+            views,
+            depth,
+        }
     }
 
     /// Views of the targets the lighting pass reads: position, normals, diffuse, specular.
@@ -91,15 +109,25 @@ impl GBufferPass {
     pub fn new(device: &wgpu::Device) -> Self {
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("gbuffer bind group layout"),
-            entries: &[super::view_entry(0), super::storage_entry(1, wgpu::ShaderStages::FRAGMENT)],
+            entries: &[
+                super::view_entry(0),
+                super::storage_entry(1, wgpu::ShaderStages::FRAGMENT),
+            ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("gbuffer pipeline layout"),
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let module = shaders::module(device, "gbuffer shader", &[shaders::COMMON, shaders::BSDF, shaders::GBUFFER]);
-        let targets: Vec<_> = TARGETS.iter().map(|(_, f)| Some(wgpu::ColorTargetState::from(*f))).collect();
+        let module = shaders::module(
+            device,
+            "gbuffer shader",
+            &[shaders::COMMON, shaders::BSDF, shaders::GBUFFER],
+        );
+        let targets: Vec<_> = TARGETS
+            .iter()
+            .map(|(_, f)| Some(wgpu::ColorTargetState::from(*f)))
+            .collect();
         let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("gbuffer pipeline"),
             layout: Some(&pipeline_layout),
@@ -141,13 +169,20 @@ impl GBufferPass {
         geometry: &super::Geometry,
         timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) {
-        let clear =
-            wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT), store: wgpu::StoreOp::Store };
+        let clear = wgpu::Operations {
+            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+            store: wgpu::StoreOp::Store,
+        };
         let attachments: Vec<_> = target
             .views
             .iter()
             .map(|view| {
-                Some(wgpu::RenderPassColorAttachment { view, depth_slice: None, resolve_target: None, ops: clear })
+                Some(wgpu::RenderPassColorAttachment {
+                    view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: clear,
+                })
             })
             .collect();
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -155,7 +190,10 @@ impl GBufferPass {
             color_attachments: &attachments,
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                 view: &target.depth,
-                depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Discard }),
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Discard,
+                }),
                 stencil_ops: None,
             }),
             timestamp_writes: timestamps,

@@ -54,7 +54,10 @@ pub(crate) fn view_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
     }
 }
 
-pub(crate) fn storage_entry(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
+pub(crate) fn storage_entry(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility,
@@ -78,7 +81,9 @@ const VIEW_SIZE: u64 = std::mem::size_of::<ViewRaw>() as u64;
 pub fn sample_positions(spp: u32) -> Vec<Vec2> {
     let n = (spp as f64).sqrt().round() as u32;
     if n * n == spp {
-        return (0..spp).map(|i| Vec2::new((i % n) as f32 + 0.5, (i / n) as f32 + 0.5) / n as f32).collect();
+        return (0..spp)
+            .map(|i| Vec2::new((i % n) as f32 + 0.5, (i / n) as f32 + 0.5) / n as f32)
+            .collect();
     }
     let halton = |mut i: u32, b: u32| {
         let (mut f, mut r) = (1.0f32, 0.0f32);
@@ -89,7 +94,9 @@ pub fn sample_positions(spp: u32) -> Vec<Vec2> {
         }
         r
     };
-    (1..=spp).map(|i| Vec2::new(halton(i, 2), halton(i, 3))).collect()
+    (1..=spp)
+        .map(|i| Vec2::new(halton(i, 2), halton(i, 3)))
+        .collect()
 }
 
 /// World -> view for an eye at `eye` looking along `dir` (right-handed, looking down −z).
@@ -122,11 +129,24 @@ pub(crate) fn perspective(fov_y: f32, aspect: f32, near: f32, far: f32) -> Mat4 
 fn camera_view(scene: &Scene, jitter: Vec2, weight: f32) -> ViewRaw {
     let cam = &scene.camera;
     let (lo, hi) = shadow::bounds(scene);
-    let far = (lo - cam.position).abs().max((hi - cam.position).abs()).length() * 1.01 + 1e-3;
+    let far = (lo - cam.position)
+        .abs()
+        .max((hi - cam.position).abs())
+        .length()
+        * 1.01
+        + 1e-3;
     let proj = perspective(cam.fov_y.to_radians(), cam.aspect(), far * 1e-5, far);
-    let shift = Vec3::new(2.0 * (0.5 - jitter.x) / cam.width as f32, -2.0 * (0.5 - jitter.y) / cam.height as f32, 0.0);
+    let shift = Vec3::new(
+        2.0 * (0.5 - jitter.x) / cam.width as f32,
+        -2.0 * (0.5 - jitter.y) / cam.height as f32,
+        0.0,
+    );
     let view = look_to(cam.position, cam.forward, cam.up);
-    ViewRaw::new(Mat4::from_translation(shift) * proj * view, cam.position, weight)
+    ViewRaw::new(
+        Mat4::from_translation(shift) * proj * view,
+        cam.position,
+        weight,
+    )
 }
 
 /// The scene's triangles as a non-indexed vertex list.
@@ -147,15 +167,29 @@ fn vertices(scene: &Scene) -> Vec<VertexRaw> {
     out
 }
 
-fn buffer_init(ctx: &GpuContext, label: &str, bytes: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer {
+fn buffer_init(
+    ctx: &GpuContext,
+    label: &str,
+    bytes: &[u8],
+    usage: wgpu::BufferUsages,
+) -> wgpu::Buffer {
     // Zero-sized bindings are invalid: pad empty data to one 256-byte block.
     let zeros = [0u8; 256];
     let contents = if bytes.is_empty() { &zeros[..] } else { bytes };
-    ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some(label), contents, usage })
+    ctx.device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents,
+            usage,
+        })
 }
 
 fn view_binding(buffer: &wgpu::Buffer) -> wgpu::BindingResource<'_> {
-    wgpu::BindingResource::Buffer(wgpu::BufferBinding { buffer, offset: 0, size: wgpu::BufferSize::new(VIEW_SIZE) })
+    wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+        buffer,
+        offset: 0,
+        size: wgpu::BufferSize::new(VIEW_SIZE),
+    })
 }
 
 /// Copies a 16-byte-per-texel texture to a mapped buffer and returns its rows unpadded.
@@ -168,12 +202,20 @@ fn read_texture(ctx: &GpuContext, texture: &wgpu::Texture) -> Result<Vec<Vec4>> 
         usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     });
-    let mut encoder = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("readback") });
+    let mut encoder = ctx
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("readback"),
+        });
     encoder.copy_texture_to_buffer(
         texture.as_image_copy(),
         wgpu::TexelCopyBufferInfo {
             buffer: &buffer,
-            layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(row), rows_per_image: Some(h) },
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(row),
+                rows_per_image: Some(h),
+            },
         },
         texture.size(),
     );
@@ -182,7 +224,9 @@ fn read_texture(ctx: &GpuContext, texture: &wgpu::Texture) -> Result<Vec<Vec4>> 
     let mut out = Vec::with_capacity((w * h) as usize);
     for y in 0..h as usize {
         let start = y * row as usize;
-        out.extend_from_slice(bytemuck::cast_slice::<u8, Vec4>(&bytes[start..start + w as usize * 16]));
+        out.extend_from_slice(bytemuck::cast_slice::<u8, Vec4>(
+            &bytes[start..start + w as usize * 16],
+        ));
     }
     Ok(out)
 }
@@ -200,22 +244,37 @@ fn check_limits(ctx: &GpuContext, scene: &Scene, settings: &Settings, layers: u3
     let l = ctx.device.limits();
     let max = l.max_texture_dimension_2d;
     if scene.camera.width > max || scene.camera.height > max {
-        return Err(Error::setting("width", format!("the GPU allows images up to {max} pixels a side")));
+        return Err(Error::setting(
+            "width",
+            format!("the GPU allows images up to {max} pixels a side"),
+        ));
     }
     if settings.shadow_map_size > max {
-        return Err(Error::setting("shadow_map_size", format!("the GPU allows at most {max}")));
+        return Err(Error::setting(
+            "shadow_map_size",
+            format!("the GPU allows at most {max}"),
+        ));
     }
     if layers > l.max_texture_array_layers {
-        return Err(Error::Gpu(format!("{layers} shadow-map layers exceed the GPU's {}", l.max_texture_array_layers)));
+        return Err(Error::Gpu(format!(
+            "{layers} shadow-map layers exceed the GPU's {}",
+            l.max_texture_array_layers
+        )));
     }
     Ok(())
 }
 
 /// Method `direct`: direct light from point and spot lights with shadow maps, rasterized.
-pub fn render_direct(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Result<RenderOutput> {
+pub fn render_direct(
+    scene: &Scene,
+    settings: &Settings,
+    progress: &dyn Progress,
+) -> Result<RenderOutput> {
     let t0 = Instant::now();
     let ctx = gpu::context(settings.adapter.as_deref())?;
-    ctx.scoped("direct frame", || frame(&ctx, scene, settings, progress, t0))
+    ctx.scoped("direct frame", || {
+        frame(&ctx, scene, settings, progress, t0)
+    })
 }
 
 fn frame(
@@ -233,34 +292,69 @@ fn frame(
     let shadows = shadow::ShadowViews::new(scene, size);
     let layers = (shadows.matrices.len() as u32).max(1);
     check_limits(ctx, scene, settings, layers)?;
-    let mut stats =
-        RenderStats { triangles: scene.triangles.len() as u64, samples_per_pixel: spp, ..Default::default() };
+    let mut stats = RenderStats {
+        triangles: scene.triangles.len() as u64,
+        samples_per_pixel: spp,
+        ..Default::default()
+    };
 
     // Upload the scene, views and lights.
     let t = Instant::now();
     let storage = wgpu::BufferUsages::STORAGE;
     let verts = vertices(scene);
     let geometry = Geometry {
-        vertices: buffer_init(ctx, "scene vertices", bytemuck::cast_slice(&verts), wgpu::BufferUsages::VERTEX),
+        vertices: buffer_init(
+            ctx,
+            "scene vertices",
+            bytemuck::cast_slice(&verts),
+            wgpu::BufferUsages::VERTEX,
+        ),
         count: verts.len() as u32,
     };
     let materials: Vec<_> = scene.materials.iter().map(|m| m.to_raw()).collect();
     let material_buffer = buffer_init(ctx, "materials", bytemuck::cast_slice(&materials), storage);
-    let light_buffer = buffer_init(ctx, "lights", bytemuck::cast_slice(&shadows.lights), storage);
+    let light_buffer = buffer_init(
+        ctx,
+        "lights",
+        bytemuck::cast_slice(&shadows.lights),
+        storage,
+    );
     let matrices: Vec<[f32; 16]> = shadows.matrices.iter().map(|m| m.to_cols_array()).collect();
-    let matrix_buffer = buffer_init(ctx, "shadow matrices", bytemuck::cast_slice(&matrices), storage);
+    let matrix_buffer = buffer_init(
+        ctx,
+        "shadow matrices",
+        bytemuck::cast_slice(&matrices),
+        storage,
+    );
     let shadow_views = shadow::ShadowPass::views(&shadows);
-    let shadow_view_buffer =
-        buffer_init(ctx, "shadow views", bytemuck::cast_slice(&shadow_views), wgpu::BufferUsages::UNIFORM);
+    let shadow_view_buffer = buffer_init(
+        ctx,
+        "shadow views",
+        bytemuck::cast_slice(&shadow_views),
+        wgpu::BufferUsages::UNIFORM,
+    );
     // Eye views: the pixel centre (for the AOVs), then one per sample.
     let mut eye_views = vec![camera_view(scene, Vec2::splat(0.5), 0.0)];
-    eye_views.extend(sample_positions(spp).into_iter().map(|j| camera_view(scene, j, 1.0 / spp as f32)));
-    let eye_buffer = buffer_init(ctx, "eye views", bytemuck::cast_slice(&eye_views), wgpu::BufferUsages::UNIFORM);
+    eye_views.extend(
+        sample_positions(spp)
+            .into_iter()
+            .map(|j| camera_view(scene, j, 1.0 / spp as f32)),
+    );
+    let eye_buffer = buffer_init(
+        ctx,
+        "eye views",
+        bytemuck::cast_slice(&eye_views),
+        wgpu::BufferUsages::UNIFORM,
+    );
 
     // Render targets.
     let shadow_maps = device.create_texture(&wgpu::TextureDescriptor {
         label: Some("shadow maps"),
-        size: wgpu::Extent3d { width: size, height: size, depth_or_array_layers: layers },
+        size: wgpu::Extent3d {
+            width: size,
+            height: size,
+            depth_or_array_layers: layers,
+        },
         mip_level_count: 1,
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
@@ -285,7 +379,11 @@ fn frame(
     let gbuf = gbuffer::GBuffer::new(device, w, h);
     let accum = device.create_texture(&wgpu::TextureDescriptor {
         label: Some("direct accumulation"),
-        size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+        size: wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        },
         mip_level_count: 1,
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
@@ -300,23 +398,44 @@ fn frame(
         label: Some("gbuffer bind group"),
         layout: &passes.gbuffer.layout,
         entries: &[
-            wgpu::BindGroupEntry { binding: 0, resource: view_binding(&eye_buffer) },
-            wgpu::BindGroupEntry { binding: 1, resource: material_buffer.as_entire_binding() },
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: view_binding(&eye_buffer),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: material_buffer.as_entire_binding(),
+            },
         ],
     });
     let shadow_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("shadow bind group"),
         layout: &passes.shadow.layout,
-        entries: &[wgpu::BindGroupEntry { binding: 0, resource: view_binding(&shadow_view_buffer) }],
+        entries: &[wgpu::BindGroupEntry {
+            binding: 0,
+            resource: view_binding(&shadow_view_buffer),
+        }],
     });
     let direct_scene_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("direct scene bind group"),
         layout: &passes.direct.scene_layout,
         entries: &[
-            wgpu::BindGroupEntry { binding: 0, resource: view_binding(&eye_buffer) },
-            wgpu::BindGroupEntry { binding: 1, resource: light_buffer.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 2, resource: matrix_buffer.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::TextureView(&shadow_array) },
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: view_binding(&eye_buffer),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: light_buffer.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 2,
+                resource: matrix_buffer.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 3,
+                resource: wgpu::BindingResource::TextureView(&shadow_array),
+            },
             wgpu::BindGroupEntry {
                 binding: 4,
                 resource: wgpu::BindingResource::Sampler(&passes.direct.shadow_sampler),
@@ -330,19 +449,28 @@ fn frame(
             .lighting_inputs()
             .iter()
             .enumerate()
-            .map(|(i, v)| wgpu::BindGroupEntry { binding: i as u32, resource: wgpu::BindingResource::TextureView(v) })
+            .map(|(i, v)| wgpu::BindGroupEntry {
+                binding: i as u32,
+                resource: wgpu::BindingResource::TextureView(v),
+            })
             .collect::<Vec<_>>(),
     });
-    stats.stages.push(("upload".into(), t.elapsed().as_secs_f64()));
+    stats
+        .stages
+        .push(("upload".into(), t.elapsed().as_secs_f64()));
 
     // Shadow maps.
     let mut timer = Timer::new(ctx, layers + 1 + 2 * SAMPLES_PER_SUBMIT.min(spp));
-    let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("shadow maps") });
+    let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+        label: Some("shadow maps"),
+    });
     for layer in 0..shadows.matrices.len() as u32 {
         let view = layer_view(layer);
         let offset = (layer as u64 * VIEW_SIZE) as u32;
         let ts = timer.pass("shadow maps");
-        passes.shadow.record(&mut encoder, &view, &shadow_group, offset, &geometry, ts);
+        passes
+            .shadow
+            .record(&mut encoder, &view, &shadow_group, offset, &geometry, ts);
     }
     timer.resolve(&mut encoder);
     ctx.queue.submit([encoder.finish()]);
@@ -352,12 +480,15 @@ fn frame(
     let mut done = 0;
     while done < spp {
         let batch = SAMPLES_PER_SUBMIT.min(spp - done);
-        let mut encoder =
-            device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("direct samples") });
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("direct samples"),
+        });
         for s in done..done + batch {
             let offset = ((s as u64 + 1) * VIEW_SIZE) as u32;
             let ts = timer.pass("gbuffer");
-            passes.gbuffer.record(&mut encoder, &gbuf, &gbuffer_group, offset, &geometry, ts);
+            passes
+                .gbuffer
+                .record(&mut encoder, &gbuf, &gbuffer_group, offset, &geometry, ts);
             let ts = timer.pass("direct light");
             passes.direct.record(
                 &mut encoder,
@@ -378,9 +509,13 @@ fn frame(
     }
     // The AOVs come from a G-buffer at the pixel centres: the single sample's when spp = 1.
     if spp > 1 {
-        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("aov gbuffer") });
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("aov gbuffer"),
+        });
         let ts = timer.pass("gbuffer");
-        passes.gbuffer.record(&mut encoder, &gbuf, &gbuffer_group, 0, &geometry, ts);
+        passes
+            .gbuffer
+            .record(&mut encoder, &gbuf, &gbuffer_group, 0, &geometry, ts);
         timer.resolve(&mut encoder);
         ctx.queue.submit([encoder.finish()]);
         timer.collect(ctx)?;
@@ -406,7 +541,11 @@ fn frame(
     };
     for i in 0..(w * h) as usize {
         let r = radiance[i];
-        out.radiance.pixels[i] = if r.w > 0.0 { r.truncate() / r.w } else { Vec3::ZERO };
+        out.radiance.pixels[i] = if r.w > 0.0 {
+            r.truncate() / r.w
+        } else {
+            Vec3::ZERO
+        };
         if position[i].w > 0.0 {
             let p = position[i].truncate();
             out.position.pixels[i] = p;
@@ -428,9 +567,14 @@ mod tests {
         for spp in [1, 4, 16, 7, 100, 33] {
             let p = sample_positions(spp);
             assert_eq!(p.len(), spp as usize);
-            assert!(p.iter().all(|s| s.cmpge(Vec2::ZERO).all() && s.cmplt(Vec2::ONE).all()));
+            assert!(p
+                .iter()
+                .all(|s| s.cmpge(Vec2::ZERO).all() && s.cmplt(Vec2::ONE).all()));
             let mean = p.iter().copied().sum::<Vec2>() / spp as f32;
-            assert!((mean - Vec2::splat(0.5)).abs().max_element() < 0.5 / (spp as f32).sqrt() + 1e-6, "{spp}: {mean}");
+            assert!(
+                (mean - Vec2::splat(0.5)).abs().max_element() < 0.5 / (spp as f32).sqrt() + 1e-6,
+                "{spp}: {mean}"
+            );
         }
     }
 
@@ -440,7 +584,10 @@ mod tests {
     fn camera_view_matches_camera_rays() {
         let scene = crate::scene::builtin::load("cornell").expect("built-in scene");
         let cam = scene.camera.with_size(64, 48);
-        let scene = Scene { camera: cam, ..scene };
+        let scene = Scene {
+            camera: cam,
+            ..scene
+        };
         let jitter = Vec2::new(0.2, 0.9);
         let m = Mat4::from_cols_array_2d(&camera_view(&scene, jitter, 1.0).view_proj);
         for (x, y) in [(0u32, 0u32), (10, 40), (63, 47)] {
@@ -448,7 +595,13 @@ mod tests {
             let c = m * p.extend(1.0);
             let ndc = c.truncate() / c.w;
             let px = Vec2::new((ndc.x + 1.0) * 0.5 * 64.0, (1.0 - ndc.y) * 0.5 * 48.0);
-            assert!((px - Vec2::new(x as f32 + 0.5, y as f32 + 0.5)).abs().max_element() < 1e-3, "{px}");
+            assert!(
+                (px - Vec2::new(x as f32 + 0.5, y as f32 + 0.5))
+                    .abs()
+                    .max_element()
+                    < 1e-3,
+                "{px}"
+            );
             assert!((0.0..=1.0).contains(&ndc.z));
         }
     }
@@ -464,7 +617,10 @@ mod tests {
                 p
             } else {
                 (Vec2::ONE - Vec2::new(p.y.abs(), p.x.abs()))
-                    * Vec2::new(if p.x >= 0.0 { 1.0 } else { -1.0 }, if p.y >= 0.0 { 1.0 } else { -1.0 })
+                    * Vec2::new(
+                        if p.x >= 0.0 { 1.0 } else { -1.0 },
+                        if p.y >= 0.0 { 1.0 } else { -1.0 },
+                    )
             };
             assert!((oct_decode(e) - n).length() < 1e-5);
         }

@@ -12,7 +12,11 @@ use glam::{Mat4, Vec3};
 pub const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
 /// Bias in depth units (scaled by the format's resolution) and per unit depth slope.
-const DEPTH_BIAS: wgpu::DepthBiasState = wgpu::DepthBiasState { constant: 4, slope_scale: 2.0, clamp: 0.0 };
+const DEPTH_BIAS: wgpu::DepthBiasState = wgpu::DepthBiasState {
+    constant: 4,
+    slope_scale: 2.0,
+    clamp: 0.0,
+};
 
 /// Extra field of view, in shadow texels on each side, so PCF taps near a view's border
 /// stay inside it.
@@ -44,7 +48,12 @@ impl ShadowViews {
             let mut raw = light.to_raw();
             let p = light.position();
             // Depth range: everything in the scene's bounding box.
-            let far = corners(lo, hi).map(|c| (c - p).length()).into_iter().fold(0.0f32, f32::max) * 1.01 + 1e-3;
+            let far = corners(lo, hi)
+                .map(|c| (c - p).length())
+                .into_iter()
+                .fold(0.0f32, f32::max)
+                * 1.01
+                + 1e-3;
             let near = (far * 1e-3).max(1e-5);
             let grow = 1.0 + 2.0 * MARGIN_TEXELS / size as f32;
             raw.first_layer = matrices.len() as u32;
@@ -56,9 +65,17 @@ impl ShadowViews {
                     }
                     t
                 }
-                Light::Spot { direction, cos_outer, .. } => {
+                Light::Spot {
+                    direction,
+                    cos_outer,
+                    ..
+                } => {
                     let t = (cos_outer.acos().tan() * grow).max(1e-3);
-                    let up = if direction.y.abs() < 0.99 { Vec3::Y } else { Vec3::X };
+                    let up = if direction.y.abs() < 0.99 {
+                        Vec3::Y
+                    } else {
+                        Vec3::X
+                    };
                     matrices.push(perspective(t, near, far) * super::look_to(p, direction, up));
                     t
                 }
@@ -77,7 +94,10 @@ fn perspective(tan_half: f32, near: f32, far: f32) -> Mat4 {
 
 /// Axis-aligned bounds of the scene's vertices.
 pub fn bounds(scene: &Scene) -> (Vec3, Vec3) {
-    scene.positions.iter().fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(lo, hi), p| (lo.min(*p), hi.max(*p)))
+    scene.positions.iter().fold(
+        (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+    )
 }
 
 fn corners(lo: Vec3, hi: Vec3) -> [Vec3; 8] {
@@ -139,7 +159,11 @@ impl ShadowPass {
 
     /// The views to render, one per layer, for the view uniform buffer.
     pub fn views(views: &ShadowViews) -> Vec<ViewRaw> {
-        views.matrices.iter().map(|m| ViewRaw::new(*m, Vec3::ZERO, 1.0)).collect()
+        views
+            .matrices
+            .iter()
+            .map(|m| ViewRaw::new(*m, Vec3::ZERO, 1.0))
+            .collect()
     }
 
     /// Records one layer's pass.
@@ -157,7 +181,10 @@ impl ShadowPass {
             color_attachments: &[],
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                 view: layer,
-                depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Store,
+                }),
                 stencil_ops: None,
             }),
             timestamp_writes: timestamps,

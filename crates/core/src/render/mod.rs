@@ -87,10 +87,7 @@ impl Settings {
         for (name, v) in [("width", self.width), ("height", self.height)] {
             if let Some(v) = v {
                 if v == 0 || v > 16384 {
-                    return Err(Error::setting(
-                        if name == "width" { "width" } else { "height" },
-                        "must be in 1..=16384",
-                    ));
+                    return Err(Error::setting(if name == "width" { "width" } else { "height" }, "must be in 1..=16384"));
                 }
             }
         }

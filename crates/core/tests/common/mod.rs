@@ -17,9 +17,17 @@ pub fn luminance(c: Vec3) -> f32 {
 ///   10% of the local mean. Smooth 1/d² and spot falloffs have small second differences and
 ///   stay in; hard shadow edges (path tracer) against PCF-softened ones (rasterizer) go.
 pub fn edge_mask(reference: &RenderOutput, radius: i32) -> Vec<bool> {
-    let (w, h) = (reference.radiance.width as i32, reference.radiance.height as i32);
+    let (w, h) = (
+        reference.radiance.width as i32,
+        reference.radiance.height as i32,
+    );
     let idx = |x: i32, y: i32| (y.clamp(0, h - 1) * w + x.clamp(0, w - 1)) as usize;
-    let lum: Vec<f32> = reference.radiance.pixels.iter().map(|c| luminance(*c)).collect();
+    let lum: Vec<f32> = reference
+        .radiance
+        .pixels
+        .iter()
+        .map(|c| luminance(*c))
+        .collect();
     let mut edge = vec![false; (w * h) as usize];
     for y in 0..h {
         for x in 0..w {
@@ -30,7 +38,8 @@ pub fn edge_mask(reference: &RenderOutput, radius: i32) -> Vec<bool> {
                 let (a, b) = (idx(x - dx, y - dy), idx(x + dx, y + dy));
                 let (da, db) = (reference.depth[a], reference.depth[b]);
                 e |= da <= 0.0 || db <= 0.0 || (da + db - 2.0 * d).abs() > 0.01 * d;
-                e |= reference.normal.pixels[a].dot(n) < 0.99 || reference.normal.pixels[b].dot(n) < 0.99;
+                e |= reference.normal.pixels[a].dot(n) < 0.99
+                    || reference.normal.pixels[b].dot(n) < 0.99;
                 let mean = (lum[a] + lum[b] + lum[i]) / 3.0;
                 e |= (lum[a] + lum[b] - 2.0 * lum[i]).abs() > 0.1 * mean;
             }
@@ -86,7 +95,8 @@ pub fn ssim(a: &Image, b: &Image, mask: &[bool]) -> f64 {
             let va = (saa / n - ma * ma).max(0.0);
             let vb = (sbb / n - mb * mb).max(0.0);
             let cov = sab / n - ma * mb;
-            total += ((2.0 * ma * mb + c1) * (2.0 * cov + c2)) / ((ma * ma + mb * mb + c1) * (va + vb + c2));
+            total += ((2.0 * ma * mb + c1) * (2.0 * cov + c2))
+                / ((ma * ma + mb * mb + c1) * (va + vb + c2));
             count += 1;
         }
     }
