@@ -222,3 +222,20 @@ fn bad_shadow_map_size_is_a_setting_error() {
         })
     ));
 }
+
+/// More samples than one submission holds (256): the per-batch view upload must keep the
+/// image the same (Halton samples at spp = 300 against the 16×16 grid).
+#[test]
+fn samples_across_submissions() {
+    let scene = builtin::load("cornell").expect("built-in scene");
+    let small = |spp| Settings {
+        width: Some(24),
+        height: Some(24),
+        shadow_map_size: 512,
+        ..settings(Method::Direct, spp)
+    };
+    let a = render(&scene, &small(300), &Silent).expect("direct render");
+    let b = render(&scene, &small(256), &Silent).expect("direct render");
+    let (ma, mb) = (a.radiance.mean(), b.radiance.mean());
+    assert!(((ma - mb) / mb).abs().max_element() < 0.01, "{ma} vs {mb}");
+}

@@ -333,18 +333,19 @@ fn frame(
         bytemuck::cast_slice(&shadow_views),
         wgpu::BufferUsages::UNIFORM,
     );
-    // Eye views: the pixel centre (for the AOVs), then one per sample.
+    // Eye views: the pixel centre (for the AOVs), then the samples of one submission,
+    // rewritten for each.
+    let sample_views: Vec<ViewRaw> = sample_positions(spp)
+        .into_iter()
+        .map(|j| camera_view(scene, j, 1.0 / spp as f32))
+        .collect();
     let mut eye_views = vec![camera_view(scene, Vec2::splat(0.5), 0.0)];
-    eye_views.extend(
-        sample_positions(spp)
-            .into_iter()
-            .map(|j| camera_view(scene, j, 1.0 / spp as f32)),
-    );
+    eye_views.extend_from_slice(&sample_views[..SAMPLES_PER_SUBMIT.min(spp) as usize]);
     let eye_buffer = buffer_init(
         ctx,
         "eye views",
         bytemuck::cast_slice(&eye_views),
-        wgpu::BufferUsages::UNIFORM,
+        wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
     );
 
     // Render targets.
@@ -480,11 +481,14 @@ fn frame(
     let mut done = 0;
     while done < spp {
         let batch = SAMPLES_PER_SUBMIT.min(spp - done);
+        let views = &sample_views[done as usize..(done + batch) as usize];
+        ctx.queue
+            .write_buffer(&eye_buffer, VIEW_SIZE, bytemuck::cast_slice(views));
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("direct samples"),
         });
         for s in done..done + batch {
-            let offset = ((s as u64 + 1) * VIEW_SIZE) as u32;
+            let offset = ((s - done + 1) as u64 * VIEW_SIZE) as u32;
             let ts = timer.pass("gbuffer");
             passes
                 .gbuffer
