@@ -41,9 +41,9 @@ enum Choice {
 }
 
 impl Choice {
-    fn parse(setting: Option<&str>) -> Choice {
-        let env = std::env::var(ADAPTER_ENV).ok();
-        match setting.or(env.as_deref()).map(|s| s.trim().to_lowercase()) {
+    /// The setting wins over the environment variable's value `env`.
+    fn parse(setting: Option<&str>, env: Option<&str>) -> Choice {
+        match setting.or(env).map(|s| s.trim().to_lowercase()) {
             None => Choice::Auto,
             Some(s) if s.is_empty() || s == "auto" => Choice::Auto,
             Some(s) if s == "cpu" => Choice::Cpu,
@@ -53,9 +53,9 @@ impl Choice {
     }
 
     /// Rank of an adapter under this choice; `None` = not acceptable. Lower is better.
-    fn rank(&self, info: &wgpu::AdapterInfo) -> Option<u32> {
+    fn rank(&self, name: &str, device_type: wgpu::DeviceType) -> Option<u32> {
         use wgpu::DeviceType::*;
-        let gpu_rank = match info.device_type {
+        let gpu_rank = match device_type {
             DiscreteGpu => 0,
             IntegratedGpu => 1,
             VirtualGpu => 2,
@@ -64,13 +64,9 @@ impl Choice {
         };
         match self {
             Choice::Auto => Some(gpu_rank),
-            Choice::Cpu => (info.device_type == Cpu).then_some(0),
+            Choice::Cpu => (device_type == Cpu).then_some(0),
             Choice::Gpu => (gpu_rank <= 2).then_some(gpu_rank),
-            Choice::Name(s) => info
-                .name
-                .to_lowercase()
-                .contains(s.as_str())
-                .then_some(gpu_rank),
+            Choice::Name(s) => name.to_lowercase().contains(s.as_str()).then_some(gpu_rank),
         }
     }
 }
@@ -93,7 +89,10 @@ fn pick_adapter(choice: &Choice) -> Result<wgpu::Adapter> {
         .collect();
     adapters
         .into_iter()
-        .filter_map(|a| choice.rank(&a.get_info()).map(|r| (r, a)))
+        .filter_map(|a| {
+            let info = a.get_info();
+            choice.rank(&info.name, info.device_type).map(|r| (r, a))
+        })
         .min_by_key(|(r, _)| *r)
         .map(|(_, a)| a)
         .ok_or_else(|| {
@@ -152,7 +151,7 @@ fn create_context(choice: &Choice) -> Result<GpuContext> {
 /// The context for an adapter choice (`None` = `GI_ADAPTER` or automatic), created on first use.
 pub fn context(adapter: Option<&str>) -> Result<Arc<GpuContext>> {
     static CONTEXTS: OnceLock<Mutex<HashMap<Choice, Arc<GpuContext>>>> = OnceLock::new();
-    let choice = Choice::parse(adapter);
+    let choice = Choice::parse(adapter, std::env::var(ADAPTER_ENV).ok().as_deref());
     let mut map = CONTEXTS
         .get_or_init(Default::default)
         .lock()
@@ -230,5 +229,28 @@ impl GpuContext {
             .to_vec();
         buffer.unmap();
         Ok(bytes)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn adapter_choice() {
+        assert_eq!(Choice::parse(None, None), Choice::Auto);
+        assert_eq!(Choice::parse(None, Some(" CPU ")), Choice::Cpu);
+        assert_eq!(Choice::parse(Some("gpu"), Some("cpu")), Choice::Gpu);
+        assert_eq!(
+            Choice::parse(Some("LLVMpipe"), None),
+            Choice::Name("llvmpipe".into())
+        );
+        let cpu = ("llvmpipe (LLVM 15.0.6, 256 bits)", wgpu::DeviceType::Cpu);
+        let gpu = ("NVIDIA H100", wgpu::DeviceType::DiscreteGpu);
+        assert!(Choice::Auto.rank(gpu.0, gpu.1) < Choice::Auto.rank(cpu.0, cpu.1));
+        assert_eq!(Choice::Gpu.rank(cpu.0, cpu.1), None);
+        assert_eq!(Choice::Cpu.rank(gpu.0, gpu.1), None);
+        assert!(Choice::Name("llvm".into()).rank(cpu.0, cpu.1).is_some());
+        assert_eq!(Choice::Name("llvm".into()).rank(gpu.0, gpu.1), None);
     }
 }
