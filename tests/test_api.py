@@ -79,12 +79,13 @@ def test_gil_is_released_while_rendering():
     t = threading.Thread(target=count)
     t.start()
     start = time.monotonic()
-    gi.render(scene, spp=16, size=(64, 64))
+    gi.render(scene, spp=128, size=(96, 96))
     elapsed = time.monotonic() - start
     done.set()
     t.join()
-    # With the GIL held the counter could not advance during the render at all.
-    assert elapsed > 0.05 and ticks > 10
+    # With the GIL held the counter could not advance during the render at all; released,
+    # it ticks about once a millisecond.
+    assert elapsed > 0.1 and ticks > 20, (elapsed, ticks)
 
 
 def test_furnace_from_python_matches_analytic():
@@ -114,3 +115,22 @@ def test_photon_method_matches_furnace():
     expected = 0.5 * 1.0 / (np.pi * 1.0 * 0.5)
     assert r.radiance.mean() == pytest.approx(expected, rel=0.03)
     assert r.stats.method == "photon" and "photon" in gi.methods()
+
+
+def test_direct_method_on_the_cpu_adapter_matches_path_direct_light():
+    # GPU deferred direct light (lavapipe) against the path tracer limited to one bounce;
+    # the Rust tests compare per pixel, this checks the Python path end to end.
+    scene = gi.load_scene("cornell")
+    gpu = gi.render(scene, "direct", spp=4, size=(32, 32), adapter="cpu")
+    ref = gi.render(scene, "path", spp=64, size=(32, 32), max_depth=1)
+    assert gpu.radiance.dtype == np.float32 and gpu.radiance.shape == (32, 32, 3)
+    assert gpu.radiance.mean() == pytest.approx(ref.radiance.mean(), rel=0.02)
+    stages = [n for n, _ in gpu.stats.stages]
+    assert {"shadow maps", "gbuffer", "direct light"} <= set(stages)
+
+
+def test_adapter_report_and_bad_adapter():
+    report = gi.adapter_report("cpu")
+    assert "llvmpipe" in report.lower() or "lavapipe" in report.lower()
+    with pytest.raises(gi.GpuError, match="mesa-vulkan-drivers"):
+        gi.render(gi.load_scene("cornell"), "direct", spp=1, size=(8, 8), adapter="no-such-gpu")

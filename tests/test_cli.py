@@ -71,3 +71,8 @@ def test_scene_file_with_relative_mesh(tmp_path):
     )
     assert p.returncode == 0, p.stderr
     assert np.isfinite(gi.read_image(out)).all()
+
+
+def test_info_prints_the_adapter():
+    p = run("info", "--adapter", "cpu")
+    assert p.returncode == 0 and "gi " in p.stdout and "backend" in p.stdout.lower(), p.stdout

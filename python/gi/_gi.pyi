@@ -66,5 +66,8 @@ def render(
     k: int = 100,
     max_radius: float | None = None,
     kernel: str = "cone",
+    adapter: str | None = None,
+    shadow_map_size: int = 1024,
     progress: Callable[[str, float], bool | None] | None = None,
 ) -> dict[str, Any]: ...
+def adapter_report(adapter: str | None = None) -> str: ...

@@ -43,6 +43,8 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument(
         "--kernel", default="cone", choices=["box", "cone", "epanechnikov"], help="photon kernel"
     )
+    r.add_argument("--adapter", help='GPU adapter: "cpu" (lavapipe), "gpu" or part of a name')
+    r.add_argument("--shadow-map-size", type=int, default=1024, help="shadow map texels per side")
     r.add_argument("--exposure", type=float, default=0.0, help="PNG exposure in stops")
     r.add_argument(
         "--aov",
@@ -54,6 +56,8 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
     sub.add_parser("scenes", help="list the built-in scenes")
     sub.add_parser("methods", help="list the rendering methods")
+    i = sub.add_parser("info", help="show the GPU adapter gi uses")
+    i.add_argument("--adapter", help='"cpu", "gpu" or part of an adapter name')
     return p
 
 
@@ -71,6 +75,8 @@ def _render(args: argparse.Namespace) -> int:
         k=args.k,
         max_radius=args.max_radius,
         kernel=args.kernel,
+        adapter=args.adapter,
+        shadow_map_size=args.shadow_map_size,
         progress=not args.quiet,
     )
     written = []
@@ -95,6 +101,10 @@ def main(argv: list[str] | None = None) -> int:
         if args.command == "scenes":
             for name, desc in gi.builtin_scenes():
                 print(f"{name:15} {desc}")
+            return 0
+        if args.command == "info":
+            print(f"gi {gi.__version__}")
+            print(gi.adapter_report(args.adapter))
             return 0
         if args.command == "methods":
             print("\n".join(gi.methods()))

@@ -84,6 +84,8 @@ def render(
     k: int = 100,
     max_radius: float | None = None,
     kernel: str = "cone",
+    adapter: str | None = None,
+    shadow_map_size: int = 1024,
     progress: bool | ProgressCallback = False,
 ) -> RenderResult:
     """Renders ``scene`` with ``method`` (see :func:`gi.methods`).
@@ -93,9 +95,12 @@ def render(
     one per camera sample). Method ``photon`` (classic photon mapping) emits ``photons``
     photons and estimates radiance from the ``k`` nearest within ``max_radius`` (metres;
     default 5% of the scene's diagonal) with a ``kernel`` of "box", "cone" or "epanechnikov".
-    ``progress`` is a callable ``(stage, fraction) -> bool | None`` (return ``False`` to cancel), or ``True``
-    for a text bar on stderr. The GIL is released while rendering; Ctrl-C cancels with
-    :class:`KeyboardInterrupt`.
+    GPU methods (``direct``) run on ``adapter`` ("cpu" for lavapipe, "gpu", or part of an
+    adapter's name; default: the ``GI_ADAPTER`` environment variable, else a real GPU when
+    present, else lavapipe) with ``shadow_map_size``² texels per shadow-map face.
+    ``progress`` is a callable ``(stage, fraction) -> bool | None`` (return ``False`` to
+    cancel), or ``True`` for a text bar on stderr. The GIL is released while rendering;
+    Ctrl-C cancels with :class:`KeyboardInterrupt`.
     """
     callback: ProgressCallback | None
     if progress is True:
@@ -118,6 +123,8 @@ def render(
         k=k,
         max_radius=max_radius,
         kernel=kernel,
+        adapter=adapter,
+        shadow_map_size=shadow_map_size,
         progress=callback,
     )
     s = out["stats"]

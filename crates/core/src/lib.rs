@@ -6,8 +6,10 @@
 
 pub mod bsdf;
 pub mod error;
+pub mod gpu;
 pub mod image;
 pub mod photon;
+pub mod raster;
 pub mod render;
 pub mod sampling;
 pub mod scene;

@@ -55,7 +55,7 @@ fn image_array<'py>(py: Python<'py>, img: Image) -> PyResult<Bound<'py, PyAny>> 
 /// Renders `scene`; returns a dict of float32 arrays (radiance, albedo, normal, position,
 /// caustics: H×W×3; depth: H×W) and `stats`.
 #[pyfunction]
-#[pyo3(signature = (scene, method = "path", spp = 64, width = None, height = None, seed = 0, max_depth = 64, light_paths = None, photons = 200_000, k = 100, max_radius = None, kernel = "cone", progress = None))]
+#[pyo3(signature = (scene, method = "path", spp = 64, width = None, height = None, seed = 0, max_depth = 64, light_paths = None, photons = 200_000, k = 100, max_radius = None, kernel = "cone", adapter = None, shadow_map_size = 1024, progress = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn render<'py>(
     py: Python<'py>,
@@ -71,6 +71,8 @@ pub fn render<'py>(
     k: u32,
     max_radius: Option<f32>,
     kernel: &str,
+    adapter: Option<String>,
+    shadow_map_size: u32,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let method: Method = method.parse().map_err(|e| to_py(py, e))?;
@@ -87,6 +89,8 @@ pub fn render<'py>(
         k,
         max_radius,
         kernel,
+        adapter,
+        shadow_map_size,
     };
     let reporter = PyProgress {
         callback: progress,
@@ -128,4 +132,13 @@ pub fn render<'py>(
 #[pyfunction]
 pub fn methods() -> Vec<&'static str> {
     Method::ALL.iter().map(|m| m.name()).collect()
+}
+
+/// A description of the GPU adapter gi would use (name, backend, driver, limits).
+/// `adapter` is "cpu", "gpu" or part of an adapter name; `None` follows `GI_ADAPTER`.
+#[pyfunction]
+#[pyo3(signature = (adapter = None))]
+pub fn adapter_report(py: Python<'_>, adapter: Option<String>) -> PyResult<String> {
+    py.detach(|| gi_core::gpu::adapter_report(adapter.as_deref()))
+        .map_err(|e| to_py(py, e))
 }

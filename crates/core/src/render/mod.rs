@@ -18,15 +18,19 @@ pub enum Method {
     /// Classic photon mapping (Jensen): k-nearest-neighbour radiance estimates from a
     /// photon map of all bounces, direct light included. The baseline for ISPM.
     Photon,
+    /// GPU rasterization of direct light only: eye G-buffer, shadow maps (PCF) and deferred
+    /// uber-BSDF shading, supersampled `spp` times per pixel.
+    Direct,
 }
 
 impl Method {
-    pub const ALL: &'static [Method] = &[Method::Path, Method::Photon];
+    pub const ALL: &'static [Method] = &[Method::Path, Method::Photon, Method::Direct];
 
     pub fn name(self) -> &'static str {
         match self {
             Method::Path => "path",
             Method::Photon => "photon",
+            Method::Direct => "direct",
         }
     }
 }
@@ -52,7 +56,7 @@ impl FromStr for Method {
 #[derive(Clone, Debug)]
 pub struct Settings {
     pub method: Method,
-    /// Camera samples per pixel (method `path`).
+    /// Camera samples per pixel (method `path`); sub-pixel raster samples (method `direct`).
     pub spp: u32,
     pub width: Option<u32>,
     pub height: Option<u32>,
@@ -70,6 +74,11 @@ pub struct Settings {
     pub max_radius: Option<f32>,
     /// Density estimation kernel (method `photon`).
     pub kernel: Kernel,
+    /// GPU adapter: "cpu", "gpu" or a case-insensitive part of its name; `None` uses the
+    /// `GI_ADAPTER` environment variable, else a real GPU when present, else lavapipe.
+    pub adapter: Option<String>,
+    /// Shadow-map resolution in texels per side (GPU methods).
+    pub shadow_map_size: u32,
 }
 
 impl Default for Settings {
@@ -86,6 +95,8 @@ impl Default for Settings {
             k: 100,
             max_radius: None,
             kernel: Kernel::default(),
+            adapter: None,
+            shadow_map_size: 1024,
         }
     }
 }
@@ -138,6 +149,9 @@ impl Settings {
                     "must be a positive finite distance",
                 ));
             }
+        }
+        if !(16..=16384).contains(&self.shadow_map_size) {
+            return Err(Error::setting("shadow_map_size", "must be in 16..=16384"));
         }
         Ok(())
     }
@@ -200,5 +214,6 @@ pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Re
     match settings.method {
         Method::Path => reference::render(&scene, settings, progress),
         Method::Photon => photon_map::render(&scene, settings, progress),
+        Method::Direct => crate::raster::render_direct(&scene, settings, progress),
     }
 }

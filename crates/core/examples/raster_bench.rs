@@ -1,0 +1,67 @@
+//! GPU times of the raster passes of method `direct` (timestamp queries), as a markdown table.
+//!
+//! `cargo run -p gi-core --profile test --example raster_bench [-- --runs N]`
+//!
+//! Built-in Cornell box (one point light: six cube shadow faces of 1024²), one sample per
+//! pixel, median of N frames after one warm-up frame (pipelines compiled).
+
+use gi_core::render::Silent;
+use gi_core::{render, scene::builtin, Method, Settings};
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().collect();
+    let runs: usize = match args.iter().position(|a| a == "--runs") {
+        Some(i) => args.get(i + 1).ok_or("--runs needs a value")?.parse()?,
+        None => 5,
+    };
+    let scene = builtin::load("cornell")?;
+    println!(
+        "{}\n",
+        gi_core::gpu::adapter_report(None)?
+            .lines()
+            .take(4)
+            .collect::<Vec<_>>()
+            .join("; ")
+    );
+    let stages = ["shadow maps", "gbuffer", "direct light", "readback"];
+    println!(
+        "| resolution | {} | frame (wall) |",
+        stages.map(|s| format!("{s} (ms)")).join(" | ")
+    );
+    println!("|---|{}---|", "---|".repeat(stages.len()));
+    for (w, h) in [(640, 480), (1280, 720)] {
+        let settings = Settings {
+            method: Method::Direct,
+            spp: 1,
+            width: Some(w),
+            height: Some(h),
+            shadow_map_size: 1024,
+            ..Default::default()
+        };
+        render(&scene, &settings, &Silent)?;
+        let mut samples: Vec<Vec<f64>> = vec![Vec::new(); stages.len() + 1];
+        for _ in 0..runs {
+            let out = render(&scene, &settings, &Silent)?;
+            for (i, stage) in stages.iter().enumerate() {
+                let t: f64 = out
+                    .stats
+                    .stages
+                    .iter()
+                    .filter(|(n, _)| n == stage)
+                    .map(|(_, t)| t)
+                    .sum();
+                samples[i].push(t * 1e3);
+            }
+            samples[stages.len()].push(out.stats.total_seconds * 1e3);
+        }
+        let medians: Vec<String> = samples
+            .iter_mut()
+            .map(|v| {
+                v.sort_by(f64::total_cmp);
+                format!("{:.2}", v[v.len() / 2])
+            })
+            .collect();
+        println!("| {w}×{h} | {} |", medians.join(" | "));
+    }
+    Ok(())
+}

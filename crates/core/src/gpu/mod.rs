@@ -1,0 +1,256 @@
+//! The headless GPU device: adapter choice, one cached context per process and adapter
+//! choice, WGSL loading, readback and timestamp helpers.
+//!
+//! The adapter is a real GPU when one is present, else a CPU implementation (Mesa lavapipe).
+//! An explicit choice comes from `Settings::adapter` or, failing that, the environment
+//! variable `GI_ADAPTER`: `"cpu"`, `"gpu"`, or a case-insensitive substring of the adapter
+//! name.
+
+pub mod raw;
+pub mod shaders;
+
+use crate::error::{Error, Result};
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex, OnceLock};
+
+/// Environment variable naming the adapter when the settings don't.
+pub const ADAPTER_ENV: &str = "GI_ADAPTER";
+
+const INSTALL_HINT: &str =
+    "install a Vulkan driver; without a GPU use Mesa's CPU driver lavapipe (`apt-get install mesa-vulkan-drivers`)";
+
+/// A device with its queue, created once per process and adapter choice.
+pub struct GpuContext {
+    pub adapter: wgpu::Adapter,
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub info: wgpu::AdapterInfo,
+    /// Whether timestamp queries are enabled (per-pass GPU timings).
+    pub timestamps: bool,
+    /// The raster passes, compiled on first use (pipelines once per device).
+    pub(crate) passes: OnceLock<crate::raster::Passes>,
+}
+
+/// How the user chose the adapter.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+enum Choice {
+    Auto,
+    Cpu,
+    Gpu,
+    Name(String),
+}
+
+impl Choice {
+    /// The setting wins over the environment variable's value `env`.
+    fn parse(setting: Option<&str>, env: Option<&str>) -> Choice {
+        match setting.or(env).map(|s| s.trim().to_lowercase()) {
+            None => Choice::Auto,
+            Some(s) if s.is_empty() || s == "auto" => Choice::Auto,
+            Some(s) if s == "cpu" => Choice::Cpu,
+            Some(s) if s == "gpu" => Choice::Gpu,
+            Some(s) => Choice::Name(s),
+        }
+    }
+
+    /// Rank of an adapter under this choice; `None` = not acceptable. Lower is better.
+    fn rank(&self, name: &str, device_type: wgpu::DeviceType) -> Option<u32> {
+        use wgpu::DeviceType::*;
+        let gpu_rank = match device_type {
+            DiscreteGpu => 0,
+            IntegratedGpu => 1,
+            VirtualGpu => 2,
+            Cpu => 3,
+            Other => 4,
+        };
+        match self {
+            Choice::Auto => Some(gpu_rank),
+            Choice::Cpu => (device_type == Cpu).then_some(0),
+            Choice::Gpu => (gpu_rank <= 2).then_some(gpu_rank),
+            Choice::Name(s) => name.to_lowercase().contains(s.as_str()).then_some(gpu_rank),
+        }
+    }
+}
+
+fn instance() -> &'static wgpu::Instance {
+    static INSTANCE: OnceLock<wgpu::Instance> = OnceLock::new();
+    INSTANCE.get_or_init(|| {
+        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+        desc.backends = wgpu::Backends::PRIMARY;
+        wgpu::Instance::new(desc)
+    })
+}
+
+fn pick_adapter(choice: &Choice) -> Result<wgpu::Adapter> {
+    let adapters = pollster::block_on(instance().enumerate_adapters(wgpu::Backends::PRIMARY));
+    let names: Vec<String> = adapters
+        .iter()
+        .map(|a| a.get_info())
+        .map(|i| format!("{} ({:?})", i.name, i.device_type))
+        .collect();
+    adapters
+        .into_iter()
+        .filter_map(|a| {
+            let info = a.get_info();
+            choice.rank(&info.name, info.device_type).map(|r| (r, a))
+        })
+        .min_by_key(|(r, _)| *r)
+        .map(|(_, a)| a)
+        .ok_or_else(|| {
+            let found = if names.is_empty() {
+                "none".to_string()
+            } else {
+                names.join(", ")
+            };
+            Error::Gpu(format!(
+                "no GPU adapter matches {choice:?} (adapters found: {found}); {INSTALL_HINT}"
+            ))
+        })
+}
+
+/// The features gi needs; `FLOAT32_BLENDABLE` accumulates supersamples in an `Rgba32Float`.
+const REQUIRED: wgpu::Features = wgpu::Features::FLOAT32_BLENDABLE;
+
+fn create_context(choice: &Choice) -> Result<GpuContext> {
+    let adapter = pick_adapter(choice)?;
+    let info = adapter.get_info();
+    let missing = REQUIRED - adapter.features();
+    if !missing.is_empty() {
+        return Err(Error::Gpu(format!(
+            "adapter `{}` lacks features {missing:?}",
+            info.name
+        )));
+    }
+    let timestamps = adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY);
+    let features = REQUIRED
+        | if timestamps {
+            wgpu::Features::TIMESTAMP_QUERY
+        } else {
+            wgpu::Features::empty()
+        };
+    // The adapter's own limits: the defaults cap textures at 8192 and color targets at 32 bytes.
+    let desc = wgpu::DeviceDescriptor {
+        label: Some("gi device"),
+        required_features: features,
+        required_limits: adapter.limits(),
+        ..Default::default()
+    };
+    let (device, queue) = pollster::block_on(adapter.request_device(&desc))
+        .map_err(|e| Error::Gpu(format!("cannot open device on `{}`: {e}", info.name)))?;
+    // Errors inside a frame are caught by error scopes; anything else is reported, not a panic.
+    device.on_uncaptured_error(Arc::new(|e| eprintln!("gi: uncaptured GPU error: {e}")));
+    Ok(GpuContext {
+        adapter,
+        device,
+        queue,
+        info,
+        timestamps,
+        passes: OnceLock::new(),
+    })
+}
+
+/// The context for an adapter choice (`None` = `GI_ADAPTER` or automatic), created on first use.
+pub fn context(adapter: Option<&str>) -> Result<Arc<GpuContext>> {
+    static CONTEXTS: OnceLock<Mutex<HashMap<Choice, Arc<GpuContext>>>> = OnceLock::new();
+    let choice = Choice::parse(adapter, std::env::var(ADAPTER_ENV).ok().as_deref());
+    let mut map = CONTEXTS
+        .get_or_init(Default::default)
+        .lock()
+        .unwrap_or_else(|p| p.into_inner());
+    if let Some(ctx) = map.get(&choice) {
+        return Ok(ctx.clone());
+    }
+    let ctx = Arc::new(create_context(&choice)?);
+    map.insert(choice, ctx.clone());
+    Ok(ctx)
+}
+
+/// A human-readable description of the adapter an adapter choice selects: name, backend,
+/// device type, driver and the limits gi cares about.
+pub fn adapter_report(adapter: Option<&str>) -> Result<String> {
+    let ctx = context(adapter)?;
+    let i = &ctx.info;
+    let l = ctx.device.limits();
+    Ok(format!(
+        "adapter: {}\nbackend: {:?}\ndevice type: {:?}\ndriver: {} {}\ntimestamp queries: {}\n\
+         max texture 2d: {}\nmax texture array layers: {}\nmax color attachments: {}\n\
+         max color attachment bytes per sample: {}\nmax storage buffer binding: {} bytes\n\
+         max compute workgroup invocations: {}",
+        i.name,
+        i.backend,
+        i.device_type,
+        i.driver,
+        i.driver_info,
+        if ctx.timestamps { "yes" } else { "no" },
+        l.max_texture_dimension_2d,
+        l.max_texture_array_layers,
+        l.max_color_attachments,
+        l.max_color_attachment_bytes_per_sample,
+        l.max_storage_buffer_binding_size,
+        l.max_compute_invocations_per_workgroup,
+    ))
+}
+
+impl GpuContext {
+    /// Runs `f` inside a validation and out-of-memory error scope; a GPU error becomes `Error::Gpu`.
+    pub fn scoped<T>(&self, what: &str, f: impl FnOnce() -> Result<T>) -> Result<T> {
+        let oom = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let out = f();
+        let v = pollster::block_on(validation.pop());
+        let o = pollster::block_on(oom.pop());
+        if let Some(e) = v.or(o) {
+            return Err(Error::Gpu(format!("{what}: {e}")));
+        }
+        out
+    }
+
+    /// Waits for all submitted work.
+    pub fn wait(&self) -> Result<()> {
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map(|_| ())
+            .map_err(|e| Error::Gpu(e.to_string()))
+    }
+
+    /// Maps `buffer` (with `MAP_READ` usage) after the queue's work and copies out its bytes.
+    pub fn read_buffer(&self, buffer: &wgpu::Buffer) -> Result<Vec<u8>> {
+        let slice = buffer.slice(..);
+        let (tx, rx) = std::sync::mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        self.wait()?;
+        rx.recv()
+            .map_err(|e| Error::Gpu(e.to_string()))?
+            .map_err(|e| Error::Gpu(format!("buffer mapping failed: {e}")))?;
+        let bytes = slice
+            .get_mapped_range()
+            .map_err(|e| Error::Gpu(e.to_string()))?
+            .to_vec();
+        buffer.unmap();
+        Ok(bytes)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn adapter_choice() {
+        assert_eq!(Choice::parse(None, None), Choice::Auto);
+        assert_eq!(Choice::parse(None, Some(" CPU ")), Choice::Cpu);
+        assert_eq!(Choice::parse(Some("gpu"), Some("cpu")), Choice::Gpu);
+        assert_eq!(
+            Choice::parse(Some("LLVMpipe"), None),
+            Choice::Name("llvmpipe".into())
+        );
+        let cpu = ("llvmpipe (LLVM 15.0.6, 256 bits)", wgpu::DeviceType::Cpu);
+        let gpu = ("NVIDIA H100", wgpu::DeviceType::DiscreteGpu);
+        assert!(Choice::Auto.rank(gpu.0, gpu.1) < Choice::Auto.rank(cpu.0, cpu.1));
+        assert_eq!(Choice::Gpu.rank(cpu.0, cpu.1), None);
+        assert_eq!(Choice::Cpu.rank(gpu.0, gpu.1), None);
+        assert!(Choice::Name("llvm".into()).rank(cpu.0, cpu.1).is_some());
+        assert_eq!(Choice::Name("llvm".into()).rank(gpu.0, gpu.1), None);
+    }
+}

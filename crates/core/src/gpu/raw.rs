@@ -1,0 +1,114 @@
+//! GPU-facing data: `#[repr(C)]` Pod mirrors of the structs in `shaders/common/types.wgsl`.
+
+use crate::bsdf::Material;
+use crate::scene::Light;
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec3};
+
+/// `Material` in WGSL: 48 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct MaterialRaw {
+    pub diffuse: [f32; 3],
+    pub roughness: f32,
+    pub specular: [f32; 3],
+    pub fresnel: u32,
+    pub transmission: [f32; 3],
+    pub ior: f32,
+}
+
+impl Material {
+    pub fn to_raw(&self) -> MaterialRaw {
+        MaterialRaw {
+            diffuse: self.diffuse.into(),
+            roughness: self.roughness,
+            specular: self.specular.into(),
+            fresnel: self.fresnel as u32,
+            transmission: self.transmission.into(),
+            ior: self.ior,
+        }
+    }
+}
+
+/// `Light` in WGSL: 64 bytes. Shadow fields are filled in by the shadow-map pass.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct LightRaw {
+    pub position: [f32; 3],
+    /// 0 = point, 1 = spot.
+    pub kind: u32,
+    pub intensity: [f32; 3],
+    pub cos_inner: f32,
+    pub direction: [f32; 3],
+    pub cos_outer: f32,
+    pub first_layer: u32,
+    pub layers: u32,
+    pub texel_scale: f32,
+    pub _pad: f32,
+}
+
+impl Light {
+    /// The light without its shadow-map fields.
+    pub fn to_raw(&self) -> LightRaw {
+        let mut raw = LightRaw::zeroed();
+        match *self {
+            Light::Point {
+                position,
+                intensity,
+            } => {
+                raw.position = position.into();
+                raw.intensity = intensity.into();
+                raw.cos_outer = -2.0;
+                raw.cos_inner = -1.0;
+            }
+            Light::Spot {
+                position,
+                direction,
+                intensity,
+                cos_inner,
+                cos_outer,
+            } => {
+                raw.kind = 1;
+                raw.position = position.into();
+                raw.direction = direction.into();
+                raw.intensity = intensity.into();
+                raw.cos_inner = cos_inner;
+                raw.cos_outer = cos_outer;
+            }
+        }
+        raw
+    }
+}
+
+/// `View` in WGSL, padded to 256 bytes so that views can be picked by dynamic offset.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct ViewRaw {
+    pub view_proj: [[f32; 4]; 4],
+    pub eye: [f32; 3],
+    /// Weight of this view's sample in the accumulated image.
+    pub weight: f32,
+    pub _pad: [f32; 44],
+}
+
+impl ViewRaw {
+    pub fn new(view_proj: Mat4, eye: Vec3, weight: f32) -> Self {
+        ViewRaw {
+            view_proj: view_proj.to_cols_array_2d(),
+            eye: eye.into(),
+            weight,
+            _pad: [0.0; 44],
+        }
+    }
+}
+
+/// One vertex of the non-indexed triangle list: position, shading normal, geometric normal
+/// (from the winding, the same for the triangle's three vertices) and material index.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct VertexRaw {
+    pub position: [f32; 3],
+    pub normal: [f32; 3],
+    pub geometric_normal: [f32; 3],
+    pub material: u32,
+}

@@ -1,0 +1,20 @@
+//! WGSL sources. Shared code lives in `shaders/common/` and is prepended to a pass's own file
+//! by plain string concatenation when the module is created (WGSL has no includes).
+
+/// Structs shared by the passes (`Material`, `Light`, `View`) and octahedral normal packing.
+pub const COMMON: &str = include_str!("shaders/common/types.wgsl");
+/// The uber BSDF: the formulas of `bsdf::Material::eval`.
+pub const BSDF: &str = include_str!("shaders/common/bsdf.wgsl");
+
+pub const GBUFFER: &str = include_str!("shaders/gbuffer.wgsl");
+pub const SHADOW: &str = include_str!("shaders/shadow.wgsl");
+pub const DIRECT: &str = include_str!("shaders/direct.wgsl");
+
+/// Creates a shader module from `parts`, concatenated in order (common code first).
+pub fn module(device: &wgpu::Device, label: &str, parts: &[&str]) -> wgpu::ShaderModule {
+    let source = parts.join("\n");
+    device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(label),
+        source: wgpu::ShaderSource::Wgsl(source.into()),
+    })
+}

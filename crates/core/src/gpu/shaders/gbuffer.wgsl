@@ -1,0 +1,77 @@
+// Eye G-buffer: rasterizes the scene from a (jittered) camera view and writes what the
+// deferred passes need per sample. Target formats (see raster/gbuffer.rs for the reasons).
+
+@group(0) @binding(0) var<uniform> view: View;
+@group(0) @binding(1) var<storage, read> materials: array<Material>;
+
+struct VertexIn {
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) geometric_normal: vec3<f32>,
+    @location(3) material: u32,
+}
+
+struct VertexOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) world: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) @interpolate(flat) geometric_normal: vec3<f32>,
+    @location(3) @interpolate(flat) material: u32,
+}
+
+@vertex
+fn vs_main(v: VertexIn) -> VertexOut {
+    var o: VertexOut;
+    o.clip = view.view_proj * vec4<f32>(v.position, 1.0);
+    o.world = v.position;
+    o.normal = v.normal;
+    o.geometric_normal = v.geometric_normal;
+    o.material = v.material;
+    return o;
+}
+
+struct GBufferOut {
+    // World position xyz; w = 1 where a surface covers the sample, 0 (clear) elsewhere.
+    @location(0) position: vec4<f32>,
+    // Octahedral shading normal (xy) and geometric normal (zw), both facing the viewer.
+    @location(1) normals: vec4<f32>,
+    // Diffuse albedo rgb, roughness.
+    @location(2) diffuse: vec4<f32>,
+    // Specular F0 rgb, Fresnel flag (0 or 1).
+    @location(3) specular: vec4<f32>,
+    // Scatter probability towards the viewer (the albedo AOV).
+    @location(4) albedo: vec4<f32>,
+}
+
+@fragment
+fn fs_main(in: VertexOut) -> GBufferOut {
+    let m = materials[in.material];
+    let wo = normalize(view.eye - in.world);
+    var ng = in.geometric_normal;
+    // Shading normal as in trace::Interaction::new: on the side of ng, and replaced by ng
+    // where the two disagree about the side the view ray comes from.
+    var ns = in.normal;
+    let len = length(ns);
+    if !(len > 0.0) {
+        ns = ng;
+    } else {
+        ns = ns / len;
+        if dot(ns, ng) < 0.0 {
+            ns = -ns;
+        }
+    }
+    if dot(wo, ns) * dot(wo, ng) <= 0.0 {
+        ns = ng;
+    }
+    if dot(wo, ng) < 0.0 {
+        ng = -ng;
+        ns = -ns;
+    }
+    var o: GBufferOut;
+    o.position = vec4<f32>(in.world, 1.0);
+    o.normals = vec4<f32>(oct_encode(ns), oct_encode(ng));
+    o.diffuse = vec4<f32>(m.diffuse, m.roughness);
+    o.specular = vec4<f32>(m.specular, f32(m.fresnel));
+    o.albedo = vec4<f32>(scatter_probability(m, dot(wo, ns)), 1.0);
+    return o;
+}

@@ -1,0 +1,155 @@
+//! Deferred direct lighting: a full-screen pass over the G-buffer that evaluates the uber
+//! BSDF for every light with PCF shadow-map visibility and adds the weighted sample into an
+//! `Rgba32Float` accumulation target (additive blending; needs `FLOAT32_BLENDABLE`).
+
+use crate::gpu::shaders;
+
+/// The accumulation target: radiance·weight in rgb, the sum of weights in alpha.
+pub const ACCUM: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+
+pub struct DirectPass {
+    pub pipeline: wgpu::RenderPipeline,
+    /// Group 0: view, lights, shadow matrices, shadow maps, comparison sampler.
+    pub scene_layout: wgpu::BindGroupLayout,
+    /// Group 1: the G-buffer's position, normals, diffuse and specular textures.
+    pub gbuffer_layout: wgpu::BindGroupLayout,
+    pub shadow_sampler: wgpu::Sampler,
+}
+
+impl DirectPass {
+    pub fn new(device: &wgpu::Device) -> Self {
+        let frag = wgpu::ShaderStages::FRAGMENT;
+        let scene_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("direct scene bind group layout"),
+            entries: &[
+                super::view_entry(0),
+                super::storage_entry(1, frag),
+                super::storage_entry(2, frag),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 3,
+                    visibility: frag,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Depth,
+                        view_dimension: wgpu::TextureViewDimension::D2Array,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 4,
+                    visibility: frag,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison),
+                    count: None,
+                },
+            ],
+        });
+        let texture = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: frag,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                view_dimension: wgpu::TextureViewDimension::D2,
+                multisampled: false,
+            },
+            count: None,
+        };
+        let gbuffer_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("direct gbuffer bind group layout"),
+            entries: &[texture(0), texture(1), texture(2), texture(3)],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("direct pipeline layout"),
+            bind_group_layouts: &[Some(&scene_layout), Some(&gbuffer_layout)],
+            immediate_size: 0,
+        });
+        let module = shaders::module(
+            device,
+            "direct shader",
+            &[shaders::COMMON, shaders::BSDF, shaders::DIRECT],
+        );
+        let add = wgpu::BlendComponent {
+            src_factor: wgpu::BlendFactor::One,
+            dst_factor: wgpu::BlendFactor::One,
+            operation: wgpu::BlendOperation::Add,
+        };
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("direct pipeline"),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: None,
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format: ACCUM,
+                    blend: Some(wgpu::BlendState {
+                        color: add,
+                        alpha: add,
+                    }),
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let shadow_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("shadow comparison sampler"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            compare: Some(wgpu::CompareFunction::LessEqual),
+            ..Default::default()
+        });
+        DirectPass {
+            pipeline,
+            scene_layout,
+            gbuffer_layout,
+            shadow_sampler,
+        }
+    }
+
+    /// Records the pass, adding into `accum` (cleared first when `clear`). The bind groups
+    /// are those of `scene_layout` and `gbuffer_layout`.
+    pub fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        accum: &wgpu::TextureView,
+        clear: bool,
+        [scene_group, gbuffer_group]: [&wgpu::BindGroup; 2],
+        view_offset: u32,
+        timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
+    ) {
+        let load = if clear {
+            wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT)
+        } else {
+            wgpu::LoadOp::Load
+        };
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("direct light pass"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: accum,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load,
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes: timestamps,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, scene_group, &[view_offset]);
+        pass.set_bind_group(1, gbuffer_group, &[]);
+        pass.draw(0..3, 0..1);
+    }
+}

@@ -1,0 +1,208 @@
+//! The eye G-buffer pass.
+//!
+//! Targets and why those formats:
+//! - `position` `Rgba32Float`: world position (w = coverage). Shadow-map lookups and light
+//!   vectors need it to well under a shadow texel; `f16` would quantize 2 m to ~1 mm steps
+//!   and bring back shadow acne.
+//! - `normals` `Rgba32Float`: octahedral shading normal (xy) and geometric normal (zw).
+//!   The geometric normal decides which side of a surface is lit, as in the path tracer.
+//! - `diffuse` and `specular` `Rgba16Float`: material colours with roughness / Fresnel flag.
+//!   `f16` keeps 11 significant bits (0.05% relative) where 8-bit unorm would be off by 2.6%
+//!   on a reflectance of 0.065 (the Cornell red wall's green channel).
+//! - `albedo` `Rgba32Float`: the albedo AOV, read back as is.
+//! - depth `Depth32Float`: visibility only; view depth is derived from `position`.
+
+use crate::gpu::raw::VertexRaw;
+use crate::gpu::shaders;
+
+pub const POSITION: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+pub const NORMALS: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+pub const MATERIAL: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+pub const ALBEDO: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+pub const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+/// The G-buffer's colour targets in location order, with their labels.
+const TARGETS: [(&str, wgpu::TextureFormat); 5] = [
+    ("gbuffer position", POSITION),
+    ("gbuffer normals", NORMALS),
+    ("gbuffer diffuse", MATERIAL),
+    ("gbuffer specular", MATERIAL),
+    ("gbuffer albedo", ALBEDO),
+];
+
+/// Vertex layout of [`VertexRaw`], shared with the shadow pass (which reads location 0 only).
+pub const VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 4] =
+    wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Uint32];
+
+pub fn vertex_layout() -> wgpu::VertexBufferLayout<'static> {
+    wgpu::VertexBufferLayout {
+        array_stride: std::mem::size_of::<VertexRaw>() as u64,
+        step_mode: wgpu::VertexStepMode::Vertex,
+        attributes: &VERTEX_ATTRIBUTES,
+    }
+}
+
+/// The G-buffer textures for one image size.
+pub struct GBuffer {
+    pub textures: Vec<wgpu::Texture>,
+    pub views: Vec<wgpu::TextureView>,
+    pub depth: wgpu::TextureView,
+}
+
+impl GBuffer {
+    pub fn new(device: &wgpu::Device, width: u32, height: u32) -> Self {
+        let size = wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        };
+        let make = |label: &str, format, usage| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size,
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage,
+                view_formats: &[],
+            })
+        };
+        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::COPY_SRC;
+        let textures: Vec<_> = TARGETS
+            .iter()
+            .map(|(label, format)| make(label, *format, usage))
+            .collect();
+        let views = textures
+            .iter()
+            .map(|t| t.create_view(&Default::default()))
+            .collect();
+        let depth = make(
+            "gbuffer depth",
+            DEPTH,
+            wgpu::TextureUsages::RENDER_ATTACHMENT,
+        )
+        .create_view(&Default::default());
+        GBuffer {
+            textures,
+            views,
+            depth,
+        }
+    }
+
+    /// Views of the targets the lighting pass reads: position, normals, diffuse, specular.
+    pub fn lighting_inputs(&self) -> &[wgpu::TextureView] {
+        &self.views[..4]
+    }
+}
+
+/// Pipeline and bind group layout of the G-buffer pass.
+pub struct GBufferPass {
+    pub pipeline: wgpu::RenderPipeline,
+    /// Group 0: the view (uniform, dynamic offset) and the materials (storage).
+    pub layout: wgpu::BindGroupLayout,
+}
+
+impl GBufferPass {
+    pub fn new(device: &wgpu::Device) -> Self {
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("gbuffer bind group layout"),
+            entries: &[
+                super::view_entry(0),
+                super::storage_entry(1, wgpu::ShaderStages::FRAGMENT),
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("gbuffer pipeline layout"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let module = shaders::module(
+            device,
+            "gbuffer shader",
+            &[shaders::COMMON, shaders::BSDF, shaders::GBUFFER],
+        );
+        let targets: Vec<_> = TARGETS
+            .iter()
+            .map(|(_, f)| Some(wgpu::ColorTargetState::from(*f)))
+            .collect();
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("gbuffer pipeline"),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[Some(vertex_layout())],
+            },
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: DEPTH,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Less),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &targets,
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        GBufferPass { pipeline, layout }
+    }
+
+    /// Records the pass: clears the G-buffer and draws the geometry seen from the view at
+    /// `view_offset` in the bind group's view buffer.
+    pub fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        target: &GBuffer,
+        bind_group: &wgpu::BindGroup,
+        view_offset: u32,
+        geometry: &super::Geometry,
+        timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
+    ) {
+        let clear = wgpu::Operations {
+            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+            store: wgpu::StoreOp::Store,
+        };
+        let attachments: Vec<_> = target
+            .views
+            .iter()
+            .map(|view| {
+                Some(wgpu::RenderPassColorAttachment {
+                    view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: clear,
+                })
+            })
+            .collect();
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("gbuffer pass"),
+            color_attachments: &attachments,
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &target.depth,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Discard,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: timestamps,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, bind_group, &[view_offset]);
+        pass.set_vertex_buffer(0, geometry.vertices.slice(..));
+        pass.draw(0..geometry.count, 0..1);
+    }
+}
