@@ -134,3 +134,18 @@ def test_adapter_report_and_bad_adapter():
     assert "llvmpipe" in report.lower() or "lavapipe" in report.lower()
     with pytest.raises(gi.GpuError, match="mesa-vulkan-drivers"):
         gi.render(gi.load_scene("cornell"), "direct", spp=1, size=(8, 8), adapter="no-such-gpu")
+
+
+def test_gather_method_matches_furnace_and_reports_stages():
+    r = gi.render(gi.load_scene("furnace"), "gather", spp=2, size=(24, 24), photons=100_000)
+    expected = 0.5 * 1.0 / (np.pi * 1.0 * 0.5)
+    assert r.radiance.mean() == pytest.approx(expected, rel=0.03)
+    stages = [n for n, _ in r.stats.stages]
+    assert stages == ["bvh build", "photon trace", "photon map build", "radiance estimate"]
+
+
+def test_footprint_radii_per_kind():
+    rows = gi.footprint_radii(gi.load_scene("caustic-ring"), photons=50_000, percentiles=[5, 50])
+    assert set(rows) >= {"direct", "caustic"}
+    for count, (p5, p50) in rows.values():
+        assert count > 0 and 0 < p5 <= p50

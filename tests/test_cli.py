@@ -76,3 +76,9 @@ def test_scene_file_with_relative_mesh(tmp_path):
 def test_info_prints_the_adapter():
     p = run("info", "--adapter", "cpu")
     assert p.returncode == 0 and "gi " in p.stdout and "backend" in p.stdout.lower(), p.stdout
+
+
+def test_footprints_prints_a_table():
+    p = run("footprints", "caustic-ring", "--photons", "20000")
+    assert p.returncode == 0, p.stderr
+    assert "caustic" in p.stdout and "direct" in p.stdout and "p50" in p.stdout

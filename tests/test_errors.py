@@ -126,6 +126,8 @@ def test_nan_in_description(write_scene, cornell_desc):
         ({"method": "photon", "photons": 0}, "photons"),
         ({"method": "photon", "photons": 10**12}, "photons"),
         ({"method": "photon", "kernel": "gaussian"}, "kernel"),
+        ({"method": "gather", "smoothing": 0.0}, "smoothing"),
+        ({"method": "gather", "leaf_size": 0}, "leaf_size"),
     ],
 )
 def test_absurd_settings(kwargs, setting):

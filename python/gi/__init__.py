@@ -18,6 +18,7 @@ from gi._gi import (
     adapter_report,
     builtin_json,
     builtin_scenes,
+    footprint_radii,
     methods,
 )
 from gi.io import read_image, save_image
@@ -37,6 +38,7 @@ __all__ = [
     "adapter_report",
     "builtin_json",
     "builtin_scenes",
+    "footprint_radii",
     "load_scene",
     "methods",
     "read_image",

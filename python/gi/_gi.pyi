@@ -66,8 +66,17 @@ def render(
     k: int = 100,
     max_radius: float | None = None,
     kernel: str = "cone",
+    smoothing: float = 1.0,
+    leaf_size: int | None = None,
     adapter: str | None = None,
     shadow_map_size: int = 1024,
     progress: Callable[[str, float], bool | None] | None = None,
 ) -> dict[str, Any]: ...
 def adapter_report(adapter: str | None = None) -> str: ...
+def footprint_radii(
+    scene: Scene,
+    photons: int = 200_000,
+    seed: int = 0,
+    smoothing: float = 1.0,
+    percentiles: list[float] = ...,
+) -> dict[str, tuple[int, list[float]]]: ...

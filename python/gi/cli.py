@@ -43,6 +43,8 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument(
         "--kernel", default="cone", choices=["box", "cone", "epanechnikov"], help="photon kernel"
     )
+    r.add_argument("--smoothing", type=float, default=1.0, help="footprint scale (gather)")
+    r.add_argument("--leaf-size", type=int, help="photon-map BVH leaf size (gather; default auto)")
     r.add_argument("--adapter", help='GPU adapter: "cpu" (lavapipe), "gpu" or part of a name')
     r.add_argument("--shadow-map-size", type=int, default=1024, help="shadow map texels per side")
     r.add_argument("--exposure", type=float, default=0.0, help="PNG exposure in stops")
@@ -56,6 +58,13 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
     sub.add_parser("scenes", help="list the built-in scenes")
     sub.add_parser("methods", help="list the rendering methods")
+    f = sub.add_parser(
+        "footprints", help="photon-differential footprint radii per path kind (Table 3)"
+    )
+    f.add_argument("scene", help="built-in scene name or JSON scene file")
+    f.add_argument("--photons", type=int, default=200_000, help="photons to emit")
+    f.add_argument("--smoothing", type=float, default=1.0, help="footprint smoothing factor s")
+    f.add_argument("--seed", type=int, default=0)
     i = sub.add_parser("info", help="show the GPU adapter gi uses")
     i.add_argument("--adapter", help='"cpu", "gpu" or part of an adapter name')
     return p
@@ -75,6 +84,8 @@ def _render(args: argparse.Namespace) -> int:
         k=args.k,
         max_radius=args.max_radius,
         kernel=args.kernel,
+        smoothing=args.smoothing,
+        leaf_size=args.leaf_size,
         adapter=args.adapter,
         shadow_map_size=args.shadow_map_size,
         progress=not args.quiet,
@@ -95,6 +106,18 @@ def _render(args: argparse.Namespace) -> int:
     return 0
 
 
+def _footprints(args: argparse.Namespace) -> int:
+    qs = [1.0, 5.0, 25.0, 50.0, 75.0, 95.0, 99.0]
+    rows = gi.footprint_radii(
+        gi.load_scene(args.scene), args.photons, args.seed, args.smoothing, qs
+    )
+    print(f"footprint radius (m) by percentile, {args.photons} photons, s = {args.smoothing}")
+    print(f"{'kind':8} {'photons':>9} " + " ".join(f"{f'p{q:g}':>8}" for q in qs))
+    for kind, (count, radii) in rows.items():
+        print(f"{kind:8} {count:9d} " + " ".join(f"{r:8.4f}" for r in radii))
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     try:
@@ -102,6 +125,8 @@ def main(argv: list[str] | None = None) -> int:
             for name, desc in gi.builtin_scenes():
                 print(f"{name:15} {desc}")
             return 0
+        if args.command == "footprints":
+            return _footprints(args)
         if args.command == "info":
             print(f"gi {gi.__version__}")
             print(gi.adapter_report(args.adapter))

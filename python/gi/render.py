@@ -84,6 +84,8 @@ def render(
     k: int = 100,
     max_radius: float | None = None,
     kernel: str = "cone",
+    smoothing: float = 1.0,
+    leaf_size: int | None = None,
     adapter: str | None = None,
     shadow_map_size: int = 1024,
     progress: bool | ProgressCallback = False,
@@ -95,6 +97,10 @@ def render(
     one per camera sample). Method ``photon`` (classic photon mapping) emits ``photons``
     photons and estimates radiance from the ``k`` nearest within ``max_radius`` (metres;
     default 5% of the scene's diagonal) with a ``kernel`` of "box", "cone" or "epanechnikov".
+    Method ``gather`` traces ``photons`` photons with photon differentials and gathers every
+    photon whose footprint (scaled by ``smoothing``, semi-axes at most ``max_radius``)
+    contains the shading point, from a linear BVH with ``leaf_size`` footprints per leaf
+    (default: the automatic T_auto).
     GPU methods (``direct``) run on ``adapter`` ("cpu" for lavapipe, "gpu", or part of an
     adapter's name; default: the ``GI_ADAPTER`` environment variable, else a real GPU when
     present, else lavapipe) with ``shadow_map_size``² texels per shadow-map face.
@@ -123,6 +129,8 @@ def render(
         k=k,
         max_radius=max_radius,
         kernel=kernel,
+        smoothing=smoothing,
+        leaf_size=leaf_size,
         adapter=adapter,
         shadow_map_size=shadow_map_size,
         progress=callback,

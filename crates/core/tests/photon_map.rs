@@ -66,6 +66,7 @@ fn furnace_power_per_bounce() {
         &PhotonTraceSettings {
             max_bounces: 6,
             store_direct: true,
+            differentials: None,
         },
         1,
     );
@@ -107,6 +108,7 @@ fn mixed_materials_power_per_bounce() {
         &PhotonTraceSettings {
             max_bounces: 5,
             store_direct: true,
+            differentials: None,
         },
         2,
     );
@@ -160,6 +162,7 @@ fn tracing_is_deterministic() {
     let s = PhotonTraceSettings {
         max_bounces: 8,
         store_direct: false,
+        differentials: None,
     };
     let a = emit_and_trace(&scene, &bvh, 20_000, &s, 5);
     let b = emit_and_trace(&scene, &bvh, 20_000, &s, 5);
@@ -199,6 +202,7 @@ fn continue_paths_from_rays() {
         &PhotonTraceSettings {
             max_bounces: 3,
             store_direct: false,
+            differentials: None,
         },
         0,
     );

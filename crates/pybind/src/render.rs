@@ -55,7 +55,7 @@ fn image_array<'py>(py: Python<'py>, img: Image) -> PyResult<Bound<'py, PyAny>> 
 /// Renders `scene`; returns a dict of float32 arrays (radiance, albedo, normal, position,
 /// caustics: H×W×3; depth: H×W) and `stats`.
 #[pyfunction]
-#[pyo3(signature = (scene, method = "path", spp = 64, width = None, height = None, seed = 0, max_depth = 64, light_paths = None, photons = 200_000, k = 100, max_radius = None, kernel = "cone", adapter = None, shadow_map_size = 1024, progress = None))]
+#[pyo3(signature = (scene, method = "path", spp = 64, width = None, height = None, seed = 0, max_depth = 64, light_paths = None, photons = 200_000, k = 100, max_radius = None, kernel = "cone", smoothing = 1.0, leaf_size = None, adapter = None, shadow_map_size = 1024, progress = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn render<'py>(
     py: Python<'py>,
@@ -71,6 +71,8 @@ pub fn render<'py>(
     k: u32,
     max_radius: Option<f32>,
     kernel: &str,
+    smoothing: f32,
+    leaf_size: Option<u32>,
     adapter: Option<String>,
     shadow_map_size: u32,
     progress: Option<Py<PyAny>>,
@@ -89,6 +91,8 @@ pub fn render<'py>(
         k,
         max_radius,
         kernel,
+        smoothing,
+        leaf_size,
         adapter,
         shadow_map_size,
     };
@@ -141,4 +145,50 @@ pub fn methods() -> Vec<&'static str> {
 pub fn adapter_report(py: Python<'_>, adapter: Option<String>) -> PyResult<String> {
     py.detach(|| gi_core::gpu::adapter_report(adapter.as_deref()))
         .map_err(|e| to_py(py, e))
+}
+
+/// Footprint radii of photons traced with photon differentials, per path kind ("direct",
+/// "caustic", "diffuse"): {kind: (count, [radius at each percentile])}, radii in metres.
+#[pyfunction]
+#[pyo3(signature = (scene, photons = 200_000, seed = 0, smoothing = 1.0, percentiles = vec![1.0, 5.0, 25.0, 50.0, 75.0, 95.0, 99.0]))]
+pub fn footprint_radii(
+    py: Python<'_>,
+    scene: &PyScene,
+    photons: u64,
+    seed: u64,
+    smoothing: f32,
+    percentiles: Vec<f64>,
+) -> PyResult<std::collections::BTreeMap<&'static str, (usize, Vec<f32>)>> {
+    use gi_core::photon::{gather::radius_percentiles, PathKind};
+    let settings = Settings {
+        method: Method::Gather,
+        photons,
+        seed,
+        smoothing,
+        ..Default::default()
+    };
+    settings.validate().map_err(|e| to_py(py, e))?;
+    if percentiles.iter().any(|q| !(0.0..=100.0).contains(q)) {
+        return Err(pyo3::exceptions::PyValueError::new_err(
+            "percentiles must be in [0, 100]",
+        ));
+    }
+    let rows = py.detach(|| {
+        let bvh = gi_core::trace::SceneBvh::build(&scene.inner);
+        let mut ts = gi_core::render::gather_trace_settings(&scene.inner, &settings);
+        ts.store_direct = true;
+        let set = gi_core::photon::emit_and_trace(&scene.inner, &bvh, photons, &ts, seed);
+        radius_percentiles(&set, &percentiles)
+    });
+    Ok(rows
+        .into_iter()
+        .map(|(kind, n, r)| {
+            let name = match kind {
+                PathKind::Direct => "direct",
+                PathKind::Caustic => "caustic",
+                PathKind::Diffuse => "diffuse",
+            };
+            (name, (n, r))
+        })
+        .collect())
 }

@@ -30,6 +30,14 @@ impl Differentials {
         }
     }
 
+    /// Scales all differentials (e.g. by Δ_light / Δ for a light whose photons are spaced
+    /// differently from the global spacing).
+    pub fn scaled(mut self, s: f32) -> Self {
+        self.dp = self.dp.map(|v| v * s);
+        self.dd = self.dd.map(|v| v * s);
+        self
+    }
+
     /// Transfer along `d` by distance `t` to a surface with normal `n` (Igehy 1999):
     /// ∂p' = ∂p + t∂d + ∂t·d with ∂t = −(∂p + t∂d)·n / (d·n), which keeps ∂p' in the
     /// surface's tangent plane.

@@ -3,17 +3,8 @@
 //! on nearby surfaces cut an ellipse through it.
 
 use super::lbvh::Aabb;
+use super::Kernel;
 use glam::{Mat3, Vec3};
-
-/// Radial falloff of a photon's contribution over its footprint, normalised so that its
-/// integral over the footprint ellipse is 1.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum FootprintKernel {
-    /// 1/A over the ellipse of area A.
-    Constant,
-    /// (2/A)·(1 − ρ²), ρ the ellipse's normalised radius.
-    Epanechnikov,
-}
 
 /// A photon's footprint ellipsoid.
 #[derive(Clone, Copy, Debug)]
@@ -52,18 +43,16 @@ impl Footprint {
         })
     }
 
-    /// Kernel weight (1/m²) of this footprint at `p`, or `None` outside it.
+    /// Kernel weight (1/m²) of this footprint at `p`, or `None` outside it: the disc
+    /// kernel stretched over the ellipse, so it still integrates to 1 over the footprint.
     #[inline]
-    pub fn weight(&self, p: Vec3, kernel: FootprintKernel) -> Option<f32> {
+    pub fn weight(&self, p: Vec3, kernel: Kernel) -> Option<f32> {
         let l = self.to_local * (p - self.centre);
         let planar = l.x * l.x + l.y * l.y;
         if planar + l.z * l.z > 1.0 {
             return None;
         }
-        Some(match kernel {
-            FootprintKernel::Constant => 1.0 / self.area,
-            FootprintKernel::Epanechnikov => 2.0 / self.area * (1.0 - planar),
-        })
+        Some(kernel.weight(planar, 1.0) * std::f32::consts::PI / self.area)
     }
 }
 
@@ -95,7 +84,7 @@ mod tests {
             f.bounds.max.z,
         );
         let area = (x1 - x0) * (z1 - z0);
-        for kernel in [FootprintKernel::Constant, FootprintKernel::Epanechnikov] {
+        for &kernel in Kernel::ALL {
             let mut sum = 0.0f64;
             for _ in 0..n {
                 let p = Vec3::new(
@@ -113,8 +102,7 @@ mod tests {
             assert!((integral - 1.0).abs() < 0.01, "{kernel:?}: {integral}");
         }
         assert!(
-            f.weight(Vec3::new(1.0, 2.05, 3.0), FootprintKernel::Constant)
-                .is_none(),
+            f.weight(Vec3::new(1.0, 2.05, 3.0), Kernel::Box).is_none(),
             "too far off the surface"
         );
     }

@@ -9,6 +9,7 @@
 pub mod differential;
 pub mod estimate;
 pub mod footprint;
+pub mod gather;
 pub mod kdtree;
 pub mod lbvh;
 pub mod trace;
@@ -103,6 +104,36 @@ pub struct PhotonSet {
     pub escaped: u64,
     /// Paths cut at the bounce limit.
     pub truncated: u64,
+    /// Footprint semi-axes of each stored photon (same order as `photons`), when traced
+    /// with photon differentials; empty otherwise.
+    pub footprints: Vec<FootprintAxes>,
+}
+
+/// A stored photon's footprint from its differentials: two semi-axes (m) in the surface
+/// plane, and how the photon got there.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FootprintAxes {
+    pub axes: [Vec3; 2],
+    pub kind: PathKind,
+}
+
+/// The scattering history of a stored photon, for footprint statistics (the paper's Table 3).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum PathKind {
+    /// Straight from the light.
+    #[default]
+    Direct,
+    /// Only specular (mirror/glass) bounces since the light: a caustic photon.
+    Caustic,
+    /// At least one diffuse or glossy bounce.
+    Diffuse,
+}
+
+impl FootprintAxes {
+    /// Radius of the circle of the same area, √|a₁ × a₂| (m).
+    pub fn radius(&self) -> f32 {
+        self.axes[0].cross(self.axes[1]).length().sqrt()
+    }
 }
 
 impl PhotonSet {
@@ -118,6 +149,7 @@ impl PhotonSet {
     /// Appends `other`, summing the counts.
     pub fn append(&mut self, mut other: PhotonSet) {
         self.photons.append(&mut other.photons);
+        self.footprints.append(&mut other.footprints);
         self.emitted += other.emitted;
         self.absorbed += other.absorbed;
         self.escaped += other.escaped;

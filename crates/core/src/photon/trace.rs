@@ -9,7 +9,8 @@
 //! `Rng::new(seed, stream, path)` into its own [`PhotonSet`]; the chunks are concatenated
 //! in order, so the result depends on the seed only, not on the thread schedule.
 
-use super::{path_density_factor, Photon, PhotonRay, PhotonSet};
+use super::differential::Differentials;
+use super::{path_density_factor, FootprintAxes, PathKind, Photon, PhotonRay, PhotonSet};
 use crate::bsdf::Lobe;
 use crate::sampling::Rng;
 use crate::scene::Scene;
@@ -31,6 +32,19 @@ pub struct PhotonTraceSettings {
     pub max_bounces: u32,
     /// Whether hits of bounce 0 (direct light) are stored.
     pub store_direct: bool,
+    /// Trace photon differentials and record each stored photon's footprint.
+    pub differentials: Option<DifferentialSettings>,
+}
+
+/// Footprint parameters of photon differentials (Fabianowski & Dingliana 2009, §4).
+#[derive(Clone, Copy, Debug)]
+pub struct DifferentialSettings {
+    /// Global spacing Δ = √(Ω/n); see [`super::differential::global_spacing`].
+    pub spacing: f32,
+    /// User smoothing factor s (bias against variance).
+    pub smoothing: f32,
+    /// Largest footprint semi-axis (m).
+    pub r_max: f32,
 }
 
 impl Default for PhotonTraceSettings {
@@ -38,6 +52,7 @@ impl Default for PhotonTraceSettings {
         PhotonTraceSettings {
             max_bounces: 16,
             store_direct: true,
+            differentials: None,
         }
     }
 }
@@ -61,7 +76,15 @@ pub fn emit_and_trace(
         let e = scene.lights[li].emit(&mut rng);
         let power = e.power / (p_light * n_photons as f32);
         let ray = PhotonRay::new(e.origin, e.direction, power, 1.0, 0);
-        follow(scene, bvh, &ray, s, &mut rng, out);
+        // This light's photons are spaced by √(Ω_l / n_l) rather than the global Δ.
+        let diff = s
+            .differentials
+            .map_or(Differentials::emitted(e.direction), |ds| {
+                let n_l = (n_photons as f32 * p_light).max(1.0);
+                let spacing = (scene.lights[li].solid_angle() / n_l).sqrt();
+                Differentials::emitted(e.direction).scaled(spacing / ds.spacing)
+            });
+        follow(scene, bvh, &ray, diff, s, &mut rng, out);
     });
     set.emitted = n_photons;
     set
@@ -78,7 +101,9 @@ pub fn continue_paths(
 ) -> PhotonSet {
     let mut set = trace_chunks(rays.len() as u64, |i, out| {
         let mut rng = Rng::new(seed, STREAM_CONTINUE, i);
-        follow(scene, bvh, &rays[i as usize], s, &mut rng, out);
+        let ray = &rays[i as usize];
+        let diff = Differentials::emitted(ray.direction.into());
+        follow(scene, bvh, ray, diff, s, &mut rng, out);
     });
     set.emitted = rays.len() as u64;
     set
@@ -112,6 +137,7 @@ fn follow(
     scene: &Scene,
     bvh: &SceneBvh,
     ray: &PhotonRay,
+    mut diff: Differentials,
     s: &PhotonTraceSettings,
     rng: &mut Rng,
     out: &mut PhotonSet,
@@ -120,6 +146,13 @@ fn follow(
     let mut power = glam::Vec3::from(ray.power);
     let mut density = ray.path_density;
     let mut bounce = ray.bounce;
+    // Photons continued from elsewhere (the ISPM bounce map) start their differentials at
+    // their origin, as after a diffuse re-emission.
+    let mut kind = if bounce == 0 {
+        PathKind::Direct
+    } else {
+        PathKind::Diffuse
+    };
     if power.max_element() <= 0.0 || !power.is_finite() {
         out.absorbed += 1;
         return;
@@ -131,6 +164,9 @@ fn follow(
         };
         let it = Interaction::new(scene, &hit, d);
         let wo = -d;
+        if s.differentials.is_some() {
+            diff.transfer(d, hit.t, it.ng);
+        }
 
         // Store the photon where a non-delta lobe can reflect it towards a viewer.
         if !it.material.is_purely_specular() && (bounce > 0 || s.store_direct) {
@@ -144,6 +180,11 @@ fn follow(
                 normal: normal.into(),
                 ..Default::default()
             });
+            if let Some(ds) = &s.differentials {
+                let diffuse = kind == PathKind::Diffuse;
+                let axes = diff.footprint_axes(ds.spacing, ds.smoothing, diffuse, ds.r_max);
+                out.footprints.push(FootprintAxes { axes, kind });
+            }
         }
         if bounce >= s.max_bounces {
             out.truncated += 1;
@@ -170,9 +211,77 @@ fn follow(
             return;
         }
         power = scattered / q;
+        if s.differentials.is_some() {
+            scatter_differentials(scene, &it, &hit, d, wi, bs.lobe, &mut diff);
+            diff.survive(q);
+            kind = match (kind, bs.lobe.is_delta()) {
+                (PathKind::Direct | PathKind::Caustic, true) => PathKind::Caustic,
+                _ => PathKind::Diffuse,
+            };
+        }
         density *= path_density_factor(it.material, bs.lobe);
         bounce += 1;
         o = it.spawn(wi);
         d = wi;
     }
+}
+
+/// Updates differentials for a scattering from `d` to `wi` through `lobe` (Igehy 1999 for
+/// the delta lobes, re-emission for diffuse and glossy ones).
+fn scatter_differentials(
+    scene: &Scene,
+    it: &Interaction,
+    hit: &crate::trace::Hit,
+    d: glam::Vec3,
+    wi: glam::Vec3,
+    lobe: Lobe,
+    diff: &mut Differentials,
+) {
+    // Normal facing the incident side, and its derivative along the footprint.
+    let sign = if d.dot(it.ng) < 0.0 { 1.0 } else { -1.0 };
+    let n = it.frame.n * sign;
+    let dn = diff.dp.map(|dp| normal_derivative(scene, hit, dp) * sign);
+    match lobe {
+        Lobe::Mirror | Lobe::GlassReflect => diff.reflect(d, n, dn),
+        Lobe::GlassRefract => {
+            let ior = it.material.ior;
+            let eta = if sign > 0.0 { 1.0 / ior } else { ior };
+            diff.refract(d, wi, n, eta, dn);
+        }
+        Lobe::Diffuse | Lobe::Glossy => diff.reemit(wi),
+    }
+}
+
+/// Derivative of the interpolated (unit) vertex normal at `hit` along the surface offset `dp`.
+fn normal_derivative(scene: &Scene, hit: &crate::trace::Hit, dp: glam::Vec3) -> glam::Vec3 {
+    let t = scene.triangles[hit.triangle as usize].map(|i| i as usize);
+    let (p0, p1, p2) = (
+        scene.positions[t[0]],
+        scene.positions[t[1]],
+        scene.positions[t[2]],
+    );
+    let (n0, n1, n2) = (
+        scene.normals[t[0]],
+        scene.normals[t[1]],
+        scene.normals[t[2]],
+    );
+    let (e1, e2) = (p1 - p0, p2 - p0);
+    // Barycentric derivatives: dp = du·e1 + dv·e2, solved by least squares.
+    let (a, b, c) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+    let det = a * c - b * b;
+    if det.abs() < 1e-20 {
+        return glam::Vec3::ZERO;
+    }
+    let (r1, r2) = (dp.dot(e1), dp.dot(e2));
+    let du = (c * r1 - b * r2) / det;
+    let dv = (a * r2 - b * r1) / det;
+    let w = 1.0 - hit.u - hit.v;
+    let nn = n0 * w + n1 * hit.u + n2 * hit.v;
+    let len = nn.length();
+    if len < 1e-12 {
+        return glam::Vec3::ZERO;
+    }
+    let n = nn / len;
+    let dnn = du * (n1 - n0) + dv * (n2 - n0);
+    (dnn - n * n.dot(dnn)) / len
 }

@@ -76,6 +76,14 @@ impl Light {
         }
     }
 
+    /// Solid angle (sr) that photons are emitted into.
+    pub fn solid_angle(&self) -> f32 {
+        match *self {
+            Light::Point { .. } => 4.0 * PI,
+            Light::Spot { cos_outer, .. } => 2.0 * PI * (1.0 - cos_outer),
+        }
+    }
+
     /// Emits one photon carrying power `power / n` on average when called `n` times.
     pub fn emit(&self, rng: &mut Rng) -> Emission {
         match *self {

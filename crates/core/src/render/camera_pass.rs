@@ -1,0 +1,152 @@
+//! The camera half of the photon-map methods: per pixel sample, follow the camera ray
+//! through delta lobes (mirror, glass) and ask an estimator for the radiance leaving each
+//! non-delta surface it reaches; assemble the image and the first-hit AOVs.
+
+use super::{Progress, RenderOutput, RenderStats, Settings};
+use crate::error::{Error, Result};
+use crate::image::Image;
+use crate::sampling::Rng;
+use crate::scene::Scene;
+use crate::trace::path::{self, FirstHit};
+use crate::trace::{Interaction, SceneBvh};
+use glam::Vec3;
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+
+/// Most delta scatterings a camera path follows before giving up.
+const MAX_DELTA_BOUNCES: u32 = 8;
+
+/// Renders the image whose non-delta surfaces get their outgoing radiance from `estimate`
+/// `(interaction, wo, scratch)`; `S` is per-thread scratch space.
+pub fn render_image<S: Default + Send>(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    settings: &Settings,
+    progress: &dyn Progress,
+    stats: RenderStats,
+    estimate: impl Fn(&Interaction, Vec3, &mut S) -> Vec3 + Sync,
+) -> Result<RenderOutput> {
+    let cam = &scene.camera;
+    let (w, h) = (cam.width, cam.height);
+    let max_delta = MAX_DELTA_BOUNCES.min(settings.max_depth);
+    let done = AtomicU64::new(0);
+    let cancelled = AtomicBool::new(false);
+    let rows: Vec<Vec<(Vec3, FirstHit)>> = (0..h)
+        .into_par_iter()
+        .map_init(S::default, |scratch, y| {
+            if cancelled.load(Ordering::Relaxed) {
+                return Vec::new();
+            }
+            let row = (0..w)
+                .map(|x| {
+                    let pixel = (y * w + x) as u64;
+                    let mut sum = Vec3::ZERO;
+                    for s in 0..settings.spp {
+                        let mut rng = Rng::new(settings.seed, pixel, s as u64);
+                        let j = rng.next_2d();
+                        let dir = cam.direction(x as f32 + j.x, y as f32 + j.y);
+                        sum += radiance(
+                            scene,
+                            bvh,
+                            cam.position,
+                            dir,
+                            max_delta,
+                            &mut rng,
+                            |it, wo| estimate(it, wo, scratch),
+                        );
+                    }
+                    let centre = cam.direction(x as f32 + 0.5, y as f32 + 0.5);
+                    (
+                        sum / settings.spp as f32,
+                        path::first_hit(scene, bvh, cam.position, centre),
+                    )
+                })
+                .collect();
+            let d = done.fetch_add(1, Ordering::Relaxed) + 1;
+            if !progress.update("radiance estimate", d as f64 / h as f64) {
+                cancelled.store(true, Ordering::Relaxed);
+            }
+            row
+        })
+        .collect();
+    if cancelled.load(Ordering::Relaxed) {
+        return Err(Error::Cancelled);
+    }
+    let mut out = RenderOutput {
+        radiance: Image::new(w, h),
+        albedo: Image::new(w, h),
+        normal: Image::new(w, h),
+        position: Image::new(w, h),
+        depth: vec![0.0; (w * h) as usize],
+        caustics: Image::new(w, h),
+        stats,
+    };
+    for (i, (l, fh)) in rows.into_iter().flatten().enumerate() {
+        out.radiance.pixels[i] = l;
+        out.albedo.pixels[i] = fh.albedo;
+        out.normal.pixels[i] = fh.normal;
+        out.position.pixels[i] = fh.position;
+        out.depth[i] = fh.depth;
+    }
+    out.stats.samples_per_pixel = settings.spp;
+    out.stats.camera_paths = settings.spp as u64 * w as u64 * h as u64;
+    Ok(out)
+}
+
+/// Radiance arriving at `origin` from `-dir`: estimates at every non-delta surface the ray
+/// reaches through up to `max_delta` delta scatterings. The estimate covers a surface's
+/// non-delta lobes; its delta lobe (if any) is followed when `Material::sample` picks it,
+/// with the sample weight accounting for that choice.
+fn radiance(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    origin: Vec3,
+    dir: Vec3,
+    max_delta: u32,
+    rng: &mut Rng,
+    mut estimate: impl FnMut(&Interaction, Vec3) -> Vec3,
+) -> Vec3 {
+    let mut l = Vec3::ZERO;
+    let mut beta = Vec3::ONE;
+    let (mut o, mut d) = (origin, dir);
+    for _ in 0..=max_delta {
+        let Some(hit) = bvh.intersect(o, d, f32::INFINITY) else {
+            break;
+        };
+        let it = Interaction::new(scene, &hit, d);
+        let wo = -d;
+        if !it.material.is_purely_specular() {
+            l += beta * estimate(&it, wo);
+        }
+        // Continue only through a delta lobe, geometrically consistent.
+        let Some(bs) = it.material.sample(it.frame.to_local(wo), rng) else {
+            break;
+        };
+        if !bs.lobe.is_delta() {
+            break;
+        }
+        let wi = it.frame.to_world(bs.wi);
+        let same_side = wi.dot(it.ng) * wo.dot(it.ng) > 0.0;
+        if same_side == matches!(bs.lobe, crate::bsdf::Lobe::GlassRefract) {
+            break;
+        }
+        beta *= bs.weight;
+        o = it.spawn(wi);
+        d = wi;
+    }
+    l
+}
+
+/// Length of the scene's bounding-box diagonal (m).
+pub fn scene_diagonal(scene: &Scene) -> f32 {
+    let (lo, hi) = scene
+        .positions
+        .iter()
+        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
+            (lo.min(*p), hi.max(*p))
+        });
+    if lo.x > hi.x {
+        return 1.0;
+    }
+    (hi - lo).length()
+}

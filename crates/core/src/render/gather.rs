@@ -1,0 +1,85 @@
+//! Method `gather`: photons traced with photon differentials, a linear-BVH footprint photon
+//! map, and a CPU gather estimate (Fabianowski & Dingliana 2009). Direct light comes from
+//! next-event estimation at each shading point; the photons carry indirect light and
+//! caustics. Camera rays follow mirrors and glass (`camera_pass`), so reflections and
+//! refractions show indirect light too.
+
+use super::camera_pass::{render_image, scene_diagonal};
+use super::{Progress, RenderOutput, RenderStats, Settings};
+use crate::error::{Error, Result};
+use crate::photon::differential::global_spacing;
+use crate::photon::gather::{scene_area, FootprintMap, LeafSize};
+use crate::photon::trace::DifferentialSettings;
+use crate::photon::{emit_and_trace, PhotonTraceSettings};
+use crate::scene::Scene;
+use crate::trace::{path::direct_light, SceneBvh};
+use std::time::Instant;
+
+/// Default largest footprint semi-axis, as a fraction of the scene's diagonal.
+const DEFAULT_R_MAX_FRACTION: f32 = 0.1;
+
+/// Photon-trace settings of the gather method for `n` photons (shared with the statistics
+/// of `footprint_statistics`).
+pub fn trace_settings(scene: &Scene, settings: &Settings) -> PhotonTraceSettings {
+    PhotonTraceSettings {
+        max_bounces: settings.max_depth.saturating_sub(1).max(1),
+        store_direct: false,
+        differentials: Some(DifferentialSettings {
+            spacing: global_spacing(4.0 * std::f32::consts::PI, settings.photons),
+            smoothing: settings.smoothing,
+            r_max: settings
+                .max_radius
+                .unwrap_or_else(|| DEFAULT_R_MAX_FRACTION * scene_diagonal(scene)),
+        }),
+    }
+}
+
+pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Result<RenderOutput> {
+    let t0 = Instant::now();
+    let mut stats = RenderStats {
+        triangles: scene.triangles.len() as u64,
+        ..Default::default()
+    };
+    let mut stage =
+        |name: &str, t: Instant| stats.stages.push((name.into(), t.elapsed().as_secs_f64()));
+
+    let t = Instant::now();
+    let bvh = SceneBvh::build(scene);
+    stage("bvh build", t);
+
+    let t = Instant::now();
+    let set = emit_and_trace(
+        scene,
+        &bvh,
+        settings.photons,
+        &trace_settings(scene, settings),
+        settings.seed,
+    );
+    stage("photon trace", t);
+    if !progress.update("photon trace", 1.0) {
+        return Err(Error::Cancelled);
+    }
+
+    let t = Instant::now();
+    let leaf = settings
+        .leaf_size
+        .map_or(LeafSize::Auto, |n| LeafSize::Fixed(n as usize));
+    let map = FootprintMap::build(&set, 1, scene_area(scene), leaf, settings.kernel);
+    stage("photon map build", t);
+
+    let t = Instant::now();
+    let mut out = render_image(
+        scene,
+        &bvh,
+        settings,
+        progress,
+        stats,
+        |it, wo, _: &mut ()| direct_light(scene, &bvh, it, wo) + map.radiance(it, wo),
+    )?;
+    out.stats
+        .stages
+        .push(("radiance estimate".into(), t.elapsed().as_secs_f64()));
+    out.stats.light_paths = set.emitted;
+    out.stats.total_seconds = t0.elapsed().as_secs_f64();
+    Ok(out)
+}
