@@ -161,7 +161,8 @@ pub fn bounce_layers(scene: &Scene, photons: u64) -> Vec<BounceLayer> {
             0.0
         };
         for (forward, up, t) in views {
-            let view_proj = super::shadow::perspective(t, near, far) * super::look_to(p, forward, up);
+            let view_proj =
+                super::shadow::perspective(t, near, far) * super::look_to(p, forward, up);
             let area = (2.0 * t / res as f32).powi(2);
             layers.push(BounceLayer {
                 light: li,
@@ -678,8 +679,7 @@ pub fn bounce_map(
                 let wo = (light_pos - p).normalize_or_zero();
                 let frame = Frame::new(ns);
                 let wo_l = frame.to_local(wo);
-                out.expected_scattered_power +=
-                    (phi * m.scatter_probability(wo_l)).as_dvec3();
+                out.expected_scattered_power += (phi * m.scatter_probability(wo_l)).as_dvec3();
                 if phi.max_element() <= 0.0 {
                     continue;
                 }

@@ -169,8 +169,7 @@ impl Settings {
         if !(16..=16384).contains(&self.shadow_map_size) {
             return Err(Error::setting("shadow_map_size", "must be in 16..=16384"));
         }
-        if !(self.kernel_scale.is_finite() && self.kernel_scale > 0.0 && self.kernel_scale <= 1e3)
-        {
+        if !(self.kernel_scale.is_finite() && self.kernel_scale > 0.0 && self.kernel_scale <= 1e3) {
             return Err(Error::setting(
                 "kernel_scale",
                 "must be a positive finite scale up to 1000",
