@@ -166,6 +166,36 @@ fn cornell_matches_path_tracer() {
     eprintln!("cornell worst 12x12 block relative error {worst:.4}");
     assert!(rel.max_element() < 0.03, "{a:?} vs {b:?}");
     assert!(worst < 0.10, "worst block {worst}");
+
+    // Subsampled splatting (k = 2) with joint bilateral upsampling: same criteria for the
+    // image mean, and the mean absolute difference to k = 1 is under 10% of the mean (measured
+    // 6%: both images carry their own kernel noise at 48×48).
+    let sub = run(
+        &scene,
+        &Settings {
+            subsample: 2,
+            ..ispm_settings(size)
+        },
+    );
+    let c = mean(&sub.radiance);
+    let rel2 = (c / b - DVec3::ONE).abs();
+    let diff: f64 = sub
+        .radiance
+        .pixels
+        .iter()
+        .zip(&ispm.radiance.pixels)
+        .map(|(p, q)| (*p - *q).abs().element_sum() as f64)
+        .sum::<f64>()
+        / ispm
+            .radiance
+            .pixels
+            .iter()
+            .map(|p| p.element_sum() as f64)
+            .sum::<f64>();
+    eprintln!("cornell subsample 2: {c:?} rel {rel2:?}, mean |k2 − k1| / mean {diff:.4}");
+    assert!(sub.stats.stages.iter().any(|(n, _)| n == "upsample"));
+    assert!(rel2.max_element() < 0.03, "{c:?} vs {b:?}");
+    assert!(diff < 0.10, "{diff}");
 }
 
 /// Caustic ring: the mirror focuses light into a cardioid on the floor. In the ISPM

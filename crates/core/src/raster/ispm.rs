@@ -496,6 +496,11 @@ pub struct BounceMap {
     pub scattered_power: DVec3,
     /// Σ over covered texels of power × scatter probability (the expected scattered power).
     pub expected_scattered_power: DVec3,
+    /// Seconds: rasterizing the bounce maps (until the GPU is done), reading them back,
+    /// and the first scatter on the CPU.
+    pub raster_seconds: f64,
+    pub readback_seconds: f64,
+    pub scatter_seconds: f64,
 }
 
 /// [`bounce_map`] on the context of `settings.adapter`, for inspection and tests.
@@ -649,9 +654,15 @@ pub fn bounce_map(
         pass.set_vertex_buffer(0, geometry.vertices.slice(..));
         pass.draw(0..geometry.count, 0..1);
     }
+    let t = Instant::now();
     ctx.queue.submit([encoder.finish()]);
+    ctx.wait()?;
+    out.raster_seconds = t.elapsed().as_secs_f64();
+    let t = Instant::now();
     let [position, normals, power] = [0, 1, 2].map(|i| read_array(ctx, &targets[i]));
     let (position, normals, power) = (position?, normals?, power?);
+    out.readback_seconds = t.elapsed().as_secs_f64();
+    let t = Instant::now();
 
     // First scatter on the CPU, as `photon::trace::follow` does.
     let per_layer = (max_res * max_res) as usize;
@@ -712,6 +723,7 @@ pub fn bounce_map(
         }
     }
     out.texels = layers.iter().map(|l| l.res as u64 * l.res as u64).sum();
+    out.scatter_seconds = t.elapsed().as_secs_f64();
     Ok(out)
 }
 
@@ -820,7 +832,15 @@ fn indirect(
         count: verts.len() as u32,
     };
     let bm = bounce_map(ctx, scene, &geometry, settings.photons, settings.seed)?;
-    stage(out, "bounce maps", t);
+    let setup =
+        t.elapsed().as_secs_f64() - bm.raster_seconds - bm.readback_seconds - bm.scatter_seconds;
+    for (name, secs) in [
+        ("bounce maps", bm.raster_seconds + setup.max(0.0)),
+        ("bounce readback", bm.readback_seconds),
+        ("first scatter", bm.scatter_seconds),
+    ] {
+        out.stats.stages.push((name.to_string(), secs));
+    }
     out.stats.photons_emitted = bm.covered;
     out.stats.photons_first_bounce = bm.rays.len() as u64;
     if !progress.update("bounce maps", 1.0) {
@@ -882,8 +902,15 @@ fn indirect(
     });
     let r_base = base_radius(scene, settings.photons, settings.kernel_scale);
     let (lo, hi) = super::shadow::bounds(scene);
+    // Low-res texel i shades full-res pixel i·k + ⌊k/2⌋, whose centre is half a full-res
+    // pixel off the low-res sample position when k is even: shift the volumes to match, so
+    // that coverage is tested where the G-buffer sample lies.
+    let half = if k % 2 == 0 { 1.0 } else { 0.0 };
+    let shift =
+        glam::Mat4::from_translation(glam::Vec3::new(-half / w as f32, half / h as f32, 0.0));
+    let volume_view = shift * glam::Mat4::from_cols_array_2d(&eye.view_proj);
     let params = VolumeParamsRaw {
-        view_proj: eye.view_proj,
+        view_proj: volume_view.to_cols_array_2d(),
         eye: scene.camera.position.into(),
         r_base,
         r_max: (0.1 * (hi - lo).length()).max(r_base),
