@@ -91,6 +91,8 @@ pub fn render<'py>(
         kernel,
         adapter,
         shadow_map_size,
+        // ISPM settings (kernel_scale, subsample) keep their defaults until exposed.
+        ..Default::default()
     };
     let reporter = PyProgress {
         callback: progress,
