@@ -127,14 +127,21 @@ fn region_mean(img: &gi_core::image::Image, keep: &[bool]) -> DVec3 {
     sum / n.max(1) as f64
 }
 
-/// Cornell box: ISPM (direct + photon volumes) against the path tracer (512 spp), 48×48.
+/// Cornell box: ISPM (direct + photon volumes, 400k bounce-map photons) against the path
+/// tracer (512 spp), 48×48.
 /// Criteria: image mean per channel within 3%, and the means of the 4×4 blocks of 12×12
 /// pixels within 10% (measured values are printed).
 #[test]
 fn cornell_matches_path_tracer() {
     let scene = load("cornell");
     let size = 48;
-    let ispm = run(&scene, &ispm_settings(size));
+    let ispm = run(
+        &scene,
+        &Settings {
+            photons: 400_000,
+            ..ispm_settings(size)
+        },
+    );
     let path = run(
         &scene,
         &Settings {
@@ -174,6 +181,7 @@ fn cornell_matches_path_tracer() {
         &scene,
         &Settings {
             subsample: 2,
+            photons: 400_000,
             ..ispm_settings(size)
         },
     );

@@ -6,9 +6,10 @@
 //!    spot light, six exact cube faces per point light) whose texels are the photons leaving
 //!    the light. Resolutions split `Settings::photons` between lights by power; a texel's
 //!    power is I(ω)·A·cos³θ, corrected per light so that all texels sum to the light's power.
-//!    The hits are direct light and are not stored. Their first scatter (BSDF sample, Russian
-//!    roulette, path density) is taken on the CPU from the read-back texels with
-//!    `Material::sample` (the same sampler as the CPU photon tracer).
+//!    The hits are direct light and are not stored. Their first scatter (importance sampling
+//!    of the uber BSDF, Russian roulette, path density) is taken in the same fragment shader
+//!    (`bounce.wgsl`, a port of `Material::sample`); surviving texels are read back as
+//!    [`PhotonRay`]s.
 //! 3. CPU photon tracing of the later bounces ([`crate::photon::continue_paths`], bounce
 //!    index 1 for the first-bounce rays).
 //! 4. Photon volumes (section 5): one instanced icosahedron per stored photon, splatted into
@@ -18,20 +19,16 @@
 //! The final radiance is direct + indirect; `caustics` stays zero (no AOV).
 
 use super::{buffer_init, camera_view, gbuffer, vertices, view_binding, Geometry};
-use crate::bsdf::Lobe;
 use crate::error::{Error, Result};
 use crate::gpu::{self, shaders, GpuContext};
-use crate::photon::{continue_paths, path_density_factor, Photon, PhotonRay, PhotonTraceSettings};
+use crate::photon::{continue_paths, Photon, PhotonRay, PhotonTraceSettings};
 use crate::render::{Progress, RenderOutput, Settings};
-use crate::sampling::{Frame, Rng};
 use crate::scene::{Light, Scene};
 use crate::trace::SceneBvh;
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, Vec2, Vec3, Vec4};
 use std::time::Instant;
 
-/// Random stream of the bounce map's first scatter.
-const STREAM_BOUNCE: u64 = 0x15b0_0001;
 /// r_z / r_xy of the photon volumes.
 const Z_RATIO: f32 = 0.5;
 /// Largest bounce-map side (texels).
@@ -54,7 +51,11 @@ pub struct BounceViewRaw {
     pub cos_inner: f32,
     pub spot_direction: [f32; 3],
     pub cos_outer: f32,
-    pub _pad: [f32; 32],
+    /// Random seed of the frame (low 32 bits of `Settings::seed`, hashed with the high ones).
+    pub seed: u32,
+    /// Index of this layer among all bounce-map layers.
+    pub layer: u32,
+    pub _pad: [f32; 30],
 }
 
 /// `VolumeParams` of `volume.wgsl`.
@@ -177,7 +178,9 @@ pub fn bounce_layers(scene: &Scene, photons: u64) -> Vec<BounceLayer> {
                     cos_inner: raw.cos_inner,
                     spot_direction: raw.direction,
                     cos_outer: raw.cos_outer,
-                    _pad: [0.0; 32],
+                    seed: 0,
+                    layer: layers.len() as u32,
+                    _pad: [0.0; 30],
                 },
             });
         }
@@ -269,19 +272,26 @@ impl IspmPasses {
         // Bounce map.
         let bounce_layout = layout(
             "bounce bind group layout",
-            &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: true,
-                    min_binding_size: wgpu::BufferSize::new(BOUNCE_VIEW_SIZE),
+            &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: true,
+                        min_binding_size: wgpu::BufferSize::new(BOUNCE_VIEW_SIZE),
+                    },
+                    count: None,
                 },
-                count: None,
-            }],
+                super::storage_entry(1, wgpu::ShaderStages::FRAGMENT),
+            ],
         );
-        let module = shaders::module(device, "bounce shader", &[shaders::COMMON, shaders::BOUNCE]);
-        let targets: [_; 3] = std::array::from_fn(|_| Some(wgpu::ColorTargetState::from(TARGET)));
+        let module = shaders::module(
+            device,
+            "bounce shader",
+            &[shaders::COMMON, shaders::BSDF, shaders::BOUNCE],
+        );
+        let targets: [_; 5] = std::array::from_fn(|_| Some(wgpu::ColorTargetState::from(TARGET)));
         let bounce = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("bounce pipeline"),
             layout: Some(&pipeline_layout(&bounce_layout)),
@@ -496,8 +506,8 @@ pub struct BounceMap {
     pub scattered_power: DVec3,
     /// Σ over covered texels of power × scatter probability (the expected scattered power).
     pub expected_scattered_power: DVec3,
-    /// Seconds: rasterizing the bounce maps (until the GPU is done), reading them back,
-    /// and the first scatter on the CPU.
+    /// Seconds: rasterizing the bounce maps with the first scatter (until the GPU is done),
+    /// reading them back, and converting the survivors to rays.
     pub raster_seconds: f64,
     pub readback_seconds: f64,
     pub scatter_seconds: f64,
@@ -555,7 +565,21 @@ pub fn bounce_map(
             limits.max_texture_array_layers
         )));
     }
-    let views: Vec<BounceViewRaw> = layers.iter().map(|l| l.view).collect();
+    let seed32 = (seed ^ (seed >> 32)) as u32;
+    let views: Vec<BounceViewRaw> = layers
+        .iter()
+        .map(|l| BounceViewRaw {
+            seed: seed32,
+            ..l.view
+        })
+        .collect();
+    let materials: Vec<_> = scene.materials.iter().map(|m| m.to_raw()).collect();
+    let material_buffer = buffer_init(
+        ctx,
+        "materials",
+        bytemuck::cast_slice(&materials),
+        wgpu::BufferUsages::STORAGE,
+    );
     let view_buffer = buffer_init(
         ctx,
         "bounce views",
@@ -565,14 +589,20 @@ pub fn bounce_map(
     let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("bounce bind group"),
         layout: &passes.bounce_layout,
-        entries: &[wgpu::BindGroupEntry {
-            binding: 0,
-            resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                buffer: &view_buffer,
-                offset: 0,
-                size: wgpu::BufferSize::new(BOUNCE_VIEW_SIZE),
-            }),
-        }],
+        entries: &[
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                    buffer: &view_buffer,
+                    offset: 0,
+                    size: wgpu::BufferSize::new(BOUNCE_VIEW_SIZE),
+                }),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: material_buffer.as_entire_binding(),
+            },
+        ],
     });
     let size = wgpu::Extent3d {
         width: max_res,
@@ -593,9 +623,11 @@ pub fn bounce_map(
     };
     let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
     let targets = [
-        make("bounce position", TARGET, usage),
-        make("bounce normals", TARGET, usage),
+        make("bounce origin", TARGET, usage),
+        make("bounce direction", TARGET, usage),
         make("bounce power", TARGET, usage),
+        make("bounce incident", TARGET, usage),
+        make("bounce expected", TARGET, usage),
     ];
     let depth = make(
         "bounce depth",
@@ -659,64 +691,38 @@ pub fn bounce_map(
     ctx.wait()?;
     out.raster_seconds = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let [position, normals, power] = [0, 1, 2].map(|i| read_array(ctx, &targets[i]));
-    let (position, normals, power) = (position?, normals?, power?);
+    let read = targets
+        .iter()
+        .map(|t| read_array(ctx, t))
+        .collect::<Result<Vec<_>>>()?;
+    let [origin, direction, power, incident, expected] = &read[..] else {
+        return Err(Error::Gpu("bounce map readback".into()));
+    };
     out.readback_seconds = t.elapsed().as_secs_f64();
     let t = Instant::now();
 
-    // First scatter on the CPU, as `photon::trace::follow` does.
+    // Surviving texels become rays for the CPU tracer.
     let per_layer = (max_res * max_res) as usize;
-    let mut index = 0u64;
     for (li, layer) in layers.iter().enumerate() {
-        let light_pos = Vec3::from(layer.view.light_position);
         for y in 0..layer.res as usize {
             for x in 0..layer.res as usize {
-                let t = li * per_layer + y * max_res as usize + x;
-                index += 1;
-                let pw = power[t];
-                if pw.w <= 0.0 {
+                let i = li * per_layer + y * max_res as usize + x;
+                if incident[i].w <= 0.0 {
                     continue;
                 }
                 out.covered += 1;
-                let phi = pw.truncate();
-                out.incident_power += phi.as_dvec3();
-                let pos = position[t];
-                let p = pos.truncate();
-                let Some(m) = scene.materials.get(pos.w as usize) else {
-                    continue;
-                };
-                let ns = super::oct_decode(Vec2::new(normals[t].x, normals[t].y));
-                let ng = super::oct_decode(Vec2::new(normals[t].z, normals[t].w));
-                let wo = (light_pos - p).normalize_or_zero();
-                let frame = Frame::new(ns);
-                let wo_l = frame.to_local(wo);
-                out.expected_scattered_power += (phi * m.scatter_probability(wo_l)).as_dvec3();
-                if phi.max_element() <= 0.0 {
+                out.incident_power += incident[i].truncate().as_dvec3();
+                out.expected_scattered_power += expected[i].truncate().as_dvec3();
+                if direction[i].w <= 0.0 {
                     continue;
                 }
-                let mut rng = Rng::new(seed, STREAM_BOUNCE, index);
-                let Some(bs) = m.sample(wo_l, &mut rng) else {
-                    continue;
-                };
-                let wi = frame.to_world(bs.wi);
-                let same_side = wi.dot(ng) * wo.dot(ng) > 0.0;
-                if same_side == matches!(bs.lobe, Lobe::GlassRefract) {
-                    continue;
-                }
-                let scattered = phi * bs.weight;
-                let q = (scattered.max_element() / phi.max_element()).min(1.0);
-                if q.is_nan() || q <= 0.0 || rng.next_f32() >= q {
-                    continue;
-                }
-                let carried = scattered / q;
+                let carried = power[i].truncate();
                 out.scattered_power += carried.as_dvec3();
-                let eps = 1e-4 * (1.0 + p.abs().max_element());
-                let origin = p + ng * eps * wi.dot(ng).signum();
                 out.rays.push(PhotonRay::new(
-                    origin,
-                    wi,
+                    origin[i].truncate(),
+                    direction[i].truncate(),
                     carried,
-                    path_density_factor(m, bs.lobe),
+                    origin[i].w,
                     1,
                 ));
             }
@@ -837,7 +843,7 @@ fn indirect(
     for (name, secs) in [
         ("bounce maps", bm.raster_seconds + setup.max(0.0)),
         ("bounce readback", bm.readback_seconds),
-        ("first scatter", bm.scatter_seconds),
+        ("bounce rays", bm.scatter_seconds),
     ] {
         out.stats.stages.push((name.to_string(), secs));
     }
