@@ -276,3 +276,34 @@ fn caustic_ring_is_brighter_than_surroundings() {
     assert!(ci.x > 3.0 * ri.x, "{ci:?} vs {ri:?}");
     assert!((ti.x / tp.x - 1.0).abs() < 0.10, "{ti:?} vs {tp:?}");
 }
+
+#[test]
+fn ispm_settings_are_validated() {
+    assert_eq!("ispm".parse::<Method>().ok(), Some(Method::Ispm));
+    let ok = Settings::default();
+    assert_eq!((ok.kernel_scale, ok.subsample), (1.0, 1));
+    assert!(ok.validate().is_ok());
+    for bad in [
+        Settings {
+            subsample: 0,
+            ..ok.clone()
+        },
+        Settings {
+            subsample: 9,
+            ..ok.clone()
+        },
+        Settings {
+            kernel_scale: 0.0,
+            ..ok.clone()
+        },
+        Settings {
+            kernel_scale: f32::NAN,
+            ..ok.clone()
+        },
+    ] {
+        assert!(matches!(
+            bad.validate(),
+            Err(gi_core::Error::Setting { .. })
+        ));
+    }
+}

@@ -1093,12 +1093,25 @@ mod tests {
         }
     }
 
+    /// Cornell (one point light): six faces of √(budget / 6) texels a side whose texel
+    /// solid angles, with the round-off correction, add up to 4π.
     #[test]
-    fn bounce_layers_sum_to_light_power() {
+    fn bounce_layers_follow_budget_and_power() {
         let scene = crate::scene::builtin::load("cornell").expect("scene");
         let layers = bounce_layers(&scene, 10_000);
         assert_eq!(layers.len(), 6);
-        let res = layers[0].res;
-        assert_eq!(res, 41);
+        let mut solid_angle = 0.0f64;
+        for l in &layers {
+            assert_eq!(l.res, 41);
+            for j in 0..l.res {
+                for i in 0..l.res {
+                    let x = 2.0 * (i as f64 + 0.5) / l.res as f64 - 1.0;
+                    let y = 2.0 * (j as f64 + 0.5) / l.res as f64 - 1.0;
+                    let c = 1.0 / (1.0 + x * x + y * y).sqrt();
+                    solid_angle += l.view.texel_area as f64 * c * c * c;
+                }
+            }
+        }
+        assert!((solid_angle / (4.0 * std::f64::consts::PI) - 1.0).abs() < 1e-5);
     }
 }
