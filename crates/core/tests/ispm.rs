@@ -307,3 +307,14 @@ fn ispm_settings_are_validated() {
         ));
     }
 }
+
+/// A photon budget whose bounce maps would not fit is a setting error, not a crash.
+#[test]
+fn huge_photon_budget_is_a_setting_error() {
+    let s = Settings {
+        photons: 900_000_000,
+        ..ispm_settings(8)
+    };
+    let e = render(&load("cornell"), &s, &Silent).err();
+    assert!(matches!(e, Some(gi_core::Error::Setting { .. })), "{e:?}");
+}

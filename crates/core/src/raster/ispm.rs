@@ -33,6 +33,8 @@ use std::time::Instant;
 const Z_RATIO: f32 = 0.5;
 /// Largest bounce-map side (texels).
 const MAX_BOUNCE_RES: u32 = 4096;
+/// Most GPU memory the bounce-map targets may take.
+const MAX_BOUNCE_BYTES: u64 = 2 << 30;
 /// Widest spot cone the bounce map covers (tan of the half angle, about 84°).
 const MAX_SPOT_TAN: f32 = 10.0;
 
@@ -559,6 +561,18 @@ pub fn bounce_map(
         ));
     }
     let n_layers = layers.len() as u32;
+    // Five Rgba32Float targets plus the readback copy: keep them within 2 GiB.
+    let bytes = max_res as u64 * max_res as u64 * n_layers as u64 * 16 * 5;
+    if bytes > MAX_BOUNCE_BYTES {
+        return Err(Error::setting(
+            "photons",
+            format!(
+                "the bounce maps would take {} MiB of GPU memory (at most {} MiB); use fewer photons",
+                bytes >> 20,
+                MAX_BOUNCE_BYTES >> 20
+            ),
+        ));
+    }
     if n_layers > limits.max_texture_array_layers {
         return Err(Error::Gpu(format!(
             "{n_layers} bounce-map layers exceed the GPU's {}",
