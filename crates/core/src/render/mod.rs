@@ -63,12 +63,14 @@ impl FromStr for Method {
 #[derive(Clone, Debug)]
 pub struct Settings {
     pub method: Method,
-    /// Camera samples per pixel (method `path`); sub-pixel raster samples (method `direct`).
+    /// Camera samples per pixel (method `path`); sub-pixel raster samples of the direct light
+    /// (methods `direct` and `ispm`; the ISPM indirect light is shaded at pixel centres).
     pub spp: u32,
     pub width: Option<u32>,
     pub height: Option<u32>,
     pub seed: u64,
-    /// Maximum number of scattering events on a path (1 = direct light only).
+    /// Maximum number of scattering events on a path (1 = direct light only); for method
+    /// `ispm` photons are traced to bounce `max_depth − 1`.
     pub max_depth: u32,
     /// Light paths for caustics (method `path`); `None` = one per camera sample.
     pub light_paths: Option<u64>,
