@@ -128,6 +128,8 @@ def test_nan_in_description(write_scene, cornell_desc):
         ({"method": "photon", "kernel": "gaussian"}, "kernel"),
         ({"method": "gather", "smoothing": 0.0}, "smoothing"),
         ({"method": "gather", "leaf_size": 0}, "leaf_size"),
+        ({"method": "ispm", "subsample": 9}, "subsample"),
+        ({"method": "ispm", "kernel_scale": -1.0}, "kernel_scale"),
     ],
 )
 def test_absurd_settings(kwargs, setting):

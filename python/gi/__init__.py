@@ -7,7 +7,13 @@
 >>> gi.save_image("cornell.png", result.radiance)
 """
 
-from gi._gi import (
+import os
+
+# Mesa's device-select Vulkan layer tries to reach a Wayland display and prints
+# "XDG_RUNTIME_DIR is invalid" on headless machines; gi chooses adapters itself, so skip it.
+os.environ.setdefault("NODEVICE_SELECT", "1")
+
+from gi._gi import (  # noqa: E402
     GiError,
     GpuError,
     RenderCancelled,
@@ -21,9 +27,9 @@ from gi._gi import (
     footprint_radii,
     methods,
 )
-from gi.io import read_image, save_image
-from gi.render import RenderResult, RenderStats, render
-from gi.scene import load_scene
+from gi.io import read_image, save_image  # noqa: E402
+from gi.render import RenderResult, RenderStats, render  # noqa: E402
+from gi.scene import load_scene  # noqa: E402
 
 __all__ = [
     "GiError",

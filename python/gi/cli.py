@@ -31,7 +31,7 @@ def _parser() -> argparse.ArgumentParser:
         action="append",
         help="output image, .exr (float) or .png (sRGB); repeat for several",
     )
-    r.add_argument("--method", default="path", help="rendering method (see `gi methods`)")
+    r.add_argument("--method", default="ispm", help="rendering method (see `gi methods`)")
     r.add_argument("--spp", type=int, default=64, help="samples per pixel (default 64)")
     r.add_argument("--size", type=_size, help="image size WIDTHxHEIGHT (default: the scene's)")
     r.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
@@ -45,6 +45,13 @@ def _parser() -> argparse.ArgumentParser:
     )
     r.add_argument("--smoothing", type=float, default=1.0, help="footprint scale (gather)")
     r.add_argument("--leaf-size", type=int, help="photon-map BVH leaf size (gather; default auto)")
+    r.add_argument("--kernel-scale", type=float, default=1.0, help="photon volume scale (ispm)")
+    r.add_argument("--subsample", type=int, default=1, help="splat at 1/k resolution (ispm)")
+    r.add_argument(
+        "--footprint-volumes",
+        action="store_true",
+        help="size ISPM photon volumes by photon-differential footprints",
+    )
     r.add_argument("--adapter", help='GPU adapter: "cpu" (lavapipe), "gpu" or part of a name')
     r.add_argument("--shadow-map-size", type=int, default=1024, help="shadow map texels per side")
     r.add_argument("--exposure", type=float, default=0.0, help="PNG exposure in stops")
@@ -86,6 +93,9 @@ def _render(args: argparse.Namespace) -> int:
         kernel=args.kernel,
         smoothing=args.smoothing,
         leaf_size=args.leaf_size,
+        kernel_scale=args.kernel_scale,
+        subsample=args.subsample,
+        footprint_volumes=args.footprint_volumes,
         adapter=args.adapter,
         shadow_map_size=args.shadow_map_size,
         progress=not args.quiet,

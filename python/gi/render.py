@@ -26,6 +26,9 @@ class RenderStats:
     camera_paths: int = 0
     light_paths: int = 0
     triangles: int = 0
+    photons_emitted: int = 0
+    photons_first_bounce: int = 0
+    photons_stored: int = 0
 
 
 @dataclass(frozen=True)
@@ -86,6 +89,9 @@ def render(
     kernel: str = "cone",
     smoothing: float = 1.0,
     leaf_size: int | None = None,
+    kernel_scale: float = 1.0,
+    subsample: int = 1,
+    footprint_volumes: bool = False,
     adapter: str | None = None,
     shadow_map_size: int = 1024,
     progress: bool | ProgressCallback = False,
@@ -101,7 +107,12 @@ def render(
     photon whose footprint (scaled by ``smoothing``, semi-axes at most ``max_radius``)
     contains the shading point, from a linear BVH with ``leaf_size`` footprints per leaf
     (default: the automatic T_auto).
-    GPU methods (``direct``) run on ``adapter`` ("cpu" for lavapipe, "gpu", or part of an
+    Method ``ispm`` (image-space photon mapping) rasterizes a bounce map per light with
+    ``photons`` first-bounce photons in all, traces later bounces on the CPU and splats one
+    photon volume per stored photon, ``kernel_scale`` times the default radius (or sized by
+    photon-differential footprints with ``footprint_volumes``), at 1/``subsample``
+    resolution with joint bilateral upsampling.
+    GPU methods (``direct``, ``ispm``) run on ``adapter`` ("cpu" for lavapipe, "gpu", or part of an
     adapter's name; default: the ``GI_ADAPTER`` environment variable, else a real GPU when
     present, else lavapipe) with ``shadow_map_size``² texels per shadow-map face.
     ``progress`` is a callable ``(stage, fraction) -> bool | None`` (return ``False`` to
@@ -131,6 +142,9 @@ def render(
         kernel=kernel,
         smoothing=smoothing,
         leaf_size=leaf_size,
+        kernel_scale=kernel_scale,
+        subsample=subsample,
+        footprint_volumes=footprint_volumes,
         adapter=adapter,
         shadow_map_size=shadow_map_size,
         progress=callback,
@@ -144,6 +158,9 @@ def render(
         camera_paths=s["camera_paths"],
         light_paths=s["light_paths"],
         triangles=s["triangles"],
+        photons_emitted=s["photons_emitted"],
+        photons_first_bounce=s["photons_first_bounce"],
+        photons_stored=s["photons_stored"],
     )
     return RenderResult(
         radiance=out["radiance"],

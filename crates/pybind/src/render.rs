@@ -55,7 +55,7 @@ fn image_array<'py>(py: Python<'py>, img: Image) -> PyResult<Bound<'py, PyAny>> 
 /// Renders `scene`; returns a dict of float32 arrays (radiance, albedo, normal, position,
 /// caustics: H×W×3; depth: H×W) and `stats`.
 #[pyfunction]
-#[pyo3(signature = (scene, method = "path", spp = 64, width = None, height = None, seed = 0, max_depth = 64, light_paths = None, photons = 200_000, k = 100, max_radius = None, kernel = "cone", smoothing = 1.0, leaf_size = None, adapter = None, shadow_map_size = 1024, progress = None))]
+#[pyo3(signature = (scene, method = "path", spp = 64, width = None, height = None, seed = 0, max_depth = 64, light_paths = None, photons = 200_000, k = 100, max_radius = None, kernel = "cone", smoothing = 1.0, leaf_size = None, kernel_scale = 1.0, subsample = 1, footprint_volumes = false, adapter = None, shadow_map_size = 1024, progress = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn render<'py>(
     py: Python<'py>,
@@ -73,6 +73,9 @@ pub fn render<'py>(
     kernel: &str,
     smoothing: f32,
     leaf_size: Option<u32>,
+    kernel_scale: f32,
+    subsample: u32,
+    footprint_volumes: bool,
     adapter: Option<String>,
     shadow_map_size: u32,
     progress: Option<Py<PyAny>>,
@@ -93,8 +96,13 @@ pub fn render<'py>(
         kernel,
         smoothing,
         leaf_size,
+        kernel_scale,
+        subsample,
+        footprint_volumes,
         adapter,
         shadow_map_size,
+        // ISPM settings (kernel_scale, subsample) keep their defaults until exposed.
+        ..Default::default()
     };
     let reporter = PyProgress {
         callback: progress,
@@ -128,6 +136,9 @@ pub fn render<'py>(
     stats.set_item("camera_paths", s.camera_paths)?;
     stats.set_item("light_paths", s.light_paths)?;
     stats.set_item("triangles", s.triangles)?;
+    stats.set_item("photons_emitted", s.photons_emitted)?;
+    stats.set_item("photons_first_bounce", s.photons_first_bounce)?;
+    stats.set_item("photons_stored", s.photons_stored)?;
     d.set_item("stats", stats)?;
     Ok(d)
 }

@@ -29,6 +29,8 @@ pub struct GpuContext {
     pub timestamps: bool,
     /// The raster passes, compiled on first use (pipelines once per device).
     pub(crate) passes: OnceLock<crate::raster::Passes>,
+    /// The ISPM passes, compiled on first use of method `ispm`.
+    pub(crate) ispm_passes: OnceLock<crate::raster::ispm::IspmPasses>,
 }
 
 /// How the user chose the adapter.
@@ -145,6 +147,7 @@ fn create_context(choice: &Choice) -> Result<GpuContext> {
         info,
         timestamps,
         passes: OnceLock::new(),
+        ispm_passes: OnceLock::new(),
     })
 }
 

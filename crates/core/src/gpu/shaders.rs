@@ -9,6 +9,9 @@ pub const BSDF: &str = include_str!("shaders/common/bsdf.wgsl");
 pub const GBUFFER: &str = include_str!("shaders/gbuffer.wgsl");
 pub const SHADOW: &str = include_str!("shaders/shadow.wgsl");
 pub const DIRECT: &str = include_str!("shaders/direct.wgsl");
+pub const BOUNCE: &str = include_str!("shaders/bounce.wgsl");
+pub const VOLUME: &str = include_str!("shaders/volume.wgsl");
+pub const UPSAMPLE: &str = include_str!("shaders/upsample.wgsl");
 
 /// Creates a shader module from `parts`, concatenated in order (common code first).
 pub fn module(device: &wgpu::Device, label: &str, parts: &[&str]) -> wgpu::ShaderModule {

@@ -40,7 +40,8 @@ pub struct Photon {
     pub _pad0: u32,
     /// Unit (shading) normal of the surface hit, on the side the photon arrived from.
     pub normal: [f32; 3],
-    pub _pad1: u32,
+    /// Footprint radius (m) from photon differentials, √|a₁ × a₂|; 0 when traced without.
+    pub footprint_radius: f32,
 }
 
 impl Photon {

@@ -183,7 +183,11 @@ fn follow(
             if let Some(ds) = &s.differentials {
                 let diffuse = kind == PathKind::Diffuse;
                 let axes = diff.footprint_axes(ds.spacing, ds.smoothing, diffuse, ds.r_max);
-                out.footprints.push(FootprintAxes { axes, kind });
+                let fa = FootprintAxes { axes, kind };
+                if let Some(p) = out.photons.last_mut() {
+                    p.footprint_radius = fa.radius();
+                }
+                out.footprints.push(fa);
             }
         }
         if bounce >= s.max_bounces {

@@ -3,6 +3,7 @@
 
 pub mod direct;
 pub mod gbuffer;
+pub mod ispm;
 pub mod shadow;
 mod timer;
 

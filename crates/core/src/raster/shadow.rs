@@ -23,7 +23,7 @@ const DEPTH_BIAS: wgpu::DepthBiasState = wgpu::DepthBiasState {
 const MARGIN_TEXELS: f32 = 8.0;
 
 /// Cube faces in layer order: forward and up vectors.
-const CUBE_FACES: [(Vec3, Vec3); 6] = [
+pub(crate) const CUBE_FACES: [(Vec3, Vec3); 6] = [
     (Vec3::X, Vec3::Y),
     (Vec3::NEG_X, Vec3::Y),
     (Vec3::Y, Vec3::Z),
@@ -88,7 +88,7 @@ impl ShadowViews {
     }
 }
 
-fn perspective(tan_half: f32, near: f32, far: f32) -> Mat4 {
+pub(crate) fn perspective(tan_half: f32, near: f32, far: f32) -> Mat4 {
     super::perspective(2.0 * tan_half.atan(), 1.0, near, far)
 }
 
@@ -100,7 +100,7 @@ pub fn bounds(scene: &Scene) -> (Vec3, Vec3) {
     )
 }
 
-fn corners(lo: Vec3, hi: Vec3) -> [Vec3; 8] {
+pub(crate) fn corners(lo: Vec3, hi: Vec3) -> [Vec3; 8] {
     std::array::from_fn(|i| {
         Vec3::new(
             if i & 1 == 0 { lo.x } else { hi.x },

@@ -27,11 +27,21 @@ pub enum Method {
     /// GPU rasterization of direct light only: eye G-buffer, shadow maps (PCF) and deferred
     /// uber-BSDF shading, supersampled `spp` times per pixel.
     Direct,
+    /// Image Space Photon Mapping (McGuire & Luebke 2009): GPU direct light as `direct`, plus
+    /// indirect light from a GPU bounce map (the first scatter of `photons` light rays),
+    /// CPU photon tracing of the later bounces, and photon volumes splatted on the GPU
+    /// (optionally at 1/`subsample` resolution with joint bilateral upsampling).
+    Ispm,
 }
 
 impl Method {
-    pub const ALL: &'static [Method] =
-        &[Method::Path, Method::Photon, Method::Gather, Method::Direct];
+    pub const ALL: &'static [Method] = &[
+        Method::Path,
+        Method::Photon,
+        Method::Gather,
+        Method::Direct,
+        Method::Ispm,
+    ];
 
     pub fn name(self) -> &'static str {
         match self {
@@ -39,6 +49,7 @@ impl Method {
             Method::Photon => "photon",
             Method::Gather => "gather",
             Method::Direct => "direct",
+            Method::Ispm => "ispm",
         }
     }
 }
@@ -64,16 +75,19 @@ impl FromStr for Method {
 #[derive(Clone, Debug)]
 pub struct Settings {
     pub method: Method,
-    /// Camera samples per pixel (method `path`); sub-pixel raster samples (method `direct`).
+    /// Camera samples per pixel (method `path`); sub-pixel raster samples of the direct light
+    /// (methods `direct` and `ispm`; the ISPM indirect light is shaded at pixel centres).
     pub spp: u32,
     pub width: Option<u32>,
     pub height: Option<u32>,
     pub seed: u64,
-    /// Maximum number of scattering events on a path (1 = direct light only).
+    /// Maximum number of scattering events on a path (1 = direct light only); for method
+    /// `ispm` photons are traced to bounce `max_depth − 1`.
     pub max_depth: u32,
     /// Light paths for caustics (method `path`); `None` = one per camera sample.
     pub light_paths: Option<u64>,
-    /// Photons emitted from the lights (method `photon`).
+    /// Photons emitted from the lights (method `photon`); for method `ispm` the bounce-map
+    /// texels of all lights together (the first-bounce photon budget, split by power).
     pub photons: u64,
     /// Photons per radiance estimate (method `photon`).
     pub k: u32,
@@ -91,6 +105,15 @@ pub struct Settings {
     pub adapter: Option<String>,
     /// Shadow-map resolution in texels per side (GPU methods).
     pub shadow_map_size: u32,
+    /// Scale of the photon-volume radii (method `ispm`); 1 = a photon of path density 1
+    /// gets √(scene area / photons) and each diffuse bounce widens it about 4×.
+    pub kernel_scale: f32,
+    /// Indirect light is splatted at 1/`subsample` resolution and joint-bilaterally
+    /// upsampled (method `ispm`); 1 = full resolution. 1..=8.
+    pub subsample: u32,
+    /// Size ISPM photon volumes by photon-differential footprints (as method `gather`,
+    /// with `smoothing` and `max_radius`) instead of the path-density heuristic.
+    pub footprint_volumes: bool,
 }
 
 impl Default for Settings {
@@ -111,6 +134,9 @@ impl Default for Settings {
             leaf_size: None,
             adapter: None,
             shadow_map_size: 1024,
+            kernel_scale: 1.0,
+            subsample: 1,
+            footprint_volumes: false,
         }
     }
 }
@@ -175,6 +201,15 @@ impl Settings {
         if !(16..=16384).contains(&self.shadow_map_size) {
             return Err(Error::setting("shadow_map_size", "must be in 16..=16384"));
         }
+        if !(self.kernel_scale.is_finite() && self.kernel_scale > 0.0 && self.kernel_scale <= 1e3) {
+            return Err(Error::setting(
+                "kernel_scale",
+                "must be a positive finite scale up to 1000",
+            ));
+        }
+        if !(1..=8).contains(&self.subsample) {
+            return Err(Error::setting("subsample", "must be in 1..=8"));
+        }
         Ok(())
     }
 }
@@ -189,6 +224,12 @@ pub struct RenderStats {
     pub camera_paths: u64,
     pub light_paths: u64,
     pub triangles: u64,
+    /// Method `ispm`: bounce-map texels that hit the scene (photons emitted from the lights).
+    pub photons_emitted: u64,
+    /// Method `ispm`: photons that survived the first (bounce-map) scatter.
+    pub photons_first_bounce: u64,
+    /// Method `ispm`: photons stored (and splatted as volumes), bounce 1 and later.
+    pub photons_stored: u64,
 }
 
 /// A rendered frame: radiance and auxiliary images, all `width × height`.
@@ -238,5 +279,6 @@ pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Re
         Method::Photon => photon_map::render(&scene, settings, progress),
         Method::Gather => gather::render(&scene, settings, progress),
         Method::Direct => crate::raster::render_direct(&scene, settings, progress),
+        Method::Ispm => crate::raster::ispm::render(&scene, settings, progress),
     }
 }

@@ -1,0 +1,110 @@
+//! Frame time of method `ispm` split by stage (wall-clock seconds per stage as recorded in
+//! `RenderStats::stages`), as a markdown table.
+//!
+//! `cargo run -p gi-core --profile test --example ispm_bench [-- --runs N]`
+//!
+//! Built-in `cornell` and `cornell-glass` at 640×480, one direct sample per pixel, shadow
+//! maps 1024², several photon budgets and subsample 1 and 2; median of N frames after one
+//! warm-up frame (pipelines compiled).
+
+use gi_core::render::Silent;
+use gi_core::{render, scene::builtin, Method, Settings};
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().collect();
+    let runs: usize = match args.iter().position(|a| a == "--runs") {
+        Some(i) => args.get(i + 1).ok_or("--runs needs a value")?.parse()?,
+        None => 3,
+    };
+    println!(
+        "{}\n",
+        gi_core::gpu::adapter_report(None)?
+            .lines()
+            .take(4)
+            .collect::<Vec<_>>()
+            .join("; ")
+    );
+    // Stage groups: (column, stage names summed).
+    let groups: [(&str, &[&str]); 8] = [
+        (
+            "direct light",
+            &[
+                "upload",
+                "shadow maps",
+                "gbuffer",
+                "direct light",
+                "readback",
+            ],
+        ),
+        ("bounce maps", &["bounce maps"]),
+        ("bounce readback", &["bounce readback"]),
+        ("bounce rays", &["bounce rays"]),
+        ("cpu trace", &["cpu trace"]),
+        ("photon volumes", &["photon volumes"]),
+        ("upsample", &["upsample"]),
+        ("indirect readback", &["readback indirect"]),
+    ];
+    println!(
+        "| scene | photons | subsample | stored | {} | frame |",
+        groups.map(|g| format!("{} (ms)", g.0)).join(" | ")
+    );
+    println!("|---|---|---|---|{}---|", "---|".repeat(groups.len()));
+    for name in ["cornell", "cornell-glass"] {
+        let scene = builtin::load(name)?;
+        for photons in [50_000u64, 100_000, 200_000] {
+            for subsample in [1u32, 2] {
+                let settings = Settings {
+                    method: Method::Ispm,
+                    spp: 1,
+                    width: Some(640),
+                    height: Some(480),
+                    photons,
+                    subsample,
+                    ..Default::default()
+                };
+                render(&scene, &settings, &Silent)?;
+                let mut samples: Vec<Vec<f64>> = vec![Vec::new(); groups.len() + 1];
+                let mut present = vec![false; groups.len() + 1];
+                present[groups.len()] = true;
+                let mut stored = 0;
+                for _ in 0..runs {
+                    let out = render(&scene, &settings, &Silent)?;
+                    stored = out.stats.photons_stored;
+                    for (i, (_, names)) in groups.iter().enumerate() {
+                        present[i] |= out
+                            .stats
+                            .stages
+                            .iter()
+                            .any(|(n, _)| names.contains(&n.as_str()));
+                        let t: f64 = out
+                            .stats
+                            .stages
+                            .iter()
+                            .filter(|(n, _)| names.contains(&n.as_str()))
+                            .map(|(_, t)| t)
+                            .sum();
+                        samples[i].push(t * 1e3);
+                    }
+                    samples[groups.len()].push(out.stats.total_seconds * 1e3);
+                }
+                let medians: Vec<String> = samples
+                    .iter_mut()
+                    .zip(&present)
+                    .map(|(v, &p)| {
+                        v.sort_by(f64::total_cmp);
+                        if p {
+                            format!("{:.1}", v[v.len() / 2])
+                        } else {
+                            "–".to_string()
+                        }
+                    })
+                    .collect();
+                println!(
+                    "| {name} | {photons} | {subsample} | {stored} | {} |",
+                    medians.join(" | ")
+                );
+            }
+        }
+    }
+    Ok(())
+}

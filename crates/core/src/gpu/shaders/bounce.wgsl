@@ -1,0 +1,317 @@
+// ISPM bounce map (section 4.2): rasterizes the scene from a light's view (one perspective
+// view per spot light, six exact 90° cube faces per point light). Every covered texel is one
+// photon leaving the light through that texel: its power is I(ω)·dω with the texel's solid
+// angle dω = A_texel·cos³θ on a unit-distance image plane (A_texel already carries the
+// per-light round-off correction, so all texels of a light sum to its power). The hit it
+// lands on is direct light (not stored). Its first scatter is taken here: the uber BSDF is
+// importance-sampled (a port of `Material::sample`, with a hash-seeded PCG generator per
+// frame seed, layer and texel), then Russian roulette as in `photon::trace` (survival
+// q = min(1, max(Φ·w)/max(Φ)), survivors carry Φ·w/q), and the path density factor.
+
+struct BounceView {
+    view_proj: mat4x4<f32>,
+    light_position: vec3<f32>,
+    // Texel area on the unit-distance image plane times the round-off correction.
+    texel_area: f32,
+    // The view's optical axis (cos θ is measured from it).
+    forward: vec3<f32>,
+    // 0 = point, 1 = spot.
+    kind: u32,
+    intensity: vec3<f32>,
+    cos_inner: f32,
+    spot_direction: vec3<f32>,
+    cos_outer: f32,
+    seed: u32,
+    layer: u32,
+}
+
+@group(0) @binding(0) var<uniform> view: BounceView;
+
+struct VertexIn {
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) geometric_normal: vec3<f32>,
+    @location(3) material: u32,
+}
+
+struct VertexOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) world: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) @interpolate(flat) geometric_normal: vec3<f32>,
+    @location(3) @interpolate(flat) material: u32,
+}
+
+@vertex
+fn vs_main(v: VertexIn) -> VertexOut {
+    var o: VertexOut;
+    o.clip = view.view_proj * vec4<f32>(v.position, 1.0);
+    o.world = v.position;
+    o.normal = v.normal;
+    o.geometric_normal = v.geometric_normal;
+    o.material = v.material;
+    return o;
+}
+
+struct BounceOut {
+    // Origin of the scattered photon (offset off the surface), path density (0: absorbed).
+    @location(0) origin: vec4<f32>,
+    // Unit direction of the scattered photon; w = 1 if it survived.
+    @location(1) direction: vec4<f32>,
+    // Power (W) of the scattered photon.
+    @location(2) power: vec4<f32>,
+    // Photon power (W) arriving at the hit; w = 1 marks a covered texel.
+    @location(3) incident: vec4<f32>,
+    // Arriving power times the scatter probability (the expected scattered power).
+    @location(4) expected: vec4<f32>,
+}
+
+fn falloff(cos_t: f32) -> f32 {
+    if cos_t >= view.cos_inner {
+        return 1.0;
+    }
+    if cos_t <= view.cos_outer {
+        return 0.0;
+    }
+    let t = (cos_t - view.cos_outer) / (view.cos_inner - view.cos_outer);
+    return t * t * (3.0 - 2.0 * t);
+}
+
+@fragment
+fn fs_main(in: VertexOut) -> BounceOut {
+    let to_light = view.light_position - in.world;
+    let wo = normalize(to_light);
+    // Normals as in the eye G-buffer, oriented towards the light.
+    var ng = in.geometric_normal;
+    var ns = in.normal;
+    let len = length(ns);
+    if !(len > 0.0) {
+        ns = ng;
+    } else {
+        ns = ns / len;
+        if dot(ns, ng) < 0.0 {
+            ns = -ns;
+        }
+    }
+    if dot(wo, ns) * dot(wo, ng) <= 0.0 {
+        ns = ng;
+    }
+    if dot(wo, ng) < 0.0 {
+        ng = -ng;
+        ns = -ns;
+    }
+    let d = -wo;
+    let c = max(dot(d, view.forward), 0.0);
+    var intensity = view.intensity;
+    if view.kind == 1u {
+        intensity *= falloff(dot(d, view.spot_direction));
+    }
+    let phi = intensity * view.texel_area * c * c * c;
+    let m = materials[in.material];
+    var o: BounceOut;
+    o.incident = vec4<f32>(phi, 1.0);
+    o.expected = vec4<f32>(phi * scatter_probability(m, dot(wo, ns)), 1.0);
+    o.origin = vec4<f32>(0.0);
+    o.direction = vec4<f32>(0.0);
+    o.power = vec4<f32>(0.0);
+    if max3(phi) <= 0.0 {
+        return o;
+    }
+    let texel = vec2<u32>(in.clip.xy);
+    rng_state = hash_u32(view.seed ^ hash_u32(view.layer ^ hash_u32(texel.x ^ hash_u32(texel.y))));
+    // Shading frame (Duff et al.), +z = ns.
+    let sz = select(-1.0, 1.0, ns.z >= 0.0);
+    let a = -1.0 / (sz + ns.z);
+    let bb = ns.x * ns.y * a;
+    let t = vec3<f32>(1.0 + sz * ns.x * ns.x * a, sz * bb, -sz * ns.x);
+    let b = vec3<f32>(bb, sz + ns.y * ns.y * a, -ns.y);
+    let wo_l = vec3<f32>(dot(wo, t), dot(wo, b), dot(wo, ns));
+    let bs = sample_bsdf(m, wo_l);
+    if !bs.ok {
+        return o;
+    }
+    let wi = normalize(t * bs.wi.x + b * bs.wi.y + ns * bs.wi.z);
+    // Reflections stay on the arrival side, refractions cross.
+    let same_side = dot(wi, ng) * dot(wo, ng) > 0.0;
+    if same_side == (bs.lobe == 4u) {
+        return o;
+    }
+    let scattered = phi * bs.weight;
+    let q = min(max3(scattered) / max3(phi), 1.0);
+    if !(q > 0.0) || rng_next() >= q {
+        return o;
+    }
+    let eps = 1e-4 * (1.0 + max3(abs(in.world)));
+    let origin = in.world + ng * eps * sign(dot(wi, ng));
+    o.origin = vec4<f32>(origin, path_density_factor(m, bs.lobe));
+    o.direction = vec4<f32>(wi, 1.0);
+    o.power = vec4<f32>(scattered / q, 0.0);
+    return o;
+}
+
+// ---- First scatter (port of `bsdf::Material::sample` and `photon::trace::follow`) ----
+
+@group(0) @binding(1) var<storage, read> materials: array<Material>;
+
+var<private> rng_state: u32;
+
+fn hash_u32(x_in: u32) -> u32 {
+    var x = x_in;
+    x ^= x >> 16u;
+    x *= 0x7feb352du;
+    x ^= x >> 15u;
+    x *= 0x846ca68bu;
+    x ^= x >> 16u;
+    return x;
+}
+
+// PCG-RXS-M-XS 32-bit step; 24-bit uniform floats in [0, 1).
+fn rng_next() -> f32 {
+    rng_state = rng_state * 747796405u + 2891336453u;
+    var w = ((rng_state >> ((rng_state >> 28u) + 4u)) ^ rng_state) * 277803737u;
+    w = (w >> 22u) ^ w;
+    return f32(w >> 8u) * (1.0 / 16777216.0);
+}
+
+fn avg3(v: vec3<f32>) -> f32 {
+    return (v.x + v.y + v.z) / 3.0;
+}
+
+// (specular, diffuse, glass) choice probabilities for viewing cosine `cos_o` ≥ 0.
+fn lobe_probabilities(m: Material, cos_o: f32) -> vec3<f32> {
+    let f = fresnel_spec(m, cos_o);
+    let w = vec3<f32>(
+        avg3(f),
+        avg3((vec3<f32>(1.0) - f) * m.diffuse),
+        avg3((vec3<f32>(1.0) - f) * m.transmission)
+    );
+    let total = w.x + w.y + w.z;
+    if total <= 0.0 {
+        return vec3<f32>(0.0);
+    }
+    return w / total;
+}
+
+// Local frame (+z = normal): density of the non-delta sample `wi`.
+fn bsdf_pdf(m: Material, wo_in: vec3<f32>, wi_in: vec3<f32>) -> f32 {
+    if wo_in.z * wi_in.z <= 0.0 {
+        return 0.0;
+    }
+    let s = sign(wo_in.z);
+    let wo = wo_in * s;
+    let wi = wi_in * s;
+    let p = lobe_probabilities(m, wo.z);
+    var pdf = p.y * wi.z / PI;
+    if m.roughness >= MIRROR_ROUGHNESS && p.x > 0.0 {
+        let h = normalize(wo + wi);
+        let oh = abs(dot(wo, h));
+        if oh > 0.0 {
+            let alpha = m.roughness * m.roughness;
+            pdf += p.x * ggx_d(h.z, alpha) * h.z / (4.0 * oh);
+        }
+    }
+    return pdf;
+}
+
+struct BsdfSample {
+    wi: vec3<f32>,
+    weight: vec3<f32>,
+    // 0 diffuse, 1 glossy, 2 mirror, 3 glass reflection, 4 glass refraction.
+    lobe: u32,
+    ok: bool,
+}
+
+// `Material::sample` in the local frame.
+fn sample_bsdf(m: Material, wo: vec3<f32>) -> BsdfSample {
+    var s: BsdfSample;
+    s.ok = false;
+    let flip = wo.z < 0.0;
+    let sgn = select(1.0, -1.0, flip);
+    let wo_up = wo * sgn;
+    let p = lobe_probabilities(m, wo_up.z);
+    let u = rng_next();
+    let u2 = vec2<f32>(rng_next(), rng_next());
+    let n = vec3<f32>(0.0, 0.0, 1.0);
+    if u < p.x + p.y {
+        if u < p.x && m.roughness < MIRROR_ROUGHNESS {
+            s.wi = vec3<f32>(-wo.x, -wo.y, wo.z);
+            s.weight = fresnel_spec(m, wo_up.z) / p.x;
+            s.lobe = 2u;
+            s.ok = true;
+            return s;
+        }
+        var wi_up: vec3<f32>;
+        if u < p.x {
+            let alpha = m.roughness * m.roughness;
+            let a2 = alpha * alpha;
+            let cos2 = (1.0 - u2.x) / (1.0 + (a2 - 1.0) * u2.x);
+            let cos_t = sqrt(max(cos2, 0.0));
+            let sin_t = sqrt(max(1.0 - cos2, 0.0));
+            let phi = 2.0 * PI * u2.y;
+            let h = vec3<f32>(sin_t * cos(phi), sin_t * sin(phi), cos_t);
+            wi_up = 2.0 * dot(wo_up, h) * h - wo_up;
+            s.lobe = 1u;
+        } else {
+            let r = sqrt(u2.x);
+            let phi = 2.0 * PI * u2.y;
+            wi_up = vec3<f32>(r * cos(phi), r * sin(phi), sqrt(max(1.0 - u2.x, 0.0)));
+            s.lobe = 0u;
+        }
+        if wi_up.z <= 0.0 {
+            return s;
+        }
+        let wi = wi_up * sgn;
+        let pdf = bsdf_pdf(m, wo, wi);
+        if pdf <= 0.0 {
+            return s;
+        }
+        s.wi = wi;
+        s.weight = bsdf_eval(m, n, wo, wi) * wi_up.z / pdf;
+        s.ok = true;
+        return s;
+    }
+    if p.z <= 0.0 {
+        return s;
+    }
+    // Smooth glass: the geometric side decides whether we enter or leave.
+    s.weight = m.transmission * (vec3<f32>(1.0) - fresnel_spec(m, wo_up.z)) / p.z;
+    let eta = select(m.ior, 1.0 / m.ior, flip);
+    let cos_i = clamp(wo_up.z, 0.0, 1.0);
+    let sin2_t = (1.0 - cos_i * cos_i) / (eta * eta);
+    var fr = 1.0;
+    var cos_t = 0.0;
+    if sin2_t < 1.0 {
+        cos_t = sqrt(1.0 - sin2_t);
+        let rs = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+        let rp = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+        fr = 0.5 * (rs * rs + rp * rp);
+    }
+    if u2.x < fr {
+        s.wi = vec3<f32>(-wo.x, -wo.y, wo.z);
+        s.lobe = 3u;
+    } else {
+        let wt_up = -wo_up / eta + (wo_up.z / eta - cos_t) * n;
+        s.wi = normalize(wt_up * sgn);
+        s.lobe = 4u;
+    }
+    s.ok = true;
+    return s;
+}
+
+// `photon::path_density_factor`.
+fn path_density_factor(m: Material, lobe: u32) -> f32 {
+    switch lobe {
+        case 0u: {
+            return avg3(m.diffuse) / 1000.0;
+        }
+        case 1u: {
+            return avg3(m.specular) / 10.0;
+        }
+        case 2u: {
+            return avg3(m.specular);
+        }
+        default: {
+            return avg3(m.transmission);
+        }
+    }
+}

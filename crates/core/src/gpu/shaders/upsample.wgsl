@@ -1,0 +1,70 @@
+// ISPM joint bilateral upsampling (section 5.2): the indirect light splatted at 1/k
+// resolution is brought to full resolution by weighting the 2×2 nearest low-resolution
+// texels with bilinear weights times a normal term (cos^32) and a plane-distance term, both
+// measured between this pixel's G-buffer sample and the one each low-res texel shaded.
+
+struct UpsampleParams {
+    eye: vec3<f32>,
+    subsample: u32,
+}
+
+@group(0) @binding(0) var<uniform> params: UpsampleParams;
+@group(0) @binding(1) var g_position: texture_2d<f32>;
+@group(0) @binding(2) var g_normals: texture_2d<f32>;
+@group(0) @binding(3) var low: texture_2d<f32>;
+
+@vertex
+fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
+    let uv = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
+    return vec4<f32>(uv * 2.0 - 1.0, 0.0, 1.0);
+}
+
+@fragment
+fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
+    let px = vec2<i32>(frag.xy);
+    let pos = textureLoad(g_position, px, 0);
+    if pos.w == 0.0 {
+        return vec4<f32>(0.0);
+    }
+    let n = oct_decode(textureLoad(g_normals, px, 0).xy);
+    let k = i32(params.subsample);
+    let dims = vec2<i32>(textureDimensions(g_position));
+    let ldims = vec2<i32>(textureDimensions(low));
+    // Low-res texel i shaded full-res pixel i·k + k/2.
+    let c = (frag.xy - 0.5 - f32(k / 2)) / f32(k);
+    let base = vec2<i32>(floor(c));
+    let fr = c - floor(c);
+    // Plane-distance tolerance: 1% of the distance to the eye.
+    let tol = 0.01 * length(params.eye - pos.xyz) + 1e-6;
+    var sum = vec3<f32>(0.0);
+    var wsum = 0.0;
+    var nearest = vec3<f32>(0.0);
+    var best = -1.0;
+    for (var j = 0; j < 2; j++) {
+        for (var i = 0; i < 2; i++) {
+            let l = clamp(base + vec2<i32>(i, j), vec2<i32>(0), ldims - 1);
+            let q = min(l * k + k / 2, dims - 1);
+            let qp = textureLoad(g_position, q, 0);
+            if qp.w == 0.0 {
+                continue;
+            }
+            let qn = oct_decode(textureLoad(g_normals, q, 0).xy);
+            let bx = select(1.0 - fr.x, fr.x, i == 1);
+            let by = select(1.0 - fr.y, fr.y, j == 1);
+            let dz = abs(dot(qp.xyz - pos.xyz, n)) / tol;
+            let wn = pow(max(dot(n, qn), 0.0), 32.0);
+            let w = max(bx * by, 1e-3) * wn / (1.0 + dz * dz);
+            let v = textureLoad(low, l, 0).xyz;
+            sum += w * v;
+            wsum += w;
+            if w > best {
+                best = w;
+                nearest = v;
+            }
+        }
+    }
+    if wsum > 1e-6 {
+        return vec4<f32>(sum / wsum, 1.0);
+    }
+    return vec4<f32>(nearest, 1.0);
+}
