@@ -101,8 +101,6 @@ pub fn render<'py>(
         footprint_volumes,
         adapter,
         shadow_map_size,
-        // ISPM settings (kernel_scale, subsample) keep their defaults until exposed.
-        ..Default::default()
     };
     let reporter = PyProgress {
         callback: progress,
