@@ -160,3 +160,9 @@ def test_ispm_method_end_to_end():
     assert {"bounce maps", "cpu trace", "photon volumes", "upsample"} <= {n for n, _ in s.stages}
     # The Rust tests check accuracy per region; here the image mean within 5%.
     assert r.radiance.mean() == pytest.approx(ref.radiance.mean(), rel=0.05)
+    # AOVs: direct + indirect = radiance; photon hits are counts.
+    direct, indirect = r.aov("direct"), r.aov("indirect")
+    assert np.allclose(direct + indirect, r.radiance, atol=1e-5)
+    assert indirect.mean() > 0 and r.aov("photons").sum() > 0
+    with pytest.raises(KeyError, match="available"):
+        r.aov("nope")

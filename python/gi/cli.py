@@ -59,8 +59,8 @@ def _parser() -> argparse.ArgumentParser:
         "--aov",
         action="append",
         default=[],
-        choices=["albedo", "normal", "position", "depth", "caustics"],
-        help="also write this auxiliary image next to the output (repeatable)",
+        help="also write this image next to the output (repeatable): albedo, normal, position,"
+        " depth, caustics; method ispm adds direct, indirect, photons",
     )
     r.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
     sub.add_parser("scenes", help="list the built-in scenes")
@@ -100,6 +100,9 @@ def _render(args: argparse.Namespace) -> int:
         shadow_map_size=args.shadow_map_size,
         progress=not args.quiet,
     )
+    missing = [name for name in args.aov if name not in result.aov_names()]
+    if missing:
+        raise ValueError(f"no image {missing[0]!r} (available: {', '.join(result.aov_names())})")
     written = []
     for out in map(Path, args.output):
         gi.save_image(out, result.radiance, exposure=args.exposure)

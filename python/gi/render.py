@@ -48,12 +48,22 @@ class RenderResult:
     depth: np.ndarray
     caustics: np.ndarray
     stats: RenderStats
+    extra: dict[str, np.ndarray] = field(default_factory=dict)
+
+    BASE = ("radiance", "albedo", "normal", "position", "depth", "caustics")
+
+    def aov_names(self) -> list[str]:
+        """Names :meth:`aov` accepts: the base images, then the method's own (``extra``;
+        method ``ispm``: direct, indirect, photons)."""
+        return [*self.BASE, *self.extra]
 
     def aov(self, name: str) -> np.ndarray:
-        """An image by name: radiance, albedo, normal, position, depth or caustics."""
-        if name not in ("radiance", "albedo", "normal", "position", "depth", "caustics"):
-            raise KeyError(f"unknown image {name!r}")
-        return getattr(self, name)  # type: ignore[no-any-return]
+        """An image by name (see :meth:`aov_names`)."""
+        if name in self.BASE:
+            return getattr(self, name)  # type: ignore[no-any-return]
+        if name in self.extra:
+            return self.extra[name]
+        raise KeyError(f"no image {name!r} (available: {', '.join(self.aov_names())})")
 
 
 class ProgressBar:
@@ -170,4 +180,5 @@ def render(
         depth=out["depth"],
         caustics=out["caustics"],
         stats=stats,
+        extra=dict(out["extra"]),
     )

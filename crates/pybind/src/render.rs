@@ -125,6 +125,11 @@ pub fn render<'py>(
     d.set_item("position", image_array(py, out.position)?)?;
     d.set_item("caustics", image_array(py, out.caustics)?)?;
     d.set_item("depth", out.depth.into_pyarray(py).reshape([h, w])?)?;
+    let extra = PyDict::new(py);
+    for (name, img) in out.aovs {
+        extra.set_item(name, image_array(py, img)?)?;
+    }
+    d.set_item("extra", extra)?;
     let stats = PyDict::new(py);
     let s = &out.stats;
     stats.set_item("method", method.name())?;

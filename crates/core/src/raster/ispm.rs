@@ -21,6 +21,7 @@
 use super::{buffer_init, camera_view, gbuffer, vertices, view_binding, Geometry};
 use crate::error::{Error, Result};
 use crate::gpu::{self, shaders, GpuContext};
+use crate::image::Image;
 use crate::photon::{continue_paths, Photon, PhotonRay, PhotonTraceSettings};
 use crate::render::{Progress, RenderOutput, Settings};
 use crate::scene::{Light, Scene};
@@ -1095,11 +1096,41 @@ fn indirect(
     };
     let t = Instant::now();
     let indirect = super::read_texture(ctx, &result)?;
-    for (px, v) in out.radiance.pixels.iter_mut().zip(&indirect) {
-        *px += v.truncate();
+    let mut indirect_image = Image::new(w, h);
+    for (dst, v) in indirect_image.pixels.iter_mut().zip(&indirect) {
+        *dst = v.truncate();
     }
+    out.aovs.push(("direct".into(), out.radiance.clone()));
+    for (px, v) in out.radiance.pixels.iter_mut().zip(&indirect_image.pixels) {
+        *px += *v;
+    }
+    out.aovs.push(("indirect".into(), indirect_image));
+    out.aovs
+        .push(("photons".into(), photon_hits(scene, out, &photons)));
     stage(out, "readback indirect", t);
     Ok(())
+}
+
+/// Where the stored photons land, as seen from the camera: per pixel, the number of visible
+/// photons of bounce 1 (green) and of later bounces (red).
+fn photon_hits(scene: &Scene, out: &RenderOutput, photons: &[Photon]) -> Image {
+    let cam = &scene.camera;
+    let mut img = Image::new(cam.width, cam.height);
+    for p in photons {
+        let pos = p.position();
+        let Some((x, y, _)) = cam.project(pos) else {
+            continue;
+        };
+        let i = y as usize * cam.width as usize + x as usize;
+        // Visible if the surface seen through the pixel is where the photon is.
+        let seen = out.position.pixels[i];
+        let dist = (pos - cam.position).length();
+        if (seen - pos).length() > 0.02 * dist {
+            continue;
+        }
+        img.pixels[i] += if p.bounce <= 1 { Vec3::Y } else { Vec3::X };
+    }
+    img
 }
 
 #[cfg(test)]

@@ -543,6 +543,7 @@ fn frame(
         depth: vec![0.0; (w * h) as usize],
         caustics: Image::new(w, h),
         stats,
+        aovs: Vec::new(),
     };
     for i in 0..(w * h) as usize {
         let r = radiance[i];

@@ -80,6 +80,7 @@ pub fn render_image<S: Default + Send>(
         depth: vec![0.0; (w * h) as usize],
         caustics: Image::new(w, h),
         stats,
+        aovs: Vec::new(),
     };
     for (i, (l, fh)) in rows.into_iter().flatten().enumerate() {
         out.radiance.pixels[i] = l;

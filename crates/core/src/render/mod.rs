@@ -247,6 +247,9 @@ pub struct RenderOutput {
     pub depth: Vec<f32>,
     /// The light-traced (caustic) part of `radiance`, already included in it.
     pub caustics: Image,
+    /// Further method-specific images by name (method `ispm`: "direct", "indirect" and
+    /// "photons", a visualization of where stored photons land).
+    pub aovs: Vec<(String, Image)>,
     pub stats: RenderStats,
 }
 

@@ -145,6 +145,7 @@ pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Re
         depth: vec![0.0; (w * h) as usize],
         caustics,
         stats,
+        aovs: Vec::new(),
     };
     for (y, row) in rows.into_iter().enumerate() {
         for (x, (l, fh)) in row.into_iter().enumerate() {
