@@ -179,7 +179,7 @@ fn main() {
 
     // 3. Leaf-size sweep of the gather estimate.
     println!("\n## Leaf-size sweep (gather estimate time)\n");
-    println!("400k photons, {SWEEP_SIZE}×{SWEEP_SIZE}, 4 spp; the estimate stage only (BVH traversal, footprint tests");
+    println!("400k photons, {SWEEP_SIZE}×{SWEEP_SIZE}, 8 spp, best of 7; the estimate stage only (BVH traversal, footprint tests");
     println!("and next-event estimation, which is the same for every T).\n");
     println!("| leaf size T | estimate (s) | relative to best |");
     println!("|---|---|---|");
@@ -196,7 +196,7 @@ fn main() {
     ] {
         let s = Settings {
             method: Method::Gather,
-            spp: 4,
+            spp: 8,
             width: Some(SWEEP_SIZE),
             height: Some(SWEEP_SIZE),
             photons: 400_000,
