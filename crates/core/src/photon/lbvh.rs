@@ -5,8 +5,9 @@
 //!
 //! obvhs builds excellent BVHs (PLOC), but its leaves are shaped by a SAH collapse, not by a
 //! photon count on Morton intervals; the paper's leaf-size threshold and its T_auto
-//! heuristic are defined on the latter, so this module builds its own hierarchy. The gather
-//! benchmark also runs an obvhs `Bvh2` over the same footprint boxes for comparison.
+//! heuristic are defined on the latter, so this module builds its own hierarchy. (An obvhs
+//! `Bvh2` with `point_traverse` over the same footprint boxes would be the natural
+//! comparison; it is not benchmarked yet.)
 
 use glam::Vec3;
 use rayon::prelude::*;
