@@ -49,8 +49,22 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         groups.map(|g| format!("{} (ms)", g.0)).join(" | ")
     );
     println!("|---|---|---|---|{}---|", "---|".repeat(groups.len()));
-    for name in ["cornell", "cornell-glass"] {
-        let scene = builtin::load(name)?;
+    // `--scene NAME` (repeatable) picks scenes; "dense-cornell" is the ~246k-triangle
+    // Cornell box of `scene::bench`.
+    let mut names: Vec<&str> = args
+        .windows(2)
+        .filter(|w| w[0] == "--scene")
+        .map(|w| w[1].as_str())
+        .collect();
+    if names.is_empty() {
+        names = vec!["cornell", "cornell-glass"];
+    }
+    for name in names {
+        let scene = if name == "dense-cornell" {
+            gi_core::scene::bench::dense_cornell()
+        } else {
+            builtin::load(name)?
+        };
         for photons in [50_000u64, 100_000, 200_000] {
             for subsample in [1u32, 2] {
                 let settings = Settings {
