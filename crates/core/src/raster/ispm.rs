@@ -441,58 +441,14 @@ impl IspmPasses {
 /// clockwise seen from outside) triangles.
 pub fn icosahedron() -> Vec<[f32; 3]> {
     let phi = (1.0 + 5f32.sqrt()) / 2.0;
-    let v: Vec<Vec3> = [
-        (-1.0, phi, 0.0),
-        (1.0, phi, 0.0),
-        (-1.0, -phi, 0.0),
-        (1.0, -phi, 0.0),
-        (0.0, -1.0, phi),
-        (0.0, 1.0, phi),
-        (0.0, -1.0, -phi),
-        (0.0, 1.0, -phi),
-        (phi, 0.0, -1.0),
-        (phi, 0.0, 1.0),
-        (-phi, 0.0, -1.0),
-        (-phi, 0.0, 1.0),
-    ]
-    .iter()
-    .map(|&(x, y, z)| Vec3::new(x, y, z).normalize())
-    .collect();
     // Inradius of the unit-circumradius icosahedron.
     let inradius = (phi * phi / (3.0f32.sqrt() * (1.0 + phi * phi).sqrt())).min(1.0);
-    let faces = [
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
-    let mut out = Vec::with_capacity(60);
-    for f in faces {
-        let [a, b, c] = f.map(|i| v[i] / inradius);
-        let (b, c) = if (b - a).cross(c - a).dot(a + b + c) < 0.0 {
-            (c, b)
-        } else {
-            (b, c)
-        };
-        out.extend([a, b, c].map(<[f32; 3]>::from));
-    }
-    out
+    // The scene's geodesic sphere at 0 subdivisions is that icosahedron, wound outwards.
+    let ico = crate::scene::primitives::sphere(1.0, 0);
+    ico.indices
+        .iter()
+        .flat_map(|t| t.map(|i| (ico.positions[i as usize] / inradius).to_array()))
+        .collect()
 }
 
 /// The bounce map's result: first-scatter rays and the bookkeeping of the power.
