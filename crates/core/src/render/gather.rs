@@ -4,15 +4,15 @@
 //! caustics. Camera rays follow mirrors and glass (`camera_pass`), so reflections and
 //! refractions show indirect light too.
 
-use super::camera_pass::{render_image, scene_diagonal};
-use super::{Progress, RenderOutput, RenderStats, Settings};
+use super::camera_pass::{render_image, scene_diagonal, start_frame};
+use super::{Progress, RenderOutput, Settings};
 use crate::error::{Error, Result};
 use crate::photon::differential::global_spacing;
 use crate::photon::gather::{scene_area, FootprintMap, LeafSize};
 use crate::photon::trace::DifferentialSettings;
 use crate::photon::{emit_and_trace, PhotonTraceSettings};
 use crate::scene::Scene;
-use crate::trace::{path::direct_light, SceneBvh};
+use crate::trace::path::direct_light;
 use std::time::Instant;
 
 /// Default largest footprint semi-axis, as a fraction of the scene's diagonal.
@@ -36,16 +36,9 @@ pub fn trace_settings(scene: &Scene, settings: &Settings) -> PhotonTraceSettings
 
 pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Result<RenderOutput> {
     let t0 = Instant::now();
-    let mut stats = RenderStats {
-        triangles: scene.triangles.len() as u64,
-        ..Default::default()
-    };
+    let (bvh, mut stats) = start_frame(scene);
     let mut stage =
         |name: &str, t: Instant| stats.stages.push((name.into(), t.elapsed().as_secs_f64()));
-
-    let t = Instant::now();
-    let bvh = SceneBvh::build(scene);
-    stage("bvh build", t);
 
     let t = Instant::now();
     let set = emit_and_trace(

@@ -8,13 +8,12 @@
 //!    else: direct light comes from the photons too, so the image converges to the full
 //!    solution as the photon count grows and the gather radius shrinks.
 
-use super::camera_pass::{render_image, scene_diagonal};
-use super::{Progress, RenderOutput, RenderStats, Settings};
+use super::camera_pass::{render_image, scene_diagonal, start_frame};
+use super::{Progress, RenderOutput, Settings};
 use crate::error::{Error, Result};
 use crate::photon::estimate::{Gather, PhotonMap};
 use crate::photon::{emit_and_trace, Neighbour, PhotonTraceSettings};
 use crate::scene::Scene;
-use crate::trace::SceneBvh;
 use std::time::Instant;
 
 /// Default maximum gather radius, as a fraction of the scene's bounding-box diagonal.
@@ -22,16 +21,9 @@ const DEFAULT_RADIUS_FRACTION: f32 = 0.05;
 
 pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Result<RenderOutput> {
     let t0 = Instant::now();
-    let mut stats = RenderStats {
-        triangles: scene.triangles.len() as u64,
-        ..Default::default()
-    };
+    let (bvh, mut stats) = start_frame(scene);
     let mut stage =
         |name: &str, t: Instant| stats.stages.push((name.into(), t.elapsed().as_secs_f64()));
-
-    let t = Instant::now();
-    let bvh = SceneBvh::build(scene);
-    stage("bvh build", t);
 
     // Photon tracing: every bounce, direct light included.
     let t = Instant::now();
