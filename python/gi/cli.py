@@ -52,6 +52,11 @@ def _parser() -> argparse.ArgumentParser:
         action="store_true",
         help="size ISPM photon volumes by photon-differential footprints",
     )
+    r.add_argument(
+        "--no-boundary-compensation",
+        action="store_true",
+        help="don't correct ISPM photon power for kernels that fall off surfaces",
+    )
     r.add_argument("--adapter", help='GPU adapter: "cpu" (lavapipe), "gpu" or part of a name')
     r.add_argument("--shadow-map-size", type=int, default=1024, help="shadow map texels per side")
     r.add_argument("--exposure", type=float, default=0.0, help="PNG exposure in stops")
@@ -96,6 +101,7 @@ def _render(args: argparse.Namespace) -> int:
         kernel_scale=args.kernel_scale,
         subsample=args.subsample,
         footprint_volumes=args.footprint_volumes,
+        boundary_compensation=not args.no_boundary_compensation,
         adapter=args.adapter,
         shadow_map_size=args.shadow_map_size,
         progress=not args.quiet,

@@ -102,6 +102,7 @@ def render(
     kernel_scale: float = 1.0,
     subsample: int = 1,
     footprint_volumes: bool = False,
+    boundary_compensation: bool = True,
     adapter: str | None = None,
     shadow_map_size: int = 1024,
     progress: bool | ProgressCallback = False,
@@ -121,7 +122,10 @@ def render(
     ``photons`` first-bounce photons in all, traces later bounces on the CPU and splats one
     photon volume per stored photon, ``kernel_scale`` times the default radius (or sized by
     photon-differential footprints with ``footprint_volumes``), at 1/``subsample``
-    resolution with joint bilateral upsampling.
+    resolution with joint bilateral upsampling; ``boundary_compensation`` divides each
+    photon's power by the fraction of its kernel that lies on surfaces (probe rays), so
+    edges and corners keep their energy. Mirrors and glass seen by the camera are traced
+    backwards on the CPU with a photon-map gather (``k``, ``max_radius``, ``kernel``).
     GPU methods (``direct``, ``ispm``) run on ``adapter`` ("cpu" for lavapipe, "gpu", or part of an
     adapter's name; default: the ``GI_ADAPTER`` environment variable, else a real GPU when
     present, else lavapipe) with ``shadow_map_size``² texels per shadow-map face.
@@ -155,6 +159,7 @@ def render(
         kernel_scale=kernel_scale,
         subsample=subsample,
         footprint_volumes=footprint_volumes,
+        boundary_compensation=boundary_compensation,
         adapter=adapter,
         shadow_map_size=shadow_map_size,
         progress=callback,

@@ -2,8 +2,10 @@
 //!
 //! - furnace: the indirect part (ispm − direct) against the analytic value;
 //! - bounce-map power bookkeeping (emitted = light power, first scatter = ρ × emitted);
-//! - Cornell box against the reference path tracer (image means per channel);
+//! - Cornell box against the reference path tracer (block error, image mean, SSIM);
 //! - caustic: the caustic region is brighter than its surroundings.
+
+mod common;
 
 use gi_core::raster::ispm::render_bounce_map;
 use gi_core::render::Silent;
@@ -115,6 +117,19 @@ fn bounce_map_power_bookkeeping() {
     assert!(rel < 1e-4, "{:?} vs {:?}", stored[1], bm.scattered_power);
 }
 
+/// Means of the `block`×`block` pixel blocks.
+fn block_means(img: &gi_core::image::Image, block: u32) -> Vec<DVec3> {
+    let (bw, bh) = (img.width / block, img.height / block);
+    let mut out = vec![DVec3::ZERO; (bw * bh) as usize];
+    for y in 0..bh * block {
+        for x in 0..bw * block {
+            out[((y / block) * bw + x / block) as usize] +=
+                img.get(x, y).as_dvec3() / (block * block) as f64;
+        }
+    }
+    out
+}
+
 /// Mean radiance per channel over pixels `keep`.
 fn region_mean(img: &gi_core::image::Image, keep: &[bool]) -> DVec3 {
     let (sum, n) = img
@@ -129,9 +144,15 @@ fn region_mean(img: &gi_core::image::Image, keep: &[bool]) -> DVec3 {
 }
 
 /// Cornell box: ISPM (direct + photon volumes, 400k bounce-map photons) against the path
-/// tracer (512 spp), 48×48.
-/// Criteria: image mean per channel within 3%, and the means of the 4×4 blocks of 12×12
-/// pixels within 10% (measured values are printed).
+/// tracer (512 spp), 48×48, with the issue's criteria:
+/// - mean relative error per channel over the 36 blocks of 8×8 pixels ≤ 3% (the metric of
+///   `gather`'s test; pixels alone carry the reference's own noise, ~4% at 512 spp);
+/// - the image mean per channel within 3%;
+/// - SSIM of luminance (7×7 windows, all pixels) ≥ 0.95: the kernel blurs contact shadows
+///   and the reference is noisy, so the images are not identical at pixel scale;
+///   0.95 still fails for visible blotches or a misplaced splat.
+///
+/// On failure the images and their difference are written to target/test-output.
 #[test]
 fn cornell_matches_path_tracer() {
     let scene = load("cornell");
@@ -140,6 +161,7 @@ fn cornell_matches_path_tracer() {
         &scene,
         &Settings {
             photons: 400_000,
+            spp: 4,
             ..ispm_settings(size)
         },
     );
@@ -153,27 +175,42 @@ fn cornell_matches_path_tracer() {
     );
     let (a, b) = (mean(&ispm.radiance), mean(&path.radiance));
     let rel = (a / b - DVec3::ONE).abs();
+    let (ba, bb) = (
+        block_means(&ispm.radiance, 8),
+        block_means(&path.radiance, 8),
+    );
+    let block_err = ba
+        .iter()
+        .zip(&bb)
+        .map(|(x, y)| (*x - *y).abs() / y.max(DVec3::splat(1e-3)))
+        .sum::<DVec3>()
+        / ba.len() as f64;
+    let all = vec![true; (size * size) as usize];
+    let ssim = common::ssim(&ispm.radiance, &path.radiance, &all);
     eprintln!(
-        "cornell ispm {a:?} path {b:?} rel {rel:?}; {:?}",
+        "cornell ispm {a:?} path {b:?} rel {rel:?}; mean relative 8x8-block error {block_err:?}; \
+         SSIM {ssim:.4}; {:?}",
         ispm.stats
     );
-    let mut worst = 0.0f64;
-    for by in 0..4 {
-        for bx in 0..4 {
-            let keep: Vec<bool> = (0..size * size)
-                .map(|i| (i % size) / 12 == bx && (i / size) / 12 == by)
-                .collect();
-            let (ra, rb) = (
-                region_mean(&ispm.radiance, &keep),
-                region_mean(&path.radiance, &keep),
-            );
-            let e = ((ra - rb).abs() / rb.max(DVec3::splat(1e-3))).max_element();
-            worst = worst.max(e);
+    let ok = rel.max_element() < 0.03 && block_err.max_element() < 0.03 && ssim >= 0.95;
+    if !ok {
+        let dir = common::output_dir();
+        let mut diff = ispm.radiance.clone();
+        for (d, p) in diff.pixels.iter_mut().zip(&path.radiance.pixels) {
+            *d = (*d - *p).abs();
         }
+        for (name, img) in [
+            ("ispm-cornell.pfm", &ispm.radiance),
+            ("ispm-cornell-path.pfm", &path.radiance),
+            ("ispm-cornell-diff.pfm", &diff),
+        ] {
+            let _ = common::write_pfm(&dir.join(name), img);
+        }
+        eprintln!("images written to {}", dir.display());
     }
-    eprintln!("cornell worst 12x12 block relative error {worst:.4}");
-    assert!(rel.max_element() < 0.03, "{a:?} vs {b:?}");
-    assert!(worst < 0.10, "worst block {worst}");
+    assert!(rel.max_element() < 0.03, "image mean {a:?} vs {b:?}");
+    assert!(block_err.max_element() < 0.03, "block error {block_err:?}");
+    assert!(ssim >= 0.95, "SSIM {ssim}");
 
     // Subsampled splatting (k = 2) with joint bilateral upsampling: same criteria for the
     // image mean, and the mean absolute difference to k = 1 is under 10% of the mean (measured
@@ -208,7 +245,7 @@ fn cornell_matches_path_tracer() {
 }
 
 /// Caustic ring: the mirror focuses light into a cardioid on the floor. In the ISPM
-/// indirect image (ispm − direct) the caustic (the brightest 3% of the reference's
+/// indirect image (ispm − direct) the caustic (the brightest 3% of a reference's
 /// light-traced caustic image on the floor inside the ring) is more than 3× brighter than
 /// the rest of that floor, and its total radiance matches the path tracer's there within 10%.
 #[test]
@@ -235,13 +272,25 @@ fn caustic_ring_is_brighter_than_surroundings() {
             ..s.clone()
         },
     );
+    // The region is chosen on an independent reference render: selecting the brightest
+    // pixels of the very image we compare against would pick its upward noise (measured
+    // +18% on `path` at 32 spp) and bias the comparison.
+    let select = run(
+        &scene,
+        &Settings {
+            method: Method::Path,
+            spp: 32,
+            seed: 1234,
+            ..s.clone()
+        },
+    );
     let floor: Vec<bool> = path
         .position
         .pixels
         .iter()
         .map(|p| p.y.abs() < 1e-3 && (p.x * p.x + p.z * p.z).sqrt() < 0.95)
         .collect();
-    let mut c: Vec<f32> = path
+    let mut c: Vec<f32> = select
         .caustics
         .pixels
         .iter()
@@ -251,7 +300,7 @@ fn caustic_ring_is_brighter_than_surroundings() {
         .collect();
     c.sort_by(f32::total_cmp);
     let threshold = c[c.len() * 97 / 100];
-    let ring: Vec<bool> = path
+    let ring: Vec<bool> = select
         .caustics
         .pixels
         .iter()
@@ -355,4 +404,111 @@ fn footprint_sized_volumes_match_furnace() {
         (indirect / expected - 1.0).abs() < 0.05,
         "{indirect} vs {expected}"
     );
+}
+
+/// `cornell-glass`: the glass sphere focuses a caustic on the floor and both spheres are
+/// seen directly. Caustic region: the brightest 5% of a reference's light-traced caustic
+/// image on the floor (about 90 pixels at 128²; the focused spot is a few pixels wide, and
+/// ISPM shades pixel centres while the reference box-filters pixels, which over the
+/// brightest 1–2% alone reads 5–10% high: measured at 64² and 128²). Criteria: ISPM's indirect light there is more than 3× that of the rest
+/// of the floor; its total radiance there matches the path tracer's within 10%; and the
+/// pixels that see the mirror or the glass sphere (traced backwards on the CPU, otherwise
+/// black in a rasterizer) match the path tracer's mean within 10% per channel. Measured
+/// values are printed.
+#[test]
+fn cornell_glass_caustic_and_specular_surfaces() {
+    let scene = load("cornell-glass");
+    let size = 128;
+    let s = Settings {
+        photons: 400_000,
+        ..ispm_settings(size)
+    };
+    let ispm = run(&scene, &s);
+    let direct = run(
+        &scene,
+        &Settings {
+            method: Method::Direct,
+            ..s.clone()
+        },
+    );
+    let path = run(
+        &scene,
+        &Settings {
+            method: Method::Path,
+            spp: 64,
+            ..s.clone()
+        },
+    );
+    let spheres = [
+        (glam::Vec3::new(0.4, 0.4, 0.25), 0.4f32),
+        (glam::Vec3::new(-0.45, 0.4, -0.4), 0.4),
+    ];
+    let on_sphere: Vec<bool> = path
+        .position
+        .pixels
+        .iter()
+        .zip(&path.depth)
+        .map(|(p, d)| *d > 0.0 && spheres.iter().any(|(c, r)| (*p - *c).length() < r + 1e-3))
+        .collect();
+    let floor: Vec<bool> = path
+        .position
+        .pixels
+        .iter()
+        .zip(&on_sphere)
+        .map(|(p, s)| !s && p.y.abs() < 1e-3)
+        .collect();
+    // Region chosen on an independent reference render (see the caustic-ring test).
+    let select = run(
+        &scene,
+        &Settings {
+            method: Method::Path,
+            spp: 64,
+            seed: 1234,
+            ..s.clone()
+        },
+    );
+    let mut c: Vec<f32> = select
+        .caustics
+        .pixels
+        .iter()
+        .zip(&floor)
+        .filter(|(_, f)| **f)
+        .map(|(p, _)| p.x)
+        .collect();
+    c.sort_by(f32::total_cmp);
+    let threshold = c[c.len() * 95 / 100];
+    let caustic: Vec<bool> = select
+        .caustics
+        .pixels
+        .iter()
+        .zip(&floor)
+        .map(|(p, f)| *f && p.x >= threshold && p.x > 0.0)
+        .collect();
+    let rest: Vec<bool> = floor.iter().zip(&caustic).map(|(f, c)| *f && !c).collect();
+    let indirect =
+        |keep: &[bool]| region_mean(&ispm.radiance, keep) - region_mean(&direct.radiance, keep);
+    let (ci, ri) = (indirect(&caustic), indirect(&rest));
+    let (ti, tp) = (
+        region_mean(&ispm.radiance, &caustic),
+        region_mean(&path.radiance, &caustic),
+    );
+    let (si, sp) = (
+        region_mean(&ispm.radiance, &on_sphere),
+        region_mean(&path.radiance, &on_sphere),
+    );
+    eprintln!(
+        "cornell-glass caustic ({} px): ispm indirect {ci:?} vs rest {ri:?}; total ispm {ti:?} \
+         path {tp:?}; spheres ({} px) ispm {si:?} path {sp:?}; {:?}",
+        caustic.iter().filter(|c| **c).count(),
+        on_sphere.iter().filter(|c| **c).count(),
+        ispm.stats
+    );
+    assert!(
+        ci.min_element() > 3.0 * ri.max_element(),
+        "{ci:?} vs {ri:?}"
+    );
+    let rel = (ti / tp - DVec3::ONE).abs();
+    assert!(rel.max_element() < 0.10, "caustic {ti:?} vs {tp:?}");
+    let rel = (si / sp - DVec3::ONE).abs();
+    assert!(rel.max_element() < 0.10, "spheres {si:?} vs {sp:?}");
 }

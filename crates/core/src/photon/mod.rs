@@ -6,6 +6,7 @@
 //! powers of all photons stored for one bounce index add up to the power that reaches that
 //! bounce (in expectation).
 
+pub mod boundary;
 pub mod differential;
 pub mod estimate;
 pub mod footprint;
@@ -41,6 +42,7 @@ pub struct Photon {
     /// Unit (shading) normal of the surface hit, on the side the photon arrived from.
     pub normal: [f32; 3],
     /// Footprint radius (m) from photon differentials, √|a₁ × a₂|; 0 when traced without.
+    /// Method `ispm` sets it to the photon-volume radius before the splat.
     pub footprint_radius: f32,
 }
 

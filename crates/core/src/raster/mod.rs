@@ -5,6 +5,7 @@ pub mod direct;
 pub mod gbuffer;
 pub mod ispm;
 pub mod shadow;
+mod specular;
 mod timer;
 
 use crate::error::{Error, Result};

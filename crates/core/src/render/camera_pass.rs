@@ -64,6 +64,7 @@ pub fn render_image<S: Default + Send>(
                             cam.position,
                             dir,
                             max_delta,
+                            true,
                             &mut rng,
                             |it, wo| estimate(it, wo, scratch),
                         );
@@ -107,30 +108,103 @@ pub fn render_image<S: Default + Send>(
     Ok(out)
 }
 
+/// The part of the image that reaches the camera through a delta lobe (mirror reflection,
+/// refraction) of the first surface seen, `spp` jittered samples per pixel, as in
+/// `render_image` but without the first surface's own non-delta lobes: what a rasterizer
+/// that shades the first surface cannot give (ISPM section 4: "backwards recursive ray
+/// tracing on the CPU, with recursive global illumination approximated by ... a
+/// traditional photon map gather"). Pixels whose first surface has no delta lobe cost one
+/// ray per sample and stay black.
+pub fn delta_image<S: Default + Send>(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    settings: &Settings,
+    progress: &dyn Progress,
+    estimate: impl Fn(&Interaction, Vec3, &mut S) -> Vec3 + Sync,
+) -> Result<Image> {
+    let cam = &scene.camera;
+    let (w, h) = (cam.width, cam.height);
+    let mut image = Image::new(w, h);
+    if !scene.materials.iter().any(has_delta_lobe) {
+        return Ok(image);
+    }
+    let max_delta = MAX_DELTA_BOUNCES.min(settings.max_depth);
+    let done = AtomicU64::new(0);
+    let cancelled = AtomicBool::new(false);
+    image
+        .pixels
+        .par_chunks_mut(w as usize)
+        .enumerate()
+        .for_each_init(S::default, |scratch, (y, row)| {
+            if cancelled.load(Ordering::Relaxed) {
+                return;
+            }
+            for (x, px) in row.iter_mut().enumerate() {
+                let pixel = y as u64 * w as u64 + x as u64;
+                let mut sum = Vec3::ZERO;
+                for s in 0..settings.spp {
+                    let mut rng = Rng::new(settings.seed, pixel, s as u64);
+                    let j = rng.next_2d();
+                    let dir = cam.direction(x as f32 + j.x, y as f32 + j.y);
+                    sum += radiance(
+                        scene,
+                        bvh,
+                        cam.position,
+                        dir,
+                        max_delta,
+                        false,
+                        &mut rng,
+                        |it, wo| estimate(it, wo, scratch),
+                    );
+                }
+                *px = sum / settings.spp as f32;
+            }
+            let d = done.fetch_add(1, Ordering::Relaxed) + 1;
+            if !progress.update("specular paths", d as f64 / h as f64) {
+                cancelled.store(true, Ordering::Relaxed);
+            }
+        });
+    if cancelled.load(Ordering::Relaxed) {
+        return Err(Error::Cancelled);
+    }
+    Ok(image)
+}
+
+/// True when the material can scatter into a delta lobe (perfect mirror or smooth glass).
+pub fn has_delta_lobe(m: &crate::bsdf::Material) -> bool {
+    (m.has_specular() && m.is_mirror()) || m.has_transmission()
+}
+
 /// Radiance arriving at `origin` from `-dir`: estimates at every non-delta surface the ray
-/// reaches through up to `max_delta` delta scatterings. The estimate covers a surface's
-/// non-delta lobes; its delta lobe (if any) is followed when `Material::sample` picks it,
-/// with the sample weight accounting for that choice.
+/// reaches through up to `max_delta` delta scatterings (the first surface only when
+/// `estimate_first`). The estimate covers a surface's non-delta lobes; its delta lobe (if
+/// any) is followed when `Material::sample` picks it, with the sample weight accounting for
+/// that choice.
+#[allow(clippy::too_many_arguments)]
 fn radiance(
     scene: &Scene,
     bvh: &SceneBvh,
     origin: Vec3,
     dir: Vec3,
     max_delta: u32,
+    estimate_first: bool,
     rng: &mut Rng,
     mut estimate: impl FnMut(&Interaction, Vec3) -> Vec3,
 ) -> Vec3 {
     let mut l = Vec3::ZERO;
     let mut beta = Vec3::ONE;
     let (mut o, mut d) = (origin, dir);
-    for _ in 0..=max_delta {
+    for depth in 0..=max_delta {
         let Some(hit) = bvh.intersect(o, d, f32::INFINITY) else {
             break;
         };
         let it = Interaction::new(scene, &hit, d);
         let wo = -d;
-        if !it.material.is_purely_specular() {
+        if (depth > 0 || estimate_first) && !it.material.is_purely_specular() {
             l += beta * estimate(&it, wo);
+        }
+        if depth == 0 && !estimate_first && !has_delta_lobe(it.material) {
+            break;
         }
         // Continue only through a delta lobe, geometrically consistent.
         let Some(bs) = it.material.sample(it.frame.to_local(wo), rng) else {

@@ -1,6 +1,6 @@
 //! Rendering a frame: settings, the method dispatch, outputs and statistics.
 
-mod camera_pass;
+pub(crate) mod camera_pass;
 mod gather;
 mod photon_map;
 mod reference;
@@ -114,6 +114,10 @@ pub struct Settings {
     /// Size ISPM photon volumes by photon-differential footprints (as method `gather`,
     /// with `smoothing` and `max_radius`) instead of the path-density heuristic.
     pub footprint_volumes: bool,
+    /// Divide each ISPM photon's power by the fraction of its kernel that lies on surfaces
+    /// (probe rays, `photon::boundary`), so that photons near edges and corners don't lose
+    /// the energy that falls off the surface.
+    pub boundary_compensation: bool,
 }
 
 impl Default for Settings {
@@ -137,6 +141,7 @@ impl Default for Settings {
             kernel_scale: 1.0,
             subsample: 1,
             footprint_volumes: false,
+            boundary_compensation: true,
         }
     }
 }

@@ -1,4 +1,6 @@
 //! Image comparison helpers for the GPU golden tests: luminance SSIM, an edge mask, PFM output.
+// Each test binary uses its own subset of these helpers.
+#![allow(dead_code)]
 
 use gi_core::{Image, RenderOutput};
 use glam::Vec3;

@@ -79,11 +79,25 @@ fn falloff(cos_t: f32) -> f32 {
 
 @fragment
 fn fs_main(in: VertexOut) -> BounceOut {
-    let to_light = view.light_position - in.world;
+    // Stratified jitter: the photon leaves the light through a uniformly random point of its
+    // texel instead of the texel centre (the surface point and interpolated normal are moved
+    // along their screen derivatives, exact within a planar triangle). Centre-sampled
+    // texels map a regular grid through mirrors and glass onto the receivers and show as
+    // moiré in sparse caustics. The offset is part of the frame-seeded sequence, so static
+    // scenes stay frame-coherent.
+    let dwdx = dpdx(in.world);
+    let dwdy = dpdy(in.world);
+    let dndx = dpdx(in.normal);
+    let dndy = dpdy(in.normal);
+    let texel = vec2<u32>(in.clip.xy);
+    rng_state = hash_u32(view.seed ^ hash_u32(view.layer ^ hash_u32(texel.x ^ hash_u32(texel.y))));
+    let jitter = vec2<f32>(rng_next(), rng_next()) - 0.5;
+    let world = in.world + jitter.x * dwdx + jitter.y * dwdy;
+    let to_light = view.light_position - world;
     let wo = normalize(to_light);
     // Normals as in the eye G-buffer, oriented towards the light.
     var ng = in.geometric_normal;
-    var ns = in.normal;
+    var ns = in.normal + jitter.x * dndx + jitter.y * dndy;
     let len = length(ns);
     if !(len > 0.0) {
         ns = ng;
@@ -117,8 +131,6 @@ fn fs_main(in: VertexOut) -> BounceOut {
     if max3(phi) <= 0.0 {
         return o;
     }
-    let texel = vec2<u32>(in.clip.xy);
-    rng_state = hash_u32(view.seed ^ hash_u32(view.layer ^ hash_u32(texel.x ^ hash_u32(texel.y))));
     // Shading frame (Duff et al.), +z = ns.
     let sz = select(-1.0, 1.0, ns.z >= 0.0);
     let a = -1.0 / (sz + ns.z);
@@ -141,8 +153,8 @@ fn fs_main(in: VertexOut) -> BounceOut {
     if !(q > 0.0) || rng_next() >= q {
         return o;
     }
-    let eps = 1e-4 * (1.0 + max3(abs(in.world)));
-    let origin = in.world + ng * eps * sign(dot(wi, ng));
+    let eps = 1e-4 * (1.0 + max3(abs(world)));
+    let origin = world + ng * eps * sign(dot(wi, ng));
     o.origin = vec4<f32>(origin, path_density_factor(m, bs.lobe));
     o.direction = vec4<f32>(wi, 1.0);
     o.power = vec4<f32>(scattered / q, 0.0);

@@ -1,0 +1,51 @@
+//! Mirrors and glass seen by the camera in method `ispm`. Rasterized shading of the eye
+//! G-buffer evaluates only the non-delta lobes of the first surface, so perfect reflection
+//! and refraction are traced backwards on the CPU, as the paper suggests (section 4:
+//! "backwards recursive ray tracing on the CPU, with recursive global illumination
+//! approximated by ... a traditional photon map gather"): next-event estimation for direct
+//! light and a k-nearest-neighbour gather over the frame's stored photons (which exclude
+//! the bounce-map hits, i.e. direct light) wherever the specular path lands.
+
+use crate::error::Result;
+use crate::image::Image;
+use crate::photon::estimate::{Gather, PhotonMap};
+use crate::photon::{Neighbour, Photon};
+use crate::render::camera_pass::{delta_image, has_delta_lobe, scene_diagonal};
+use crate::render::{Progress, Settings};
+use crate::scene::Scene;
+use crate::trace::path::direct_light;
+use crate::trace::SceneBvh;
+
+/// Default largest gather radius, as a fraction of the scene's diagonal (as method `photon`).
+const DEFAULT_RADIUS_FRACTION: f32 = 0.05;
+
+/// Radiance reaching the camera through the delta lobes of the first surface seen.
+pub fn specular_paths(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    settings: &Settings,
+    photons: &[Photon],
+    progress: &dyn Progress,
+) -> Result<Image> {
+    if !scene.materials.iter().any(has_delta_lobe) {
+        let cam = &scene.camera;
+        return Ok(Image::new(cam.width, cam.height));
+    }
+    let map = PhotonMap::build(photons.to_vec());
+    let gather = Gather {
+        k: settings.k as usize,
+        max_radius: settings
+            .max_radius
+            .unwrap_or_else(|| DEFAULT_RADIUS_FRACTION * scene_diagonal(scene)),
+        kernel: settings.kernel,
+    };
+    delta_image(
+        scene,
+        bvh,
+        settings,
+        progress,
+        |it, wo, scratch: &mut Vec<Neighbour>| {
+            direct_light(scene, bvh, it, wo) + map.radiance(it, wo, &gather, scratch)
+        },
+    )
+}
