@@ -3,9 +3,10 @@
 //!
 //! `cargo run -p gi-core --profile test --example ispm_equal_error >> docs/bench/ispm.md`
 //!
-//! For each scene: a converged image (`path`, 2048 spp); the ISPM frame's RMSE against it;
-//! then `path` at 1, 2, 4, … spp until its RMSE is at most ISPM's, interpolating the time
-//! log-linearly between the last two sample counts.
+//! For each scene: a converged image (`path`, 2048 spp); the RMSE of ISPM frames against it
+//! (default settings; `kernel_scale` 1/3, about the narrower volumes of diffuse photons
+//! before boundary compensation; subsample 2); then `path` at 1, 2, 4, … spp until its RMSE
+//! is at most ISPM's, interpolating the time log-linearly between the last two counts.
 
 use gi_core::render::{render, Silent};
 use gi_core::scene::{bench::dense_cornell, builtin};
@@ -31,6 +32,22 @@ fn timed(scene: &Scene, s: &Settings) -> (f64, Image) {
     (t.elapsed().as_secs_f64(), out.radiance)
 }
 
+/// The path tracer's spp and time at error `e` on its measured curve (spp, time, error):
+/// the first count at or below `e`, log(time) interpolated against log(error) from the
+/// count before it.
+fn equal_error(curve: &[(u32, f64, f64)], e: f64) -> Option<(f64, f64)> {
+    let i = curve.iter().position(|c| c.2 <= e)?;
+    let (spp, t, e1) = curve[i];
+    match i.checked_sub(1).map(|j| curve[j]) {
+        Some((p_spp, p_t, p_e)) if p_e > e1 => {
+            let f = (e.ln() - p_e.ln()) / (e1.ln() - p_e.ln());
+            let lerp = |a: f64, b: f64| (a.ln() + f * (b.ln() - a.ln())).exp();
+            Some((lerp(p_spp as f64, spp as f64), lerp(p_t, t)))
+        }
+        _ => Some((spp as f64, t)),
+    }
+}
+
 fn main() {
     println!("\n## Equal-error speed-up against `path`\n");
     println!("Command: `cargo run -p gi-core --profile test --example ispm_equal_error >> docs/bench/ispm.md`");
@@ -40,8 +57,8 @@ fn main() {
     println!(
         "samples per pixel, warm pipelines · wall-clock seconds on the same 2 cores (lavapipe).\n"
     );
-    println!("| scene | triangles | ISPM frame (s) | ISPM RMSE | `path` spp at equal RMSE | `path` time (s) | speed-up |");
-    println!("|---|---|---|---|---|---|---|");
+    println!("| scene | triangles | ISPM settings | ISPM frame (s) | ISPM RMSE | `path` spp at equal RMSE | `path` time (s) | speed-up |");
+    println!("|---|---|---|---|---|---|---|---|");
     let scenes = [
         ("cornell", builtin::load("cornell").expect("built-in")),
         ("dense cornell", dense_cornell()),
@@ -60,17 +77,31 @@ fn main() {
                 ..base.clone()
             },
         );
-        let ispm = Settings {
-            method: Method::Ispm,
-            spp: 4,
-            photons: 200_000,
-            ..base.clone()
-        };
-        let _ = timed(scene, &ispm); // warm-up: pipelines, device
-        let (t_ispm, img) = timed(scene, &ispm);
-        let e_ispm = rmse(&img, &converged);
-        let mut prev: Option<(u32, f64, f64)> = None;
-        let mut found = None;
+        let configs = [
+            ("default", 1.0, 1),
+            ("kernel_scale 1/3", 1.0 / 3.0, 1),
+            ("subsample 2", 1.0, 2),
+        ];
+        let results: Vec<(&str, f64, f64)> = configs
+            .iter()
+            .map(|&(label, kernel_scale, subsample)| {
+                let ispm = Settings {
+                    method: Method::Ispm,
+                    spp: 4,
+                    photons: 200_000,
+                    kernel_scale,
+                    subsample,
+                    ..base.clone()
+                };
+                let _ = timed(scene, &ispm); // warm-up: pipelines, device
+                let (t, img) = timed(scene, &ispm);
+                (label, t, rmse(&img, &converged))
+            })
+            .collect();
+        // The path tracer's error and time against spp, once per scene, down to the
+        // smallest ISPM error.
+        let target = results.iter().map(|r| r.2).fold(f64::INFINITY, f64::min);
+        let mut curve: Vec<(u32, f64, f64)> = Vec::new();
         for k in 0..11 {
             let spp = 1u32 << k;
             let (t, img) = timed(
@@ -81,33 +112,22 @@ fn main() {
                     ..base.clone()
                 },
             );
-            let e = rmse(&img, &converged);
-            if e <= e_ispm {
-                // Interpolate log(time) against log(error) between the last two counts.
-                let (spp_eq, t_eq) = match prev {
-                    Some((p_spp, p_t, p_e)) if p_e > e => {
-                        let f = (e_ispm.ln() - p_e.ln()) / (e.ln() - p_e.ln());
-                        let spp_eq =
-                            (p_spp as f64).ln() + f * ((spp as f64).ln() - (p_spp as f64).ln());
-                        (spp_eq.exp(), (p_t.ln() + f * (t.ln() - p_t.ln())).exp())
-                    }
-                    _ => (spp as f64, t),
-                };
-                found = Some((spp_eq, t_eq));
+            curve.push((spp, t, rmse(&img, &converged)));
+            if curve[curve.len() - 1].2 <= target {
                 break;
             }
-            prev = Some((spp, t, e));
         }
-        match found {
-            Some((spp_eq, t_eq)) => println!(
-                "| {name} | {} | {t_ispm:.2} | {e_ispm:.4} | {spp_eq:.1} | {t_eq:.2} | {:.2}× |",
-                scene.triangles.len(),
-                t_eq / t_ispm
-            ),
-            None => println!(
-                "| {name} | {} | {t_ispm:.2} | {e_ispm:.4} | > 1024 | – | – |",
+        for (label, t_ispm, e_ispm) in results {
+            let prefix = format!(
+                "| {name} | {} | {label} | {t_ispm:.2} | {e_ispm:.4} |",
                 scene.triangles.len()
-            ),
+            );
+            match equal_error(&curve, e_ispm) {
+                Some((spp_eq, t_eq)) => {
+                    println!("{prefix} {spp_eq:.1} | {t_eq:.2} | {:.2}× |", t_eq / t_ispm)
+                }
+                None => println!("{prefix} > 1024 | – | – |"),
+            }
         }
     }
     println!("\nA speed-up below 1 means the path tracer reaches ISPM's error sooner on this machine, where");
