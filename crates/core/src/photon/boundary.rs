@@ -19,7 +19,7 @@ use rayon::prelude::*;
 
 /// Probe rays per photon that may be off a surface (stratified in angle and radius).
 pub const PROBES: u32 = 8;
-/// Quick test first: probes on a ring at this fraction of the radius, one per quadrant. When
+/// Quick tests first: whether the disc lies inside one triangle; then probes on a ring at this fraction of the radius, one per quadrant. When
 /// all four find the surface the photon counts as fully covered, which saves two thirds of
 /// the rays in the interior of surfaces (most photons); an edge that cuts off less than
 /// about 4% of the kernel can slip through.
@@ -42,6 +42,26 @@ fn probe(scene: &Scene, bvh: &SceneBvh, p: &Photon, frame: &Frame, d: f32, a: f3
     ns.dot(n) > NORMAL_AGREEMENT
 }
 
+/// Whether the kernel disc of radius `r` lies inside the triangle under the photon, which
+/// settles full coverage with one ray for photons on large triangles (walls, floors).
+fn disc_inside_triangle(scene: &Scene, bvh: &SceneBvh, p: &Photon, r: f32, h: f32) -> bool {
+    let n = p.normal();
+    let Some(hit) = bvh.intersect(p.position() + h * n, -n, 2.0 * h) else {
+        return false;
+    };
+    let [a, b, c] = scene.triangle(hit.triangle as usize);
+    let ng = (b - a).cross(c - a).normalize_or_zero();
+    if ng.dot(n).abs() <= NORMAL_AGREEMENT {
+        return false;
+    }
+    // In-plane distance from the hit point to each edge, on the inner side of all three.
+    let x = p.position() + (h - hit.t) * n;
+    [(a, b), (b, c), (c, a)].iter().all(|&(u, v)| {
+        let inward = ng.cross(v - u).normalize_or_zero();
+        (x - u).dot(inward) >= r
+    })
+}
+
 /// Fraction of the kernel of radius `r` around photon `p` that lies on surfaces the splat
 /// would shade.
 pub fn coverage(
@@ -54,6 +74,9 @@ pub fn coverage(
 ) -> f32 {
     let frame = Frame::new(p.normal());
     let h = z_ratio * r;
+    if disc_inside_triangle(scene, bvh, p, r, h) {
+        return 1.0;
+    }
     let turn = rng.next_f32();
     if (0..RING_PROBES).all(|i| {
         let a = (i as f32 + turn) / RING_PROBES as f32 * std::f32::consts::TAU;
@@ -126,5 +149,20 @@ mod tests {
         assert_eq!(middle, 1.0);
         assert!((wall - 0.5).abs() < 0.05, "{wall}");
         assert!((corner - 0.25).abs() < 0.05, "{corner}");
+    }
+
+    /// The one-ray shortcut: a disc well inside one floor triangle is recognised, one that
+    /// reaches over the wall or across the quad's diagonal is not.
+    #[test]
+    fn disc_inside_triangle_checks_all_edges() {
+        let scene = builtin::load("cornell").unwrap();
+        let bvh = SceneBvh::build(&scene);
+        let at = |pos: [f32; 3], r: f32| {
+            disc_inside_triangle(&scene, &bvh, &photon_at(pos, [0.0, 1.0, 0.0]), r, 0.5 * r)
+        };
+        assert!(at([0.0, 0.0, -0.75], 0.1));
+        assert!(!at([0.0, 0.0, -0.75], 0.3), "crosses the back wall");
+        assert!(!at([-0.95, 0.0, 0.3], 0.1), "crosses the left wall");
+        assert!(!at([0.05, 0.0, 0.0], 0.1), "crosses the diagonal");
     }
 }
