@@ -71,6 +71,7 @@ def render(
     kernel_scale: float = 1.0,
     subsample: int = 1,
     footprint_volumes: bool = False,
+    volume_shape: str = "auto",
     adapter: str | None = None,
     shadow_map_size: int = 1024,
     progress: Callable[[str, float], bool | None] | None = None,

@@ -52,6 +52,12 @@ def _parser() -> argparse.ArgumentParser:
         action="store_true",
         help="size ISPM photon volumes by photon-differential footprints",
     )
+    r.add_argument(
+        "--volume-shape",
+        default="auto",
+        choices=["auto", "icosahedron", "quad"],
+        help="shape drawn per ISPM photon volume (default auto: quads for small volumes)",
+    )
     r.add_argument("--adapter", help='GPU adapter: "cpu" (lavapipe), "gpu" or part of a name')
     r.add_argument("--shadow-map-size", type=int, default=1024, help="shadow map texels per side")
     r.add_argument("--exposure", type=float, default=0.0, help="PNG exposure in stops")
@@ -96,6 +102,7 @@ def _render(args: argparse.Namespace) -> int:
         kernel_scale=args.kernel_scale,
         subsample=args.subsample,
         footprint_volumes=args.footprint_volumes,
+        volume_shape=args.volume_shape,
         adapter=args.adapter,
         shadow_map_size=args.shadow_map_size,
         progress=not args.quiet,

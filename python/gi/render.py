@@ -29,6 +29,7 @@ class RenderStats:
     photons_emitted: int = 0
     photons_first_bounce: int = 0
     photons_stored: int = 0
+    volume_quads: int = 0
 
 
 @dataclass(frozen=True)
@@ -102,6 +103,7 @@ def render(
     kernel_scale: float = 1.0,
     subsample: int = 1,
     footprint_volumes: bool = False,
+    volume_shape: str = "auto",
     adapter: str | None = None,
     shadow_map_size: int = 1024,
     progress: bool | ProgressCallback = False,
@@ -121,7 +123,10 @@ def render(
     ``photons`` first-bounce photons in all, traces later bounces on the CPU and splats one
     photon volume per stored photon, ``kernel_scale`` times the default radius (or sized by
     photon-differential footprints with ``footprint_volumes``), at 1/``subsample``
-    resolution with joint bilateral upsampling.
+    resolution with joint bilateral upsampling. ``volume_shape`` picks the shape drawn per
+    photon volume: "icosahedron", "quad" (a screen-aligned bounding rectangle, cheaper for
+    small volumes) or "auto" (quads for volumes under 16 pixels in radius, else icosahedra);
+    it changes the cost, not the image.
     GPU methods (``direct``, ``ispm``) run on ``adapter`` ("cpu" for lavapipe, "gpu", or part of an
     adapter's name; default: the ``GI_ADAPTER`` environment variable, else a real GPU when
     present, else lavapipe) with ``shadow_map_size``² texels per shadow-map face.
@@ -155,6 +160,7 @@ def render(
         kernel_scale=kernel_scale,
         subsample=subsample,
         footprint_volumes=footprint_volumes,
+        volume_shape=volume_shape,
         adapter=adapter,
         shadow_map_size=shadow_map_size,
         progress=callback,
@@ -171,6 +177,7 @@ def render(
         photons_emitted=s["photons_emitted"],
         photons_first_bounce=s["photons_first_bounce"],
         photons_stored=s["photons_stored"],
+        volume_quads=s["volume_quads"],
     )
     return RenderResult(
         radiance=out["radiance"],

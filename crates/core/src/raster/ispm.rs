@@ -12,12 +12,14 @@
 //!    [`PhotonRay`]s.
 //! 3. CPU photon tracing of the later bounces ([`crate::photon::continue_paths`], bounce
 //!    index 1 for the first-bounce rays).
-//! 4. Photon volumes (section 5): one instanced icosahedron per stored photon, splatted into
-//!    an `Rgba32Float` target with additive blending (`volume.wgsl`), at 1/`subsample`
-//!    resolution, then joint bilateral upsampling (`upsample.wgsl`).
+//! 4. Photon volumes (section 5): one instanced icosahedron or screen-aligned quad per stored
+//!    photon ([`super::volume_shape`]), splatted into an `Rgba32Float` target with additive
+//!    blending (`volume.wgsl`), at 1/`subsample` resolution, then joint bilateral upsampling
+//!    (`upsample.wgsl`).
 //!
 //! The final radiance is direct + indirect; `caustics` stays zero (no AOV).
 
+use super::volume_shape::{partition, VolumeRadius};
 use super::{buffer_init, camera_view, gbuffer, vertices, view_binding, Geometry};
 use crate::error::{Error, Result};
 use crate::gpu::{self, shaders, GpuContext};
@@ -206,7 +208,10 @@ fn spot_falloff(cos: f32, cos_inner: f32, cos_outer: f32) -> f32 {
 pub struct IspmPasses {
     bounce: wgpu::RenderPipeline,
     bounce_layout: wgpu::BindGroupLayout,
+    /// Photon volumes as icosahedra.
     volume: wgpu::RenderPipeline,
+    /// Photon volumes as screen-aligned quads.
+    volume_quad: wgpu::RenderPipeline,
     volume_layout: wgpu::BindGroupLayout,
     upsample: wgpu::RenderPipeline,
     upsample_layout: wgpu::BindGroupLayout,
@@ -347,48 +352,71 @@ impl IspmPasses {
             dst_factor: wgpu::BlendFactor::One,
             operation: wgpu::BlendOperation::Add,
         };
-        let volume = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("volume pipeline"),
-            layout: Some(&pipeline_layout(&volume_layout)),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[
-                    Some(wgpu::VertexBufferLayout {
-                        array_stride: 12,
-                        step_mode: wgpu::VertexStepMode::Vertex,
-                        attributes: &corner_attr,
+        let photon_buffer = wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<Photon>() as u64,
+            step_mode: wgpu::VertexStepMode::Instance,
+            attributes: &photon_attr,
+        };
+        // The two bounding shapes (`volume_shape`) share the fragment stage and differ in
+        // the vertex stage and topology.
+        let volume_pipeline =
+            |label, entry_point, buffers: &[Option<wgpu::VertexBufferLayout>], primitive| {
+                device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some(label),
+                    layout: Some(&pipeline_layout(&volume_layout)),
+                    vertex: wgpu::VertexState {
+                        module: &module,
+                        entry_point: Some(entry_point),
+                        compilation_options: Default::default(),
+                        buffers,
+                    },
+                    primitive,
+                    depth_stencil: None,
+                    multisample: Default::default(),
+                    fragment: Some(wgpu::FragmentState {
+                        module: &module,
+                        entry_point: Some("fs_main"),
+                        compilation_options: Default::default(),
+                        targets: &[Some(wgpu::ColorTargetState {
+                            format: TARGET,
+                            blend: Some(wgpu::BlendState {
+                                color: additive,
+                                alpha: additive,
+                            }),
+                            write_mask: wgpu::ColorWrites::ALL,
+                        })],
                     }),
-                    Some(wgpu::VertexBufferLayout {
-                        array_stride: std::mem::size_of::<Photon>() as u64,
-                        step_mode: wgpu::VertexStepMode::Instance,
-                        attributes: &photon_attr,
-                    }),
-                ],
-            },
-            primitive: wgpu::PrimitiveState {
+                    multiview_mask: None,
+                    cache: None,
+                })
+            };
+        let volume = volume_pipeline(
+            "volume pipeline (icosahedron)",
+            "vs_icosahedron",
+            &[
+                Some(wgpu::VertexBufferLayout {
+                    array_stride: 12,
+                    step_mode: wgpu::VertexStepMode::Vertex,
+                    attributes: &corner_attr,
+                }),
+                Some(photon_buffer.clone()),
+            ],
+            wgpu::PrimitiveState {
                 cull_mode: Some(wgpu::Face::Front),
                 ..Default::default()
             },
-            depth_stencil: None,
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: TARGET,
-                    blend: Some(wgpu::BlendState {
-                        color: additive,
-                        alpha: additive,
-                    }),
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        );
+        // Corners from the vertex index; the photons are vertex buffer 0. No culling: the
+        // rectangle's winding depends on nothing but the strip order.
+        let volume_quad = volume_pipeline(
+            "volume pipeline (quad)",
+            "vs_quad",
+            &[Some(photon_buffer)],
+            wgpu::PrimitiveState {
+                topology: wgpu::PrimitiveTopology::TriangleStrip,
+                ..Default::default()
+            },
+        );
 
         // Joint bilateral upsampling.
         let upsample_layout = layout(
@@ -430,6 +458,7 @@ impl IspmPasses {
             bounce,
             bounce_layout,
             volume,
+            volume_quad,
             volume_layout,
             upsample,
             upsample_layout,
@@ -954,10 +983,17 @@ fn indirect(
         bytemuck::cast_slice(&ico),
         wgpu::BufferUsages::VERTEX,
     );
+    // Small volumes first (quads), the rest after (icosahedra): one buffer, two draws.
+    let radius = VolumeRadius {
+        r_base: params.r_base,
+        r_max: params.r_max,
+    };
+    let (ordered, quads) = partition(settings.volume_shape, &photons, &scene.camera, k, radius);
+    out.stats.volume_quads = quads as u64;
     let photon_buffer = buffer_init(
         ctx,
         "photons",
-        bytemuck::cast_slice(&photons),
+        bytemuck::cast_slice(&ordered),
         wgpu::BufferUsages::VERTEX,
     );
     let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -981,11 +1017,19 @@ fn indirect(
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_pipeline(&passes.volume);
         pass.set_bind_group(0, &volume_group, &[]);
-        pass.set_vertex_buffer(0, ico_buffer.slice(..));
-        pass.set_vertex_buffer(1, photon_buffer.slice(..));
-        pass.draw(0..ico.len() as u32, 0..photons.len() as u32);
+        let (n, quads) = (ordered.len() as u32, quads as u32);
+        if quads > 0 {
+            pass.set_pipeline(&passes.volume_quad);
+            pass.set_vertex_buffer(0, photon_buffer.slice(..));
+            pass.draw(0..4, 0..quads);
+        }
+        if quads < n {
+            pass.set_pipeline(&passes.volume);
+            pass.set_vertex_buffer(0, ico_buffer.slice(..));
+            pass.set_vertex_buffer(1, photon_buffer.slice(..));
+            pass.draw(0..ico.len() as u32, quads..n);
+        }
     }
     ctx.queue.submit([encoder.finish()]);
     ctx.wait()?;

@@ -6,6 +6,7 @@ pub mod gbuffer;
 pub mod ispm;
 pub mod shadow;
 mod timer;
+pub mod volume_shape;
 
 use crate::error::{Error, Result};
 use crate::gpu::raw::{VertexRaw, ViewRaw};
