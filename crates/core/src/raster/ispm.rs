@@ -917,8 +917,7 @@ fn indirect(
             },
         ],
     });
-    let r_base = base_radius(scene, settings.photons, settings.kernel_scale);
-    let (lo, hi) = super::shadow::bounds(scene);
+    let radius = VolumeRadius::of_scene(scene, settings.photons, settings.kernel_scale);
     // Low-res texel i shades full-res pixel i·k + ⌊k/2⌋, whose centre is half a full-res
     // pixel off the low-res sample position when k is even: shift the volumes to match, so
     // that coverage is tested where the G-buffer sample lies.
@@ -929,8 +928,8 @@ fn indirect(
     let params = VolumeParamsRaw {
         view_proj: volume_view.to_cols_array_2d(),
         eye: scene.camera.position.into(),
-        r_base,
-        r_max: (0.1 * (hi - lo).length()).max(r_base),
+        r_base: radius.r_base,
+        r_max: radius.r_max,
         z_ratio: Z_RATIO,
         subsample: k,
         _pad: 0.0,
@@ -984,10 +983,6 @@ fn indirect(
         wgpu::BufferUsages::VERTEX,
     );
     // Small volumes first (quads), the rest after (icosahedra): one buffer, two draws.
-    let radius = VolumeRadius {
-        r_base: params.r_base,
-        r_max: params.r_max,
-    };
     let (ordered, quads) = partition(settings.volume_shape, &photons, &scene.camera, k, radius);
     out.stats.volume_quads = quads as u64;
     let photon_buffer = buffer_init(

@@ -6,16 +6,17 @@
 
 use crate::error::{Error, Result};
 use crate::photon::Photon;
-use crate::scene::Camera;
+use crate::scene::{Camera, Scene};
 use std::borrow::Cow;
 use std::str::FromStr;
 
 /// Photons whose volume projects to a radius below this many pixels of the volume target
 /// are drawn as quads by [`VolumeShape::Auto`], the rest as icosahedra. Measured on lavapipe
-/// (`volume_shape_bench`, docs/bench/ispm.md "Photon volume shapes"): quads are cheaper at
-/// every radius measured up to 16 px and cost about the same at 32 px, where a quad's
-/// extra rejected fragments (a rectangle around an ellipse that is often seen at a slant)
-/// outweigh its 18 fewer triangles.
+/// (`volume_shape_bench`, docs/bench/ispm.md "Photon volume shapes"; Cornell box, 640×480):
+/// the "photon volumes" stage with quads costs 0.43–0.52× the icosahedra's at median radii
+/// of 2–4 px and 0.64–0.75× at 8 px (vertex work: 4 vertices instead of 60), 0.90–0.96× at
+/// 16 px, and 1.03–1.05× at 32–64 px, where the rectangle's extra rejected fragments around
+/// the ellipse outweigh the saved vertices. The crossover lies between 16 and 32 px.
 pub const AUTO_QUAD_MAX_PIXELS: f32 = 16.0;
 
 /// Which bounding shape draws the photon volumes (method `ispm`).
@@ -76,6 +77,17 @@ pub struct VolumeRadius {
 }
 
 impl VolumeRadius {
+    /// The radii of method `ispm` for `scene`: `r_base` from [`super::ispm::base_radius`],
+    /// `r_max` a tenth of the scene's bounding-box diagonal.
+    pub fn of_scene(scene: &Scene, photons: u64, kernel_scale: f32) -> Self {
+        let r_base = super::ispm::base_radius(scene, photons, kernel_scale);
+        let (lo, hi) = super::shadow::bounds(scene);
+        VolumeRadius {
+            r_base,
+            r_max: (0.1 * (hi - lo).length()).max(r_base),
+        }
+    }
+
     /// The ellipsoid's radius in the surface plane (m), also the radius of a sphere around it
     /// (the normal axis is shorter).
     pub fn of(&self, p: &Photon) -> f32 {
