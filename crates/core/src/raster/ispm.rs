@@ -406,8 +406,8 @@ impl IspmPasses {
                 ..Default::default()
             },
         );
-        // Corners from the vertex index; the photons are vertex buffer 0. No culling: the
-        // rectangle's winding depends on nothing but the strip order.
+        // Corners from the vertex index; the photons are vertex buffer 0. Not culled: the
+        // rectangle faces the camera by construction.
         let volume_quad = volume_pipeline(
             "volume pipeline (quad)",
             "vs_quad",
