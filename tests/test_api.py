@@ -201,3 +201,20 @@ def test_ispm_boundary_compensation_restores_edge_energy():
     # Kernels reaching over the box's edges lose energy without it (measured ~5% of the
     # indirect light at this photon count).
     assert on.aov("indirect").mean() > 1.02 * off.aov("indirect").mean()
+
+
+def test_ispm_volume_shapes_agree():
+    # Every shape feeds the same exact ellipsoid test: only the summation order differs
+    # ("auto" draws small volumes first), so the images agree to float round-off.
+    scene = gi.load_scene("cornell")
+    images = {}
+    for shape in ("icosahedron", "quad", "auto"):
+        r = gi.render(scene, "ispm", spp=1, size=(48, 48), photons=20_000, volume_shape=shape)
+        images[shape] = r.aov("indirect")
+        expected = {"icosahedron": 0, "quad": r.stats.photons_stored}.get(shape)
+        if expected is not None:
+            assert r.stats.volume_quads == expected
+    assert images["icosahedron"].max() > 0
+    scale = images["icosahedron"].max()
+    for shape in ("quad", "auto"):
+        np.testing.assert_allclose(images[shape], images["icosahedron"], rtol=0, atol=1e-4 * scale)

@@ -82,3 +82,13 @@ def test_footprints_prints_a_table():
     p = run("footprints", "caustic-ring", "--photons", "20000")
     assert p.returncode == 0, p.stderr
     assert "caustic" in p.stdout and "direct" in p.stdout and "p50" in p.stdout
+
+
+def test_volume_shape_option(tmp_path):
+    out = tmp_path / "q.exr"
+    args = ["render", "cornell", "-o", str(out), "--spp", "1", "--size", "16x16", "-q"]
+    p = run(*args, "--photons", "5000", "--volume-shape", "quad")
+    assert p.returncode == 0, p.stderr
+    assert gi.read_image(out).mean() > 0
+    p = run(*args, "--volume-shape", "sphere")
+    assert p.returncode == 2 and "--volume-shape" in p.stderr

@@ -130,6 +130,7 @@ def test_nan_in_description(write_scene, cornell_desc):
         ({"method": "gather", "leaf_size": 0}, "leaf_size"),
         ({"method": "ispm", "subsample": 9}, "subsample"),
         ({"method": "ispm", "kernel_scale": -1.0}, "kernel_scale"),
+        ({"method": "ispm", "volume_shape": "sphere"}, "volume_shape"),
     ],
 )
 def test_absurd_settings(kwargs, setting):

@@ -72,6 +72,7 @@ def render(
     subsample: int = 1,
     footprint_volumes: bool = False,
     boundary_compensation: bool = True,
+    volume_shape: str = "auto",
     adapter: str | None = None,
     shadow_map_size: int = 1024,
     progress: Callable[[str, float], bool | None] | None = None,

@@ -57,6 +57,12 @@ def _parser() -> argparse.ArgumentParser:
         action="store_true",
         help="don't correct ISPM photon power for kernels that fall off surfaces",
     )
+    r.add_argument(
+        "--volume-shape",
+        default="auto",
+        choices=["auto", "icosahedron", "quad"],
+        help="shape drawn per ISPM photon volume (default auto: quads for small volumes)",
+    )
     r.add_argument("--adapter", help='GPU adapter: "cpu" (lavapipe), "gpu" or part of a name')
     r.add_argument("--shadow-map-size", type=int, default=1024, help="shadow map texels per side")
     r.add_argument("--exposure", type=float, default=0.0, help="PNG exposure in stops")
@@ -102,6 +108,7 @@ def _render(args: argparse.Namespace) -> int:
         subsample=args.subsample,
         footprint_volumes=args.footprint_volumes,
         boundary_compensation=not args.no_boundary_compensation,
+        volume_shape=args.volume_shape,
         adapter=args.adapter,
         shadow_map_size=args.shadow_map_size,
         progress=not args.quiet,

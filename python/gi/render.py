@@ -29,6 +29,7 @@ class RenderStats:
     photons_emitted: int = 0
     photons_first_bounce: int = 0
     photons_stored: int = 0
+    volume_quads: int = 0
 
 
 @dataclass(frozen=True)
@@ -103,6 +104,7 @@ def render(
     subsample: int = 1,
     footprint_volumes: bool = False,
     boundary_compensation: bool = True,
+    volume_shape: str = "auto",
     adapter: str | None = None,
     shadow_map_size: int = 1024,
     progress: bool | ProgressCallback = False,
@@ -126,6 +128,10 @@ def render(
     photon's power by the fraction of its kernel that lies on surfaces (probe rays), so
     edges and corners keep their energy. Mirrors and glass seen by the camera are traced
     backwards on the CPU with a photon-map gather (``k``, ``max_radius``, ``kernel``).
+    ``volume_shape`` picks the shape drawn per
+    photon volume: "icosahedron", "quad" (a screen-aligned bounding rectangle, cheaper for
+    small volumes) or "auto" (quads for volumes under 16 pixels in radius, else icosahedra);
+    it changes the cost, not the image.
     GPU methods (``direct``, ``ispm``) run on ``adapter`` ("cpu" for lavapipe, "gpu", or part of an
     adapter's name; default: the ``GI_ADAPTER`` environment variable, else a real GPU when
     present, else lavapipe) with ``shadow_map_size``² texels per shadow-map face.
@@ -160,6 +166,7 @@ def render(
         subsample=subsample,
         footprint_volumes=footprint_volumes,
         boundary_compensation=boundary_compensation,
+        volume_shape=volume_shape,
         adapter=adapter,
         shadow_map_size=shadow_map_size,
         progress=callback,
@@ -176,6 +183,7 @@ def render(
         photons_emitted=s["photons_emitted"],
         photons_first_bounce=s["photons_first_bounce"],
         photons_stored=s["photons_stored"],
+        volume_quads=s["volume_quads"],
     )
     return RenderResult(
         radiance=out["radiance"],

@@ -8,7 +8,7 @@
 mod common;
 
 use gi_core::raster::ispm::render_bounce_map;
-use gi_core::render::Silent;
+use gi_core::render::{Silent, VolumeShape};
 use gi_core::{render, scene::builtin, Method, RenderOutput, Scene, Settings};
 use glam::DVec3;
 use std::f64::consts::PI;
@@ -410,11 +410,11 @@ fn footprint_sized_volumes_match_furnace() {
 /// seen directly. Caustic region: the brightest 5% of a reference's light-traced caustic
 /// image on the floor (about 90 pixels at 128²; the focused spot is a few pixels wide, and
 /// ISPM shades pixel centres while the reference box-filters pixels, which over the
-/// brightest 1–2% alone reads 5–10% high: measured at 64² and 128²). Criteria: ISPM's indirect light there is more than 3× that of the rest
-/// of the floor; its total radiance there matches the path tracer's within 10%; and the
-/// pixels that see the mirror or the glass sphere (traced backwards on the CPU, otherwise
-/// black in a rasterizer) match the path tracer's mean within 10% per channel. Measured
-/// values are printed.
+/// brightest 1–2% alone reads 5–10% high: measured at 64² and 128²). Criteria: ISPM's
+/// indirect light there is more than 3× that of the rest of the floor; its total radiance
+/// there matches the path tracer's within 10%; and the pixels that see the mirror or the
+/// glass sphere (traced backwards on the CPU, otherwise black in a rasterizer) match the
+/// path tracer's mean within 10% per channel. Measured values are printed.
 #[test]
 fn cornell_glass_caustic_and_specular_surfaces() {
     let scene = load("cornell-glass");
@@ -511,4 +511,125 @@ fn cornell_glass_caustic_and_specular_surfaces() {
     assert!(rel.max_element() < 0.10, "caustic {ti:?} vs {tp:?}");
     let rel = (si / sp - DVec3::ONE).abs();
     assert!(rel.max_element() < 0.10, "spheres {si:?} vs {sp:?}");
+}
+
+/// The indirect AOV of `s` with volume shape `shape`, and (stored photons, volumes drawn as
+/// quads).
+fn indirect_with(scene: &Scene, s: &Settings, shape: VolumeShape) -> (gi_core::Image, (u64, u64)) {
+    let out = run(
+        scene,
+        &Settings {
+            volume_shape: shape,
+            ..s.clone()
+        },
+    );
+    let counts = (out.stats.photons_stored, out.stats.volume_quads);
+    let img = out
+        .aovs
+        .into_iter()
+        .find(|(n, _)| n == "indirect")
+        .map(|(_, img)| img)
+        .expect("indirect AOV");
+    (img, counts)
+}
+
+/// Largest per-pixel difference of `a` and `b` relative to `scale`.
+fn max_difference(a: &gi_core::Image, b: &gi_core::Image, scale: f32) -> f32 {
+    a.pixels
+        .iter()
+        .zip(&b.pixels)
+        .map(|(p, q)| (*p - *q).abs().max_element() / scale)
+        .fold(0.0, f32::max)
+}
+
+fn lit_pixels(img: &gi_core::Image) -> usize {
+    img.pixels.iter().filter(|p| p.max_element() > 0.0).count()
+}
+
+/// Photon volumes drawn as screen-aligned quads, as icosahedra, and per photon by size
+/// (`auto`) give the same indirect image: every shape feeds the same exact ellipsoid test,
+/// so a pixel that differs means a bound that is not conservative (a quad too small, a wrong
+/// near-plane fallback). Quad and icosahedron draw the photons in the same order, so equal
+/// coverage blends the same terms in the same order; `auto` reorders the photons (small ones
+/// first), which changes only the float summation order: tolerance 1e-4 of the image's
+/// largest pixel (an f32 sum of a few hundred terms is off by ~1e-5 relative).
+/// Cases: the Cornell box at subsample 1 and 2 (the half-pixel shift of the volume view);
+/// the furnace, whose camera sits inside the sphere among the photons, so that volumes
+/// reach behind the eye plane (the quad's full-screen fallback) or lie wholly behind it; and
+/// the Cornell box with 3× larger volumes at 128², where `auto` draws both shapes and the
+/// back-wall icosahedra reach past the far plane (before their depth was clamped they lost
+/// up to 2% of a pixel there, which this test found).
+/// Besides equal lit-pixel counts, the tolerance is checked to be tight: volumes 3% smaller
+/// (kernel_scale 0.97) differ from it by more than 100× the tolerance.
+#[test]
+fn volume_shapes_give_the_same_image() {
+    let cases = [
+        ("cornell", 64, 1, 1.0),
+        ("cornell", 64, 2, 1.0),
+        ("furnace", 32, 1, 4.0),
+        ("cornell", 128, 1, 3.0),
+    ];
+    for (name, size, subsample, kernel_scale) in cases {
+        let scene = load(name);
+        let s = Settings {
+            photons: 50_000,
+            subsample,
+            kernel_scale,
+            ..ispm_settings(size)
+        };
+        let (ico, _) = indirect_with(&scene, &s, VolumeShape::Icosahedron);
+        let (quad, _) = indirect_with(&scene, &s, VolumeShape::Quad);
+        let (auto, quads) = indirect_with(&scene, &s, VolumeShape::Auto);
+        let scale = ico
+            .pixels
+            .iter()
+            .map(|p| p.max_element())
+            .fold(0.0, f32::max);
+        let (dq, da) = (
+            max_difference(&quad, &ico, scale),
+            max_difference(&auto, &ico, scale),
+        );
+        let lit = lit_pixels(&ico);
+        eprintln!(
+            "{name} {size}² k={subsample}: max pixel {scale:.4}, lit {lit}/{}, \
+             |quad − ico| {dq:.2e}, |auto − ico| {da:.2e} (of the max pixel); \
+             auto drew {} of {} volumes as quads",
+            size * size,
+            quads.1,
+            quads.0
+        );
+        assert!(scale > 0.0, "no indirect light");
+        assert!(lit > size as usize * size as usize / 2, "{lit} lit pixels");
+        assert_eq!(lit_pixels(&quad), lit, "quad covers other pixels");
+        assert_eq!(lit_pixels(&auto), lit, "auto covers other pixels");
+        assert!(dq < 1e-4, "quad differs from icosahedron by {dq}");
+        assert!(da < 1e-4, "auto differs from icosahedron by {da}");
+        if kernel_scale == 3.0 {
+            assert!(0 < quads.1 && quads.1 < quads.0, "auto drew one shape only");
+        }
+        if name == "cornell" && size == 64 && subsample == 1 {
+            let (smaller, _) = indirect_with(
+                &scene,
+                &Settings {
+                    kernel_scale: 0.97,
+                    ..s.clone()
+                },
+                VolumeShape::Quad,
+            );
+            let d = max_difference(&smaller, &ico, scale);
+            eprintln!("cornell with 3% smaller volumes: {d:.2e}");
+            assert!(d > 1e-2, "{d}");
+        }
+    }
+}
+
+#[test]
+fn volume_shape_setting_parses() {
+    assert_eq!(Settings::default().volume_shape, VolumeShape::Auto);
+    assert_eq!("quad".parse::<VolumeShape>().ok(), Some(VolumeShape::Quad));
+    let e = "cube".parse::<VolumeShape>().err();
+    assert!(
+        matches!(e, Some(gi_core::Error::Setting { name, .. }) if name == "volume_shape"),
+        "{e:?}"
+    );
 }

@@ -55,7 +55,7 @@ fn image_array<'py>(py: Python<'py>, img: Image) -> PyResult<Bound<'py, PyAny>> 
 /// Renders `scene`; returns a dict of float32 arrays (radiance, albedo, normal, position,
 /// caustics: H×W×3; depth: H×W) and `stats`.
 #[pyfunction]
-#[pyo3(signature = (scene, method = "path", spp = 64, width = None, height = None, seed = 0, max_depth = 64, light_paths = None, photons = 200_000, k = 100, max_radius = None, kernel = "cone", smoothing = 1.0, leaf_size = None, kernel_scale = 1.0, subsample = 1, footprint_volumes = false, boundary_compensation = true, adapter = None, shadow_map_size = 1024, progress = None))]
+#[pyo3(signature = (scene, method = "path", spp = 64, width = None, height = None, seed = 0, max_depth = 64, light_paths = None, photons = 200_000, k = 100, max_radius = None, kernel = "cone", smoothing = 1.0, leaf_size = None, kernel_scale = 1.0, subsample = 1, footprint_volumes = false, boundary_compensation = true, volume_shape = "auto", adapter = None, shadow_map_size = 1024, progress = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn render<'py>(
     py: Python<'py>,
@@ -77,12 +77,15 @@ pub fn render<'py>(
     subsample: u32,
     footprint_volumes: bool,
     boundary_compensation: bool,
+    volume_shape: &str,
     adapter: Option<String>,
     shadow_map_size: u32,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let method: Method = method.parse().map_err(|e| to_py(py, e))?;
     let kernel: gi_core::render::Kernel = kernel.parse().map_err(|e| to_py(py, e))?;
+    let volume_shape: gi_core::render::VolumeShape =
+        volume_shape.parse().map_err(|e| to_py(py, e))?;
     let settings = Settings {
         method,
         spp,
@@ -101,6 +104,7 @@ pub fn render<'py>(
         subsample,
         footprint_volumes,
         boundary_compensation,
+        volume_shape,
         adapter,
         shadow_map_size,
     };
@@ -144,6 +148,7 @@ pub fn render<'py>(
     stats.set_item("photons_emitted", s.photons_emitted)?;
     stats.set_item("photons_first_bounce", s.photons_first_bounce)?;
     stats.set_item("photons_stored", s.photons_stored)?;
+    stats.set_item("volume_quads", s.volume_quads)?;
     d.set_item("stats", stats)?;
     Ok(d)
 }

@@ -12,9 +12,10 @@
 //!    [`PhotonRay`]s.
 //! 3. CPU photon tracing of the later bounces ([`crate::photon::continue_paths`], bounce
 //!    index 1 for the first-bounce rays).
-//! 4. Photon volumes (section 5): one instanced icosahedron per stored photon, splatted into
-//!    an `Rgba32Float` target with additive blending (`volume.wgsl`), at 1/`subsample`
-//!    resolution, then joint bilateral upsampling (`upsample.wgsl`).
+//! 4. Photon volumes (section 5): one instanced icosahedron or screen-aligned quad per stored
+//!    photon ([`super::volume_shape`]), splatted into an `Rgba32Float` target with additive
+//!    blending (`volume.wgsl`), at 1/`subsample` resolution, then joint bilateral upsampling
+//!    (`upsample.wgsl`).
 //!
 //! 5. Mirrors and glass seen by the camera: backward ray tracing on the CPU with a photon-map
 //!    gather where the specular paths land (`specular.rs`).
@@ -22,6 +23,7 @@
 //! The final radiance is direct + specular + indirect (AOVs `direct`, `specular`,
 //! `indirect`); `caustics` stays zero.
 
+use super::volume_shape::{partition, VolumeRadius};
 use super::{buffer_init, camera_view, gbuffer, vertices, view_binding, Geometry};
 use crate::error::{Error, Result};
 use crate::gpu::{self, shaders, GpuContext};
@@ -36,10 +38,6 @@ use std::time::Instant;
 
 /// r_z / r_xy of the photon volumes.
 const Z_RATIO: f32 = 0.5;
-/// Photon-volume radius ∝ ρp^(−α) (`volume_radius`).
-const DENSITY_EXPONENT: f32 = 0.35;
-/// Largest widening of a photon volume over the base radius (`volume_radius`).
-const MAX_WIDENING: f32 = 12.0;
 /// Largest bounce-map side (texels).
 const MAX_BOUNCE_RES: u32 = 4096;
 /// Most GPU memory the bounce-map targets may take.
@@ -214,7 +212,10 @@ fn spot_falloff(cos: f32, cos_inner: f32, cos_outer: f32) -> f32 {
 pub struct IspmPasses {
     bounce: wgpu::RenderPipeline,
     bounce_layout: wgpu::BindGroupLayout,
+    /// Photon volumes as icosahedra.
     volume: wgpu::RenderPipeline,
+    /// Photon volumes as screen-aligned quads.
+    volume_quad: wgpu::RenderPipeline,
     volume_layout: wgpu::BindGroupLayout,
     upsample: wgpu::RenderPipeline,
     upsample_layout: wgpu::BindGroupLayout,
@@ -355,48 +356,71 @@ impl IspmPasses {
             dst_factor: wgpu::BlendFactor::One,
             operation: wgpu::BlendOperation::Add,
         };
-        let volume = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("volume pipeline"),
-            layout: Some(&pipeline_layout(&volume_layout)),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[
-                    Some(wgpu::VertexBufferLayout {
-                        array_stride: 12,
-                        step_mode: wgpu::VertexStepMode::Vertex,
-                        attributes: &corner_attr,
+        let photon_buffer = wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<Photon>() as u64,
+            step_mode: wgpu::VertexStepMode::Instance,
+            attributes: &photon_attr,
+        };
+        // The two bounding shapes (`volume_shape`) share the fragment stage and differ in
+        // the vertex stage and topology.
+        let volume_pipeline =
+            |label, entry_point, buffers: &[Option<wgpu::VertexBufferLayout>], primitive| {
+                device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some(label),
+                    layout: Some(&pipeline_layout(&volume_layout)),
+                    vertex: wgpu::VertexState {
+                        module: &module,
+                        entry_point: Some(entry_point),
+                        compilation_options: Default::default(),
+                        buffers,
+                    },
+                    primitive,
+                    depth_stencil: None,
+                    multisample: Default::default(),
+                    fragment: Some(wgpu::FragmentState {
+                        module: &module,
+                        entry_point: Some("fs_main"),
+                        compilation_options: Default::default(),
+                        targets: &[Some(wgpu::ColorTargetState {
+                            format: TARGET,
+                            blend: Some(wgpu::BlendState {
+                                color: additive,
+                                alpha: additive,
+                            }),
+                            write_mask: wgpu::ColorWrites::ALL,
+                        })],
                     }),
-                    Some(wgpu::VertexBufferLayout {
-                        array_stride: std::mem::size_of::<Photon>() as u64,
-                        step_mode: wgpu::VertexStepMode::Instance,
-                        attributes: &photon_attr,
-                    }),
-                ],
-            },
-            primitive: wgpu::PrimitiveState {
+                    multiview_mask: None,
+                    cache: None,
+                })
+            };
+        let volume = volume_pipeline(
+            "volume pipeline (icosahedron)",
+            "vs_icosahedron",
+            &[
+                Some(wgpu::VertexBufferLayout {
+                    array_stride: 12,
+                    step_mode: wgpu::VertexStepMode::Vertex,
+                    attributes: &corner_attr,
+                }),
+                Some(photon_buffer.clone()),
+            ],
+            wgpu::PrimitiveState {
                 cull_mode: Some(wgpu::Face::Front),
                 ..Default::default()
             },
-            depth_stencil: None,
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: TARGET,
-                    blend: Some(wgpu::BlendState {
-                        color: additive,
-                        alpha: additive,
-                    }),
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        );
+        // Corners from the vertex index; the photons are vertex buffer 0. Not culled: the
+        // rectangle faces the camera by construction.
+        let volume_quad = volume_pipeline(
+            "volume pipeline (quad)",
+            "vs_quad",
+            &[Some(photon_buffer)],
+            wgpu::PrimitiveState {
+                topology: wgpu::PrimitiveTopology::TriangleStrip,
+                ..Default::default()
+            },
+        );
 
         // Joint bilateral upsampling.
         let upsample_layout = layout(
@@ -438,6 +462,7 @@ impl IspmPasses {
             bounce,
             bounce_layout,
             volume,
+            volume_quad,
             volume_layout,
             upsample,
             upsample_layout,
@@ -774,32 +799,6 @@ pub fn base_radius(scene: &Scene, photons: u64, kernel_scale: f32) -> f32 {
     (kernel_scale as f64 * (area / photons.max(1) as f64).sqrt()) as f32
 }
 
-/// Radius (m) of the photon volumes of path density 1, and the largest radius.
-fn volume_radii(scene: &Scene, settings: &Settings) -> (f32, f32) {
-    let r_base = base_radius(scene, settings.photons, settings.kernel_scale);
-    let (lo, hi) = super::shadow::bounds(scene);
-    (r_base, (0.1 * (hi - lo).length()).max(r_base))
-}
-
-/// Radius (m) of photon `p`'s volume: the footprint when traced with differentials, else
-/// from the path density (section 5.1): r_base·clamp(ρp^(−α), 1, G). Dense (caustic) paths
-/// get the base radius; one Lambertian bounce (ρp = ρL/1000 ≈ 7·10⁻⁴) widens it to the cap
-/// G, glossy ones less. α and G come from `examples/ispm_kernel_sweep.rs` on cornell with
-/// boundary compensation: RMSE against the converged image at 200k photons falls from
-/// 0.0430 at 4× (the earlier α = 0.2, G = 4) to 0.0249 at 12× and flattens beyond (0.0244
-/// at 16×), the 8×8-block error from 3.15% to 2.67%.
-pub fn volume_radius(p: &Photon, r_base: f32, r_max: f32) -> f32 {
-    if p.footprint_radius > 0.0 {
-        return p.footprint_radius.min(r_max);
-    }
-    let g = p
-        .path_density
-        .max(1e-30)
-        .powf(-DENSITY_EXPONENT)
-        .clamp(1.0, MAX_WIDENING);
-    (r_base * g).min(r_max)
-}
-
 /// Method `ispm`.
 pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Result<RenderOutput> {
     let t0 = Instant::now();
@@ -885,9 +884,9 @@ fn indirect(
     out.stats.photons_stored = photons.len() as u64;
     // Volume radii are decided here, once (the splat reads `footprint_radius`).
     let mut photons = photons;
-    let (r_base, r_max) = volume_radii(scene, settings);
+    let radius = VolumeRadius::of_scene(scene, settings.photons, settings.kernel_scale);
     for p in &mut photons {
-        p.footprint_radius = volume_radius(p, r_base, r_max);
+        p.footprint_radius = radius.of(p);
     }
     if settings.boundary_compensation {
         let t = Instant::now();
@@ -950,7 +949,7 @@ fn indirect(
             },
         ],
     });
-    let (r_base, r_max) = volume_radii(scene, settings);
+    let radius = VolumeRadius::of_scene(scene, settings.photons, settings.kernel_scale);
     // Low-res texel i shades full-res pixel i·k + ⌊k/2⌋, whose centre is half a full-res
     // pixel off the low-res sample position when k is even: shift the volumes to match, so
     // that coverage is tested where the G-buffer sample lies.
@@ -961,8 +960,8 @@ fn indirect(
     let params = VolumeParamsRaw {
         view_proj: volume_view.to_cols_array_2d(),
         eye: scene.camera.position.into(),
-        r_base,
-        r_max,
+        r_base: radius.r_base,
+        r_max: radius.r_max,
         z_ratio: Z_RATIO,
         subsample: k,
         _pad: 0.0,
@@ -1015,10 +1014,13 @@ fn indirect(
         bytemuck::cast_slice(&ico),
         wgpu::BufferUsages::VERTEX,
     );
+    // Small volumes first (quads), the rest after (icosahedra): one buffer, two draws.
+    let (ordered, quads) = partition(settings.volume_shape, &photons, &scene.camera, k, radius);
+    out.stats.volume_quads = quads as u64;
     let photon_buffer = buffer_init(
         ctx,
         "photons",
-        bytemuck::cast_slice(&photons),
+        bytemuck::cast_slice(&ordered),
         wgpu::BufferUsages::VERTEX,
     );
     let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -1042,11 +1044,19 @@ fn indirect(
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_pipeline(&passes.volume);
         pass.set_bind_group(0, &volume_group, &[]);
-        pass.set_vertex_buffer(0, ico_buffer.slice(..));
-        pass.set_vertex_buffer(1, photon_buffer.slice(..));
-        pass.draw(0..ico.len() as u32, 0..photons.len() as u32);
+        let (n, quads) = (ordered.len() as u32, quads as u32);
+        if quads > 0 {
+            pass.set_pipeline(&passes.volume_quad);
+            pass.set_vertex_buffer(0, photon_buffer.slice(..));
+            pass.draw(0..4, 0..quads);
+        }
+        if quads < n {
+            pass.set_pipeline(&passes.volume);
+            pass.set_vertex_buffer(0, ico_buffer.slice(..));
+            pass.set_vertex_buffer(1, photon_buffer.slice(..));
+            pass.draw(0..ico.len() as u32, quads..n);
+        }
     }
     ctx.queue.submit([encoder.finish()]);
     ctx.wait()?;

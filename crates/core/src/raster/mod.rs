@@ -7,6 +7,7 @@ pub mod ispm;
 pub mod shadow;
 mod specular;
 mod timer;
+pub mod volume_shape;
 
 use crate::error::{Error, Result};
 use crate::gpu::raw::{VertexRaw, ViewRaw};

@@ -8,6 +8,7 @@ mod reference;
 use crate::error::{Error, Result};
 use crate::image::Image;
 pub use crate::photon::Kernel;
+pub use crate::raster::volume_shape::VolumeShape;
 use crate::scene::Scene;
 pub use gather::trace_settings as gather_trace_settings;
 use std::str::FromStr;
@@ -118,6 +119,9 @@ pub struct Settings {
     /// (probe rays, `photon::boundary`), so that photons near edges and corners don't lose
     /// the energy that falls off the surface.
     pub boundary_compensation: bool,
+    /// Bounding shape of the ISPM photon volumes: icosahedra, screen-aligned quads, or per
+    /// photon by projected size (`Auto`). Changes the cost only, not the image.
+    pub volume_shape: VolumeShape,
 }
 
 impl Default for Settings {
@@ -142,6 +146,7 @@ impl Default for Settings {
             subsample: 1,
             footprint_volumes: false,
             boundary_compensation: true,
+            volume_shape: VolumeShape::Auto,
         }
     }
 }
@@ -235,6 +240,9 @@ pub struct RenderStats {
     pub photons_first_bounce: u64,
     /// Method `ispm`: photons stored (and splatted as volumes), bounce 1 and later.
     pub photons_stored: u64,
+    /// Method `ispm`: stored photons whose volumes were drawn as quads (the rest as
+    /// icosahedra; see `Settings::volume_shape`).
+    pub volume_quads: u64,
 }
 
 /// A rendered frame: radiance and auxiliary images, all `width × height`.
