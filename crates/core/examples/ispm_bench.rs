@@ -25,7 +25,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .join("; ")
     );
     // Stage groups: (column, stage names summed).
-    let groups: [(&str, &[&str]); 8] = [
+    let groups: [(&str, &[&str]); 10] = [
         (
             "direct light",
             &[
@@ -40,6 +40,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ("bounce readback", &["bounce readback"]),
         ("bounce rays", &["bounce rays"]),
         ("cpu trace", &["cpu trace"]),
+        ("boundary compensation", &["boundary compensation"]),
+        ("specular paths", &["specular paths"]),
         ("photon volumes", &["photon volumes"]),
         ("upsample", &["upsample"]),
         ("indirect readback", &["readback indirect"]),
