@@ -344,12 +344,13 @@ fn lbvh_vs_obvhs(scene: &gi_core::Scene) {
     let np = points.len() as f64;
     let auto = map.leaf_size();
     let (mut t_build, mut t_query, mut w_ref) = (0.0, 0.0, 0.0);
-    for leaf in [auto, 8] {
+    let leaves = std::iter::once(auto).chain([4, 16].into_iter().filter(|&t| t != auto));
+    for (row, leaf) in leaves.enumerate() {
         let (t_b, lbvh) = best_of(runs, || LinearBvh::build(&boxes, leaf));
         let (t_q, (w, tests, hits)) = best_of(runs, || {
             query(&|p, visit: &mut dyn FnMut(u32)| lbvh.for_each_candidate(p, visit))
         });
-        if leaf == auto {
+        if row == 0 {
             (t_build, t_query, w_ref) = (t_b, t_q, w);
             println!(
                 "Footprints containing a query point: {:.1} on average (the paper's k_PD, Table 2: \
@@ -360,7 +361,7 @@ fn lbvh_vs_obvhs(scene: &gi_core::Scene) {
             println!("| hierarchy | leaf size | build (ms) | query (ms) | tests / point | build vs LBVH | query vs LBVH |");
             println!("|---|---|---|---|---|---|---|");
         }
-        let name = if leaf == auto { "T_auto" } else { "fixed T" };
+        let name = if row == 0 { "T_auto" } else { "fixed T" };
         println!(
             "| LBVH (Morton, {name}) | {leaf} | {:.1} | {:.1} | {:.1} | {:.2} | {:.2} |",
             t_b * 1e3,
