@@ -40,6 +40,7 @@ def test_progress_bar_shows(tmp_path):
 def test_scenes_lists_builtins():
     p = run("scenes")
     assert p.returncode == 0 and "cornell-glass" in p.stdout and "furnace" in p.stdout
+    assert "ring-room" in p.stdout
 
 
 def test_errors_exit_non_zero_with_a_message(tmp_path):
@@ -82,3 +83,11 @@ def test_footprints_prints_a_table():
     p = run("footprints", "caustic-ring", "--photons", "20000")
     assert p.returncode == 0, p.stderr
     assert "caustic" in p.stdout and "direct" in p.stdout and "p50" in p.stdout
+
+
+def test_footprints_of_all_three_path_kinds():
+    # ring-room: the mirror ring's caustic amid diffusely reflected light (the paper's Table 3).
+    p = run("footprints", "ring-room", "--photons", "20000")
+    assert p.returncode == 0, p.stderr
+    kinds = {line.split()[0] for line in p.stdout.splitlines()[2:]}
+    assert kinds == {"caustic", "diffuse", "direct"}, p.stdout
