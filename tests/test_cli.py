@@ -40,6 +40,7 @@ def test_progress_bar_shows(tmp_path):
 def test_scenes_lists_builtins():
     p = run("scenes")
     assert p.returncode == 0 and "cornell-glass" in p.stdout and "furnace" in p.stdout
+    assert "ring-room" in p.stdout
 
 
 def test_errors_exit_non_zero_with_a_message(tmp_path):
@@ -92,3 +93,11 @@ def test_volume_shape_option(tmp_path):
     assert gi.read_image(out).mean() > 0
     p = run(*args, "--volume-shape", "sphere")
     assert p.returncode == 2 and "--volume-shape" in p.stderr
+
+
+def test_footprints_of_all_three_path_kinds():
+    # ring-room: the mirror ring's caustic amid diffusely reflected light (the paper's Table 3).
+    p = run("footprints", "ring-room", "--photons", "20000")
+    assert p.returncode == 0, p.stderr
+    kinds = {line.split()[0] for line in p.stdout.splitlines()[2:]}
+    assert kinds == {"caustic", "diffuse", "direct"}, p.stdout

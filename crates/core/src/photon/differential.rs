@@ -103,30 +103,57 @@ impl Differentials {
         }
     }
 
-    /// Footprint semi-axes Δ·s·∂p at the current hit, with the nonlinear compression
-    /// ‖∂p‖^(−3/4) for photons that were diffusely reflected (§4.3), clamped to `r_max`.
-    pub fn footprint_axes(
-        &self,
-        delta: f32,
-        smoothing: f32,
-        diffuse: bool,
-        r_max: f32,
-    ) -> [Vec3; 2] {
-        self.dp.map(|a| {
-            let len = a.length();
-            let scaled = if diffuse && len > 0.0 {
-                a * len.powf(-0.75)
-            } else {
-                a
-            };
-            let axis = scaled * delta * smoothing;
-            let l = axis.length();
-            if l > r_max {
-                axis * (r_max / l)
-            } else {
-                axis
-            }
-        })
+    /// Footprint semi-axes Δ·s·∂p at the current hit, before the compression of diffusely
+    /// reflected photons ([`compress`]) and the clamp to a largest radius ([`clamp_axis`]),
+    /// which wait until all photons are traced.
+    pub fn footprint_axes(&self, delta: f32, smoothing: f32) -> [Vec3; 2] {
+        self.dp.map(|a| a * (delta * smoothing))
+    }
+}
+
+/// The nonlinear compression of a diffusely reflected photon's semi-axis `a` (§4.3):
+/// a·(‖a‖/L)^(−3/4), so its length becomes L^(3/4)·‖a‖^(1/4).
+///
+/// The paper writes the factor as ‖∂p‖^(−3/4) of the raw differential, which silently fixes
+/// the reference length (L = Δ·s scene units for these axes a = Δ·s·∂p): the result then has
+/// units of length^(1/4), and multiplying a scene's coordinates by 100 (metres to
+/// centimetres) multiplies its diffuse footprints by only 100^(1/4) ≈ 3.2 — they would
+/// shrink 32-fold relative to the scene (and in a metre-scale scene they end up smaller than
+/// the caustic ones: tests/gather.rs). Measuring ‖a‖ against
+/// a length of the scene itself keeps footprints scale-free; [`reference_length`] picks the
+/// geometric mean of the lengths being compressed, so that the compression only narrows
+/// the range of radii around their typical size (what §4.3 asks of it) and leaves the overall
+/// size to the smoothing factor s.
+pub fn compress(a: Vec3, reference: f32) -> Vec3 {
+    let len = a.length();
+    if len > 0.0 && reference > 0.0 {
+        a * (len / reference).powf(-0.75)
+    } else {
+        a
+    }
+}
+
+/// The reference length L of [`compress`]: the geometric mean of the (nonzero, finite)
+/// semi-axis lengths `lengths`, accumulated in f64 and in order (deterministic). `None`
+/// when there are none.
+pub fn reference_length(lengths: impl IntoIterator<Item = f32>) -> Option<f32> {
+    let (mut sum, mut n) = (0.0f64, 0u64);
+    for l in lengths {
+        if l > 0.0 && l.is_finite() {
+            sum += (l as f64).ln();
+            n += 1;
+        }
+    }
+    (n > 0).then(|| (sum / n as f64).exp() as f32)
+}
+
+/// Clamps a semi-axis to the length `r_max`, keeping its direction.
+pub fn clamp_axis(a: Vec3, r_max: f32) -> Vec3 {
+    let l = a.length();
+    if l > r_max {
+        a * (r_max / l)
+    } else {
+        a
     }
 }
 
@@ -213,6 +240,33 @@ mod tests {
         diff.survive(0.25);
         let widened = diff.dp[0].cross(diff.dp[1]).length();
         assert!((widened / after - 4.0).abs() < 1e-3);
+    }
+
+    /// Scaling a scene by k scales every raw semi-axis by k; with L measured in the scene
+    /// (the geometric mean, which scales by k too) the compressed axes scale by exactly k,
+    /// while the paper's literal ‖∂p‖^(−3/4) (L fixed at 1) scales them by k^(1/4).
+    #[test]
+    fn compression_is_scale_free() {
+        let axes = [
+            Vec3::new(0.02, 0.0, 0.01),
+            Vec3::new(0.0, 0.3, 0.0),
+            Vec3::new(1.5, 0.2, 0.0),
+            Vec3::new(0.0, 0.0, 7.0),
+        ];
+        let k = 100.0f32;
+        let l1 = reference_length(axes.iter().map(|a| a.length())).unwrap();
+        let lk = reference_length(axes.iter().map(|a| (*a * k).length())).unwrap();
+        assert!((lk / l1 / k - 1.0).abs() < 1e-5);
+        for a in axes {
+            let ratio = compress(a * k, lk).length() / compress(a, l1).length();
+            assert!((ratio / k - 1.0).abs() < 1e-5, "{ratio}");
+            let literal = compress(a * k, 1.0).length() / compress(a, 1.0).length();
+            assert!((literal / k.powf(0.25) - 1.0).abs() < 1e-5, "{literal}");
+        }
+        // It narrows the range of lengths: the ratio of largest to smallest goes to its 4th root.
+        let c: Vec<f32> = axes.iter().map(|a| compress(*a, l1).length()).collect();
+        let before = 7.0 / axes[0].length();
+        assert!((c[3] / c[0] - before.powf(0.25)).abs() < 1e-3);
     }
 
     #[test]

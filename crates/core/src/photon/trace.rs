@@ -9,7 +9,7 @@
 //! `Rng::new(seed, stream, path)` into its own [`PhotonSet`]; the chunks are concatenated
 //! in order, so the result depends on the seed only, not on the thread schedule.
 
-use super::differential::Differentials;
+use super::differential::{self, Differentials};
 use super::{path_density_factor, FootprintAxes, PathKind, Photon, PhotonRay, PhotonSet};
 use crate::bsdf::Lobe;
 use crate::sampling::Rng;
@@ -87,6 +87,7 @@ pub fn emit_and_trace(
         follow(scene, bvh, &ray, diff, s, &mut rng, out);
     });
     set.emitted = n_photons;
+    finish_footprints(&mut set, s);
     set
 }
 
@@ -106,7 +107,35 @@ pub fn continue_paths(
         follow(scene, bvh, ray, diff, s, &mut rng, out);
     });
     set.emitted = rays.len() as u64;
+    finish_footprints(&mut set, s);
     set
+}
+
+/// Once all photons are traced (§4.3, "after photon tracing has completed"): compresses the
+/// footprints of diffusely reflected photons against their geometric-mean semi-axis (see
+/// [`differential::compress`] for why that reference), clamps every semi-axis to `r_max`
+/// and records each photon's footprint radius.
+fn finish_footprints(set: &mut PhotonSet, s: &PhotonTraceSettings) {
+    let Some(ds) = &s.differentials else {
+        return;
+    };
+    let diffuse = |f: &&FootprintAxes| f.kind == PathKind::Diffuse;
+    let reference = differential::reference_length(
+        set.footprints
+            .iter()
+            .filter(diffuse)
+            .flat_map(|f| f.axes.map(|a| a.length())),
+    );
+    for (p, f) in set.photons.iter_mut().zip(&mut set.footprints) {
+        f.axes = f.axes.map(|a| {
+            let a = match reference {
+                Some(l) if f.kind == PathKind::Diffuse => differential::compress(a, l),
+                _ => a,
+            };
+            differential::clamp_axis(a, ds.r_max)
+        });
+        p.footprint_radius = f.radius();
+    }
 }
 
 /// Runs `path(i, set)` for every `i < n` in parallel chunks and concatenates the chunks' sets
@@ -181,13 +210,8 @@ fn follow(
                 ..Default::default()
             });
             if let Some(ds) = &s.differentials {
-                let diffuse = kind == PathKind::Diffuse;
-                let axes = diff.footprint_axes(ds.spacing, ds.smoothing, diffuse, ds.r_max);
-                let fa = FootprintAxes { axes, kind };
-                if let Some(p) = out.photons.last_mut() {
-                    p.footprint_radius = fa.radius();
-                }
-                out.footprints.push(fa);
+                let axes = diff.footprint_axes(ds.spacing, ds.smoothing);
+                out.footprints.push(FootprintAxes { axes, kind });
             }
         }
         if bounce >= s.max_bounces {

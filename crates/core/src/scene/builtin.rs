@@ -22,6 +22,11 @@ pub const BUILTINS: &[(&str, &str, &str)] = &[
         include_str!("../../scenes/caustic-ring.json"),
     ),
     (
+        "ring-room",
+        "the caustic-ring's mirror ring in a closed white room (caustic amid indirect light)",
+        include_str!("../../scenes/ring-room.json"),
+    ),
+    (
         "furnace",
         "closed diffuse sphere (R = 1, albedo 0.5), point light (I = 1) at its centre",
         include_str!("../../scenes/furnace.json"),
