@@ -69,7 +69,7 @@ def render(
     smoothing: float = 1.0,
     leaf_size: int | None = None,
     kernel_scale: float = 1.0,
-    subsample: int = 1,
+    subsample: int = 2,
     footprint_volumes: bool = False,
     boundary_compensation: bool = True,
     volume_shape: str = "auto",

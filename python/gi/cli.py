@@ -46,7 +46,9 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("--smoothing", type=float, default=1.0, help="footprint scale (gather)")
     r.add_argument("--leaf-size", type=int, help="photon-map BVH leaf size (gather; default auto)")
     r.add_argument("--kernel-scale", type=float, default=1.0, help="photon volume scale (ispm)")
-    r.add_argument("--subsample", type=int, default=1, help="splat at 1/k resolution (ispm)")
+    r.add_argument(
+        "--subsample", type=int, default=2, help="splat at 1/k resolution (ispm; default 2)"
+    )
     r.add_argument(
         "--footprint-volumes",
         action="store_true",

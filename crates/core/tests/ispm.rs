@@ -25,9 +25,12 @@ fn run(scene: &Scene, s: &Settings) -> RenderOutput {
     render(scene, s, &Silent).expect("render")
 }
 
+/// ISPM at full-resolution splats (subsample 1): the accuracy tests measure the estimator,
+/// the subsampled path has its own comparison.
 fn ispm_settings(size: u32) -> Settings {
     Settings {
         method: Method::Ispm,
+        subsample: 1,
         spp: 1,
         width: Some(size),
         height: Some(size),
@@ -64,7 +67,8 @@ fn furnace_indirect_matches_analytic() {
 }
 
 /// Bounce-map texels carry the light's power; the first scatter keeps ρ of it (furnace,
-/// closed sphere: every texel hits); all rays are stored at bounce 1 by the CPU tracer.
+/// closed sphere: every texel hits); all rays are stored at bounce 1 by the CPU tracer, and
+/// each later bounce keeps ρ of the one before.
 #[test]
 fn bounce_map_power_bookkeeping() {
     let scene = load("furnace");
@@ -106,7 +110,7 @@ fn bounce_map_power_bookkeeping() {
     // Stored at bounce 1: the sum of the rays' power.
     let bvh = gi_core::trace::SceneBvh::build(&scene);
     let pts = gi_core::photon::PhotonTraceSettings {
-        max_bounces: 1,
+        max_bounces: 4,
         store_direct: false,
         differentials: None,
     };
@@ -115,6 +119,31 @@ fn bounce_map_power_bookkeeping() {
     assert_eq!(stored[0], DVec3::ZERO);
     let rel = (stored[1] - bm.scattered_power).abs().max_element() / expected;
     assert!(rel < 1e-4, "{:?} vs {:?}", stored[1], bm.scattered_power);
+    // Later bounces on the CPU: each photon stored at bounce k − 1 scatters on with
+    // probability ρ = 0.5 (Russian roulette on the grey albedo) carrying its power, and
+    // every scattered ray hits the closed sphere, so the power stored at bounce k is
+    // ρ × that of bounce k − 1, within 4σ of the Bernoulli sum (σ² = Σ Φ²·ρ(1 − ρ)).
+    for k in 2..=4u32 {
+        let parents: Vec<f64> = set
+            .photons
+            .iter()
+            .filter(|p| p.bounce == k - 1)
+            .map(|p| p.power[0] as f64)
+            .collect();
+        let prev: f64 = parents.iter().sum();
+        let sigma = (parents.iter().map(|p| p * p * 0.25).sum::<f64>()).sqrt();
+        eprintln!(
+            "bounce {k}: stored {:.5} expected {:.5} ± {sigma:.5}",
+            stored[k as usize].x,
+            0.5 * prev
+        );
+        assert!(
+            (stored[k as usize].x - 0.5 * prev).abs() < 4.0 * sigma,
+            "bounce {k}: {} vs {} ± {sigma}",
+            stored[k as usize].x,
+            0.5 * prev
+        );
+    }
 }
 
 /// Means of the `block`×`block` pixel blocks.
@@ -331,7 +360,7 @@ fn caustic_ring_is_brighter_than_surroundings() {
 fn ispm_settings_are_validated() {
     assert_eq!("ispm".parse::<Method>().ok(), Some(Method::Ispm));
     let ok = Settings::default();
-    assert_eq!((ok.kernel_scale, ok.subsample), (1.0, 1));
+    assert_eq!((ok.kernel_scale, ok.subsample), (1.0, 2));
     assert!(ok.validate().is_ok());
     for bad in [
         Settings {

@@ -55,7 +55,7 @@ fn image_array<'py>(py: Python<'py>, img: Image) -> PyResult<Bound<'py, PyAny>> 
 /// Renders `scene`; returns a dict of float32 arrays (radiance, albedo, normal, position,
 /// caustics: H×W×3; depth: H×W) and `stats`.
 #[pyfunction]
-#[pyo3(signature = (scene, method = "path", spp = 64, width = None, height = None, seed = 0, max_depth = 64, light_paths = None, photons = 200_000, k = 100, max_radius = None, kernel = "cone", smoothing = 1.0, leaf_size = None, kernel_scale = 1.0, subsample = 1, footprint_volumes = false, boundary_compensation = true, volume_shape = "auto", adapter = None, shadow_map_size = 1024, progress = None))]
+#[pyo3(signature = (scene, method = "path", spp = 64, width = None, height = None, seed = 0, max_depth = 64, light_paths = None, photons = 200_000, k = 100, max_radius = None, kernel = "cone", smoothing = 1.0, leaf_size = None, kernel_scale = 1.0, subsample = 2, footprint_volumes = false, boundary_compensation = true, volume_shape = "auto", adapter = None, shadow_map_size = 1024, progress = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn render<'py>(
     py: Python<'py>,
