@@ -16,16 +16,6 @@ use std::time::Instant;
 const W: u32 = 160;
 const H: u32 = 120;
 
-fn rmse(a: &Image, b: &Image) -> f64 {
-    let s: f64 = a
-        .pixels
-        .iter()
-        .zip(&b.pixels)
-        .map(|(x, y)| (*x - *y).length_squared() as f64)
-        .sum();
-    (s / (3 * a.pixels.len()) as f64).sqrt()
-}
-
 fn timed(scene: &Scene, s: &Settings) -> (f64, Image) {
     let t = Instant::now();
     let out = render(scene, s, &Silent).expect("render");
@@ -95,7 +85,7 @@ fn main() {
                 };
                 let _ = timed(scene, &ispm); // warm-up: pipelines, device
                 let (t, img) = timed(scene, &ispm);
-                (label, t, rmse(&img, &converged))
+                (label, t, img.rmse(&converged))
             })
             .collect();
         // The path tracer's error and time against spp, once per scene, down to the
@@ -112,7 +102,7 @@ fn main() {
                     ..base.clone()
                 },
             );
-            curve.push((spp, t, rmse(&img, &converged)));
+            curve.push((spp, t, img.rmse(&converged)));
             if curve[curve.len() - 1].2 <= target {
                 break;
             }

@@ -16,16 +16,6 @@ use glam::DVec3;
 const W: u32 = 160;
 const H: u32 = 120;
 
-fn rmse(a: &Image, b: &Image) -> f64 {
-    let s: f64 = a
-        .pixels
-        .iter()
-        .zip(&b.pixels)
-        .map(|(x, y)| (*x - *y).length_squared() as f64)
-        .sum();
-    (s / (3 * a.pixels.len()) as f64).sqrt()
-}
-
 fn block_error(a: &Image, b: &Image, block: u32) -> f64 {
     let (bw, bh) = (a.width / block, a.height / block);
     let mut err = 0.0;
@@ -87,7 +77,7 @@ fn main() {
             .radiance;
             println!(
                 "| {photons} | {scale} | {:.4} | {:.2}% | {:+.2}% |",
-                rmse(&out, &converged),
+                out.rmse(&converged),
                 100.0 * block_error(&out, &converged, 8),
                 100.0 * (mean(&out) / mean(&converged) - 1.0)
             );

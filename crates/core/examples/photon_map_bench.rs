@@ -15,18 +15,8 @@ use gi_core::photon::{emit_and_trace, Kernel};
 use gi_core::render::{gather_trace_settings, render, Silent};
 use gi_core::scene::builtin;
 use gi_core::trace::SceneBvh;
-use gi_core::{Image, Method, Settings};
+use gi_core::{Method, Settings};
 use std::time::Instant;
-
-fn rmse(a: &Image, b: &Image) -> f64 {
-    let s: f64 = a
-        .pixels
-        .iter()
-        .zip(&b.pixels)
-        .map(|(x, y)| (*x - *y).length_squared() as f64)
-        .sum();
-    (s / (3 * a.pixels.len()) as f64).sqrt()
-}
 
 fn best_of<T>(n: usize, mut f: impl FnMut() -> T) -> (f64, T) {
     let mut best = f64::INFINITY;
@@ -148,7 +138,7 @@ fn main() {
                 ..Default::default()
             };
             let (t, out) = best_of(3, || render(&scene, &s, &Silent).expect("render"));
-            let e = rmse(&out.radiance, &reference);
+            let e = out.radiance.rmse(&reference);
             let build = stage(&out, "kd-tree build") + stage(&out, "photon map build");
             println!(
                 "| {} | {n} | {t:.3} | {:.3} | {build:.3} | {:.3} | {e:.4} |",

@@ -29,6 +29,17 @@ impl Image {
         (sum / self.pixels.len().max(1) as f64).as_vec3()
     }
 
+    /// Root-mean-square difference to `other` (same size) over all pixels and channels.
+    pub fn rmse(&self, other: &Image) -> f64 {
+        let s: f64 = self
+            .pixels
+            .iter()
+            .zip(&other.pixels)
+            .map(|(x, y)| (*x - *y).length_squared() as f64)
+            .sum();
+        (s / (3 * self.pixels.len().max(1)) as f64).sqrt()
+    }
+
     /// Pixels as a flat `[r, g, b, r, g, b, ...]` slice.
     pub fn as_flat(&self) -> &[f32] {
         bytemuck::cast_slice(&self.pixels)

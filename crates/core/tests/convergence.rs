@@ -3,16 +3,6 @@
 
 use gi_core::{render, render::Silent, scene::builtin, Settings};
 
-fn rmse(a: &gi_core::Image, b: &gi_core::Image) -> f64 {
-    let s: f64 = a
-        .pixels
-        .iter()
-        .zip(&b.pixels)
-        .map(|(x, y)| (*x - *y).length_squared() as f64)
-        .sum();
-    (s / (3 * a.pixels.len()) as f64).sqrt()
-}
-
 #[test]
 fn error_falls_as_inverse_sqrt_spp() {
     let scene = builtin::load("cornell").unwrap();
@@ -29,7 +19,7 @@ fn error_falls_as_inverse_sqrt_spp() {
     let reference = at(4096, 1000);
     let errors: Vec<f64> = [4u32, 16, 64]
         .iter()
-        .map(|&spp| rmse(&at(spp, spp as u64), &reference))
+        .map(|&spp| at(spp, spp as u64).rmse(&reference))
         .collect();
     for w in errors.windows(2) {
         // 4× the samples halves the error; the reference's own noise (1/32 of the 4-spp

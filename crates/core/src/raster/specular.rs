@@ -8,16 +8,13 @@
 
 use crate::error::Result;
 use crate::image::Image;
-use crate::photon::estimate::{Gather, PhotonMap};
+use crate::photon::estimate::PhotonMap;
 use crate::photon::{Neighbour, Photon};
-use crate::render::camera_pass::{delta_image, has_delta_lobe, scene_diagonal};
+use crate::render::camera_pass::{delta_image, has_delta_lobe};
 use crate::render::{Progress, Settings};
 use crate::scene::Scene;
 use crate::trace::path::direct_light;
 use crate::trace::SceneBvh;
-
-/// Default largest gather radius, as a fraction of the scene's diagonal (as method `photon`).
-const DEFAULT_RADIUS_FRACTION: f32 = 0.05;
 
 /// Radiance reaching the camera through the delta lobes of the first surface seen.
 pub fn specular_paths(
@@ -32,13 +29,7 @@ pub fn specular_paths(
         return Ok(Image::new(cam.width, cam.height));
     }
     let map = PhotonMap::build(photons.to_vec());
-    let gather = Gather {
-        k: settings.k as usize,
-        max_radius: settings
-            .max_radius
-            .unwrap_or_else(|| DEFAULT_RADIUS_FRACTION * scene_diagonal(scene)),
-        kernel: settings.kernel,
-    };
+    let gather = crate::render::photon_map_gather(scene, settings);
     delta_image(
         scene,
         bvh,

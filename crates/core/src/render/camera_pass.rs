@@ -41,7 +41,6 @@ pub fn render_image<S: Default + Send>(
 ) -> Result<RenderOutput> {
     let cam = &scene.camera;
     let (w, h) = (cam.width, cam.height);
-    let max_delta = MAX_DELTA_BOUNCES.min(settings.max_depth);
     let done = AtomicU64::new(0);
     let cancelled = AtomicBool::new(false);
     let rows: Vec<Vec<(Vec3, FirstHit)>> = (0..h)
@@ -52,28 +51,11 @@ pub fn render_image<S: Default + Send>(
             }
             let row = (0..w)
                 .map(|x| {
-                    let pixel = (y * w + x) as u64;
-                    let mut sum = Vec3::ZERO;
-                    for s in 0..settings.spp {
-                        let mut rng = Rng::new(settings.seed, pixel, s as u64);
-                        let j = rng.next_2d();
-                        let dir = cam.direction(x as f32 + j.x, y as f32 + j.y);
-                        sum += radiance(
-                            scene,
-                            bvh,
-                            cam.position,
-                            dir,
-                            max_delta,
-                            true,
-                            &mut rng,
-                            |it, wo| estimate(it, wo, scratch),
-                        );
-                    }
+                    let l = pixel_radiance(scene, bvh, settings, x, y, true, |it, wo| {
+                        estimate(it, wo, scratch)
+                    });
                     let centre = cam.direction(x as f32 + 0.5, y as f32 + 0.5);
-                    (
-                        sum / settings.spp as f32,
-                        path::first_hit(scene, bvh, cam.position, centre),
-                    )
+                    (l, path::first_hit(scene, bvh, cam.position, centre))
                 })
                 .collect();
             let d = done.fetch_add(1, Ordering::Relaxed) + 1;
@@ -128,7 +110,6 @@ pub fn delta_image<S: Default + Send>(
     if !scene.materials.iter().any(has_delta_lobe) {
         return Ok(image);
     }
-    let max_delta = MAX_DELTA_BOUNCES.min(settings.max_depth);
     let done = AtomicU64::new(0);
     let cancelled = AtomicBool::new(false);
     image
@@ -140,24 +121,9 @@ pub fn delta_image<S: Default + Send>(
                 return;
             }
             for (x, px) in row.iter_mut().enumerate() {
-                let pixel = y as u64 * w as u64 + x as u64;
-                let mut sum = Vec3::ZERO;
-                for s in 0..settings.spp {
-                    let mut rng = Rng::new(settings.seed, pixel, s as u64);
-                    let j = rng.next_2d();
-                    let dir = cam.direction(x as f32 + j.x, y as f32 + j.y);
-                    sum += radiance(
-                        scene,
-                        bvh,
-                        cam.position,
-                        dir,
-                        max_delta,
-                        false,
-                        &mut rng,
-                        |it, wo| estimate(it, wo, scratch),
-                    );
-                }
-                *px = sum / settings.spp as f32;
+                *px = pixel_radiance(scene, bvh, settings, x as u32, y as u32, false, |it, wo| {
+                    estimate(it, wo, scratch)
+                });
             }
             let d = done.fetch_add(1, Ordering::Relaxed) + 1;
             if !progress.update("specular paths", d as f64 / h as f64) {
@@ -168,6 +134,39 @@ pub fn delta_image<S: Default + Send>(
         return Err(Error::Cancelled);
     }
     Ok(image)
+}
+
+/// Mean radiance of `settings.spp` jittered camera samples through pixel (`x`, `y`),
+/// estimating at the first surface only when `estimate_first` (see [`radiance`]).
+fn pixel_radiance(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    settings: &Settings,
+    x: u32,
+    y: u32,
+    estimate_first: bool,
+    mut estimate: impl FnMut(&Interaction, Vec3) -> Vec3,
+) -> Vec3 {
+    let cam = &scene.camera;
+    let max_delta = MAX_DELTA_BOUNCES.min(settings.max_depth);
+    let pixel = y as u64 * cam.width as u64 + x as u64;
+    let mut sum = Vec3::ZERO;
+    for s in 0..settings.spp {
+        let mut rng = Rng::new(settings.seed, pixel, s as u64);
+        let j = rng.next_2d();
+        let dir = cam.direction(x as f32 + j.x, y as f32 + j.y);
+        sum += radiance(
+            scene,
+            bvh,
+            cam.position,
+            dir,
+            max_delta,
+            estimate_first,
+            &mut rng,
+            &mut estimate,
+        );
+    }
+    sum / settings.spp as f32
 }
 
 /// True when the material can scatter into a delta lobe (perfect mirror or smooth glass).

@@ -11,6 +11,7 @@ pub use crate::photon::Kernel;
 pub use crate::raster::volume_shape::VolumeShape;
 use crate::scene::Scene;
 pub use gather::trace_settings as gather_trace_settings;
+pub use photon_map::gather_settings as photon_map_gather;
 use std::str::FromStr;
 
 /// A rendering technique.

@@ -19,6 +19,18 @@ use std::time::Instant;
 /// Default maximum gather radius, as a fraction of the scene's bounding-box diagonal.
 const DEFAULT_RADIUS_FRACTION: f32 = 0.05;
 
+/// The kNN estimate of `settings` (`k`, `max_radius` or its default, `kernel`); also the
+/// gather of ISPM's specular paths.
+pub fn gather_settings(scene: &Scene, settings: &Settings) -> Gather {
+    Gather {
+        k: settings.k as usize,
+        max_radius: settings
+            .max_radius
+            .unwrap_or_else(|| DEFAULT_RADIUS_FRACTION * scene_diagonal(scene)),
+        kernel: settings.kernel,
+    }
+}
+
 pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Result<RenderOutput> {
     let t0 = Instant::now();
     let (bvh, mut stats) = start_frame(scene);
@@ -43,13 +55,7 @@ pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Re
     stage("kd-tree build", t);
 
     let t = Instant::now();
-    let gather = Gather {
-        k: settings.k as usize,
-        max_radius: settings
-            .max_radius
-            .unwrap_or_else(|| DEFAULT_RADIUS_FRACTION * scene_diagonal(scene)),
-        kernel: settings.kernel,
-    };
+    let gather = gather_settings(scene, settings);
     let mut out = render_image(
         scene,
         &bvh,
