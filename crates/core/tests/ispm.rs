@@ -273,6 +273,60 @@ fn cornell_matches_path_tracer() {
     assert!(diff < 0.10, "{diff}");
 }
 
+/// The renders a caustic test compares: ISPM with `s`, the same frame's direct light, the
+/// reference path tracer at `path_spp`, and an independent reference (another seed) that
+/// picks the region. Selecting the brightest pixels of the very image we compare against
+/// would pick its upward noise (measured +18% on `path` at 32 spp) and bias the comparison.
+struct CausticRenders {
+    ispm: RenderOutput,
+    direct: RenderOutput,
+    path: RenderOutput,
+    select: RenderOutput,
+}
+
+fn caustic_renders(scene: &Scene, s: &Settings, path_spp: u32) -> CausticRenders {
+    let with = |method, seed| Settings {
+        method,
+        spp: path_spp,
+        seed,
+        ..s.clone()
+    };
+    CausticRenders {
+        ispm: run(scene, s),
+        direct: run(
+            scene,
+            &Settings {
+                method: Method::Direct,
+                ..s.clone()
+            },
+        ),
+        path: run(scene, &with(Method::Path, s.seed)),
+        select: run(scene, &with(Method::Path, 1234)),
+    }
+}
+
+/// The pixels of `region` whose light-traced caustic radiance in `select` is at or above the
+/// `percentile` of the region's.
+fn brightest_caustic(select: &RenderOutput, region: &[bool], percentile: usize) -> Vec<bool> {
+    let mut c: Vec<f32> = select
+        .caustics
+        .pixels
+        .iter()
+        .zip(region)
+        .filter(|(_, f)| **f)
+        .map(|(p, _)| p.x)
+        .collect();
+    c.sort_by(f32::total_cmp);
+    let threshold = c[c.len() * percentile / 100];
+    select
+        .caustics
+        .pixels
+        .iter()
+        .zip(region)
+        .map(|(p, f)| *f && p.x >= threshold && p.x > 0.0)
+        .collect()
+}
+
 /// Caustic ring: the mirror focuses light into a cardioid on the floor. In the ISPM
 /// indirect image (ispm − direct) the caustic (the brightest 3% of a reference's
 /// light-traced caustic image on the floor inside the ring) is more than 3× brighter than
@@ -285,57 +339,19 @@ fn caustic_ring_is_brighter_than_surroundings() {
         photons: 400_000,
         ..ispm_settings(size)
     };
-    let ispm = run(&scene, &s);
-    let direct = run(
-        &scene,
-        &Settings {
-            method: Method::Direct,
-            ..s.clone()
-        },
-    );
-    let path = run(
-        &scene,
-        &Settings {
-            method: Method::Path,
-            spp: 32,
-            ..s.clone()
-        },
-    );
-    // The region is chosen on an independent reference render: selecting the brightest
-    // pixels of the very image we compare against would pick its upward noise (measured
-    // +18% on `path` at 32 spp) and bias the comparison.
-    let select = run(
-        &scene,
-        &Settings {
-            method: Method::Path,
-            spp: 32,
-            seed: 1234,
-            ..s.clone()
-        },
-    );
+    let CausticRenders {
+        ispm,
+        direct,
+        path,
+        select,
+    } = caustic_renders(&scene, &s, 32);
     let floor: Vec<bool> = path
         .position
         .pixels
         .iter()
         .map(|p| p.y.abs() < 1e-3 && (p.x * p.x + p.z * p.z).sqrt() < 0.95)
         .collect();
-    let mut c: Vec<f32> = select
-        .caustics
-        .pixels
-        .iter()
-        .zip(&floor)
-        .filter(|(_, f)| **f)
-        .map(|(p, _)| p.x)
-        .collect();
-    c.sort_by(f32::total_cmp);
-    let threshold = c[c.len() * 97 / 100];
-    let ring: Vec<bool> = select
-        .caustics
-        .pixels
-        .iter()
-        .zip(&floor)
-        .map(|(p, f)| *f && p.x >= threshold)
-        .collect();
+    let ring = brightest_caustic(&select, &floor, 97);
     let rest: Vec<bool> = floor.iter().zip(&ring).map(|(f, r)| *f && !r).collect();
     let indirect = |img: &gi_core::image::Image, keep: &[bool]| {
         region_mean(img, keep) - region_mean(&direct.radiance, keep)
@@ -452,22 +468,12 @@ fn cornell_glass_caustic_and_specular_surfaces() {
         photons: 400_000,
         ..ispm_settings(size)
     };
-    let ispm = run(&scene, &s);
-    let direct = run(
-        &scene,
-        &Settings {
-            method: Method::Direct,
-            ..s.clone()
-        },
-    );
-    let path = run(
-        &scene,
-        &Settings {
-            method: Method::Path,
-            spp: 64,
-            ..s.clone()
-        },
-    );
+    let CausticRenders {
+        ispm,
+        direct,
+        path,
+        select,
+    } = caustic_renders(&scene, &s, 64);
     let spheres = [
         (glam::Vec3::new(0.4, 0.4, 0.25), 0.4f32),
         (glam::Vec3::new(-0.45, 0.4, -0.4), 0.4),
@@ -486,33 +492,7 @@ fn cornell_glass_caustic_and_specular_surfaces() {
         .zip(&on_sphere)
         .map(|(p, s)| !s && p.y.abs() < 1e-3)
         .collect();
-    // Region chosen on an independent reference render (see the caustic-ring test).
-    let select = run(
-        &scene,
-        &Settings {
-            method: Method::Path,
-            spp: 64,
-            seed: 1234,
-            ..s.clone()
-        },
-    );
-    let mut c: Vec<f32> = select
-        .caustics
-        .pixels
-        .iter()
-        .zip(&floor)
-        .filter(|(_, f)| **f)
-        .map(|(p, _)| p.x)
-        .collect();
-    c.sort_by(f32::total_cmp);
-    let threshold = c[c.len() * 95 / 100];
-    let caustic: Vec<bool> = select
-        .caustics
-        .pixels
-        .iter()
-        .zip(&floor)
-        .map(|(p, f)| *f && p.x >= threshold && p.x > 0.0)
-        .collect();
+    let caustic = brightest_caustic(&select, &floor, 95);
     let rest: Vec<bool> = floor.iter().zip(&caustic).map(|(f, c)| *f && !c).collect();
     let indirect =
         |keep: &[bool]| region_mean(&ispm.radiance, keep) - region_mean(&direct.radiance, keep);
