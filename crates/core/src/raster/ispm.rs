@@ -882,6 +882,21 @@ fn indirect(
     };
     stage(out, "cpu trace", t);
     out.stats.photons_stored = photons.len() as u64;
+    if !progress.update("cpu trace", 1.0) {
+        return Err(Error::Cancelled);
+    }
+
+    // Mirrors and glass seen by the camera, traced backwards on the CPU. Their gather uses
+    // the photons as traced: boundary compensation is for the splat's kernel only.
+    let t = Instant::now();
+    out.aovs.push(("direct".into(), out.radiance.clone()));
+    let specular = super::specular::specular_paths(scene, &bvh, settings, &photons, progress)?;
+    for (px, v) in out.radiance.pixels.iter_mut().zip(&specular.pixels) {
+        *px += *v;
+    }
+    out.aovs.push(("specular".into(), specular));
+    stage(out, "specular paths", t);
+
     // Volume radii are decided here, once (the splat reads `footprint_radius`).
     let mut photons = photons;
     let radius = VolumeRadius::of_scene(scene, settings.photons, settings.kernel_scale);
@@ -900,19 +915,6 @@ fn indirect(
         );
         stage(out, "boundary compensation", t);
     }
-    if !progress.update("cpu trace", 1.0) {
-        return Err(Error::Cancelled);
-    }
-
-    // Mirrors and glass seen by the camera, traced backwards on the CPU.
-    let t = Instant::now();
-    out.aovs.push(("direct".into(), out.radiance.clone()));
-    let specular = super::specular::specular_paths(scene, &bvh, settings, &photons, progress)?;
-    for (px, v) in out.radiance.pixels.iter_mut().zip(&specular.pixels) {
-        *px += *v;
-    }
-    out.aovs.push(("specular".into(), specular));
-    stage(out, "specular paths", t);
     if photons.is_empty() {
         return Ok(());
     }
