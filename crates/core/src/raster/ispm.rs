@@ -10,21 +10,24 @@
 //!    of the uber BSDF, Russian roulette, path density) is taken in the same fragment shader
 //!    (`bounce.wgsl`, a port of `Material::sample`); surviving texels are read back as
 //!    [`PhotonRay`]s.
+//!    The bounce maps are submitted before the direct-light frame, with the copies of their
+//!    targets into mappable buffers in the same submission, and mapped after it
+//!    ([`PendingBounceMap`]): the readback does not stall the CPU.
 //! 3. CPU photon tracing of the later bounces ([`crate::photon::continue_paths`], bounce
 //!    index 1 for the first-bounce rays).
 //! 4. Photon volumes (section 5): one instanced icosahedron or screen-aligned quad per stored
 //!    photon ([`super::volume_shape`]), splatted into an `Rgba32Float` target with additive
 //!    blending (`volume.wgsl`), at 1/`subsample` resolution, then joint bilateral upsampling
 //!    (`upsample.wgsl`).
-//!
 //! 5. Mirrors and glass seen by the camera: backward ray tracing on the CPU with a photon-map
 //!    gather where the specular paths land (`specular.rs`).
 //!
 //! The final radiance is direct + specular + indirect (AOVs `direct`, `specular`,
 //! `indirect`); `caustics` stays zero.
 
+use super::timer::Timer;
 use super::volume_shape::{partition, VolumeRadius};
-use super::{buffer_init, camera_view, gbuffer, vertices, view_binding, Geometry};
+use super::{buffer_init, camera_view, gbuffer, view_binding, Geometry};
 use crate::error::{Error, Result};
 use crate::gpu::{self, shaders, GpuContext};
 use crate::image::Image;
@@ -511,16 +514,7 @@ pub fn render_bounce_map(scene: &Scene, settings: &Settings) -> Result<BounceMap
     settings.validate()?;
     let ctx = gpu::context(settings.adapter.as_deref())?;
     ctx.scoped("bounce map", || {
-        let verts = vertices(scene);
-        let geometry = Geometry {
-            vertices: buffer_init(
-                ctx.as_ref(),
-                "scene vertices",
-                bytemuck::cast_slice(&verts),
-                wgpu::BufferUsages::VERTEX,
-            ),
-            count: verts.len() as u32,
-        };
+        let geometry = Geometry::upload(&ctx, scene);
         bounce_map(&ctx, scene, &geometry, settings.photons, settings.seed)
     })
 }
@@ -533,12 +527,43 @@ pub fn bounce_map(
     photons: u64,
     seed: u64,
 ) -> Result<BounceMap> {
+    start_bounce_map(ctx, scene, geometry, photons, seed)?.finish(ctx)
+}
+
+/// Bounce maps submitted to the GPU together with the copies of their targets into
+/// mappable buffers, not waited on: the readback runs on the GPU queue while the CPU goes on
+/// submitting the eye passes (section 4.3's asynchronous readback), and
+/// [`PendingBounceMap::finish`] maps the copies once that work is done.
+pub struct PendingBounceMap {
+    layers: Vec<BounceLayer>,
+    max_res: u32,
+    /// One buffer per bounce-map target, rows padded to `row` bytes.
+    staging: Vec<wgpu::Buffer>,
+    row: u32,
+    timer: Timer,
+    submit_seconds: f64,
+}
+
+/// Records and submits the bounce maps of `scene` with their readback copies.
+pub fn start_bounce_map(
+    ctx: &GpuContext,
+    scene: &Scene,
+    geometry: &Geometry,
+    photons: u64,
+    seed: u64,
+) -> Result<PendingBounceMap> {
     let passes = IspmPasses::get(ctx);
     let device = &ctx.device;
     let layers = bounce_layers(scene, photons);
-    let mut out = BounceMap::default();
     if layers.is_empty() {
-        return Ok(out);
+        return Ok(PendingBounceMap {
+            layers,
+            max_res: 0,
+            staging: Vec::new(),
+            row: 0,
+            timer: Timer::new(ctx, 1),
+            submit_seconds: 0.0,
+        });
     }
     let max_res = layers.iter().map(|l| l.res).max().unwrap_or(1);
     let limits = device.limits();
@@ -651,6 +676,7 @@ pub fn bounce_map(
     let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
         label: Some("bounce maps"),
     });
+    let mut timer = Timer::new(ctx, n_layers);
     for (i, layer) in layers.iter().enumerate() {
         let i = i as u32;
         let views: Vec<_> = targets.iter().map(|t| layer_view(t, i)).collect();
@@ -680,7 +706,7 @@ pub fn bounce_map(
                 }),
                 stencil_ops: None,
             }),
-            timestamp_writes: None,
+            timestamp_writes: timer.pass("bounce maps"),
             occlusion_query_set: None,
             multiview_mask: None,
         });
@@ -691,94 +717,113 @@ pub fn bounce_map(
         pass.set_vertex_buffer(0, geometry.vertices.slice(..));
         pass.draw(0..geometry.count, 0..1);
     }
+    // Every target, all layers, into one mappable buffer each, in the same submission.
+    let row = (max_res * 16).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+    let staging: Vec<wgpu::Buffer> = targets
+        .iter()
+        .map(|texture| {
+            let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("bounce readback"),
+                size: row as u64 * max_res as u64 * n_layers as u64,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            encoder.copy_texture_to_buffer(
+                texture.as_image_copy(),
+                wgpu::TexelCopyBufferInfo {
+                    buffer: &buffer,
+                    layout: wgpu::TexelCopyBufferLayout {
+                        offset: 0,
+                        bytes_per_row: Some(row),
+                        rows_per_image: Some(max_res),
+                    },
+                },
+                size,
+            );
+            buffer
+        })
+        .collect();
+    timer.resolve(&mut encoder);
     let t = Instant::now();
     ctx.queue.submit([encoder.finish()]);
-    ctx.wait()?;
-    out.raster_seconds = t.elapsed().as_secs_f64();
-    let t = Instant::now();
-    let read = targets
-        .iter()
-        .map(|t| read_array(ctx, t))
-        .collect::<Result<Vec<_>>>()?;
-    let [origin, direction, power, incident, expected] = &read[..] else {
-        return Err(Error::Gpu("bounce map readback".into()));
-    };
-    out.readback_seconds = t.elapsed().as_secs_f64();
-    let t = Instant::now();
-
-    // Surviving texels become rays for the CPU tracer.
-    let per_layer = (max_res * max_res) as usize;
-    for (li, layer) in layers.iter().enumerate() {
-        for y in 0..layer.res as usize {
-            for x in 0..layer.res as usize {
-                let i = li * per_layer + y * max_res as usize + x;
-                if incident[i].w <= 0.0 {
-                    continue;
-                }
-                out.covered += 1;
-                out.incident_power += incident[i].truncate().as_dvec3();
-                out.expected_scattered_power += expected[i].truncate().as_dvec3();
-                if direction[i].w <= 0.0 {
-                    continue;
-                }
-                let carried = power[i].truncate();
-                out.scattered_power += carried.as_dvec3();
-                out.rays.push(PhotonRay::new(
-                    origin[i].truncate(),
-                    direction[i].truncate(),
-                    carried,
-                    origin[i].w,
-                    1,
-                ));
-            }
-        }
-    }
-    out.texels = layers.iter().map(|l| l.res as u64 * l.res as u64).sum();
-    out.scatter_seconds = t.elapsed().as_secs_f64();
-    Ok(out)
+    Ok(PendingBounceMap {
+        layers,
+        max_res,
+        staging,
+        row,
+        timer,
+        submit_seconds: t.elapsed().as_secs_f64(),
+    })
 }
 
-/// Copies every layer of a 16-byte-per-texel 2D array to the CPU, layer after layer.
-fn read_array(ctx: &GpuContext, texture: &wgpu::Texture) -> Result<Vec<Vec4>> {
-    let (w, h, n) = (
-        texture.width(),
-        texture.height(),
-        texture.depth_or_array_layers(),
-    );
-    let row = (w * 16).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
-    let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("bounce readback"),
-        size: row as u64 * h as u64 * n as u64,
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    let mut encoder = ctx
-        .device
-        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("bounce readback"),
-        });
-    encoder.copy_texture_to_buffer(
-        texture.as_image_copy(),
-        wgpu::TexelCopyBufferInfo {
-            buffer: &buffer,
-            layout: wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(row),
-                rows_per_image: Some(h),
-            },
-        },
-        texture.size(),
-    );
-    ctx.queue.submit([encoder.finish()]);
-    let bytes = ctx.read_buffer(&buffer)?;
-    let mut out = Vec::with_capacity((w * h * n) as usize);
-    for r in 0..(h * n) as usize {
-        let start = r * row as usize;
-        out.extend_from_slice(bytemuck::cast_slice::<u8, Vec4>(
-            &bytes[start..start + w as usize * 16],
-        ));
+impl PendingBounceMap {
+    /// Maps the copies (waiting for the GPU only if it is still busy) and turns the
+    /// surviving texels into rays.
+    pub fn finish(mut self, ctx: &GpuContext) -> Result<BounceMap> {
+        let mut out = BounceMap::default();
+        if self.layers.is_empty() {
+            return Ok(out);
+        }
+        let (layers, max_res, row) = (&self.layers, self.max_res, self.row as usize);
+        let t = Instant::now();
+        let read = self
+            .staging
+            .iter()
+            .map(|buffer| {
+                let bytes = ctx.read_buffer(buffer)?;
+                let width = max_res as usize * 16;
+                Ok(bytes
+                    .chunks_exact(row)
+                    .flat_map(|r| bytemuck::cast_slice::<u8, Vec4>(&r[..width]).to_vec())
+                    .collect::<Vec<Vec4>>())
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let [origin, direction, power, incident, expected] = &read[..] else {
+            return Err(Error::Gpu("bounce map readback".into()));
+        };
+        out.readback_seconds = t.elapsed().as_secs_f64();
+        self.timer.collect(ctx)?;
+        // GPU time of the bounce passes when timestamps are available, else the submission.
+        out.raster_seconds = self
+            .timer
+            .totals
+            .iter()
+            .map(|(_, s)| s)
+            .sum::<f64>()
+            .max(self.submit_seconds);
+        let t = Instant::now();
+
+        // Surviving texels become rays for the CPU tracer.
+        let per_layer = (max_res * max_res) as usize;
+        for (li, layer) in layers.iter().enumerate() {
+            for y in 0..layer.res as usize {
+                for x in 0..layer.res as usize {
+                    let i = li * per_layer + y * max_res as usize + x;
+                    if incident[i].w <= 0.0 {
+                        continue;
+                    }
+                    out.covered += 1;
+                    out.incident_power += incident[i].truncate().as_dvec3();
+                    out.expected_scattered_power += expected[i].truncate().as_dvec3();
+                    if direction[i].w <= 0.0 {
+                        continue;
+                    }
+                    let carried = power[i].truncate();
+                    out.scattered_power += carried.as_dvec3();
+                    out.rays.push(PhotonRay::new(
+                        origin[i].truncate(),
+                        direction[i].truncate(),
+                        carried,
+                        origin[i].w,
+                        1,
+                    ));
+                }
+            }
+        }
+        out.texels = layers.iter().map(|l| l.res as u64 * l.res as u64).sum();
+        out.scatter_seconds = t.elapsed().as_secs_f64();
+        Ok(out)
     }
-    Ok(out)
 }
 
 fn tex(binding: u32, view: &wgpu::TextureView) -> wgpu::BindGroupEntry<'_> {
@@ -804,8 +849,22 @@ pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Re
     let t0 = Instant::now();
     let ctx = gpu::context(settings.adapter.as_deref())?;
     ctx.scoped("ispm frame", || {
-        let mut out = super::frame(&ctx, scene, settings, progress, t0)?;
-        indirect(&ctx, scene, settings, progress, &mut out)?;
+        // Bounce maps first: their readback runs on the GPU queue behind them while the
+        // direct-light frame is recorded and rendered.
+        let t = Instant::now();
+        let geometry = Geometry::upload(&ctx, scene);
+        let pending = start_bounce_map(&ctx, scene, &geometry, settings.photons, settings.seed)?;
+        let submit = t.elapsed().as_secs_f64();
+        let mut out = super::frame(&ctx, scene, settings, Some(&geometry), progress, t0)?;
+        let bm = pending.finish(&ctx)?;
+        for (name, secs) in [
+            ("bounce maps", bm.raster_seconds.max(submit)),
+            ("bounce readback", bm.readback_seconds),
+            ("bounce rays", bm.scatter_seconds),
+        ] {
+            out.stats.stages.push((name.to_string(), secs));
+        }
+        indirect(&ctx, scene, settings, progress, &mut out, &geometry, bm)?;
         out.stats.total_seconds = t0.elapsed().as_secs_f64();
         Ok(out)
     })
@@ -818,6 +877,8 @@ fn indirect(
     settings: &Settings,
     progress: &dyn Progress,
     out: &mut RenderOutput,
+    geometry: &Geometry,
+    bm: BounceMap,
 ) -> Result<()> {
     let passes = IspmPasses::get(ctx);
     let device = &ctx.device;
@@ -830,28 +891,6 @@ fn indirect(
             .push((name.to_string(), t.elapsed().as_secs_f64()))
     };
 
-    // Bounce maps and the first scatter.
-    let t = Instant::now();
-    let verts = vertices(scene);
-    let geometry = Geometry {
-        vertices: buffer_init(
-            ctx,
-            "scene vertices",
-            bytemuck::cast_slice(&verts),
-            wgpu::BufferUsages::VERTEX,
-        ),
-        count: verts.len() as u32,
-    };
-    let bm = bounce_map(ctx, scene, &geometry, settings.photons, settings.seed)?;
-    let setup =
-        t.elapsed().as_secs_f64() - bm.raster_seconds - bm.readback_seconds - bm.scatter_seconds;
-    for (name, secs) in [
-        ("bounce maps", bm.raster_seconds + setup.max(0.0)),
-        ("bounce readback", bm.readback_seconds),
-        ("bounce rays", bm.scatter_seconds),
-    ] {
-        out.stats.stages.push((name.to_string(), secs));
-    }
     out.stats.photons_emitted = bm.covered;
     out.stats.photons_first_bounce = bm.rays.len() as u64;
     if !progress.update("bounce maps", 1.0) {
@@ -1028,7 +1067,7 @@ fn indirect(
     let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
         label: Some("photon volumes"),
     });
-    gp.record(&mut encoder, &gbuf, &gbuffer_group, 0, &geometry, None);
+    gp.record(&mut encoder, &gbuf, &gbuffer_group, 0, geometry, None);
     {
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("volume pass"),

@@ -43,6 +43,22 @@ pub struct Geometry {
     pub count: u32,
 }
 
+impl Geometry {
+    /// Uploads the scene's triangles.
+    pub fn upload(ctx: &GpuContext, scene: &Scene) -> Self {
+        let verts = vertices(scene);
+        Geometry {
+            vertices: buffer_init(
+                ctx,
+                "scene vertices",
+                bytemuck::cast_slice(&verts),
+                wgpu::BufferUsages::VERTEX,
+            ),
+            count: verts.len() as u32,
+        }
+    }
+}
+
 /// A `View` uniform picked by dynamic offset.
 pub(crate) fn view_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
@@ -276,14 +292,16 @@ pub fn render_direct(
     let t0 = Instant::now();
     let ctx = gpu::context(settings.adapter.as_deref())?;
     ctx.scoped("direct frame", || {
-        frame(&ctx, scene, settings, progress, t0)
+        frame(&ctx, scene, settings, None, progress, t0)
     })
 }
 
+/// The direct-light frame; `geometry` is the scene already on the GPU, if it is.
 fn frame(
     ctx: &GpuContext,
     scene: &Scene,
     settings: &Settings,
+    geometry: Option<&Geometry>,
     progress: &dyn Progress,
     t0: Instant,
 ) -> Result<RenderOutput> {
@@ -304,15 +322,13 @@ fn frame(
     // Upload the scene, views and lights.
     let t = Instant::now();
     let storage = wgpu::BufferUsages::STORAGE;
-    let verts = vertices(scene);
-    let geometry = Geometry {
-        vertices: buffer_init(
-            ctx,
-            "scene vertices",
-            bytemuck::cast_slice(&verts),
-            wgpu::BufferUsages::VERTEX,
-        ),
-        count: verts.len() as u32,
+    let uploaded;
+    let geometry = match geometry {
+        Some(g) => g,
+        None => {
+            uploaded = Geometry::upload(ctx, scene);
+            &uploaded
+        }
     };
     let materials: Vec<_> = scene.materials.iter().map(|m| m.to_raw()).collect();
     let material_buffer = buffer_init(ctx, "materials", bytemuck::cast_slice(&materials), storage);
@@ -474,7 +490,7 @@ fn frame(
         let ts = timer.pass("shadow maps");
         passes
             .shadow
-            .record(&mut encoder, &view, &shadow_group, offset, &geometry, ts);
+            .record(&mut encoder, &view, &shadow_group, offset, geometry, ts);
     }
     timer.resolve(&mut encoder);
     ctx.queue.submit([encoder.finish()]);
@@ -495,7 +511,7 @@ fn frame(
             let ts = timer.pass("gbuffer");
             passes
                 .gbuffer
-                .record(&mut encoder, &gbuf, &gbuffer_group, offset, &geometry, ts);
+                .record(&mut encoder, &gbuf, &gbuffer_group, offset, geometry, ts);
             let ts = timer.pass("direct light");
             passes.direct.record(
                 &mut encoder,
@@ -522,7 +538,7 @@ fn frame(
         let ts = timer.pass("gbuffer");
         passes
             .gbuffer
-            .record(&mut encoder, &gbuf, &gbuffer_group, 0, &geometry, ts);
+            .record(&mut encoder, &gbuf, &gbuffer_group, 0, geometry, ts);
         timer.resolve(&mut encoder);
         ctx.queue.submit([encoder.finish()]);
         timer.collect(ctx)?;
