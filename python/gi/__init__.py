@@ -16,6 +16,8 @@ os.environ.setdefault("NODEVICE_SELECT", "1")
 from gi._gi import (  # noqa: E402
     GiError,
     GpuError,
+    InternalError,
+    OutOfMemoryError,
     RenderCancelled,
     Scene,
     SceneError,
@@ -34,6 +36,8 @@ from gi.scene import load_scene  # noqa: E402
 __all__ = [
     "GiError",
     "GpuError",
+    "InternalError",
+    "OutOfMemoryError",
     "RenderCancelled",
     "RenderResult",
     "RenderStats",

@@ -7,6 +7,9 @@ import sys
 from pathlib import Path
 
 import gi
+import gi.io
+from gi._checks import U64_MAX, float_setting, int_setting
+from gi._checks import exposure_setting as check_exposure
 
 
 def _size(text: str) -> tuple[int, int]:
@@ -91,6 +94,10 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def _render(args: argparse.Namespace) -> int:
+    # Outputs and exposure are checked before the render, not after it.
+    exposure = check_exposure(args.exposure)
+    for out in args.output:
+        gi.io.check_output(out)
     scene = gi.load_scene(args.scene)
     result = gi.render(
         scene,
@@ -120,7 +127,7 @@ def _render(args: argparse.Namespace) -> int:
         raise ValueError(f"no image {missing[0]!r} (available: {', '.join(result.aov_names())})")
     written = []
     for out in map(Path, args.output):
-        gi.save_image(out, result.radiance, exposure=args.exposure)
+        gi.save_image(out, result.radiance, exposure=exposure)
         written.append(out)
         for name in args.aov:
             aov_path = out.with_name(f"{out.stem}.{name}{out.suffix}")
@@ -136,9 +143,10 @@ def _render(args: argparse.Namespace) -> int:
 
 def _footprints(args: argparse.Namespace) -> int:
     qs = [1.0, 5.0, 25.0, 50.0, 75.0, 95.0, 99.0]
-    rows = gi.footprint_radii(
-        gi.load_scene(args.scene), args.photons, args.seed, args.smoothing, qs
-    )
+    photons = int_setting("photons", args.photons, U64_MAX)
+    seed = int_setting("seed", args.seed, U64_MAX)
+    smoothing = float_setting("smoothing", args.smoothing)
+    rows = gi.footprint_radii(gi.load_scene(args.scene), photons, seed, smoothing, qs)
     print(f"footprint radius (m) by percentile, {args.photons} photons, s = {args.smoothing}")
     print(f"{'kind':8} {'photons':>9} " + " ".join(f"{f'p{q:g}':>8}" for q in qs))
     for kind, (count, radii) in rows.items():
@@ -166,7 +174,7 @@ def main(argv: list[str] | None = None) -> int:
     except gi.GiError as e:
         print(f"gi: error: {e}", file=sys.stderr)
         return 2
-    except (OSError, ValueError) as e:
+    except (OSError, ValueError, MemoryError) as e:
         print(f"gi: error: {e}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

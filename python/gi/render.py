@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from gi import _gi
+from gi import _checks, _gi
 from gi._gi import Scene
 
 ProgressCallback = Callable[[str, float], "bool | None"]
@@ -142,33 +142,37 @@ def render(
     callback: ProgressCallback | None
     if progress is True:
         callback = ProgressBar()
-    elif progress is False:
+    elif progress is False or progress is None:
         callback = None
-    else:
+    elif callable(progress):
         callback = progress
-    width, height = size if size is not None else (None, None)
+    else:
+        raise _checks.setting_error("progress", f"must be a bool or a callable, got {progress!r}")
+    if not isinstance(scene, Scene):
+        raise TypeError(f"scene must be a gi.Scene (see gi.load_scene), got {type(scene).__name__}")
+    width, height = _checks.size_setting(size)
     out = _gi.render(
         scene,
-        method=method,
-        spp=spp,
+        method=_checks.str_setting("method", method),
+        spp=_checks.int_setting("spp", spp),
         width=width,
         height=height,
-        seed=seed,
-        max_depth=max_depth,
-        light_paths=light_paths,
-        photons=photons,
-        k=k,
-        max_radius=max_radius,
-        kernel=kernel,
-        smoothing=smoothing,
-        leaf_size=leaf_size,
-        kernel_scale=kernel_scale,
-        subsample=subsample,
-        footprint_volumes=footprint_volumes,
-        boundary_compensation=boundary_compensation,
-        volume_shape=volume_shape,
-        adapter=adapter,
-        shadow_map_size=shadow_map_size,
+        seed=_checks.int_setting("seed", seed, _checks.U64_MAX),
+        max_depth=_checks.int_setting("max_depth", max_depth),
+        light_paths=_checks.optional_int("light_paths", light_paths, _checks.U64_MAX),
+        photons=_checks.int_setting("photons", photons, _checks.U64_MAX),
+        k=_checks.int_setting("k", k),
+        max_radius=_checks.optional_float("max_radius", max_radius),
+        kernel=_checks.str_setting("kernel", kernel),
+        smoothing=_checks.float_setting("smoothing", smoothing),
+        leaf_size=_checks.optional_int("leaf_size", leaf_size),
+        kernel_scale=_checks.float_setting("kernel_scale", kernel_scale),
+        subsample=_checks.int_setting("subsample", subsample),
+        footprint_volumes=_checks.bool_setting("footprint_volumes", footprint_volumes),
+        boundary_compensation=_checks.bool_setting("boundary_compensation", boundary_compensation),
+        volume_shape=_checks.str_setting("volume_shape", volume_shape),
+        adapter=_checks.str_setting("adapter", adapter, optional=True),
+        shadow_map_size=_checks.int_setting("shadow_map_size", shadow_map_size),
         progress=callback,
     )
     s = out["stats"]

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from gi._gi import Scene, SceneError, builtin_scenes
+from gi._gi import GiError, OutOfMemoryError, Scene, SceneError, builtin_scenes
 
 MeshEntry = tuple[Any, Any, Any, "str | None", Any]
 
@@ -35,11 +35,15 @@ def load_scene(source: str | Path) -> Scene:
     geometry, a degenerate camera or a negative intensity.
     """
     path = Path(source)
-    names = [n for n, _ in builtin_scenes()]
-    if not path.exists() and str(source) in names:
-        return Scene.builtin(str(source))
     file = str(path)
-    if not path.is_file():
+    names = [n for n, _ in builtin_scenes()]
+    try:
+        exists, is_file = path.exists(), path.is_file()
+    except (OSError, ValueError) as e:  # a name too long, a NUL byte
+        raise _scene_error(file, "(file)", f"cannot read: {e}") from e
+    if not exists and str(source) in names:
+        return Scene.builtin(str(source))
+    if not is_file:
         hint = f" (built-in scenes: {', '.join(names)})" if path.suffix == "" else ""
         raise _scene_error(file, "(file)", f"no such scene file{hint}")
     try:
@@ -51,6 +55,10 @@ def load_scene(source: str | Path) -> Scene:
         raise _scene_error(
             file, f"(line {e.lineno}, column {e.colno})", f"invalid JSON: {e.msg}"
         ) from e
+    except RecursionError as e:
+        raise _scene_error(file, "(root)", "invalid JSON: nested too deeply") from e
+    except MemoryError as e:
+        raise _scene_error(file, "(file)", "too large to parse") from e
     meshes: dict[str, MeshEntry] = {}
     objects = desc.get("objects", []) if isinstance(desc, dict) else []
     for i, obj in enumerate(objects if isinstance(objects, list) else []):
@@ -103,12 +111,32 @@ def load_mesh(path: Path, scene_file: str, field: str) -> MeshEntry:
     """Loads a mesh file into the arrays the core takes (see ``Scene.from_json``)."""
     import trimesh
 
-    if not path.is_file():
+    try:
+        is_file = path.is_file()
+    except (OSError, ValueError) as e:  # a name too long, a NUL byte
+        raise _scene_error(scene_file, field, f"cannot read mesh file {path}: {e}") from e
+    if not is_file:
         raise _scene_error(scene_file, field, f"mesh file not found: {path}")
     try:
         loaded = trimesh.load(str(path), force="scene", process=False)
+    except MemoryError as e:
+        raise OutOfMemoryError(f"{scene_file}: {field}: mesh {path} is too large: {e}") from e
     except Exception as e:  # trimesh raises many types for bad files
         raise _scene_error(scene_file, field, f"cannot load mesh {path}: {e}") from e
+    try:
+        return _mesh_arrays(loaded, path, scene_file, field)
+    except (GiError, OutOfMemoryError):
+        raise
+    except MemoryError as e:
+        raise OutOfMemoryError(f"{scene_file}: {field}: mesh {path} is too large: {e}") from e
+    except Exception as e:  # malformed content trimesh accepted (the checks below name most)
+        raise _scene_error(scene_file, field, f"cannot convert mesh {path}: {e!r}") from e
+
+
+def _mesh_arrays(loaded: Any, path: Path, scene_file: str, field: str) -> MeshEntry:
+    """The arrays of a loaded trimesh scene, world transforms of its nodes applied."""
+    import trimesh
+
     parts = []
     for node in loaded.graph.nodes_geometry:
         transform, geom_name = loaded.graph[node]
@@ -122,6 +150,24 @@ def load_mesh(path: Path, scene_file: str, field: str) -> MeshEntry:
     materials: dict[str, dict[str, Any]] = {}
     offset = 0
     for geom, transform in parts:
+        nv = len(geom.vertices)
+        f = np.asarray(geom.faces)
+        if f.size and (f.min() < 0 or f.max() >= nv):
+            bad = int(np.flatnonzero(((f < 0) | (f >= nv)).any(axis=1))[0])
+            raise _scene_error(
+                scene_file,
+                field,
+                f"{path}: face {bad} indexes a vertex out of range (the mesh has {nv})",
+            )
+        xf = np.asarray(transform, dtype=np.float64)
+        with np.errstate(all="ignore"):
+            det = np.linalg.det(xf[:3, :3]) if np.isfinite(xf).all() else np.nan
+        if not (np.isfinite(det) and abs(det) > 1e-30):
+            raise _scene_error(
+                scene_file,
+                field,
+                f"{path}: a node transform is singular or not finite (e.g. a zero scale)",
+            )
         v = trimesh.transform_points(np.asarray(geom.vertices, dtype=np.float64), transform)
         if not np.isfinite(v).all():
             bad = int(np.flatnonzero(~np.isfinite(v).all(axis=1))[0])

@@ -31,7 +31,8 @@ use super::{buffer_init, camera_view, gbuffer, view_binding, Geometry};
 use crate::error::{Error, Result};
 use crate::gpu::{self, shaders, GpuContext};
 use crate::image::Image;
-use crate::photon::{boundary, continue_paths, Photon, PhotonRay, PhotonTraceSettings};
+use crate::photon::trace::Checked;
+use crate::photon::{boundary, continue_paths_checked, Photon, PhotonRay, PhotonTraceSettings};
 use crate::render::{Progress, RenderOutput, Settings};
 use crate::scene::{Light, Scene};
 use crate::trace::SceneBvh;
@@ -852,7 +853,9 @@ pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Re
         // Bounce maps first: their readback runs on the GPU queue behind them while the
         // direct-light frame is recorded and rendered.
         let t = Instant::now();
+        super::check_scene_buffers(&ctx, scene)?;
         let geometry = Geometry::upload(&ctx, scene);
+        crate::cancel::check(progress)?;
         let pending = start_bounce_map(&ctx, scene, &geometry, settings.photons, settings.seed)?;
         let submit = t.elapsed().as_secs_f64();
         let mut out = super::frame(&ctx, scene, settings, Some(&geometry), progress, t0)?;
@@ -899,7 +902,7 @@ fn indirect(
 
     // Later bounces on the CPU.
     let t = Instant::now();
-    let bvh = SceneBvh::build(scene);
+    let bvh = SceneBvh::try_build(scene)?;
     let photons: Vec<Photon> = if settings.max_depth >= 2 && !bm.rays.is_empty() {
         // Footprints from photon differentials size the volumes when asked for (issue 5);
         // otherwise the path-density heuristic of the paper does (section 5.1).
@@ -915,7 +918,8 @@ fn indirect(
                 differentials: None,
             }
         };
-        continue_paths(scene, &bvh, &bm.rays, &pts, settings.seed).photons
+        let control = Checked::new(progress, "cpu trace");
+        continue_paths_checked(scene, &bvh, &bm.rays, &pts, settings.seed, &control)?.photons
     } else {
         Vec::new()
     };
@@ -944,15 +948,22 @@ fn indirect(
     }
     if settings.boundary_compensation {
         let t = Instant::now();
-        boundary::compensate(
+        progress.update("boundary compensation", 0.0);
+        boundary::compensate_until(
             scene,
             &bvh,
             &mut photons,
             |p| p.footprint_radius,
             Z_RATIO,
             settings.seed,
+            &|| progress.cancelled(),
         );
+        crate::cancel::check(progress)?;
         stage(out, "boundary compensation", t);
+    }
+    ctx.check_buffer("photon volumes", photons.len() as u64 * 64)?;
+    if !progress.update("photon volumes", 0.0) {
+        return Err(Error::Cancelled);
     }
     if photons.is_empty() {
         return Ok(());
@@ -1175,6 +1186,7 @@ fn indirect(
     out.aovs
         .push(("photons".into(), photon_hits(scene, out, &photons)));
     stage(out, "readback indirect", t);
+    progress.update("photon volumes", 1.0);
     Ok(())
 }
 

@@ -283,6 +283,12 @@ fn check_limits(ctx: &GpuContext, scene: &Scene, settings: &Settings, layers: u3
     Ok(())
 }
 
+/// Fails with a GPU error when the scene's vertex buffer exceeds the adapter's limits.
+pub(crate) fn check_scene_buffers(ctx: &GpuContext, scene: &Scene) -> Result<()> {
+    let bytes = scene.triangles.len() as u64 * 3 * std::mem::size_of::<VertexRaw>() as u64;
+    ctx.check_buffer("scene vertices", bytes)
+}
+
 /// Method `direct`: direct light from point and spot lights with shadow maps, rasterized.
 pub fn render_direct(
     scene: &Scene,
@@ -326,6 +332,7 @@ fn frame(
     let geometry = match geometry {
         Some(g) => g,
         None => {
+            check_scene_buffers(ctx, scene)?;
             uploaded = Geometry::upload(ctx, scene);
             &uploaded
         }

@@ -3,30 +3,30 @@
 //! non-delta surface it reaches; assemble the image and the first-hit AOVs.
 
 use super::{Progress, RenderOutput, RenderStats, Settings};
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::image::Image;
 use crate::sampling::Rng;
 use crate::scene::Scene;
 use crate::trace::path::{self, FirstHit};
 use crate::trace::{Interaction, SceneBvh};
 use glam::Vec3;
+use crate::cancel::StageProgress;
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 /// Most delta scatterings a camera path follows before giving up.
 const MAX_DELTA_BOUNCES: u32 = 8;
 
 /// Builds the scene's BVH and starts a frame's statistics with its timing: the common
 /// first step of the photon-map methods.
-pub fn start_frame(scene: &Scene) -> (SceneBvh, RenderStats) {
+pub fn start_frame(scene: &Scene) -> Result<(SceneBvh, RenderStats)> {
     let t = std::time::Instant::now();
-    let bvh = SceneBvh::build(scene);
+    let bvh = SceneBvh::try_build(scene)?;
     let stats = RenderStats {
         triangles: scene.triangles.len() as u64,
         stages: vec![("bvh build".into(), t.elapsed().as_secs_f64())],
         ..Default::default()
     };
-    (bvh, stats)
+    Ok((bvh, stats))
 }
 
 /// Renders the image whose non-delta surfaces get their outgoing radiance from `estimate`
@@ -41,33 +41,30 @@ pub fn render_image<S: Default + Send>(
 ) -> Result<RenderOutput> {
     let cam = &scene.camera;
     let (w, h) = (cam.width, cam.height);
-    let done = AtomicU64::new(0);
-    let cancelled = AtomicBool::new(false);
+    let stage = StageProgress::new(progress, "radiance estimate", h as u64);
     let rows: Vec<Vec<(Vec3, FirstHit)>> = (0..h)
         .into_par_iter()
         .map_init(S::default, |scratch, y| {
-            if cancelled.load(Ordering::Relaxed) {
+            if stage.stopped() {
                 return Vec::new();
             }
             let row = (0..w)
-                .map(|x| {
+                .map_while(|x| {
+                    if stage.stopped() {
+                        return None;
+                    }
                     let l = pixel_radiance(scene, bvh, settings, x, y, true, |it, wo| {
                         estimate(it, wo, scratch)
                     });
                     let centre = cam.direction(x as f32 + 0.5, y as f32 + 0.5);
-                    (l, path::first_hit(scene, bvh, cam.position, centre))
+                    Some((l, path::first_hit(scene, bvh, cam.position, centre)))
                 })
                 .collect();
-            let d = done.fetch_add(1, Ordering::Relaxed) + 1;
-            if !progress.update("radiance estimate", d as f64 / h as f64) {
-                cancelled.store(true, Ordering::Relaxed);
-            }
+            stage.advance(1);
             row
         })
         .collect();
-    if cancelled.load(Ordering::Relaxed) {
-        return Err(Error::Cancelled);
-    }
+    stage.finish()?;
     let mut out = RenderOutput {
         radiance: Image::new(w, h),
         albedo: Image::new(w, h),
@@ -110,29 +107,23 @@ pub fn delta_image<S: Default + Send>(
     if !scene.materials.iter().any(has_delta_lobe) {
         return Ok(image);
     }
-    let done = AtomicU64::new(0);
-    let cancelled = AtomicBool::new(false);
+    let stage = StageProgress::new(progress, "specular paths", h as u64);
     image
         .pixels
         .par_chunks_mut(w as usize)
         .enumerate()
         .for_each_init(S::default, |scratch, (y, row)| {
-            if cancelled.load(Ordering::Relaxed) {
-                return;
-            }
             for (x, px) in row.iter_mut().enumerate() {
+                if stage.stopped() {
+                    return;
+                }
                 *px = pixel_radiance(scene, bvh, settings, x as u32, y as u32, false, |it, wo| {
                     estimate(it, wo, scratch)
                 });
             }
-            let d = done.fetch_add(1, Ordering::Relaxed) + 1;
-            if !progress.update("specular paths", d as f64 / h as f64) {
-                cancelled.store(true, Ordering::Relaxed);
-            }
+            stage.advance(1);
         });
-    if cancelled.load(Ordering::Relaxed) {
-        return Err(Error::Cancelled);
-    }
+    stage.finish()?;
     Ok(image)
 }
 
