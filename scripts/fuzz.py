@@ -54,7 +54,10 @@ def run_group(
     cmd += ["--cases", str(cases), "--log", str(log)]
     if all_methods:
         cmd.append("--all-methods")
-    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    # stderr to a file: a pipe nobody reads would block the worker once full.
+    err_path = tmp / f"{group}-{seed}.stderr"
+    err_file = err_path.open("w")
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=err_file)
     hung = None
     started = time.time()
     while proc.poll() is None:
@@ -69,7 +72,8 @@ def run_group(
             proc.kill()  # stuck before its first case: reported as a crash below
             break
     proc.wait()
-    stderr = proc.stderr.read() if proc.stderr else ""
+    err_file.close()
+    stderr = err_path.read_text(errors="replace")
     records = read_log(log)
     ends = [r for r in records if r["event"] == "end"]
     starts = {r["case"]: r for r in records if r["event"] == "start"}

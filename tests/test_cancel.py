@@ -32,25 +32,25 @@ LONG = {
 def test_ctrl_c_exits_130_quickly(method, tmp_path):
     out = tmp_path / "x.png"
     cmd = [sys.executable, "-m", "gi.cli", "render", "cornell", "-o", str(out), "--method", method]
-    proc = subprocess.Popen([*cmd, *LONG[method]], stderr=subprocess.PIPE)
-    try:
-        # The progress bar's first output: the scene is loaded and the render is running.
+    with subprocess.Popen([*cmd, *LONG[method]], stderr=subprocess.PIPE) as proc:
         assert proc.stderr is not None
-        seen = b""
-        while b"%" not in seen:
-            chunk = os.read(proc.stderr.fileno(), 256)
-            assert chunk, f"exited before rendering: {seen!r}"
-            seen += chunk
-        time.sleep(1.0)
-        assert proc.poll() is None, "the render finished too soon to test"
-        t0 = time.monotonic()
-        proc.send_signal(signal.SIGINT)
-        rc = proc.wait(timeout=30)
-        latency = time.monotonic() - t0
-    finally:
-        proc.kill()
-        proc.wait()
-    rest = proc.stderr.read().decode(errors="replace") if proc.stderr else ""
+        try:
+            # The progress bar's first output: the scene is loaded and the render is running.
+            seen = b""
+            while b"%" not in seen:
+                chunk = os.read(proc.stderr.fileno(), 256)
+                assert chunk, f"exited before rendering: {seen!r}"
+                seen += chunk
+            time.sleep(1.0)
+            assert proc.poll() is None, "the render finished too soon to test"
+            t0 = time.monotonic()
+            proc.send_signal(signal.SIGINT)
+            rc = proc.wait(timeout=30)
+            latency = time.monotonic() - t0
+        finally:
+            proc.kill()
+        rest = proc.stderr.read().decode(errors="replace")
+    print(f"{method}: exit {rc} {latency:.3f} s after SIGINT")
     assert rc == 130, rest
     assert "interrupted" in rest and "Traceback" not in rest
     # The bound: exit within 1.5 s of Ctrl-C, process teardown included.
@@ -87,6 +87,7 @@ def test_callback_cancels_within_half_a_second(method, settings, stage):
     with pytest.raises(gi.RenderCancelled):
         gi.render(scene, method, progress=progress, **settings)
     latency = time.monotonic() - asked[-1]
+    print(f"{method}/{stage}: cancelled {latency:.3f} s after the callback")
     assert latency < 0.5, f"{method}/{stage}: stopped {latency:.2f} s after the callback"
     # The process renders again.
     img = gi.render(scene, method, spp=1, size=(8, 8), photons=2000).radiance

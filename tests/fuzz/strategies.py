@@ -38,121 +38,141 @@ EXTREME_FLOATS = [
 EXTREME_INTS = [-(2**64), -1, 0, 2**31, 2**32, 2**63, 2**64, 10**30]
 
 
-def number(lo: float = -10.0, hi: float = 10.0) -> st.SearchStrategy[float]:
-    """Mostly in [lo, hi], sometimes an extreme, sometimes anything a float can be."""
-    return st.one_of(
-        st.floats(lo, hi),
-        st.floats(lo, hi),
-        st.floats(lo, hi),
-        st.sampled_from(EXTREME_FLOATS),
-        st.floats(allow_nan=True, allow_infinity=True),
-    )
+@st.composite
+def number(draw: st.DrawFn, lo: float = -10.0, hi: float = 10.0, bad: float = 0.0) -> float:
+    """In [lo, hi], except with probability `bad`: an extreme or any float at all."""
+    if bad > 0.0 and draw(st.floats(0.0, 1.0)) < bad:
+        return draw(
+            st.one_of(
+                st.sampled_from(EXTREME_FLOATS), st.floats(allow_nan=True, allow_infinity=True)
+            )
+        )
+    return draw(st.floats(lo, hi))
 
 
-def vec3(lo: float = -10.0, hi: float = 10.0) -> st.SearchStrategy[list[float]]:
-    return st.lists(number(lo, hi), min_size=3, max_size=3)
+def vec3(lo: float = -10.0, hi: float = 10.0, bad: float = 0.0) -> st.SearchStrategy[list[float]]:
+    return st.lists(number(lo, hi, bad), min_size=3, max_size=3)
 
 
-def camera() -> st.SearchStrategy[dict[str, Any]]:
+def camera(bad: float) -> st.SearchStrategy[dict[str, Any]]:
     return st.fixed_dictionaries(
-        {"position": vec3(), "look_at": vec3()},
+        {"position": vec3(-6.0, 6.0, bad), "look_at": vec3(-1.0, 1.0, bad)},
         optional={
-            "up": vec3(),
-            "fov": number(1.0, 120.0),
-            "width": st.one_of(st.integers(1, 16), st.sampled_from(EXTREME_INTS)),
+            "up": vec3(-1.0, 1.0, bad),
+            "fov": number(10.0, 120.0, bad),
+            "width": st.one_of(st.integers(1, 16), st.sampled_from(EXTREME_INTS))
+            if bad
+            else st.integers(1, 16),
             "height": st.integers(1, 16),
         },
     )
 
 
-def light() -> st.SearchStrategy[dict[str, Any]]:
-    intensity = st.lists(number(0.0, 50.0), min_size=3, max_size=3)
+def light(bad: float) -> st.SearchStrategy[dict[str, Any]]:
+    intensity = st.lists(number(0.0, 50.0, bad), min_size=3, max_size=3)
     point = st.fixed_dictionaries(
-        {"type": st.just("point"), "position": vec3(), "intensity": intensity}
+        {"type": st.just("point"), "position": vec3(-3.0, 3.0, bad), "intensity": intensity}
     )
     spot = st.fixed_dictionaries(
         {
             "type": st.just("spot"),
-            "position": vec3(),
-            "direction": vec3(-1.0, 1.0),
+            "position": vec3(-3.0, 3.0, bad),
+            "direction": vec3(-1.0, 1.0, bad),
             "intensity": intensity,
         },
-        optional={"inner_angle": number(0.0, 60.0), "outer_angle": number(1.0, 89.0)},
+        optional={"inner_angle": number(0.0, 40.0, bad), "outer_angle": number(41.0, 89.0, bad)},
     )
     return st.one_of(point, spot)
 
 
-def material() -> st.SearchStrategy[dict[str, Any]]:
-    channel = st.lists(number(0.0, 1.0), min_size=3, max_size=3)
+@st.composite
+def material(draw: st.DrawFn, bad: float) -> dict[str, Any]:
+    """Energy-conserving channels unless `bad` says otherwise."""
+    out: dict[str, Any] = {}
+    t = draw(st.sampled_from([0.0, 0.0, 0.0, 0.5, 1.0]))
+    if t > 0.0:
+        out["transmission"] = [t] * 3
+        out["ior"] = draw(number(1.0, 3.0, bad))
+    out["diffuse"] = draw(st.lists(number(0.0, 1.0 - t, bad), min_size=3, max_size=3))
+    if draw(st.booleans()):
+        out["specular"] = draw(st.lists(number(0.0, 1.0, bad), min_size=3, max_size=3))
+        out["roughness"] = draw(number(0.0, 1.0, bad))
+        out["fresnel"] = draw(st.booleans())
+    return out
+
+
+def transform(bad: float = 0.2) -> st.SearchStrategy[dict[str, Any]]:
     return st.fixed_dictionaries(
         {},
         optional={
-            "diffuse": channel,
-            "specular": channel,
-            "roughness": number(0.0, 1.0),
-            "fresnel": st.booleans(),
-            "transmission": channel,
-            "ior": number(1.0, 3.0),
+            "translate": vec3(-2.0, 2.0, bad),
+            "rotate": vec3(-360.0, 360.0, bad),
+            "scale": st.one_of(number(0.05, 3.0, bad), vec3(0.05, 3.0, bad)),
         },
     )
 
 
-def transform() -> st.SearchStrategy[dict[str, Any]]:
-    return st.fixed_dictionaries(
-        {},
-        optional={
-            "translate": vec3(),
-            "rotate": vec3(-360.0, 360.0),
-            "scale": st.one_of(number(0.01, 5.0), vec3(0.01, 5.0)),
-        },
+def shape(bad: float) -> st.SearchStrategy[dict[str, Any]]:
+    size = number(0.05, 3.0, bad)
+    segments = (
+        st.one_of(st.integers(3, 48), st.sampled_from([0, 4097, 2**40]))
+        if bad
+        else st.integers(3, 48)
     )
-
-
-def shape() -> st.SearchStrategy[dict[str, Any]]:
-    size = number(0.01, 5.0)
+    subdivisions = (
+        st.one_of(st.integers(0, 3), st.sampled_from([7, 8, 2**32])) if bad else st.integers(0, 3)
+    )
     return st.one_of(
-        st.fixed_dictionaries({"type": st.just("quad"), "size": st.lists(size, min_size=2, max_size=2)}),
-        st.fixed_dictionaries({"type": st.just("box"), "size": st.lists(size, min_size=3, max_size=3)}),
+        st.fixed_dictionaries(
+            {"type": st.just("quad"), "size": st.lists(size, min_size=2, max_size=2)}
+        ),
+        st.fixed_dictionaries(
+            {"type": st.just("box"), "size": st.lists(size, min_size=3, max_size=3)}
+        ),
         st.fixed_dictionaries(
             {"type": st.just("sphere"), "radius": size},
-            optional={"subdivisions": st.one_of(st.integers(0, 3), st.sampled_from([7, 8, 2**32]))},
+            optional={"subdivisions": subdivisions},
         ),
         st.fixed_dictionaries(
             {"type": st.just("cylinder"), "radius": size, "height": size},
-            optional={
-                "segments": st.one_of(st.integers(0, 48), st.sampled_from([4097, 2**40])),
-                "caps": st.booleans(),
-            },
+            optional={"segments": segments, "caps": st.booleans()},
         ),
         st.fixed_dictionaries(
             {
                 "type": st.just("ring"),
-                "inner_radius": size,
-                "outer_radius": size,
+                "inner_radius": number(0.05, 1.0, bad),
+                "outer_radius": number(1.05, 3.0, bad),
                 "height": size,
             },
-            optional={"segments": st.integers(0, 48)},
+            optional={"segments": segments},
         ),
     )
+
+
+#: Per-number probability of an extreme value: half the scenes are plausible throughout.
+BAD_RATES = [0.0, 0.0, 0.0, 0.0, 0.01, 0.03, 0.1, 0.3]
 
 
 @st.composite
 def scene_desc(draw: st.DrawFn) -> dict[str, Any]:
     """A scene description dict; materials referenced by objects mostly exist."""
-    materials = draw(st.dictionaries(st.sampled_from(["a", "b", "c"]), material(), max_size=3))
-    names = [*materials, "missing"] if materials else ["missing"]
+    bad = draw(st.sampled_from(BAD_RATES))
+    materials = draw(
+        st.dictionaries(st.sampled_from(["a", "b", "c"]), material(bad), min_size=1, max_size=3)
+    )
+    names = [*materials, "missing"] if bad else list(materials)
     objects = draw(
         st.lists(
             st.fixed_dictionaries(
-                {"shape": shape(), "material": st.sampled_from(names)},
-                optional={"transform": transform()},
+                {"shape": shape(bad), "material": st.sampled_from(names)},
+                optional={"transform": transform(bad)},
             ),
             max_size=4,
         )
     )
     return {
-        "camera": draw(camera()),
-        "lights": draw(st.lists(light(), max_size=3)),
+        "camera": draw(camera(bad)),
+        "lights": draw(st.lists(light(bad), max_size=3)),
         "materials": materials,
         "objects": objects,
     }
@@ -165,7 +185,7 @@ def scene_text(draw: st.DrawFn) -> str:
     desc = draw(scene_desc())
     text = json.dumps(desc)  # NaN/Infinity are written as such: not JSON, a SceneError
     mutation = draw(
-        st.sampled_from(["none"] * 6 + ["unknown", "wrong_type", "truncate", "nest", "garbage"])
+        st.sampled_from(["none"] * 12 + ["unknown", "wrong_type", "truncate", "nest", "garbage"])
     )
     if mutation == "unknown":
         desc["camera"]["colour"] = 1
@@ -261,37 +281,50 @@ METHODS = ["path", "photon", "gather", "direct", "ispm"]
 HOSTILE = [-1, 2**32, 2**64, 10**30, math.nan, math.inf, -math.inf, "8", None, [1], True]
 
 
-def cheap_or_hostile(cheap: st.SearchStrategy[Any]) -> st.SearchStrategy[Any]:
-    return st.one_of(cheap, cheap, cheap, st.sampled_from(HOSTILE))
+@st.composite
+def cheap_or_hostile(draw: st.DrawFn, cheap: st.SearchStrategy[Any], bad: float) -> Any:
+    if bad > 0.0 and draw(st.floats(0.0, 1.0)) < bad:
+        return draw(st.sampled_from(HOSTILE))
+    return draw(cheap)
 
 
-def render_settings() -> st.SearchStrategy[dict[str, Any]]:
+@st.composite
+def render_settings(draw: st.DrawFn) -> dict[str, Any]:
     """Keyword arguments of `gi.render` besides the scene: cheap valid values or absurd
     ones (which must raise `gi.SettingError`)."""
-    return st.fixed_dictionaries(
-        {
-            "method": st.one_of(st.sampled_from(METHODS), st.sampled_from(["", "PATH", 3])),
-            "size": st.one_of(
-                st.tuples(st.integers(1, 12), st.integers(1, 12)),
-                st.sampled_from([(0, 4), (-1, 4), (2**40, 2), (4,), "8x8"]),
-            ),
-        },
-        optional={
-            "spp": cheap_or_hostile(st.integers(1, 4)),
-            "seed": cheap_or_hostile(st.integers(0, 2**64 - 1)),
-            "max_depth": cheap_or_hostile(st.integers(1, 1024)),
-            "light_paths": cheap_or_hostile(st.integers(0, 2000)),
-            "photons": cheap_or_hostile(st.integers(1, 5000)),
-            "k": cheap_or_hostile(st.integers(1, 200)),
-            "max_radius": cheap_or_hostile(st.floats(1e-3, 10.0)),
-            "kernel": st.sampled_from(["box", "cone", "epanechnikov", "gauss"]),
-            "smoothing": cheap_or_hostile(st.floats(0.01, 100.0)),
-            "leaf_size": cheap_or_hostile(st.integers(1, 4096)),
-            "kernel_scale": cheap_or_hostile(st.floats(0.01, 10.0)),
-            "subsample": cheap_or_hostile(st.integers(1, 8)),
-            "footprint_volumes": st.one_of(st.booleans(), st.sampled_from([2, "yes"])),
-            "boundary_compensation": st.booleans(),
-            "volume_shape": st.sampled_from(["auto", "quad", "icosahedron", "cube"]),
-            "shadow_map_size": cheap_or_hostile(st.integers(16, 128)),
-        },
+    bad = draw(st.sampled_from([0.0, 0.0, 0.0, 0.03, 0.1, 0.3]))
+
+    def pick(cheap: st.SearchStrategy[Any]) -> st.SearchStrategy[Any]:
+        return cheap_or_hostile(cheap, bad)
+
+    return draw(
+        st.fixed_dictionaries(
+            {
+                "method": pick(st.sampled_from(METHODS)),
+                "size": st.one_of(
+                    *[st.tuples(st.integers(1, 12), st.integers(1, 12))] * 4,
+                    st.sampled_from([(0, 4), (-1, 4), (2**40, 2), (4,), "8x8"]),
+                )
+                if bad
+                else st.tuples(st.integers(1, 12), st.integers(1, 12)),
+            },
+            optional={
+                "spp": pick(st.integers(1, 4)),
+                "seed": pick(st.integers(0, 2**64 - 1)),
+                "max_depth": pick(st.integers(1, 1024)),
+                "light_paths": pick(st.integers(0, 2000)),
+                "photons": pick(st.integers(1, 5000)),
+                "k": pick(st.integers(1, 200)),
+                "max_radius": pick(st.floats(1e-3, 10.0)),
+                "kernel": pick(st.sampled_from(["box", "cone", "epanechnikov"])),
+                "smoothing": pick(st.floats(0.01, 100.0)),
+                "leaf_size": pick(st.integers(1, 4096)),
+                "kernel_scale": pick(st.floats(0.01, 10.0)),
+                "subsample": pick(st.integers(1, 8)),
+                "footprint_volumes": pick(st.booleans()),
+                "boundary_compensation": pick(st.booleans()),
+                "volume_shape": pick(st.sampled_from(["auto", "quad", "icosahedron"])),
+                "shadow_map_size": pick(st.integers(16, 128)),
+            },
+        )
     )

@@ -15,6 +15,7 @@ import argparse
 import itertools
 import json
 import os
+import shutil
 import sys
 import tempfile
 import time
@@ -149,7 +150,7 @@ def main() -> None:
                 "material": data.draw(st.sampled_from(["m", "g"])),
             }
             if data.draw(st.booleans()):
-                obj["transform"] = data.draw(fz.transform())
+                obj["transform"] = data.draw(fz.transform(data.draw(st.sampled_from(fz.BAD_RATES))))
             desc = dict(MESH_SCENE, objects=[obj])
             path = workdir / "scene.json"
             path.write_text(json.dumps(desc))
@@ -178,6 +179,7 @@ def main() -> None:
             run_case(log, "settings", {"settings": kwargs, "exposure": exposure}, go)
 
         settings_case()
+    shutil.rmtree(workdir, ignore_errors=True)
 
 
 if __name__ == "__main__":

@@ -259,6 +259,14 @@ fn oct_decode(e: Vec2) -> Vec3 {
     n.normalize_or_zero()
 }
 
+/// Samples per submission: up to [`SAMPLES_PER_SUBMIT`], fewer for large images so that
+/// one submission stays short (about 2¹⁸ pixel samples, about 0.1 s on
+/// lavapipe) and cancellation, checked between submissions, stays prompt.
+fn samples_per_submit(w: u32, h: u32) -> u32 {
+    let pixels = (w as u64 * h as u64).max(1);
+    ((1u64 << 18) / pixels).clamp(1, SAMPLES_PER_SUBMIT as u64) as u32
+}
+
 fn check_limits(ctx: &GpuContext, scene: &Scene, settings: &Settings, layers: u32) -> Result<()> {
     let l = ctx.device.limits();
     let max = l.max_texture_dimension_2d;
@@ -505,8 +513,9 @@ fn frame(
 
     // Per sample: G-buffer at the jittered view, then lighting added into the accumulator.
     let mut done = 0;
+    let per_submit = samples_per_submit(w, h);
     while done < spp {
-        let batch = SAMPLES_PER_SUBMIT.min(spp - done);
+        let batch = per_submit.min(spp - done);
         let views = &sample_views[done as usize..(done + batch) as usize];
         ctx.queue
             .write_buffer(&eye_buffer, VIEW_SIZE, bytemuck::cast_slice(views));

@@ -65,6 +65,9 @@ pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Re
                     let pixel = (y * w + x) as u64;
                     let mut sum = Vec3::ZERO;
                     for s in 0..spp {
+                        if s % 64 == 63 && stage.stopped() {
+                            return None;
+                        }
                         let mut rng = Rng::new(settings.seed, pixel, s as u64);
                         let j = rng.next_2d();
                         let dir = cam.direction(x as f32 + j.x, y as f32 + j.y);
