@@ -32,7 +32,10 @@ def with_object(desc, obj):
             "objects[7].transform.scale",
         ),
         (
-            {"shape": {"type": "box", "size": [1, 1, 1]}, "transform": {"translate": [3.4e38, 0, 0]}},
+            {
+                "shape": {"type": "box", "size": [1, 1, 1]},
+                "transform": {"translate": [3.4e38, 0, 0]},
+            },
             "objects[7].transform.translate",
         ),
         # A sphere of radius 1e38.

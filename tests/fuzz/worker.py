@@ -39,7 +39,10 @@ SMALL = {"size": (8, 8), "spp": 1, "photons": 400, "max_depth": 8, "shadow_map_s
 MESH_SCENE = {
     "camera": {"position": [0, 0, 4], "look_at": [0, 0, 0], "width": 8, "height": 8},
     "lights": [{"type": "point", "position": [0, 2, 3], "intensity": [5, 5, 5]}],
-    "materials": {"m": {"diffuse": [0.6, 0.6, 0.6]}, "g": {"diffuse": [0, 0, 0], "transmission": [1, 1, 1]}},
+    "materials": {
+        "m": {"diffuse": [0.6, 0.6, 0.6]},
+        "g": {"diffuse": [0, 0, 0], "transmission": [1, 1, 1]},
+    },
 }
 
 
@@ -133,7 +136,9 @@ def main() -> None:
             path.write_text(text, encoding="utf-8", errors="surrogatepass")
             ms = methods()
             run_case(
-                log, "scenes", {"scene": text[:4000], "methods": ms},
+                log,
+                "scenes",
+                {"scene": text[:4000], "methods": ms},
                 lambda: render_all(gi.load_scene(path), ms),
             )
 
@@ -158,8 +163,15 @@ def main() -> None:
             blob = mesh.read_bytes()
             shown = blob[:2000].decode("latin-1")
             run_case(
-                log, "meshes",
-                {"mesh": mesh.name, "bytes": len(blob), "head": shown, "object": obj, "methods": ms},
+                log,
+                "meshes",
+                {
+                    "mesh": mesh.name,
+                    "bytes": len(blob),
+                    "head": shown,
+                    "object": obj,
+                    "methods": ms,
+                },
                 lambda: render_all(gi.load_scene(path), ms),
             )
 

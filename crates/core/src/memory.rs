@@ -20,7 +20,10 @@ pub fn available() -> Option<u64> {
         limit.saturating_sub(used)
     });
     let cgroup = cgroup_room();
-    [physical, address_space, cgroup].into_iter().flatten().min()
+    [physical, address_space, cgroup]
+        .into_iter()
+        .flatten()
+        .min()
 }
 
 /// Fails with [`Error::OutOfMemory`] when `needed` bytes (plus a reserve) are more than the
@@ -87,7 +90,9 @@ fn status(key: &str) -> Option<u64> {
 /// The soft `RLIMIT_AS` in bytes (`None` when unlimited or unreadable).
 fn address_space_limit() -> Option<u64> {
     let limits = std::fs::read_to_string("/proc/self/limits").ok()?;
-    let line = limits.lines().find(|l| l.starts_with("Max address space"))?;
+    let line = limits
+        .lines()
+        .find(|l| l.starts_with("Max address space"))?;
     line["Max address space".len()..]
         .split_whitespace()
         .next()?

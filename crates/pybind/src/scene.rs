@@ -200,21 +200,26 @@ impl PyScene {
             ));
         }
         if let Some(i) = o.iter().chain(&d).position(|v| !v.is_finite()) {
-            let (what, row) = if i < o.len() { ("origins", i) } else { ("directions", i - o.len()) };
+            let (what, row) = if i < o.len() {
+                ("origins", i)
+            } else {
+                ("directions", i - o.len())
+            };
             return Err(pyo3::exceptions::PyValueError::new_err(format!(
                 "{what}[{row}] is not finite"
             )));
         }
-        let (t, tri): (Vec<f32>, Vec<i64>) = crate::guard::run(py, "Scene.intersect", None, |_| {
-            let bvh = self.bvh()?;
-            Ok(o.par_iter()
-                .zip(d.par_iter())
-                .map(|(o, d)| match bvh.intersect(*o, *d, f32::INFINITY) {
-                    Some(h) => (h.t, h.triangle as i64),
-                    None => (f32::INFINITY, -1),
-                })
-                .unzip())
-        })?;
+        let (t, tri): (Vec<f32>, Vec<i64>) =
+            crate::guard::run(py, "Scene.intersect", None, |_| {
+                let bvh = self.bvh()?;
+                Ok(o.par_iter()
+                    .zip(d.par_iter())
+                    .map(|(o, d)| match bvh.intersect(*o, *d, f32::INFINITY) {
+                        Some(h) => (h.t, h.triangle as i64),
+                        None => (f32::INFINITY, -1),
+                    })
+                    .unzip())
+            })?;
         Ok((
             t.into_pyarray(py).into_any(),
             tri.into_pyarray(py).into_any(),

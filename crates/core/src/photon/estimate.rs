@@ -10,11 +10,11 @@
 //! (k − 1)/(πr²), the unbiased kNN density for uniformly spread photons.
 
 use super::{KdTree, Neighbour, Photon};
-use crate::error::{Error, Result};
-use crate::trace::Interaction;
 use crate::cancel;
+use crate::error::{Error, Result};
 use crate::memory;
 use crate::render::Progress;
+use crate::trace::Interaction;
 use glam::Vec3;
 use std::f32::consts::PI;
 use std::str::FromStr;

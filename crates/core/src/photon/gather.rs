@@ -6,11 +6,11 @@
 use super::footprint::{t_auto, Footprint};
 use super::lbvh::{Aabb, LinearBvh};
 use super::{Kernel, Photon, PhotonSet};
-use crate::trace::Interaction;
 use crate::cancel;
 use crate::error::Result;
 use crate::memory;
 use crate::render::Progress;
+use crate::trace::Interaction;
 use glam::Vec3;
 
 /// Minimum cosine between a photon's surface normal and the shading normal for the photon

@@ -12,13 +12,13 @@
 use super::differential::{self, Differentials};
 use super::{path_density_factor, FootprintAxes, PathKind, Photon, PhotonRay, PhotonSet};
 use crate::bsdf::Lobe;
+use crate::error::{Error, Result};
+use crate::memory;
+use crate::render::Progress;
 use crate::sampling::Rng;
 use crate::scene::Scene;
 use crate::trace::light_tracer::{choose_light, light_weights};
 use crate::trace::{Interaction, SceneBvh};
-use crate::error::{Error, Result};
-use crate::memory;
-use crate::render::Progress;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
@@ -230,7 +230,8 @@ impl TraceControl for Checked<'_> {
 const EXTRAPOLATE_AFTER: u64 = 8;
 
 /// Bytes a stored photon takes while tracing (the record and its footprint).
-const STORED_BYTES: u64 = (std::mem::size_of::<Photon>() + std::mem::size_of::<FootprintAxes>()) as u64;
+const STORED_BYTES: u64 =
+    (std::mem::size_of::<Photon>() + std::mem::size_of::<FootprintAxes>()) as u64;
 
 /// Runs `path(i, set)` for every `i < n` in parallel chunks and concatenates the chunks' sets
 /// in order. Stops with `Cancelled` when `control` asks, and with `OutOfMemory` when the

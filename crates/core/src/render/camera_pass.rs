@@ -3,6 +3,7 @@
 //! non-delta surface it reaches; assemble the image and the first-hit AOVs.
 
 use super::{Progress, RenderOutput, RenderStats, Settings};
+use crate::cancel::StageProgress;
 use crate::error::Result;
 use crate::image::Image;
 use crate::sampling::Rng;
@@ -10,7 +11,6 @@ use crate::scene::Scene;
 use crate::trace::path::{self, FirstHit};
 use crate::trace::{Interaction, SceneBvh};
 use glam::Vec3;
-use crate::cancel::StageProgress;
 use rayon::prelude::*;
 
 /// Most delta scatterings a camera path follows before giving up.

@@ -1,6 +1,7 @@
 //! Method `path`: the reference renderer (path tracing + light tracing for caustics).
 
 use super::{Progress, RenderOutput, RenderStats, Settings};
+use crate::cancel::StageProgress;
 use crate::error::Result;
 use crate::image::Image;
 use crate::sampling::Rng;
@@ -10,7 +11,6 @@ use crate::trace::path::{self, PathSettings};
 use crate::trace::SceneBvh;
 use glam::Vec3;
 use rayon::prelude::*;
-use crate::cancel::StageProgress;
 use std::time::Instant;
 
 /// Light paths per parallel work item.

@@ -302,10 +302,7 @@ fn check_light_position(v: V3) -> std::result::Result<Vec3, FieldError> {
         return Err(("position".into(), "must be finite"));
     }
     if !within_extent(v) {
-        return Err((
-            "position".into(),
-            "must lie within ±100000 m (MAX_EXTENT)",
-        ));
+        return Err(("position".into(), "must lie within ±100000 m (MAX_EXTENT)"));
     }
     Ok(Vec3::from(v))
 }
@@ -388,10 +385,7 @@ fn transform_matrix(t: &desc::TransformDesc) -> std::result::Result<Mat4, FieldE
         return Err(("translate".into(), "must be finite"));
     }
     if !within_extent(t.translate) {
-        return Err((
-            "translate".into(),
-            "must lie within ±100000 m (MAX_EXTENT)",
-        ));
+        return Err(("translate".into(), "must lie within ±100000 m (MAX_EXTENT)"));
     }
     if !finite3(t.rotate) {
         return Err(("rotate".into(), "must be finite"));
