@@ -25,10 +25,11 @@ from gi._gi import (  # noqa: E402
     builtin_json,
     builtin_scenes,
     footprint_radii,
+    gpu_counters,
     methods,
 )
 from gi.io import read_image, save_image  # noqa: E402
-from gi.render import RenderResult, RenderStats, render  # noqa: E402
+from gi.render import Renderer, RenderResult, RenderStats, render  # noqa: E402
 from gi.scene import load_scene  # noqa: E402
 
 __all__ = [
@@ -36,6 +37,7 @@ __all__ = [
     "GpuError",
     "RenderCancelled",
     "RenderResult",
+    "Renderer",
     "RenderStats",
     "Scene",
     "SceneError",
@@ -45,6 +47,7 @@ __all__ = [
     "builtin_json",
     "builtin_scenes",
     "footprint_radii",
+    "gpu_counters",
     "load_scene",
     "methods",
     "read_image",
