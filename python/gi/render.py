@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import json
 import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -85,6 +87,150 @@ class ProgressBar:
         return True
 
 
+def _settings(**kw: object) -> dict[str, object]:
+    """Keyword settings for the native module, with ``size`` split into width and height."""
+    size = kw.pop("size", None)
+    if size is not None:
+        try:
+            kw["width"], kw["height"] = size  # type: ignore[misc]
+        except (TypeError, ValueError):
+            raise _checks.setting_error("size", f"expected (width, height), got {size!r}") from None
+    return kw
+
+
+def _progress(progress: bool | ProgressCallback) -> ProgressCallback | None:
+    if progress is True:
+        return ProgressBar()
+    if progress is False or progress is None:
+        return None
+    if not callable(progress):
+        raise _checks.setting_error("progress", f"must be a bool or a callable, got {progress!r}")
+    return progress
+
+
+def _result(out: dict[str, Any]) -> RenderResult:
+    s = out["stats"]
+    stats = RenderStats(
+        method=s["method"],
+        total_seconds=s["total_seconds"],
+        stages=[(str(n), float(t)) for n, t in s["stages"]],
+        samples_per_pixel=s["samples_per_pixel"],
+        camera_paths=s["camera_paths"],
+        light_paths=s["light_paths"],
+        triangles=s["triangles"],
+        photons_emitted=s["photons_emitted"],
+        photons_first_bounce=s["photons_first_bounce"],
+        photons_stored=s["photons_stored"],
+        volume_quads=s["volume_quads"],
+    )
+    return RenderResult(
+        radiance=out["radiance"],
+        albedo=out["albedo"],
+        normal=out["normal"],
+        position=out["position"],
+        depth=out["depth"],
+        caustics=out["caustics"],
+        stats=stats,
+        extra=dict(out["extra"]),
+    )
+
+
+class Renderer:
+    """A persistent renderer: made once from a scene, a method and its settings (the
+    keywords of :func:`render`, plus ``temporal_frames`` for method ``ispm``), then one
+    :meth:`render` per frame with :meth:`update` calls between frames. GPU resources, the
+    BVH and the photon ring live from one frame to the next; a frame uploads only what
+    changed and reads back only the images asked for.
+
+    >>> r = gi.Renderer(gi.load_scene("cornell"), "ispm", size=(320, 240), photons=50_000)
+    >>> r.update(lights={0: {"position": [0.2, 1.9, 0.0]}})
+    >>> frame = r.render()                    # radiance only; aovs=True for the rest
+    """
+
+    def __init__(self, scene: Scene, method: str = "ispm", **settings: Any) -> None:
+        if not isinstance(method, str):
+            raise _checks.setting_error("method", f"must be a string, got {method!r}")
+        self._native = _gi.Renderer(scene, method, _settings(**settings))
+
+    @property
+    def method(self) -> str:
+        return self._native.method
+
+    @property
+    def size(self) -> tuple[int, int]:
+        """``(width, height)`` of the frames."""
+        return self._native.size
+
+    @property
+    def frame_index(self) -> int:
+        """Frames rendered so far."""
+        return self._native.frame_index
+
+    @property
+    def object_names(self) -> list[str | None]:
+        """Names of the scene's objects (``None`` where unnamed), in scene order."""
+        return self._native.object_names
+
+    def describe(self, target: str, key: int | str | None = None) -> dict[str, Any]:
+        """The current ``"camera"``, ``"light"`` (key: index) or ``"material"`` (key: name)
+        in the scene format."""
+        return json.loads(self._native.describe(target, key))  # type: ignore[no-any-return]
+
+    def update(
+        self,
+        *,
+        camera: dict[str, Any] | None = None,
+        lights: dict[int, dict[str, Any]] | None = None,
+        objects: dict[int | str, dict[str, Any]] | None = None,
+        materials: dict[str, dict[str, Any]] | None = None,
+    ) -> None:
+        """Changes the scene before the next frame, in the scene format's terms.
+
+        ``camera`` and each ``lights[i]`` / ``materials[name]`` give the fields that change
+        (``{"position": [0, 1, 3]}``); ``objects[name or index]`` gives the object's whole
+        transform (``translate``/``rotate``/``scale`` as in the scene file, or
+        ``{"matrix": 4×4 rows}``). Invalid values raise :class:`gi.SceneError` and change
+        nothing.
+        """
+        if camera is not None:
+            self._native.update("camera", None, json.dumps(camera))
+        for i, light in (lights or {}).items():
+            self._native.update("light", i, json.dumps(light))
+        for key, transform in (objects or {}).items():
+            self._native.update("object", key, json.dumps(_jsonable(transform)))
+        for name, material in (materials or {}).items():
+            self._native.update("material", name, json.dumps(material))
+
+    def resize(self, width: int, height: int) -> None:
+        """Changes the image size (render targets are rebuilt at the next frame)."""
+        self._native.resize(width, height)
+
+    def render(
+        self,
+        *,
+        aovs: bool = False,
+        extras: bool = False,
+        seed: int | None = None,
+        progress: bool | ProgressCallback = False,
+    ) -> RenderResult:
+        """Renders one frame. Only the radiance is read back unless ``aovs`` (albedo,
+        normal, position, depth) or ``extras`` (the method's own images) are asked for;
+        images not asked for are empty arrays. ``seed`` overrides the frame's random seed."""
+        out = self._native.render(
+            aovs=aovs, extras=extras, seed=seed, progress=_progress(progress)
+        )
+        return _result(out)
+
+
+def _jsonable(value: Any) -> Any:
+    """numpy arrays (a 4×4 matrix) as nested lists."""
+    if isinstance(value, dict):
+        return {k: _jsonable(v) for k, v in value.items()}
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    return value
+
+
 def render(
     scene: Scene,
     method: str = "path",
@@ -139,63 +285,26 @@ def render(
     cancel), or ``True`` for a text bar on stderr. The GIL is released while rendering;
     Ctrl-C cancels with :class:`KeyboardInterrupt`.
     """
-    callback: ProgressCallback | None
-    if progress is True:
-        callback = ProgressBar()
-    elif progress is False or progress is None:
-        callback = None
-    elif callable(progress):
-        callback = progress
-    else:
-        raise _checks.setting_error("progress", f"must be a bool or a callable, got {progress!r}")
-    if not isinstance(scene, Scene):
-        raise TypeError(f"scene must be a gi.Scene (see gi.load_scene), got {type(scene).__name__}")
-    width, height = _checks.size_setting(size)
-    out = _gi.render(
+    renderer = Renderer(
         scene,
-        method=_checks.str_setting("method", method),
-        spp=_checks.int_setting("spp", spp),
-        width=width,
-        height=height,
-        seed=_checks.int_setting("seed", seed, _checks.U64_MAX),
-        max_depth=_checks.int_setting("max_depth", max_depth),
-        light_paths=_checks.optional_int("light_paths", light_paths, _checks.U64_MAX),
-        photons=_checks.int_setting("photons", photons, _checks.U64_MAX),
-        k=_checks.int_setting("k", k),
-        max_radius=_checks.optional_float("max_radius", max_radius),
-        kernel=_checks.str_setting("kernel", kernel),
-        smoothing=_checks.float_setting("smoothing", smoothing),
-        leaf_size=_checks.optional_int("leaf_size", leaf_size),
-        kernel_scale=_checks.float_setting("kernel_scale", kernel_scale),
-        subsample=_checks.int_setting("subsample", subsample),
-        footprint_volumes=_checks.bool_setting("footprint_volumes", footprint_volumes),
-        boundary_compensation=_checks.bool_setting("boundary_compensation", boundary_compensation),
-        volume_shape=_checks.str_setting("volume_shape", volume_shape),
-        adapter=_checks.str_setting("adapter", adapter, optional=True),
-        shadow_map_size=_checks.int_setting("shadow_map_size", shadow_map_size),
-        progress=callback,
+        method,
+        spp=spp,
+        size=size,
+        seed=seed,
+        max_depth=max_depth,
+        light_paths=light_paths,
+        photons=photons,
+        k=k,
+        max_radius=max_radius,
+        kernel=kernel,
+        smoothing=smoothing,
+        leaf_size=leaf_size,
+        kernel_scale=kernel_scale,
+        subsample=subsample,
+        footprint_volumes=footprint_volumes,
+        boundary_compensation=boundary_compensation,
+        volume_shape=volume_shape,
+        adapter=adapter,
+        shadow_map_size=shadow_map_size,
     )
-    s = out["stats"]
-    stats = RenderStats(
-        method=s["method"],
-        total_seconds=s["total_seconds"],
-        stages=[(str(n), float(t)) for n, t in s["stages"]],
-        samples_per_pixel=s["samples_per_pixel"],
-        camera_paths=s["camera_paths"],
-        light_paths=s["light_paths"],
-        triangles=s["triangles"],
-        photons_emitted=s["photons_emitted"],
-        photons_first_bounce=s["photons_first_bounce"],
-        photons_stored=s["photons_stored"],
-        volume_quads=s["volume_quads"],
-    )
-    return RenderResult(
-        radiance=out["radiance"],
-        albedo=out["albedo"],
-        normal=out["normal"],
-        position=out["position"],
-        depth=out["depth"],
-        caustics=out["caustics"],
-        stats=stats,
-        extra=dict(out["extra"]),
-    )
+    return renderer.render(aovs=True, extras=True, progress=progress)

@@ -7,6 +7,8 @@
 pub mod bsdf;
 pub mod cancel;
 pub mod error;
+pub mod estimate;
+pub mod frame;
 pub mod gpu;
 pub mod image;
 pub mod memory;
@@ -18,6 +20,7 @@ pub mod scene;
 pub mod trace;
 
 pub use error::{Error, Result};
+pub use frame::{FrameDesc, Images, Renderer};
 pub use image::Image;
 pub use render::{render, Method, Progress, RenderOutput, RenderStats, Settings};
-pub use scene::Scene;
+pub use scene::{Scene, SceneUpdate};

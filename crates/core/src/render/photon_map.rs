@@ -15,6 +15,7 @@ use crate::photon::estimate::{Gather, PhotonMap};
 use crate::photon::trace::Checked;
 use crate::photon::{emit_and_trace_checked, Neighbour, PhotonTraceSettings};
 use crate::scene::Scene;
+use crate::trace::SceneBvh;
 use std::time::Instant;
 
 /// Default maximum gather radius, as a fraction of the scene's bounding-box diagonal.
@@ -32,9 +33,14 @@ pub fn gather_settings(scene: &Scene, settings: &Settings) -> Gather {
     }
 }
 
-pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Result<RenderOutput> {
+pub fn render(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    settings: &Settings,
+    progress: &dyn Progress,
+) -> Result<RenderOutput> {
     let t0 = Instant::now();
-    let (bvh, mut stats) = start_frame(scene)?;
+    let mut stats = start_frame(scene);
     let mut stage =
         |name: &str, t: Instant| stats.stages.push((name.into(), t.elapsed().as_secs_f64()));
 
@@ -46,7 +52,7 @@ pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Re
         differentials: None,
     };
     let control = Checked::new(progress, "photon trace");
-    let set = emit_and_trace_checked(scene, &bvh, settings.photons, &pts, settings.seed, &control)?;
+    let set = emit_and_trace_checked(scene, bvh, settings.photons, &pts, settings.seed, &control)?;
     stage("photon trace", t);
 
     let t = Instant::now();
@@ -57,7 +63,7 @@ pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Re
     let gather = gather_settings(scene, settings);
     let mut out = render_image(
         scene,
-        &bvh,
+        bvh,
         settings,
         progress,
         stats,
