@@ -9,8 +9,11 @@ recorded against the case that caused it and the run goes on with the next group
         --summary docs/fuzz-summary.json
 
 The summary counts outcomes per group: ok, typed (a gi.GiError), untyped (any other
-exception), nan (an accepted render with a non-finite pixel), crash and hang; the last four
-must be zero. The exit status is 1 when any of them is not.
+exception), nan (an accepted render with a non-finite pixel), crash and hang (no result
+after --hang-timeout seconds: the worker is killed); the last four must be zero. Cases that
+took longer than --case-timeout (20 s) of wall time are listed as `slow` with their CPU
+time, which tells a slow input from a worker starved by other load (`nice -n 19` on a busy
+machine). The exit status is 1 when any failure or slow case occurred.
 """
 
 from __future__ import annotations
@@ -46,7 +49,7 @@ def read_log(path: Path) -> list[dict]:
 
 
 def run_group(
-    group: str, seed: int, cases: int, case_timeout: float, all_methods: bool, tmp: Path
+    group: str, seed: int, cases: int, hang_timeout: float, all_methods: bool, tmp: Path
 ) -> list[dict]:
     """Runs one worker; returns its cases as end records, a crash or hang included."""
     log = tmp / f"{group}-{seed}.jsonl"
@@ -64,7 +67,7 @@ def run_group(
         time.sleep(0.2)
         records = read_log(log)
         if records and records[-1]["event"] == "start":
-            if time.time() - records[-1]["t"] > case_timeout:
+            if time.time() - records[-1]["t"] > hang_timeout:
                 hung = records[-1]
                 proc.kill()
                 break
@@ -83,7 +86,7 @@ def run_group(
     for r in unfinished:
         status = "hang" if hung is not None and r["case"] == hung["case"] else "crash"
         detail = (
-            f"no result after {case_timeout:.0f} s"
+            f"no result after {hang_timeout:.0f} s"
             if status == "hang"
             else f"worker exited with {proc.returncode}: {stderr[-1500:]}"
         )
@@ -111,6 +114,7 @@ def run(
     all_methods: bool,
     seed: int = 0,
     jobs: int = 1,
+    hang_timeout: float = 300.0,
 ) -> dict:
     """Runs at least `cases` cases, groups cycling through scenes, meshes and settings."""
     t0 = time.monotonic()
@@ -125,7 +129,7 @@ def run(
             i += 1
         if jobs <= 1:
             for group, s in plan:
-                results += run_group(group, s, group_size, case_timeout, all_methods, tmp)
+                results += run_group(group, s, group_size, hang_timeout, all_methods, tmp)
                 done = len(results)
                 bad = sum(r["status"] in FAILURES for r in results)
                 print(f"{done} cases, {bad} failures, {time.monotonic() - t0:.0f} s", flush=True)
@@ -134,7 +138,7 @@ def run(
 
             with ThreadPoolExecutor(jobs) as pool:
                 futures = [
-                    pool.submit(run_group, g, s, group_size, case_timeout, all_methods, tmp)
+                    pool.submit(run_group, g, s, group_size, hang_timeout, all_methods, tmp)
                     for g, s in plan
                 ]
                 for f in futures:
@@ -142,14 +146,20 @@ def run(
     counts = {g: dict(Counter(r["status"] for r in results if r["group"] == g)) for g in GROUPS}
     totals = dict(Counter(r["status"] for r in results))
     slowest = sorted(results, key=lambda r: -float(r.get("seconds") or 0))[:5]
+    slow = [r for r in results if float(r.get("seconds") or 0) > case_timeout]
     return {
         "cases": len(results),
         "seconds": round(time.monotonic() - t0, 1),
         "all_methods": all_methods,
         "case_timeout_s": case_timeout,
+        "hang_timeout_s": hang_timeout,
         "totals": {k: totals.get(k, 0) for k in ["ok", "typed", *FAILURES]},
         "per_group": counts,
-        "slowest_cases_s": [r.get("seconds") for r in slowest],
+        "slowest_cases_s": [(r.get("seconds"), r.get("cpu_seconds")) for r in slowest],
+        "slow": [
+            {k: r.get(k) for k in ["group", "seconds", "cpu_seconds", "status", "input"]}
+            for r in slow
+        ],
         "failures": [r for r in results if r["status"] in FAILURES],
     }
 
@@ -158,7 +168,8 @@ def main() -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     p.add_argument("--cases", type=int, default=10_000)
     p.add_argument("--group-size", type=int, default=250)
-    p.add_argument("--case-timeout", type=float, default=20.0)
+    p.add_argument("--case-timeout", type=float, default=20.0, help="a case slower is `slow`")
+    p.add_argument("--hang-timeout", type=float, default=300.0, help="a case slower is killed")
     p.add_argument("--all-methods", action="store_true", help="render every case with all five")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--jobs", type=int, default=1, help="worker processes at a time")
@@ -166,7 +177,13 @@ def main() -> int:
     args = p.parse_args()
     os.environ.setdefault("GI_ADAPTER", "cpu")
     summary = run(
-        args.cases, args.group_size, args.case_timeout, args.all_methods, args.seed, args.jobs
+        args.cases,
+        args.group_size,
+        args.case_timeout,
+        args.all_methods,
+        args.seed,
+        args.jobs,
+        args.hang_timeout,
     )
     summary["command"] = " ".join(["scripts/fuzz.py", *sys.argv[1:]])
     text = json.dumps(summary, indent=1, default=repr)
@@ -175,7 +192,7 @@ def main() -> int:
     print(json.dumps({k: v for k, v in summary.items() if k != "failures"}, indent=1))
     for f in summary["failures"][:20]:
         print(f["status"], f["group"], f.get("detail", "")[:300], file=sys.stderr)
-    return 1 if summary["failures"] else 0
+    return 1 if summary["failures"] or summary["slow"] else 0
 
 
 if __name__ == "__main__":

@@ -307,13 +307,15 @@ def render_settings(draw: st.DrawFn) -> dict[str, Any]:
                 )
                 if bad
                 else st.tuples(st.integers(1, 12), st.integers(1, 12)),
+                # Always given: the defaults (64 spp, 200,000 photons) are not cheap.
+                "spp": pick(st.integers(1, 4)),
+                "photons": pick(st.integers(1, 5000)),
+                "shadow_map_size": pick(st.integers(16, 128)),
             },
             optional={
-                "spp": pick(st.integers(1, 4)),
                 "seed": pick(st.integers(0, 2**64 - 1)),
                 "max_depth": pick(st.integers(1, 1024)),
                 "light_paths": pick(st.integers(0, 2000)),
-                "photons": pick(st.integers(1, 5000)),
                 "k": pick(st.integers(1, 200)),
                 "max_radius": pick(st.floats(1e-3, 10.0)),
                 "kernel": pick(st.sampled_from(["box", "cone", "epanechnikov"])),
@@ -324,7 +326,6 @@ def render_settings(draw: st.DrawFn) -> dict[str, Any]:
                 "footprint_volumes": pick(st.booleans()),
                 "boundary_compensation": pick(st.booleans()),
                 "volume_shape": pick(st.sampled_from(["auto", "quad", "icosahedron"])),
-                "shadow_map_size": pick(st.integers(16, 128)),
             },
         )
     )

@@ -89,7 +89,7 @@ def render_all(scene: gi.Scene, methods: list[str]) -> str | None:
 def run_case(log: Log, group: str, data: dict[str, Any], fn: Any) -> None:
     case = next(log.counter)
     log.write({"event": "start", "case": case, "group": group, "input": data, "t": time.time()})
-    t = time.monotonic()
+    t, cpu = time.monotonic(), time.process_time()
     status, detail = outcome(fn)
     log.write(
         {
@@ -99,6 +99,8 @@ def run_case(log: Log, group: str, data: dict[str, Any], fn: Any) -> None:
             "status": status,
             "detail": detail,
             "seconds": round(time.monotonic() - t, 3),
+            # CPU time of all threads: tells a slow case from one starved by other load.
+            "cpu_seconds": round(time.process_time() - cpu, 3),
         }
     )
 
