@@ -251,3 +251,20 @@ def test_nan_rays_are_refused():
 def test_scene_json_with_huge_numbers(write_scene, cornell_desc):
     text = json.dumps(cornell_desc).replace('"fov": 40', '"fov": 1e400')
     assert scene_error(write_scene(text)).field.startswith("camera")
+
+
+def test_renderer_updates_are_bounded_too():
+    # A persistent renderer's updates go through the same limits as scene files.
+    r = gi.Renderer(gi.load_scene("cornell"), "path", size=(8, 8), spp=1)
+    with pytest.raises(gi.SceneError) as e:
+        r.update(objects={0: {"translate": [0, 1e15, 0]}})
+    assert e.value.field == "objects[0].transform.translate"
+    with pytest.raises(gi.SceneError) as e:
+        r.update(
+            objects={0: {"matrix": [[1e30, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]}}
+        )
+    assert e.value.field == "objects[0].transform" and "outside" in e.value.reason
+    with pytest.raises(gi.SceneError) as e:
+        r.update(lights={0: {"intensity": [1e38, 1e38, 1e38]}})
+    assert e.value.field == "lights[0].intensity"
+    assert np.isfinite(r.render().radiance).all()

@@ -261,12 +261,18 @@ impl PyRenderer {
         let update = scene
             .update_from_json(&target, &value)
             .map_err(|e| to_py(py, e))?;
-        self.inner.update(&update).map_err(|e| to_py(py, e))
+        let inner = &mut self.inner;
+        crate::guard::catch("Renderer.update", || {
+            inner.update(&update).map_err(|e| to_py(py, e))
+        })
     }
 
     /// Changes the image size (targets are rebuilt at the next frame).
     fn resize(&mut self, py: Python<'_>, width: u32, height: u32) -> PyResult<()> {
-        self.inner.resize(width, height).map_err(|e| to_py(py, e))
+        let inner = &mut self.inner;
+        crate::guard::catch("Renderer.resize", || {
+            inner.resize(width, height).map_err(|e| to_py(py, e))
+        })
     }
 
     /// Frames rendered so far.
