@@ -16,14 +16,18 @@ pub struct StageProgress<'a> {
 }
 
 impl<'a> StageProgress<'a> {
+    /// Starts the stage, reporting it at 0 (so that the stage shows before its first
+    /// item, which may take long, is done).
     pub fn new(progress: &'a dyn Progress, name: &'a str, total: u64) -> Self {
-        StageProgress {
+        let stage = StageProgress {
             progress,
             name,
             total: total.max(1),
             done: AtomicU64::new(0),
             stop: AtomicBool::new(false),
-        }
+        };
+        stage.advance(0);
+        stage
     }
 
     /// Counts `n` more finished items and reports the fraction done; a `false` from the

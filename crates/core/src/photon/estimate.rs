@@ -108,7 +108,6 @@ impl PhotonMap {
         let bytes = n * (12 + 16 + 12 + 4 + 1);
         memory::check(|| format!("the kd-tree over {n} photons"), bytes)?;
         let stage = cancel::StageProgress::new(progress, "kd-tree build", 1);
-        stage.advance(0);
         let positions: Vec<Vec3> = photons.iter().map(Photon::position).collect();
         let tree = KdTree::build_until(&positions, &|| stage.stopped()).ok_or(Error::Cancelled)?;
         stage.advance(1);

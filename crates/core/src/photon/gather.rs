@@ -98,7 +98,6 @@ impl FootprintMap {
             n * per_photon,
         )?;
         let stage = cancel::StageProgress::new(progress, "photon map build", 1);
-        stage.advance(0);
         stage.finish()?;
         let map = Self::build(set, min_bounce, scene_area, leaf, kernel);
         stage.advance(1);
