@@ -204,12 +204,12 @@ mod tests {
         let bvh = SceneBvh::build(&scene);
         let object = scene.objects.len() - 1;
         let o = &scene.objects[object];
-        let moved = [o.triangles.start as usize..o.triangles.end as usize];
+        let moved = o.triangles.start as usize..o.triangles.end as usize;
         let transform = glam::Mat4::from_translation(Vec3::new(0.3, 0.1, -0.2)) * o.transform;
         scene
             .apply(&crate::scene::SceneUpdate::Transform { object, transform })
             .unwrap();
-        let refit = bvh.refit(&scene, &moved);
+        let refit = bvh.refit(&scene, std::slice::from_ref(&moved));
         let fresh = SceneBvh::build(&scene);
         let mut rng = Rng::new(7, 0, 0);
         let mut hits = 0;
@@ -331,7 +331,7 @@ pub fn rebuild_vs_refit(scene: &Scene, runs: usize) -> (f64, f64) {
     let start = scene.objects[object].transform;
     let moved = {
         let o = &scene.objects[object];
-        [o.triangles.start as usize..o.triangles.end as usize]
+        o.triangles.start as usize..o.triangles.end as usize
     };
     let mut bvh = Some(SceneBvh::build(&scene));
     let (mut rebuild, mut refit) = (Vec::new(), Vec::new());
@@ -345,7 +345,7 @@ pub fn rebuild_vs_refit(scene: &Scene, runs: usize) -> (f64, f64) {
         let _ = SceneBvh::build(&scene);
         rebuild.push(t.elapsed().as_secs_f64());
         let t = Instant::now();
-        bvh = bvh.map(|b| b.refit(&scene, &moved));
+        bvh = bvh.map(|b| b.refit(&scene, std::slice::from_ref(&moved)));
         refit.push(t.elapsed().as_secs_f64());
     }
     (median(rebuild), median(refit))
