@@ -11,8 +11,9 @@ use obvhs::{
 };
 
 /// Peak memory of a BVH build per triangle (bytes): the obvhs triangles, the PLOC build's
-/// boxes, Morton codes and binary nodes, the compressed wide BVH and the Möller–Trumbore
-/// copies. Measured 273 bytes (peak RSS growth building 1.3M triangles); with headroom.
+/// boxes, Morton codes and binary nodes (kept for refits), the compressed wide BVH and the
+/// Möller–Trumbore copies. Measured 325 bytes (peak RSS growth building 1.3M triangles,
+/// `Scene.build_bvh`); with headroom.
 const BUILD_BYTES_PER_TRIANGLE: u64 = 512;
 
 /// A closest hit: distance, triangle index (into the scene) and barycentrics of v1 and v2.
