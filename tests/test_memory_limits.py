@@ -29,10 +29,13 @@ SCRIPT = textwrap.dedent(
         settings = {"size": (8, 8), "spp": 1, "photons": 1000}
     else:
         scene = gi.load_scene("cornell")
+        if case == "light-paths":
+            scene = gi.load_scene("cornell-glass")  # light paths need a glass surface
         settings = {
-            # The documented maxima: 10^9 photons; 16384 x 16384 pixels.
+            # The documented maxima: 10^9 photons; 16384 x 16384 pixels; 2^36 light paths.
             "photons": {"size": (8, 8), "spp": 1, "photons": 10**9},
             "pixels": {"size": (16384, 16384), "spp": 1, "photons": 1000},
+            "light-paths": {"size": (8, 8), "spp": 1, "light_paths": 2**36},
         }[case]
     used = int(next(l for l in open("/proc/self/status") if l.startswith("VmSize")).split()[1])
     limit = used * 1024 + (3 << 29)
@@ -57,6 +60,7 @@ SCRIPT = textwrap.dedent(
         ("photon", "big-scene"),
         ("direct", "big-scene"),
         ("path", "pixels"),
+        ("path", "light-paths"),
         ("ispm", "pixels"),
     ],
 )

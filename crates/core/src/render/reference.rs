@@ -43,6 +43,12 @@ pub fn render(
     };
     // Progress counts camera rows and light-path chunks together.
     let light_chunks = light_paths.div_ceil(LIGHT_CHUNK);
+    // The camera connections of all light paths are kept until they are summed in order:
+    // about one (pixel, radiance) splat of 16 bytes per path.
+    crate::memory::check(
+        || format!("the camera splats of {light_paths} light paths"),
+        light_paths.saturating_mul(16),
+    )?;
     let stage = StageProgress::new(progress, "path", h as u64 + light_chunks);
 
     // Camera paths, one row per work item.
