@@ -108,6 +108,17 @@ pub struct ObjectDesc {
     /// Name of an entry of `materials`; may be omitted for mesh files that carry materials.
     #[serde(default)]
     pub material: Option<String>,
+    /// Shading normals: `false` flat, `true` smooth, or a crease angle in degrees (smooth
+    /// across edges flatter than it). Absent: the shape's own normals, flat where it has none.
+    #[serde(default)]
+    pub smooth: Option<SmoothDesc>,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(untagged)]
+pub enum SmoothDesc {
+    On(bool),
+    CreaseAngle(f32),
 }
 
 /// Geometry of an object, in its local frame (metres).
