@@ -338,3 +338,30 @@ def test_large_mesh_without_normals_loads_quietly(tmp_path):
     assert p.stderr == ""
     count, scipy_loaded = p.stdout.split()
     assert int(count) == len(ball.faces) and scipy_loaded == "False"
+
+
+def test_gltf_requiring_an_unread_extension_is_a_scene_error(tmp_path):
+    path = write_gltf(tmp_path, "draco.gltf", [{"name": "m"}])
+    doc = json.loads(path.read_text())
+    doc["extensionsRequired"] = ["KHR_draco_mesh_compression"]
+    path.write_text(json.dumps(doc))
+    with pytest.raises(gi.SceneError) as e:
+        gi.load_scene(viewing_scene(tmp_path, "draco.gltf"))
+    assert e.value.field == "objects[0].shape.file"
+    assert "extensionsRequired: unsupported extension KHR_draco_mesh_compression" in str(e.value)
+
+
+def test_cli_prints_asset_warnings(tmp_path):
+    path = write_gltf(tmp_path, "lamp.gltf", [{"name": "glow", "emissiveFactor": [1, 1, 1]}])
+    scene = viewing_scene(tmp_path, "lamp.gltf")
+    out = tmp_path / "o.png"
+    p = subprocess.run(
+        [sys.executable, "-m", "gi.cli", "render", str(scene), "-o", str(out), "--spp", "1",
+         "--size", "8x8", "--method", "path", "-q"],
+        capture_output=True, text=True, timeout=300,
+    )  # fmt: skip
+    assert p.returncode == 0, p.stderr
+    assert p.stderr == (
+        f"gi: warning: {path}: materials[0].emissiveFactor: "
+        "emission is not supported; the surface is not a light\n"
+    )

@@ -212,7 +212,7 @@ mod tests {
         let mut v: Vec<[u32; 3]> = m
             .normals
             .iter()
-            .map(|n| n.to_array().map(|x| (x * 1e4).round().to_bits()))
+            .map(|n| n.to_array().map(|x| ((x * 1e4).round() + 0.0).to_bits())) // -0 is 0
             .collect();
         v.sort_unstable();
         v.dedup();
