@@ -113,11 +113,11 @@ pub struct ObjectDesc {
     pub material: Option<String>,
     /// Shading normals: `false` flat, `true` smooth, or a crease angle in degrees (smooth
     /// across edges flatter than it). Absent: the shape's own normals, flat where it has none.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub smooth: Option<SmoothDesc>,
 }
 
-#[derive(Debug, Clone, Copy, Deserialize)]
+#[derive(Debug, Clone, Copy, Deserialize, Serialize)]
 #[serde(untagged)]
 pub enum SmoothDesc {
     On(bool),
