@@ -25,11 +25,12 @@ from gi._gi import (  # noqa: E402
     builtin_json,
     builtin_scenes,
     footprint_radii,
+    gpu_counters,
     methods,
 )
 from gi.io import read_image, save_image  # noqa: E402
 from gi.meshes import AssetWarning  # noqa: E402
-from gi.render import RenderResult, RenderStats, render  # noqa: E402
+from gi.render import Renderer, RenderResult, RenderStats, render  # noqa: E402
 from gi.scene import load_scene  # noqa: E402
 
 __all__ = [
@@ -38,6 +39,7 @@ __all__ = [
     "GpuError",
     "RenderCancelled",
     "RenderResult",
+    "Renderer",
     "RenderStats",
     "Scene",
     "SceneError",
@@ -47,6 +49,7 @@ __all__ = [
     "builtin_json",
     "builtin_scenes",
     "footprint_radii",
+    "gpu_counters",
     "load_scene",
     "methods",
     "read_image",

@@ -37,6 +37,11 @@ pub(super) struct IspmState {
     volumes: Volumes,
     /// Whether the scene has mirrors or glass (the specular texture is written each frame).
     specular: bool,
+    /// The seed of the photons in the ring, when they are those of the current scene: a
+    /// still scene with frame-coherent random numbers re-traces nothing.
+    traced_seed: Option<u64>,
+    /// The specular image of the last frame (reused while the camera and scene stand still).
+    specular_image: Option<Image>,
 }
 
 /// What changed since the photons in the ring were traced.
@@ -56,6 +61,7 @@ pub(super) struct FrameInputs<'a> {
     pub bvh: &'a SceneBvh,
     pub settings: &'a Settings,
     pub frame: u64,
+    pub changes: crate::scene::Changes,
     pub images: Images,
     pub progress: &'a dyn Progress,
 }
@@ -69,6 +75,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         bvh,
         settings,
         frame,
+        changes,
         images,
         progress,
     } = f;
@@ -102,15 +109,27 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
                     .materials
                     .iter()
                     .any(crate::render::camera_pass::has_delta_lobe),
+                traced_seed: None,
+                specular_image: None,
             }
         }
     };
     let mut state = state;
-    if !state.bounce.as_ref().is_some_and(|b| b.fits(&layers)) {
-        state.bounce = BounceTargets::new(&ctx, &layers, &g.scene.materials)?;
+    if changes.lighting() {
+        state.traced_seed = None;
     }
-    if let Some(b) = &state.bounce {
-        b.write_views(&ctx, &layers, settings.seed);
+    if changes.any() {
+        state.specular_image = None;
+    }
+    // A still scene with frame-coherent random numbers has this frame's photons already.
+    let reuse = ring.frames() == 1 && state.traced_seed == Some(settings.seed);
+    if !reuse {
+        if !state.bounce.as_ref().is_some_and(|b| b.fits(&layers)) {
+            state.bounce = BounceTargets::new(&ctx, &layers, &g.scene.materials)?;
+        }
+        if let Some(b) = &state.bounce {
+            b.write_views(&ctx, &layers, settings.seed);
+        }
     }
     g.targets.write_eye(&ctx, scene);
     stage(&mut stats, "upload", t);
@@ -121,7 +140,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         .create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("bounce maps"),
         });
-    if let Some(b) = &state.bounce {
+    if let (false, Some(b)) = (reuse, &state.bounce) {
         b.record(
             IspmPasses::get(&ctx),
             &mut encoder,
@@ -151,9 +170,9 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
 
     // 3. The bounce-map readback, then the CPU trace while the GPU lights the frame.
     let t = Instant::now();
-    let bm = match &state.bounce {
-        Some(b) => b.finish(&ctx, &layers, Some(bounce_submission))?,
-        None => Default::default(),
+    let bm = match (reuse, &state.bounce) {
+        (false, Some(b)) => b.finish(&ctx, &layers, Some(bounce_submission))?,
+        _ => Default::default(),
     };
     stage(&mut stats, "bounce readback", t);
     stats.photons_emitted = bm.covered;
@@ -182,7 +201,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     let t = Instant::now();
     let mut traced = 0u64;
     let mut compensation_seconds = 0.0;
-    if settings.max_depth >= 2 {
+    if !reuse && settings.max_depth >= 2 {
         let pts = if settings.footprint_volumes {
             PhotonTraceSettings {
                 store_direct: false,
@@ -247,10 +266,14 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     let photons = ring.collect();
     stats.photons_stored = photons.splat.len() as u64;
     let _ = traced;
+    let photons_changed = !reuse;
+    state.traced_seed = Some(settings.seed);
 
     // 5. Mirrors and glass seen by the camera; their gather uses the photons as traced.
     let t = Instant::now();
-    let specular = if state.specular {
+    let specular = if state.specular && state.specular_image.is_some() && !photons_changed {
+        state.specular_image.clone()
+    } else if state.specular {
         let img = specular_paths(scene, bvh, settings, &photons.traced, progress)?;
         let texels: Vec<[f32; 4]> = img.pixels.iter().map(|p| [p.x, p.y, p.z, 0.0]).collect();
         let bytes: &[u8] = bytemuck::cast_slice(&texels);
@@ -269,6 +292,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     } else {
         None
     };
+    state.specular_image = specular.clone();
     stage(&mut stats, "specular paths", t);
 
     // 6. Photon volumes, upsampling, composite, readback.
@@ -283,7 +307,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     );
     stats.volume_quads = quads as u64;
     state.volumes.write_params(&ctx, scene, radius);
-    if !ordered.is_empty() {
+    if !ordered.is_empty() && (photons_changed || changes.camera) {
         state.volumes.write_photons(&ctx, &ordered);
     }
     let mut encoder = ctx

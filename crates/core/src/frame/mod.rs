@@ -226,6 +226,7 @@ impl Renderer {
                         bvh,
                         settings,
                         frame: self.frame_index,
+                        changes: self.changes,
                         images,
                         progress,
                     })

@@ -333,6 +333,50 @@ mod tests {
         assert_eq!(scene.positions, before);
     }
 
+    /// JSON updates merge into the current description and name the field on error.
+    #[test]
+    fn json_updates() {
+        let mut scene = builtin::load("cornell").expect("scene");
+        let v = |s: &str| serde_json::from_str::<serde_json::Value>(s).expect("json");
+        let u = scene
+            .update_from_json(&UpdateTarget::Light(0), &v(r#"{"intensity": [1, 2, 3]}"#))
+            .expect("valid");
+        let p = scene.lights[0].position();
+        scene.apply(&u).expect("valid");
+        assert_eq!(scene.lights[0].position(), p);
+        assert!(
+            matches!(scene.lights[0], Light::Point { intensity, .. } if intensity == Vec3::new(1.0, 2.0, 3.0))
+        );
+        let name = scene.material_names[0].clone();
+        let u = scene
+            .update_from_json(
+                &UpdateTarget::Material(name.clone()),
+                &v(r#"{"roughness": 0.5}"#),
+            )
+            .expect("valid");
+        scene.apply(&u).expect("valid");
+        assert_eq!(scene.material_desc(&name).expect("m").roughness, 0.5);
+        let u = scene
+            .update_from_json(&UpdateTarget::Object(0), &v(r#"{"translate": [0, 1, 0]}"#))
+            .expect("valid");
+        assert!(matches!(u, SceneUpdate::Transform { transform, .. } if transform.w_axis.y == 1.0));
+        let u = scene
+            .update_from_json(
+                &UpdateTarget::Object(0),
+                &v(r#"{"matrix": [[1,0,0,2],[0,1,0,0],[0,0,1,0],[0,0,0,1]]}"#),
+            )
+            .expect("valid");
+        assert!(matches!(u, SceneUpdate::Transform { transform, .. } if transform.w_axis.x == 2.0));
+        let e = scene
+            .update_from_json(&UpdateTarget::Camera, &v(r#"{"fov": "wide"}"#))
+            .expect_err("type error");
+        assert!(e.to_string().contains("camera.fov"), "{e}");
+        let e = scene
+            .update_from_json(&UpdateTarget::Light(0), &v(r#"{"colour": [1, 1, 1]}"#))
+            .expect_err("unknown field");
+        assert!(e.to_string().contains("colour"), "{e}");
+    }
+
     /// The descriptions read back from a scene rebuild the same lights and materials.
     #[test]
     fn descriptions_round_trip() {
@@ -353,5 +397,114 @@ mod tests {
             .apply(&SceneUpdate::Camera(scene.camera_desc()))
             .expect("valid");
         assert!((scene.camera.forward - camera.forward).length() < 1e-6);
+    }
+}
+
+/// What a JSON update addresses (see [`Scene::update_from_json`]).
+#[derive(Clone, Debug)]
+pub enum UpdateTarget {
+    Camera,
+    /// A light by index.
+    Light(usize),
+    /// An object by index into `Scene::objects`.
+    Object(usize),
+    /// A material by name.
+    Material(String),
+}
+
+impl Scene {
+    /// An update from JSON, in the scene format's terms:
+    /// - camera, lights, materials: the fields given replace the current ones (the rest
+    ///   stay), e.g. `{"position": [0, 1, 3]}` or `{"intensity": [5, 5, 5]}`;
+    /// - objects: a whole transform, `{"translate", "rotate", "scale"}` as in the scene
+    ///   format (fields left out are the identity's), or `{"matrix": 4×4 rows}`.
+    ///
+    /// Errors name the field (`SceneError` with source "scene update").
+    pub fn update_from_json(
+        &self,
+        target: &UpdateTarget,
+        json: &serde_json::Value,
+    ) -> Result<SceneUpdate> {
+        let obj = json
+            .as_object()
+            .ok_or_else(|| Error::scene(SOURCE, "(root)", "an update must be a JSON object"))?;
+        // The fields given replace the current description's.
+        let merged = |mut current: serde_json::Value| {
+            if let Some(map) = current.as_object_mut() {
+                for (k, v) in obj {
+                    map.insert(k.clone(), v.clone());
+                }
+            }
+            current
+        };
+        fn typed<T: serde::de::DeserializeOwned>(v: serde_json::Value, prefix: &str) -> Result<T> {
+            serde_path_to_error::deserialize(v).map_err(|e| {
+                let path = e.path().to_string();
+                let field = if path == "." {
+                    prefix.to_string()
+                } else {
+                    format!("{prefix}.{path}")
+                };
+                Error::scene(SOURCE, field, e.inner().to_string())
+            })
+        }
+        let to_value = |v: std::result::Result<serde_json::Value, serde_json::Error>| {
+            v.map_err(|e| Error::scene(SOURCE, "(root)", e.to_string()))
+        };
+        Ok(match target {
+            UpdateTarget::Camera => {
+                let current = to_value(serde_json::to_value(self.camera_desc()))?;
+                SceneUpdate::Camera(typed(merged(current), "camera")?)
+            }
+            UpdateTarget::Light(i) => {
+                let prefix = format!("lights[{i}]");
+                let desc = self.light_desc(*i).ok_or_else(|| {
+                    let n = self.lights.len();
+                    Error::scene(
+                        SOURCE,
+                        prefix.clone(),
+                        format!("no such light (the scene has {n})"),
+                    )
+                })?;
+                let current = to_value(serde_json::to_value(desc))?;
+                SceneUpdate::Light {
+                    index: *i,
+                    light: typed(merged(current), &prefix)?,
+                }
+            }
+            UpdateTarget::Material(name) => {
+                let prefix = format!("materials.{name}");
+                let desc = self.material_desc(name).ok_or_else(|| {
+                    Error::scene(SOURCE, prefix.clone(), "no material of that name")
+                })?;
+                let current = to_value(serde_json::to_value(desc))?;
+                SceneUpdate::Material {
+                    name: name.clone(),
+                    material: typed(merged(current), &prefix)?,
+                }
+            }
+            UpdateTarget::Object(i) => {
+                let prefix = format!("objects[{i}].transform");
+                let transform = if let Some(m) = obj.get("matrix") {
+                    if obj.len() != 1 {
+                        return Err(Error::scene(
+                            SOURCE,
+                            prefix,
+                            "`matrix` excludes translate/rotate/scale",
+                        ));
+                    }
+                    let rows: [[f32; 4]; 4] = typed(m.clone(), &format!("{prefix}.matrix"))?;
+                    Mat4::from_cols_array_2d(&rows).transpose()
+                } else {
+                    let desc: super::desc::TransformDesc = typed(json.clone(), &prefix)?;
+                    super::transform_matrix(&desc)
+                        .map_err(|(f, m)| Error::scene(SOURCE, format!("{prefix}.{f}"), m))?
+                };
+                SceneUpdate::Transform {
+                    object: *i,
+                    transform,
+                }
+            }
+        })
     }
 }
