@@ -231,3 +231,11 @@ def test_obj_shape_with_bitmap_texture_warns_and_uses_its_mean(tmp_path):
     assert len(seen) > 10 and np.allclose(seen, [0.5, 0, 0], atol=1e-3)
     # face_normals: flat shading, as in Mitsuba (two faces in view from this camera).
     assert len(np.unique(np.round(r.normal[r.depth > 0], 3), axis=0)) <= 3
+
+
+def test_ignored_properties_warn_naming_element_and_line(tmp_path):
+    body = '<shape type="cube"><float name="weird" value="1"/></shape>'
+    with pytest.warns(gi.AssetWarning) as rec:
+        gi.load_scene(write(tmp_path, body))
+    assert [w.message.field for w in rec] == ['<float name="weird"> (line 6)']
+    assert rec[0].message.reason == "ignored"

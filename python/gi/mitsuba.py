@@ -248,6 +248,11 @@ class _Translator:
         )
         return mean
 
+    def note_unknown(self, props: dict[str, Element], known: set[str]) -> None:
+        for key, p in props.items():
+            if key not in known:
+                self.notes[p.label] = "ignored"
+
     def resolve(self, ref: Element) -> Element:
         key = self.attr(ref, "id")
         if key not in self.ids:
@@ -499,6 +504,8 @@ class _Translator:
             v, f = n * r + c, np.asarray(ico.faces, np.int64)
         else:
             raise self.error(el, "unsupported shape (gi reads obj, ply, rectangle, cube, sphere)")
+        known = {"filename", "face_normals", "flip_normals", "to_world", "center", "radius", "bsdf"}
+        self.note_unknown(props, known)
         if self.boolean(props, "flip_normals", False):
             f = f[:, [0, 2, 1]]
             n = None if n is None else -n
@@ -544,6 +551,8 @@ class _Translator:
     def emitter(self, el: Element) -> None:
         kind = el.attrs.get("type")
         props = self.props(el)
+        known = {"intensity", "to_world", "position", "cutoff_angle", "beam_width"}
+        self.note_unknown(props, known)
         intensity = self.color(props, "intensity", 1.0)
         xf = self.transform(props.get("to_world"))
         if kind == "point":
