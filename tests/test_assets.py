@@ -365,3 +365,17 @@ def test_cli_prints_asset_warnings(tmp_path):
         f"gi: warning: {path}: materials[0].emissiveFactor: "
         "emission is not supported; the surface is not a light\n"
     )
+
+
+def test_gltf_lights_and_animations_warn(tmp_path):
+    path = write_gltf(tmp_path, "anim.gltf", [{"name": "m", "pbrMetallicRoughness": {}}])
+    doc = json.loads(path.read_text())
+    doc["nodes"][0]["extensions"] = {"KHR_lights_punctual": {"light": 0}}
+    doc["animations"] = [{"channels": [], "samplers": []}]
+    path.write_text(json.dumps(doc))
+    with pytest.warns(gi.AssetWarning) as rec:
+        gi.load_scene(viewing_scene(tmp_path, "anim.gltf"))
+    assert sorted(w.message.field for w in rec) == [
+        "animations",
+        "nodes[0].extensions.KHR_lights_punctual",
+    ]

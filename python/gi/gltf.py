@@ -227,6 +227,8 @@ def load_gltf(path: Path) -> GltfMesh:
         raise GltfError("extensionsRequired", f"unsupported extension {unsupported[0]}")
     reader = _Reader(path, doc, glb_bin)
     warn: dict[str, str] = {}
+    if doc.get("animations"):
+        warn["animations"] = "animations are ignored (the rest pose is used)"
     nodes = doc.get("nodes", [])
     scenes = doc.get("scenes", [])
     if scenes:
@@ -248,6 +250,10 @@ def load_gltf(path: Path) -> GltfMesh:
         node = nodes[ni]
         world = parent @ _node_matrix(node)
         stack.extend((c, world, depth + 1) for c in reversed(node.get("children", [])))
+        if "KHR_lights_punctual" in node.get("extensions", {}):
+            warn[f"nodes[{ni}].extensions.KHR_lights_punctual"] = (
+                "lights in mesh files are ignored; give them in the scene's `lights`"
+            )
         if "mesh" not in node:
             continue
         lin = world[:3, :3]
@@ -282,6 +288,8 @@ def load_gltf(path: Path) -> GltfMesh:
                 normals.append(np.nan_to_num(n, nan=0.0, posinf=0.0, neginf=0.0))
             else:
                 normals.append(None)
+            if prim.get("targets"):
+                warn[f"{where}.targets"] = "morph targets are ignored (the base shape is used)"
             for a in attrs:
                 if a.startswith("COLOR_"):
                     warn[f"{where}.attributes.{a}"] = "vertex colours are not supported"
