@@ -27,7 +27,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // Stage groups: (column, stage names summed). GPU passes are timestamp times; the
     // readbacks are the CPU's waits, which include GPU work still running.
     let groups: [(&str, &[&str]); 9] = [
-        ("direct light (GPU)", &["shadow maps", "gbuffer", "direct light"]),
+        (
+            "direct light (GPU)",
+            &["shadow maps", "gbuffer", "direct light"],
+        ),
         ("bounce maps (GPU)", &["bounce maps"]),
         ("bounce readback", &["bounce readback"]),
         ("cpu trace", &["cpu trace"]),

@@ -73,10 +73,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         runs.push(rows);
     }
-    for f in 0..frames as usize {
+    for (f, (a, b)) in runs[0].iter().zip(&runs[1]).enumerate() {
         println!(
             "| {f} | {:.4} | {:.4} | {:.0} | {:.0} |",
-            runs[0][f].0, runs[1][f].0, runs[0][f].1, runs[1][f].1
+            a.0, b.0, a.1, b.1
         );
     }
     let mean = |rows: &[(f64, f64)], i: usize| {
