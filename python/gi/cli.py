@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import warnings
 from pathlib import Path
 
 import gi
@@ -26,7 +27,9 @@ def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="gi", description="Global illumination renderer (ISPM).")
     sub = p.add_subparsers(dest="command", required=True)
     r = sub.add_parser("render", help="render a scene to an image")
-    r.add_argument("scene", help="built-in scene name (see `gi scenes`) or JSON scene file")
+    r.add_argument(
+        "scene", help="built-in scene name (see `gi scenes`), JSON scene file or Mitsuba 3 XML"
+    )
     r.add_argument(
         "-o",
         "--output",
@@ -97,12 +100,25 @@ def _parser() -> argparse.ArgumentParser:
     return p
 
 
+def _load(source: str) -> gi.Scene:
+    """Loads a scene, printing what its files hold that gi does not render."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", gi.AssetWarning)
+        scene = gi.load_scene(source)
+    for w in caught:
+        if issubclass(w.category, gi.AssetWarning):
+            print(f"gi: warning: {w.message}", file=sys.stderr)
+        else:
+            warnings.showwarning(w.message, w.category, w.filename, w.lineno)
+    return scene
+
+
 def _render(args: argparse.Namespace) -> int:
     # Outputs and exposure are checked before the render, not after it.
     exposure = check_exposure(args.exposure)
     for out in args.output:
         gi.io.check_output(out)
-    scene = gi.load_scene(args.scene)
+    scene = _load(args.scene)
     result = gi.render(
         scene,
         args.method,
@@ -150,7 +166,7 @@ def _footprints(args: argparse.Namespace) -> int:
     photons = int_setting("photons", args.photons, U64_MAX)
     seed = int_setting("seed", args.seed, U64_MAX)
     smoothing = float_setting("smoothing", args.smoothing)
-    rows = gi.footprint_radii(gi.load_scene(args.scene), photons, seed, smoothing, qs)
+    rows = gi.footprint_radii(_load(args.scene), photons, seed, smoothing, qs)
     print(f"footprint radius (m) by percentile, {args.photons} photons, s = {args.smoothing}")
     print(f"{'kind':8} {'photons':>9} " + " ".join(f"{f'p{q:g}':>8}" for q in qs))
     for kind, (count, radii) in rows.items():

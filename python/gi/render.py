@@ -256,11 +256,12 @@ def render(
     """Renders ``scene`` with ``method`` (see :func:`gi.methods`).
 
     ``size`` is ``(width, height)`` and defaults to the scene camera's. ``spp`` is camera
-    samples per pixel (default 64; 16 direct-light samples for the GPU methods ``direct``
-    and ``ispm``, chosen by measurement); ``light_paths`` the caustic light paths of method ``path`` (default
-    one per camera sample). Method ``photon`` (classic photon mapping) emits ``photons``
-    photons and estimates radiance from the ``k`` nearest within ``max_radius`` (metres;
-    default 5% of the scene's diagonal) with a ``kernel`` of "box", "cone" or "epanechnikov".
+    samples per pixel (default 64; 16 direct-light samples for the GPU methods ``direct`` and
+    ``ispm``, chosen by measurement); ``light_paths`` the caustic light paths of method ``path``
+    (default one per camera sample). Method ``photon`` (classic photon mapping) emits
+    ``photons`` photons and estimates radiance from the ``k`` nearest within ``max_radius``
+    (metres; default 5% of the scene's diagonal) with a ``kernel`` of "box", "cone" or
+    "epanechnikov".
     Method ``gather`` traces ``photons`` photons with photon differentials and gathers every
     photon whose footprint (scaled by ``smoothing``, semi-axes at most ``max_radius``)
     contains the shading point, from a linear BVH with ``leaf_size`` footprints per leaf
