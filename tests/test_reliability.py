@@ -268,3 +268,40 @@ def test_renderer_updates_are_bounded_too():
         r.update(lights={0: {"intensity": [1e38, 1e38, 1e38]}})
     assert e.value.field == "lights[0].intensity"
     assert np.isfinite(r.render().radiance).all()
+
+
+def test_nearly_mirror_glossy_is_finite():
+    # Found by the fuzzer (all five methods per case): roughness 0.0031 gives α² ≈ 1e-10,
+    # below f32's epsilon, and the GGX distribution divided by zero at h = n in the path
+    # tracer (NaN radiance).
+    desc = {
+        "camera": {"position": [1.93, 0, 0], "look_at": [0, 0, 0]},
+        "lights": [],
+        "materials": {
+            "c": {
+                "diffuse": [0.27, 0.18, 0.2],
+                "specular": [0.9, 0.72, 0.055],
+                "roughness": 0.0031308,
+                "transmission": [0.5, 0.5, 0.5],
+                "ior": 2.49,
+            }
+        },
+        "objects": [
+            {
+                "shape": {
+                    "type": "ring",
+                    "inner_radius": 0.055,
+                    "outer_radius": 2.13,
+                    "height": 1.63,
+                },
+                "material": "c",
+            }
+        ],
+    }
+    for lights in ([], [{"type": "point", "position": [0, 1.5, 0], "intensity": [5, 5, 5]}]):
+        desc["lights"] = lights
+        scene = gi.Scene.from_json(json.dumps(desc), "fuzz")
+        for method in gi.methods():
+            result = gi.render(scene, method, spp=4, size=(16, 16), photons=2000, max_depth=8)
+            for name in result.aov_names():
+                assert np.isfinite(result.aov(name)).all(), (method, name, len(lights))
