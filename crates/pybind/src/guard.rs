@@ -127,7 +127,8 @@ pub fn run<T: Send>(
                 .spawn_scoped(scope, move || {
                     let r = catch_unwind(AssertUnwindSafe(|| work(poller)));
                     let _ = tx.send(());
-                    r
+                    // The GPU counters are per thread: hand the worker's to the caller.
+                    (r, gi_core::gpu::alloc::counters())
                 });
             let worker = match worker {
                 Ok(w) => w,
@@ -154,9 +155,11 @@ pub fn run<T: Send>(
                     }
                 }
             }
-            worker
+            let (result, counters) = worker
                 .join()
-                .map_err(|_| "the worker thread died".to_string())
+                .map_err(|_| "the worker thread died".to_string())?;
+            gi_core::gpu::alloc::merge(counters);
+            Ok(result)
         })
     });
     if let Some(e) = py_error {
