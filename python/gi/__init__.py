@@ -27,7 +27,10 @@ from gi._gi import (  # noqa: E402
     footprint_radii,
     methods,
 )
-from gi.io import read_image, save_image  # noqa: E402
+from gi.batch import render_batch  # noqa: E402  (imports Ray only when called)
+from gi.denoising import denoise  # noqa: E402
+from gi.display import to_display  # noqa: E402
+from gi.io import read_channels, read_image, save_image, save_layers, save_result  # noqa: E402
 from gi.render import RenderResult, RenderStats, render  # noqa: E402
 from gi.scene import load_scene  # noqa: E402
 
@@ -44,10 +47,16 @@ __all__ = [
     "adapter_report",
     "builtin_json",
     "builtin_scenes",
+    "denoise",
     "footprint_radii",
     "load_scene",
     "methods",
+    "read_channels",
     "read_image",
     "render",
+    "render_batch",
     "save_image",
+    "save_layers",
+    "save_result",
+    "to_display",
 ]

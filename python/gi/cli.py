@@ -7,6 +7,10 @@ import sys
 from pathlib import Path
 
 import gi
+from gi import denoising
+from gi.aovs import aov_names, check_aovs
+from gi.display import TONEMAPS
+from gi.io import check_output_path, planned_files, save_result
 
 
 def _size(text: str) -> tuple[int, int]:
@@ -21,6 +25,7 @@ def _size(text: str) -> tuple[int, int]:
 
 def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="gi", description="Global illumination renderer (ISPM).")
+    p.add_argument("--version", action="version", version=f"gi {gi.__version__}")
     sub = p.add_subparsers(dest="command", required=True)
     r = sub.add_parser("render", help="render a scene to an image")
     r.add_argument("scene", help="built-in scene name (see `gi scenes`) or JSON scene file")
@@ -29,7 +34,8 @@ def _parser() -> argparse.ArgumentParser:
         "--output",
         required=True,
         action="append",
-        help="output image, .exr (float) or .png (sRGB); repeat for several",
+        help="output image: .exr (float; AOVs become layers of the same file), .png/.jpg"
+        " (8-bit sRGB through --tonemap), .hdr/.pfm/.tif (float); repeat for several",
     )
     r.add_argument("--method", default="ispm", help="rendering method (see `gi methods`)")
     r.add_argument("--spp", type=int, default=64, help="samples per pixel (default 64)")
@@ -67,13 +73,28 @@ def _parser() -> argparse.ArgumentParser:
     )
     r.add_argument("--adapter", help='GPU adapter: "cpu" (lavapipe), "gpu" or part of a name')
     r.add_argument("--shadow-map-size", type=int, default=1024, help="shadow map texels per side")
-    r.add_argument("--exposure", type=float, default=0.0, help="PNG exposure in stops")
+    r.add_argument(
+        "--exposure", type=float, default=0.0, help="exposure in stops for 8-bit outputs"
+    )
+    r.add_argument(
+        "--tonemap",
+        default="clip",
+        choices=list(TONEMAPS),
+        help="display transform for 8-bit outputs: clip (default), filmic (AgX-style; alias"
+        " agx) or aces (ACES 2.0 SDR through OpenColorIO)",
+    )
+    r.add_argument(
+        "--denoise",
+        action="store_true",
+        help="denoise with Intel Open Image Denoise, guided by the albedo and normal AOVs",
+    )
     r.add_argument(
         "--aov",
         action="append",
         default=[],
-        help="also write this image next to the output (repeatable): albedo, normal, position,"
-        " depth, caustics; method ispm adds direct, indirect, photons",
+        help="also write this AOV (repeatable; 'all' for every one): albedo, normal, position,"
+        " depth, caustics; method ispm adds direct, specular, indirect, photons; --denoise"
+        " adds noisy. EXR: layers of the output file; other formats: NAME.AOV.EXT files",
     )
     r.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
     sub.add_parser("scenes", help="list the built-in scenes")
@@ -85,12 +106,42 @@ def _parser() -> argparse.ArgumentParser:
     f.add_argument("--photons", type=int, default=200_000, help="photons to emit")
     f.add_argument("--smoothing", type=float, default=1.0, help="footprint smoothing factor s")
     f.add_argument("--seed", type=int, default=0)
+    b = sub.add_parser(
+        "batch",
+        help="render the frames of a job file as Ray tasks (see `gi.batch` for the format)",
+    )
+    b.add_argument("job", help="job file (JSON): scene, method, settings, frames, sweep, outputs")
+    b.add_argument("--address", help="Ray cluster address (default: RAY_ADDRESS, else local Ray)")
+    b.add_argument("--retries", type=int, help="times a failed frame is tried again (default 2)")
+    b.add_argument("-q", "--quiet", action="store_true", help="print only failures")
     i = sub.add_parser("info", help="show the GPU adapter gi uses")
     i.add_argument("--adapter", help='"cpu", "gpu" or part of an adapter name')
     return p
 
 
+def _check_outputs(args: argparse.Namespace) -> list[str]:
+    """Checks outputs, formats and AOV names before rendering; returns the AOVs to write."""
+    if args.denoise and not denoising.available():
+        raise gi.SettingError(denoising.INSTALL_HINT)
+    if args.method not in gi.methods():
+        raise gi.SettingError(f"unknown method {args.method!r} (use {', '.join(gi.methods())})")
+    names = aov_names(args.method, args.denoise)
+    wanted = names[1:] if "all" in args.aov else list(dict.fromkeys(args.aov))
+    check_aovs(args.method, wanted, args.denoise)
+    targets: list[Path] = []
+    for out in args.output:
+        targets += planned_files(out, wanted)
+    seen: set[Path] = set()
+    for t in targets:
+        check_output_path(t)
+        if t.resolve() in seen:
+            raise ValueError(f"{t} would be written twice")
+        seen.add(t.resolve())
+    return wanted
+
+
 def _render(args: argparse.Namespace) -> int:
+    aovs = _check_outputs(args)
     scene = gi.load_scene(args.scene)
     result = gi.render(
         scene,
@@ -114,24 +165,41 @@ def _render(args: argparse.Namespace) -> int:
         adapter=args.adapter,
         shadow_map_size=args.shadow_map_size,
         progress=not args.quiet,
+        denoise=args.denoise,
     )
-    missing = [name for name in args.aov if name not in result.aov_names()]
-    if missing:
-        raise ValueError(f"no image {missing[0]!r} (available: {', '.join(result.aov_names())})")
-    written = []
-    for out in map(Path, args.output):
-        gi.save_image(out, result.radiance, exposure=args.exposure)
-        written.append(out)
-        for name in args.aov:
-            aov_path = out.with_name(f"{out.stem}.{name}{out.suffix}")
-            gi.save_image(aov_path, result.aov(name), exposure=0.0)
-            written.append(aov_path)
+    written: list[Path] = []
+    for out in args.output:
+        written += save_result(out, result, aovs, tonemap=args.tonemap, exposure=args.exposure)
     if not args.quiet:
         s = result.stats
         stages = ", ".join(f"{n} {t:.2f}s" for n, t in s.stages)
         files = ", ".join(map(str, written))
         print(f"wrote {files} ({s.method}, {s.total_seconds:.2f}s: {stages})", file=sys.stderr)
     return 0
+
+
+def _batch(args: argparse.Namespace) -> int:
+    from gi.batch import render_batch
+
+    def report(entry: dict) -> None:
+        if entry["status"] == "ok" and not args.quiet:
+            retried = f", attempt {entry['attempts']}" if entry["attempts"] > 1 else ""
+            print(
+                f"frame {entry['index']}: {', '.join(entry['files'])}"
+                f" ({entry['seconds']:.2f}s on {entry['worker']}{retried})",
+                file=sys.stderr,
+            )
+        elif entry["status"] == "failed":
+            print(f"frame {entry['index']} failed: {entry['errors'][-1]}", file=sys.stderr)
+
+    summary = render_batch(args.job, address=args.address, retries=args.retries, on_frame=report)
+    if not args.quiet or summary["failed"]:
+        print(
+            f"{summary['ok']} of {len(summary['frames'])} frames rendered, {summary['failed']}"
+            f" failed, {summary['retried']} retried ({summary['wall_seconds']:.1f}s)",
+            file=sys.stderr,
+        )
+    return 0 if summary["failed"] == 0 else 1
 
 
 def _footprints(args: argparse.Namespace) -> int:
@@ -155,6 +223,8 @@ def main(argv: list[str] | None = None) -> int:
             return 0
         if args.command == "footprints":
             return _footprints(args)
+        if args.command == "batch":
+            return _batch(args)
         if args.command == "info":
             print(f"gi {gi.__version__}")
             print(gi.adapter_report(args.adapter))

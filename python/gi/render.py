@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import sys
-import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -11,6 +9,7 @@ import numpy as np
 
 from gi import _gi
 from gi._gi import Scene
+from gi.progress import ProgressBar
 
 ProgressCallback = Callable[[str, float], "bool | None"]
 
@@ -66,23 +65,26 @@ class RenderResult:
             return self.extra[name]
         raise KeyError(f"no image {name!r} (available: {', '.join(self.aov_names())})")
 
+    def __repr__(self) -> str:
+        h, w = self.radiance.shape[:2]
+        s = self.stats
+        return (
+            f"<RenderResult {s.method} {w}x{h}, {s.samples_per_pixel} spp,"
+            f" {s.total_seconds:.2f} s; aovs: {', '.join(self.aov_names())}>"
+        )
 
-class ProgressBar:
-    """A one-line text progress bar on stderr, for the CLI and interactive use."""
+    def display(self, tonemap: str = "clip", exposure: float = 0.0) -> np.ndarray:
+        """The beauty as 8-bit sRGB (H×W×3 uint8) through a display transform
+        (:mod:`gi.display`: "clip", "filmic"/"agx" or "aces")."""
+        from gi.display import to_srgb8
 
-    def __init__(self, stream=None, width: int = 30) -> None:  # type: ignore[no-untyped-def]
-        self.stream = stream or sys.stderr
-        self.width = width
-        self.start = time.monotonic()
+        return to_srgb8(self.radiance, exposure, tonemap)
 
-    def __call__(self, stage: str, fraction: float) -> bool:
-        filled = int(self.width * min(max(fraction, 0.0), 1.0))
-        bar = "#" * filled + "-" * (self.width - filled)
-        elapsed = time.monotonic() - self.start
-        end = "\n" if fraction >= 1.0 else ""
-        self.stream.write(f"\r{stage:>8} [{bar}] {fraction * 100:5.1f}% {elapsed:6.1f}s{end}")
-        self.stream.flush()
-        return True
+    def _repr_png_(self) -> bytes:
+        """The tone-mapped beauty as PNG, for Jupyter."""
+        from gi.display import png_bytes
+
+        return png_bytes(self.display())
 
 
 def render(
@@ -108,6 +110,7 @@ def render(
     adapter: str | None = None,
     shadow_map_size: int = 1024,
     progress: bool | ProgressCallback = False,
+    denoise: bool = False,
 ) -> RenderResult:
     """Renders ``scene`` with ``method`` (see :func:`gi.methods`).
 
@@ -136,9 +139,17 @@ def render(
     adapter's name; default: the ``GI_ADAPTER`` environment variable, else a real GPU when
     present, else lavapipe) with ``shadow_map_size``² texels per shadow-map face.
     ``progress`` is a callable ``(stage, fraction) -> bool | None`` (return ``False`` to
-    cancel), or ``True`` for a text bar on stderr. The GIL is released while rendering;
-    Ctrl-C cancels with :class:`KeyboardInterrupt`.
+    cancel), or ``True`` for progress bars (tqdm; in a terminal or a notebook, nothing in
+    logs). The GIL is released while rendering; Ctrl-C cancels with
+    :class:`KeyboardInterrupt`.
+    ``denoise`` runs Intel Open Image Denoise on the radiance, guided by the albedo and
+    normal AOVs (:func:`gi.denoise`); the noisy radiance is kept as the AOV ``noisy``.
     """
+    if denoise:
+        from gi.denoising import INSTALL_HINT, available
+
+        if not available():
+            raise _gi.SettingError(INSTALL_HINT)
     callback: ProgressCallback | None
     if progress is True:
         callback = ProgressBar()
@@ -185,7 +196,7 @@ def render(
         photons_stored=s["photons_stored"],
         volume_quads=s["volume_quads"],
     )
-    return RenderResult(
+    result = RenderResult(
         radiance=out["radiance"],
         albedo=out["albedo"],
         normal=out["normal"],
@@ -195,3 +206,8 @@ def render(
         stats=stats,
         extra=dict(out["extra"]),
     )
+    if denoise:
+        from gi.denoising import denoise as run_denoiser
+
+        result = run_denoiser(result)
+    return result
