@@ -65,9 +65,9 @@ def main() -> None:
         common = {"size": (w, h), "seed": 1, "adapter": args.adapter, **settings}
         noisy, seconds = timed_render(scene, method, **common)
         t = time.perf_counter()
-        clean = denoise_image(noisy.radiance, noisy.albedo, noisy.normal)
+        clean_aux = denoise_image(noisy.radiance, noisy.albedo, noisy.normal)
         denoise_seconds = time.perf_counter() - t
-        clean_aux = denoise_image(noisy.radiance, noisy.albedo, noisy.normal, clean_aux=True)
+        clean = denoise_image(noisy.radiance, noisy.albedo, noisy.normal, clean_aux=False)
         # Equal time: scale the method's main budget by (render + denoise) / render.
         base = settings.get(scaled, defaults[scaled])
         more = max(base + 1, round(base * (seconds + denoise_seconds) / seconds))
@@ -94,8 +94,8 @@ def main() -> None:
         f"Scene `{args.scene}`, {w}x{h}, adapter `{args.adapter}`; reference: `path` at"
         f" {args.ref_spp} spp ({ref_seconds:.0f} s). HDR-FLIP (flip-evaluator, 67 ppd; lower is"
         " better). Denoised: Intel Open Image Denoise (pyoidn), filter RT, hdr, quality high,"
-        " guided by gi's albedo and normal AOVs; *prefiltered aux* is gi's default (OIDN"
-        " cleans the pixel-centre AOVs itself), *clean aux* tells OIDN they are noise-free."
+        " guided by gi's albedo and normal AOVs; *clean aux* (gi's default) tells OIDN the"
+        " pixel-centre AOVs are noise-free, *prefiltered aux* lets OIDN clean them first."
         " Equal time: the same method with its budget scaled by (render + denoise) / render.",
         "",
         f"Machine: {platform.processor() or platform.machine()}, gi {gi.__version__}.",
