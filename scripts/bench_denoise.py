@@ -11,6 +11,7 @@ reference. Writes a Markdown table.
 from __future__ import annotations
 
 import argparse
+import os
 import platform
 import time
 from pathlib import Path
@@ -20,6 +21,16 @@ import numpy as np
 
 import gi
 from gi.denoising import denoise_image
+
+
+def cpu_name() -> str:
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.machine()
 
 
 def flip(reference: np.ndarray, test: np.ndarray) -> float:
@@ -43,8 +54,9 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--scene", default="cornell")
     ap.add_argument("--size", default="96x96")
-    ap.add_argument("--ref-spp", type=int, default=4096)
+    ap.add_argument("--ref-spp", type=int, default=16384)
     ap.add_argument("--adapter", default="cpu")
+    ap.add_argument("--seeds", type=int, default=3, help="renders averaged per row")
     ap.add_argument("--out", type=Path)
     args = ap.parse_args()
     w, h = (int(v) for v in args.size.split("x"))
@@ -53,6 +65,13 @@ def main() -> None:
     ref = gi.render(scene, "path", spp=args.ref_spp, size=(w, h), seed=1234).radiance
     ref_seconds = time.perf_counter() - t
 
+    # Untimed warm-ups: OIDN's device and filter set-up (reported), lavapipe's pipelines.
+    warm = gi.render(scene, "path", spp=1, size=(w, h))
+    t = time.perf_counter()
+    denoise_image(warm.radiance, warm.albedo, warm.normal)
+    oidn_init = time.perf_counter() - t
+    gi.render(scene, "ispm", spp=1, size=(w, h), photons=1000, adapter=args.adapter)
+
     # (method, settings label, settings, key scaled for the equal-time run)
     cases = [
         ("path", "16 spp", {"spp": 16}, "spp"),
@@ -60,30 +79,43 @@ def main() -> None:
         ("gather", "defaults (64 spp, 200k photons)", {}, "photons"),
     ]
     defaults = {"spp": 64, "photons": 200_000}
+    seeds = range(1, args.seeds + 1)
     rows = []
     for method, label, settings, scaled in cases:
-        common = {"size": (w, h), "seed": 1, "adapter": args.adapter, **settings}
-        noisy, seconds = timed_render(scene, method, **common)
-        t = time.perf_counter()
-        clean_aux = denoise_image(noisy.radiance, noisy.albedo, noisy.normal)
-        denoise_seconds = time.perf_counter() - t
-        clean = denoise_image(noisy.radiance, noisy.albedo, noisy.normal, clean_aux=False)
+        seconds, denoise_seconds, f_noisy, f_clean, f_pre = [], [], [], [], []
+        for seed in seeds:
+            common = {"size": (w, h), "seed": seed, "adapter": args.adapter, **settings}
+            noisy, dt = timed_render(scene, method, **common)
+            t = time.perf_counter()
+            clean = denoise_image(noisy.radiance, noisy.albedo, noisy.normal)
+            denoise_seconds.append(time.perf_counter() - t)
+            pre = denoise_image(noisy.radiance, noisy.albedo, noisy.normal, clean_aux=False)
+            seconds.append(dt)
+            f_noisy.append(flip(ref, noisy.radiance))
+            f_clean.append(flip(ref, clean))
+            f_pre.append(flip(ref, pre))
         # Equal time: scale the method's main budget by (render + denoise) / render.
+        render_s, denoise_s = float(np.mean(seconds)), float(np.mean(denoise_seconds))
         base = settings.get(scaled, defaults[scaled])
-        more = max(base + 1, round(base * (seconds + denoise_seconds) / seconds))
-        equal, equal_seconds = timed_render(scene, method, **{**common, scaled: more})
+        more = max(base + 1, round(base * (render_s + denoise_s) / render_s))
+        equal_seconds, f_equal = [], []
+        for seed in seeds:
+            common = {"size": (w, h), "seed": seed, "adapter": args.adapter, **settings}
+            equal, dt = timed_render(scene, method, **{**common, scaled: more})
+            equal_seconds.append(dt)
+            f_equal.append(flip(ref, equal.radiance))
         rows.append(
             (
                 method,
                 label,
-                seconds,
-                denoise_seconds,
-                flip(ref, noisy.radiance),
-                flip(ref, clean),
-                flip(ref, clean_aux),
+                render_s,
+                denoise_s,
+                float(np.mean(f_noisy)),
+                float(np.mean(f_pre)),
+                float(np.mean(f_clean)),
                 f"{scaled}={more}",
-                equal_seconds,
-                flip(ref, equal.radiance),
+                float(np.mean(equal_seconds)),
+                float(np.mean(f_equal)),
             )
         )
         print(rows[-1], flush=True)
@@ -96,19 +128,21 @@ def main() -> None:
         " better). Denoised: Intel Open Image Denoise (pyoidn), filter RT, hdr, quality high,"
         " guided by gi's albedo and normal AOVs; *clean aux* (gi's default) tells OIDN the"
         " pixel-centre AOVs are noise-free, *prefiltered aux* lets OIDN clean them first."
-        " Equal time: the same method with its budget scaled by (render + denoise) / render.",
+        " Equal time: the same method with its budget scaled by (render + denoise) / render."
+        f" Each row is the mean over seeds 1-{args.seeds}; times after untimed warm-ups (OIDN's"
+        f" first call in a process also sets up its device: {oidn_init:.2f} s here).",
         "",
-        f"Machine: {platform.processor() or platform.machine()}, gi {gi.__version__}.",
+        f"Machine: {cpu_name()}, {os.cpu_count()} cores (shared), gi {gi.__version__}.",
         "",
         "| method | settings | render s | denoise s | FLIP noisy | FLIP denoised"
         " (prefiltered aux) | FLIP denoised (clean aux) | equal-time noisy | its s |"
-        " FLIP equal-time noisy |",
-        "|---|---|---:|---:|---:|---:|---:|---|---:|---:|",
+        " FLIP equal-time noisy | denoised / noisy | denoised / equal-time |",
+        "|---|---|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|",
     ]
     for m, label, s, d, fn, fd, fc, eq, es, fe in rows:
         lines.append(
             f"| {m} | {label} | {s:.2f} | {d:.3f} | {fn:.4f} | {fd:.4f} | {fc:.4f} | {eq} |"
-            f" {es:.2f} | {fe:.4f} |"
+            f" {es:.2f} | {fe:.4f} | {fc / fn:.2f} | {fc / fe:.2f} |"
         )
     lines += [
         "",

@@ -14,6 +14,7 @@ import pytest
 
 import gi
 from gi import batch
+from gi.scene import scene_from_desc
 
 CAMERA = [
     # Frame 0 is the built-in camera; the eye then moves right and closer by frame 7.
@@ -64,17 +65,24 @@ def test_batch_frames_equal_single_process_renders(tmp_path):
 
     frames = batch.plan(desc, tmp_path)
     images = []
-    for f in frames:
-        local = gi.render(batch.frame_scene(f), f.method, **f.settings)
+    for f in reversed(frames):  # another order than the workers': the result must not care
+        local, _ = batch.render_frame(f)
         channels = gi.read_channels(f.outputs[0])
         got = np.stack([channels[c] for c in "RGB"], axis=-1)
         # The same seed gives the same image on any worker: exact equality.
         assert np.array_equal(got, local.radiance), f.index
         assert np.array_equal(channels["Z"], local.depth), f.index
         images.append(got)
-    # Frame 0 is the built-in camera (the keyframe) with seed 3 + 0; later frames move.
+    images.reverse()
+    # Independently of the batch code: frame 0 is the built-in camera (the first keyframe)
+    # with seed 3 + 0, and frame 7 the last keyframe, set in the scene file, with seed 3 + 7.
     plain = gi.render(gi.load_scene("cornell"), "path", spp=2, size=(24, 24), seed=3)
     assert np.array_equal(images[0], plain.radiance)
+    desc7 = json.loads(gi.builtin_json("cornell"))
+    desc7["camera"].update(position=[0.6, 1.1, 3.0], look_at=[0, 1, 0])
+    scene7 = scene_from_desc(desc7, "cornell-7", tmp_path)
+    last = gi.render(scene7, "path", spp=2, size=(24, 24), seed=10)
+    assert np.array_equal(images[7], last.radiance)
     assert not np.allclose(images[0], images[7], atol=0.05)
 
 

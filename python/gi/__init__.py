@@ -25,13 +25,14 @@ from gi._gi import (  # noqa: E402
     builtin_json,
     builtin_scenes,
     footprint_radii,
+    gpu_counters,
     methods,
 )
 from gi.batch import render_batch  # noqa: E402  (imports Ray only when called)
 from gi.denoising import denoise  # noqa: E402
 from gi.display import to_display  # noqa: E402
 from gi.io import read_channels, read_image, save_image, save_layers, save_result  # noqa: E402
-from gi.render import RenderResult, RenderStats, render  # noqa: E402
+from gi.render import Renderer, RenderResult, RenderStats, render  # noqa: E402
 from gi.scene import load_scene  # noqa: E402
 
 __all__ = [
@@ -39,6 +40,7 @@ __all__ = [
     "GpuError",
     "RenderCancelled",
     "RenderResult",
+    "Renderer",
     "RenderStats",
     "Scene",
     "SceneError",
@@ -49,6 +51,7 @@ __all__ = [
     "builtin_scenes",
     "denoise",
     "footprint_radii",
+    "gpu_counters",
     "load_scene",
     "methods",
     "read_channels",

@@ -53,30 +53,32 @@ class Scene:
 def builtin_scenes() -> list[tuple[str, str]]: ...
 def builtin_json(name: str) -> str: ...
 def methods() -> list[str]: ...
-def render(
-    scene: Scene,
-    method: str = "path",
-    spp: int = 64,
-    width: int | None = None,
-    height: int | None = None,
-    seed: int = 0,
-    max_depth: int = 64,
-    light_paths: int | None = None,
-    photons: int = 200_000,
-    k: int = 100,
-    max_radius: float | None = None,
-    kernel: str = "cone",
-    smoothing: float = 1.0,
-    leaf_size: int | None = None,
-    kernel_scale: float = 1.0,
-    subsample: int = 2,
-    footprint_volumes: bool = False,
-    boundary_compensation: bool = True,
-    volume_shape: str = "auto",
-    adapter: str | None = None,
-    shadow_map_size: int = 1024,
-    progress: Callable[[str, float], bool | None] | None = None,
-) -> dict[str, Any]: ...
+
+@final
+class Renderer:
+    def __new__(
+        cls, scene: Scene, method: str = "ispm", settings: dict[str, Any] | None = None
+    ) -> Renderer: ...
+    def render(
+        self,
+        aovs: bool = False,
+        extras: bool = False,
+        seed: int | None = None,
+        progress: Callable[[str, float], bool | None] | None = None,
+    ) -> dict[str, Any]: ...
+    def update(self, target: str, key: int | str | None, json: str) -> None: ...
+    def resize(self, width: int, height: int) -> None: ...
+    def describe(self, target: str, key: int | str | None = None) -> str: ...
+    @property
+    def frame_index(self) -> int: ...
+    @property
+    def method(self) -> str: ...
+    @property
+    def size(self) -> tuple[int, int]: ...
+    @property
+    def object_names(self) -> list[str | None]: ...
+
+def gpu_counters() -> dict[str, Any]: ...
 def adapter_report(adapter: str | None = None) -> str: ...
 def footprint_radii(
     scene: Scene,

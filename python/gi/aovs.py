@@ -9,7 +9,7 @@ METHOD_EXTRA: dict[str, tuple[str, ...]] = {
     "path": (),
     "photon": (),
     "gather": (),
-    "direct": (),
+    "direct": ("direct",),
     "ispm": ("direct", "specular", "indirect", "photons"),
 }
 

@@ -26,10 +26,13 @@ overrides ``scene``, ``method``, ``settings`` (merged), ``camera``, ``aovs`` or
 before a frame starts.
 
 Frames run as Ray tasks: on a local Ray started for the batch, or on the cluster that
-``RAY_ADDRESS`` (or ``address=``) names. Workers return the images and the driver writes
-the files, so they land where the batch was started. A frame whose worker dies or that
-raises is submitted again up to ``retries`` times; every frame is reported in the
-summary (status, attempts, errors, files, per-stage seconds, worker).
+``RAY_ADDRESS`` (or ``address=``) names. Each worker process keeps one ``gi.Renderer`` per
+scene, method and settings warm across the frames it renders (the camera is updated per
+frame, the seed set per frame, so a frame's image does not depend on the worker). Workers
+return the images and the driver writes the files, so they land where the batch started.
+A frame whose worker dies or that raises is submitted again up to ``retries`` times;
+every frame is reported in the summary (status, attempts, errors, files, per-stage
+seconds, worker).
 """
 
 from __future__ import annotations
@@ -77,8 +80,8 @@ class Frame:
     index: int
     frame: int
     variant: int
-    scene: str
-    scene_desc: str | None  # JSON text when the camera is animated, else None
+    scene: str  # a built-in name or an absolute scene-file path
+    camera: dict[str, Any] | None  # camera fields of this frame (animation), else None
     method: str
     settings: dict[str, Any]
     denoise: bool
@@ -87,7 +90,8 @@ class Frame:
 
 
 def _render_keywords() -> set[str]:
-    return set(inspect.signature(gi.render).parameters) - {"scene", "method", "progress"}
+    skip = {"scene", "method", "progress", "denoise"}
+    return set(inspect.signature(gi.render).parameters) - skip
 
 
 def _scene_label(scene: str) -> str:
@@ -101,16 +105,26 @@ def _resolve(scene: str, base_dir: Path) -> str:
     return scene if (not path.exists() and scene in names) else str(path.resolve())
 
 
-def _scene_desc(scene: str) -> dict[str, Any]:
-    if not Path(scene).is_absolute():
-        return json.loads(gi.builtin_json(scene))  # type: ignore[no-any-return]
-    return json.loads(Path(scene).read_text(encoding="utf-8"))  # type: ignore[no-any-return]
+def _base_camera(scene: str) -> dict[str, Any]:
+    """The scene's own camera fields (scene-format defaults where the file has none)."""
+    if Path(scene).is_absolute():
+        desc = json.loads(Path(scene).read_text(encoding="utf-8"))
+    else:
+        desc = json.loads(gi.builtin_json(scene))
+    camera = desc.get("camera", {}) if isinstance(desc, dict) else {}
+    base = {"up": [0.0, 1.0, 0.0], "fov": 40.0}
+    return {**base, **{k: camera[k] for k in CAMERA_FIELDS if k in camera}}
 
 
-def _interpolate(keys: list[dict[str, Any]], frame: int) -> dict[str, Any]:
-    """Camera fields at ``frame``: linear between the keyframes around it, held outside."""
+def _interpolate(
+    keys: list[dict[str, Any]], frame: int, base: dict[str, Any] | None = None
+) -> dict[str, Any]:
+    """Camera fields at ``frame``: linear between the keyframes around it, held outside;
+    fields no keyframe sets come from ``base``. All four fields are always given so that a
+    renderer's camera update is absolute (a partial update keeps the renderer's previous,
+    re-orthogonalised ``up``, and images would depend on the frames rendered before)."""
     keys = sorted(keys, key=lambda k: k["frame"])
-    out: dict[str, Any] = {}
+    out: dict[str, Any] = dict(base or {})
     for name in CAMERA_FIELDS:
         have = [k for k in keys if name in k]
         if not have:
@@ -172,7 +186,8 @@ def plan(job: dict[str, Any], base_dir: str | Path = ".") -> list[Frame]:
 
     frames: list[Frame] = []
     planned: set[Path] = set()
-    scenes: dict[str, dict[str, Any]] = {}
+    scenes: set[str] = set()
+    cameras: dict[str, dict[str, Any]] = {}
     for variant, entry in enumerate(sweep):
         if not isinstance(entry, dict) or set(entry) - SWEEP_KEYS:
             raise ValueError(
@@ -201,14 +216,10 @@ def plan(job: dict[str, Any], base_dir: str | Path = ".") -> list[Frame]:
         scene = _resolve(scene, base)
         if scene not in scenes:
             gi.load_scene(scene)  # a SceneError now rather than in every worker
-            scenes[scene] = _scene_desc(scene)
+            scenes.add(scene)
+            cameras[scene] = _base_camera(scene)
         for f in range(*frames_field):
             index = len(frames)
-            desc = None
-            if camera is not None:
-                d = json.loads(json.dumps(scenes[scene]))
-                d["camera"] = {**d["camera"], **_interpolate(camera, f)}
-                desc = json.dumps(d)
             names = {
                 "index": index,
                 "frame": f,
@@ -237,7 +248,7 @@ def plan(job: dict[str, Any], base_dir: str | Path = ".") -> list[Frame]:
                     frame=f,
                     variant=variant,
                     scene=scene,
-                    scene_desc=desc,
+                    camera=_interpolate(camera, f, cameras[scene]) if camera else None,
                     method=method,
                     settings={**settings, "seed": seed},
                     denoise=denoise,
@@ -248,30 +259,33 @@ def plan(job: dict[str, Any], base_dir: str | Path = ".") -> list[Frame]:
     return frames
 
 
-_SCENES: dict[tuple[str, str | None], Any] = {}
+_RENDERERS: dict[str, gi.Renderer] = {}
 
 
-def frame_scene(frame: Frame) -> gi.Scene:
-    """The scene a frame renders (kept per worker process across its frames)."""
-    key = (frame.scene, frame.scene_desc)
-    if key not in _SCENES:
-        if frame.scene_desc is None:
-            _SCENES[key] = gi.load_scene(frame.scene)
-        else:
-            from gi.scene import scene_from_desc
-
-            # Mesh files are relative to the scene file (built-in scenes have none).
-            _SCENES[key] = scene_from_desc(
-                json.loads(frame.scene_desc), frame.scene, Path(frame.scene).parent
-            )
-        while len(_SCENES) > 8:
-            _SCENES.pop(next(iter(_SCENES)))
-    return _SCENES[key]
+def _renderer(frame: Frame) -> gi.Renderer:
+    """This worker's renderer for the frame's scene, method and settings, made on its
+    first such frame and kept warm (GPU state, BVH) for the next ones."""
+    settings = {k: v for k, v in frame.settings.items() if k != "seed"}
+    key = json.dumps([frame.scene, frame.method, settings], sort_keys=True, default=list)
+    if key not in _RENDERERS:
+        while len(_RENDERERS) >= 4:
+            _RENDERERS.pop(next(iter(_RENDERERS)))
+        _RENDERERS[key] = gi.Renderer(gi.load_scene(frame.scene), frame.method, **settings)
+    return _RENDERERS[key]
 
 
 def render_frame(frame: Frame) -> tuple[gi.RenderResult, str]:
-    """Renders one frame (what a Ray task runs); returns the result and ``host:pid``."""
-    result = gi.render(frame_scene(frame), frame.method, denoise=frame.denoise, **frame.settings)
+    """Renders one frame (what a Ray task runs); returns the result and ``host:pid``.
+
+    The frame's seed is set explicitly and its camera (when animated) completely, so the
+    image does not depend on which frames this worker rendered before.
+    """
+    renderer = _renderer(frame)
+    if frame.camera is not None:
+        renderer.update(camera=frame.camera)
+    result = renderer.render(aovs=True, extras=True, seed=int(frame.settings.get("seed", 0)))
+    if frame.denoise:
+        result = gi.denoise(result)
     return result, f"{socket.gethostname()}:{os.getpid()}"
 
 

@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
+import json
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
 from gi import _gi
-from gi._gi import Scene
+from gi._gi import Scene, SettingError
 from gi.progress import ProgressBar
 
 ProgressCallback = Callable[[str, float], "bool | None"]
@@ -87,6 +89,146 @@ class RenderResult:
         return png_bytes(self.display())
 
 
+def _settings(**kw: object) -> dict[str, object]:
+    """Keyword settings for the native module, with ``size`` split into width and height."""
+    size = kw.pop("size", None)
+    if size is not None:
+        try:
+            kw["width"], kw["height"] = size  # type: ignore[misc]
+        except (TypeError, ValueError):
+            raise SettingError(
+                f"invalid setting `size`: expected (width, height), got {size!r}"
+            ) from None
+    return kw
+
+
+def _progress(progress: bool | ProgressCallback) -> ProgressCallback | None:
+    if progress is True:
+        return ProgressBar()
+    if progress is False:
+        return None
+    return progress
+
+
+def _result(out: dict[str, Any]) -> RenderResult:
+    s = out["stats"]
+    stats = RenderStats(
+        method=s["method"],
+        total_seconds=s["total_seconds"],
+        stages=[(str(n), float(t)) for n, t in s["stages"]],
+        samples_per_pixel=s["samples_per_pixel"],
+        camera_paths=s["camera_paths"],
+        light_paths=s["light_paths"],
+        triangles=s["triangles"],
+        photons_emitted=s["photons_emitted"],
+        photons_first_bounce=s["photons_first_bounce"],
+        photons_stored=s["photons_stored"],
+        volume_quads=s["volume_quads"],
+    )
+    return RenderResult(
+        radiance=out["radiance"],
+        albedo=out["albedo"],
+        normal=out["normal"],
+        position=out["position"],
+        depth=out["depth"],
+        caustics=out["caustics"],
+        stats=stats,
+        extra=dict(out["extra"]),
+    )
+
+
+class Renderer:
+    """A persistent renderer: made once from a scene, a method and its settings (the
+    keywords of :func:`render`, plus ``temporal_frames`` for method ``ispm``), then one
+    :meth:`render` per frame with :meth:`update` calls between frames. GPU resources, the
+    BVH and the photon ring live from one frame to the next; a frame uploads only what
+    changed and reads back only the images asked for.
+
+    >>> r = gi.Renderer(gi.load_scene("cornell"), "ispm", size=(320, 240), photons=50_000)
+    >>> r.update(lights={0: {"position": [0.2, 1.9, 0.0]}})
+    >>> frame = r.render()                    # radiance only; aovs=True for the rest
+    """
+
+    def __init__(self, scene: Scene, method: str = "ispm", **settings: Any) -> None:
+        self._native = _gi.Renderer(scene, method, _settings(**settings))
+
+    @property
+    def method(self) -> str:
+        return self._native.method
+
+    @property
+    def size(self) -> tuple[int, int]:
+        """``(width, height)`` of the frames."""
+        return self._native.size
+
+    @property
+    def frame_index(self) -> int:
+        """Frames rendered so far."""
+        return self._native.frame_index
+
+    @property
+    def object_names(self) -> list[str | None]:
+        """Names of the scene's objects (``None`` where unnamed), in scene order."""
+        return self._native.object_names
+
+    def describe(self, target: str, key: int | str | None = None) -> dict[str, Any]:
+        """The current ``"camera"``, ``"light"`` (key: index) or ``"material"`` (key: name)
+        in the scene format."""
+        return json.loads(self._native.describe(target, key))  # type: ignore[no-any-return]
+
+    def update(
+        self,
+        *,
+        camera: dict[str, Any] | None = None,
+        lights: dict[int, dict[str, Any]] | None = None,
+        objects: dict[int | str, dict[str, Any]] | None = None,
+        materials: dict[str, dict[str, Any]] | None = None,
+    ) -> None:
+        """Changes the scene before the next frame, in the scene format's terms.
+
+        ``camera`` and each ``lights[i]`` / ``materials[name]`` give the fields that change
+        (``{"position": [0, 1, 3]}``); ``objects[name or index]`` gives the object's whole
+        transform (``translate``/``rotate``/``scale`` as in the scene file, or
+        ``{"matrix": 4×4 rows}``). Invalid values raise :class:`gi.SceneError` and change
+        nothing.
+        """
+        if camera is not None:
+            self._native.update("camera", None, json.dumps(camera))
+        for i, light in (lights or {}).items():
+            self._native.update("light", i, json.dumps(light))
+        for key, transform in (objects or {}).items():
+            self._native.update("object", key, json.dumps(_jsonable(transform)))
+        for name, material in (materials or {}).items():
+            self._native.update("material", name, json.dumps(material))
+
+    def resize(self, width: int, height: int) -> None:
+        """Changes the image size (render targets are rebuilt at the next frame)."""
+        self._native.resize(width, height)
+
+    def render(
+        self,
+        *,
+        aovs: bool = False,
+        extras: bool = False,
+        seed: int | None = None,
+        progress: bool | ProgressCallback = False,
+    ) -> RenderResult:
+        """Renders one frame. Only the radiance is read back unless ``aovs`` (albedo,
+        normal, position, depth) or ``extras`` (the method's own images) are asked for;
+        images not asked for are empty arrays. ``seed`` overrides the frame's random seed."""
+        out = self._native.render(aovs=aovs, extras=extras, seed=seed, progress=_progress(progress))
+        return _result(out)
+
+
+def _jsonable(value: Any) -> Any:
+    """numpy arrays (a 4×4 matrix) as nested lists."""
+    if isinstance(value, dict):
+        return {k: _jsonable(v) for k, v in value.items()}
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    return value
+
+
 def render(
     scene: Scene,
     method: str = "path",
@@ -149,21 +291,12 @@ def render(
         from gi.denoising import INSTALL_HINT, available
 
         if not available():
-            raise _gi.SettingError(INSTALL_HINT)
-    callback: ProgressCallback | None
-    if progress is True:
-        callback = ProgressBar()
-    elif progress is False:
-        callback = None
-    else:
-        callback = progress
-    width, height = size if size is not None else (None, None)
-    out = _gi.render(
+            raise SettingError(INSTALL_HINT)
+    renderer = Renderer(
         scene,
-        method=method,
+        method,
         spp=spp,
-        width=width,
-        height=height,
+        size=size,
         seed=seed,
         max_depth=max_depth,
         light_paths=light_paths,
@@ -180,32 +313,8 @@ def render(
         volume_shape=volume_shape,
         adapter=adapter,
         shadow_map_size=shadow_map_size,
-        progress=callback,
     )
-    s = out["stats"]
-    stats = RenderStats(
-        method=s["method"],
-        total_seconds=s["total_seconds"],
-        stages=[(str(n), float(t)) for n, t in s["stages"]],
-        samples_per_pixel=s["samples_per_pixel"],
-        camera_paths=s["camera_paths"],
-        light_paths=s["light_paths"],
-        triangles=s["triangles"],
-        photons_emitted=s["photons_emitted"],
-        photons_first_bounce=s["photons_first_bounce"],
-        photons_stored=s["photons_stored"],
-        volume_quads=s["volume_quads"],
-    )
-    result = RenderResult(
-        radiance=out["radiance"],
-        albedo=out["albedo"],
-        normal=out["normal"],
-        position=out["position"],
-        depth=out["depth"],
-        caustics=out["caustics"],
-        stats=stats,
-        extra=dict(out["extra"]),
-    )
+    result = renderer.render(aovs=True, extras=True, progress=progress)
     if denoise:
         from gi.denoising import denoise as run_denoiser
 

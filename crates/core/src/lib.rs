@@ -6,6 +6,8 @@
 
 pub mod bsdf;
 pub mod error;
+pub mod estimate;
+pub mod frame;
 pub mod gpu;
 pub mod image;
 pub mod photon;
@@ -16,6 +18,7 @@ pub mod scene;
 pub mod trace;
 
 pub use error::{Error, Result};
+pub use frame::{FrameDesc, Images, Renderer};
 pub use image::Image;
 pub use render::{render, Method, Progress, RenderOutput, RenderStats, Settings};
-pub use scene::Scene;
+pub use scene::{Scene, SceneUpdate};

@@ -13,7 +13,8 @@ fn _gi(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<scene::PyScene>()?;
     m.add_function(wrap_pyfunction!(scene::builtin_scenes, m)?)?;
     m.add_function(wrap_pyfunction!(scene::builtin_json, m)?)?;
-    m.add_function(wrap_pyfunction!(render::render, m)?)?;
+    m.add_class::<render::PyRenderer>()?;
+    m.add_function(wrap_pyfunction!(render::gpu_counters, m)?)?;
     m.add_function(wrap_pyfunction!(render::methods, m)?)?;
     m.add_function(wrap_pyfunction!(render::adapter_report, m)?)?;
     m.add_function(wrap_pyfunction!(render::footprint_radii, m)?)?;

@@ -2,6 +2,8 @@
 
 use crate::errors::to_py;
 use crate::scene::PyScene;
+use gi_core::frame::{FrameDesc, Images, Renderer};
+use gi_core::scene::update::UpdateTarget;
 use gi_core::{Image, Method, Progress, Settings};
 use numpy::{IntoPyArray, PyArrayMethods};
 use pyo3::prelude::*;
@@ -52,79 +54,129 @@ fn image_array<'py>(py: Python<'py>, img: Image) -> PyResult<Bound<'py, PyAny>> 
     Ok(flat.into_pyarray(py).reshape([h, w, 3])?.into_any())
 }
 
-/// Renders `scene`; returns a dict of float32 arrays (radiance, albedo, normal, position,
-/// caustics: H×W×3; depth: H×W) and `stats`.
-#[pyfunction]
-#[pyo3(signature = (scene, method = "path", spp = 64, width = None, height = None, seed = 0, max_depth = 64, light_paths = None, photons = 200_000, k = 100, max_radius = None, kernel = "cone", smoothing = 1.0, leaf_size = None, kernel_scale = 1.0, subsample = 2, footprint_volumes = false, boundary_compensation = true, volume_shape = "auto", adapter = None, shadow_map_size = 1024, progress = None))]
-#[allow(clippy::too_many_arguments)]
-pub fn render<'py>(
-    py: Python<'py>,
-    scene: &PyScene,
-    method: &str,
-    spp: u32,
-    width: Option<u32>,
-    height: Option<u32>,
-    seed: u64,
-    max_depth: u32,
-    light_paths: Option<u64>,
-    photons: u64,
-    k: u32,
-    max_radius: Option<f32>,
-    kernel: &str,
-    smoothing: f32,
-    leaf_size: Option<u32>,
-    kernel_scale: f32,
-    subsample: u32,
-    footprint_volumes: bool,
-    boundary_compensation: bool,
-    volume_shape: &str,
-    adapter: Option<String>,
-    shadow_map_size: u32,
-    progress: Option<Py<PyAny>>,
-) -> PyResult<Bound<'py, PyDict>> {
-    let method: Method = method.parse().map_err(|e| to_py(py, e))?;
-    let kernel: gi_core::render::Kernel = kernel.parse().map_err(|e| to_py(py, e))?;
-    let volume_shape: gi_core::render::VolumeShape =
-        volume_shape.parse().map_err(|e| to_py(py, e))?;
-    let settings = Settings {
-        method,
-        spp,
-        width,
-        height,
-        seed,
-        max_depth,
-        light_paths,
-        photons,
-        k,
-        max_radius,
-        kernel,
-        smoothing,
-        leaf_size,
-        kernel_scale,
-        subsample,
-        footprint_volumes,
-        boundary_compensation,
-        volume_shape,
-        adapter,
-        shadow_map_size,
-    };
-    let reporter = PyProgress {
-        callback: progress,
-        last: Mutex::new(None),
-        error: Mutex::new(None),
-    };
-    let result = py.detach(|| gi_core::render(&scene.inner, &settings, &reporter));
-    if let Some(e) = reporter
-        .error
-        .lock()
-        .unwrap_or_else(|p| p.into_inner())
-        .take()
-    {
-        return Err(e);
+/// A setting's error, named.
+fn setting_error(py: Python<'_>, name: &'static str, message: impl Into<String>) -> PyErr {
+    to_py(
+        py,
+        gi_core::Error::Setting {
+            name,
+            message: message.into(),
+        },
+    )
+}
+
+/// An integer setting of any Python size, range-checked into `T`.
+fn int<T: TryFrom<i128>>(v: &Bound<'_, PyAny>, name: &'static str) -> PyResult<T> {
+    let py = v.py();
+    if v.is_instance_of::<pyo3::types::PyBool>() {
+        return Err(setting_error(py, name, "must be an integer, not a bool"));
     }
-    let out = result.map_err(|e| to_py(py, e))?;
+    let i: i128 = v
+        .extract()
+        .map_err(|_| setting_error(py, name, format!("must be an integer, got {v}")))?;
+    T::try_from(i).map_err(|_| setting_error(py, name, format!("{i} is out of range")))
+}
+
+fn opt_int<T: TryFrom<i128>>(v: &Bound<'_, PyAny>, name: &'static str) -> PyResult<Option<T>> {
+    if v.is_none() {
+        Ok(None)
+    } else {
+        int(v, name).map(Some)
+    }
+}
+
+fn float(v: &Bound<'_, PyAny>, name: &'static str) -> PyResult<f32> {
+    let py = v.py();
+    let x: f64 = v
+        .extract()
+        .map_err(|_| setting_error(py, name, format!("must be a number, got {v}")))?;
+    if !x.is_finite() || x.abs() > f32::MAX as f64 {
+        return Err(setting_error(py, name, format!("must be finite, got {x}")));
+    }
+    Ok(x as f32)
+}
+
+fn flag(v: &Bound<'_, PyAny>, name: &'static str) -> PyResult<bool> {
+    v.extract()
+        .map_err(|_| setting_error(v.py(), name, format!("must be a bool, got {v}")))
+}
+
+fn text(v: &Bound<'_, PyAny>, name: &'static str) -> PyResult<String> {
+    v.extract()
+        .map_err(|_| setting_error(v.py(), name, format!("must be a string, got {v}")))
+}
+
+/// The settings of `method` from keyword arguments (the names of `gi.render`); defaults and
+/// validation are the core's (`Settings::default`, `Settings::validate`).
+pub fn settings_from(
+    py: Python<'_>,
+    method: &str,
+    kw: Option<&Bound<'_, PyDict>>,
+) -> PyResult<Settings> {
+    let mut s = Settings {
+        method: method.parse().map_err(|e| to_py(py, e))?,
+        ..Default::default()
+    };
+    for (k, v) in kw.into_iter().flat_map(|d| d.iter()) {
+        let key: String = k.extract()?;
+        let v = &v;
+        match key.as_str() {
+            "spp" => s.spp = int(v, "spp")?,
+            "width" => s.width = opt_int(v, "width")?,
+            "height" => s.height = opt_int(v, "height")?,
+            "seed" => s.seed = int(v, "seed")?,
+            "max_depth" => s.max_depth = int(v, "max_depth")?,
+            "light_paths" => s.light_paths = opt_int(v, "light_paths")?,
+            "photons" => s.photons = int(v, "photons")?,
+            "k" => s.k = int(v, "k")?,
+            "max_radius" => {
+                s.max_radius = if v.is_none() {
+                    None
+                } else {
+                    Some(float(v, "max_radius")?)
+                }
+            }
+            "kernel" => s.kernel = text(v, "kernel")?.parse().map_err(|e| to_py(py, e))?,
+            "smoothing" => s.smoothing = float(v, "smoothing")?,
+            "leaf_size" => s.leaf_size = opt_int(v, "leaf_size")?,
+            "kernel_scale" => s.kernel_scale = float(v, "kernel_scale")?,
+            "subsample" => s.subsample = int(v, "subsample")?,
+            "footprint_volumes" => s.footprint_volumes = flag(v, "footprint_volumes")?,
+            "boundary_compensation" => s.boundary_compensation = flag(v, "boundary_compensation")?,
+            "volume_shape" => {
+                s.volume_shape = text(v, "volume_shape")?.parse().map_err(|e| to_py(py, e))?
+            }
+            "adapter" => {
+                s.adapter = if v.is_none() {
+                    None
+                } else {
+                    Some(text(v, "adapter")?)
+                }
+            }
+            "shadow_map_size" => s.shadow_map_size = int(v, "shadow_map_size")?,
+            "temporal_frames" => s.temporal_frames = int(v, "temporal_frames")?,
+            other => {
+                return Err(setting_error(
+                    py,
+                    "settings",
+                    format!("unknown setting `{other}`"),
+                ))
+            }
+        }
+    }
+    s.validate().map_err(|e| to_py(py, e))?;
+    Ok(s)
+}
+
+/// A frame as a dict of float32 arrays (radiance, albedo, normal, position, caustics:
+/// H×W×3, empty when not read back; depth: H×W), `extra` and `stats`.
+fn output_dict<'py>(
+    py: Python<'py>,
+    out: gi_core::RenderOutput,
+    method: Method,
+) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
-    let (w, h) = (out.radiance.width as usize, out.radiance.height as usize);
+    let (w, h) = (out.albedo.width as usize, out.albedo.height as usize);
     d.set_item("radiance", image_array(py, out.radiance)?)?;
     d.set_item("albedo", image_array(py, out.albedo)?)?;
     d.set_item("normal", image_array(py, out.normal)?)?;
@@ -150,6 +202,205 @@ pub fn render<'py>(
     stats.set_item("photons_stored", s.photons_stored)?;
     stats.set_item("volume_quads", s.volume_quads)?;
     d.set_item("stats", stats)?;
+    Ok(d)
+}
+
+/// A persistent renderer (`gi_core::Renderer`): made once, then `render()` per frame with
+/// `update()`s between frames.
+#[pyclass(module = "gi._gi", name = "Renderer")]
+pub struct PyRenderer {
+    inner: Renderer,
+}
+
+#[pymethods]
+impl PyRenderer {
+    #[new]
+    #[pyo3(signature = (scene, method = "ispm", settings = None))]
+    fn new(
+        py: Python<'_>,
+        scene: &PyScene,
+        method: &str,
+        settings: Option<&Bound<'_, PyDict>>,
+    ) -> PyResult<Self> {
+        let settings = settings_from(py, method, settings)?;
+        let inner = Renderer::new(&scene.inner, &settings).map_err(|e| to_py(py, e))?;
+        Ok(PyRenderer { inner })
+    }
+
+    /// Renders one frame; `aovs` adds albedo/normal/position/depth, `extras` the method's
+    /// own images. Returns the dict of `render()`.
+    #[pyo3(signature = (aovs = false, extras = false, seed = None, progress = None))]
+    fn render<'py>(
+        &mut self,
+        py: Python<'py>,
+        aovs: bool,
+        extras: bool,
+        seed: Option<u64>,
+        progress: Option<Py<PyAny>>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let reporter = PyProgress {
+            callback: progress,
+            last: Mutex::new(None),
+            error: Mutex::new(None),
+        };
+        let desc = FrameDesc {
+            seed,
+            images: Images { aovs, extras },
+        };
+        let inner = &mut self.inner;
+        let result = py.detach(|| inner.render(&desc, &reporter));
+        if let Some(e) = reporter
+            .error
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .take()
+        {
+            return Err(e);
+        }
+        let out = result.map_err(|e| to_py(py, e))?;
+        output_dict(py, out, self.inner.settings().method)
+    }
+
+    /// Applies a scene update given as JSON: `target` is "camera", "light" (key: index),
+    /// "object" (key: index or name) or "material" (key: name); see
+    /// `Scene::update_from_json` for the fields.
+    #[pyo3(signature = (target, key, json))]
+    fn update(
+        &mut self,
+        py: Python<'_>,
+        target: &str,
+        key: Option<&Bound<'_, PyAny>>,
+        json: &str,
+    ) -> PyResult<()> {
+        let scene = self.inner.scene();
+        let bad = |msg: String| {
+            to_py(
+                py,
+                gi_core::Error::Scene {
+                    source_name: "scene update".into(),
+                    field: target.to_string(),
+                    message: msg,
+                },
+            )
+        };
+        let index = |key: Option<&Bound<'_, PyAny>>| -> PyResult<usize> {
+            key.and_then(|k| k.extract::<usize>().ok())
+                .ok_or_else(|| bad("needs an index".into()))
+        };
+        let target = match target {
+            "camera" => UpdateTarget::Camera,
+            "light" => UpdateTarget::Light(index(key)?),
+            "material" => UpdateTarget::Material(
+                key.and_then(|k| k.extract::<String>().ok())
+                    .ok_or_else(|| bad("needs a material name".into()))?,
+            ),
+            "object" => {
+                let i = match key.and_then(|k| k.extract::<String>().ok()) {
+                    Some(name) => scene
+                        .object_index(&name)
+                        .ok_or_else(|| bad(format!("no object named `{name}`")))?,
+                    None => index(key)?,
+                };
+                UpdateTarget::Object(i)
+            }
+            other => return Err(bad(format!("unknown update target `{other}`"))),
+        };
+        let value: serde_json::Value =
+            serde_json::from_str(json).map_err(|e| bad(format!("invalid JSON: {e}")))?;
+        let update = scene
+            .update_from_json(&target, &value)
+            .map_err(|e| to_py(py, e))?;
+        self.inner.update(&update).map_err(|e| to_py(py, e))
+    }
+
+    /// Changes the image size (targets are rebuilt at the next frame).
+    fn resize(&mut self, py: Python<'_>, width: u32, height: u32) -> PyResult<()> {
+        self.inner.resize(width, height).map_err(|e| to_py(py, e))
+    }
+
+    /// Frames rendered so far.
+    #[getter]
+    fn frame_index(&self) -> u64 {
+        self.inner.frame_index()
+    }
+
+    #[getter]
+    fn method(&self) -> &'static str {
+        self.inner.settings().method.name()
+    }
+
+    /// (width, height) of the frames.
+    #[getter]
+    fn size(&self) -> (u32, u32) {
+        let c = &self.inner.scene().camera;
+        (c.width, c.height)
+    }
+
+    /// Object names (None for unnamed objects), in scene order.
+    #[getter]
+    fn object_names(&self) -> Vec<Option<String>> {
+        self.inner
+            .scene()
+            .objects
+            .iter()
+            .map(|o| o.name.clone())
+            .collect()
+    }
+
+    /// The current camera, light `i` or material as scene-format JSON.
+    #[pyo3(signature = (target, key = None))]
+    fn describe(
+        &self,
+        py: Python<'_>,
+        target: &str,
+        key: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<String> {
+        let scene = self.inner.scene();
+        let value = match target {
+            "camera" => serde_json::to_string(&scene.camera_desc()),
+            "light" => {
+                let i: usize = key.map(|k| k.extract()).transpose()?.unwrap_or(0);
+                match scene.light_desc(i) {
+                    Some(l) => serde_json::to_string(&l),
+                    None => return Err(setting_error(py, "light", format!("no light {i}"))),
+                }
+            }
+            "material" => {
+                let name: String = key.map(|k| k.extract()).transpose()?.unwrap_or_default();
+                match scene.material_desc(&name) {
+                    Some(m) => serde_json::to_string(&m),
+                    None => {
+                        return Err(setting_error(
+                            py,
+                            "material",
+                            format!("no material `{name}`"),
+                        ))
+                    }
+                }
+            }
+            other => {
+                return Err(setting_error(
+                    py,
+                    "target",
+                    format!("unknown target `{other}`"),
+                ))
+            }
+        };
+        value.map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))
+    }
+}
+
+/// GPU objects created and uploads made on this thread so far (the device layer's
+/// counters): {"buffers", "textures", "bind_groups", "pipelines", "uploads": [(label, bytes)]}.
+#[pyfunction]
+pub fn gpu_counters(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
+    let c = gi_core::gpu::alloc::counters();
+    let d = PyDict::new(py);
+    d.set_item("buffers", c.buffers)?;
+    d.set_item("textures", c.textures)?;
+    d.set_item("bind_groups", c.bind_groups)?;
+    d.set_item("pipelines", c.pipelines)?;
+    d.set_item("uploads", c.uploads)?;
     Ok(d)
 }
 

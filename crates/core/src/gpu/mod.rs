@@ -6,6 +6,7 @@
 //! variable `GI_ADAPTER`: `"cpu"`, `"gpu"`, or a case-insensitive substring of the adapter
 //! name.
 
+pub mod alloc;
 pub mod raw;
 pub mod shaders;
 
@@ -215,6 +216,45 @@ impl GpuContext {
             .map_err(|e| Error::Gpu(e.to_string()))
     }
 
+    /// Maps `buffers` (with `MAP_READ` usage) once the submission `after` is done (`None`:
+    /// all submitted work) and copies out their bytes; later submissions are not waited on.
+    pub fn read_buffers(
+        &self,
+        buffers: &[&wgpu::Buffer],
+        after: Option<wgpu::SubmissionIndex>,
+    ) -> Result<Vec<Vec<u8>>> {
+        let (tx, rx) = std::sync::mpsc::channel();
+        for (i, b) in buffers.iter().enumerate() {
+            let tx = tx.clone();
+            b.slice(..).map_async(wgpu::MapMode::Read, move |r| {
+                let _ = tx.send((i, r));
+            });
+        }
+        drop(tx);
+        self.device
+            .poll(wgpu::PollType::Wait {
+                submission_index: after,
+                timeout: None,
+            })
+            .map_err(|e| Error::Gpu(e.to_string()))?;
+        for _ in 0..buffers.len() {
+            let (_, r) = rx.recv().map_err(|e| Error::Gpu(e.to_string()))?;
+            r.map_err(|e| Error::Gpu(format!("buffer mapping failed: {e}")))?;
+        }
+        buffers
+            .iter()
+            .map(|b| {
+                let bytes = b
+                    .slice(..)
+                    .get_mapped_range()
+                    .map_err(|e| Error::Gpu(e.to_string()))?
+                    .to_vec();
+                b.unmap();
+                Ok(bytes)
+            })
+            .collect()
+    }
+
     /// Maps `buffer` (with `MAP_READ` usage) after the queue's work and copies out its bytes.
     pub fn read_buffer(&self, buffer: &wgpu::Buffer) -> Result<Vec<u8>> {
         let slice = buffer.slice(..);
@@ -233,6 +273,58 @@ impl GpuContext {
         buffer.unmap();
         Ok(bytes)
     }
+}
+
+/// `Device::create_buffer`, counted ([`alloc::counters`]).
+pub fn create_buffer(device: &wgpu::Device, desc: &wgpu::BufferDescriptor) -> wgpu::Buffer {
+    alloc::note(alloc::Created::Buffer);
+    device.create_buffer(desc)
+}
+
+/// `DeviceExt::create_buffer_init`, counted.
+pub fn create_buffer_init(
+    device: &wgpu::Device,
+    desc: &wgpu::util::BufferInitDescriptor,
+) -> wgpu::Buffer {
+    use wgpu::util::DeviceExt;
+    alloc::note(alloc::Created::Buffer);
+    device.create_buffer_init(desc)
+}
+
+/// `Device::create_texture`, counted.
+pub fn create_texture(device: &wgpu::Device, desc: &wgpu::TextureDescriptor) -> wgpu::Texture {
+    alloc::note(alloc::Created::Texture);
+    device.create_texture(desc)
+}
+
+/// `Device::create_bind_group`, counted.
+pub fn create_bind_group(
+    device: &wgpu::Device,
+    desc: &wgpu::BindGroupDescriptor,
+) -> wgpu::BindGroup {
+    alloc::note(alloc::Created::BindGroup);
+    device.create_bind_group(desc)
+}
+
+/// `Device::create_render_pipeline`, counted.
+pub fn create_render_pipeline(
+    device: &wgpu::Device,
+    desc: &wgpu::RenderPipelineDescriptor,
+) -> wgpu::RenderPipeline {
+    alloc::note(alloc::Created::Pipeline);
+    device.create_render_pipeline(desc)
+}
+
+/// `Queue::write_buffer`, counted as an upload of `label`.
+pub fn write_buffer(
+    queue: &wgpu::Queue,
+    label: &str,
+    buffer: &wgpu::Buffer,
+    offset: u64,
+    bytes: &[u8],
+) {
+    alloc::note_upload(label, bytes.len() as u64);
+    queue.write_buffer(buffer, offset, bytes);
 }
 
 #[cfg(test)]

@@ -12,6 +12,7 @@ pub const DIRECT: &str = include_str!("shaders/direct.wgsl");
 pub const BOUNCE: &str = include_str!("shaders/bounce.wgsl");
 pub const VOLUME: &str = include_str!("shaders/volume.wgsl");
 pub const UPSAMPLE: &str = include_str!("shaders/upsample.wgsl");
+pub const COMPOSITE: &str = include_str!("shaders/composite.wgsl");
 
 /// Creates a shader module from `parts`, concatenated in order (common code first).
 pub fn module(device: &wgpu::Device, label: &str, parts: &[&str]) -> wgpu::ShaderModule {

@@ -13,6 +13,7 @@ pub mod footprint;
 pub mod gather;
 pub mod kdtree;
 pub mod lbvh;
+pub mod ring;
 pub mod trace;
 
 use crate::bsdf::{Lobe, Material};

@@ -26,21 +26,19 @@
 //! `indirect`); `caustics` stays zero.
 
 use super::timer::Timer;
-use super::volume_shape::{partition, VolumeRadius};
-use super::{buffer_init, camera_view, gbuffer, view_binding, Geometry};
+use super::{buffer_init, gbuffer, Geometry};
 use crate::error::{Error, Result};
 use crate::gpu::{self, shaders, GpuContext};
 use crate::image::Image;
-use crate::photon::{boundary, continue_paths, Photon, PhotonRay, PhotonTraceSettings};
-use crate::render::{Progress, RenderOutput, Settings};
+use crate::photon::{Photon, PhotonRay};
+use crate::render::Settings;
 use crate::scene::{Light, Scene};
-use crate::trace::SceneBvh;
 use bytemuck::{Pod, Zeroable};
-use glam::{DVec3, Vec2, Vec3, Vec4};
+use glam::{DVec3, Vec3, Vec4};
 use std::time::Instant;
 
 /// r_z / r_xy of the photon volumes.
-const Z_RATIO: f32 = 0.5;
+pub(crate) const Z_RATIO: f32 = 0.5;
 /// Largest bounce-map side (texels).
 const MAX_BOUNCE_RES: u32 = 4096;
 /// Most GPU memory the bounce-map targets may take.
@@ -48,7 +46,7 @@ const MAX_BOUNCE_BYTES: u64 = 2 << 30;
 /// Widest spot cone the bounce map covers (tan of the half angle, about 84°).
 const MAX_SPOT_TAN: f32 = 10.0;
 
-const TARGET: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+pub(crate) const TARGET: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
 /// `BounceView` of `bounce.wgsl`, padded to 256 bytes for dynamic offsets.
 #[repr(C)]
@@ -73,22 +71,22 @@ pub struct BounceViewRaw {
 /// `VolumeParams` of `volume.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
-struct VolumeParamsRaw {
-    view_proj: [[f32; 4]; 4],
-    eye: [f32; 3],
-    r_base: f32,
-    r_max: f32,
-    z_ratio: f32,
-    subsample: u32,
-    _pad: f32,
+pub(crate) struct VolumeParamsRaw {
+    pub view_proj: [[f32; 4]; 4],
+    pub eye: [f32; 3],
+    pub r_base: f32,
+    pub r_max: f32,
+    pub z_ratio: f32,
+    pub subsample: u32,
+    pub _pad: f32,
 }
 
 /// `UpsampleParams` of `upsample.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
-struct UpsampleParamsRaw {
-    eye: [f32; 3],
-    subsample: u32,
+pub(crate) struct UpsampleParamsRaw {
+    pub eye: [f32; 3],
+    pub subsample: u32,
 }
 
 const BOUNCE_VIEW_SIZE: u64 = std::mem::size_of::<BounceViewRaw>() as u64;
@@ -213,15 +211,15 @@ fn spot_falloff(cos: f32, cos_inner: f32, cos_outer: f32) -> f32 {
 
 /// Pipelines of method `ispm`, compiled once per device.
 pub struct IspmPasses {
-    bounce: wgpu::RenderPipeline,
-    bounce_layout: wgpu::BindGroupLayout,
+    pub(crate) bounce: wgpu::RenderPipeline,
+    pub(crate) bounce_layout: wgpu::BindGroupLayout,
     /// Photon volumes as icosahedra.
-    volume: wgpu::RenderPipeline,
+    pub(crate) volume: wgpu::RenderPipeline,
     /// Photon volumes as screen-aligned quads.
-    volume_quad: wgpu::RenderPipeline,
-    volume_layout: wgpu::BindGroupLayout,
-    upsample: wgpu::RenderPipeline,
-    upsample_layout: wgpu::BindGroupLayout,
+    pub(crate) volume_quad: wgpu::RenderPipeline,
+    pub(crate) volume_layout: wgpu::BindGroupLayout,
+    pub(crate) upsample: wgpu::RenderPipeline,
+    pub(crate) upsample_layout: wgpu::BindGroupLayout,
 }
 
 fn texture_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
@@ -308,33 +306,36 @@ impl IspmPasses {
             &[shaders::COMMON, shaders::BSDF, shaders::BOUNCE],
         );
         let targets: [_; 5] = std::array::from_fn(|_| Some(wgpu::ColorTargetState::from(TARGET)));
-        let bounce = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("bounce pipeline"),
-            layout: Some(&pipeline_layout(&bounce_layout)),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[Some(gbuffer::vertex_layout())],
+        let bounce = crate::gpu::create_render_pipeline(
+            device,
+            &wgpu::RenderPipelineDescriptor {
+                label: Some("bounce pipeline"),
+                layout: Some(&pipeline_layout(&bounce_layout)),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("vs_main"),
+                    compilation_options: Default::default(),
+                    buffers: &[Some(gbuffer::vertex_layout())],
+                },
+                primitive: wgpu::PrimitiveState::default(),
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: gbuffer::DEPTH,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(wgpu::CompareFunction::Less),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("fs_main"),
+                    compilation_options: Default::default(),
+                    targets: &targets,
+                }),
+                multiview_mask: None,
+                cache: None,
             },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: gbuffer::DEPTH,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &targets,
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        );
 
         // Photon volumes.
         let volume_layout = layout(
@@ -368,34 +369,37 @@ impl IspmPasses {
         // the vertex stage and topology.
         let volume_pipeline =
             |label, entry_point, buffers: &[Option<wgpu::VertexBufferLayout>], primitive| {
-                device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                    label: Some(label),
-                    layout: Some(&pipeline_layout(&volume_layout)),
-                    vertex: wgpu::VertexState {
-                        module: &module,
-                        entry_point: Some(entry_point),
-                        compilation_options: Default::default(),
-                        buffers,
+                crate::gpu::create_render_pipeline(
+                    device,
+                    &wgpu::RenderPipelineDescriptor {
+                        label: Some(label),
+                        layout: Some(&pipeline_layout(&volume_layout)),
+                        vertex: wgpu::VertexState {
+                            module: &module,
+                            entry_point: Some(entry_point),
+                            compilation_options: Default::default(),
+                            buffers,
+                        },
+                        primitive,
+                        depth_stencil: None,
+                        multisample: Default::default(),
+                        fragment: Some(wgpu::FragmentState {
+                            module: &module,
+                            entry_point: Some("fs_main"),
+                            compilation_options: Default::default(),
+                            targets: &[Some(wgpu::ColorTargetState {
+                                format: TARGET,
+                                blend: Some(wgpu::BlendState {
+                                    color: additive,
+                                    alpha: additive,
+                                }),
+                                write_mask: wgpu::ColorWrites::ALL,
+                            })],
+                        }),
+                        multiview_mask: None,
+                        cache: None,
                     },
-                    primitive,
-                    depth_stencil: None,
-                    multisample: Default::default(),
-                    fragment: Some(wgpu::FragmentState {
-                        module: &module,
-                        entry_point: Some("fs_main"),
-                        compilation_options: Default::default(),
-                        targets: &[Some(wgpu::ColorTargetState {
-                            format: TARGET,
-                            blend: Some(wgpu::BlendState {
-                                color: additive,
-                                alpha: additive,
-                            }),
-                            write_mask: wgpu::ColorWrites::ALL,
-                        })],
-                    }),
-                    multiview_mask: None,
-                    cache: None,
-                })
+                )
             };
         let volume = volume_pipeline(
             "volume pipeline (icosahedron)",
@@ -440,27 +444,30 @@ impl IspmPasses {
             "upsample shader",
             &[shaders::COMMON, shaders::UPSAMPLE],
         );
-        let upsample = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("upsample pipeline"),
-            layout: Some(&pipeline_layout(&upsample_layout)),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[],
+        let upsample = crate::gpu::create_render_pipeline(
+            device,
+            &wgpu::RenderPipelineDescriptor {
+                label: Some("upsample pipeline"),
+                layout: Some(&pipeline_layout(&upsample_layout)),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("vs_main"),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                primitive: wgpu::PrimitiveState::default(),
+                depth_stencil: None,
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("fs_main"),
+                    compilation_options: Default::default(),
+                    targets: &[Some(wgpu::ColorTargetState::from(TARGET))],
+                }),
+                multiview_mask: None,
+                cache: None,
             },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: None,
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState::from(TARGET))],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        );
         IspmPasses {
             bounce,
             bounce_layout,
@@ -507,290 +514,334 @@ pub struct BounceMap {
     pub raster_seconds: f64,
     pub readback_seconds: f64,
     pub scatter_seconds: f64,
+    /// The light of each ray (index into `Scene::lights`).
+    pub ray_lights: Vec<u32>,
 }
 
-/// [`bounce_map`] on the context of `settings.adapter`, for inspection and tests.
+/// [`BounceTargets`] on the context of `settings.adapter`, for inspection and tests: the
+/// bounce maps of `scene` rendered and read back once.
 pub fn render_bounce_map(scene: &Scene, settings: &Settings) -> Result<BounceMap> {
     settings.validate()?;
     let ctx = gpu::context(settings.adapter.as_deref())?;
     ctx.scoped("bounce map", || {
         let geometry = Geometry::upload(&ctx, scene);
-        bounce_map(&ctx, scene, &geometry, settings.photons, settings.seed)
+        let materials: Vec<_> = scene.materials.iter().map(|m| m.to_raw()).collect();
+        let materials = buffer_init(
+            &ctx,
+            "materials",
+            bytemuck::cast_slice(&materials),
+            wgpu::BufferUsages::STORAGE,
+        );
+        let layers = bounce_layers(scene, settings.photons);
+        let Some(targets) = BounceTargets::new(&ctx, &layers, &materials)? else {
+            return Ok(BounceMap::default());
+        };
+        targets.write_views(&ctx, &layers, settings.seed);
+        let mut timer = Timer::new(&ctx, layers.len() as u32);
+        let mut encoder = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("bounce maps"),
+            });
+        targets.record(
+            IspmPasses::get(&ctx),
+            &mut encoder,
+            &layers,
+            &geometry,
+            &mut timer,
+        );
+        timer.resolve(&mut encoder);
+        let index = ctx.queue.submit([encoder.finish()]);
+        let mut bm = targets.finish(&ctx, &layers, Some(index))?;
+        timer.collect(&ctx)?;
+        bm.raster_seconds = timer.totals.iter().map(|(_, s)| s).sum();
+        Ok(bm)
     })
 }
 
-/// Renders the bounce maps of `scene` and takes the first scatter of every texel's photon.
-pub fn bounce_map(
-    ctx: &GpuContext,
-    scene: &Scene,
-    geometry: &Geometry,
-    photons: u64,
-    seed: u64,
-) -> Result<BounceMap> {
-    start_bounce_map(ctx, scene, geometry, photons, seed)?.finish(ctx)
-}
-
-/// Bounce maps submitted to the GPU together with the copies of their targets into
-/// mappable buffers, not waited on: the readback runs on the GPU queue while the CPU goes on
-/// submitting the eye passes (section 4.3's asynchronous readback), and
-/// [`PendingBounceMap::finish`] maps the copies once that work is done.
-pub struct PendingBounceMap {
-    layers: Vec<BounceLayer>,
+/// The bounce maps' GPU resources for a number of layers and a resolution: five
+/// `Rgba32Float` target arrays, depth, the views and the mappable copies of the targets.
+/// Recorded into a frame's first submission and mapped after the direct light was
+/// submitted (section 4.3's asynchronous readback): [`BounceTargets::finish`] waits only for
+/// the bounce submission.
+pub struct BounceTargets {
     max_res: u32,
-    /// One buffer per bounce-map target, rows padded to `row` bytes.
-    staging: Vec<wgpu::Buffer>,
+    n_layers: u32,
     row: u32,
-    timer: Timer,
-    submit_seconds: f64,
+    targets: Vec<wgpu::Texture>,
+    /// Per layer: the five target views and the depth view.
+    layer_views: Vec<(Vec<wgpu::TextureView>, wgpu::TextureView)>,
+    staging: Vec<wgpu::Buffer>,
+    views: wgpu::Buffer,
+    group: wgpu::BindGroup,
 }
 
-/// Records and submits the bounce maps of `scene` with their readback copies.
-pub fn start_bounce_map(
-    ctx: &GpuContext,
-    scene: &Scene,
-    geometry: &Geometry,
-    photons: u64,
-    seed: u64,
-) -> Result<PendingBounceMap> {
-    let passes = IspmPasses::get(ctx);
-    let device = &ctx.device;
-    let layers = bounce_layers(scene, photons);
-    if layers.is_empty() {
-        return Ok(PendingBounceMap {
-            layers,
-            max_res: 0,
-            staging: Vec::new(),
-            row: 0,
-            timer: Timer::new(ctx, 1),
-            submit_seconds: 0.0,
-        });
-    }
-    let max_res = layers.iter().map(|l| l.res).max().unwrap_or(1);
-    let limits = device.limits();
-    if max_res > limits.max_texture_dimension_2d {
-        return Err(Error::setting(
-            "photons",
-            format!(
-                "the bounce map needs {max_res} texels a side; the GPU allows {}",
-                limits.max_texture_dimension_2d
-            ),
-        ));
-    }
-    let n_layers = layers.len() as u32;
-    // Five Rgba32Float targets plus the readback copy: keep them within 2 GiB.
-    let bytes = max_res as u64 * max_res as u64 * n_layers as u64 * 16 * 5;
-    if bytes > MAX_BOUNCE_BYTES {
-        return Err(Error::setting(
-            "photons",
-            format!(
-                "the bounce maps would take {} MiB of GPU memory (at most {} MiB); use fewer photons",
-                bytes >> 20,
-                MAX_BOUNCE_BYTES >> 20
-            ),
-        ));
-    }
-    if n_layers > limits.max_texture_array_layers {
-        return Err(Error::Gpu(format!(
-            "{n_layers} bounce-map layers exceed the GPU's {}",
-            limits.max_texture_array_layers
-        )));
-    }
-    let seed32 = (seed ^ (seed >> 32)) as u32;
-    let views: Vec<BounceViewRaw> = layers
-        .iter()
-        .map(|l| BounceViewRaw {
-            seed: seed32,
-            ..l.view
-        })
-        .collect();
-    let materials: Vec<_> = scene.materials.iter().map(|m| m.to_raw()).collect();
-    let material_buffer = buffer_init(
-        ctx,
-        "materials",
-        bytemuck::cast_slice(&materials),
-        wgpu::BufferUsages::STORAGE,
-    );
-    let view_buffer = buffer_init(
-        ctx,
-        "bounce views",
-        bytemuck::cast_slice(&views),
-        wgpu::BufferUsages::UNIFORM,
-    );
-    let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("bounce bind group"),
-        layout: &passes.bounce_layout,
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                    buffer: &view_buffer,
-                    offset: 0,
-                    size: wgpu::BufferSize::new(BOUNCE_VIEW_SIZE),
-                }),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: material_buffer.as_entire_binding(),
-            },
-        ],
-    });
-    let size = wgpu::Extent3d {
-        width: max_res,
-        height: max_res,
-        depth_or_array_layers: n_layers,
-    };
-    let make = |label, format, usage| {
-        device.create_texture(&wgpu::TextureDescriptor {
-            label: Some(label),
-            size,
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format,
-            usage,
-            view_formats: &[],
-        })
-    };
-    let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
-    let targets = [
-        make("bounce origin", TARGET, usage),
-        make("bounce direction", TARGET, usage),
-        make("bounce power", TARGET, usage),
-        make("bounce incident", TARGET, usage),
-        make("bounce expected", TARGET, usage),
-    ];
-    let depth = make(
-        "bounce depth",
-        gbuffer::DEPTH,
-        wgpu::TextureUsages::RENDER_ATTACHMENT,
-    );
-    let layer_view = |t: &wgpu::Texture, i: u32| {
-        t.create_view(&wgpu::TextureViewDescriptor {
-            label: Some("bounce layer"),
-            dimension: Some(wgpu::TextureViewDimension::D2),
-            base_array_layer: i,
-            array_layer_count: Some(1),
-            ..Default::default()
-        })
-    };
-    let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-        label: Some("bounce maps"),
-    });
-    let mut timer = Timer::new(ctx, n_layers);
-    for (i, layer) in layers.iter().enumerate() {
-        let i = i as u32;
-        let views: Vec<_> = targets.iter().map(|t| layer_view(t, i)).collect();
-        let depth_view = layer_view(&depth, i);
-        let attachments: Vec<_> = views
-            .iter()
-            .map(|view| {
-                Some(wgpu::RenderPassColorAttachment {
-                    view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                        store: wgpu::StoreOp::Store,
+impl BounceTargets {
+    /// Resources for `layers` (`None` when there are none: no light emits).
+    pub fn new(
+        ctx: &GpuContext,
+        layers: &[BounceLayer],
+        materials: &wgpu::Buffer,
+    ) -> Result<Option<Self>> {
+        if layers.is_empty() {
+            return Ok(None);
+        }
+        let passes = IspmPasses::get(ctx);
+        let device = &ctx.device;
+        let max_res = layers.iter().map(|l| l.res).max().unwrap_or(1);
+        let limits = device.limits();
+        if max_res > limits.max_texture_dimension_2d {
+            return Err(Error::setting(
+                "photons",
+                format!(
+                    "the bounce map needs {max_res} texels a side; the GPU allows {}",
+                    limits.max_texture_dimension_2d
+                ),
+            ));
+        }
+        let n_layers = layers.len() as u32;
+        // Five Rgba32Float targets plus the readback copy: keep them within 2 GiB.
+        let bytes = max_res as u64 * max_res as u64 * n_layers as u64 * 16 * 5;
+        if bytes > MAX_BOUNCE_BYTES {
+            return Err(Error::setting(
+                "photons",
+                format!(
+                    "the bounce maps would take {} MiB of GPU memory (at most {} MiB); use fewer photons",
+                    bytes >> 20,
+                    MAX_BOUNCE_BYTES >> 20
+                ),
+            ));
+        }
+        if n_layers > limits.max_texture_array_layers {
+            return Err(Error::Gpu(format!(
+                "{n_layers} bounce-map layers exceed the GPU's {}",
+                limits.max_texture_array_layers
+            )));
+        }
+        let views = buffer_init(
+            ctx,
+            "bounce views",
+            &vec![0u8; n_layers as usize * BOUNCE_VIEW_SIZE as usize],
+            wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        );
+        let group = crate::gpu::create_bind_group(
+            device,
+            &wgpu::BindGroupDescriptor {
+                label: Some("bounce bind group"),
+                layout: &passes.bounce_layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                            buffer: &views,
+                            offset: 0,
+                            size: wgpu::BufferSize::new(BOUNCE_VIEW_SIZE),
+                        }),
                     },
-                })
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: materials.as_entire_binding(),
+                    },
+                ],
+            },
+        );
+        let size = wgpu::Extent3d {
+            width: max_res,
+            height: max_res,
+            depth_or_array_layers: n_layers,
+        };
+        let make = |label, format, usage| {
+            crate::gpu::create_texture(
+                device,
+                &wgpu::TextureDescriptor {
+                    label: Some(label),
+                    size,
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format,
+                    usage,
+                    view_formats: &[],
+                },
+            )
+        };
+        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
+        let targets = vec![
+            make("bounce origin", TARGET, usage),
+            make("bounce direction", TARGET, usage),
+            make("bounce power", TARGET, usage),
+            make("bounce incident", TARGET, usage),
+            make("bounce expected", TARGET, usage),
+        ];
+        let depth = make(
+            "bounce depth",
+            gbuffer::DEPTH,
+            wgpu::TextureUsages::RENDER_ATTACHMENT,
+        );
+        let layer_view = |t: &wgpu::Texture, i: u32| {
+            t.create_view(&wgpu::TextureViewDescriptor {
+                label: Some("bounce layer"),
+                dimension: Some(wgpu::TextureViewDimension::D2),
+                base_array_layer: i,
+                array_layer_count: Some(1),
+                ..Default::default()
+            })
+        };
+        let layer_views = (0..n_layers)
+            .map(|i| {
+                (
+                    targets.iter().map(|t| layer_view(t, i)).collect(),
+                    layer_view(&depth, i),
+                )
             })
             .collect();
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("bounce pass"),
-            color_attachments: &attachments,
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &depth_view,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(1.0),
-                    store: wgpu::StoreOp::Discard,
-                }),
-                stencil_ops: None,
-            }),
-            timestamp_writes: timer.pass("bounce maps"),
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
-        pass.set_pipeline(&passes.bounce);
-        pass.set_viewport(0.0, 0.0, layer.res as f32, layer.res as f32, 0.0, 1.0);
-        pass.set_scissor_rect(0, 0, layer.res, layer.res);
-        pass.set_bind_group(0, &group, &[(i as u64 * BOUNCE_VIEW_SIZE) as u32]);
-        pass.set_vertex_buffer(0, geometry.vertices.slice(..));
-        pass.draw(0..geometry.count, 0..1);
+        let row = (max_res * 16).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+        let staging = (0..targets.len())
+            .map(|_| {
+                crate::gpu::create_buffer(
+                    device,
+                    &wgpu::BufferDescriptor {
+                        label: Some("bounce readback"),
+                        size: row as u64 * max_res as u64 * n_layers as u64,
+                        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                        mapped_at_creation: false,
+                    },
+                )
+            })
+            .collect();
+        Ok(Some(BounceTargets {
+            max_res,
+            n_layers,
+            row,
+            targets,
+            layer_views,
+            staging,
+            views,
+            group,
+        }))
     }
-    // Every target, all layers, into one mappable buffer each, in the same submission.
-    let row = (max_res * 16).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
-    let staging: Vec<wgpu::Buffer> = targets
-        .iter()
-        .map(|texture| {
-            let buffer = device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("bounce readback"),
-                size: row as u64 * max_res as u64 * n_layers as u64,
-                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
+
+    /// Whether these resources serve `layers`.
+    pub fn fits(&self, layers: &[BounceLayer]) -> bool {
+        self.n_layers as usize == layers.len()
+            && self.max_res == layers.iter().map(|l| l.res).max().unwrap_or(1)
+    }
+
+    /// Uploads the layers' views with the frame's random seed.
+    pub fn write_views(&self, ctx: &GpuContext, layers: &[BounceLayer], seed: u64) {
+        let seed32 = (seed ^ (seed >> 32)) as u32;
+        let views: Vec<BounceViewRaw> = layers
+            .iter()
+            .map(|l| BounceViewRaw {
+                seed: seed32,
+                ..l.view
+            })
+            .collect();
+        crate::gpu::write_buffer(
+            &ctx.queue,
+            "bounce views",
+            &self.views,
+            0,
+            bytemuck::cast_slice(&views),
+        );
+    }
+
+    /// Records the bounce passes of all layers and the copies of their targets.
+    pub fn record(
+        &self,
+        passes: &IspmPasses,
+        encoder: &mut wgpu::CommandEncoder,
+        layers: &[BounceLayer],
+        geometry: &Geometry,
+        timer: &mut Timer,
+    ) {
+        for (i, layer) in layers.iter().enumerate() {
+            let (views, depth_view) = &self.layer_views[i];
+            let attachments: Vec<_> = views
+                .iter()
+                .map(|view| {
+                    Some(wgpu::RenderPassColorAttachment {
+                        view,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })
+                })
+                .collect();
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("bounce pass"),
+                color_attachments: &attachments,
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: depth_view,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Discard,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: timer.pass("bounce maps"),
+                occlusion_query_set: None,
+                multiview_mask: None,
             });
+            pass.set_pipeline(&passes.bounce);
+            pass.set_viewport(0.0, 0.0, layer.res as f32, layer.res as f32, 0.0, 1.0);
+            pass.set_scissor_rect(0, 0, layer.res, layer.res);
+            pass.set_bind_group(0, &self.group, &[(i as u64 * BOUNCE_VIEW_SIZE) as u32]);
+            pass.set_vertex_buffer(0, geometry.vertices.slice(..));
+            pass.draw(0..geometry.count, 0..1);
+        }
+        // Every target, all layers, into one mappable buffer each, in the same submission.
+        let size = wgpu::Extent3d {
+            width: self.max_res,
+            height: self.max_res,
+            depth_or_array_layers: self.n_layers,
+        };
+        for (texture, buffer) in self.targets.iter().zip(&self.staging) {
             encoder.copy_texture_to_buffer(
                 texture.as_image_copy(),
                 wgpu::TexelCopyBufferInfo {
-                    buffer: &buffer,
+                    buffer,
                     layout: wgpu::TexelCopyBufferLayout {
                         offset: 0,
-                        bytes_per_row: Some(row),
-                        rows_per_image: Some(max_res),
+                        bytes_per_row: Some(self.row),
+                        rows_per_image: Some(self.max_res),
                     },
                 },
                 size,
             );
-            buffer
-        })
-        .collect();
-    timer.resolve(&mut encoder);
-    let t = Instant::now();
-    ctx.queue.submit([encoder.finish()]);
-    Ok(PendingBounceMap {
-        layers,
-        max_res,
-        staging,
-        row,
-        timer,
-        submit_seconds: t.elapsed().as_secs_f64(),
-    })
-}
-
-impl PendingBounceMap {
-    /// Maps the copies (waiting for the GPU only if it is still busy) and turns the
-    /// surviving texels into rays.
-    pub fn finish(mut self, ctx: &GpuContext) -> Result<BounceMap> {
-        let mut out = BounceMap::default();
-        if self.layers.is_empty() {
-            return Ok(out);
         }
-        let (layers, max_res, row) = (&self.layers, self.max_res, self.row as usize);
+    }
+
+    /// Maps the copies once submission `after` is done and turns the surviving texels into
+    /// rays, grouped by light.
+    pub fn finish(
+        &self,
+        ctx: &GpuContext,
+        layers: &[BounceLayer],
+        after: Option<wgpu::SubmissionIndex>,
+    ) -> Result<BounceMap> {
+        let mut out = BounceMap::default();
+        let (max_res, row) = (self.max_res, self.row as usize);
         let t = Instant::now();
-        let read = self
-            .staging
-            .iter()
-            .map(|buffer| {
-                let bytes = ctx.read_buffer(buffer)?;
+        let buffers: Vec<&wgpu::Buffer> = self.staging.iter().collect();
+        let read: Vec<Vec<Vec4>> = ctx
+            .read_buffers(&buffers, after)?
+            .into_iter()
+            .map(|bytes| {
                 let width = max_res as usize * 16;
-                Ok(bytes
+                bytes
                     .chunks_exact(row)
                     .flat_map(|r| bytemuck::cast_slice::<u8, Vec4>(&r[..width]).to_vec())
-                    .collect::<Vec<Vec4>>())
+                    .collect()
             })
-            .collect::<Result<Vec<_>>>()?;
+            .collect();
         let [origin, direction, power, incident, expected] = &read[..] else {
             return Err(Error::Gpu("bounce map readback".into()));
         };
         out.readback_seconds = t.elapsed().as_secs_f64();
-        self.timer.collect(ctx)?;
-        // GPU time of the bounce passes when timestamps are available, else the submission.
-        out.raster_seconds = self
-            .timer
-            .totals
-            .iter()
-            .map(|(_, s)| s)
-            .sum::<f64>()
-            .max(self.submit_seconds);
         let t = Instant::now();
 
         // Surviving texels become rays for the CPU tracer.
@@ -817,6 +868,7 @@ impl PendingBounceMap {
                         origin[i].w,
                         1,
                     ));
+                    out.ray_lights.push(layer.light as u32);
                 }
             }
         }
@@ -826,7 +878,7 @@ impl PendingBounceMap {
     }
 }
 
-fn tex(binding: u32, view: &wgpu::TextureView) -> wgpu::BindGroupEntry<'_> {
+pub(crate) fn tex(binding: u32, view: &wgpu::TextureView) -> wgpu::BindGroupEntry<'_> {
     wgpu::BindGroupEntry {
         binding,
         resource: wgpu::BindingResource::TextureView(view),
@@ -844,343 +896,9 @@ pub fn base_radius(scene: &Scene, photons: u64, kernel_scale: f32) -> f32 {
     (kernel_scale as f64 * (area / photons.max(1) as f64).sqrt()) as f32
 }
 
-/// Method `ispm`.
-pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Result<RenderOutput> {
-    let t0 = Instant::now();
-    let ctx = gpu::context(settings.adapter.as_deref())?;
-    ctx.scoped("ispm frame", || {
-        // Bounce maps first: their readback runs on the GPU queue behind them while the
-        // direct-light frame is recorded and rendered.
-        let t = Instant::now();
-        let geometry = Geometry::upload(&ctx, scene);
-        let pending = start_bounce_map(&ctx, scene, &geometry, settings.photons, settings.seed)?;
-        let submit = t.elapsed().as_secs_f64();
-        let mut out = super::frame(&ctx, scene, settings, Some(&geometry), progress, t0)?;
-        let bm = pending.finish(&ctx)?;
-        for (name, secs) in [
-            ("bounce maps", bm.raster_seconds.max(submit)),
-            ("bounce readback", bm.readback_seconds),
-            ("bounce rays", bm.scatter_seconds),
-        ] {
-            out.stats.stages.push((name.to_string(), secs));
-        }
-        indirect(&ctx, scene, settings, progress, &mut out, &geometry, bm)?;
-        out.stats.total_seconds = t0.elapsed().as_secs_f64();
-        Ok(out)
-    })
-}
-
-/// Adds the indirect light of the photon volumes to `out.radiance`.
-fn indirect(
-    ctx: &GpuContext,
-    scene: &Scene,
-    settings: &Settings,
-    progress: &dyn Progress,
-    out: &mut RenderOutput,
-    geometry: &Geometry,
-    bm: BounceMap,
-) -> Result<()> {
-    let passes = IspmPasses::get(ctx);
-    let device = &ctx.device;
-    let (w, h) = (scene.camera.width, scene.camera.height);
-    let k = settings.subsample.max(1);
-    let (lw, lh) = (w.div_ceil(k), h.div_ceil(k));
-    let stage = |out: &mut RenderOutput, name: &str, t: Instant| {
-        out.stats
-            .stages
-            .push((name.to_string(), t.elapsed().as_secs_f64()))
-    };
-
-    out.stats.photons_emitted = bm.covered;
-    out.stats.photons_first_bounce = bm.rays.len() as u64;
-    if !progress.update("bounce maps", 1.0) {
-        return Err(Error::Cancelled);
-    }
-
-    // Later bounces on the CPU.
-    let t = Instant::now();
-    let bvh = SceneBvh::build(scene);
-    let photons: Vec<Photon> = if settings.max_depth >= 2 && !bm.rays.is_empty() {
-        // Footprints from photon differentials size the volumes when asked for (issue 5);
-        // otherwise the path-density heuristic of the paper does (section 5.1).
-        let pts = if settings.footprint_volumes {
-            PhotonTraceSettings {
-                store_direct: false,
-                ..crate::render::gather_trace_settings(scene, settings)
-            }
-        } else {
-            PhotonTraceSettings {
-                max_bounces: settings.max_depth - 1,
-                store_direct: false,
-                differentials: None,
-            }
-        };
-        continue_paths(scene, &bvh, &bm.rays, &pts, settings.seed).photons
-    } else {
-        Vec::new()
-    };
-    stage(out, "cpu trace", t);
-    out.stats.photons_stored = photons.len() as u64;
-    if !progress.update("cpu trace", 1.0) {
-        return Err(Error::Cancelled);
-    }
-
-    // Mirrors and glass seen by the camera, traced backwards on the CPU. Their gather uses
-    // the photons as traced: boundary compensation is for the splat's kernel only.
-    let t = Instant::now();
-    out.aovs.push(("direct".into(), out.radiance.clone()));
-    let specular = super::specular::specular_paths(scene, &bvh, settings, &photons, progress)?;
-    for (px, v) in out.radiance.pixels.iter_mut().zip(&specular.pixels) {
-        *px += *v;
-    }
-    out.aovs.push(("specular".into(), specular));
-    stage(out, "specular paths", t);
-
-    // Volume radii are decided here, once (the splat reads `footprint_radius`).
-    let mut photons = photons;
-    let radius = VolumeRadius::of_scene(scene, settings.photons, settings.kernel_scale);
-    for p in &mut photons {
-        p.footprint_radius = radius.of(p);
-    }
-    if settings.boundary_compensation {
-        let t = Instant::now();
-        boundary::compensate(
-            scene,
-            &bvh,
-            &mut photons,
-            |p| p.footprint_radius,
-            Z_RATIO,
-            settings.seed,
-        );
-        stage(out, "boundary compensation", t);
-    }
-    if photons.is_empty() {
-        return Ok(());
-    }
-
-    // Photon volumes into the eye G-buffer at the pixel centres.
-    let t = Instant::now();
-    let gp = &super::Passes::get(ctx).gbuffer;
-    let materials: Vec<_> = scene.materials.iter().map(|m| m.to_raw()).collect();
-    let material_buffer = buffer_init(
-        ctx,
-        "materials",
-        bytemuck::cast_slice(&materials),
-        wgpu::BufferUsages::STORAGE,
-    );
-    let eye = camera_view(scene, Vec2::splat(0.5), 0.0);
-    let eye_buffer = buffer_init(
-        ctx,
-        "eye view",
-        bytemuck::bytes_of(&eye),
-        wgpu::BufferUsages::UNIFORM,
-    );
-    let gbuf = gbuffer::GBuffer::new(device, w, h);
-    let gbuffer_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("ispm gbuffer bind group"),
-        layout: &gp.layout,
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: view_binding(&eye_buffer),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: material_buffer.as_entire_binding(),
-            },
-        ],
-    });
-    let radius = VolumeRadius::of_scene(scene, settings.photons, settings.kernel_scale);
-    // Low-res texel i shades full-res pixel i·k + ⌊k/2⌋, whose centre is half a full-res
-    // pixel off the low-res sample position when k is even: shift the volumes to match, so
-    // that coverage is tested where the G-buffer sample lies.
-    let half = if k % 2 == 0 { 1.0 } else { 0.0 };
-    let shift =
-        glam::Mat4::from_translation(glam::Vec3::new(-half / w as f32, half / h as f32, 0.0));
-    let volume_view = shift * glam::Mat4::from_cols_array_2d(&eye.view_proj);
-    let params = VolumeParamsRaw {
-        view_proj: volume_view.to_cols_array_2d(),
-        eye: scene.camera.position.into(),
-        r_base: radius.r_base,
-        r_max: radius.r_max,
-        z_ratio: Z_RATIO,
-        subsample: k,
-        _pad: 0.0,
-    };
-    let params_buffer = buffer_init(
-        ctx,
-        "volume params",
-        bytemuck::bytes_of(&params),
-        wgpu::BufferUsages::UNIFORM,
-    );
-    let inputs = gbuf.lighting_inputs();
-    let volume_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("volume bind group"),
-        layout: &passes.volume_layout,
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: params_buffer.as_entire_binding(),
-            },
-            tex(1, &inputs[0]),
-            tex(2, &inputs[1]),
-            tex(3, &inputs[2]),
-            tex(4, &inputs[3]),
-        ],
-    });
-    let target = |label, width, height| {
-        device.create_texture(&wgpu::TextureDescriptor {
-            label: Some(label),
-            size: wgpu::Extent3d {
-                width,
-                height,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: TARGET,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT
-                | wgpu::TextureUsages::TEXTURE_BINDING
-                | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        })
-    };
-    let low = target("indirect (subsampled)", lw, lh);
-    let low_view = low.create_view(&Default::default());
-    let ico = icosahedron();
-    let ico_buffer = buffer_init(
-        ctx,
-        "icosahedron",
-        bytemuck::cast_slice(&ico),
-        wgpu::BufferUsages::VERTEX,
-    );
-    // Small volumes first (quads), the rest after (icosahedra): one buffer, two draws.
-    let (ordered, quads) = partition(settings.volume_shape, &photons, &scene.camera, k, radius);
-    out.stats.volume_quads = quads as u64;
-    let photon_buffer = buffer_init(
-        ctx,
-        "photons",
-        bytemuck::cast_slice(&ordered),
-        wgpu::BufferUsages::VERTEX,
-    );
-    let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-        label: Some("photon volumes"),
-    });
-    gp.record(&mut encoder, &gbuf, &gbuffer_group, 0, geometry, None);
-    {
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("volume pass"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &low_view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            depth_stencil_attachment: None,
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
-        pass.set_bind_group(0, &volume_group, &[]);
-        let (n, quads) = (ordered.len() as u32, quads as u32);
-        if quads > 0 {
-            pass.set_pipeline(&passes.volume_quad);
-            pass.set_vertex_buffer(0, photon_buffer.slice(..));
-            pass.draw(0..4, 0..quads);
-        }
-        if quads < n {
-            pass.set_pipeline(&passes.volume);
-            pass.set_vertex_buffer(0, ico_buffer.slice(..));
-            pass.set_vertex_buffer(1, photon_buffer.slice(..));
-            pass.draw(0..ico.len() as u32, quads..n);
-        }
-    }
-    ctx.queue.submit([encoder.finish()]);
-    ctx.wait()?;
-    stage(out, "photon volumes", t);
-
-    // Joint bilateral upsampling.
-    let result = if k > 1 {
-        let t = Instant::now();
-        let full = target("indirect", w, h);
-        let full_view = full.create_view(&Default::default());
-        let up = UpsampleParamsRaw {
-            eye: scene.camera.position.into(),
-            subsample: k,
-        };
-        let up_buffer = buffer_init(
-            ctx,
-            "upsample params",
-            bytemuck::bytes_of(&up),
-            wgpu::BufferUsages::UNIFORM,
-        );
-        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("upsample bind group"),
-            layout: &passes.upsample_layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: up_buffer.as_entire_binding(),
-                },
-                tex(1, &inputs[0]),
-                tex(2, &inputs[1]),
-                tex(3, &low_view),
-            ],
-        });
-        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("upsample"),
-        });
-        {
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("upsample pass"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &full_view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                depth_stencil_attachment: None,
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            pass.set_pipeline(&passes.upsample);
-            pass.set_bind_group(0, &group, &[]);
-            pass.draw(0..3, 0..1);
-        }
-        ctx.queue.submit([encoder.finish()]);
-        ctx.wait()?;
-        stage(out, "upsample", t);
-        full
-    } else {
-        low
-    };
-    let t = Instant::now();
-    let indirect = super::read_texture(ctx, &result)?;
-    let mut indirect_image = Image::new(w, h);
-    for (dst, v) in indirect_image.pixels.iter_mut().zip(&indirect) {
-        *dst = v.truncate();
-    }
-    for (px, v) in out.radiance.pixels.iter_mut().zip(&indirect_image.pixels) {
-        *px += *v;
-    }
-    out.aovs.push(("indirect".into(), indirect_image));
-    out.aovs
-        .push(("photons".into(), photon_hits(scene, out, &photons)));
-    stage(out, "readback indirect", t);
-    Ok(())
-}
-
 /// Where the stored photons land, as seen from the camera: per pixel, the number of visible
 /// photons of bounce 1 (green) and of later bounces (red).
-fn photon_hits(scene: &Scene, out: &RenderOutput, photons: &[Photon]) -> Image {
+pub(crate) fn photon_hits(scene: &Scene, position: &Image, photons: &[Photon]) -> Image {
     let cam = &scene.camera;
     let mut img = Image::new(cam.width, cam.height);
     for p in photons {
@@ -1190,7 +908,7 @@ fn photon_hits(scene: &Scene, out: &RenderOutput, photons: &[Photon]) -> Image {
         };
         let i = y as usize * cam.width as usize + x as usize;
         // Visible if the surface seen through the pixel is where the photon is.
-        let seen = out.position.pixels[i];
+        let seen = position.pixels[i];
         let dist = (pos - cam.position).length();
         if (seen - pos).length() > 0.02 * dist {
             continue;

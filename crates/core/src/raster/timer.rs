@@ -27,12 +27,15 @@ impl Timer {
         });
         let size = capacity as u64 * 8;
         let buffer = |label, usage| {
-            ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size,
-                usage,
-                mapped_at_creation: false,
-            })
+            crate::gpu::create_buffer(
+                &ctx.device,
+                &wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size,
+                    usage,
+                    mapped_at_creation: false,
+                },
+            )
         };
         Timer {
             set,
@@ -93,5 +96,13 @@ impl Timer {
             }
         }
         Ok(())
+    }
+}
+
+impl Timer {
+    /// Forgets the totals and any unresolved queries, for the next frame.
+    pub fn reset(&mut self) {
+        self.labels.clear();
+        self.totals.clear();
     }
 }

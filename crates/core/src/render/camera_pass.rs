@@ -16,17 +16,13 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 /// Most delta scatterings a camera path follows before giving up.
 const MAX_DELTA_BOUNCES: u32 = 8;
 
-/// Builds the scene's BVH and starts a frame's statistics with its timing: the common
-/// first step of the photon-map methods.
-pub fn start_frame(scene: &Scene) -> (SceneBvh, RenderStats) {
-    let t = std::time::Instant::now();
-    let bvh = SceneBvh::build(scene);
-    let stats = RenderStats {
+/// A frame's statistics before its first stage: the common first step of the photon-map
+/// methods (the BVH is the renderer's, built or updated before the frame).
+pub fn start_frame(scene: &Scene) -> RenderStats {
+    RenderStats {
         triangles: scene.triangles.len() as u64,
-        stages: vec![("bvh build".into(), t.elapsed().as_secs_f64())],
         ..Default::default()
-    };
-    (bvh, stats)
+    }
 }
 
 /// Renders the image whose non-delta surfaces get their outgoing radiance from `estimate`

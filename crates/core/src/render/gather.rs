@@ -13,6 +13,7 @@ use crate::photon::trace::DifferentialSettings;
 use crate::photon::{emit_and_trace, PhotonTraceSettings};
 use crate::scene::Scene;
 use crate::trace::path::direct_light;
+use crate::trace::SceneBvh;
 use std::time::Instant;
 
 /// Default largest footprint semi-axis, as a fraction of the scene's diagonal.
@@ -34,16 +35,21 @@ pub fn trace_settings(scene: &Scene, settings: &Settings) -> PhotonTraceSettings
     }
 }
 
-pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Result<RenderOutput> {
+pub fn render(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    settings: &Settings,
+    progress: &dyn Progress,
+) -> Result<RenderOutput> {
     let t0 = Instant::now();
-    let (bvh, mut stats) = start_frame(scene);
+    let mut stats = start_frame(scene);
     let mut stage =
         |name: &str, t: Instant| stats.stages.push((name.into(), t.elapsed().as_secs_f64()));
 
     let t = Instant::now();
     let set = emit_and_trace(
         scene,
-        &bvh,
+        bvh,
         settings.photons,
         &trace_settings(scene, settings),
         settings.seed,
@@ -63,11 +69,11 @@ pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Re
     let t = Instant::now();
     let mut out = render_image(
         scene,
-        &bvh,
+        bvh,
         settings,
         progress,
         stats,
-        |it, wo, _: &mut ()| direct_light(scene, &bvh, it, wo) + map.radiance(it, wo),
+        |it, wo, _: &mut ()| direct_light(scene, bvh, it, wo) + map.radiance(it, wo),
     )?;
     out.stats
         .stages

@@ -1,9 +1,9 @@
 //! Rendering a frame: settings, the method dispatch, outputs and statistics.
 
 pub(crate) mod camera_pass;
-mod gather;
-mod photon_map;
-mod reference;
+pub(crate) mod gather;
+pub(crate) mod photon_map;
+pub(crate) mod reference;
 
 use crate::error::{Error, Result};
 use crate::image::Image;
@@ -125,6 +125,10 @@ pub struct Settings {
     /// Bounding shape of the ISPM photon volumes: icosahedra, screen-aligned quads, or per
     /// photon by projected size (`Auto`). Changes the cost only, not the image.
     pub volume_shape: VolumeShape,
+    /// Temporal photon reuse (method `ispm`, Jozwowski 2002): a frame splats the photons
+    /// of the last `temporal_frames` frames of a `Renderer`, each frame tracing `photons`
+    /// new ones; 1 = no reuse (and frame-coherent random numbers).
+    pub temporal_frames: u32,
 }
 
 impl Default for Settings {
@@ -150,6 +154,7 @@ impl Default for Settings {
             footprint_volumes: false,
             boundary_compensation: true,
             volume_shape: VolumeShape::Auto,
+            temporal_frames: 1,
         }
     }
 }
@@ -159,6 +164,7 @@ pub const MAX_SPP: u32 = 1 << 20;
 pub const MAX_LIGHT_PATHS: u64 = 1 << 36;
 pub const MAX_PHOTONS: u64 = 1_000_000_000;
 pub const MAX_K: u32 = 1 << 16;
+pub const MAX_TEMPORAL_FRAMES: u32 = 64;
 
 impl Settings {
     pub fn validate(&self) -> Result<()> {
@@ -223,6 +229,12 @@ impl Settings {
         if !(1..=8).contains(&self.subsample) {
             return Err(Error::setting("subsample", "must be in 1..=8"));
         }
+        if !(1..=MAX_TEMPORAL_FRAMES).contains(&self.temporal_frames) {
+            return Err(Error::setting(
+                "temporal_frames",
+                format!("must be in 1..={MAX_TEMPORAL_FRAMES}"),
+            ));
+        }
         Ok(())
     }
 }
@@ -282,22 +294,15 @@ impl Progress for Silent {
     }
 }
 
-/// Renders `scene` with `settings`.
+/// Renders `scene` with `settings`: one frame of a new [`Renderer`](crate::frame::Renderer)
+/// with every image read back.
 pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Result<RenderOutput> {
-    settings.validate()?;
-    let camera = scene.camera.with_size(
-        settings.width.unwrap_or(scene.camera.width),
-        settings.height.unwrap_or(scene.camera.height),
-    );
-    let scene = Scene {
-        camera,
-        ..scene.clone()
-    };
-    match settings.method {
-        Method::Path => reference::render(&scene, settings, progress),
-        Method::Photon => photon_map::render(&scene, settings, progress),
-        Method::Gather => gather::render(&scene, settings, progress),
-        Method::Direct => crate::raster::render_direct(&scene, settings, progress),
-        Method::Ispm => crate::raster::ispm::render(&scene, settings, progress),
-    }
+    let mut renderer = crate::frame::Renderer::new(scene, settings)?;
+    renderer.render(
+        &crate::frame::FrameDesc {
+            seed: None,
+            images: crate::frame::Images::ALL,
+        },
+        progress,
+    )
 }

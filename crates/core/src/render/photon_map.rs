@@ -14,6 +14,7 @@ use crate::error::{Error, Result};
 use crate::photon::estimate::{Gather, PhotonMap};
 use crate::photon::{emit_and_trace, Neighbour, PhotonTraceSettings};
 use crate::scene::Scene;
+use crate::trace::SceneBvh;
 use std::time::Instant;
 
 /// Default maximum gather radius, as a fraction of the scene's bounding-box diagonal.
@@ -31,9 +32,14 @@ pub fn gather_settings(scene: &Scene, settings: &Settings) -> Gather {
     }
 }
 
-pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Result<RenderOutput> {
+pub fn render(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    settings: &Settings,
+    progress: &dyn Progress,
+) -> Result<RenderOutput> {
     let t0 = Instant::now();
-    let (bvh, mut stats) = start_frame(scene);
+    let mut stats = start_frame(scene);
     let mut stage =
         |name: &str, t: Instant| stats.stages.push((name.into(), t.elapsed().as_secs_f64()));
 
@@ -44,7 +50,7 @@ pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Re
         store_direct: true,
         differentials: None,
     };
-    let set = emit_and_trace(scene, &bvh, settings.photons, &pts, settings.seed);
+    let set = emit_and_trace(scene, bvh, settings.photons, &pts, settings.seed);
     stage("photon trace", t);
     if !progress.update("photon trace", 1.0) {
         return Err(Error::Cancelled);
@@ -58,7 +64,7 @@ pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Re
     let gather = gather_settings(scene, settings);
     let mut out = render_image(
         scene,
-        &bvh,
+        bvh,
         settings,
         progress,
         stats,

@@ -16,18 +16,17 @@ use std::time::Instant;
 /// Light paths per parallel work item.
 const LIGHT_CHUNK: u64 = 1 << 14;
 
-pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Result<RenderOutput> {
+pub fn render(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    settings: &Settings,
+    progress: &dyn Progress,
+) -> Result<RenderOutput> {
     let t0 = Instant::now();
     let mut stats = RenderStats {
         triangles: scene.triangles.len() as u64,
         ..Default::default()
     };
-
-    let t = Instant::now();
-    let bvh = SceneBvh::build(scene);
-    stats
-        .stages
-        .push(("bvh build".into(), t.elapsed().as_secs_f64()));
 
     let (w, h) = (scene.camera.width, scene.camera.height);
     let spp = settings.spp;
@@ -71,12 +70,12 @@ pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Re
                         let mut rng = Rng::new(settings.seed, pixel, s as u64);
                         let j = rng.next_2d();
                         let dir = cam.direction(x as f32 + j.x, y as f32 + j.y);
-                        sum += path::radiance(scene, &bvh, cam.position, dir, &mut rng, &ps);
+                        sum += path::radiance(scene, bvh, cam.position, dir, &mut rng, &ps);
                     }
                     // Auxiliary images through the pixel centre are noise-free.
                     let first = path::first_hit(
                         scene,
-                        &bvh,
+                        bvh,
                         cam.position,
                         cam.direction(x as f32 + 0.5, y as f32 + 0.5),
                     );
@@ -114,7 +113,7 @@ pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Re
                 let mut rng = Rng::new(settings.seed, u64::MAX - 1, i);
                 light_tracer::trace_path(
                     scene,
-                    &bvh,
+                    bvh,
                     &weights,
                     &mut rng,
                     light_paths,

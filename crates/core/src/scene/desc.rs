@@ -1,11 +1,11 @@
 //! The JSON scene description (serde). Every field has a unit and a default; unknown fields
 //! are errors. See `docs/scene-format.md` for the documented schema.
 
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 pub type V3 = [f32; 3];
 
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct SceneDesc {
     pub camera: CameraDesc,
@@ -18,7 +18,7 @@ pub struct SceneDesc {
 }
 
 /// Pinhole camera.
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct CameraDesc {
     /// Eye position, metres.
@@ -47,7 +47,7 @@ fn default_size() -> u32 {
 }
 
 /// A light: intensity in W/sr per RGB channel.
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
 pub enum LightDesc {
     Point {
@@ -75,7 +75,7 @@ fn default_outer() -> f32 {
 }
 
 /// The uber BSDF's parameters (see `bsdf`).
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct MaterialDesc {
     #[serde(default = "default_diffuse")]
@@ -99,9 +99,12 @@ fn default_ior() -> f32 {
     1.5
 }
 
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct ObjectDesc {
+    /// Optional name by which scene updates and animation tracks address the object.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
     pub shape: ShapeDesc,
     #[serde(default)]
     pub transform: TransformDesc,
@@ -111,7 +114,7 @@ pub struct ObjectDesc {
 }
 
 /// Geometry of an object, in its local frame (metres).
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
 pub enum ShapeDesc {
     /// A triangle mesh file (OBJ/MTL, PLY, glTF/GLB, STL), relative to the scene file.
@@ -153,7 +156,7 @@ fn default_segments() -> u32 {
 }
 
 /// Scale, then rotate (degrees about x, then y, then z), then translate.
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct TransformDesc {
     #[serde(default)]
@@ -174,7 +177,7 @@ impl Default for TransformDesc {
     }
 }
 
-#[derive(Debug, Clone, Copy, Deserialize)]
+#[derive(Debug, Clone, Copy, Deserialize, Serialize)]
 #[serde(untagged)]
 pub enum Scale {
     Uniform(f32),

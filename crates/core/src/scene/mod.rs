@@ -6,11 +6,13 @@ pub mod camera;
 pub mod desc;
 pub mod light;
 pub mod primitives;
+pub mod update;
 
 pub use camera::Camera;
 pub use desc::SceneDesc;
 pub use light::Light;
 pub use primitives::TriMesh;
+pub use update::{Changes, SceneObject, SceneUpdate};
 
 use crate::bsdf::Material;
 use crate::error::{Error, Result};
@@ -41,6 +43,9 @@ pub struct Scene {
     pub triangles: Vec<[u32; 3]>,
     /// Material index per triangle.
     pub triangle_materials: Vec<u32>,
+    /// The objects of the description, in order: their vertex and triangle ranges and the
+    /// local geometry a new transform is applied to (`SceneUpdate::Transform`).
+    pub objects: Vec<SceneObject>,
 }
 
 fn finite3(v: V3) -> bool {
@@ -102,6 +107,7 @@ impl Scene {
             normals: Vec::new(),
             triangles: Vec::new(),
             triangle_materials: Vec::new(),
+            objects: Vec::new(),
         };
         for (i, obj) in desc.objects.iter().enumerate() {
             let at = |f: &str| format!("objects[{i}].{f}");
@@ -154,22 +160,28 @@ impl Scene {
                     ))
                 }
             };
-            scene.append(&mesh, xf, &tri_mats);
+            if let Some(name) = &obj.name {
+                if scene
+                    .objects
+                    .iter()
+                    .any(|o| o.name.as_deref() == Some(name))
+                {
+                    return Err(err(at("name"), "another object has this name"));
+                }
+            }
+            scene.append(obj.name.clone(), &mesh, xf, &tri_mats);
         }
         Ok(scene)
     }
 
-    fn append(&mut self, mesh: &TriMesh, xf: Mat4, tri_materials: &[u32]) {
+    fn append(&mut self, name: Option<String>, mesh: &TriMesh, xf: Mat4, tri_materials: &[u32]) {
         let base = self.positions.len() as u32;
-        let normal_xf = Mat3::from_mat4(xf).inverse().transpose();
+        let first_triangle = self.triangles.len() as u32;
         let flip = Mat3::from_mat4(xf).determinant() < 0.0;
         self.positions
-            .extend(mesh.positions.iter().map(|p| xf.transform_point3(*p)));
-        self.normals.extend(
-            mesh.normals
-                .iter()
-                .map(|n| (normal_xf * *n).normalize_or_zero()),
-        );
+            .resize(self.positions.len() + mesh.positions.len(), Vec3::ZERO);
+        self.normals
+            .resize(self.normals.len() + mesh.normals.len(), Vec3::ZERO);
         self.triangles.extend(mesh.indices.iter().map(|t| {
             let t = t.map(|i| i + base);
             if flip {
@@ -179,6 +191,17 @@ impl Scene {
             }
         }));
         self.triangle_materials.extend_from_slice(tri_materials);
+        let object = SceneObject {
+            name,
+            vertices: base..base + mesh.positions.len() as u32,
+            triangles: first_triangle..self.triangles.len() as u32,
+            transform: xf,
+            flipped: flip,
+            local_positions: mesh.positions.clone(),
+            local_normals: mesh.normals.clone(),
+        };
+        object.place(&mut self.positions, &mut self.normals);
+        self.objects.push(object);
     }
 
     /// The three corners of triangle `t`.
@@ -196,7 +219,7 @@ impl Scene {
     }
 }
 
-type FieldError = (String, &'static str);
+pub(crate) type FieldError = (String, &'static str);
 
 /// Parses a JSON object of named materials (the `materials` section's format), as carried by
 /// mesh files (e.g. OBJ + MTL) whose loader turned them into descriptions.
@@ -220,7 +243,9 @@ pub fn parse_materials(json: &str, source_name: &str) -> Result<Vec<(String, Mat
         .collect()
 }
 
-fn camera_from_desc(c: &desc::CameraDesc) -> std::result::Result<Camera, (String, &'static str)> {
+pub(crate) fn camera_from_desc(
+    c: &desc::CameraDesc,
+) -> std::result::Result<Camera, (String, &'static str)> {
     for (name, v) in [
         ("position", c.position),
         ("look_at", c.look_at),
@@ -262,7 +287,7 @@ fn check_intensity(v: V3) -> std::result::Result<Vec3, FieldError> {
     Ok(Vec3::from(v))
 }
 
-fn light_from_desc(l: &LightDesc) -> std::result::Result<Light, FieldError> {
+pub(crate) fn light_from_desc(l: &LightDesc) -> std::result::Result<Light, FieldError> {
     match *l {
         LightDesc::Point {
             position,
@@ -307,7 +332,7 @@ fn light_from_desc(l: &LightDesc) -> std::result::Result<Light, FieldError> {
     }
 }
 
-fn material_from_desc(m: &MaterialDesc) -> std::result::Result<Material, FieldError> {
+pub(crate) fn material_from_desc(m: &MaterialDesc) -> std::result::Result<Material, FieldError> {
     for (name, v) in [
         ("diffuse", m.diffuse),
         ("specular", m.specular),
@@ -339,7 +364,7 @@ fn material_from_desc(m: &MaterialDesc) -> std::result::Result<Material, FieldEr
     })
 }
 
-fn transform_matrix(t: &desc::TransformDesc) -> std::result::Result<Mat4, FieldError> {
+pub(crate) fn transform_matrix(t: &desc::TransformDesc) -> std::result::Result<Mat4, FieldError> {
     if !finite3(t.translate) {
         return Err(("translate".into(), "must be finite"));
     }

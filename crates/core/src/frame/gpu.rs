@@ -1,0 +1,614 @@
+//! What the GPU methods keep from one frame to the next: the scene on the GPU (vertices,
+//! materials, lights, shadow maps), the render targets of one image size with their bind
+//! groups, the pass timer and the readback buffers. Everything is created once; a frame
+//! writes only what changed ([`crate::scene::Changes`]) and records passes.
+
+use crate::error::{Error, Result};
+use crate::gpu::raw::ViewRaw;
+use crate::gpu::{self, GpuContext};
+use crate::image::Image;
+use crate::raster::timer::Timer;
+use crate::raster::{
+    self, buffer_init, camera_view, gbuffer, sample_positions, shadow, view_binding, Geometry,
+    Passes, SAMPLES_PER_SUBMIT, VIEW_SIZE,
+};
+use crate::scene::Scene;
+use glam::{Vec2, Vec4};
+use std::collections::HashMap;
+
+/// Timestamp queries of one frame (wgpu's maximum per set); passes beyond it go untimed.
+const TIMER_PASSES: u32 = wgpu::QUERY_SET_MAX_QUERIES / 2;
+
+/// The scene's GPU-resident data.
+pub(crate) struct GpuScene {
+    pub geometry: Geometry,
+    pub materials: wgpu::Buffer,
+    pub lights: wgpu::Buffer,
+    shadow_matrices: wgpu::Buffer,
+    shadow_views: wgpu::Buffer,
+    shadow_layers: Vec<wgpu::TextureView>,
+    shadow_array: wgpu::TextureView,
+    shadow_group: wgpu::BindGroup,
+    /// Shadow-map layers (one per spot light, six per point light).
+    pub layers: u32,
+    /// The shadow maps must be rendered again (lights or geometry moved).
+    pub shadows_stale: bool,
+}
+
+fn storage_init(ctx: &GpuContext, label: &str, bytes: &[u8]) -> wgpu::Buffer {
+    let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
+    buffer_init(ctx, label, bytes, usage)
+}
+
+impl GpuScene {
+    pub fn new(ctx: &GpuContext, scene: &Scene, shadow_map_size: u32) -> Self {
+        let passes = Passes::get(ctx);
+        let shadows = shadow::ShadowViews::new(scene, shadow_map_size);
+        let layers = (shadows.matrices.len() as u32).max(1);
+        let materials: Vec<_> = scene.materials.iter().map(|m| m.to_raw()).collect();
+        let matrices: Vec<[f32; 16]> = shadows.matrices.iter().map(|m| m.to_cols_array()).collect();
+        let shadow_views = buffer_init(
+            ctx,
+            "shadow views",
+            bytemuck::cast_slice(&shadow::ShadowPass::views(&shadows)),
+            wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        );
+        let shadow_maps = gpu::create_texture(
+            &ctx.device,
+            &wgpu::TextureDescriptor {
+                label: Some("shadow maps"),
+                size: wgpu::Extent3d {
+                    width: shadow_map_size,
+                    height: shadow_map_size,
+                    depth_or_array_layers: layers,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: shadow::FORMAT,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                    | wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            },
+        );
+        let shadow_layers = (0..layers)
+            .map(|i| {
+                shadow_maps.create_view(&wgpu::TextureViewDescriptor {
+                    label: Some("shadow map layer"),
+                    dimension: Some(wgpu::TextureViewDimension::D2),
+                    base_array_layer: i,
+                    array_layer_count: Some(1),
+                    ..Default::default()
+                })
+            })
+            .collect();
+        let shadow_array = shadow_maps.create_view(&wgpu::TextureViewDescriptor {
+            label: Some("shadow map array"),
+            dimension: Some(wgpu::TextureViewDimension::D2Array),
+            ..Default::default()
+        });
+        let shadow_group = gpu::create_bind_group(
+            &ctx.device,
+            &wgpu::BindGroupDescriptor {
+                label: Some("shadow bind group"),
+                layout: &passes.shadow.layout,
+                entries: &[wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: view_binding(&shadow_views),
+                }],
+            },
+        );
+        GpuScene {
+            geometry: Geometry::upload(ctx, scene),
+            materials: storage_init(ctx, "materials", bytemuck::cast_slice(&materials)),
+            lights: storage_init(ctx, "lights", bytemuck::cast_slice(&shadows.lights)),
+            shadow_matrices: storage_init(ctx, "shadow matrices", bytemuck::cast_slice(&matrices)),
+            shadow_views,
+            shadow_layers,
+            shadow_array,
+            shadow_group,
+            layers,
+            shadows_stale: true,
+        }
+    }
+
+    /// Whether the scene's lights still fit these shadow maps (same number of layers).
+    pub fn fits(scene: &Scene, layers: u32) -> bool {
+        let needed: u32 = scene
+            .lights
+            .iter()
+            .map(|l| match l {
+                crate::scene::Light::Point { .. } => 6,
+                crate::scene::Light::Spot { .. } => 1,
+            })
+            .sum();
+        needed.max(1) == layers
+    }
+
+    /// Uploads the vertices of scene triangles `range`.
+    pub fn write_triangles(&self, ctx: &GpuContext, scene: &Scene, range: std::ops::Range<usize>) {
+        let verts = raster::vertices_of(scene, range.clone());
+        let offset = (range.start * 3 * std::mem::size_of::<crate::gpu::raw::VertexRaw>()) as u64;
+        gpu::write_buffer(
+            &ctx.queue,
+            "scene vertices",
+            &self.geometry.vertices,
+            offset,
+            bytemuck::cast_slice(&verts),
+        );
+    }
+
+    pub fn write_materials(&self, ctx: &GpuContext, scene: &Scene) {
+        let materials: Vec<_> = scene.materials.iter().map(|m| m.to_raw()).collect();
+        gpu::write_buffer(
+            &ctx.queue,
+            "materials",
+            &self.materials,
+            0,
+            bytemuck::cast_slice(&materials),
+        );
+    }
+
+    /// Uploads the lights and their shadow views (they depend on the scene's bounds too).
+    pub fn write_lights(&mut self, ctx: &GpuContext, scene: &Scene, shadow_map_size: u32) {
+        let shadows = shadow::ShadowViews::new(scene, shadow_map_size);
+        let matrices: Vec<[f32; 16]> = shadows.matrices.iter().map(|m| m.to_cols_array()).collect();
+        let q = &ctx.queue;
+        gpu::write_buffer(
+            q,
+            "lights",
+            &self.lights,
+            0,
+            bytemuck::cast_slice(&shadows.lights),
+        );
+        gpu::write_buffer(
+            q,
+            "shadow matrices",
+            &self.shadow_matrices,
+            0,
+            bytemuck::cast_slice(&matrices),
+        );
+        gpu::write_buffer(
+            q,
+            "shadow views",
+            &self.shadow_views,
+            0,
+            bytemuck::cast_slice(&shadow::ShadowPass::views(&shadows)),
+        );
+        self.shadows_stale = true;
+    }
+
+    /// Renders the shadow maps if lights or geometry moved since they were last rendered.
+    pub fn record_shadows(
+        &mut self,
+        passes: &Passes,
+        encoder: &mut wgpu::CommandEncoder,
+        timer: &mut Timer,
+        lights: usize,
+    ) {
+        if !self.shadows_stale || lights == 0 {
+            return;
+        }
+        for (layer, view) in self.shadow_layers.iter().enumerate() {
+            let offset = (layer as u64 * VIEW_SIZE) as u32;
+            let ts = timer.pass("shadow maps");
+            passes.shadow.record(
+                encoder,
+                view,
+                &self.shadow_group,
+                offset,
+                &self.geometry,
+                ts,
+            );
+        }
+        self.shadows_stale = false;
+    }
+}
+
+/// Render targets of one image size, the eye views and the bind groups that read them.
+pub(crate) struct Targets {
+    pub width: u32,
+    pub height: u32,
+    spp: u32,
+    eye: wgpu::Buffer,
+    /// The jittered sample views of the current camera (all `spp`).
+    sample_views: Vec<ViewRaw>,
+    /// Whether `eye` holds the current camera's views (false after a camera change).
+    pub eye_current: bool,
+    pub gbuf: gbuffer::GBuffer,
+    accum: wgpu::Texture,
+    accum_view: wgpu::TextureView,
+    pub specular: wgpu::Texture,
+    pub specular_view: wgpu::TextureView,
+    pub black_view: wgpu::TextureView,
+    radiance: wgpu::Texture,
+    radiance_view: wgpu::TextureView,
+    pub gbuffer_group: wgpu::BindGroup,
+    direct_scene_group: wgpu::BindGroup,
+    direct_gbuffer_group: wgpu::BindGroup,
+    composite_group: Option<wgpu::BindGroup>,
+    readback: HashMap<&'static str, wgpu::Buffer>,
+}
+
+fn target(
+    ctx: &GpuContext,
+    label: &str,
+    w: u32,
+    h: u32,
+    usage: wgpu::TextureUsages,
+) -> wgpu::Texture {
+    gpu::create_texture(
+        &ctx.device,
+        &wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba32Float,
+            usage,
+            view_formats: &[],
+        },
+    )
+}
+
+fn tex_entry(binding: u32, view: &wgpu::TextureView) -> wgpu::BindGroupEntry<'_> {
+    wgpu::BindGroupEntry {
+        binding,
+        resource: wgpu::BindingResource::TextureView(view),
+    }
+}
+
+impl Targets {
+    pub fn new(ctx: &GpuContext, gs: &GpuScene, scene: &Scene, spp: u32) -> Self {
+        let passes = Passes::get(ctx);
+        let device = &ctx.device;
+        let (w, h) = (scene.camera.width, scene.camera.height);
+        let eye = buffer_init(
+            ctx,
+            "eye views",
+            &vec![0u8; (1 + SAMPLES_PER_SUBMIT.min(spp) as usize) * VIEW_SIZE as usize],
+            wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        );
+        let gbuf = gbuffer::GBuffer::new(device, w, h);
+        let rw = wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::COPY_SRC;
+        let accum = target(ctx, "direct accumulation", w, h, rw);
+        let specular = target(
+            ctx,
+            "specular paths",
+            w,
+            h,
+            wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        );
+        let black = target(ctx, "black", w, h, wgpu::TextureUsages::TEXTURE_BINDING);
+        let radiance = target(ctx, "radiance", w, h, rw);
+        let view = |t: &wgpu::Texture| t.create_view(&Default::default());
+        let (accum_view, specular_view, black_view, radiance_view) =
+            (view(&accum), view(&specular), view(&black), view(&radiance));
+        let gbuffer_group = gpu::create_bind_group(
+            device,
+            &wgpu::BindGroupDescriptor {
+                label: Some("gbuffer bind group"),
+                layout: &passes.gbuffer.layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: view_binding(&eye),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: gs.materials.as_entire_binding(),
+                    },
+                ],
+            },
+        );
+        let direct_scene_group = gpu::create_bind_group(
+            device,
+            &wgpu::BindGroupDescriptor {
+                label: Some("direct scene bind group"),
+                layout: &passes.direct.scene_layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: view_binding(&eye),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: gs.lights.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: gs.shadow_matrices.as_entire_binding(),
+                    },
+                    tex_entry(3, &gs.shadow_array),
+                    wgpu::BindGroupEntry {
+                        binding: 4,
+                        resource: wgpu::BindingResource::Sampler(&passes.direct.shadow_sampler),
+                    },
+                ],
+            },
+        );
+        let direct_gbuffer_group = gpu::create_bind_group(
+            device,
+            &wgpu::BindGroupDescriptor {
+                label: Some("direct gbuffer bind group"),
+                layout: &passes.direct.gbuffer_layout,
+                entries: &gbuf
+                    .lighting_inputs()
+                    .iter()
+                    .enumerate()
+                    .map(|(i, v)| tex_entry(i as u32, v))
+                    .collect::<Vec<_>>(),
+            },
+        );
+        Targets {
+            width: w,
+            height: h,
+            spp,
+            eye,
+            sample_views: Vec::new(),
+            eye_current: false,
+            gbuf,
+            accum,
+            accum_view,
+            specular,
+            specular_view,
+            black_view,
+            radiance,
+            radiance_view,
+            gbuffer_group,
+            direct_scene_group,
+            direct_gbuffer_group,
+            composite_group: None,
+            readback: HashMap::new(),
+        }
+    }
+
+    /// Points the composite pass at `indirect` (the estimator's output, or black).
+    pub fn bind_composite(&mut self, ctx: &GpuContext, indirect: Option<&wgpu::TextureView>) {
+        let passes = Passes::get(ctx);
+        let indirect = indirect.unwrap_or(&self.black_view);
+        self.composite_group = Some(gpu::create_bind_group(
+            &ctx.device,
+            &wgpu::BindGroupDescriptor {
+                label: Some("composite bind group"),
+                layout: &passes.composite.layout,
+                entries: &[
+                    tex_entry(0, &self.accum_view),
+                    tex_entry(1, &self.specular_view),
+                    tex_entry(2, indirect),
+                ],
+            },
+        ));
+    }
+
+    /// Sub-pixel samples of the direct light.
+    pub fn spp(&self) -> u32 {
+        self.spp
+    }
+
+    pub fn has_composite(&self) -> bool {
+        self.composite_group.is_some()
+    }
+
+    /// Writes the eye views of the current camera (the pixel centre, then the first batch of
+    /// jittered samples) if the camera changed.
+    pub fn write_eye(&mut self, ctx: &GpuContext, scene: &Scene) {
+        if self.eye_current {
+            return;
+        }
+        let spp = self.spp;
+        self.sample_views = sample_positions(spp)
+            .into_iter()
+            .map(|j| camera_view(scene, j, 1.0 / spp as f32))
+            .collect();
+        let mut views = vec![camera_view(scene, Vec2::splat(0.5), 0.0)];
+        views.extend_from_slice(&self.sample_views[..SAMPLES_PER_SUBMIT.min(spp) as usize]);
+        gpu::write_buffer(
+            &ctx.queue,
+            "eye views",
+            &self.eye,
+            0,
+            bytemuck::cast_slice(&views),
+        );
+        self.eye_current = true;
+    }
+
+    /// Direct light: per sub-pixel sample an eye G-buffer and the deferred lighting added
+    /// into the accumulation target, then the G-buffer at the pixel centres (AOVs and the
+    /// photon estimate read it). Batches beyond the first rewrite the sample views.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_direct(
+        &self,
+        ctx: &GpuContext,
+        gs: &GpuScene,
+        mut encoder: wgpu::CommandEncoder,
+        timer: &mut Timer,
+        progress: &dyn crate::render::Progress,
+    ) -> Result<wgpu::CommandEncoder> {
+        let passes = Passes::get(ctx);
+        let spp = self.spp;
+        let mut done = 0;
+        while done < spp {
+            let batch = SAMPLES_PER_SUBMIT.min(spp - done);
+            if done > 0 {
+                // The previous batch's views are in use: submit it, then write the next.
+                ctx.queue.submit([encoder.finish()]);
+                let views = &self.sample_views[done as usize..(done + batch) as usize];
+                gpu::write_buffer(
+                    &ctx.queue,
+                    "eye views",
+                    &self.eye,
+                    VIEW_SIZE,
+                    bytemuck::cast_slice(views),
+                );
+                encoder = ctx
+                    .device
+                    .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                        label: Some("direct samples"),
+                    });
+            }
+            for s in 0..batch {
+                let offset = ((s + 1) as u64 * VIEW_SIZE) as u32;
+                let ts = timer.pass("gbuffer");
+                passes.gbuffer.record(
+                    &mut encoder,
+                    &self.gbuf,
+                    &self.gbuffer_group,
+                    offset,
+                    &gs.geometry,
+                    ts,
+                );
+                let ts = timer.pass("direct light");
+                passes.direct.record(
+                    &mut encoder,
+                    &self.accum_view,
+                    done + s == 0,
+                    [&self.direct_scene_group, &self.direct_gbuffer_group],
+                    offset,
+                    ts,
+                );
+            }
+            done += batch;
+            if !progress.update("direct", done as f64 / spp as f64) {
+                return Err(Error::Cancelled);
+            }
+        }
+        // The AOVs and the photon estimate use a G-buffer at the pixel centres: the single
+        // sample's when spp = 1.
+        if spp > 1 {
+            let ts = timer.pass("gbuffer");
+            passes.gbuffer.record(
+                &mut encoder,
+                &self.gbuf,
+                &self.gbuffer_group,
+                0,
+                &gs.geometry,
+                ts,
+            );
+        }
+        Ok(encoder)
+    }
+
+    /// Records the composite pass.
+    pub fn record_composite(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        timer: &mut Timer,
+    ) {
+        if let Some(group) = &self.composite_group {
+            let ts = timer.pass("composite");
+            Passes::get(ctx)
+                .composite
+                .record(encoder, &self.radiance_view, group, ts);
+        }
+    }
+
+    /// The texture read back under `name`.
+    fn texture_of<'a>(
+        &'a self,
+        name: &str,
+        indirect: Option<&'a wgpu::Texture>,
+    ) -> Option<&'a wgpu::Texture> {
+        Some(match name {
+            "radiance" => &self.radiance,
+            "accum" => &self.accum,
+            "position" => &self.gbuf.textures[0],
+            "normals" => &self.gbuf.textures[1],
+            "albedo" => &self.gbuf.textures[4],
+            "indirect" => indirect?,
+            _ => return None,
+        })
+    }
+
+    /// Records copies of the named textures into their readback buffers (created on first
+    /// use at this size).
+    pub fn record_readback(
+        &mut self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        names: &[&'static str],
+        indirect: Option<&wgpu::Texture>,
+    ) {
+        let (w, h) = (self.width, self.height);
+        let row = (w * 16).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+        for &name in names {
+            if !self.readback.contains_key(name) {
+                let buffer = gpu::create_buffer(
+                    &ctx.device,
+                    &wgpu::BufferDescriptor {
+                        label: Some("readback"),
+                        size: row as u64 * h as u64,
+                        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                        mapped_at_creation: false,
+                    },
+                );
+                self.readback.insert(name, buffer);
+            }
+        }
+        for &name in names {
+            let Some(texture) = self.texture_of(name, indirect) else {
+                continue;
+            };
+            encoder.copy_texture_to_buffer(
+                texture.as_image_copy(),
+                wgpu::TexelCopyBufferInfo {
+                    buffer: &self.readback[name],
+                    layout: wgpu::TexelCopyBufferLayout {
+                        offset: 0,
+                        bytes_per_row: Some(row),
+                        rows_per_image: Some(h),
+                    },
+                },
+                texture.size(),
+            );
+        }
+    }
+
+    /// Maps the readback buffers of `names` (after all submitted work) and returns their
+    /// texels, rows unpadded.
+    pub fn read(
+        &self,
+        ctx: &GpuContext,
+        names: &[&'static str],
+    ) -> Result<HashMap<&'static str, Vec<Vec4>>> {
+        let (w, h) = (self.width as usize, self.height as usize);
+        let row = (w * 16).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT as usize);
+        let buffers: Vec<&wgpu::Buffer> = names.iter().map(|n| &self.readback[n]).collect();
+        let bytes = ctx.read_buffers(&buffers, None)?;
+        Ok(names
+            .iter()
+            .zip(bytes)
+            .map(|(&n, b)| {
+                let mut out = Vec::with_capacity(w * h);
+                for y in 0..h {
+                    out.extend_from_slice(bytemuck::cast_slice::<u8, Vec4>(
+                        &b[y * row..y * row + w * 16],
+                    ));
+                }
+                (n, out)
+            })
+            .collect())
+    }
+}
+
+/// The timer of a frame, created once.
+pub(crate) fn frame_timer(ctx: &GpuContext) -> Timer {
+    Timer::new(ctx, TIMER_PASSES)
+}
+
+/// RGB of texels.
+pub(crate) fn rgb_image(w: u32, h: u32, texels: &[Vec4]) -> Image {
+    let mut img = Image::new(w, h);
+    for (d, t) in img.pixels.iter_mut().zip(texels) {
+        *d = t.truncate();
+    }
+    img
+}

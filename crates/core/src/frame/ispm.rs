@@ -1,0 +1,358 @@
+//! Method `ispm` (McGuire & Luebke 2009) as a frame of the engine:
+//!
+//! 1. bounce maps (section 4.2) with the copies of their targets, submitted first;
+//! 2. shadow maps, direct light and the eye G-buffer, submitted without waiting;
+//! 3. the bounce-map readback, waiting for the bounce submission only (section 4.3), then
+//!    the CPU photon trace of the later bounces and the boundary compensation while the GPU
+//!    renders the direct light;
+//! 4. temporal reuse (Jozwowski 2002): the photons of the last frames, invalidated where
+//!    lights or objects moved;
+//! 5. mirrors and glass seen by the camera traced on the CPU (section 4);
+//! 6. the photon-volume estimate (section 5), upsampling, the composite on the GPU and the
+//!    readback of the images asked for.
+
+use super::direct::{assemble, normalized, readback_names};
+use super::gpu::rgb_image;
+use super::{GpuState, Images};
+use crate::error::{Error, Result};
+use crate::estimate::Volumes;
+use crate::gpu;
+use crate::image::Image;
+use crate::photon::lbvh::Aabb;
+use crate::photon::ring::PhotonRing;
+use crate::photon::{boundary, continue_paths, PhotonTraceSettings};
+use crate::raster::ispm::{bounce_layers, photon_hits, BounceTargets, IspmPasses, Z_RATIO};
+use crate::raster::specular::specular_paths;
+use crate::raster::volume_shape::{partition, VolumeRadius};
+use crate::raster::Passes;
+use crate::render::{Progress, RenderOutput, RenderStats, Settings};
+use crate::scene::Scene;
+use crate::trace::SceneBvh;
+use glam::Vec3;
+use std::time::Instant;
+
+/// The ISPM resources beyond the direct light's: bounce maps and the estimator.
+pub(super) struct IspmState {
+    bounce: Option<BounceTargets>,
+    volumes: Volumes,
+    /// Whether the scene has mirrors or glass (the specular texture is written each frame).
+    specular: bool,
+    /// The seed of the photons in the ring, when they are those of the current scene: a
+    /// still scene with frame-coherent random numbers re-traces nothing.
+    traced_seed: Option<u64>,
+    /// The specular image of the last frame (reused while the camera and scene stand still).
+    specular_image: Option<Image>,
+}
+
+/// What changed since the photons in the ring were traced.
+pub(super) struct Invalidation<'a> {
+    /// Materials changed: every photon is stale.
+    pub all: bool,
+    pub lights: &'a [usize],
+    /// Objects moved, with their bounds before the move.
+    pub moved: &'a [(usize, Aabb)],
+}
+
+pub(super) struct FrameInputs<'a> {
+    pub gpu: &'a mut GpuState,
+    pub ring: &'a mut PhotonRing,
+    pub invalid: Invalidation<'a>,
+    pub scene: &'a Scene,
+    pub bvh: &'a SceneBvh,
+    pub settings: &'a Settings,
+    pub frame: u64,
+    pub changes: crate::scene::Changes,
+    pub images: Images,
+    pub progress: &'a dyn Progress,
+}
+
+pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
+    let FrameInputs {
+        gpu: g,
+        ring,
+        invalid,
+        scene,
+        bvh,
+        settings,
+        frame,
+        changes,
+        images,
+        progress,
+    } = f;
+    let ctx = g.ctx.clone();
+    let cam = &scene.camera;
+    let (w, h) = (cam.width, cam.height);
+    g.timer.reset();
+    let mut stats = RenderStats {
+        triangles: scene.triangles.len() as u64,
+        samples_per_pixel: g.targets.spp(),
+        ..Default::default()
+    };
+    let stage = |stats: &mut RenderStats, name: &str, t: Instant| {
+        stats
+            .stages
+            .push((name.to_string(), t.elapsed().as_secs_f64()))
+    };
+
+    // Resources: created on the first frame at this size, else kept.
+    let t = Instant::now();
+    let layers = bounce_layers(scene, settings.photons);
+    let state = match g.ispm.take() {
+        Some(s) => s,
+        None => {
+            let volumes = Volumes::new(&ctx, &g.targets.gbuf, w, h, settings.subsample);
+            g.targets.bind_composite(&ctx, Some(volumes.output().1));
+            IspmState {
+                bounce: None,
+                volumes,
+                specular: scene
+                    .materials
+                    .iter()
+                    .any(crate::render::camera_pass::has_delta_lobe),
+                traced_seed: None,
+                specular_image: None,
+            }
+        }
+    };
+    let mut state = state;
+    if changes.lighting() {
+        state.traced_seed = None;
+    }
+    if changes.any() {
+        state.specular_image = None;
+    }
+    // A still scene with frame-coherent random numbers has this frame's photons already.
+    let reuse = ring.frames() == 1 && state.traced_seed == Some(settings.seed);
+    if !reuse {
+        if !state.bounce.as_ref().is_some_and(|b| b.fits(&layers)) {
+            state.bounce = BounceTargets::new(&ctx, &layers, &g.scene.materials)?;
+        }
+        if let Some(b) = &state.bounce {
+            b.write_views(&ctx, &layers, settings.seed);
+        }
+    }
+    g.targets.write_eye(&ctx, scene);
+    stage(&mut stats, "upload", t);
+
+    // 1. Bounce maps, submitted first with their readback copies.
+    let mut encoder = ctx
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("bounce maps"),
+        });
+    if let (false, Some(b)) = (reuse, &state.bounce) {
+        b.record(
+            IspmPasses::get(&ctx),
+            &mut encoder,
+            &layers,
+            &g.scene.geometry,
+            &mut g.timer,
+        );
+    }
+    let bounce_submission = ctx.queue.submit([encoder.finish()]);
+
+    // 2. Direct light and the eye G-buffer, not waited on.
+    let mut encoder = ctx
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("direct frame"),
+        });
+    g.scene.record_shadows(
+        Passes::get(&ctx),
+        &mut encoder,
+        &mut g.timer,
+        scene.lights.len(),
+    );
+    let encoder = g
+        .targets
+        .record_direct(&ctx, &g.scene, encoder, &mut g.timer, progress)?;
+    ctx.queue.submit([encoder.finish()]);
+
+    // 3. The bounce-map readback, then the CPU trace while the GPU lights the frame.
+    let t = Instant::now();
+    let bm = match (reuse, &state.bounce) {
+        (false, Some(b)) => b.finish(&ctx, &layers, Some(bounce_submission))?,
+        _ => Default::default(),
+    };
+    stage(&mut stats, "bounce readback", t);
+    stats.photons_emitted = bm.covered;
+    stats.photons_first_bounce = bm.rays.len() as u64;
+    if !progress.update("bounce maps", 1.0) {
+        return Err(Error::Cancelled);
+    }
+
+    // 4. Temporal reuse: drop what moved, trace this frame's photons per light, keep them.
+    if invalid.all {
+        ring.clear();
+    }
+    for &l in invalid.lights {
+        ring.invalidate_light(l);
+    }
+    let grow = VolumeRadius::of_scene(scene, settings.photons, settings.kernel_scale).r_max;
+    for (object, before) in invalid.moved {
+        let o = &scene.objects[*object];
+        let after = super::object_bounds(scene, o);
+        let b = before.union(after);
+        ring.invalidate_region(Aabb {
+            min: b.min - Vec3::splat(grow),
+            max: b.max + Vec3::splat(grow),
+        });
+    }
+    let t = Instant::now();
+    let mut traced = 0u64;
+    let mut compensation_seconds = 0.0;
+    if !reuse && settings.max_depth >= 2 {
+        let pts = if settings.footprint_volumes {
+            PhotonTraceSettings {
+                store_direct: false,
+                ..crate::render::gather_trace_settings(scene, settings)
+            }
+        } else {
+            PhotonTraceSettings {
+                max_bounces: settings.max_depth - 1,
+                store_direct: false,
+                differentials: None,
+            }
+        };
+        let mut start = 0;
+        while start < bm.rays.len() {
+            let light = bm.ray_lights[start];
+            let end = start
+                + bm.ray_lights[start..]
+                    .iter()
+                    .take_while(|&&l| l == light)
+                    .count();
+            let seed = settings.seed ^ (light as u64).wrapping_mul(0xA24B_AED4_963E_E407);
+            let photons = continue_paths(scene, bvh, &bm.rays[start..end], &pts, seed).photons;
+            traced += photons.len() as u64;
+            // Volume radii are decided here, once, for the photon count the ring will hold
+            // (the splat reads `footprint_radius`).
+            let frames = (ring.held(light as usize) + 1).min(ring.frames()) as u64;
+            let radius =
+                VolumeRadius::of_scene(scene, settings.photons * frames, settings.kernel_scale);
+            let mut photons = photons;
+            for p in &mut photons {
+                p.footprint_radius = radius.of(p);
+            }
+            let mut compensated = photons.clone();
+            if settings.boundary_compensation {
+                let tc = Instant::now();
+                boundary::compensate(
+                    scene,
+                    bvh,
+                    &mut compensated,
+                    |p| p.footprint_radius,
+                    Z_RATIO,
+                    seed,
+                );
+                compensation_seconds += tc.elapsed().as_secs_f64();
+            }
+            ring.push(frame, light as usize, photons, compensated);
+            start = end;
+            if !progress.update("cpu trace", start as f64 / bm.rays.len() as f64) {
+                return Err(Error::Cancelled);
+            }
+        }
+    }
+    stats.stages.push((
+        "cpu trace".into(),
+        t.elapsed().as_secs_f64() - compensation_seconds,
+    ));
+    if settings.boundary_compensation {
+        stats
+            .stages
+            .push(("boundary compensation".into(), compensation_seconds));
+    }
+    let photons = ring.collect();
+    stats.photons_stored = photons.splat.len() as u64;
+    let _ = traced;
+    let photons_changed = !reuse;
+    state.traced_seed = Some(settings.seed);
+
+    // 5. Mirrors and glass seen by the camera; their gather uses the photons as traced.
+    let t = Instant::now();
+    let specular = if state.specular && state.specular_image.is_some() && !photons_changed {
+        state.specular_image.clone()
+    } else if state.specular {
+        let img = specular_paths(scene, bvh, settings, &photons.traced, progress)?;
+        let texels: Vec<[f32; 4]> = img.pixels.iter().map(|p| [p.x, p.y, p.z, 0.0]).collect();
+        let bytes: &[u8] = bytemuck::cast_slice(&texels);
+        gpu::alloc::note_upload("specular paths", bytes.len() as u64);
+        ctx.queue.write_texture(
+            g.targets.specular.as_image_copy(),
+            bytes,
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(w * 16),
+                rows_per_image: Some(h),
+            },
+            g.targets.specular.size(),
+        );
+        Some(img)
+    } else {
+        None
+    };
+    state.specular_image = specular.clone();
+    stage(&mut stats, "specular paths", t);
+
+    // 6. Photon volumes, upsampling, composite, readback.
+    let t = Instant::now();
+    let radius = VolumeRadius::of_scene(scene, settings.photons, settings.kernel_scale);
+    let (ordered, quads) = partition(
+        settings.volume_shape,
+        &photons.splat,
+        cam,
+        settings.subsample.max(1),
+        radius,
+    );
+    stats.volume_quads = quads as u64;
+    state.volumes.write_params(&ctx, scene, radius);
+    if !ordered.is_empty() && (photons_changed || changes.camera) {
+        state.volumes.write_photons(&ctx, &ordered);
+    }
+    let mut encoder = ctx
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("photon volumes"),
+        });
+    state.volumes.record(
+        &ctx,
+        &mut encoder,
+        ordered.len() as u32,
+        quads as u32,
+        &mut g.timer,
+    );
+    g.targets.record_composite(&ctx, &mut encoder, &mut g.timer);
+    let names = readback_names(images, true);
+    g.targets
+        .record_readback(&ctx, &mut encoder, &names, Some(state.volumes.output().0));
+    g.timer.resolve(&mut encoder);
+    ctx.queue.submit([encoder.finish()]);
+    stage(&mut stats, "photon upload", t);
+    let t = Instant::now();
+    let data = g.targets.read(&ctx, &names)?;
+    stage(&mut stats, "readback", t);
+    g.timer.collect(&ctx)?;
+    stats.stages.append(&mut g.timer.totals);
+
+    let mut out = assemble(scene, &g.targets, &data, stats);
+    if images.extras {
+        let empty = || Image::new(w, h);
+        let direct = data
+            .get("accum")
+            .map(|a| normalized(&g.targets, a))
+            .unwrap_or_else(empty);
+        let indirect = data
+            .get("indirect")
+            .map(|a| rgb_image(w, h, a))
+            .unwrap_or_else(empty);
+        let hits = photon_hits(scene, &out.position, &photons.traced);
+        out.aovs.push(("direct".into(), direct));
+        out.aovs
+            .push(("specular".into(), specular.unwrap_or_else(empty)));
+        out.aovs.push(("indirect".into(), indirect));
+        out.aovs.push(("photons".into(), hits));
+    }
+    g.ispm = Some(state);
+    Ok(out)
+}

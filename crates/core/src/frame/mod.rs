@@ -1,0 +1,317 @@
+//! The frame engine. A [`Renderer`] is made once from a scene and settings and owns what
+//! lives from one frame to the next: the scene (updated in place by [`SceneUpdate`]s), its
+//! CPU BVH, and for the GPU methods the device, the scene's GPU buffers, the render targets
+//! of one size, the estimator's resources and the temporal photon ring. A frame re-uploads
+//! only what changed and reads back only the images asked for ([`FrameDesc`]).
+//!
+//! One file per method runs its passes in order: [`direct`], [`ispm`]; the CPU methods
+//! (`path`, `photon`, `gather`) reuse the renderer's BVH ([`cpu`]).
+
+mod cpu;
+mod direct;
+mod gpu;
+mod ispm;
+
+use crate::error::{Error, Result};
+use crate::gpu::GpuContext;
+use crate::image::Image;
+use crate::photon::lbvh::Aabb;
+use crate::photon::ring::PhotonRing;
+use crate::render::{Method, Progress, RenderOutput, Settings};
+use crate::scene::{Changes, Scene, SceneUpdate};
+use crate::trace::SceneBvh;
+use std::sync::Arc;
+use std::time::Instant;
+
+/// Which images a frame reads back. The radiance always; the rest on request.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct Images {
+    /// `albedo`, `normal`, `position`, `depth` (and `caustics`).
+    pub aovs: bool,
+    /// The method's own images (`RenderOutput::aovs`; `ispm`: direct, specular, indirect,
+    /// photons).
+    pub extras: bool,
+}
+
+impl Images {
+    /// Everything: what the one-shot [`crate::render`] returns.
+    pub const ALL: Images = Images {
+        aovs: true,
+        extras: true,
+    };
+}
+
+/// What to render in one frame.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct FrameDesc {
+    /// Random seed of the frame; `None`: the settings' seed, varied per frame when temporal
+    /// reuse is on (`Settings::temporal_frames` > 1) and kept otherwise (frame-coherent
+    /// random numbers, ISPM section 4.1: a still scene does not flicker).
+    pub seed: Option<u64>,
+    pub images: Images,
+}
+
+/// The GPU side of a renderer (methods `direct` and `ispm`).
+struct GpuState {
+    ctx: Arc<GpuContext>,
+    scene: gpu::GpuScene,
+    targets: gpu::Targets,
+    timer: crate::raster::timer::Timer,
+    ispm: Option<ispm::IspmState>,
+}
+
+/// A persistent renderer of one scene with one method.
+pub struct Renderer {
+    scene: Scene,
+    settings: Settings,
+    bvh: Option<SceneBvh>,
+    /// What changed since the last frame.
+    changes: Changes,
+    /// Objects moved since the last frame, with the bounds they had before.
+    moved: Vec<(usize, Aabb)>,
+    lights_changed: Vec<usize>,
+    resized: bool,
+    gpu: Option<GpuState>,
+    ring: PhotonRing,
+    frame_index: u64,
+}
+
+impl Renderer {
+    /// A renderer of `scene` (copied) with `settings`; the image size is the settings' or,
+    /// failing that, the scene camera's.
+    pub fn new(scene: &Scene, settings: &Settings) -> Result<Self> {
+        settings.validate()?;
+        let camera = scene.camera.with_size(
+            settings.width.unwrap_or(scene.camera.width),
+            settings.height.unwrap_or(scene.camera.height),
+        );
+        Ok(Renderer {
+            scene: Scene {
+                camera,
+                ..scene.clone()
+            },
+            settings: settings.clone(),
+            bvh: None,
+            changes: Changes::default(),
+            moved: Vec::new(),
+            lights_changed: Vec::new(),
+            resized: false,
+            gpu: None,
+            ring: PhotonRing::new(settings.temporal_frames as usize),
+            frame_index: 0,
+        })
+    }
+
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    pub fn settings(&self) -> &Settings {
+        &self.settings
+    }
+
+    /// Frames rendered so far.
+    pub fn frame_index(&self) -> u64 {
+        self.frame_index
+    }
+
+    /// Applies a change to the scene before the next frame.
+    pub fn update(&mut self, update: &SceneUpdate) -> Result<()> {
+        let before = match update {
+            SceneUpdate::Transform { object, .. } => self
+                .scene
+                .objects
+                .get(*object)
+                .map(|o| object_bounds(&self.scene, o)),
+            _ => None,
+        };
+        let c = self.scene.apply(update)?;
+        self.changes = self.changes.union(c);
+        match update {
+            SceneUpdate::Transform { object, .. } => {
+                if let Some(b) = before {
+                    self.moved.push((*object, b));
+                }
+            }
+            SceneUpdate::Light { index, .. } => self.lights_changed.push(*index),
+            _ => {}
+        }
+        Ok(())
+    }
+
+    /// Changes the image size; targets are rebuilt at the next frame.
+    pub fn resize(&mut self, width: u32, height: u32) -> Result<()> {
+        for (name, v) in [("width", width), ("height", height)] {
+            if v == 0 || v > 16384 {
+                return Err(Error::setting(
+                    if name == "width" { "width" } else { "height" },
+                    "must be in 1..=16384",
+                ));
+            }
+        }
+        if (width, height) != (self.scene.camera.width, self.scene.camera.height) {
+            self.scene.camera = self.scene.camera.with_size(width, height);
+            self.resized = true;
+        }
+        Ok(())
+    }
+
+    /// The seed of the next frame (see [`FrameDesc::seed`]).
+    fn frame_seed(&self) -> u64 {
+        if self.settings.temporal_frames <= 1 || self.frame_index == 0 {
+            self.settings.seed
+        } else {
+            self.settings.seed ^ self.frame_index.wrapping_mul(0x9E37_79B9_7F4A_7C15)
+        }
+    }
+
+    /// Renders one frame.
+    pub fn render(&mut self, desc: &FrameDesc, progress: &dyn Progress) -> Result<RenderOutput> {
+        let t0 = Instant::now();
+        let mut stages = Vec::new();
+        if self.bvh.is_none() || self.changes.geometry {
+            let t = Instant::now();
+            self.bvh = Some(SceneBvh::build(&self.scene));
+            stages.push(("bvh build".to_string(), t.elapsed().as_secs_f64()));
+        }
+        let settings = Settings {
+            seed: desc.seed.unwrap_or_else(|| self.frame_seed()),
+            ..self.settings.clone()
+        };
+        let mut out = match settings.method {
+            Method::Path | Method::Photon | Method::Gather => {
+                let bvh = self.bvh.as_ref().ok_or(Error::Cancelled)?;
+                cpu::frame(&self.scene, bvh, &settings, progress)?
+            }
+            Method::Direct | Method::Ispm => self.gpu_frame(&settings, desc.images, progress)?,
+        };
+        stages.append(&mut out.stats.stages);
+        out.stats.stages = stages;
+        keep_requested(&mut out, desc.images);
+        self.changes = Changes::default();
+        self.moved.clear();
+        self.lights_changed.clear();
+        self.resized = false;
+        self.frame_index += 1;
+        out.stats.total_seconds = t0.elapsed().as_secs_f64();
+        Ok(out)
+    }
+
+    fn gpu_frame(
+        &mut self,
+        settings: &Settings,
+        images: Images,
+        progress: &dyn Progress,
+    ) -> Result<RenderOutput> {
+        let ctx = match &self.gpu {
+            Some(g) => g.ctx.clone(),
+            None => crate::gpu::context(settings.adapter.as_deref())?,
+        };
+        ctx.scoped("frame", || {
+            self.sync_gpu(&ctx, settings)?;
+            let gpu = self.gpu.as_mut().ok_or(Error::Cancelled)?;
+            let bvh = self.bvh.as_ref().ok_or(Error::Cancelled)?;
+            match settings.method {
+                Method::Ispm => {
+                    let invalid = ispm::Invalidation {
+                        all: self.changes.materials,
+                        lights: &self.lights_changed,
+                        moved: &self.moved,
+                    };
+                    ispm::frame(ispm::FrameInputs {
+                        gpu,
+                        ring: &mut self.ring,
+                        invalid,
+                        scene: &self.scene,
+                        bvh,
+                        settings,
+                        frame: self.frame_index,
+                        changes: self.changes,
+                        images,
+                        progress,
+                    })
+                }
+                _ => direct::frame(gpu, &self.scene, images, progress),
+            }
+        })
+    }
+
+    /// Creates the GPU state on the first frame, else uploads what changed and rebuilds
+    /// the targets after a resize.
+    fn sync_gpu(&mut self, ctx: &Arc<GpuContext>, settings: &Settings) -> Result<()> {
+        let scene = &self.scene;
+        let layers = self.gpu.as_ref().map(|g| g.scene.layers);
+        let fits = layers.is_some_and(|l| gpu::GpuScene::fits(scene, l));
+        if !fits {
+            let gs = gpu::GpuScene::new(ctx, scene, settings.shadow_map_size);
+            crate::raster::check_limits(ctx, scene, settings, gs.layers)?;
+            let targets = gpu::Targets::new(ctx, &gs, scene, settings.spp);
+            self.gpu = Some(GpuState {
+                ctx: ctx.clone(),
+                scene: gs,
+                targets,
+                timer: gpu::frame_timer(ctx),
+                ispm: None,
+            });
+            return Ok(());
+        }
+        let Some(g) = self.gpu.as_mut() else {
+            return Ok(());
+        };
+        let c = self.changes;
+        if c.geometry {
+            for (object, _) in &self.moved {
+                let o = &scene.objects[*object];
+                g.scene.write_triangles(
+                    ctx,
+                    scene,
+                    o.triangles.start as usize..o.triangles.end as usize,
+                );
+            }
+        }
+        if c.materials {
+            g.scene.write_materials(ctx, scene);
+        }
+        if c.lights || c.geometry {
+            g.scene.write_lights(ctx, scene, settings.shadow_map_size);
+        }
+        if self.resized {
+            crate::raster::check_limits(ctx, scene, settings, g.scene.layers)?;
+            g.targets = gpu::Targets::new(ctx, &g.scene, scene, settings.spp);
+            g.ispm = None;
+        } else if c.camera || c.geometry {
+            // The eye views' depth range follows the scene's bounds.
+            g.targets.eye_current = false;
+        }
+        Ok(())
+    }
+}
+
+/// World bounds of an object's vertices.
+fn object_bounds(scene: &Scene, o: &crate::scene::SceneObject) -> Aabb {
+    scene.positions[o.vertices.start as usize..o.vertices.end as usize]
+        .iter()
+        .fold(Aabb::EMPTY, |b, p| Aabb {
+            min: b.min.min(*p),
+            max: b.max.max(*p),
+        })
+}
+
+/// Drops the images the frame did not ask for (they may have been computed anyway by the
+/// CPU methods).
+fn keep_requested(out: &mut RenderOutput, images: Images) {
+    if !images.aovs {
+        for img in [
+            &mut out.albedo,
+            &mut out.normal,
+            &mut out.position,
+            &mut out.caustics,
+        ] {
+            *img = Image::new(0, 0);
+        }
+        out.depth = Vec::new();
+    }
+    if !images.extras {
+        out.aovs.clear();
+    }
+}

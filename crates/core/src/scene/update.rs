@@ -1,0 +1,510 @@
+//! Changes to a scene between frames: the camera, a light, an object's transform, a
+//! material. Each is validated like the scene description it replaces, and reports what it
+//! invalidates ([`Changes`]) so that a renderer re-uploads and rebuilds only that.
+
+use super::desc::{CameraDesc, LightDesc, MaterialDesc};
+use super::{camera_from_desc, light_from_desc, material_from_desc, Light, Scene};
+use crate::error::{Error, Result};
+use glam::{Mat3, Mat4, Vec3};
+use std::ops::Range;
+
+/// Where an update's errors say they come from.
+const SOURCE: &str = "scene update";
+
+/// One object of the description: its slice of the scene's flat arrays and the local
+/// geometry that its transform places there.
+#[derive(Clone, Debug)]
+pub struct SceneObject {
+    pub name: Option<String>,
+    /// Range of `Scene::positions` / `Scene::normals`.
+    pub vertices: Range<u32>,
+    /// Range of `Scene::triangles` / `Scene::triangle_materials`.
+    pub triangles: Range<u32>,
+    /// Object -> world.
+    pub transform: Mat4,
+    /// Whether the triangles are stored with flipped winding (a mirroring transform).
+    pub flipped: bool,
+    pub(crate) local_positions: Vec<glam::Vec3>,
+    pub(crate) local_normals: Vec<glam::Vec3>,
+}
+
+impl SceneObject {
+    /// Writes the transformed local geometry into the scene's arrays.
+    pub(crate) fn place(&self, positions: &mut [Vec3], normals: &mut [Vec3]) {
+        let r = self.vertices.start as usize..self.vertices.end as usize;
+        let xf = self.transform;
+        let normal_xf = Mat3::from_mat4(xf).inverse().transpose();
+        for (dst, p) in positions[r.clone()].iter_mut().zip(&self.local_positions) {
+            *dst = xf.transform_point3(*p);
+        }
+        for (dst, n) in normals[r].iter_mut().zip(&self.local_normals) {
+            *dst = (normal_xf * *n).normalize_or_zero();
+        }
+    }
+}
+
+/// A change to a scene between two frames.
+#[derive(Clone, Debug)]
+pub enum SceneUpdate {
+    /// The camera's pose and field of view. Its `width`/`height` are ignored: the image size
+    /// belongs to the renderer (`Renderer::resize`).
+    Camera(CameraDesc),
+    /// Light `index` replaced by `light`.
+    Light { index: usize, light: LightDesc },
+    /// Object `object` (index into `Scene::objects`) placed by a new object -> world
+    /// transform; a mirroring transform flips its winding, as in the description.
+    Transform { object: usize, transform: Mat4 },
+    /// The material called `name` replaced by `material`.
+    Material {
+        name: String,
+        material: MaterialDesc,
+    },
+}
+
+/// What a set of updates invalidated.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Changes {
+    pub camera: bool,
+    pub lights: bool,
+    /// Vertex positions or normals (object transforms): BVH, vertex buffer, shadow maps.
+    pub geometry: bool,
+    pub materials: bool,
+}
+
+impl Changes {
+    pub fn any(self) -> bool {
+        self.camera || self.lights || self.geometry || self.materials
+    }
+
+    /// Whether light transport (photons, shadows) changed, not only the view.
+    pub fn lighting(self) -> bool {
+        self.lights || self.geometry || self.materials
+    }
+
+    pub fn union(self, o: Changes) -> Changes {
+        Changes {
+            camera: self.camera || o.camera,
+            lights: self.lights || o.lights,
+            geometry: self.geometry || o.geometry,
+            materials: self.materials || o.materials,
+        }
+    }
+}
+
+impl Scene {
+    /// Applies `update` after validating it; on error the scene is unchanged.
+    pub fn apply(&mut self, update: &SceneUpdate) -> Result<Changes> {
+        let err = |field: String, msg: &str| Error::scene(SOURCE, field, msg);
+        match update {
+            SceneUpdate::Camera(desc) => {
+                let desc = CameraDesc {
+                    width: self.camera.width,
+                    height: self.camera.height,
+                    ..desc.clone()
+                };
+                self.camera =
+                    camera_from_desc(&desc).map_err(|(f, m)| err(format!("camera.{f}"), m))?;
+                Ok(Changes {
+                    camera: true,
+                    ..Default::default()
+                })
+            }
+            SceneUpdate::Light { index, light } => {
+                let n = self.lights.len();
+                let slot = self.lights.get_mut(*index).ok_or_else(|| {
+                    err(
+                        format!("lights[{index}]"),
+                        &format!("no such light (the scene has {n})"),
+                    )
+                })?;
+                *slot = light_from_desc(light)
+                    .map_err(|(f, m)| err(format!("lights[{index}].{f}"), m))?;
+                Ok(Changes {
+                    lights: true,
+                    ..Default::default()
+                })
+            }
+            SceneUpdate::Transform { object, transform } => {
+                let field = format!("objects[{object}].transform");
+                let n = self.objects.len();
+                if *object >= n {
+                    return Err(err(field, &format!("no such object (the scene has {n})")));
+                }
+                let det = Mat3::from_mat4(*transform).determinant();
+                if !transform.is_finite() || !det.is_finite() || det.abs() <= 1e-30 {
+                    return Err(err(field, "must be finite and invertible"));
+                }
+                let obj = &self.objects[*object];
+                let placed: Vec<Vec3> = obj
+                    .local_positions
+                    .iter()
+                    .map(|p| transform.transform_point3(*p))
+                    .collect();
+                if placed.iter().any(|p| !p.is_finite()) {
+                    return Err(err(field, "moves vertices to non-finite positions"));
+                }
+                let obj = &mut self.objects[*object];
+                obj.transform = *transform;
+                let flip = det < 0.0;
+                if flip != obj.flipped {
+                    obj.flipped = flip;
+                    let r = obj.triangles.start as usize..obj.triangles.end as usize;
+                    for t in &mut self.triangles[r] {
+                        t.swap(1, 2);
+                    }
+                }
+                let obj = &self.objects[*object];
+                obj.place(&mut self.positions, &mut self.normals);
+                Ok(Changes {
+                    geometry: true,
+                    ..Default::default()
+                })
+            }
+            SceneUpdate::Material { name, material } => {
+                let i = self
+                    .material_names
+                    .iter()
+                    .position(|m| m == name)
+                    .ok_or_else(|| err(format!("materials.{name}"), "no material of that name"))?;
+                self.materials[i] = material_from_desc(material)
+                    .map_err(|(f, m)| err(format!("materials.{name}.{f}"), m))?;
+                Ok(Changes {
+                    materials: true,
+                    ..Default::default()
+                })
+            }
+        }
+    }
+
+    /// Index of the object called `name`.
+    pub fn object_index(&self, name: &str) -> Option<usize> {
+        self.objects
+            .iter()
+            .position(|o| o.name.as_deref() == Some(name))
+    }
+
+    /// The camera as a description (what [`SceneUpdate::Camera`] takes).
+    pub fn camera_desc(&self) -> CameraDesc {
+        let c = &self.camera;
+        CameraDesc {
+            position: c.position.into(),
+            look_at: (c.position + c.forward).into(),
+            up: c.up.into(),
+            fov: c.fov_y,
+            width: c.width,
+            height: c.height,
+        }
+    }
+
+    /// Light `index` as a description (what [`SceneUpdate::Light`] takes).
+    pub fn light_desc(&self, index: usize) -> Option<LightDesc> {
+        let degrees = |c: f32| c.clamp(-1.0, 1.0).acos().to_degrees();
+        Some(match *self.lights.get(index)? {
+            Light::Point {
+                position,
+                intensity,
+            } => LightDesc::Point {
+                position: position.into(),
+                intensity: intensity.into(),
+            },
+            Light::Spot {
+                position,
+                direction,
+                intensity,
+                cos_inner,
+                cos_outer,
+            } => LightDesc::Spot {
+                position: position.into(),
+                direction: direction.into(),
+                intensity: intensity.into(),
+                inner_angle: degrees(cos_inner),
+                outer_angle: degrees(cos_outer),
+            },
+        })
+    }
+
+    /// The material called `name` as a description (what [`SceneUpdate::Material`] takes).
+    pub fn material_desc(&self, name: &str) -> Option<MaterialDesc> {
+        let i = self.material_names.iter().position(|m| m == name)?;
+        let m = &self.materials[i];
+        Some(MaterialDesc {
+            diffuse: m.diffuse.into(),
+            specular: m.specular.into(),
+            roughness: m.roughness,
+            fresnel: m.fresnel,
+            transmission: m.transmission.into(),
+            ior: m.ior,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::builtin;
+
+    /// Moving an object and moving it back restores its vertices (to float round-off), and
+    /// its triangles keep their winding.
+    #[test]
+    fn transform_round_trip() {
+        let mut scene = builtin::load("cornell").expect("scene");
+        let before = scene.clone();
+        let i = scene.objects.len() - 1;
+        let original = scene.objects[i].transform;
+        let moved = Mat4::from_translation(Vec3::new(0.1, 0.0, -0.2)) * original;
+        let c = scene
+            .apply(&SceneUpdate::Transform {
+                object: i,
+                transform: moved,
+            })
+            .expect("valid");
+        assert!(c.geometry && !c.camera);
+        let r = scene.objects[i].vertices.clone();
+        let p = scene.positions[r.start as usize];
+        let q = before.positions[r.start as usize];
+        assert!((p - q - Vec3::new(0.1, 0.0, -0.2)).length() < 1e-5);
+        scene
+            .apply(&SceneUpdate::Transform {
+                object: i,
+                transform: original,
+            })
+            .expect("valid");
+        for (a, b) in scene.positions.iter().zip(&before.positions) {
+            assert!((*a - *b).length() < 1e-5);
+        }
+        assert_eq!(scene.triangles, before.triangles);
+    }
+
+    /// A mirroring transform flips the winding so the geometric normal keeps pointing out.
+    #[test]
+    fn mirroring_flips_winding() {
+        let mut scene = builtin::load("cornell").expect("scene");
+        let i = scene.objects.len() - 1;
+        let t = scene.objects[i].triangles.start as usize;
+        let normal = |s: &Scene| {
+            let [a, b, c] = s.triangle(t);
+            (b - a).cross(c - a).normalize()
+        };
+        let n0 = normal(&scene);
+        let xf = scene.objects[i].transform;
+        let mirrored = xf * Mat4::from_scale(Vec3::new(-1.0, 1.0, 1.0));
+        scene
+            .apply(&SceneUpdate::Transform {
+                object: i,
+                transform: mirrored,
+            })
+            .expect("valid");
+        // The mirrored face's normal is the original one mirrored in the object's x axis,
+        // still outward: its dot with the vertex normal is positive.
+        let [a, _, _] = scene.triangles[t];
+        let n1 = normal(&scene);
+        assert!(n1.dot(scene.normals[a as usize]) > 0.0, "{n0} {n1}");
+    }
+
+    #[test]
+    fn invalid_updates_leave_the_scene_unchanged() {
+        let mut scene = builtin::load("cornell").expect("scene");
+        let before = scene.positions.clone();
+        let bad = [
+            SceneUpdate::Transform {
+                object: 0,
+                transform: Mat4::from_scale(Vec3::ZERO),
+            },
+            SceneUpdate::Transform {
+                object: 999,
+                transform: Mat4::IDENTITY,
+            },
+            SceneUpdate::Light {
+                index: 0,
+                light: LightDesc::Point {
+                    position: [0.0, f32::NAN, 0.0],
+                    intensity: [1.0; 3],
+                },
+            },
+            SceneUpdate::Material {
+                name: "no such".into(),
+                material: scene.material_desc(&scene.material_names[0]).expect("m"),
+            },
+        ];
+        for u in &bad {
+            let e = scene.apply(u).expect_err("must be rejected");
+            assert!(matches!(e, Error::Scene { .. }), "{e}");
+        }
+        assert_eq!(scene.positions, before);
+    }
+
+    /// JSON updates merge into the current description and name the field on error.
+    #[test]
+    fn json_updates() {
+        let mut scene = builtin::load("cornell").expect("scene");
+        let v = |s: &str| serde_json::from_str::<serde_json::Value>(s).expect("json");
+        let u = scene
+            .update_from_json(&UpdateTarget::Light(0), &v(r#"{"intensity": [1, 2, 3]}"#))
+            .expect("valid");
+        let p = scene.lights[0].position();
+        scene.apply(&u).expect("valid");
+        assert_eq!(scene.lights[0].position(), p);
+        assert!(
+            matches!(scene.lights[0], Light::Point { intensity, .. } if intensity == Vec3::new(1.0, 2.0, 3.0))
+        );
+        let name = scene.material_names[0].clone();
+        let u = scene
+            .update_from_json(
+                &UpdateTarget::Material(name.clone()),
+                &v(r#"{"roughness": 0.5}"#),
+            )
+            .expect("valid");
+        scene.apply(&u).expect("valid");
+        assert_eq!(scene.material_desc(&name).expect("m").roughness, 0.5);
+        let u = scene
+            .update_from_json(&UpdateTarget::Object(0), &v(r#"{"translate": [0, 1, 0]}"#))
+            .expect("valid");
+        assert!(matches!(u, SceneUpdate::Transform { transform, .. } if transform.w_axis.y == 1.0));
+        let u = scene
+            .update_from_json(
+                &UpdateTarget::Object(0),
+                &v(r#"{"matrix": [[1,0,0,2],[0,1,0,0],[0,0,1,0],[0,0,0,1]]}"#),
+            )
+            .expect("valid");
+        assert!(matches!(u, SceneUpdate::Transform { transform, .. } if transform.w_axis.x == 2.0));
+        let e = scene
+            .update_from_json(&UpdateTarget::Camera, &v(r#"{"fov": "wide"}"#))
+            .expect_err("type error");
+        assert!(e.to_string().contains("camera.fov"), "{e}");
+        let e = scene
+            .update_from_json(&UpdateTarget::Light(0), &v(r#"{"colour": [1, 1, 1]}"#))
+            .expect_err("unknown field");
+        assert!(e.to_string().contains("colour"), "{e}");
+    }
+
+    /// The descriptions read back from a scene rebuild the same lights and materials.
+    #[test]
+    fn descriptions_round_trip() {
+        let mut scene = builtin::load("cornell-glass").expect("scene");
+        let lights = scene.lights.clone();
+        for i in 0..lights.len() {
+            let light = scene.light_desc(i).expect("light");
+            scene
+                .apply(&SceneUpdate::Light { index: i, light })
+                .expect("valid");
+        }
+        for (a, b) in scene.lights.iter().zip(&lights) {
+            assert_eq!(a.position(), b.position());
+            assert!((a.power() - b.power()).abs().max_element() < 1e-3 * b.power().max_element());
+        }
+        let camera = scene.camera;
+        scene
+            .apply(&SceneUpdate::Camera(scene.camera_desc()))
+            .expect("valid");
+        assert!((scene.camera.forward - camera.forward).length() < 1e-6);
+    }
+}
+
+/// What a JSON update addresses (see [`Scene::update_from_json`]).
+#[derive(Clone, Debug)]
+pub enum UpdateTarget {
+    Camera,
+    /// A light by index.
+    Light(usize),
+    /// An object by index into `Scene::objects`.
+    Object(usize),
+    /// A material by name.
+    Material(String),
+}
+
+impl Scene {
+    /// An update from JSON, in the scene format's terms:
+    /// - camera, lights, materials: the fields given replace the current ones (the rest
+    ///   stay), e.g. `{"position": [0, 1, 3]}` or `{"intensity": [5, 5, 5]}`;
+    /// - objects: a whole transform, `{"translate", "rotate", "scale"}` as in the scene
+    ///   format (fields left out are the identity's), or `{"matrix": 4×4 rows}`.
+    ///
+    /// Errors name the field (`SceneError` with source "scene update").
+    pub fn update_from_json(
+        &self,
+        target: &UpdateTarget,
+        json: &serde_json::Value,
+    ) -> Result<SceneUpdate> {
+        let obj = json
+            .as_object()
+            .ok_or_else(|| Error::scene(SOURCE, "(root)", "an update must be a JSON object"))?;
+        // The fields given replace the current description's.
+        let merged = |mut current: serde_json::Value| {
+            if let Some(map) = current.as_object_mut() {
+                for (k, v) in obj {
+                    map.insert(k.clone(), v.clone());
+                }
+            }
+            current
+        };
+        fn typed<T: serde::de::DeserializeOwned>(v: serde_json::Value, prefix: &str) -> Result<T> {
+            serde_path_to_error::deserialize(v).map_err(|e| {
+                let path = e.path().to_string();
+                let field = if path == "." {
+                    prefix.to_string()
+                } else {
+                    format!("{prefix}.{path}")
+                };
+                Error::scene(SOURCE, field, e.inner().to_string())
+            })
+        }
+        let to_value = |v: std::result::Result<serde_json::Value, serde_json::Error>| {
+            v.map_err(|e| Error::scene(SOURCE, "(root)", e.to_string()))
+        };
+        Ok(match target {
+            UpdateTarget::Camera => {
+                let current = to_value(serde_json::to_value(self.camera_desc()))?;
+                SceneUpdate::Camera(typed(merged(current), "camera")?)
+            }
+            UpdateTarget::Light(i) => {
+                let prefix = format!("lights[{i}]");
+                let desc = self.light_desc(*i).ok_or_else(|| {
+                    let n = self.lights.len();
+                    Error::scene(
+                        SOURCE,
+                        prefix.clone(),
+                        format!("no such light (the scene has {n})"),
+                    )
+                })?;
+                let current = to_value(serde_json::to_value(desc))?;
+                SceneUpdate::Light {
+                    index: *i,
+                    light: typed(merged(current), &prefix)?,
+                }
+            }
+            UpdateTarget::Material(name) => {
+                let prefix = format!("materials.{name}");
+                let desc = self.material_desc(name).ok_or_else(|| {
+                    Error::scene(SOURCE, prefix.clone(), "no material of that name")
+                })?;
+                let current = to_value(serde_json::to_value(desc))?;
+                SceneUpdate::Material {
+                    name: name.clone(),
+                    material: typed(merged(current), &prefix)?,
+                }
+            }
+            UpdateTarget::Object(i) => {
+                let prefix = format!("objects[{i}].transform");
+                let transform = if let Some(m) = obj.get("matrix") {
+                    if obj.len() != 1 {
+                        return Err(Error::scene(
+                            SOURCE,
+                            prefix,
+                            "`matrix` excludes translate/rotate/scale",
+                        ));
+                    }
+                    let rows: [[f32; 4]; 4] = typed(m.clone(), &format!("{prefix}.matrix"))?;
+                    Mat4::from_cols_array_2d(&rows).transpose()
+                } else {
+                    let desc: super::desc::TransformDesc = typed(json.clone(), &prefix)?;
+                    super::transform_matrix(&desc)
+                        .map_err(|(f, m)| Error::scene(SOURCE, format!("{prefix}.{f}"), m))?
+                };
+                SceneUpdate::Transform {
+                    object: *i,
+                    transform,
+                }
+            }
+        })
+    }
+}
