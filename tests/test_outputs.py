@@ -74,6 +74,11 @@ def test_png_aovs_are_mapped_to_a_visible_range(tmp_path, ispm_result):
     assert depth[near] == 1.0
     position = gi.read_image(tmp_path / "f.position.png")
     assert position[hit].min() == 0.0 and position[hit].max() == 1.0
+    # ispm's photon visualisation: scaled to its 99th percentile, not washed out to white.
+    gi.save_result(tmp_path / "p.png", r, ["photons"])
+    photons = gi.read_image(tmp_path / "p.photons.png")
+    assert np.mean(photons == 1.0) < 0.05 and photons.max() == 1.0
+    assert np.array_equal(photons > 0, r.aov("photons") > 0)  # every photon stays visible
 
 
 def test_outputs_formats_and_aov_names_are_checked_before_rendering(tmp_path):

@@ -93,8 +93,8 @@ def _parser() -> argparse.ArgumentParser:
         action="append",
         default=[],
         help="also write this AOV (repeatable; 'all' for every one): albedo, normal, position,"
-        " depth, caustics; method ispm adds direct, specular, indirect, photons; --denoise"
-        " adds noisy. EXR: layers of the output file; other formats: NAME.AOV.EXT files",
+        " depth, caustics; method direct adds direct, ispm direct, specular, indirect, photons;"
+        " --denoise adds noisy. EXR: layers of the output file; other formats: NAME.AOV.EXT",
     )
     r.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
     sub.add_parser("scenes", help="list the built-in scenes")

@@ -144,7 +144,8 @@ def aov_display(
     ``albedo``: clipped reflectance, sRGB-encoded. ``normal``: ``n/2 + 1/2`` per component
     (the usual normal-map colours; a miss is 0.5 grey). ``position``: each axis scaled to
     the range of the surfaces seen (misses black). ``depth``: one channel, the nearest
-    surface white, the farthest 15 % grey, misses (depth 0) black. Anything else is light
+    surface white, the farthest 15 % grey, misses (depth 0) black. ``photons`` (ispm's
+    photon-landing visualisation): scaled to its 99th percentile. Anything else is light
     (caustics, direct, indirect, …) and gets ``tonemap`` and ``exposure`` like the beauty.
     ``depth`` (the depth AOV) tells hits from misses for ``position``.
     """
@@ -160,6 +161,11 @@ def aov_display(
         near, far = float(img[hit].min()), float(img[hit].max())
         t = (img - near) / max(far - near, 1e-12)
         return np.where(hit, 1.0 - 0.85 * t, 0.0).astype(np.float32)
+    if name == "photons":
+        # A visualisation of where photons land, in arbitrary units: scaled to its 99th
+        # percentile so that it is visible whatever the photon count.
+        top = float(np.percentile(img, 99.0)) if img.size else 0.0
+        return srgb_encode(img / top if top > 0.0 else img).astype(np.float32)
     if name == "position":
         hit = (depth > 0.0) if depth is not None else np.any(img != 0.0, axis=-1)
         if not hit.any():
