@@ -38,7 +38,11 @@ def _parser() -> argparse.ArgumentParser:
         " (8-bit sRGB through --tonemap), .hdr/.pfm/.tif (float); repeat for several",
     )
     r.add_argument("--method", default="ispm", help="rendering method (see `gi methods`)")
-    r.add_argument("--spp", type=int, default=64, help="samples per pixel (default 64)")
+    r.add_argument(
+        "--spp",
+        type=int,
+        help="samples per pixel (default 64; 16 direct-light samples for direct and ispm)",
+    )
     r.add_argument("--size", type=_size, help="image size WIDTHxHEIGHT (default: the scene's)")
     r.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     r.add_argument("--max-depth", type=int, default=64, help="maximum path length")

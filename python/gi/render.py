@@ -233,7 +233,7 @@ def render(
     scene: Scene,
     method: str = "path",
     *,
-    spp: int = 64,
+    spp: int | None = None,
     size: tuple[int, int] | None = None,
     seed: int = 0,
     max_depth: int = 64,
@@ -257,7 +257,8 @@ def render(
     """Renders ``scene`` with ``method`` (see :func:`gi.methods`).
 
     ``size`` is ``(width, height)`` and defaults to the scene camera's. ``spp`` is camera
-    samples per pixel; ``light_paths`` the caustic light paths of method ``path`` (default
+    samples per pixel (default 64; 16 direct-light samples for the GPU methods ``direct``
+    and ``ispm``, chosen by measurement); ``light_paths`` the caustic light paths of method ``path`` (default
     one per camera sample). Method ``photon`` (classic photon mapping) emits ``photons``
     photons and estimates radiance from the ``k`` nearest within ``max_radius`` (metres;
     default 5% of the scene's diagonal) with a ``kernel`` of "box", "cone" or "epanechnikov".
