@@ -28,6 +28,7 @@ from gi._gi import (  # noqa: E402
     gpu_counters,
     methods,
 )
+from gi.animation import animation_updates, render_animation  # noqa: E402
 from gi.io import read_image, save_image  # noqa: E402
 from gi.render import Renderer, RenderResult, RenderStats, render  # noqa: E402
 from gi.scene import load_scene  # noqa: E402
@@ -44,6 +45,7 @@ __all__ = [
     "SettingError",
     "__version__",
     "adapter_report",
+    "animation_updates",
     "builtin_json",
     "builtin_scenes",
     "footprint_radii",
@@ -52,5 +54,6 @@ __all__ = [
     "methods",
     "read_image",
     "render",
+    "render_animation",
     "save_image",
 ]

@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -147,6 +147,7 @@ class Renderer:
 
     def __init__(self, scene: Scene, method: str = "ispm", **settings: Any) -> None:
         self._native = _gi.Renderer(scene, method, _settings(**settings))
+        self._scene = scene
 
     @property
     def method(self) -> str:
@@ -216,6 +217,53 @@ class Renderer:
             aovs=aovs, extras=extras, seed=seed, progress=_progress(progress)
         )
         return _result(out)
+
+    @property
+    def animation_duration(self) -> float | None:
+        """Length of the scene's animation in seconds (``None``: the scene has none)."""
+        return self._scene.animation_duration
+
+    def apply_animation(self, time: float) -> None:
+        """Poses the scene at ``time`` seconds of its ``animation`` tracks: every animated
+        camera, light, object and material takes its description at that time (the fields
+        no track animates keep the scene file's values). Nothing happens without tracks."""
+        from gi.animation import animation_updates
+
+        self.update(**animation_updates(self._scene, time))
+
+    def render_animation(
+        self,
+        frames: Iterable[int] | None = None,
+        fps: float = 30.0,
+        *,
+        aovs: bool = False,
+        extras: bool = False,
+        seed: int | None = None,
+        progress: bool | ProgressCallback = False,
+    ) -> Iterator[tuple[int, RenderResult]]:
+        """Renders frames of the scene's animation: an iterator of ``(frame number,
+        RenderResult)``. Frame ``n`` shows time ``n / fps`` seconds (:meth:`apply_animation`
+        before each frame); ``frames`` defaults to the whole animation,
+        ``range(round(duration · fps))``. ``progress=True`` draws one bar over the frames on
+        stderr when it is a terminal; a callable gets ``("frames", fraction done)`` and
+        cancels with :class:`gi.RenderCancelled` by returning ``False``. Arguments are checked
+        at the call (:class:`gi.SettingError`), before any frame is rendered.
+
+        >>> for n, frame in r.render_animation(range(0, 120), fps=30):
+        ...     gi.save_image(f"frame_{n:04d}.png", frame.radiance)
+        """
+        from gi.animation import render_frames
+
+        return render_frames(
+            self,
+            self._scene,
+            frames,
+            fps,
+            aovs=aovs,
+            extras=extras,
+            seed=seed,
+            progress=progress,
+        )
 
 
 def _jsonable(value: Any) -> Any:

@@ -1,5 +1,6 @@
 //! The scene: camera, lights, materials and one flat triangle soup in world space.
 
+pub mod animation;
 pub mod bench;
 pub mod builtin;
 pub mod camera;
@@ -8,6 +9,7 @@ pub mod light;
 pub mod primitives;
 pub mod update;
 
+pub use animation::Animation;
 pub use camera::Camera;
 pub use desc::SceneDesc;
 pub use light::Light;
@@ -46,6 +48,8 @@ pub struct Scene {
     /// The objects of the description, in order: their vertex and triangle ranges and the
     /// local geometry a new transform is applied to (`SceneUpdate::Transform`).
     pub objects: Vec<SceneObject>,
+    /// The description's keyframed tracks, if any (see [`animation`]).
+    pub animation: Option<Animation>,
 }
 
 fn finite3(v: V3) -> bool {
@@ -108,6 +112,7 @@ impl Scene {
             triangles: Vec::new(),
             triangle_materials: Vec::new(),
             objects: Vec::new(),
+            animation: None,
         };
         for (i, obj) in desc.objects.iter().enumerate() {
             let at = |f: &str| format!("objects[{i}].{f}");
@@ -170,6 +175,9 @@ impl Scene {
                 }
             }
             scene.append(obj.name.clone(), &mesh, xf, &tri_mats);
+        }
+        if let Some(anim) = &desc.animation {
+            scene.animation = Some(Animation::from_desc(anim, desc, &scene, source_name)?);
         }
         Ok(scene)
     }
