@@ -101,9 +101,7 @@ class FrameProgressBar:
         self.stream.flush()
 
 
-def _frame_progress(
-    progress: bool | ProgressCallback, total: int
-) -> Callable[[int], None] | None:
+def _frame_progress(progress: bool | ProgressCallback, total: int) -> Callable[[int], None] | None:
     if progress is False:
         return None
     if progress is True:
@@ -163,6 +161,4 @@ def render_animation(
     from gi.render import Renderer
 
     renderer = Renderer(scene, method, **settings)
-    return renderer.render_animation(
-        frames, fps, aovs=aovs, extras=extras, progress=progress
-    )
+    return renderer.render_animation(frames, fps, aovs=aovs, extras=extras, progress=progress)

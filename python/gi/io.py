@@ -6,6 +6,11 @@ from pathlib import Path
 
 import numpy as np
 
+#: Suffixes written as linear float images.
+FLOAT_FORMATS = {".exr", ".hdr", ".pfm", ".tif", ".tiff"}
+#: Suffixes written as tone-mapped 8-bit sRGB.
+SRGB_FORMATS = {".png", ".jpg", ".jpeg"}
+
 
 def _oiio():  # type: ignore[no-untyped-def]
     import OpenImageIO as oiio  # noqa: N813 (the package's own usual alias)
@@ -33,10 +38,9 @@ def save_image(path: str | Path, image: np.ndarray, exposure: float = 0.0) -> No
         img = img[:, :, None]
     if img.ndim != 3:
         raise ValueError(f"image must be H×W or H×W×C, got shape {img.shape}")
-    float_formats = {".exr", ".hdr", ".pfm", ".tif", ".tiff"}
-    if path.suffix.lower() in float_formats:
+    if path.suffix.lower() in FLOAT_FORMATS:
         data, fmt = np.ascontiguousarray(img), "float"
-    elif path.suffix.lower() in {".png", ".jpg", ".jpeg"}:
+    elif path.suffix.lower() in SRGB_FORMATS:
         data, fmt = np.ascontiguousarray(to_srgb8(img, exposure)), "uint8"
     else:
         raise ValueError(f"unsupported image format {path.suffix!r} (use .exr or .png)")

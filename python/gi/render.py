@@ -94,7 +94,9 @@ def _settings(**kw: object) -> dict[str, object]:
         try:
             kw["width"], kw["height"] = size  # type: ignore[misc]
         except (TypeError, ValueError):
-            raise SettingError(f"invalid setting `size`: expected (width, height), got {size!r}") from None
+            raise SettingError(
+                f"invalid setting `size`: expected (width, height), got {size!r}"
+            ) from None
     return kw
 
 
@@ -213,9 +215,7 @@ class Renderer:
         """Renders one frame. Only the radiance is read back unless ``aovs`` (albedo,
         normal, position, depth) or ``extras`` (the method's own images) are asked for;
         images not asked for are empty arrays. ``seed`` overrides the frame's random seed."""
-        out = self._native.render(
-            aovs=aovs, extras=extras, seed=seed, progress=_progress(progress)
-        )
+        out = self._native.render(aovs=aovs, extras=extras, seed=seed, progress=_progress(progress))
         return _result(out)
 
     @property
