@@ -77,12 +77,8 @@ fn lerp(a: &Value, b: &Value, s: f64) -> Option<Value> {
             .map(|(x, y)| lerp(x, y, s))
             .collect::<Option<Vec<_>>>()
             .map(Value::Array),
-        (Value::Number(_), Value::Array(y)) => {
-            lerp(&Value::Array(vec![a.clone(); y.len()]), b, s)
-        }
-        (Value::Array(x), Value::Number(_)) => {
-            lerp(a, &Value::Array(vec![b.clone(); x.len()]), s)
-        }
+        (Value::Number(_), Value::Array(y)) => lerp(&Value::Array(vec![a.clone(); y.len()]), b, s),
+        (Value::Array(x), Value::Number(_)) => lerp(a, &Value::Array(vec![b.clone(); x.len()]), s),
         (Value::Bool(_), Value::Bool(_)) | (Value::String(_), Value::String(_)) => Some(a.clone()),
         _ => None,
     }
@@ -311,8 +307,16 @@ impl Animation {
                         &format!("{kat}.value"),
                         format!(
                             "every key of a track gives the same fields: {} here, {} in keys[0]",
-                            fields.iter().map(|s| s.as_str()).collect::<Vec<_>>().join(", "),
-                            first.iter().map(|s| s.as_str()).collect::<Vec<_>>().join(", ")
+                            fields
+                                .iter()
+                                .map(|s| s.as_str())
+                                .collect::<Vec<_>>()
+                                .join(", "),
+                            first
+                                .iter()
+                                .map(|s| s.as_str())
+                                .collect::<Vec<_>>()
+                                .join(", ")
                         ),
                     ));
                 }
@@ -375,13 +379,16 @@ impl Animation {
     }
 }
 
+/// A track's error: the field under `animation.tracks[i]` (`.index`) and the message.
+type TrackError = (&'static str, String);
+
 /// The update target of a track and the description at rest of what it animates.
 fn resolve_target(
     track: &TrackDesc,
     desc: &SceneDesc,
     scene: &Scene,
-) -> std::result::Result<(UpdateTarget, Map<String, Value>), (&'static str, String)> {
-    let no = |field: &'static str, what: &str| -> std::result::Result<(), (&'static str, String)> {
+) -> std::result::Result<(UpdateTarget, Map<String, Value>), TrackError> {
+    let no = |field: &'static str, what: &str| -> std::result::Result<(), TrackError> {
         Err((field, format!("a {what} track takes no `{}`", &field[1..])))
     };
     match track.target {
@@ -415,7 +422,10 @@ fn resolve_target(
         TrackTarget::Object => {
             let i = match (&track.name, track.index) {
                 (Some(_), Some(_)) => {
-                    return Err((".index", "give the object's `name` or `index`, not both".into()))
+                    return Err((
+                        ".index",
+                        "give the object's `name` or `index`, not both".into(),
+                    ))
                 }
                 (Some(name), None) => scene
                     .object_index(name)
@@ -437,10 +447,10 @@ fn resolve_target(
             if track.index.is_some() {
                 no(".index", "material (materials are addressed by `name`)")?;
             }
-            let name = track
-                .name
-                .clone()
-                .ok_or((".name", "a material track needs the material's `name`".into()))?;
+            let name = track.name.clone().ok_or((
+                ".name",
+                "a material track needs the material's `name`".into(),
+            ))?;
             let rest = match desc.materials.get(&name) {
                 Some(m) => to_map(m),
                 None => to_map(
@@ -537,7 +547,9 @@ mod tests {
         }
         let r = posed.objects[tall].vertices.clone();
         let local = posed.objects[tall].local_positions[0];
-        assert!((posed.positions[r.start as usize] - expect.transform_point3(local)).length() < 1e-5);
+        assert!(
+            (posed.positions[r.start as usize] - expect.transform_point3(local)).length() < 1e-5
+        );
         // A scene without an animation has none.
         let still = builtin::load("cornell").expect("scene");
         assert_eq!(still.animation_duration(), None);
@@ -570,7 +582,11 @@ mod tests {
         assert_eq!(light.0, UpdateTarget::Light(0));
         assert_eq!(nums(&light.1["intensity"]), [1.0; 3], "step");
         assert_eq!(nums(&light.1["position"]), [0.0, 1.2, 0.0]);
-        assert_eq!(light.1["type"], json!("point"), "the rest of the description");
+        assert_eq!(
+            light.1["type"],
+            json!("point"),
+            "the rest of the description"
+        );
         let values = scene.animation_values(1.0).expect("valid");
         assert_eq!(nums(&values[0].1["intensity"]), [5.0; 3]);
         let mat = &scene.animation_values(0.75).expect("valid")[1];
@@ -614,7 +630,8 @@ mod tests {
     #[test]
     fn errors_name_the_field() {
         let key = |t: f64, v: Value| json!({"time": t, "value": v});
-        let light = |keys: Vec<Value>| json!({"tracks": [{"target": "light", "index": 0, "keys": keys}]});
+        let light =
+            |keys: Vec<Value>| json!({"tracks": [{"target": "light", "index": 0, "keys": keys}]});
         let p = |x: f64| json!({"position": [x, 1, 0]});
         let cases = [
             (
@@ -664,17 +681,26 @@ mod tests {
                 "cannot be animated",
             ),
             (
-                light(vec![key(0.0, p(0.0)), key(1.0, json!({"intensity": [1, 1, 1]}))]),
+                light(vec![
+                    key(0.0, p(0.0)),
+                    key(1.0, json!({"intensity": [1, 1, 1]})),
+                ]),
                 "animation.tracks[0].keys[1].value",
                 "same fields",
             ),
             (
-                light(vec![key(0.0, p(0.0)), key(1.0, json!({"position": [1, 1]}))]),
+                light(vec![
+                    key(0.0, p(0.0)),
+                    key(1.0, json!({"position": [1, 1]})),
+                ]),
                 "animation.tracks[0].keys[1].value.position",
                 "interpolated",
             ),
             (
-                light(vec![key(0.0, json!({"intensity": [1, 1, 1]})), key(1.0, json!({"intensity": [1, -1, 1]}))]),
+                light(vec![
+                    key(0.0, json!({"intensity": [1, 1, 1]})),
+                    key(1.0, json!({"intensity": [1, -1, 1]})),
+                ]),
                 "animation.tracks[0].keys[1].value.intensity",
                 "non-negative",
             ),
@@ -742,7 +768,10 @@ mod tests {
     #[test]
     fn lerp_values() {
         assert_eq!(lerp(&json!(1.0), &json!(3.0), 0.25), Some(json!(1.5)));
-        assert_eq!(lerp(&json!([0, 2]), &json!([4, 2]), 0.5), Some(json!([2.0, 2.0])));
+        assert_eq!(
+            lerp(&json!([0, 2]), &json!([4, 2]), 0.5),
+            Some(json!([2.0, 2.0]))
+        );
         assert_eq!(lerp(&json!("a"), &json!("b"), 0.9), Some(json!("a")));
         assert_eq!(lerp(&json!([1, 2]), &json!([1, 2, 3]), 0.5), None);
         assert_eq!(lerp(&json!(true), &json!(1), 0.5), None);
