@@ -128,9 +128,18 @@ fn steady_state_creates_nothing_and_uploads_what_changed() {
             l
         };
 
+        let first = r.render(&frame, &Silent).expect("second frame");
         let c0 = counters();
-        r.render(&frame, &Silent).expect("still frame");
+        let still = r.render(&frame, &Silent).expect("still frame");
         let c1 = counters();
+        // Nothing moved: the direct light and the photon estimate are not redrawn, and the
+        // image is the same.
+        let passes: Vec<&str> = still.stats.stages.iter().map(|(n, _)| n.as_str()).collect();
+        assert!(
+            !passes.contains(&"direct light") && !passes.contains(&"photon volumes"),
+            "{passes:?}"
+        );
+        assert_eq!(still.radiance.pixels, first.radiance.pixels);
         assert_eq!(c1.created_since(&c0), 0, "{}: still frame", method.name());
         assert_eq!(
             c1.uploads_since(&c0),

@@ -215,6 +215,9 @@ pub(crate) struct Targets {
     sample_views: Vec<ViewRaw>,
     /// Whether `eye` holds the current camera's views (false after a camera change).
     pub eye_current: bool,
+    /// Whether the accumulated direct light and the centre G-buffer are those of the
+    /// current scene and camera (a still frame re-renders neither).
+    pub direct_current: bool,
     pub gbuf: gbuffer::GBuffer,
     accum: wgpu::Texture,
     accum_view: wgpu::TextureView,
@@ -354,6 +357,7 @@ impl Targets {
             eye,
             sample_views: Vec::new(),
             eye_current: false,
+            direct_current: false,
             gbuf,
             accum,
             accum_view,
@@ -423,15 +427,18 @@ impl Targets {
     /// Direct light: per sub-pixel sample an eye G-buffer and the deferred lighting added
     /// into the accumulation target, then the G-buffer at the pixel centres (AOVs and the
     /// photon estimate read it). Batches beyond the first rewrite the sample views.
-    #[allow(clippy::too_many_arguments)]
     pub fn record_direct(
-        &self,
+        &mut self,
         ctx: &GpuContext,
         gs: &GpuScene,
         mut encoder: wgpu::CommandEncoder,
         timer: &mut Timer,
         progress: &dyn crate::render::Progress,
     ) -> Result<wgpu::CommandEncoder> {
+        if self.direct_current {
+            return Ok(encoder);
+        }
+        self.direct_current = true;
         let passes = Passes::get(ctx);
         let spp = self.spp;
         let mut done = 0;

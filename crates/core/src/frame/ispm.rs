@@ -42,6 +42,8 @@ pub(super) struct IspmState {
     traced_seed: Option<u64>,
     /// The specular image of the last frame (reused while the camera and scene stand still).
     specular_image: Option<Image>,
+    /// Whether the estimator's output is this scene's and camera's.
+    splat_current: bool,
 }
 
 /// What changed since the photons in the ring were traced.
@@ -111,6 +113,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
                     .any(crate::render::camera_pass::has_delta_lobe),
                 traced_seed: None,
                 specular_image: None,
+                splat_current: false,
             }
         }
     };
@@ -310,18 +313,23 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     if !ordered.is_empty() && (photons_changed || changes.camera) {
         state.volumes.write_photons(&ctx, &ordered);
     }
+    // A still frame (same photons, nothing moved) keeps last frame's estimate.
+    let splat = photons_changed || changes.any() || !state.splat_current;
     let mut encoder = ctx
         .device
         .create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("photon volumes"),
         });
-    state.volumes.record(
-        &ctx,
-        &mut encoder,
-        ordered.len() as u32,
-        quads as u32,
-        &mut g.timer,
-    );
+    if splat {
+        state.volumes.record(
+            &ctx,
+            &mut encoder,
+            ordered.len() as u32,
+            quads as u32,
+            &mut g.timer,
+        );
+        state.splat_current = true;
+    }
     g.targets.record_composite(&ctx, &mut encoder, &mut g.timer);
     let names = readback_names(images, true);
     g.targets

@@ -279,9 +279,14 @@ impl Renderer {
             crate::raster::check_limits(ctx, scene, settings, g.scene.layers)?;
             g.targets = gpu::Targets::new(ctx, &g.scene, scene, settings.spp);
             g.ispm = None;
-        } else if c.camera || c.geometry {
-            // The eye views' depth range follows the scene's bounds.
-            g.targets.eye_current = false;
+        } else {
+            if c.camera || c.geometry {
+                // The eye views' depth range follows the scene's bounds.
+                g.targets.eye_current = false;
+            }
+            if c.any() {
+                g.targets.direct_current = false;
+            }
         }
         Ok(())
     }

@@ -467,10 +467,22 @@ impl Scene {
                     )
                 })?;
                 let current = to_value(serde_json::to_value(desc))?;
-                SceneUpdate::Light {
-                    index: *i,
-                    light: typed(merged(current), &prefix)?,
-                }
+                // Lights are an internally tagged enum, whose errors carry no field path:
+                // name the first field that fails on its own.
+                let light = typed(merged(current.clone()), &prefix).map_err(|e| {
+                    for (k, v) in obj {
+                        let mut one = current.clone();
+                        if let Some(map) = one.as_object_mut() {
+                            map.insert(k.clone(), v.clone());
+                        }
+                        if let Err(Error::Scene { message, .. }) = typed::<LightDesc>(one, &prefix)
+                        {
+                            return Error::scene(SOURCE, format!("{prefix}.{k}"), message);
+                        }
+                    }
+                    e
+                })?;
+                SceneUpdate::Light { index: *i, light }
             }
             UpdateTarget::Material(name) => {
                 let prefix = format!("materials.{name}");

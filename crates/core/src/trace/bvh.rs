@@ -231,3 +231,72 @@ mod axis_tests {
         );
     }
 }
+
+/// Seconds (median of `runs`) to update the scene's BVH after its last object moved by a few
+/// centimetres: a full rebuild (what [`SceneBvh::build`] does) against refitting the binary
+/// tree that the build starts from (leaf boxes of the moved triangles, then every parent)
+/// and converting it to the wide BVH again. For the frame benchmark.
+pub fn rebuild_vs_refit(scene: &Scene, runs: usize) -> (f64, f64) {
+    use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
+    use obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh;
+    use obvhs::ploc::PlocBuilder;
+    use std::time::Instant;
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let mut triangles: Vec<Triangle> = (0..scene.triangles.len())
+        .map(|t| {
+            let [a, b, c] = scene.triangle(t);
+            Triangle {
+                v0: a.into(),
+                v1: b.into(),
+                v2: c.into(),
+            }
+        })
+        .collect();
+    let rebuild = median(
+        (0..runs)
+            .map(|_| {
+                let t = Instant::now();
+                let _ = SceneBvh::from_triangles(&triangles);
+                t.elapsed().as_secs_f64()
+            })
+            .collect(),
+    );
+    let p = BvhBuildParams::medium_build();
+    let mut bvh2 = PlocBuilder::with_capacity(triangles.len()).build(
+        p.ploc_search_distance,
+        &triangles,
+        (0..triangles.len() as u32).collect(),
+        p.sort_precision,
+        p.search_depth_threshold,
+    );
+    ReinsertionOptimizer::default().run(&mut bvh2, p.reinsertion_batch_ratio, None);
+    bvh2.init_primitives_to_nodes_if_uninit();
+    let moved = scene
+        .objects
+        .last()
+        .map(|o| o.triangles.start as usize..o.triangles.end as usize)
+        .unwrap_or(0..0);
+    let refit = median(
+        (0..runs)
+            .map(|i| {
+                let shift = Vec3A::new(0.01 * (i + 1) as f32, 0.0, 0.0);
+                let t = Instant::now();
+                for id in moved.clone() {
+                    let tri = &mut triangles[id];
+                    tri.v0 += shift;
+                    tri.v1 += shift;
+                    tri.v2 += shift;
+                    let node = bvh2.primitives_to_nodes[id] as usize;
+                    bvh2.nodes[node].set_aabb(obvhs::Boundable::aabb(tri));
+                }
+                bvh2.refit_all();
+                let _ = bvh2_to_cwbvh(&bvh2, p.max_prims_per_leaf.clamp(1, 3), true, false);
+                t.elapsed().as_secs_f64()
+            })
+            .collect(),
+    );
+    (rebuild, refit)
+}

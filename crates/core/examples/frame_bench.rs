@@ -1,0 +1,174 @@
+//! Frame time of method `ispm`: the one-shot path (`gi_core::render`, a new renderer per
+//! frame: every buffer, target, BVH and bind group rebuilt, everything read back) against
+//! the frame engine's steady state (one `Renderer`, the light moving a little every frame
+//! so that every frame re-traces and re-splats its photons, radiance read back only), in the
+//! same run, as a markdown table.
+//!
+//! `cargo run -p gi-core --profile test --example frame_bench [-- --runs N --quick]`
+//!
+//! Scenes `cornell`, `cornell-glass` and the ~246k-triangle `dense-cornell`, at 640×480 and
+//! 1280×720, 20k / 50k / 200k photons, 16 direct samples per pixel, subsample 2 (defaults
+//! otherwise). Median of N frames after a warm-up frame. `--quick` runs 640×480 and 20k only.
+//! Also: CPU BVH rebuild against a refit of the same tree after moving one object.
+
+use gi_core::frame::{FrameDesc, Renderer};
+use gi_core::render::Silent;
+use gi_core::scene::desc::LightDesc;
+use gi_core::scene::{bench::dense_cornell, builtin, SceneUpdate};
+use gi_core::{render, Method, RenderOutput, Scene, Settings};
+use std::time::Instant;
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn stage(out: &RenderOutput, names: &[&str]) -> f64 {
+    out.stats
+        .stages
+        .iter()
+        .filter(|(n, _)| names.contains(&n.as_str()))
+        .map(|(_, s)| s)
+        .sum()
+}
+
+/// Light 0 nudged by `t` (metres along x).
+fn nudge(scene: &Scene, t: f32) -> SceneUpdate {
+    let light = match scene.light_desc(0).expect("a light") {
+        LightDesc::Point {
+            position,
+            intensity,
+        } => LightDesc::Point {
+            position: [position[0] + t, position[1], position[2]],
+            intensity,
+        },
+        LightDesc::Spot {
+            position,
+            direction,
+            intensity,
+            inner_angle,
+            outer_angle,
+        } => LightDesc::Spot {
+            position: [position[0] + t, position[1], position[2]],
+            direction,
+            intensity,
+            inner_angle,
+            outer_angle,
+        },
+    };
+    SceneUpdate::Light { index: 0, light }
+}
+
+/// (frame, splat, cpu trace + compensation) seconds.
+struct Row {
+    frame: f64,
+    splat: f64,
+    trace: f64,
+}
+
+fn row(frames: &[RenderOutput], wall: Vec<f64>) -> Row {
+    let m = |f: &dyn Fn(&RenderOutput) -> f64| median(frames.iter().map(f).collect());
+    Row {
+        frame: median(wall),
+        splat: m(&|o| stage(o, &["photon volumes"])),
+        trace: m(&|o| stage(o, &["cpu trace", "boundary compensation"])),
+    }
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().collect();
+    let runs: usize = match args.iter().position(|a| a == "--runs") {
+        Some(i) => args.get(i + 1).ok_or("--runs needs a value")?.parse()?,
+        None => 3,
+    };
+    let quick = args.iter().any(|a| a == "--quick");
+    println!(
+        "{}\n",
+        gi_core::gpu::adapter_report(None)?
+            .lines()
+            .take(4)
+            .collect::<Vec<_>>()
+            .join("; ")
+    );
+    let scenes: Vec<(&str, Scene)> = vec![
+        ("cornell", builtin::load("cornell")?),
+        ("cornell-glass", builtin::load("cornell-glass")?),
+        ("dense-cornell", dense_cornell()),
+    ];
+    let sizes: &[(u32, u32)] = if quick {
+        &[(640, 480)]
+    } else {
+        &[(640, 480), (1280, 720)]
+    };
+    let budgets: &[u64] = if quick {
+        &[20_000]
+    } else {
+        &[20_000, 50_000, 200_000]
+    };
+    println!(
+        "| scene | size | photons | one-shot frame (ms) | engine frame (ms) | speed-up | \
+         engine splat (ms) | engine CPU trace (ms) | engine other (ms) | other share |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|---|");
+    for (name, scene) in &scenes {
+        for &(w, h) in sizes {
+            for &photons in budgets {
+                let settings = Settings {
+                    method: Method::Ispm,
+                    width: Some(w),
+                    height: Some(h),
+                    spp: 16,
+                    photons,
+                    ..Default::default()
+                };
+                // One-shot: a new renderer per frame, every image read back.
+                render(scene, &settings, &Silent)?;
+                let mut frames = Vec::new();
+                let mut wall = Vec::new();
+                for _ in 0..runs {
+                    let t = Instant::now();
+                    frames.push(render(scene, &settings, &Silent)?);
+                    wall.push(t.elapsed().as_secs_f64());
+                }
+                let old = row(&frames, wall);
+                // Engine: one renderer, the light moving, radiance only.
+                let mut r = Renderer::new(scene, &settings)?;
+                r.render(&FrameDesc::default(), &Silent)?;
+                let mut frames = Vec::new();
+                let mut wall = Vec::new();
+                for i in 0..runs {
+                    r.update(&nudge(scene, 0.01 * (i + 1) as f32))?;
+                    let t = Instant::now();
+                    frames.push(r.render(&FrameDesc::default(), &Silent)?);
+                    wall.push(t.elapsed().as_secs_f64());
+                }
+                let new = row(&frames, wall);
+                let other = (new.frame - new.splat - new.trace).max(0.0);
+                println!(
+                    "| {name} | {w}×{h} | {photons} | {:.0} | {:.0} | {:.2}× | {:.0} | {:.0} | {:.0} | {:.1}% |",
+                    old.frame * 1e3,
+                    new.frame * 1e3,
+                    old.frame / new.frame,
+                    new.splat * 1e3,
+                    new.trace * 1e3,
+                    other * 1e3,
+                    100.0 * other / new.frame,
+                );
+            }
+        }
+    }
+
+    // CPU BVH after an object moves: full rebuild against refitting the same tree.
+    println!("\n| scene | triangles | rebuild (ms) | refit + CWBVH conversion (ms) |");
+    println!("|---|---|---|---|");
+    for (name, scene) in &scenes {
+        let (rebuild, refit) = gi_core::trace::bvh::rebuild_vs_refit(scene, runs.max(3));
+        println!(
+            "| {name} | {} | {:.1} | {:.1} |",
+            scene.triangles.len(),
+            rebuild * 1e3,
+            refit * 1e3
+        );
+    }
+    Ok(())
+}
