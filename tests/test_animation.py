@@ -381,3 +381,20 @@ def test_readme_python_example(tmp_path, monkeypatch):
         "frame_0001.png",
     ]
     assert re.search(r"'tall box'", printed.getvalue())
+
+
+def test_soak_script_records_rss(tmp_path):
+    """scripts/soak_rss.py (its committed 1000-frame result is docs/bench/rss.md), run short:
+    it writes its table and exits 0 inside the band."""
+    script = README.parent / "scripts" / "soak_rss.py"
+    out = tmp_path / "rss.md"
+    p = subprocess.run(
+        [sys.executable, str(script), "--frames", "12", "--warmup", "4", "--size", "16x12"]
+        + ["--photons", "500", "--tolerance", "0.5", "--out", str(out)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert p.returncode == 0, p.stderr
+    text = out.read_text()
+    assert "| 11 |" in text and "within" in text, text
