@@ -102,7 +102,9 @@ def main(argv: list[str] | None = None) -> int:
         "|---:|---:|---:|",
     ]
     marks = sorted(
-        {0, 1, 2, 5, 10, 25, args.warmup, args.frames - 1} | set(range(100, args.frames, 100))
+        n
+        for n in {0, 1, 2, 5, 10, 25, args.warmup, args.frames - 1, *range(100, args.frames, 100)}
+        if n < args.frames
     )
     for n in marks:
         lines.append(f"| {n} | {rss[n] / mib:.1f} | {(rss[n] - ref) / ref * 100:+.2f}% |")
