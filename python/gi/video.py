@@ -44,7 +44,7 @@ class VideoWriter:
             raise ValueError(f"frames must be (H, W, 3) uint8, got {frame.shape} {frame.dtype}")
         h, w = frame.shape[:2]
         if self._gen is None:
-            import imageio_ffmpeg
+            import imageio_ffmpeg  # type: ignore[import-untyped]
 
             self.path.parent.mkdir(parents=True, exist_ok=True)
             self._size = (w, h)
