@@ -8,7 +8,7 @@ setup:
 
 render: setup
 	mkdir -p out
-	$(BIN)/gi render cornell -o out/cornell.exr -o out/cornell.png --spp 64
+	$(BIN)/gi render cornell -o out/cornell.exr -o out/cornell.png
 
 lint: setup
 	cargo fmt --all -- --check

@@ -30,10 +30,12 @@ from gi._gi import (  # noqa: E402
 )
 from gi.animation import animation_updates, render_animation  # noqa: E402
 from gi.io import read_image, save_image  # noqa: E402
+from gi.meshes import AssetWarning  # noqa: E402
 from gi.render import Renderer, RenderResult, RenderStats, render  # noqa: E402
 from gi.scene import load_scene  # noqa: E402
 
 __all__ = [
+    "AssetWarning",
     "GiError",
     "GpuError",
     "RenderCancelled",

@@ -7,6 +7,7 @@ import math
 import re
 import sys
 import time
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -58,7 +59,9 @@ def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="gi", description="Global illumination renderer (ISPM).")
     sub = p.add_subparsers(dest="command", required=True)
     r = sub.add_parser("render", help="render a scene to an image")
-    r.add_argument("scene", help="built-in scene name (see `gi scenes`) or JSON scene file")
+    r.add_argument(
+        "scene", help="built-in scene name (see `gi scenes`), JSON scene file or Mitsuba 3 XML"
+    )
     r.add_argument(
         "-o",
         "--output",
@@ -78,7 +81,11 @@ def _parser() -> argparse.ArgumentParser:
         "--fps", type=_fps, default=30.0, help="frames a second: frame n shows n/fps s (30)"
     )
     r.add_argument("--method", default="ispm", help="rendering method (see `gi methods`)")
-    r.add_argument("--spp", type=int, default=64, help="samples per pixel (default 64)")
+    r.add_argument(
+        "--spp",
+        type=int,
+        help="samples per pixel (default 64; 16 direct-light samples for direct and ispm)",
+    )
     r.add_argument("--size", type=_size, help="image size WIDTHxHEIGHT (default: the scene's)")
     r.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     r.add_argument("--max-depth", type=int, default=64, help="maximum path length")
@@ -179,6 +186,19 @@ def _outputs(paths: list[str]) -> list[_Output]:
     return out
 
 
+def _load(source: str) -> gi.Scene:
+    """Loads a scene, printing what its files hold that gi does not render."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", gi.AssetWarning)
+        scene = gi.load_scene(source)
+    for w in caught:
+        if issubclass(w.category, gi.AssetWarning):
+            print(f"gi: warning: {w.message}", file=sys.stderr)
+        else:
+            warnings.showwarning(w.message, w.category, w.filename, w.lineno)
+    return scene
+
+
 def _settings(args: argparse.Namespace) -> dict[str, object]:
     return dict(
         spp=args.spp,
@@ -206,7 +226,7 @@ def _render(args: argparse.Namespace) -> int:
     outputs = _outputs(args.output)
     if args.frames is not None or any(o.video or o.numbered for o in outputs):
         return _render_sequence(args, outputs)
-    scene = gi.load_scene(args.scene)
+    scene = _load(args.scene)
     result = gi.render(scene, args.method, **_settings(args), progress=not args.quiet)  # type: ignore[arg-type]
     missing = [name for name in args.aov if name not in result.aov_names()]
     if missing:
@@ -237,7 +257,7 @@ def _render_sequence(args: argparse.Namespace, outputs: list[_Output]) -> int:
             )
     if args.aov and not any(not o.video for o in outputs):
         raise ValueError("--aov needs an image-sequence output")
-    scene = gi.load_scene(args.scene)
+    scene = _load(args.scene)
     if args.frames is None and scene.animation_duration is None:
         raise ValueError(f"{args.scene} has no animation: give the frames (--frames START:END)")
     frames = args.frames if args.frames is not None else default_frames(scene, args.fps)
@@ -288,9 +308,7 @@ def _render_sequence(args: argparse.Namespace, outputs: list[_Output]) -> int:
 
 def _footprints(args: argparse.Namespace) -> int:
     qs = [1.0, 5.0, 25.0, 50.0, 75.0, 95.0, 99.0]
-    rows = gi.footprint_radii(
-        gi.load_scene(args.scene), args.photons, args.seed, args.smoothing, qs
-    )
+    rows = gi.footprint_radii(_load(args.scene), args.photons, args.seed, args.smoothing, qs)
     print(f"footprint radius (m) by percentile, {args.photons} photons, s = {args.smoothing}")
     print(f"{'kind':8} {'photons':>9} " + " ".join(f"{f'p{q:g}':>8}" for q in qs))
     for kind, (count, radii) in rows.items():

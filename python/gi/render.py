@@ -279,7 +279,7 @@ def render(
     scene: Scene,
     method: str = "path",
     *,
-    spp: int = 64,
+    spp: int | None = None,
     size: tuple[int, int] | None = None,
     seed: int = 0,
     max_depth: int = 64,
@@ -302,10 +302,12 @@ def render(
     """Renders ``scene`` with ``method`` (see :func:`gi.methods`).
 
     ``size`` is ``(width, height)`` and defaults to the scene camera's. ``spp`` is camera
-    samples per pixel; ``light_paths`` the caustic light paths of method ``path`` (default
-    one per camera sample). Method ``photon`` (classic photon mapping) emits ``photons``
-    photons and estimates radiance from the ``k`` nearest within ``max_radius`` (metres;
-    default 5% of the scene's diagonal) with a ``kernel`` of "box", "cone" or "epanechnikov".
+    samples per pixel (default 64; 16 direct-light samples for the GPU methods ``direct`` and
+    ``ispm``, chosen by measurement); ``light_paths`` the caustic light paths of method ``path``
+    (default one per camera sample). Method ``photon`` (classic photon mapping) emits
+    ``photons`` photons and estimates radiance from the ``k`` nearest within ``max_radius``
+    (metres; default 5% of the scene's diagonal) with a ``kernel`` of "box", "cone" or
+    "epanechnikov".
     Method ``gather`` traces ``photons`` photons with photon differentials and gathers every
     photon whose footprint (scaled by ``smoothing``, semi-axes at most ``max_radius``)
     contains the shading point, from a linear BVH with ``leaf_size`` footprints per leaf

@@ -59,11 +59,12 @@ fn nudge(scene: &Scene, t: f32) -> SceneUpdate {
     SceneUpdate::Light { index: 0, light }
 }
 
-/// (frame, splat, cpu trace + compensation) seconds.
+/// (frame, splat, cpu trace + compensation, direct light) seconds.
 struct Row {
     frame: f64,
     splat: f64,
     trace: f64,
+    direct: f64,
 }
 
 fn row(frames: &[RenderOutput], wall: Vec<f64>) -> Row {
@@ -72,6 +73,7 @@ fn row(frames: &[RenderOutput], wall: Vec<f64>) -> Row {
         frame: median(wall),
         splat: m(&|o| stage(o, &["photon volumes"])),
         trace: m(&|o| stage(o, &["cpu trace", "boundary compensation"])),
+        direct: m(&|o| stage(o, &["shadow maps", "gbuffer", "direct light"])),
     }
 }
 
@@ -107,9 +109,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     println!(
         "| scene | size | photons | one-shot frame (ms) | engine frame (ms) | speed-up | \
-         engine splat (ms) | engine CPU trace (ms) | engine other (ms) | other share |"
+         splat (ms) | CPU trace (ms) | direct light (ms) | other (ms) | other share | \
+         still frame (ms) |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
     for (name, scene) in &scenes {
         for &(w, h) in sizes {
             for &photons in budgets {
@@ -143,16 +146,22 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     wall.push(t.elapsed().as_secs_f64());
                 }
                 let new = row(&frames, wall);
-                let other = (new.frame - new.splat - new.trace).max(0.0);
+                // A still frame: nothing changed since the last one.
+                let t = Instant::now();
+                r.render(&FrameDesc::default(), &Silent)?;
+                let still = t.elapsed().as_secs_f64();
+                let other = (new.frame - new.splat - new.trace - new.direct).max(0.0);
                 println!(
-                    "| {name} | {w}×{h} | {photons} | {:.0} | {:.0} | {:.2}× | {:.0} | {:.0} | {:.0} | {:.1}% |",
+                    "| {name} | {w}×{h} | {photons} | {:.0} | {:.0} | {:.2}× | {:.0} | {:.0} | {:.0} | {:.0} | {:.1}% | {:.1} |",
                     old.frame * 1e3,
                     new.frame * 1e3,
                     old.frame / new.frame,
                     new.splat * 1e3,
                     new.trace * 1e3,
+                    new.direct * 1e3,
                     other * 1e3,
                     100.0 * other / new.frame,
+                    still * 1e3,
                 );
             }
         }

@@ -297,3 +297,39 @@ fn temporal_reuse_converges_on_a_still_scene() {
     }
     assert!(errors[7] < 0.7 * errors[0], "{errors:?}");
 }
+
+/// Moving objects: the renderer tries a BVH refit once, then keeps whichever of refit and
+/// rebuild measured faster (the stage's name says which ran).
+#[test]
+fn bvh_update_is_chosen_by_measurement() {
+    let scene = builtin::load("cornell-glass").expect("scene");
+    let s = settings(Method::Path);
+    let mut r = Renderer::new(&scene, &s).expect("renderer");
+    let bvh_stage = |o: &RenderOutput| {
+        o.stats
+            .stages
+            .iter()
+            .find(|(n, _)| n.starts_with("bvh "))
+            .cloned()
+            .expect("a BVH stage")
+    };
+    let object = scene.objects.len() - 1;
+    let start = scene.objects[object].transform;
+    let mut frames = Vec::new();
+    for i in 0..3 {
+        let transform = Mat4::from_translation(Vec3::new(0.02 * i as f32, 0.0, 0.0)) * start;
+        r.update(&SceneUpdate::Transform { object, transform })
+            .expect("move");
+        frames.push(bvh_stage(
+            &r.render(&FrameDesc::default(), &Silent).expect("frame"),
+        ));
+    }
+    assert_eq!(frames[0].0, "bvh build");
+    assert_eq!(frames[1].0, "bvh refit");
+    let expected = if frames[1].1 < frames[0].1 {
+        "bvh refit"
+    } else {
+        "bvh build"
+    };
+    assert_eq!(frames[2].0, expected, "{frames:?}");
+}

@@ -113,15 +113,16 @@ pub fn settings_from(
     method: &str,
     kw: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Settings> {
-    let mut s = Settings {
-        method: method.parse().map_err(|e| to_py(py, e))?,
-        ..Default::default()
-    };
+    let mut s = Settings::for_method(method.parse().map_err(|e| to_py(py, e))?);
     for (k, v) in kw.into_iter().flat_map(|d| d.iter()) {
         let key: String = k.extract()?;
         let v = &v;
         match key.as_str() {
-            "spp" => s.spp = int(v, "spp")?,
+            "spp" => {
+                if !v.is_none() {
+                    s.spp = int(v, "spp")?
+                }
+            }
             "width" => s.width = opt_int(v, "width")?,
             "height" => s.height = opt_int(v, "height")?,
             "seed" => s.seed = int(v, "seed")?,

@@ -31,8 +31,9 @@ fn vec3s(a: &PyReadonlyArray2<'_, f32>, what: &str, source: &str) -> PyResult<Ve
         .collect())
 }
 
-/// Converts one `meshes` entry: (vertices f32 (N,3), faces u32 (M,3), normals f32 (N,3) | None,
-/// materials JSON | None, face_materials u32 (M,) | None).
+/// Converts one `meshes` entry: (vertices f32 (N,3), faces u32 (M,3), normals f32 (N,3) | None
+/// (zero rows: none for that vertex), materials JSON `[[name, material], ...]` | None,
+/// face_materials u32 (M,) | None, indices into the materials).
 fn mesh_from_py(key: &str, value: &Bound<'_, PyAny>, source: &str) -> PyResult<MeshData> {
     type Entry<'py> = (
         PyReadonlyArray2<'py, f32>,
@@ -58,18 +59,8 @@ fn mesh_from_py(key: &str, value: &Bound<'_, PyAny>, source: &str) -> PyResult<M
         .collect();
     let normals = match n {
         Some(n) => vec3s(&n, "normals", source)?,
-        None => {
-            // Area-weighted vertex normals from the faces.
-            let mut acc = vec![Vec3::ZERO; positions.len()];
-            for t in &indices {
-                if t.iter().all(|&i| (i as usize) < positions.len()) {
-                    let [a, b, c] = t.map(|i| positions[i as usize]);
-                    let ng = (b - a).cross(c - a);
-                    t.iter().for_each(|&i| acc[i as usize] += ng);
-                }
-            }
-            acc.into_iter().map(|n| n.normalize_or_zero()).collect()
-        }
+        // No normals: the core shades flat, or as the object's `smooth` asks.
+        None => Vec::new(),
     };
     let materials = match mats {
         Some(json) => gi_core::scene::parse_materials(&json, source)

@@ -74,6 +74,20 @@ pub struct Renderer {
     gpu: Option<GpuState>,
     ring: PhotonRing,
     frame_index: u64,
+    bvh_cost: BvhCost,
+}
+
+/// Most refits before the BVH is built anew (a refitted tree keeps its topology and slows
+/// down as objects travel).
+const MAX_REFITS: u32 = 16;
+
+/// Measured costs of the two ways to update the CPU BVH after objects moved: the renderer
+/// tries each once, then keeps the faster (reported as stage "bvh build" or "bvh refit").
+#[derive(Clone, Copy, Debug, Default)]
+struct BvhCost {
+    build: Option<f64>,
+    refit: Option<f64>,
+    refits: u32,
 }
 
 impl Renderer {
@@ -99,6 +113,7 @@ impl Renderer {
             gpu: None,
             ring: PhotonRing::new(settings.temporal_frames as usize),
             frame_index: 0,
+            bvh_cost: BvhCost::default(),
         })
     }
 
@@ -170,9 +185,7 @@ impl Renderer {
         let t0 = Instant::now();
         let mut stages = Vec::new();
         if self.bvh.is_none() || self.changes.geometry {
-            let t = Instant::now();
-            self.bvh = Some(SceneBvh::build(&self.scene));
-            stages.push(("bvh build".to_string(), t.elapsed().as_secs_f64()));
+            stages.push(self.update_bvh());
         }
         let settings = Settings {
             seed: desc.seed.unwrap_or_else(|| self.frame_seed()),
@@ -195,6 +208,42 @@ impl Renderer {
         self.frame_index += 1;
         out.stats.total_seconds = t0.elapsed().as_secs_f64();
         Ok(out)
+    }
+
+    /// Builds the BVH, or after objects moved rebuilds or refits it, whichever measured
+    /// faster (each is tried once first).
+    fn update_bvh(&mut self) -> (String, f64) {
+        let t = Instant::now();
+        let c = self.bvh_cost;
+        let refit = match (&self.bvh, c.build, c.refit) {
+            (None, ..) => false,
+            _ if c.refits >= MAX_REFITS => false,
+            (Some(_), _, None) => true,
+            (Some(_), Some(build), Some(refit)) => refit < build,
+            (Some(_), None, Some(_)) => false,
+        };
+        let (name, seconds) = if let (true, Some(bvh)) = (refit, self.bvh.take()) {
+            let moved: Vec<std::ops::Range<usize>> = self
+                .moved
+                .iter()
+                .map(|(o, _)| {
+                    let r = &self.scene.objects[*o].triangles;
+                    r.start as usize..r.end as usize
+                })
+                .collect();
+            self.bvh = Some(bvh.refit(&self.scene, &moved));
+            let s = t.elapsed().as_secs_f64();
+            self.bvh_cost.refit = Some(s);
+            self.bvh_cost.refits += 1;
+            ("bvh refit", s)
+        } else {
+            self.bvh = Some(SceneBvh::build(&self.scene));
+            let s = t.elapsed().as_secs_f64();
+            self.bvh_cost.build = Some(s);
+            self.bvh_cost.refits = 0;
+            ("bvh build", s)
+        };
+        (name.to_string(), seconds)
     }
 
     fn gpu_frame(

@@ -114,6 +114,17 @@ pub struct ObjectDesc {
     /// Name of an entry of `materials`; may be omitted for mesh files that carry materials.
     #[serde(default)]
     pub material: Option<String>,
+    /// Shading normals: `false` flat, `true` smooth, or a crease angle in degrees (smooth
+    /// across edges flatter than it). Absent: the shape's own normals, flat where it has none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub smooth: Option<SmoothDesc>,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, Serialize)]
+#[serde(untagged)]
+pub enum SmoothDesc {
+    On(bool),
+    CreaseAngle(f32),
 }
 
 /// Geometry of an object, in its local frame (metres).
