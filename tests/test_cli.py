@@ -52,7 +52,7 @@ def test_bad_outputs_fail_before_rendering(tmp_path):
     out = tmp_path / "out"
     (tmp_path / "dir.exr").mkdir()
     cases = [
-        (["-o", str(out / "x.bmpx")], "unsupported image format"),
+        (["-o", str(out / "x.bmpx")], "unsupported output format"),
         (["-o", str(out / "x.exr"), "--aov", "indirect", "--method", "path"], "no AOV"),
         (["-o", str(tmp_path / "dir.exr")], "is a directory"),
         (["-o", str(out / "a.png"), "-o", str(out / "a.png")], "written twice"),

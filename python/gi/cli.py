@@ -3,14 +3,28 @@
 from __future__ import annotations
 
 import argparse
+import math
+import re
 import sys
+import time
+import warnings
+from dataclasses import dataclass
 from pathlib import Path
 
 import gi
 from gi import denoising
+from gi.animation import default_frames
 from gi.aovs import aov_names, check_aovs
 from gi.display import TONEMAPS
-from gi.io import check_output_path, planned_files, save_result
+from gi.io import (
+    FLOAT_FORMATS,
+    SRGB_FORMATS,
+    check_output_path,
+    planned_files,
+    save_result,
+    to_srgb8,
+)
+from gi.video import VIDEO_FORMATS, VideoWriter
 
 
 def _size(text: str) -> tuple[int, int]:
@@ -23,19 +37,60 @@ def _size(text: str) -> tuple[int, int]:
     return w, h
 
 
+def _frames(text: str) -> range:
+    try:
+        nums = [int(v) for v in text.split(":")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected START:END[:STEP] or N, got {text!r}") from None
+    if len(nums) == 1:
+        start, end, step = nums[0], nums[0] + 1, 1
+    elif len(nums) in (2, 3):
+        start, end, step = nums[0], nums[1], nums[2] if len(nums) == 3 else 1
+    else:
+        raise argparse.ArgumentTypeError(f"expected START:END[:STEP] or N, got {text!r}")
+    if start < 0 or end <= start or step < 1:
+        raise argparse.ArgumentTypeError(
+            f"frames {text!r}: need 0 <= START < END (END excluded) and STEP >= 1"
+        )
+    return range(start, end, step)
+
+
+def _fps(text: str) -> float:
+    try:
+        fps = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not (math.isfinite(fps) and fps > 0):
+        raise argparse.ArgumentTypeError(f"must be positive, got {text!r}")
+    return fps
+
+
 def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="gi", description="Global illumination renderer (ISPM).")
     p.add_argument("--version", action="version", version=f"gi {gi.__version__}")
     sub = p.add_subparsers(dest="command", required=True)
     r = sub.add_parser("render", help="render a scene to an image")
-    r.add_argument("scene", help="built-in scene name (see `gi scenes`) or JSON scene file")
+    r.add_argument(
+        "scene", help="built-in scene name (see `gi scenes`), JSON scene file or Mitsuba 3 XML"
+    )
     r.add_argument(
         "-o",
         "--output",
         required=True,
         action="append",
         help="output image: .exr (float; AOVs become layers of the same file), .png/.jpg"
-        " (8-bit sRGB through --tonemap), .hdr/.pfm/.tif (float); repeat for several",
+        " (8-bit sRGB through --tonemap), .hdr/.pfm/.tif (float); repeat for several. With"
+        " --frames: an image sequence named by a printf pattern (out/frame_%%04d.exr), or a"
+        " video (.mp4, .mov, .mkv)",
+    )
+    r.add_argument(
+        "--frames",
+        type=_frames,
+        help="render the scene's animation: frames START:END[:STEP] (END excluded) or N;"
+        " default with a sequence or video output: the whole animation",
+    )
+    r.add_argument(
+        "--fps", type=_fps, default=30.0, help="frames a second: frame n shows n/fps s (30)"
     )
     r.add_argument("--method", default="ispm", help="rendering method (see `gi methods`)")
     r.add_argument(
@@ -144,12 +199,64 @@ def _check_outputs(args: argparse.Namespace) -> list[str]:
     return wanted
 
 
-def _render(args: argparse.Namespace) -> int:
-    aovs = _check_outputs(args)
-    scene = gi.load_scene(args.scene)
-    result = gi.render(
-        scene,
-        args.method,
+@dataclass(frozen=True)
+class _Output:
+    path: str
+    video: bool
+    numbered: bool
+
+
+def _frame_number_count(path: str) -> int:
+    """How many frame-number conversions (``%d``, ``%04d``) ``path`` has; ``%%`` is a
+    literal ``%``; any other ``%`` is an error."""
+    count = 0
+    for m in re.finditer(r"%(%|\d*d)?", path):
+        if m.group(1) is None:
+            raise ValueError(
+                f"output {path!r}: a frame-number pattern takes %d or %04d (and %% for a %)"
+            )
+        count += m.group(1) != "%"
+    return count
+
+
+def _outputs(paths: list[str]) -> list[_Output]:
+    """Classifies and validates the outputs before anything is rendered."""
+    out = []
+    for p in paths:
+        suffix = Path(p).suffix.lower()
+        numbers = _frame_number_count(p)
+        if numbers > 1:
+            raise ValueError(f"output {p!r}: more than one frame number")
+        if suffix in VIDEO_FORMATS:
+            if numbers:
+                raise ValueError(f"output {p!r}: a video takes no frame number")
+            out.append(_Output(p, True, False))
+        elif suffix in FLOAT_FORMATS | SRGB_FORMATS:
+            out.append(_Output(p, False, numbers == 1))
+        else:
+            images = ", ".join(sorted(FLOAT_FORMATS | SRGB_FORMATS))
+            videos = ", ".join(sorted(VIDEO_FORMATS))
+            raise ValueError(
+                f"unsupported output format {suffix!r} of {p!r} (images: {images}; video: {videos})"
+            )
+    return out
+
+
+def _load(source: str) -> gi.Scene:
+    """Loads a scene, printing what its files hold that gi does not render."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", gi.AssetWarning)
+        scene = gi.load_scene(source)
+    for w in caught:
+        if issubclass(w.category, gi.AssetWarning):
+            print(f"gi: warning: {w.message}", file=sys.stderr)
+        else:
+            warnings.showwarning(w.message, w.category, w.filename, w.lineno)
+    return scene
+
+
+def _settings(args: argparse.Namespace) -> dict[str, object]:
+    return dict(
         spp=args.spp,
         size=args.size,
         seed=args.seed,
@@ -168,6 +275,19 @@ def _render(args: argparse.Namespace) -> int:
         volume_shape=args.volume_shape,
         adapter=args.adapter,
         shadow_map_size=args.shadow_map_size,
+    )
+
+
+def _render(args: argparse.Namespace) -> int:
+    outputs = _outputs(args.output)
+    if args.frames is not None or any(o.video or o.numbered for o in outputs):
+        return _render_sequence(args, outputs)
+    aovs = _check_outputs(args)
+    scene = _load(args.scene)
+    result = gi.render(
+        scene,
+        args.method,
+        **_settings(args),  # type: ignore[arg-type]
         progress=not args.quiet,
         denoise=args.denoise,
     )
@@ -206,11 +326,70 @@ def _batch(args: argparse.Namespace) -> int:
     return 0 if summary["failed"] == 0 else 1
 
 
+def _render_sequence(args: argparse.Namespace, outputs: list[_Output]) -> int:
+    """Renders frames of the scene's animation to image sequences and videos."""
+    for o in outputs:
+        if not o.video and not o.numbered:
+            raise ValueError(
+                f"output {o.path!r}: an image sequence needs a frame number in its name,"
+                " e.g. out/frame_%04d.exr"
+            )
+    if args.aov and not any(not o.video for o in outputs):
+        raise ValueError("--aov needs an image-sequence output")
+    scene = _load(args.scene)
+    if args.frames is None and scene.animation_duration is None:
+        raise ValueError(f"{args.scene} has no animation: give the frames (--frames START:END)")
+    frames = args.frames if args.frames is not None else default_frames(scene, args.fps)
+    renderer = gi.Renderer(scene, args.method, **_settings(args))
+    base = set(gi.RenderResult.BASE) - {"radiance"}
+    sequence = renderer.render_animation(
+        frames,
+        args.fps,
+        aovs=args.denoise or any(a in base for a in args.aov),
+        extras=any(a not in base for a in args.aov),
+        progress=not args.quiet,
+    )
+    writers = [VideoWriter(o.path, args.fps) for o in outputs if o.video]
+    start = time.monotonic()
+    try:
+        for n, result in sequence:
+            if args.denoise:
+                result = gi.denoise(result)
+            missing = [name for name in args.aov if name not in result.aov_names()]
+            if missing:
+                available = ", ".join(result.aov_names())
+                raise ValueError(f"no image {missing[0]!r} (available: {available})")
+            for o in outputs:
+                if o.video:
+                    continue
+                path = Path(o.path % n)
+                gi.save_image(path, result.radiance, exposure=args.exposure, tonemap=args.tonemap)
+                for name in args.aov:
+                    aov_path = path.with_name(f"{path.stem}.{name}{path.suffix}")
+                    gi.save_image(aov_path, result.aov(name), exposure=0.0)
+            frame = to_srgb8(result.radiance, args.exposure, args.tonemap)
+            for w in writers:
+                w.write(frame)
+        for w in writers:
+            w.close()
+    except BaseException:
+        for w in writers:
+            w.abort()
+        raise
+    if not args.quiet:
+        seconds = time.monotonic() - start
+        files = ", ".join(o.path for o in outputs)
+        print(
+            f"wrote {len(frames)} frames ({frames[0]}..{frames[-1]}, {args.fps:g} fps) to"
+            f" {files} ({renderer.method}, {seconds:.1f}s, {seconds / len(frames):.2f}s a frame)",
+            file=sys.stderr,
+        )
+    return 0
+
+
 def _footprints(args: argparse.Namespace) -> int:
     qs = [1.0, 5.0, 25.0, 50.0, 75.0, 95.0, 99.0]
-    rows = gi.footprint_radii(
-        gi.load_scene(args.scene), args.photons, args.seed, args.smoothing, qs
-    )
+    rows = gi.footprint_radii(_load(args.scene), args.photons, args.seed, args.smoothing, qs)
     print(f"footprint radius (m) by percentile, {args.photons} photons, s = {args.smoothing}")
     print(f"{'kind':8} {'photons':>9} " + " ".join(f"{f'p{q:g}':>8}" for q in qs))
     for kind, (count, radii) in rows.items():

@@ -21,9 +21,12 @@ from gi import display
 if TYPE_CHECKING:
     from gi.render import RenderResult
 
+#: Suffixes holding several AOVs as layers of one file.
 LAYERED_FORMATS = {".exr"}
+#: Suffixes written as linear float images.
 FLOAT_FORMATS = {".exr", ".hdr", ".pfm", ".tif", ".tiff"}
-DISPLAY_FORMATS = {".png", ".jpg", ".jpeg"}
+#: Suffixes written as 8-bit sRGB through a display transform.
+SRGB_FORMATS = {".png", ".jpg", ".jpeg"}
 
 
 def _oiio():  # type: ignore[no-untyped-def]
@@ -59,8 +62,8 @@ def check_output_path(path: str | Path) -> Path:
     """
     path = Path(path)
     suffix = path.suffix.lower()
-    if suffix not in FLOAT_FORMATS | DISPLAY_FORMATS:
-        known = ", ".join(sorted(FLOAT_FORMATS | DISPLAY_FORMATS))
+    if suffix not in FLOAT_FORMATS | SRGB_FORMATS:
+        known = ", ".join(sorted(FLOAT_FORMATS | SRGB_FORMATS))
         raise ValueError(f"unsupported image format {path.suffix!r} for {path} (use {known})")
     return check_writable(path)
 

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import json
-from collections.abc import Callable
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -151,6 +151,7 @@ class Renderer:
 
     def __init__(self, scene: Scene, method: str = "ispm", **settings: Any) -> None:
         self._native = _gi.Renderer(scene, method, _settings(**settings))
+        self._scene = scene
 
     @property
     def method(self) -> str:
@@ -219,6 +220,53 @@ class Renderer:
         out = self._native.render(aovs=aovs, extras=extras, seed=seed, progress=_progress(progress))
         return _result(out)
 
+    @property
+    def animation_duration(self) -> float | None:
+        """Length of the scene's animation in seconds (``None``: the scene has none)."""
+        return self._scene.animation_duration
+
+    def apply_animation(self, time: float) -> None:
+        """Poses the scene at ``time`` seconds of its ``animation`` tracks: every animated
+        camera, light, object and material takes its description at that time (the fields
+        no track animates keep the scene file's values). Nothing happens without tracks."""
+        from gi.animation import animation_updates
+
+        self.update(**animation_updates(self._scene, time))
+
+    def render_animation(
+        self,
+        frames: Iterable[int] | None = None,
+        fps: float = 30.0,
+        *,
+        aovs: bool = False,
+        extras: bool = False,
+        seed: int | None = None,
+        progress: bool | ProgressCallback = False,
+    ) -> Iterator[tuple[int, RenderResult]]:
+        """Renders frames of the scene's animation: an iterator of ``(frame number,
+        RenderResult)``. Frame ``n`` shows time ``n / fps`` seconds (:meth:`apply_animation`
+        before each frame); ``frames`` defaults to the whole animation,
+        ``range(round(duration · fps))``. ``progress=True`` draws one bar over the frames on
+        stderr when it is a terminal; a callable gets ``("frames", fraction done)`` and
+        cancels with :class:`gi.RenderCancelled` by returning ``False``. Arguments are checked
+        at the call (:class:`gi.SettingError`), before any frame is rendered.
+
+        >>> for n, frame in r.render_animation(range(0, 120), fps=30):
+        ...     gi.save_image(f"frame_{n:04d}.png", frame.radiance)
+        """
+        from gi.animation import render_frames
+
+        return render_frames(
+            self,
+            self._scene,
+            frames,
+            fps,
+            aovs=aovs,
+            extras=extras,
+            seed=seed,
+            progress=progress,
+        )
+
 
 def _jsonable(value: Any) -> Any:
     """numpy arrays (a 4×4 matrix) as nested lists."""
@@ -257,11 +305,12 @@ def render(
     """Renders ``scene`` with ``method`` (see :func:`gi.methods`).
 
     ``size`` is ``(width, height)`` and defaults to the scene camera's. ``spp`` is camera
-    samples per pixel (default 64; 16 direct-light samples for the GPU methods ``direct``
-    and ``ispm``, chosen by measurement); ``light_paths`` the caustic light paths of method ``path`` (default
-    one per camera sample). Method ``photon`` (classic photon mapping) emits ``photons``
-    photons and estimates radiance from the ``k`` nearest within ``max_radius`` (metres;
-    default 5% of the scene's diagonal) with a ``kernel`` of "box", "cone" or "epanechnikov".
+    samples per pixel (default 64; 16 direct-light samples for the GPU methods ``direct`` and
+    ``ispm``, chosen by measurement); ``light_paths`` the caustic light paths of method ``path``
+    (default one per camera sample). Method ``photon`` (classic photon mapping) emits
+    ``photons`` photons and estimates radiance from the ``k`` nearest within ``max_radius``
+    (metres; default 5% of the scene's diagonal) with a ``kernel`` of "box", "cone" or
+    "epanechnikov".
     Method ``gather`` traces ``photons`` photons with photon differentials and gathers every
     photon whose footprint (scaled by ``smoothing``, semi-axes at most ``max_radius``)
     contains the shading point, from a linear BVH with ``leaf_size`` footprints per leaf

@@ -2,12 +2,15 @@
 //! object: ISPM with and without reuse, each frame against a converged path-traced image of
 //! the same pose, and the frame times, as a markdown table.
 //!
-//! `cargo run -p gi-core --profile test --example temporal_bench [-- --frames N --ref-spp S]`
+//! `cargo run -p gi-core --profile test --example temporal_bench [-- --frames N --ref-spp S
+//!  --size WxH --ref-photons P]`
 //!
-//! Built-in `cornell` at 96×72; its tall box slides 2 cm a frame; 20k photons traced per
-//! frame in both runs; reuse keeps the last 4 frames (`temporal_frames` = 4), so it splats
-//! up to 4× the photons with kernels sized for them. RMSE per frame against `path` at
-//! `--ref-spp` samples (default 512), mean over the frames after the ring filled (4..N).
+//! Built-in `cornell` (default 96×72); its tall box slides 2 cm a frame; 20k photons traced
+//! per frame in both runs; reuse keeps the last 4 frames (`temporal_frames` = 4), so it
+//! splats up to 4× the photons with kernels sized for them. RMSE per frame against `path` at
+//! `--ref-spp` samples (default 512), or with `--ref-photons P` against ISPM with P photons
+//! (converged for the estimator: isolates the noise that reuse averages); mean over the
+//! frames after the ring filled (4..N).
 
 use gi_core::frame::{FrameDesc, Renderer};
 use gi_core::render::Silent;
@@ -26,6 +29,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     let frames = arg("--frames", 10)?;
     let ref_spp = arg("--ref-spp", 512)?;
+    let ref_photons = arg("--ref-photons", 0)?;
+    let (width, height) = match args.iter().position(|a| a == "--size") {
+        Some(i) => {
+            let v = args.get(i + 1).ok_or("--size needs WxH")?;
+            let (w, h) = v.split_once('x').ok_or("--size needs WxH")?;
+            (w.parse()?, h.parse()?)
+        }
+        None => (96, 72),
+    };
     let scene = builtin::load("cornell")?;
     let object = scene.objects.len() - 1;
     let start = scene.objects[object].transform;
@@ -36,8 +48,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     let base = Settings {
         method: Method::Ispm,
-        width: Some(96),
-        height: Some(72),
+        width: Some(width),
+        height: Some(height),
         spp: 4,
         photons: 20_000,
         ..Default::default()
@@ -47,10 +59,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     for f in 0..frames {
         let mut posed = scene.clone();
         posed.apply(&pose(f))?;
-        let s = Settings {
-            method: Method::Path,
-            spp: ref_spp,
-            ..base.clone()
+        let s = if ref_photons > 0 {
+            Settings {
+                photons: ref_photons as u64,
+                ..base.clone()
+            }
+        } else {
+            Settings {
+                method: Method::Path,
+                spp: ref_spp,
+                ..base.clone()
+            }
         };
         references.push(render(&posed, &s, &Silent)?.radiance);
     }

@@ -31,8 +31,9 @@ fn vec3s(a: &PyReadonlyArray2<'_, f32>, what: &str, source: &str) -> PyResult<Ve
         .collect())
 }
 
-/// Converts one `meshes` entry: (vertices f32 (N,3), faces u32 (M,3), normals f32 (N,3) | None,
-/// materials JSON | None, face_materials u32 (M,) | None).
+/// Converts one `meshes` entry: (vertices f32 (N,3), faces u32 (M,3), normals f32 (N,3) | None
+/// (zero rows: none for that vertex), materials JSON `[[name, material], ...]` | None,
+/// face_materials u32 (M,) | None, indices into the materials).
 fn mesh_from_py(key: &str, value: &Bound<'_, PyAny>, source: &str) -> PyResult<MeshData> {
     type Entry<'py> = (
         PyReadonlyArray2<'py, f32>,
@@ -58,18 +59,8 @@ fn mesh_from_py(key: &str, value: &Bound<'_, PyAny>, source: &str) -> PyResult<M
         .collect();
     let normals = match n {
         Some(n) => vec3s(&n, "normals", source)?,
-        None => {
-            // Area-weighted vertex normals from the faces.
-            let mut acc = vec![Vec3::ZERO; positions.len()];
-            for t in &indices {
-                if t.iter().all(|&i| (i as usize) < positions.len()) {
-                    let [a, b, c] = t.map(|i| positions[i as usize]);
-                    let ng = (b - a).cross(c - a);
-                    t.iter().for_each(|&i| acc[i as usize] += ng);
-                }
-            }
-            acc.into_iter().map(|n| n.normalize_or_zero()).collect()
-        }
+        // No normals: the core shades flat, or as the object's `smooth` asks.
+        None => Vec::new(),
     };
     let materials = match mats {
         Some(json) => gi_core::scene::parse_materials(&json, source)
@@ -158,6 +149,44 @@ impl PyScene {
     #[getter]
     fn total_power(&self) -> [f32; 3] {
         self.inner.total_power().to_array()
+    }
+
+    /// Length of the scene's animation in seconds, or `None` without an `animation` section.
+    #[getter]
+    fn animation_duration(&self) -> Option<f64> {
+        self.inner.animation_duration()
+    }
+
+    /// The animated targets at `time` (seconds) as JSON: a list of `{"target": "camera" |
+    /// "light" | "object" | "material", "key": null | light index | object name (index when
+    /// unnamed) | material name, "value": the target's description at that time}` (an
+    /// object's value is its whole transform), what `Renderer.update` takes.
+    fn animation_at(&self, py: Python<'_>, time: f64) -> PyResult<String> {
+        use gi_core::scene::update::UpdateTarget;
+        use serde_json::{json, Value};
+        let values = self
+            .inner
+            .animation_values(time)
+            .map_err(|e| to_py(py, e))?;
+        let list: Vec<Value> = values
+            .into_iter()
+            .map(|(target, value)| {
+                let (name, key) = match target {
+                    UpdateTarget::Camera => ("camera", Value::Null),
+                    UpdateTarget::Light(i) => ("light", json!(i)),
+                    UpdateTarget::Object(i) => (
+                        "object",
+                        match &self.inner.objects[i].name {
+                            Some(n) => json!(n),
+                            None => json!(i),
+                        },
+                    ),
+                    UpdateTarget::Material(n) => ("material", json!(n)),
+                };
+                json!({"target": name, "key": key, "value": value})
+            })
+            .collect();
+        Ok(Value::Array(list).to_string())
     }
 
     /// World-space triangles: (vertices float32 (V, 3), faces uint32 (T, 3)).

@@ -1,22 +1,26 @@
 //! The scene: camera, lights, materials and one flat triangle soup in world space.
 
+pub mod animation;
 pub mod bench;
 pub mod builtin;
 pub mod camera;
 pub mod desc;
 pub mod light;
 pub mod primitives;
+pub mod shading;
 pub mod update;
 
+pub use animation::Animation;
 pub use camera::Camera;
 pub use desc::SceneDesc;
 pub use light::Light;
 pub use primitives::TriMesh;
+pub use shading::Smoothing;
 pub use update::{Changes, SceneObject, SceneUpdate};
 
 use crate::bsdf::Material;
 use crate::error::{Error, Result};
-use desc::{LightDesc, MaterialDesc, Scale, ShapeDesc, V3};
+use desc::{LightDesc, MaterialDesc, Scale, ShapeDesc, SmoothDesc, V3};
 use glam::{EulerRot, Mat3, Mat4, Quat, Vec3};
 use std::collections::HashMap;
 
@@ -24,6 +28,8 @@ use std::collections::HashMap;
 /// Python layer), keyed by the `file` string of the scene description.
 #[derive(Clone, Debug, Default)]
 pub struct MeshData {
+    /// Normals may be empty (the file has none) or zero on some vertices (parts of the file
+    /// have none): those triangles are shaded flat unless the object asks otherwise.
     pub mesh: TriMesh,
     /// Optional per-triangle material from the file (e.g. OBJ + MTL): names and materials,
     /// and an index into them per triangle. Used when the object names no material.
@@ -46,6 +52,8 @@ pub struct Scene {
     /// The objects of the description, in order: their vertex and triangle ranges and the
     /// local geometry a new transform is applied to (`SceneUpdate::Transform`).
     pub objects: Vec<SceneObject>,
+    /// The description's keyframed tracks, if any (see [`animation`]).
+    pub animation: Option<Animation>,
 }
 
 fn finite3(v: V3) -> bool {
@@ -108,6 +116,7 @@ impl Scene {
             triangles: Vec::new(),
             triangle_materials: Vec::new(),
             objects: Vec::new(),
+            animation: None,
         };
         for (i, obj) in desc.objects.iter().enumerate() {
             let at = |f: &str| format!("objects[{i}].{f}");
@@ -126,6 +135,8 @@ impl Scene {
                 ),
             };
             validate_mesh(&mesh).map_err(|m| err(at("shape"), &m))?;
+            let smoothing = smoothing(obj.smooth).map_err(|m| err(at("smooth"), m))?;
+            let mesh = shading::shade(&mesh, smoothing);
             // Per-triangle materials: the object's own, else those of the file.
             let tri_mats: Vec<u32> = match (&obj.material, file_materials) {
                 (Some(name), _) => {
@@ -170,6 +181,9 @@ impl Scene {
                 }
             }
             scene.append(obj.name.clone(), &mesh, xf, &tri_mats);
+        }
+        if let Some(anim) = &desc.animation {
+            scene.animation = Some(Animation::from_desc(anim, desc, &scene, source_name)?);
         }
         Ok(scene)
     }
@@ -221,18 +235,18 @@ impl Scene {
 
 pub(crate) type FieldError = (String, &'static str);
 
-/// Parses a JSON object of named materials (the `materials` section's format), as carried by
-/// mesh files (e.g. OBJ + MTL) whose loader turned them into descriptions.
+/// Parses the materials carried by a mesh file (e.g. OBJ + MTL), as turned into descriptions
+/// by its loader: a JSON array of `[name, material]` pairs in the `materials` section's
+/// format. The order is kept: per-face material indices refer to it.
 pub fn parse_materials(json: &str, source_name: &str) -> Result<Vec<(String, Material)>> {
     let de = &mut serde_json::Deserializer::from_str(json);
-    let descs: std::collections::BTreeMap<String, MaterialDesc> =
-        serde_path_to_error::deserialize(de).map_err(|e| {
-            Error::scene(
-                source_name,
-                format!("materials.{}", e.path()),
-                e.inner().to_string(),
-            )
-        })?;
+    let descs: Vec<(String, MaterialDesc)> = serde_path_to_error::deserialize(de).map_err(|e| {
+        Error::scene(
+            source_name,
+            format!("materials{}", e.path()),
+            e.inner().to_string(),
+        )
+    })?;
     descs
         .iter()
         .map(|(name, d)| {
@@ -459,6 +473,20 @@ fn primitive(shape: &ShapeDesc) -> std::result::Result<TriMesh, FieldError> {
     })
 }
 
+fn smoothing(s: Option<SmoothDesc>) -> std::result::Result<Smoothing, &'static str> {
+    Ok(match s {
+        None => Smoothing::Auto,
+        Some(SmoothDesc::On(false)) => Smoothing::Flat,
+        Some(SmoothDesc::On(true)) => Smoothing::Smooth,
+        Some(SmoothDesc::CreaseAngle(deg)) if (0.0..=180.0).contains(&deg) => {
+            Smoothing::from_angle_degrees(deg)
+        }
+        Some(SmoothDesc::CreaseAngle(_)) => {
+            return Err("must be false, true or a crease angle in [0, 180] degrees")
+        }
+    })
+}
+
 fn validate_mesh(m: &TriMesh) -> std::result::Result<(), String> {
     if m.indices.is_empty() {
         return Err("mesh has no triangles".into());
@@ -466,8 +494,9 @@ fn validate_mesh(m: &TriMesh) -> std::result::Result<(), String> {
     if let Some(i) = m.positions.iter().position(|p| !p.is_finite()) {
         return Err(format!("vertex {i} is not finite (NaN or infinity)"));
     }
-    if m.normals.len() != m.positions.len() || m.normals.iter().any(|n| !n.is_finite()) {
-        return Err("normals must be finite, one per vertex".into());
+    let count_ok = m.normals.is_empty() || m.normals.len() == m.positions.len();
+    if !count_ok || m.normals.iter().any(|n| !n.is_finite()) {
+        return Err("normals must be finite, one per vertex (or none)".into());
     }
     let n = m.positions.len() as u32;
     if let Some(t) = m.indices.iter().position(|t| t.iter().any(|&i| i >= n)) {

@@ -401,7 +401,7 @@ mod tests {
 }
 
 /// What a JSON update addresses (see [`Scene::update_from_json`]).
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub enum UpdateTarget {
     Camera,
     /// A light by index.

@@ -1,0 +1,335 @@
+"""glTF 2.0 (``.gltf`` and ``.glb``) reader for gi's mesh arrays, with numpy only.
+
+gi reads glTF itself rather than through trimesh so that material factors keep their exact
+float values (trimesh stores ``baseColorFactor`` as 8-bit), missing factors get the glTF
+defaults, and features gi does not render (textures, emission, vertex colours, alpha) are
+reported by name instead of dropped.
+"""
+
+from __future__ import annotations
+
+import base64
+import json
+import struct
+import urllib.parse
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+_DTYPES = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32}
+_DTYPES[5126] = np.float32
+_COMPONENTS = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT4": 16}
+_TEXTURES = (
+    ("pbrMetallicRoughness", "baseColorTexture"),
+    ("pbrMetallicRoughness", "metallicRoughnessTexture"),
+    (None, "normalTexture"),
+    (None, "occlusionTexture"),
+    (None, "emissiveTexture"),
+)
+
+
+# Required extensions gi can read a file with (textures and emission are reported anyway).
+_READABLE = {
+    "KHR_materials_transmission",
+    "KHR_materials_ior",
+    "KHR_materials_emissive_strength",
+    "KHR_texture_transform",
+    "KHR_mesh_quantization",
+}
+
+
+class GltfError(ValueError):
+    """A malformed or unsupported glTF file; ``field`` names the JSON path at fault."""
+
+    def __init__(self, field: str, reason: str):
+        super().__init__(f"{field}: {reason}")
+        self.field = field
+        self.reason = reason
+
+
+@dataclass
+class GltfMesh:
+    """World-space triangles of a glTF scene, with per-face material indices."""
+
+    vertices: np.ndarray  # float64 (N, 3)
+    faces: np.ndarray  # int64 (M, 3), counter-clockwise = front
+    normals: np.ndarray | None  # float64 (N, 3), zero rows where the file has none
+    face_materials: np.ndarray  # int64 (M,), index into `materials`, -1: none
+    materials: list[tuple[str, dict[str, Any]]]  # (name, gi material description)
+    warnings: dict[str, str] = field(default_factory=dict)  # JSON path -> what is ignored
+
+
+def _read_document(path: Path) -> tuple[dict[str, Any], bytes | None]:
+    data = path.read_bytes()
+    if data[:4] != b"glTF":
+        try:
+            return json.loads(data.decode("utf-8")), None
+        except (UnicodeDecodeError, json.JSONDecodeError) as e:
+            raise GltfError("(file)", f"neither GLB nor glTF JSON: {e}") from e
+    if len(data) < 20:
+        raise GltfError("(file)", "truncated GLB header")
+    version, length = struct.unpack_from("<II", data, 4)
+    if version != 2:
+        raise GltfError("(file)", f"GLB version {version} (gi reads glTF 2)")
+    doc, binary, offset = None, None, 12
+    while offset + 8 <= min(length, len(data)):
+        size, kind = struct.unpack_from("<II", data, offset)
+        chunk = data[offset + 8 : offset + 8 + size]
+        if kind == 0x4E4F534A:  # "JSON"
+            doc = json.loads(chunk.decode("utf-8"))
+        elif kind == 0x004E4942 and binary is None:  # "BIN\0"
+            binary = chunk
+        offset += 8 + size
+    if doc is None:
+        raise GltfError("(file)", "GLB has no JSON chunk")
+    return doc, binary
+
+
+class _Reader:
+    def __init__(self, path: Path, doc: dict[str, Any], glb_bin: bytes | None):
+        self.path, self.doc, self.glb_bin = path, doc, glb_bin
+        self.buffers: dict[int, bytes] = {}
+
+    def buffer(self, i: int) -> bytes:
+        if i not in self.buffers:
+            entry = self.doc["buffers"][i]
+            uri = entry.get("uri")
+            where = f"buffers[{i}].uri"
+            if uri is None:
+                if self.glb_bin is None:
+                    raise GltfError(where, "no URI and no GLB binary chunk")
+                data = self.glb_bin
+            elif uri.startswith("data:"):
+                data = base64.b64decode(uri.split(",", 1)[1])
+            else:
+                file = self.path.parent / urllib.parse.unquote(uri)
+                try:
+                    data = file.read_bytes()
+                except OSError as e:
+                    raise GltfError(where, f"cannot read {file}: {e}") from e
+            if len(data) < entry.get("byteLength", 0):
+                raise GltfError(where, "shorter than its byteLength")
+            self.buffers[i] = data
+        return self.buffers[i]
+
+    def accessor(self, i: int) -> np.ndarray:
+        """Accessor `i` as an (count, components) array; normalized integers become floats."""
+        where = f"accessors[{i}]"
+        try:
+            acc = self.doc["accessors"][i]
+            dtype = np.dtype(_DTYPES[acc["componentType"]]).newbyteorder("<")
+            ncomp = _COMPONENTS[acc["type"]]
+            count = int(acc["count"])
+        except (KeyError, IndexError, TypeError) as e:
+            raise GltfError(where, f"malformed accessor ({e!r})") from e
+        if "sparse" in acc:
+            raise GltfError(f"{where}.sparse", "sparse accessors are not supported")
+        if "bufferView" not in acc:
+            out = np.zeros((count, ncomp), dtype)
+        else:
+            view = self.doc["bufferViews"][acc["bufferView"]]
+            data = self.buffer(view["buffer"])
+            offset = view.get("byteOffset", 0) + acc.get("byteOffset", 0)
+            stride = view.get("byteStride") or dtype.itemsize * ncomp
+            end = offset + stride * (count - 1) + dtype.itemsize * ncomp if count else offset
+            if end > min(len(data), view.get("byteOffset", 0) + view["byteLength"]):
+                raise GltfError(where, "reads past the end of its buffer view")
+            out = np.ndarray(
+                (count, ncomp), dtype, buffer=data, offset=offset, strides=(stride, dtype.itemsize)
+            ).copy()
+        if acc.get("normalized") and dtype.kind in "iu":
+            info = np.iinfo(dtype)
+            return np.maximum(out.astype(np.float64) / info.max, -1.0)
+        return out
+
+
+def _node_matrix(node: dict[str, Any]) -> np.ndarray:
+    if "matrix" in node:
+        return np.asarray(node["matrix"], dtype=np.float64).reshape(4, 4).T  # column-major
+    t = np.asarray(node.get("translation", [0, 0, 0]), dtype=np.float64)
+    x, y, z, w = np.asarray(node.get("rotation", [0, 0, 0, 1]), dtype=np.float64)
+    s = np.asarray(node.get("scale", [1, 1, 1]), dtype=np.float64)
+    r = np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+    m = np.eye(4)
+    m[:3, :3] = r * s  # R · diag(s)
+    m[:3, 3] = t
+    return m
+
+
+def _triangles(mode: int, idx: np.ndarray, where: str) -> np.ndarray | None:
+    if mode == 4:
+        return idx[: len(idx) // 3 * 3].reshape(-1, 3)
+    if mode == 5:  # strip: every other triangle reversed to keep the winding
+        n = len(idx) - 2
+        if n <= 0:
+            return np.zeros((0, 3), np.int64)
+        tri = np.stack([idx[:-2], idx[1:-1], idx[2:]], axis=1)
+        tri[1::2] = tri[1::2][:, [1, 0, 2]]
+        return tri
+    if mode == 6:  # fan
+        if len(idx) < 3:
+            return np.zeros((0, 3), np.int64)
+        return np.stack([np.full(len(idx) - 2, idx[0]), idx[1:-1], idx[2:]], axis=1)
+    return None  # points and lines have no surface
+
+
+def _material(doc: dict[str, Any], i: int, warn: dict[str, str]) -> dict[str, Any]:
+    """glTF metallic-roughness (with the glTF defaults) onto the uber BSDF."""
+    mat = doc["materials"][i]
+    where = f"materials[{i}]"
+    pbr = mat.get("pbrMetallicRoughness", {})
+    base = np.asarray(pbr.get("baseColorFactor", [1, 1, 1, 1]), dtype=np.float64)[:3]
+    metal = float(pbr.get("metallicFactor", 1.0))
+    rough = float(pbr.get("roughnessFactor", 1.0))
+    base, metal, rough = np.clip(base, 0, 1), min(max(metal, 0.0), 1.0), min(max(rough, 0.0), 1)
+    ext = mat.get("extensions", {})
+    trans = float(ext.get("KHR_materials_transmission", {}).get("transmissionFactor", 0.0))
+    trans = min(max(trans, 0.0), 1.0)
+    ior = float(ext.get("KHR_materials_ior", {}).get("ior", 1.5))
+    dielectric = base * (1.0 - metal)
+    desc: dict[str, Any] = {
+        "diffuse": (dielectric * (1.0 - trans)).tolist(),
+        "specular": (0.04 * (1.0 - metal) + base * metal).tolist(),
+        "roughness": rough,
+        "fresnel": True,
+    }
+    if trans > 0:
+        desc["transmission"] = (dielectric * trans).tolist()
+        desc["ior"] = min(max(ior, 1.0), 4.0)
+    for group, name in _TEXTURES:
+        holder = pbr if group else mat
+        if name in holder:
+            path = f"{where}.{group + '.' if group else ''}{name}"
+            warn[path] = "textures are not supported yet; the constant factor is used"
+    if any(float(c) > 0 for c in mat.get("emissiveFactor", [0, 0, 0])):
+        warn[f"{where}.emissiveFactor"] = "emission is not supported; the surface is not a light"
+    if mat.get("alphaMode", "OPAQUE") != "OPAQUE":
+        warn[f"{where}.alphaMode"] = "alpha masks and blending are not supported; it is opaque"
+    for name in ext:
+        if name not in ("KHR_materials_transmission", "KHR_materials_ior"):
+            warn[f"{where}.extensions.{name}"] = "this material extension is ignored"
+    return desc
+
+
+def load_gltf(path: Path) -> GltfMesh:
+    """Reads the default scene of a glTF file into world-space triangles."""
+    doc, glb_bin = _read_document(path)
+    unsupported = [e for e in doc.get("extensionsRequired", []) if e not in _READABLE]
+    if unsupported:
+        raise GltfError("extensionsRequired", f"unsupported extension {unsupported[0]}")
+    reader = _Reader(path, doc, glb_bin)
+    warn: dict[str, str] = {}
+    if doc.get("animations"):
+        warn["animations"] = "animations are ignored (the rest pose is used)"
+    nodes = doc.get("nodes", [])
+    scenes = doc.get("scenes", [])
+    if scenes:
+        roots = scenes[doc.get("scene", 0)].get("nodes", [])
+    else:
+        children = {c for n in nodes for c in n.get("children", [])}
+        roots = [i for i in range(len(nodes)) if i not in children]
+
+    verts, faces, normals, face_mats = [], [], [], []
+    used: dict[int, int] = {}  # glTF material index -> our index
+    materials: list[tuple[str, dict[str, Any]]] = []
+    names: set[str] = set()
+    offset = 0
+    stack = [(r, np.eye(4), 0) for r in reversed(roots)]
+    while stack:
+        ni, parent, depth = stack.pop()
+        if depth > 256:
+            raise GltfError(f"nodes[{ni}]", "node hierarchy is cyclic or deeper than 256")
+        node = nodes[ni]
+        world = parent @ _node_matrix(node)
+        stack.extend((c, world, depth + 1) for c in reversed(node.get("children", [])))
+        if "KHR_lights_punctual" in node.get("extensions", {}):
+            warn[f"nodes[{ni}].extensions.KHR_lights_punctual"] = (
+                "lights in mesh files are ignored; give them in the scene's `lights`"
+            )
+        if "mesh" not in node:
+            continue
+        lin = world[:3, :3]
+        mirrored = np.linalg.det(lin) < 0
+        with np.errstate(all="ignore"):
+            normal_xf = np.linalg.inv(lin).T
+        for pi, prim in enumerate(doc["meshes"][node["mesh"]]["primitives"]):
+            where = f"meshes[{node['mesh']}].primitives[{pi}]"
+            attrs = prim.get("attributes", {})
+            if "POSITION" not in attrs:
+                continue
+            p = reader.accessor(attrs["POSITION"]).astype(np.float64)[:, :3]
+            if "indices" in prim:
+                idx = reader.accessor(prim["indices"]).astype(np.int64).ravel()
+            else:
+                idx = np.arange(len(p), dtype=np.int64)
+            tri = _triangles(prim.get("mode", 4), idx, where)
+            if tri is None:
+                warn[f"{where}.mode"] = "points and lines are skipped (no surface)"
+                continue
+            if len(tri) == 0:
+                continue
+            if tri.min() < 0 or tri.max() >= len(p):
+                raise GltfError(f"{where}.indices", "index out of range")
+            if mirrored:  # a mirroring transform turns the winding inside out
+                tri = tri[:, [0, 2, 1]]
+            verts.append(p @ world[:3, :3].T + world[:3, 3])
+            if "NORMAL" in attrs:
+                n = reader.accessor(attrs["NORMAL"]).astype(np.float64)[:, :3] @ normal_xf.T
+                with np.errstate(all="ignore"):
+                    n /= np.linalg.norm(n, axis=1, keepdims=True)
+                normals.append(np.nan_to_num(n, nan=0.0, posinf=0.0, neginf=0.0))
+            else:
+                normals.append(None)
+            if prim.get("targets"):
+                warn[f"{where}.targets"] = "morph targets are ignored (the base shape is used)"
+            for a in attrs:
+                if a.startswith("COLOR_"):
+                    warn[f"{where}.attributes.{a}"] = "vertex colours are not supported"
+            faces.append(tri + offset)
+            offset += len(p)
+            mi = prim.get("material")
+            if mi is None:
+                face_mats.append(np.full(len(tri), -1, np.int64))
+                continue
+            if mi not in used:
+                desc = _material(doc, mi, warn)
+                base = f"{path.name}:{doc['materials'][mi].get('name') or f'material{mi}'}"
+                name = base if base not in names else f"{base}#{mi}"
+                names.add(name)
+                used[mi] = len(materials)
+                materials.append((name, desc))
+            face_mats.append(np.full(len(tri), used[mi], np.int64))
+    if not faces:
+        return GltfMesh(np.zeros((0, 3)), np.zeros((0, 3), np.int64), None, np.zeros(0), [], warn)
+    any_normals = any(n is not None for n in normals)
+    face_materials = np.concatenate(face_mats)
+    if materials and (face_materials < 0).any():
+        # Primitives without a material get glTF's default one (white, metallic 1, rough 1).
+        doc.setdefault("materials", []).append({"name": "(glTF default)"})
+        materials.append((f"{path.name}:(glTF default)", _material(doc, -1, warn)))
+        face_materials[face_materials < 0] = len(materials) - 1
+    return GltfMesh(
+        vertices=np.concatenate(verts),
+        faces=np.concatenate(faces),
+        normals=(
+            np.concatenate(
+                [
+                    n if n is not None else np.zeros_like(v)
+                    for n, v in zip(normals, verts, strict=True)
+                ]
+            )
+            if any_normals
+            else None
+        ),
+        face_materials=face_materials,
+        materials=materials,
+        warnings=warn,
+    )

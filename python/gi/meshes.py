@@ -1,0 +1,259 @@
+"""Mesh files into the arrays the core takes: glTF by gi's own reader (:mod:`gi.gltf`), OBJ,
+PLY and STL by trimesh, MTL materials by :func:`parse_mtl`.
+
+Normals are taken only where a file stores them; the core shades the rest flat (or as the
+object's ``smooth`` asks), so no normals are computed here and trimesh never needs scipy.
+What a file holds that gi does not render (textures, emission, vertex colours) is reported
+once per file and field as an :class:`AssetWarning`.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+import warnings
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from gi._gi import SceneError
+
+MeshEntry = tuple[Any, Any, Any, "str | None", Any]
+
+
+class AssetWarning(UserWarning):
+    """A mesh or scene file holds something gi does not render (textures, emission, vertex
+    colours...); ``file`` and ``field`` say what."""
+
+    def __init__(self, file: str, field: str, reason: str):
+        super().__init__(f"{file}: {field}: {reason}")
+        self.file = file
+        self.field = field
+        self.reason = reason
+
+
+def scene_error(file: str, field: str, reason: str) -> SceneError:
+    err = SceneError(f"{file}: {field}: {reason}")
+    err.file = file  # type: ignore[attr-defined]
+    err.field = field  # type: ignore[attr-defined]
+    err.reason = reason  # type: ignore[attr-defined]
+    return err
+
+
+def report(file: Path | str, notes: dict[str, str]) -> None:
+    """One :class:`AssetWarning` per field of ``notes`` (field -> what gi does instead)."""
+    for field, reason in notes.items():
+        warnings.warn(AssetWarning(str(file), field, reason), stacklevel=5)
+
+
+def _unit_rows(n: np.ndarray) -> np.ndarray:
+    with np.errstate(all="ignore"):
+        n = n / np.linalg.norm(n, axis=1, keepdims=True)
+    return np.nan_to_num(n, nan=0.0, posinf=0.0, neginf=0.0)
+
+
+# MTL keys gi reads; the texture maps it reports (map_* is matched by prefix).
+_MTL_TEXTURES = ("bump", "norm", "disp", "decal", "refl")
+
+
+def parse_mtl(path: Path, notes: dict[str, str]) -> dict[str, dict[str, Any]]:
+    """An MTL file's materials as uber-BSDF descriptions, keyed by name. Unsupported fields
+    (texture maps, emission ``Ke``, dissolve ``d``/``Tr``) are added to ``notes``."""
+    out: dict[str, dict[str, Any]] = {}
+    try:
+        lines = path.read_text(encoding="utf-8", errors="replace").splitlines()
+    except OSError as e:
+        notes[f"mtllib {path.name}"] = f"cannot read ({e.strerror}); materials are missing"
+        return out
+    cur: dict[str, Any] | None = None
+    name = ""
+    for line in lines:
+        parts = line.split()
+        if len(parts) < 2 or parts[0].startswith("#"):
+            continue
+        key, args = parts[0].lower(), parts[1:]
+        if key == "newmtl":
+            name = " ".join(args)
+            cur = out.setdefault(name, {"diffuse": [0.8, 0.8, 0.8]})
+            continue
+        if cur is None:
+            continue
+        where = f"{path.name}: newmtl {name}: {parts[0]}"
+        try:
+            vals = [float(x) for x in args[:3]] if not key.startswith("map_") else []
+        except ValueError:
+            notes[where] = "not a number; ignored"
+            continue
+        rgb = [min(max(v, 0.0), 1.0) for v in (vals * 3)[:3]] if vals else []
+        if key == "kd":
+            cur["diffuse"] = rgb
+        elif key == "ks":
+            cur["specular"] = rgb
+        elif key == "ns" and "roughness" not in cur:
+            # Blinn-Phong exponent to GGX: alpha = sqrt(2 / (n + 2)); roughness = sqrt(alpha).
+            cur["_ns"] = math.sqrt(math.sqrt(2.0 / (max(vals[0], 0.0) + 2.0)))
+        elif key == "pr":
+            cur["roughness"] = min(max(vals[0], 0.0), 1.0)
+        elif key == "ke" and max(vals) > 0:
+            notes[where] = "emission is not supported; the surface is not a light"
+        elif key in ("d", "tr") and (vals[0] < 1.0 if key == "d" else vals[0] > 0.0):
+            notes[where] = "dissolve (transparency) is not supported; the surface is opaque"
+        elif key.startswith("map_") or key in _MTL_TEXTURES:
+            notes[where] = "textures are not supported yet; the constant colour is used"
+    for desc in out.values():
+        ns = desc.pop("_ns", None)
+        if max(desc.get("specular", [0.0])) > 0:
+            desc.setdefault("roughness", ns if ns is not None else 0.0)
+        else:
+            desc.pop("specular", None)
+            desc.pop("roughness", None)
+    return out
+
+
+def _mtllibs(path: Path) -> list[Path]:
+    with open(path, "rb") as f:
+        text = f.read()
+    libs = re.findall(rb"^[ \t]*mtllib[ \t]+(.+?)[ \t]*\r?$", text, flags=re.MULTILINE)
+    return [path.parent / lib.decode("utf-8", errors="replace") for lib in libs]
+
+
+def _obj_colours(path: Path) -> bool:
+    """Whether an OBJ stores vertex colours (``v x y z r g b``)."""
+    with open(path, "rb") as f:
+        text = f.read()
+    return re.search(rb"^v[ \t]+(\S+[ \t]+){5}\S+", text, flags=re.MULTILINE) is not None
+
+
+def load_mesh(path: Path, scene_file: str, field: str) -> MeshEntry:
+    """Loads a mesh file into the arrays the core takes (see ``Scene.from_json``)."""
+    if not path.is_file():
+        raise scene_error(scene_file, field, f"mesh file not found: {path}")
+    if path.suffix.lower() in (".gltf", ".glb"):
+        return _load_gltf(path, scene_file, field)
+    return _load_trimesh(path, scene_file, field)
+
+
+def _entry(
+    path: Path,
+    scene_file: str,
+    field: str,
+    verts: np.ndarray,
+    faces: np.ndarray,
+    normals: np.ndarray | None,
+    materials: list[tuple[str, dict[str, Any]]],
+    face_mats: np.ndarray | None,
+) -> MeshEntry:
+    if len(faces) == 0:
+        raise scene_error(scene_file, field, f"mesh file has no triangles: {path}")
+    if not np.isfinite(verts).all():
+        bad = int(np.flatnonzero(~np.isfinite(verts).all(axis=1))[0])
+        raise scene_error(
+            scene_file, field, f"{path}: vertex {bad} is not finite (NaN or infinity)"
+        )
+    if materials and face_mats is not None and (face_mats < 0).any():
+        # Parts the file gives no (known) material get the format's default one.
+        materials = [*materials, (f"{path.name}:(default)", {})]
+        face_mats = np.where(face_mats < 0, len(materials) - 1, face_mats)
+    has_mats = bool(materials) and face_mats is not None
+    return (
+        np.ascontiguousarray(verts, dtype=np.float32),
+        np.ascontiguousarray(faces, dtype=np.uint32),
+        None if normals is None else np.ascontiguousarray(normals, dtype=np.float32),
+        json.dumps(materials) if has_mats else None,
+        np.ascontiguousarray(face_mats, dtype=np.uint32) if has_mats else None,
+    )
+
+
+def _load_gltf(path: Path, scene_file: str, field: str) -> MeshEntry:
+    from gi.gltf import GltfError, load_gltf
+
+    try:
+        m = load_gltf(path)
+    except GltfError as e:
+        raise scene_error(scene_file, field, f"{path}: {e.field}: {e.reason}") from e
+    except (OSError, ValueError, KeyError, IndexError, TypeError) as e:
+        raise scene_error(scene_file, field, f"cannot load glTF {path}: {e!r}") from e
+    report(path, m.warnings)
+    return _entry(
+        path, scene_file, field, m.vertices, m.faces, m.normals, m.materials, m.face_materials
+    )
+
+
+def _load_trimesh(path: Path, scene_file: str, field: str) -> MeshEntry:
+    import trimesh
+
+    try:
+        loaded = trimesh.load(str(path), force="scene", process=False)
+    except Exception as e:  # trimesh raises many types for bad files
+        raise scene_error(scene_file, field, f"cannot load mesh {path}: {e}") from e
+    notes: dict[str, str] = {}
+    mtl: dict[str, dict[str, Any]] = {}
+    is_obj = path.suffix.lower() == ".obj"
+    if is_obj:
+        for lib in _mtllibs(path):
+            mtl.update(parse_mtl(lib, notes))
+        if _obj_colours(path):
+            notes["v (vertex colours)"] = "vertex colours are not supported"
+    verts, faces, normals, face_mats = [], [], [], []
+    materials: list[tuple[str, dict[str, Any]]] = []
+    index: dict[str, int] = {}
+    offset = 0
+    for node in loaded.graph.nodes_geometry:
+        transform, geom_name = loaded.graph[node]
+        geom = loaded.geometry[geom_name]
+        if not isinstance(geom, trimesh.Trimesh) or len(geom.faces) == 0:
+            continue
+        xf = np.asarray(transform, dtype=np.float64)
+        lin = xf[:3, :3]
+        f = np.asarray(geom.faces, dtype=np.int64)
+        if np.linalg.det(lin) < 0:  # a mirroring transform turns the winding inside out
+            f = f[:, [0, 2, 1]]
+        v = np.asarray(geom.vertices, dtype=np.float64)
+        verts.append(v @ lin.T + xf[:3, 3])
+        # Only normals stored in the file: reading `vertex_normals` would compute them
+        # (slowly without scipy) when the file has none.
+        if "vertex_normals" in geom._cache:
+            with np.errstate(all="ignore"):
+                normal_xf = np.linalg.inv(lin).T
+            normals.append(_unit_rows(np.asarray(geom.vertex_normals, np.float64) @ normal_xf.T))
+        else:
+            normals.append(None)
+        faces.append(f + offset)
+        offset += len(v)
+        kind = getattr(geom.visual, "kind", None)
+        if kind in ("vertex", "face") and not is_obj:
+            notes[f"{kind} colours"] = f"{kind} colours are not supported"
+        mat = getattr(geom.visual, "material", None)
+        name = getattr(mat, "name", None)
+        if is_obj and name in mtl:
+            if name not in index:
+                index[name] = len(materials)
+                materials.append((f"{path.name}:{name}", mtl[name]))
+            face_mats.append(np.full(len(f), index[name], np.int64))
+        else:
+            face_mats.append(np.full(len(f), -1, np.int64))
+    report(path, notes)
+    if not faces:
+        raise scene_error(scene_file, field, f"mesh file has no triangles: {path}")
+    any_normals = any(n is not None for n in normals)
+    return _entry(
+        path,
+        scene_file,
+        field,
+        np.concatenate(verts),
+        np.concatenate(faces),
+        (
+            np.concatenate(
+                [
+                    n if n is not None else np.zeros_like(v)
+                    for n, v in zip(normals, verts, strict=True)
+                ]
+            )
+            if any_normals
+            else None
+        ),
+        materials,
+        np.concatenate(face_mats),
+    )

@@ -1,0 +1,613 @@
+"""Mitsuba 3 XML scenes: the subset that common benchmark scenes use, translated into gi's
+scene description (see ``docs/mitsuba.md`` for the subset and the BSDF mapping).
+
+Every shape becomes a world-space mesh object; BSDFs become uber-BSDF materials. An element
+gi cannot render is a :class:`gi.SceneError` whose ``field`` names the element and its line
+(``<bsdf type="roughdielectric"> (line 12)``); a property it ignores is an
+:class:`gi.AssetWarning`.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+import xml.parsers.expat
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from gi._gi import Scene, SceneError
+from gi.meshes import MeshEntry, load_mesh, report, scene_error
+
+# Interior/exterior indices Mitsuba knows by name (its `ior` table, the common ones).
+IOR_NAMES = {
+    "vacuum": 1.0,
+    "helium": 1.00004,
+    "hydrogen": 1.00013,
+    "air": 1.000277,
+    "carbon dioxide": 1.00045,
+    "water": 1.333,
+    "acetone": 1.36,
+    "ethanol": 1.361,
+    "carbon tetrachloride": 1.461,
+    "glycerol": 1.4729,
+    "benzene": 1.501,
+    "silicone oil": 1.52045,
+    "bromine": 1.661,
+    "water ice": 1.31,
+    "fused quartz": 1.458,
+    "pyrex": 1.47,
+    "acrylic glass": 1.49,
+    "polypropylene": 1.49,
+    "bk7": 1.5046,
+    "sodium chloride": 1.544,
+    "amber": 1.55,
+    "pet": 1.575,
+    "diamond": 2.419,
+}
+
+# Normal-incidence reflectance (linear sRGB) of Mitsuba's named conductors.
+CONDUCTOR_F0 = {
+    "none": (1.0, 1.0, 1.0),
+    "Ag": (0.972, 0.960, 0.915),
+    "Al": (0.913, 0.922, 0.924),
+    "Au": (1.000, 0.766, 0.336),
+    "Cr": (0.550, 0.556, 0.554),
+    "Cu": (0.955, 0.638, 0.538),
+    "Fe": (0.562, 0.565, 0.578),
+    "Ni": (0.660, 0.609, 0.526),
+    "Pt": (0.673, 0.637, 0.585),
+    "Ti": (0.542, 0.497, 0.449),
+}
+
+_IGNORED = {"integrator", "sampler", "rfilter"}  # render settings: gi.render chooses these
+
+
+@dataclass
+class Element:
+    """One XML element with the line it starts on."""
+
+    tag: str
+    attrs: dict[str, str]
+    line: int
+    children: list[Element] = field(default_factory=list)
+
+    @property
+    def label(self) -> str:
+        kind = self.attrs.get("type")
+        name = self.attrs.get("name")
+        inner = f' type="{kind}"' if kind else f' name="{name}"' if name else ""
+        return f"<{self.tag}{inner}> (line {self.line})"
+
+
+def parse_xml(text: bytes, file: str) -> Element:
+    """Parses XML into :class:`Element` trees (expat, for line numbers)."""
+    parser = xml.parsers.expat.ParserCreate()
+    root: list[Element] = []
+    stack: list[Element] = []
+
+    def start(tag: str, attrs: dict[str, str]) -> None:
+        el = Element(tag, attrs, parser.CurrentLineNumber)
+        (stack[-1].children if stack else root).append(el)
+        stack.append(el)
+
+    def end(_tag: str) -> None:
+        stack.pop()
+
+    parser.StartElementHandler = start
+    parser.EndElementHandler = end
+    try:
+        parser.Parse(text, True)
+    except xml.parsers.expat.ExpatError as e:
+        raise scene_error(file, f"(line {e.lineno}, column {e.offset})", f"invalid XML: {e}") from e
+    return root[0]
+
+
+class _Translator:
+    def __init__(self, path: Path):
+        self.path = path
+        self.file = str(path)
+        self.defaults: dict[str, str] = {}
+        self.ids: dict[str, Element] = {}
+        self.materials: dict[str, dict[str, Any]] = {}
+        self.material_of: dict[int, str] = {}  # id(bsdf element) -> material name
+        self.meshes: dict[str, MeshEntry] = {}
+        self.objects: list[dict[str, Any]] = []
+        self.lights: list[dict[str, Any]] = []
+        self.camera: dict[str, Any] | None = None
+        self.notes: dict[str, str] = {}
+
+    # -- errors and attribute access ------------------------------------------------------
+
+    def error(self, el: Element, reason: str) -> SceneError:
+        return scene_error(self.file, el.label, reason)
+
+    def attr(self, el: Element, key: str, default: str | None = None) -> str:
+        value = el.attrs.get(key, default)
+        if value is None:
+            raise self.error(el, f"missing attribute `{key}`")
+
+        def sub(m: re.Match[str]) -> str:
+            if m.group(1) not in self.defaults:
+                raise self.error(el, f"no <default> for parameter ${m.group(1)}")
+            return self.defaults[m.group(1)]
+
+        return re.sub(r"\$([A-Za-z_][A-Za-z0-9_]*)", sub, value)
+
+    def numbers(self, el: Element, text: str, count: int | None = None) -> list[float]:
+        try:
+            vals = [float(x) for x in text.replace(",", " ").split()]
+        except ValueError:
+            raise self.error(el, f"expected numbers, got {text!r}") from None
+        if count is not None and len(vals) != count:
+            raise self.error(el, f"expected {count} numbers, got {text!r}")
+        if not all(math.isfinite(v) for v in vals):
+            raise self.error(el, "values must be finite")
+        return vals
+
+    def vec3(self, el: Element) -> np.ndarray:
+        if "value" in el.attrs:
+            v = self.numbers(el, self.attr(el, "value"))
+            if len(v) == 1:
+                v = v * 3
+            if len(v) != 3:
+                raise self.error(el, "expected 1 or 3 numbers")
+            return np.array(v)
+        return np.array([self.numbers(el, self.attr(el, k, "0"), 1)[0] for k in ("x", "y", "z")])
+
+    # -- properties -----------------------------------------------------------------------
+
+    def props(self, el: Element) -> dict[str, Element]:
+        """The named property children of a plugin element."""
+        out = {}
+        for c in el.children:
+            if c.tag in ("float", "integer", "boolean", "string", "rgb", "spectrum", "point"):
+                out[self.attr(c, "name")] = c
+            elif c.tag in ("vector", "transform", "texture"):
+                out[self.attr(c, "name")] = c
+            elif c.tag == "ref" and "name" in c.attrs:
+                out[self.attr(c, "name")] = c
+        return out
+
+    def float(self, el: Element, props: dict[str, Element], name: str, default: float) -> float:
+        p = props.get(name)
+        if p is None:
+            return default
+        if p.tag not in ("float", "integer"):
+            raise self.error(p, f"`{name}` must be a float")
+        return self.numbers(p, self.attr(p, "value"), 1)[0]
+
+    def string(self, props: dict[str, Element], name: str, default: str) -> str:
+        p = props.get(name)
+        return default if p is None else self.attr(p, "value")
+
+    def boolean(self, props: dict[str, Element], name: str, default: bool) -> bool:
+        p = props.get(name)
+        if p is None:
+            return default
+        value = self.attr(p, "value").strip().lower()
+        if value not in ("true", "false"):
+            raise self.error(p, "expected true or false")
+        return value == "true"
+
+    def color(self, props: dict[str, Element], name: str, default: float) -> np.ndarray:
+        """An rgb/spectrum/float property or a bitmap texture (its mean colour)."""
+        p = props.get(name)
+        if p is None:
+            return np.full(3, default)
+        if p.tag == "texture":
+            return self.bitmap_mean(p)
+        if p.tag == "ref":
+            return self.bitmap_mean(self.resolve(p))
+        text = self.attr(p, "value")
+        if p.tag == "spectrum" and ":" in text:
+            raise self.error(p, "sampled spectra are not supported (use rgb or one value)")
+        if p.tag not in ("rgb", "spectrum", "float"):
+            raise self.error(p, f"`{name}` must be an rgb, spectrum, float or texture")
+        v = self.numbers(p, text)
+        if len(v) not in (1, 3):
+            raise self.error(p, "expected 1 or 3 numbers")
+        return np.array(v * 3 if len(v) == 1 else v)
+
+    def ior(self, props: dict[str, Element], name: str, default: float) -> float:
+        p = props.get(name)
+        if p is None:
+            return default
+        value = self.attr(p, "value").strip()
+        if p.tag == "string" or value.lower() in IOR_NAMES:
+            if value.lower() not in IOR_NAMES:
+                raise self.error(p, f"unknown index of refraction {value!r}")
+            return IOR_NAMES[value.lower()]
+        return self.float(p, props, name, default)
+
+    def bitmap_mean(self, tex: Element) -> np.ndarray:
+        if tex.tag != "texture" or tex.attrs.get("type") != "bitmap":
+            raise self.error(tex, "only bitmap textures are supported")
+        props = self.props(tex)
+        file = self.path.parent / self.string(props, "filename", "")
+        if not file.is_file():
+            raise self.error(tex, f"texture file not found: {file}")
+        from gi.io import read_image
+
+        try:
+            img = read_image(file)[..., :3].astype(np.float64)
+        except OSError as e:
+            raise self.error(tex, str(e)) from e
+        if img.shape[-1] == 1:
+            img = np.repeat(img, 3, axis=-1)
+        raw = self.boolean(props, "raw", False)
+        if not raw and file.suffix.lower() not in (".exr", ".hdr", ".pfm"):
+            img = np.where(img <= 0.04045, img / 12.92, ((img + 0.055) / 1.055) ** 2.4)
+        mean = img.reshape(-1, 3).mean(axis=0)
+        self.notes[tex.label] = (
+            f"textures are not supported yet; {file.name}'s mean colour "
+            f"({mean[0]:.3f}, {mean[1]:.3f}, {mean[2]:.3f}) is used"
+        )
+        return mean
+
+    def note_unknown(self, props: dict[str, Element], known: set[str]) -> None:
+        for key, p in props.items():
+            if key not in known:
+                self.notes[p.label] = "ignored"
+
+    def resolve(self, ref: Element) -> Element:
+        key = self.attr(ref, "id")
+        if key not in self.ids:
+            raise self.error(ref, f"no element with id `{key}`")
+        return self.ids[key]
+
+    # -- transforms -----------------------------------------------------------------------
+
+    def transform(self, el: Element | None) -> np.ndarray:
+        m = np.eye(4)
+        if el is None:
+            return m
+        if el.tag != "transform":
+            raise self.error(el, "expected a <transform>")
+        for op in el.children:
+            m = self.transform_op(op) @ m
+        return m
+
+    def transform_op(self, op: Element) -> np.ndarray:
+        t = np.eye(4)
+        if op.tag == "translate":
+            t[:3, 3] = self.vec3(op)
+        elif op.tag == "scale":
+            if "value" in op.attrs:
+                s = self.vec3(op)
+            else:
+                s = np.array([self.numbers(op, self.attr(op, k, "1"), 1)[0] for k in "xyz"])
+            t[:3, :3] = np.diag(s)
+        elif op.tag == "rotate":
+            axis = self.vec3(op)
+            angle = math.radians(self.numbers(op, self.attr(op, "angle"), 1)[0])
+            n = np.linalg.norm(axis)
+            if n == 0:
+                raise self.error(op, "rotation axis must be non-zero")
+            x, y, z = axis / n
+            c, s = math.cos(angle), math.sin(angle)
+            k = np.array([[0, -z, y], [z, 0, -x], [-y, x, 0]])
+            t[:3, :3] = np.eye(3) + s * k + (1 - c) * (k @ k)
+        elif op.tag == "matrix":
+            v = self.numbers(op, self.attr(op, "value"))
+            if len(v) == 16:
+                t = np.array(v).reshape(4, 4)
+            elif len(v) == 9:
+                t[:3, :3] = np.array(v).reshape(3, 3)
+            else:
+                raise self.error(op, "expected 9 or 16 numbers")
+        elif op.tag == "lookat":
+            origin = np.array(self.numbers(op, self.attr(op, "origin"), 3))
+            target = np.array(self.numbers(op, self.attr(op, "target"), 3))
+            up = np.array(self.numbers(op, self.attr(op, "up", "0, 1, 0"), 3))
+            d = target - origin
+            if np.linalg.norm(d) == 0:
+                raise self.error(op, "origin and target must differ")
+            d /= np.linalg.norm(d)
+            left = np.cross(up, d)
+            if np.linalg.norm(left) < 1e-9:
+                raise self.error(op, "up must not be parallel to the viewing direction")
+            left /= np.linalg.norm(left)
+            t[:3, 0], t[:3, 1], t[:3, 2], t[:3, 3] = left, np.cross(d, left), d, origin
+        else:
+            raise self.error(op, "unknown transform operation")
+        return t
+
+    # -- scene elements -------------------------------------------------------------------
+
+    def run(self, root: Element) -> None:
+        if root.tag != "scene":
+            raise self.error(root, "the root element must be <scene>")
+        for el in root.children:
+            if el.tag == "default":
+                name = self.attr(el, "name")
+                self.defaults.setdefault(name, self.attr(el, "value"))
+        todo = list(root.children)
+        while todo:
+            el = todo.pop()
+            todo.extend(el.children)
+            if "id" in el.attrs and el.tag not in ("default", "ref"):
+                if el.attrs["id"] in self.ids:
+                    raise self.error(el, f"id `{el.attrs['id']}` is used twice")
+                self.ids[el.attrs["id"]] = el
+        for el in root.children:
+            if el.tag in ("default", *_IGNORED):
+                continue
+            if el.tag == "sensor":
+                self.sensor(el)
+            elif el.tag == "bsdf":
+                self.bsdf(el)
+            elif el.tag == "texture":
+                continue  # read where a BSDF uses it
+            elif el.tag == "shape":
+                self.shape(el)
+            elif el.tag == "emitter":
+                self.emitter(el)
+            else:
+                raise self.error(el, "unsupported element")
+        if self.camera is None:
+            raise scene_error(self.file, "<sensor>", "the scene has no sensor")
+
+    def sensor(self, el: Element) -> None:
+        if el.attrs.get("type") != "perspective":
+            raise self.error(el, "unsupported sensor (gi reads `perspective`)")
+        if self.camera is not None:
+            raise self.error(el, "gi renders one sensor; this is the second")
+        props = self.props(el)
+        width, height = 768, 576
+        for c in el.children:
+            if c.tag == "film":
+                if c.attrs.get("type") not in ("hdrfilm", None):
+                    raise self.error(c, "unsupported film (gi reads `hdrfilm`)")
+                fp = self.props(c)
+                width = int(self.float(c, fp, "width", width))
+                height = int(self.float(c, fp, "height", height))
+            elif c.tag not in ("sampler", "float", "string", "transform", "boolean"):
+                raise self.error(c, "unsupported element in a sensor")
+        for key in props:
+            if key not in ("fov", "fov_axis", "to_world", "near_clip", "far_clip"):
+                self.notes[props[key].label] = "ignored (gi's camera is a pinhole)"
+        fov = self.float(el, props, "fov", 39.3077)  # Mitsuba's default: 35 mm equivalent
+        axis = self.string(props, "fov_axis", "x").lower()
+        aspect = width / max(height, 1)
+        half = math.tan(math.radians(fov) / 2)
+        if axis == "smaller":
+            axis = "x" if width < height else "y"
+        elif axis == "larger":
+            axis = "x" if width > height else "y"
+        if axis == "x":
+            half /= aspect
+        elif axis == "diagonal":
+            half *= height / math.hypot(width, height)
+        elif axis != "y":
+            raise self.error(props["fov_axis"], f"unknown fov_axis {axis!r}")
+        m = self.transform(props.get("to_world"))
+        if np.linalg.det(m[:3, :3]) < 0:
+            raise self.error(props["to_world"], "mirrored sensor transforms are not supported")
+        pos, d, up = m[:3, 3], m[:3, 2], m[:3, 1]
+        self.camera = {
+            "position": pos.tolist(),
+            "look_at": (pos + d / np.linalg.norm(d)).tolist(),
+            "up": up.tolist(),
+            "fov": math.degrees(2 * math.atan(half)),
+            "width": width,
+            "height": height,
+        }
+
+    def bsdf(self, el: Element, name: str | None = None) -> str:
+        """Translates a BSDF (once) and returns its material name (its id, else `name`,
+        else where it is)."""
+        if id(el) in self.material_of:
+            return self.material_of[id(el)]
+        kind = el.attrs.get("type")
+        props = self.props(el)
+        if kind == "twosided":
+            inner = [c for c in el.children if c.tag in ("bsdf", "ref")]
+            if len(inner) != 1:
+                raise self.error(el, "gi's opaque surfaces are two-sided: give one inner BSDF")
+            target = self.resolve(inner[0]) if inner[0].tag == "ref" else inner[0]
+            name = self.bsdf(target, el.attrs.get("id") or name)
+            self.material_of[id(el)] = name
+            return name
+        desc: dict[str, Any]
+        if kind == "diffuse":
+            desc = {"diffuse": self.color(props, "reflectance", 0.5)}
+        elif kind in ("conductor", "roughconductor"):
+            metal = self.string(props, "material", "none")
+            if "eta" in props or "k" in props:
+                eta = self.color(props, "eta", 0.0)
+                k = self.color(props, "k", 1.0)
+                f0 = ((eta - 1) ** 2 + k**2) / ((eta + 1) ** 2 + k**2)
+            elif metal in CONDUCTOR_F0:
+                f0 = np.array(CONDUCTOR_F0[metal])
+            else:
+                raise self.error(props["material"], f"unknown conductor {metal!r}")
+            desc = {
+                "diffuse": np.zeros(3),
+                "specular": f0 * self.color(props, "specular_reflectance", 1.0),
+                "fresnel": metal != "none" or "eta" in props,
+            }
+        elif kind == "dielectric":
+            ior = self.ior(props, "int_ior", 1.5046) / self.ior(props, "ext_ior", 1.000277)
+            desc = {
+                "diffuse": np.zeros(3),
+                "transmission": self.color(props, "specular_transmittance", 1.0),
+                "ior": min(max(ior, 1.0), 4.0),
+            }
+        elif kind in ("plastic", "roughplastic"):
+            ior = self.ior(props, "int_ior", 1.49) / self.ior(props, "ext_ior", 1.000277)
+            f0 = ((ior - 1) / (ior + 1)) ** 2
+            desc = {
+                "diffuse": self.color(props, "diffuse_reflectance", 0.5),
+                "specular": f0 * self.color(props, "specular_reflectance", 1.0),
+                "fresnel": True,
+            }
+        else:
+            raise self.error(el, "unsupported BSDF (see docs/mitsuba.md for the list)")
+        if kind in ("roughconductor", "roughplastic"):
+            if "alpha_u" in props or "alpha_v" in props:
+                au = self.float(el, props, "alpha_u", 0.1)
+                av = self.float(el, props, "alpha_v", 0.1)
+                alpha = math.sqrt(au * av)
+                self.notes[el.label] = "anisotropic roughness is not supported; sqrt(αu·αv)"
+            else:
+                alpha = self.float(el, props, "alpha", 0.1)
+            desc["roughness"] = min(max(math.sqrt(max(alpha, 0.0)), 0.0), 1.0)
+        for key in props:
+            known = {"reflectance", "material", "eta", "k", "specular_reflectance"}
+            known |= {"int_ior", "ext_ior", "specular_transmittance", "diffuse_reflectance"}
+            known |= {"alpha", "alpha_u", "alpha_v", "distribution", "nonlinear"}
+            if key not in known:
+                self.notes[props[key].label] = "ignored"
+        name = el.attrs.get("id") or name or f"bsdf@{el.line}"
+        while name in self.materials:
+            name += "'"
+        self.materials[name] = {
+            k: (np.clip(v, 0.0, 1.0).tolist() if isinstance(v, np.ndarray) else v)
+            for k, v in desc.items()
+        }
+        self.material_of[id(el)] = name
+        return name
+
+    def shape(self, el: Element) -> None:
+        kind = el.attrs.get("type")
+        props = self.props(el)
+        xf = self.transform(props.get("to_world"))
+        smooth: bool | None = None
+        if kind in ("obj", "ply"):
+            file = self.string(props, "filename", "")
+            field = f"{el.label} filename"
+            v, f, n, _mats, _fm = load_mesh(self.path.parent / file, self.file, field)
+            v, f = np.asarray(v, np.float64), np.asarray(f, np.int64)
+            n = None if n is None else np.asarray(n, np.float64)
+            # Like Mitsuba: `face_normals` shades flat; a file without normals, smooth.
+            if self.boolean(props, "face_normals", False):
+                smooth = False
+            elif n is None:
+                smooth = True
+        elif kind == "rectangle":
+            v = np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], np.float64)
+            f = np.array([[0, 1, 2], [0, 2, 3]])
+            n = np.tile([0.0, 0.0, 1.0], (4, 1))
+        elif kind == "cube":
+            v, f, n = _cube()
+        elif kind == "sphere":
+            import trimesh
+
+            ico = trimesh.creation.icosphere(subdivisions=4)
+            r = self.float(el, props, "radius", 1.0)
+            c = self.vec3(props["center"]) if "center" in props else np.zeros(3)
+            n = np.asarray(ico.vertices, np.float64)
+            v, f = n * r + c, np.asarray(ico.faces, np.int64)
+        else:
+            raise self.error(el, "unsupported shape (gi reads obj, ply, rectangle, cube, sphere)")
+        known = {"filename", "face_normals", "flip_normals", "to_world", "center", "radius", "bsdf"}
+        self.note_unknown(props, known)
+        if self.boolean(props, "flip_normals", False):
+            f = f[:, [0, 2, 1]]
+            n = None if n is None else -n
+        material = None
+        for c in el.children:
+            if c.tag == "bsdf":
+                material = self.bsdf(c)
+            elif c.tag == "ref":
+                target = self.resolve(c)
+                if target.tag != "bsdf":
+                    raise self.error(c, f"refers to a <{target.tag}>, not a <bsdf>")
+                material = self.bsdf(target)
+            elif c.tag == "emitter":
+                raise self.error(c, "area lights are not supported (gi has point and spot)")
+        if material is None:  # Mitsuba's default BSDF
+            material = self.bsdf(Element("bsdf", {"type": "diffuse"}, el.line))
+        lin = xf[:3, :3]
+        det = np.linalg.det(lin)
+        if abs(det) < 1e-30:
+            raise self.error(props["to_world"], "the transform is singular")
+        if det < 0:  # a mirroring transform turns the winding inside out
+            f = f[:, [0, 2, 1]]
+        v = v @ lin.T + xf[:3, 3]
+        if n is not None:
+            n = n @ np.linalg.inv(lin)  # (M⁻ᵀ n) as rows
+            with np.errstate(all="ignore"):
+                n = np.nan_to_num(n / np.linalg.norm(n, axis=1, keepdims=True))
+        key = f"{kind}@line{el.line}"
+        while key in self.meshes:
+            key += "'"
+        self.meshes[key] = (
+            np.ascontiguousarray(v, np.float32),
+            np.ascontiguousarray(f, np.uint32),
+            None if n is None else np.ascontiguousarray(n, np.float32),
+            None,
+            None,
+        )
+        obj: dict[str, Any] = {"shape": {"type": "mesh", "file": key}, "material": material}
+        if smooth is not None:
+            obj["smooth"] = smooth
+        self.objects.append(obj)
+
+    def emitter(self, el: Element) -> None:
+        kind = el.attrs.get("type")
+        props = self.props(el)
+        known = {"intensity", "to_world", "position", "cutoff_angle", "beam_width"}
+        self.note_unknown(props, known)
+        intensity = self.color(props, "intensity", 1.0)
+        xf = self.transform(props.get("to_world"))
+        if kind == "point":
+            pos = self.vec3(props["position"]) if "position" in props else xf[:3, 3]
+            self.lights.append(
+                {"type": "point", "position": pos.tolist(), "intensity": intensity.tolist()}
+            )
+        elif kind == "spot":
+            cutoff = self.float(el, props, "cutoff_angle", 20.0)
+            beam = self.float(el, props, "beam_width", cutoff * 0.75)
+            self.lights.append(
+                {
+                    "type": "spot",
+                    "position": xf[:3, 3].tolist(),
+                    "direction": xf[:3, 2].tolist(),
+                    "intensity": intensity.tolist(),
+                    "inner_angle": min(beam, cutoff),
+                    "outer_angle": cutoff,
+                }
+            )
+        else:
+            raise self.error(el, "unsupported emitter (gi has point and spot lights)")
+
+    def description(self) -> dict[str, Any]:
+        return {
+            "camera": self.camera,
+            "lights": self.lights,
+            "materials": self.materials,
+            "objects": self.objects,
+        }
+
+
+def _cube() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Mitsuba's cube: [-1, 1]³, outward faces with flat normals."""
+    verts, faces, normals = [], [], []
+    for axis in range(3):
+        for sign in (-1.0, 1.0):
+            n = np.zeros(3)
+            n[axis] = sign
+            u, w = np.roll(np.eye(3), -axis, axis=0)[1:] * np.array([[1], [sign]])
+            base = len(verts)
+            for a, b in ((-1, -1), (1, -1), (1, 1), (-1, 1)):
+                verts.append(n + a * u + b * w)
+                normals.append(n)
+            faces += [[base, base + 1, base + 2], [base, base + 2, base + 3]]
+    return np.array(verts), np.array(faces), np.array(normals)
+
+
+def load_mitsuba(path: Path) -> Scene:
+    """Reads a Mitsuba 3 XML scene (see the module doc)."""
+    try:
+        text = path.read_bytes()
+    except OSError as e:
+        raise scene_error(str(path), "(file)", f"cannot read: {e}") from e
+    t = _Translator(path)
+    t.run(parse_xml(text, str(path)))
+    report(path, t.notes)
+    return Scene.from_json(json.dumps(t.description()), str(path), t.meshes)
