@@ -54,6 +54,9 @@ pub struct Scene {
     pub objects: Vec<SceneObject>,
     /// The description's keyframed tracks, if any (see [`animation`]).
     pub animation: Option<Animation>,
+    /// The camera as described (position, look-at point, up, fov), so that updates of some
+    /// of its fields keep the others exactly (`Scene::camera_desc`).
+    pub(crate) camera_source: desc::CameraDesc,
 }
 
 fn finite3(v: V3) -> bool {
@@ -117,6 +120,7 @@ impl Scene {
             triangle_materials: Vec::new(),
             objects: Vec::new(),
             animation: None,
+            camera_source: desc.camera.clone(),
         };
         for (i, obj) in desc.objects.iter().enumerate() {
             let at = |f: &str| format!("objects[{i}].{f}");
