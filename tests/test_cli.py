@@ -23,8 +23,10 @@ def test_render_png_and_exr_with_aovs(tmp_path):
     p = run("render", "cornell", "-o", str(out), "--spp", "2", "--size", "32x24", "--aov", "albedo")
     assert p.returncode == 0, p.stderr
     img = gi.read_image(out)
-    assert img.shape == (24, 32, 3) and img.mean() > 0
-    assert (tmp_path / "c.albedo.exr").exists()
+    assert img.shape == (24, 32, 3 + 3) and img[:, :, :3].mean() > 0
+    # The AOV is a layer of the same EXR, not a second file.
+    assert sorted(gi.read_channels(out)) == ["B", "G", "R", "albedo.B", "albedo.G", "albedo.R"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["c.exr"]
     p = run(
         "render", "cornell", "-o", str(tmp_path / "c.png"), "--spp", "1", "--size", "16x16", "-q"
     )
@@ -32,9 +34,75 @@ def test_render_png_and_exr_with_aovs(tmp_path):
     assert gi.read_image(tmp_path / "c.png").shape == (16, 16, 3)
 
 
-def test_progress_bar_shows(tmp_path):
-    p = run("render", "cornell", "-o", str(tmp_path / "c.png"), "--spp", "1", "--size", "16x16")
-    assert p.returncode == 0 and "100.0%" in p.stderr and "wrote" in p.stderr
+def test_png_aovs_tonemap_and_all(tmp_path):
+    out = tmp_path / "d.png"
+    args = ["render", "cornell", "-o", str(out), "--spp", "1", "--size", "16x16", "-q"]
+    p = run(*args, "--method", "path", "--aov", "all", "--tonemap", "filmic", "--exposure", "1")
+    assert p.returncode == 0, p.stderr
+    names = sorted(p.name for p in tmp_path.iterdir())
+    assert names == sorted(
+        ["d.png"] + [f"d.{a}.png" for a in ("albedo", "normal", "position", "depth", "caustics")]
+    )
+    assert gi.read_image(tmp_path / "d.depth.png").shape == (16, 16, 1)
+
+
+def test_bad_outputs_fail_before_rendering(tmp_path):
+    # Each of these used to render first (seconds to hours) and fail when writing.
+    base = ["render", "cornell", "--spp", "100000", "--size", "512x512"]
+    out = tmp_path / "out"
+    (tmp_path / "dir.exr").mkdir()
+    cases = [
+        (["-o", str(out / "x.bmpx")], "unsupported output format"),
+        (["-o", str(out / "x.exr"), "--aov", "indirect", "--method", "path"], "no AOV"),
+        (["-o", str(tmp_path / "dir.exr")], "is a directory"),
+        (["-o", str(out / "a.png"), "-o", str(out / "a.png")], "written twice"),
+        (["-o", str(out / "x.png"), "--method", "nope"], "unknown method"),
+    ]
+    for extra, message in cases:
+        p = run(*base, *extra)
+        assert p.returncode == 2 and message in p.stderr, (extra, p.stderr)
+    p = run(*base, "-o", str(out / "x.png"), "--tonemap", "reinhard")
+    assert p.returncode == 2 and "--tonemap" in p.stderr
+    assert not out.exists()
+
+
+def test_version():
+    p = run("--version")
+    assert p.returncode == 0 and p.stdout.strip() == f"gi {gi.__version__}"
+
+
+def test_progress_bars_in_a_terminal_and_quiet_in_logs(tmp_path):
+    import fcntl
+    import os
+    import pty
+    import struct
+    import termios
+
+    args = ["render", "cornell", "-o", str(tmp_path / "c.png"), "--spp", "1", "--size", "16x16"]
+    # Piped (a log file, CI): no progress frames at all, only the summary line.
+    p = run(*args)
+    assert p.returncode == 0 and "wrote" in p.stderr
+    assert "\r" not in p.stderr and "%|" not in p.stderr, p.stderr
+    # In a terminal: tqdm bars, one per stage, redrawn with carriage returns.
+    leader, follower = pty.openpty()
+    fcntl.ioctl(follower, termios.TIOCSWINSZ, struct.pack("HHHH", 24, 80, 0, 0))
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "gi.cli", *args], stdout=follower, stderr=follower
+    )
+    os.close(follower)
+    chunks = []
+    while True:
+        try:
+            data = os.read(leader, 65536)
+        except OSError:  # EIO: the child closed the terminal
+            break
+        if not data:
+            break
+        chunks.append(data)
+    os.close(leader)
+    assert proc.wait(timeout=300) == 0
+    text = b"".join(chunks).decode(errors="replace")
+    assert "100.0%|" in text and "\r" in text and "photon volumes" in text, text
 
 
 def test_scenes_lists_builtins():

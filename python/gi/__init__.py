@@ -30,7 +30,11 @@ from gi._gi import (  # noqa: E402
     gpu_counters,
     methods,
 )
-from gi.io import read_image, save_image  # noqa: E402
+from gi.animation import animation_updates, render_animation  # noqa: E402
+from gi.batch import render_batch  # noqa: E402  (imports Ray only when called)
+from gi.denoising import denoise  # noqa: E402
+from gi.display import to_display  # noqa: E402
+from gi.io import read_channels, read_image, save_image, save_layers, save_result  # noqa: E402
 from gi.meshes import AssetWarning  # noqa: E402
 from gi.render import Renderer, RenderResult, RenderStats, render  # noqa: E402
 from gi.scene import load_scene  # noqa: E402
@@ -50,13 +54,21 @@ __all__ = [
     "SettingError",
     "__version__",
     "adapter_report",
+    "animation_updates",
     "builtin_json",
     "builtin_scenes",
+    "denoise",
     "footprint_radii",
     "gpu_counters",
     "load_scene",
     "methods",
+    "read_channels",
     "read_image",
     "render",
+    "render_animation",
+    "render_batch",
     "save_image",
+    "save_layers",
+    "save_result",
+    "to_display",
 ]

@@ -3,14 +3,29 @@
 from __future__ import annotations
 
 import argparse
+import math
+import re
 import sys
+import time
 import warnings
+from dataclasses import dataclass
 from pathlib import Path
 
 import gi
-import gi.io
-from gi._checks import U64_MAX, float_setting, int_setting
-from gi._checks import exposure_setting as check_exposure
+from gi import denoising
+from gi._checks import exposure_setting
+from gi.animation import default_frames
+from gi.aovs import aov_names, check_aovs
+from gi.display import TONEMAPS
+from gi.io import (
+    FLOAT_FORMATS,
+    SRGB_FORMATS,
+    check_output_path,
+    planned_files,
+    save_result,
+    to_srgb8,
+)
+from gi.video import VIDEO_FORMATS, VideoWriter
 
 
 def _size(text: str) -> tuple[int, int]:
@@ -23,8 +38,37 @@ def _size(text: str) -> tuple[int, int]:
     return w, h
 
 
+def _frames(text: str) -> range:
+    try:
+        nums = [int(v) for v in text.split(":")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected START:END[:STEP] or N, got {text!r}") from None
+    if len(nums) == 1:
+        start, end, step = nums[0], nums[0] + 1, 1
+    elif len(nums) in (2, 3):
+        start, end, step = nums[0], nums[1], nums[2] if len(nums) == 3 else 1
+    else:
+        raise argparse.ArgumentTypeError(f"expected START:END[:STEP] or N, got {text!r}")
+    if start < 0 or end <= start or step < 1:
+        raise argparse.ArgumentTypeError(
+            f"frames {text!r}: need 0 <= START < END (END excluded) and STEP >= 1"
+        )
+    return range(start, end, step)
+
+
+def _fps(text: str) -> float:
+    try:
+        fps = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not (math.isfinite(fps) and fps > 0):
+        raise argparse.ArgumentTypeError(f"must be positive, got {text!r}")
+    return fps
+
+
 def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="gi", description="Global illumination renderer (ISPM).")
+    p.add_argument("--version", action="version", version=f"gi {gi.__version__}")
     sub = p.add_subparsers(dest="command", required=True)
     r = sub.add_parser("render", help="render a scene to an image")
     r.add_argument(
@@ -35,7 +79,19 @@ def _parser() -> argparse.ArgumentParser:
         "--output",
         required=True,
         action="append",
-        help="output image, .exr (float) or .png (sRGB); repeat for several",
+        help="output image: .exr (float; AOVs become layers of the same file), .png/.jpg"
+        " (8-bit sRGB through --tonemap), .hdr/.pfm/.tif (float); repeat for several. With"
+        " --frames: an image sequence named by a printf pattern (out/frame_%%04d.exr), or a"
+        " video (.mp4, .mov, .mkv)",
+    )
+    r.add_argument(
+        "--frames",
+        type=_frames,
+        help="render the scene's animation: frames START:END[:STEP] (END excluded) or N;"
+        " default with a sequence or video output: the whole animation",
+    )
+    r.add_argument(
+        "--fps", type=_fps, default=30.0, help="frames a second: frame n shows n/fps s (30)"
     )
     r.add_argument("--method", default="ispm", help="rendering method (see `gi methods`)")
     r.add_argument(
@@ -77,13 +133,28 @@ def _parser() -> argparse.ArgumentParser:
     )
     r.add_argument("--adapter", help='GPU adapter: "cpu" (lavapipe), "gpu" or part of a name')
     r.add_argument("--shadow-map-size", type=int, default=1024, help="shadow map texels per side")
-    r.add_argument("--exposure", type=float, default=0.0, help="PNG exposure in stops")
+    r.add_argument(
+        "--exposure", type=float, default=0.0, help="exposure in stops for 8-bit outputs"
+    )
+    r.add_argument(
+        "--tonemap",
+        default="clip",
+        choices=list(TONEMAPS),
+        help="display transform for 8-bit outputs: clip (default), filmic (AgX-style; alias"
+        " agx) or aces (ACES 2.0 SDR through OpenColorIO)",
+    )
+    r.add_argument(
+        "--denoise",
+        action="store_true",
+        help="denoise with Intel Open Image Denoise, guided by the albedo and normal AOVs",
+    )
     r.add_argument(
         "--aov",
         action="append",
         default=[],
-        help="also write this image next to the output (repeatable): albedo, normal, position,"
-        " depth, caustics; method ispm adds direct, indirect, photons",
+        help="also write this AOV (repeatable; 'all' for every one): albedo, normal, position,"
+        " depth, caustics; method direct adds direct, ispm direct, specular, indirect, photons;"
+        " --denoise adds noisy. EXR: layers of the output file; other formats: NAME.AOV.EXT",
     )
     r.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
     sub.add_parser("scenes", help="list the built-in scenes")
@@ -95,9 +166,82 @@ def _parser() -> argparse.ArgumentParser:
     f.add_argument("--photons", type=int, default=200_000, help="photons to emit")
     f.add_argument("--smoothing", type=float, default=1.0, help="footprint smoothing factor s")
     f.add_argument("--seed", type=int, default=0)
+    b = sub.add_parser(
+        "batch",
+        help="render the frames of a job file as Ray tasks (see `gi.batch` for the format)",
+    )
+    b.add_argument("job", help="job file (JSON): scene, method, settings, frames, sweep, outputs")
+    b.add_argument("--address", help="Ray cluster address (default: RAY_ADDRESS, else local Ray)")
+    b.add_argument("--retries", type=int, help="times a failed frame is tried again (default 2)")
+    b.add_argument("-q", "--quiet", action="store_true", help="print only failures")
     i = sub.add_parser("info", help="show the GPU adapter gi uses")
     i.add_argument("--adapter", help='"cpu", "gpu" or part of an adapter name')
     return p
+
+
+def _check_outputs(args: argparse.Namespace) -> list[str]:
+    """Checks outputs, formats and AOV names before rendering; returns the AOVs to write."""
+    exposure_setting(args.exposure)
+    if args.denoise and not denoising.available():
+        raise gi.SettingError(denoising.INSTALL_HINT)
+    if args.method not in gi.methods():
+        raise gi.SettingError(f"unknown method {args.method!r} (use {', '.join(gi.methods())})")
+    names = aov_names(args.method, args.denoise)
+    wanted = names[1:] if "all" in args.aov else list(dict.fromkeys(args.aov))
+    check_aovs(args.method, wanted, args.denoise)
+    targets: list[Path] = []
+    for out in args.output:
+        targets += planned_files(out, wanted)
+    seen: set[Path] = set()
+    for t in targets:
+        check_output_path(t)
+        if t.resolve() in seen:
+            raise ValueError(f"{t} would be written twice")
+        seen.add(t.resolve())
+    return wanted
+
+
+@dataclass(frozen=True)
+class _Output:
+    path: str
+    video: bool
+    numbered: bool
+
+
+def _frame_number_count(path: str) -> int:
+    """How many frame-number conversions (``%d``, ``%04d``) ``path`` has; ``%%`` is a
+    literal ``%``; any other ``%`` is an error."""
+    count = 0
+    for m in re.finditer(r"%(%|\d*d)?", path):
+        if m.group(1) is None:
+            raise ValueError(
+                f"output {path!r}: a frame-number pattern takes %d or %04d (and %% for a %)"
+            )
+        count += m.group(1) != "%"
+    return count
+
+
+def _outputs(paths: list[str]) -> list[_Output]:
+    """Classifies and validates the outputs before anything is rendered."""
+    out = []
+    for p in paths:
+        suffix = Path(p).suffix.lower()
+        numbers = _frame_number_count(p)
+        if numbers > 1:
+            raise ValueError(f"output {p!r}: more than one frame number")
+        if suffix in VIDEO_FORMATS:
+            if numbers:
+                raise ValueError(f"output {p!r}: a video takes no frame number")
+            out.append(_Output(p, True, False))
+        elif suffix in FLOAT_FORMATS | SRGB_FORMATS:
+            out.append(_Output(p, False, numbers == 1))
+        else:
+            images = ", ".join(sorted(FLOAT_FORMATS | SRGB_FORMATS))
+            videos = ", ".join(sorted(VIDEO_FORMATS))
+            raise ValueError(
+                f"unsupported output format {suffix!r} of {p!r} (images: {images}; video: {videos})"
+            )
+    return out
 
 
 def _load(source: str) -> gi.Scene:
@@ -113,15 +257,8 @@ def _load(source: str) -> gi.Scene:
     return scene
 
 
-def _render(args: argparse.Namespace) -> int:
-    # Outputs and exposure are checked before the render, not after it.
-    exposure = check_exposure(args.exposure)
-    for out in args.output:
-        gi.io.check_output(out)
-    scene = _load(args.scene)
-    result = gi.render(
-        scene,
-        args.method,
+def _settings(args: argparse.Namespace) -> dict[str, object]:
+    return dict(
         spp=args.spp,
         size=args.size,
         seed=args.seed,
@@ -140,19 +277,25 @@ def _render(args: argparse.Namespace) -> int:
         volume_shape=args.volume_shape,
         adapter=args.adapter,
         shadow_map_size=args.shadow_map_size,
-        progress=not args.quiet,
     )
-    missing = [name for name in args.aov if name not in result.aov_names()]
-    if missing:
-        raise ValueError(f"no image {missing[0]!r} (available: {', '.join(result.aov_names())})")
-    written = []
-    for out in map(Path, args.output):
-        gi.save_image(out, result.radiance, exposure=exposure)
-        written.append(out)
-        for name in args.aov:
-            aov_path = out.with_name(f"{out.stem}.{name}{out.suffix}")
-            gi.save_image(aov_path, result.aov(name), exposure=0.0)
-            written.append(aov_path)
+
+
+def _render(args: argparse.Namespace) -> int:
+    outputs = _outputs(args.output)
+    if args.frames is not None or any(o.video or o.numbered for o in outputs):
+        return _render_sequence(args, outputs)
+    aovs = _check_outputs(args)
+    scene = _load(args.scene)
+    result = gi.render(
+        scene,
+        args.method,
+        **_settings(args),  # type: ignore[arg-type]
+        progress=not args.quiet,
+        denoise=args.denoise,
+    )
+    written: list[Path] = []
+    for out in args.output:
+        written += save_result(out, result, aovs, tonemap=args.tonemap, exposure=args.exposure)
     if not args.quiet:
         s = result.stats
         stages = ", ".join(f"{n} {t:.2f}s" for n, t in s.stages)
@@ -161,12 +304,94 @@ def _render(args: argparse.Namespace) -> int:
     return 0
 
 
+def _batch(args: argparse.Namespace) -> int:
+    from gi.batch import render_batch
+
+    def report(entry: dict) -> None:
+        if entry["status"] == "ok" and not args.quiet:
+            retried = f", attempt {entry['attempts']}" if entry["attempts"] > 1 else ""
+            print(
+                f"frame {entry['index']}: {', '.join(entry['files'])}"
+                f" ({entry['seconds']:.2f}s on {entry['worker']}{retried})",
+                file=sys.stderr,
+            )
+        elif entry["status"] == "failed":
+            print(f"frame {entry['index']} failed: {entry['errors'][-1]}", file=sys.stderr)
+
+    summary = render_batch(args.job, address=args.address, retries=args.retries, on_frame=report)
+    if not args.quiet or summary["failed"]:
+        print(
+            f"{summary['ok']} of {len(summary['frames'])} frames rendered, {summary['failed']}"
+            f" failed, {summary['retried']} retried ({summary['wall_seconds']:.1f}s)",
+            file=sys.stderr,
+        )
+    return 0 if summary["failed"] == 0 else 1
+
+
+def _render_sequence(args: argparse.Namespace, outputs: list[_Output]) -> int:
+    """Renders frames of the scene's animation to image sequences and videos."""
+    for o in outputs:
+        if not o.video and not o.numbered:
+            raise ValueError(
+                f"output {o.path!r}: an image sequence needs a frame number in its name,"
+                " e.g. out/frame_%04d.exr"
+            )
+    if args.aov and not any(not o.video for o in outputs):
+        raise ValueError("--aov needs an image-sequence output")
+    scene = _load(args.scene)
+    if args.frames is None and scene.animation_duration is None:
+        raise ValueError(f"{args.scene} has no animation: give the frames (--frames START:END)")
+    frames = args.frames if args.frames is not None else default_frames(scene, args.fps)
+    renderer = gi.Renderer(scene, args.method, **_settings(args))
+    base = set(gi.RenderResult.BASE) - {"radiance"}
+    sequence = renderer.render_animation(
+        frames,
+        args.fps,
+        aovs=args.denoise or any(a in base for a in args.aov),
+        extras=any(a not in base for a in args.aov),
+        progress=not args.quiet,
+    )
+    writers = [VideoWriter(o.path, args.fps) for o in outputs if o.video]
+    start = time.monotonic()
+    try:
+        for n, result in sequence:
+            if args.denoise:
+                result = gi.denoise(result)
+            missing = [name for name in args.aov if name not in result.aov_names()]
+            if missing:
+                available = ", ".join(result.aov_names())
+                raise ValueError(f"no image {missing[0]!r} (available: {available})")
+            for o in outputs:
+                if o.video:
+                    continue
+                path = Path(o.path % n)
+                gi.save_image(path, result.radiance, exposure=args.exposure, tonemap=args.tonemap)
+                for name in args.aov:
+                    aov_path = path.with_name(f"{path.stem}.{name}{path.suffix}")
+                    gi.save_image(aov_path, result.aov(name), exposure=0.0)
+            frame = to_srgb8(result.radiance, args.exposure, args.tonemap)
+            for w in writers:
+                w.write(frame)
+        for w in writers:
+            w.close()
+    except BaseException:
+        for w in writers:
+            w.abort()
+        raise
+    if not args.quiet:
+        seconds = time.monotonic() - start
+        files = ", ".join(o.path for o in outputs)
+        print(
+            f"wrote {len(frames)} frames ({frames[0]}..{frames[-1]}, {args.fps:g} fps) to"
+            f" {files} ({renderer.method}, {seconds:.1f}s, {seconds / len(frames):.2f}s a frame)",
+            file=sys.stderr,
+        )
+    return 0
+
+
 def _footprints(args: argparse.Namespace) -> int:
     qs = [1.0, 5.0, 25.0, 50.0, 75.0, 95.0, 99.0]
-    photons = int_setting("photons", args.photons, U64_MAX)
-    seed = int_setting("seed", args.seed, U64_MAX)
-    smoothing = float_setting("smoothing", args.smoothing)
-    rows = gi.footprint_radii(_load(args.scene), photons, seed, smoothing, qs)
+    rows = gi.footprint_radii(_load(args.scene), args.photons, args.seed, args.smoothing, qs)
     print(f"footprint radius (m) by percentile, {args.photons} photons, s = {args.smoothing}")
     print(f"{'kind':8} {'photons':>9} " + " ".join(f"{f'p{q:g}':>8}" for q in qs))
     for kind, (count, radii) in rows.items():
@@ -183,6 +408,8 @@ def main(argv: list[str] | None = None) -> int:
             return 0
         if args.command == "footprints":
             return _footprints(args)
+        if args.command == "batch":
+            return _batch(args)
         if args.command == "info":
             print(f"gi {gi.__version__}")
             print(gi.adapter_report(args.adapter))
@@ -194,7 +421,7 @@ def main(argv: list[str] | None = None) -> int:
     except gi.GiError as e:
         print(f"gi: error: {e}", file=sys.stderr)
         return 2
-    except (OSError, ValueError, MemoryError) as e:
+    except (OSError, ValueError) as e:
         print(f"gi: error: {e}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

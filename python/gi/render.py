@@ -3,16 +3,15 @@
 from __future__ import annotations
 
 import json
-import sys
-import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 from gi import _checks, _gi
-from gi._gi import Scene
+from gi._gi import Scene, SettingError
+from gi.progress import ProgressBar
 
 ProgressCallback = Callable[[str, float], "bool | None"]
 
@@ -68,23 +67,26 @@ class RenderResult:
             return self.extra[name]
         raise KeyError(f"no image {name!r} (available: {', '.join(self.aov_names())})")
 
+    def __repr__(self) -> str:
+        h, w = self.radiance.shape[:2]
+        s = self.stats
+        return (
+            f"<RenderResult {s.method} {w}x{h}, {s.samples_per_pixel} spp,"
+            f" {s.total_seconds:.2f} s; aovs: {', '.join(self.aov_names())}>"
+        )
 
-class ProgressBar:
-    """A one-line text progress bar on stderr, for the CLI and interactive use."""
+    def display(self, tonemap: str = "clip", exposure: float = 0.0) -> np.ndarray:
+        """The beauty as 8-bit sRGB (H×W×3 uint8) through a display transform
+        (:mod:`gi.display`: "clip", "filmic"/"agx" or "aces")."""
+        from gi.display import to_srgb8
 
-    def __init__(self, stream=None, width: int = 30) -> None:  # type: ignore[no-untyped-def]
-        self.stream = stream or sys.stderr
-        self.width = width
-        self.start = time.monotonic()
+        return to_srgb8(self.radiance, exposure, tonemap)
 
-    def __call__(self, stage: str, fraction: float) -> bool:
-        filled = int(self.width * min(max(fraction, 0.0), 1.0))
-        bar = "#" * filled + "-" * (self.width - filled)
-        elapsed = time.monotonic() - self.start
-        end = "\n" if fraction >= 1.0 else ""
-        self.stream.write(f"\r{stage:>8} [{bar}] {fraction * 100:5.1f}% {elapsed:6.1f}s{end}")
-        self.stream.flush()
-        return True
+    def _repr_png_(self) -> bytes:
+        """The tone-mapped beauty as PNG, for Jupyter."""
+        from gi.display import png_bytes
+
+        return png_bytes(self.display())
 
 
 def _settings(**kw: object) -> dict[str, object]:
@@ -151,6 +153,7 @@ class Renderer:
         if not isinstance(method, str):
             raise _checks.setting_error("method", f"must be a string, got {method!r}")
         self._native = _gi.Renderer(scene, method, _settings(**settings))
+        self._scene = scene
 
     @property
     def method(self) -> str:
@@ -219,6 +222,53 @@ class Renderer:
         out = self._native.render(aovs=aovs, extras=extras, seed=seed, progress=_progress(progress))
         return _result(out)
 
+    @property
+    def animation_duration(self) -> float | None:
+        """Length of the scene's animation in seconds (``None``: the scene has none)."""
+        return self._scene.animation_duration
+
+    def apply_animation(self, time: float) -> None:
+        """Poses the scene at ``time`` seconds of its ``animation`` tracks: every animated
+        camera, light, object and material takes its description at that time (the fields
+        no track animates keep the scene file's values). Nothing happens without tracks."""
+        from gi.animation import animation_updates
+
+        self.update(**animation_updates(self._scene, time))
+
+    def render_animation(
+        self,
+        frames: Iterable[int] | None = None,
+        fps: float = 30.0,
+        *,
+        aovs: bool = False,
+        extras: bool = False,
+        seed: int | None = None,
+        progress: bool | ProgressCallback = False,
+    ) -> Iterator[tuple[int, RenderResult]]:
+        """Renders frames of the scene's animation: an iterator of ``(frame number,
+        RenderResult)``. Frame ``n`` shows time ``n / fps`` seconds (:meth:`apply_animation`
+        before each frame); ``frames`` defaults to the whole animation,
+        ``range(round(duration · fps))``. ``progress=True`` draws one bar over the frames on
+        stderr when it is a terminal; a callable gets ``("frames", fraction done)`` and
+        cancels with :class:`gi.RenderCancelled` by returning ``False``. Arguments are checked
+        at the call (:class:`gi.SettingError`), before any frame is rendered.
+
+        >>> for n, frame in r.render_animation(range(0, 120), fps=30):
+        ...     gi.save_image(f"frame_{n:04d}.png", frame.radiance)
+        """
+        from gi.animation import render_frames
+
+        return render_frames(
+            self,
+            self._scene,
+            frames,
+            fps,
+            aovs=aovs,
+            extras=extras,
+            seed=seed,
+            progress=progress,
+        )
+
 
 def _jsonable(value: Any) -> Any:
     """numpy arrays (a 4×4 matrix) as nested lists."""
@@ -252,6 +302,7 @@ def render(
     adapter: str | None = None,
     shadow_map_size: int = 1024,
     progress: bool | ProgressCallback = False,
+    denoise: bool = False,
 ) -> RenderResult:
     """Renders ``scene`` with ``method`` (see :func:`gi.methods`).
 
@@ -282,9 +333,17 @@ def render(
     adapter's name; default: the ``GI_ADAPTER`` environment variable, else a real GPU when
     present, else lavapipe) with ``shadow_map_size``² texels per shadow-map face.
     ``progress`` is a callable ``(stage, fraction) -> bool | None`` (return ``False`` to
-    cancel), or ``True`` for a text bar on stderr. The GIL is released while rendering;
-    Ctrl-C cancels with :class:`KeyboardInterrupt`.
+    cancel), or ``True`` for progress bars (tqdm; in a terminal or a notebook, nothing in
+    logs). The GIL is released while rendering; Ctrl-C cancels with
+    :class:`KeyboardInterrupt`.
+    ``denoise`` runs Intel Open Image Denoise on the radiance, guided by the albedo and
+    normal AOVs (:func:`gi.denoise`); the noisy radiance is kept as the AOV ``noisy``.
     """
+    if denoise:
+        from gi.denoising import INSTALL_HINT, available
+
+        if not available():
+            raise SettingError(INSTALL_HINT)
     renderer = Renderer(
         scene,
         method,
@@ -307,4 +366,9 @@ def render(
         adapter=adapter,
         shadow_map_size=shadow_map_size,
     )
-    return renderer.render(aovs=True, extras=True, progress=progress)
+    result = renderer.render(aovs=True, extras=True, progress=progress)
+    if denoise:
+        from gi.denoising import denoise as run_denoiser
+
+        result = run_denoiser(result)
+    return result

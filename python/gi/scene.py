@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 from gi._gi import Scene, builtin_scenes
 from gi.meshes import MeshEntry, load_mesh
@@ -54,6 +55,16 @@ def load_scene(source: str | Path) -> Scene:
         raise _scene_error(file, "(root)", "invalid JSON: nested too deeply") from e
     except MemoryError as e:
         raise _scene_error(file, "(file)", "too large to parse") from e
+    return Scene.from_json(text, file, _load_meshes(desc, path.parent, file))
+
+
+def scene_from_desc(desc: dict[str, Any], source: str, base_dir: Path) -> Scene:
+    """A scene from a parsed scene description (the JSON format of ``load_scene``), its mesh
+    files relative to ``base_dir``; ``source`` names it in errors."""
+    return Scene.from_json(json.dumps(desc), source, _load_meshes(desc, base_dir, source))
+
+
+def _load_meshes(desc: Any, base_dir: Path, file: str) -> dict[str, MeshEntry]:
     meshes: dict[str, MeshEntry] = {}
     objects = desc.get("objects", []) if isinstance(desc, dict) else []
     for i, obj in enumerate(objects if isinstance(objects, list) else []):
@@ -63,5 +74,5 @@ def load_scene(source: str | Path) -> Scene:
         name = shape.get("file")
         if not isinstance(name, str) or name in meshes:
             continue  # the core reports a missing or mistyped `file`
-        meshes[name] = load_mesh(path.parent / name, file, f"objects[{i}].shape.file")
-    return Scene.from_json(text, file, meshes)
+        meshes[name] = load_mesh(base_dir / name, file, f"objects[{i}].shape.file")
+    return meshes

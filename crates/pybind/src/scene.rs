@@ -157,6 +157,44 @@ impl PyScene {
         self.inner.total_power().to_array()
     }
 
+    /// Length of the scene's animation in seconds, or `None` without an `animation` section.
+    #[getter]
+    fn animation_duration(&self) -> Option<f64> {
+        self.inner.animation_duration()
+    }
+
+    /// The animated targets at `time` (seconds) as JSON: a list of `{"target": "camera" |
+    /// "light" | "object" | "material", "key": null | light index | object name (index when
+    /// unnamed) | material name, "value": the target's description at that time}` (an
+    /// object's value is its whole transform), what `Renderer.update` takes.
+    fn animation_at(&self, py: Python<'_>, time: f64) -> PyResult<String> {
+        use gi_core::scene::update::UpdateTarget;
+        use serde_json::{json, Value};
+        let values = self
+            .inner
+            .animation_values(time)
+            .map_err(|e| to_py(py, e))?;
+        let list: Vec<Value> = values
+            .into_iter()
+            .map(|(target, value)| {
+                let (name, key) = match target {
+                    UpdateTarget::Camera => ("camera", Value::Null),
+                    UpdateTarget::Light(i) => ("light", json!(i)),
+                    UpdateTarget::Object(i) => (
+                        "object",
+                        match &self.inner.objects[i].name {
+                            Some(n) => json!(n),
+                            None => json!(i),
+                        },
+                    ),
+                    UpdateTarget::Material(n) => ("material", json!(n)),
+                };
+                json!({"target": name, "key": key, "value": value})
+            })
+            .collect();
+        Ok(Value::Array(list).to_string())
+    }
+
     /// World-space triangles: (vertices float32 (V, 3), faces uint32 (T, 3)).
     fn mesh_arrays<'py>(
         &self,

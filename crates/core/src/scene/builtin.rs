@@ -17,6 +17,11 @@ pub const BUILTINS: &[(&str, &str, &str)] = &[
         include_str!("../../scenes/cornell-glass.json"),
     ),
     (
+        "cornell-anim",
+        "Cornell box animated over 4 s: the light circles, the tall box slides and turns",
+        include_str!("../../scenes/cornell-anim.json"),
+    ),
+    (
         "caustic-ring",
         "mirror ring on a diffuse floor: cardioid caustic",
         include_str!("../../scenes/caustic-ring.json"),

@@ -15,6 +15,9 @@ pub struct SceneDesc {
     pub materials: std::collections::BTreeMap<String, MaterialDesc>,
     #[serde(default)]
     pub objects: Vec<ObjectDesc>,
+    /// Keyframed tracks (see `scene::animation`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub animation: Option<AnimationDesc>,
 }
 
 /// Pinhole camera.
@@ -197,4 +200,61 @@ pub enum Scale {
 
 fn default_scale() -> Scale {
     Scale::Uniform(1.0)
+}
+
+/// Keyframed tracks over time (seconds): see `docs/scene-format.md`, `animation`.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct AnimationDesc {
+    /// Length, seconds; default: the time of the last key of any track.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub duration: Option<f64>,
+    #[serde(default)]
+    pub tracks: Vec<TrackDesc>,
+}
+
+/// What a track animates.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum TrackTarget {
+    Camera,
+    Light,
+    Object,
+    Material,
+}
+
+/// How values between two keys are found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Interpolation {
+    /// Numbers and vectors linearly; booleans and strings hold the earlier key's value.
+    #[default]
+    Linear,
+    /// Every field holds the earlier key's value until the next key.
+    Step,
+}
+
+/// One keyframed track: the fields of one camera, light, object transform or material.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct TrackDesc {
+    pub target: TrackTarget,
+    /// Light (or object) index.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub index: Option<usize>,
+    /// Object or material name.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    pub keys: Vec<KeyDesc>,
+    #[serde(default)]
+    pub interpolation: Interpolation,
+}
+
+/// A key: at `time` (seconds) the animated fields have `value` (fields as in the section
+/// the track targets; an object's are its transform's).
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct KeyDesc {
+    pub time: f64,
+    pub value: serde_json::Map<String, serde_json::Value>,
 }

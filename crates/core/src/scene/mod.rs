@@ -1,5 +1,6 @@
 //! The scene: camera, lights, materials and one flat triangle soup in world space.
 
+pub mod animation;
 pub mod bench;
 pub mod builtin;
 pub mod camera;
@@ -9,6 +10,7 @@ pub mod primitives;
 pub mod shading;
 pub mod update;
 
+pub use animation::Animation;
 pub use camera::Camera;
 pub use desc::SceneDesc;
 pub use light::Light;
@@ -50,6 +52,11 @@ pub struct Scene {
     /// The objects of the description, in order: their vertex and triangle ranges and the
     /// local geometry a new transform is applied to (`SceneUpdate::Transform`).
     pub objects: Vec<SceneObject>,
+    /// The description's keyframed tracks, if any (see [`animation`]).
+    pub animation: Option<Animation>,
+    /// The camera as described (position, look-at point, up, fov), so that updates of some
+    /// of its fields keep the others exactly (`Scene::camera_desc`).
+    pub(crate) camera_source: desc::CameraDesc,
 }
 
 fn finite3(v: V3) -> bool {
@@ -129,6 +136,8 @@ impl Scene {
             triangles: Vec::new(),
             triangle_materials: Vec::new(),
             objects: Vec::new(),
+            animation: None,
+            camera_source: desc.camera.clone(),
         };
         for (i, obj) in desc.objects.iter().enumerate() {
             let at = |f: &str| format!("objects[{i}].{f}");
@@ -200,6 +209,9 @@ impl Scene {
                 }
             }
             scene.append(obj.name.clone(), &mesh, xf, &tri_mats);
+        }
+        if let Some(anim) = &desc.animation {
+            scene.animation = Some(Animation::from_desc(anim, desc, &scene, source_name)?);
         }
         Ok(scene)
     }

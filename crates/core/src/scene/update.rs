@@ -104,6 +104,7 @@ impl Scene {
                 };
                 self.camera =
                     camera_from_desc(&desc).map_err(|(f, m)| err(format!("camera.{f}"), m))?;
+                self.camera_source = desc;
                 Ok(Changes {
                     camera: true,
                     ..Default::default()
@@ -187,16 +188,13 @@ impl Scene {
             .position(|o| o.name.as_deref() == Some(name))
     }
 
-    /// The camera as a description (what [`SceneUpdate::Camera`] takes).
+    /// The camera as a description (what [`SceneUpdate::Camera`] takes): as last described
+    /// (scene file or update), with the current image size.
     pub fn camera_desc(&self) -> CameraDesc {
-        let c = &self.camera;
         CameraDesc {
-            position: c.position.into(),
-            look_at: (c.position + c.forward).into(),
-            up: c.up.into(),
-            fov: c.fov_y,
-            width: c.width,
-            height: c.height,
+            width: self.camera.width,
+            height: self.camera.height,
+            ..self.camera_source.clone()
         }
     }
 
@@ -381,6 +379,32 @@ mod tests {
         assert!(e.to_string().contains("colour"), "{e}");
     }
 
+    /// Updating the camera's position keeps its look-at point and up vector exactly, however
+    /// often: going back to the first position gives the first camera bit for bit.
+    #[test]
+    fn partial_camera_updates_do_not_drift() {
+        let mut scene = builtin::load("cornell").expect("scene");
+        let first = scene.camera;
+        let p0 = scene.camera_desc().position;
+        let v = |s: &str| serde_json::from_str::<serde_json::Value>(s).expect("json");
+        for i in 0..50 {
+            let json = v(&format!(
+                r#"{{"position": [{}, 1.0, 3.0]}}"#,
+                0.01 * i as f32
+            ));
+            let u = scene
+                .update_from_json(&UpdateTarget::Camera, &json)
+                .expect("valid");
+            scene.apply(&u).expect("valid");
+        }
+        let json = serde_json::json!({ "position": p0 });
+        let u = scene
+            .update_from_json(&UpdateTarget::Camera, &json)
+            .expect("valid");
+        scene.apply(&u).expect("valid");
+        assert_eq!(scene.camera, first);
+    }
+
     /// The descriptions read back from a scene rebuild the same lights and materials.
     #[test]
     fn descriptions_round_trip() {
@@ -405,7 +429,7 @@ mod tests {
 }
 
 /// What a JSON update addresses (see [`Scene::update_from_json`]).
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub enum UpdateTarget {
     Camera,
     /// A light by index.

@@ -1,0 +1,88 @@
+"""Video output: 8-bit sRGB frames encoded to H.264 by the ffmpeg that ships inside the
+``imageio-ffmpeg`` wheel (no system ffmpeg needed)."""
+
+from __future__ import annotations
+
+import os
+from fractions import Fraction
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+#: File suffixes written as video.
+VIDEO_FORMATS = {".mp4", ".mov", ".mkv"}
+
+
+class VideoWriter:
+    """Writes frames (``(height, width, 3)`` uint8 sRGB) to ``path`` at ``fps`` frames a
+    second, H.264 in yuv420p (what players expect). Odd sizes are padded to even ones by
+    repeating the last row or column (yuv420p needs even sizes). The video is encoded into a
+    hidden file next to ``path`` and renamed when :meth:`close` succeeds; :meth:`abort` (or an
+    error) deletes it, so a failed or interrupted encode leaves no half file.
+
+    ``quality`` is imageio-ffmpeg's 1–10 scale (8: x264 constant rate factor 10, visually
+    lossless for renders).
+    """
+
+    def __init__(self, path: str | Path, fps: float, quality: float = 8) -> None:
+        self.path = Path(path)
+        if self.path.suffix.lower() not in VIDEO_FORMATS:
+            formats = ", ".join(sorted(VIDEO_FORMATS))
+            raise ValueError(f"unsupported video format {self.path.suffix!r} (use {formats})")
+        self.fps = Fraction(fps).limit_denominator(1001)
+        self.quality = quality
+        self.tmp = self.path.with_name(f".{self.path.stem}.partial{self.path.suffix}")
+        self._gen: Any = None
+        self._size: tuple[int, int] | None = None
+        self.frames = 0
+
+    def write(self, rgb8: np.ndarray) -> None:
+        """Appends one frame."""
+        frame = np.asarray(rgb8)
+        if frame.dtype != np.uint8 or frame.ndim != 3 or frame.shape[2] != 3:
+            raise ValueError(f"frames must be (H, W, 3) uint8, got {frame.shape} {frame.dtype}")
+        h, w = frame.shape[:2]
+        if self._gen is None:
+            import imageio_ffmpeg  # type: ignore[import-untyped]
+
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self._size = (w, h)
+            padded = (w + w % 2, h + h % 2)
+            self._gen = imageio_ffmpeg.write_frames(
+                str(self.tmp),
+                padded,
+                fps=self.fps,
+                codec="libx264",
+                quality=self.quality,
+                macro_block_size=2,
+                ffmpeg_log_level="error",
+            )
+            self._gen.send(None)
+        elif (w, h) != self._size:
+            raise ValueError(f"frame size {w}x{h} differs from the video's {self._size}")
+        if w % 2 or h % 2:
+            frame = np.pad(frame, ((0, h % 2), (0, w % 2), (0, 0)), mode="edge")
+        self._gen.send(np.ascontiguousarray(frame))
+        self.frames += 1
+
+    def close(self) -> None:
+        """Finishes the video and moves it to ``path``."""
+        if self._gen is None:
+            raise ValueError(f"{self.path}: no frames were written")
+        gen, self._gen = self._gen, None
+        try:
+            gen.close()
+        except BaseException:
+            self.tmp.unlink(missing_ok=True)
+            raise
+        os.replace(self.tmp, self.path)
+
+    def abort(self) -> None:
+        """Stops encoding and deletes the partial file."""
+        gen, self._gen = self._gen, None
+        try:
+            if gen is not None:
+                gen.close()
+        finally:
+            self.tmp.unlink(missing_ok=True)
