@@ -16,6 +16,8 @@ os.environ.setdefault("NODEVICE_SELECT", "1")
 from gi._gi import (  # noqa: E402
     GiError,
     GpuError,
+    InternalError,
+    OutOfMemoryError,
     RenderCancelled,
     Scene,
     SceneError,
@@ -41,6 +43,8 @@ __all__ = [
     "AssetWarning",
     "GiError",
     "GpuError",
+    "InternalError",
+    "OutOfMemoryError",
     "RenderCancelled",
     "RenderResult",
     "Renderer",

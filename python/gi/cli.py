@@ -13,6 +13,7 @@ from pathlib import Path
 
 import gi
 from gi import denoising
+from gi._checks import exposure_setting
 from gi.animation import default_frames
 from gi.aovs import aov_names, check_aovs
 from gi.display import TONEMAPS
@@ -180,6 +181,7 @@ def _parser() -> argparse.ArgumentParser:
 
 def _check_outputs(args: argparse.Namespace) -> list[str]:
     """Checks outputs, formats and AOV names before rendering; returns the AOVs to write."""
+    exposure_setting(args.exposure)
     if args.denoise and not denoising.available():
         raise gi.SettingError(denoising.INSTALL_HINT)
     if args.method not in gi.methods():

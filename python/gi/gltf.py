@@ -257,7 +257,13 @@ def load_gltf(path: Path) -> GltfMesh:
         if "mesh" not in node:
             continue
         lin = world[:3, :3]
-        mirrored = np.linalg.det(lin) < 0
+        with np.errstate(all="ignore"):
+            det = np.linalg.det(lin) if np.isfinite(lin).all() else np.nan
+        if not (np.isfinite(det) and abs(det) > 1e-30):
+            raise GltfError(
+                f"nodes[{ni}]", "the world transform is singular or not finite (e.g. a zero scale)"
+            )
+        mirrored = det < 0
         with np.errstate(all="ignore"):
             normal_xf = np.linalg.inv(lin).T
         for pi, prim in enumerate(doc["meshes"][node["mesh"]]["primitives"]):

@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from gi import display
+from gi import _checks, display
 
 if TYPE_CHECKING:
     from gi.render import RenderResult
@@ -110,7 +110,15 @@ def _write(
             if not ok:
                 raise OSError(f"cannot write {path}: {out.geterror()}")
         finally:
-            out.close()
+            closed = out.close()
+        if not closed:
+            raise OSError(f"cannot write {path}: {out.geterror() or 'closing failed'}")
+        # Read back in full: libpng reports no error for a short write (disk full, a
+        # file-size limit), which would otherwise replace a good file with a truncated one.
+        try:
+            read_image(tmp)
+        except OSError as e:
+            raise OSError(f"cannot write {path}: the written file does not read back ({e})") from e
         os.replace(tmp, path)
     except BaseException:
         tmp.unlink(missing_ok=True)
@@ -128,6 +136,7 @@ def save_image(
     """
     path = check_output_path(path)
     display.check_tonemap(tonemap)
+    exposure = _checks.exposure_setting(exposure)
     img = np.asarray(image, dtype=np.float32)
     if img.ndim == 2:
         img = img[:, :, None]
@@ -204,6 +213,7 @@ def save_result(
 
     path = check_output_path(path)
     display.check_tonemap(tonemap)
+    exposure = _checks.exposure_setting(exposure)
     aovs = list(aovs)
     names = result.aov_names()
     for a in aovs:
@@ -239,10 +249,19 @@ def save_result(
 def read_image(path: str | Path) -> np.ndarray:
     """Reads an image as float32 H×W×C (8-bit formats scaled to [0, 1], not linearised)."""
     oiio = _oiio()
-    buf = oiio.ImageBuf(str(path))
-    if buf.has_error:
-        raise OSError(f"cannot read {path}: {buf.geterror()}")
-    return np.asarray(buf.get_pixels(oiio.FLOAT), dtype=np.float32)
+    inp = oiio.ImageInput.open(str(path))
+    if inp is None:
+        raise OSError(f"cannot read {path}: {oiio.geterror() or 'unknown format'}")
+    try:
+        pixels = inp.read_image(oiio.FLOAT)
+        error = inp.geterror()
+    finally:
+        inp.close()
+    # A truncated or corrupt file reads as `None` or with an error, never as zeros.
+    if pixels is None or error:
+        raise OSError(f"cannot read {path}: {error or 'truncated or corrupt'}")
+    arr = np.asarray(pixels, dtype=np.float32)
+    return arr if arr.ndim == 3 else arr.reshape(arr.shape[0], arr.shape[1], -1)
 
 
 def read_channels(path: str | Path) -> dict[str, np.ndarray]:
@@ -252,6 +271,8 @@ def read_channels(path: str | Path) -> dict[str, np.ndarray]:
     if buf.has_error:
         raise OSError(f"cannot read {path}: {buf.geterror()}")
     pixels = np.asarray(buf.get_pixels(oiio.FLOAT), dtype=np.float32)
+    if buf.has_error:  # a truncated or corrupt file
+        raise OSError(f"cannot read {path}: {buf.geterror()}")
     if pixels.ndim == 2:
         pixels = pixels[:, :, None]
     return {name: pixels[:, :, i] for i, name in enumerate(buf.spec().channelnames)}

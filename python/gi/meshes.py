@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from gi._gi import SceneError
+from gi._gi import GiError, OutOfMemoryError, SceneError
 
 MeshEntry = tuple[Any, Any, Any, "str | None", Any]
 
@@ -127,12 +127,26 @@ def _obj_colours(path: Path) -> bool:
 
 
 def load_mesh(path: Path, scene_file: str, field: str) -> MeshEntry:
-    """Loads a mesh file into the arrays the core takes (see ``Scene.from_json``)."""
-    if not path.is_file():
+    """Loads a mesh file into the arrays the core takes (see ``Scene.from_json``).
+
+    Every failure is a typed error: :class:`gi.SceneError` naming the scene's field (a
+    malformed file trimesh or numpy choke on included), :class:`gi.OutOfMemoryError`."""
+    try:
+        is_file = path.is_file()
+    except (OSError, ValueError) as e:  # a name too long, a NUL byte
+        raise scene_error(scene_file, field, f"cannot read mesh file {path}: {e}") from e
+    if not is_file:
         raise scene_error(scene_file, field, f"mesh file not found: {path}")
-    if path.suffix.lower() in (".gltf", ".glb"):
-        return _load_gltf(path, scene_file, field)
-    return _load_trimesh(path, scene_file, field)
+    try:
+        if path.suffix.lower() in (".gltf", ".glb"):
+            return _load_gltf(path, scene_file, field)
+        return _load_trimesh(path, scene_file, field)
+    except GiError:
+        raise
+    except MemoryError as e:
+        raise OutOfMemoryError(f"{scene_file}: {field}: mesh {path} is too large: {e}") from e
+    except Exception as e:  # content the loaders accepted but numpy could not convert
+        raise scene_error(scene_file, field, f"cannot convert mesh {path}: {e!r}") from e
 
 
 def _entry(
@@ -147,6 +161,13 @@ def _entry(
 ) -> MeshEntry:
     if len(faces) == 0:
         raise scene_error(scene_file, field, f"mesh file has no triangles: {path}")
+    if faces.min() < 0 or faces.max() >= len(verts):
+        bad = int(np.flatnonzero(((faces < 0) | (faces >= len(verts))).any(axis=1))[0])
+        raise scene_error(
+            scene_file,
+            field,
+            f"{path}: face {bad} indexes a vertex out of range (the mesh has {len(verts)})",
+        )
     if not np.isfinite(verts).all():
         bad = int(np.flatnonzero(~np.isfinite(verts).all(axis=1))[0])
         raise scene_error(
@@ -207,6 +228,14 @@ def _load_trimesh(path: Path, scene_file: str, field: str) -> MeshEntry:
             continue
         xf = np.asarray(transform, dtype=np.float64)
         lin = xf[:3, :3]
+        with np.errstate(all="ignore"):
+            det = np.linalg.det(lin) if np.isfinite(xf).all() else np.nan
+        if not (np.isfinite(det) and abs(det) > 1e-30):
+            raise scene_error(
+                scene_file,
+                field,
+                f"{path}: a node transform is singular or not finite (e.g. a zero scale)",
+            )
         f = np.asarray(geom.faces, dtype=np.int64)
         if np.linalg.det(lin) < 0:  # a mirroring transform turns the winding inside out
             f = f[:, [0, 2, 1]]

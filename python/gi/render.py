@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from gi import _gi
+from gi import _checks, _gi
 from gi._gi import Scene, SettingError
 from gi.progress import ProgressBar
 
@@ -96,17 +96,17 @@ def _settings(**kw: object) -> dict[str, object]:
         try:
             kw["width"], kw["height"] = size  # type: ignore[misc]
         except (TypeError, ValueError):
-            raise SettingError(
-                f"invalid setting `size`: expected (width, height), got {size!r}"
-            ) from None
+            raise _checks.setting_error("size", f"expected (width, height), got {size!r}") from None
     return kw
 
 
 def _progress(progress: bool | ProgressCallback) -> ProgressCallback | None:
     if progress is True:
         return ProgressBar()
-    if progress is False:
+    if progress is False or progress is None:
         return None
+    if not callable(progress):
+        raise _checks.setting_error("progress", f"must be a bool or a callable, got {progress!r}")
     return progress
 
 
@@ -150,6 +150,8 @@ class Renderer:
     """
 
     def __init__(self, scene: Scene, method: str = "ispm", **settings: Any) -> None:
+        if not isinstance(method, str):
+            raise _checks.setting_error("method", f"must be a string, got {method!r}")
         self._native = _gi.Renderer(scene, method, _settings(**settings))
         self._scene = scene
 

@@ -27,11 +27,15 @@ def load_scene(source: str | Path) -> Scene:
     gi does not render (textures, emission, vertex colours) gives a :class:`gi.AssetWarning`.
     """
     path = Path(source)
-    names = [n for n, _ in builtin_scenes()]
-    if not path.exists() and str(source) in names:
-        return Scene.builtin(str(source))
     file = str(path)
-    if not path.is_file():
+    names = [n for n, _ in builtin_scenes()]
+    try:
+        exists, is_file = path.exists(), path.is_file()
+    except (OSError, ValueError) as e:  # a name too long, a NUL byte
+        raise _scene_error(file, "(file)", f"cannot read: {e}") from e
+    if not exists and str(source) in names:
+        return Scene.builtin(str(source))
+    if not is_file:
         hint = f" (built-in scenes: {', '.join(names)})" if path.suffix == "" else ""
         raise _scene_error(file, "(file)", f"no such scene file{hint}")
     if path.suffix.lower() == ".xml":
@@ -47,6 +51,10 @@ def load_scene(source: str | Path) -> Scene:
         raise _scene_error(
             file, f"(line {e.lineno}, column {e.colno})", f"invalid JSON: {e.msg}"
         ) from e
+    except RecursionError as e:
+        raise _scene_error(file, "(root)", "invalid JSON: nested too deeply") from e
+    except MemoryError as e:
+        raise _scene_error(file, "(file)", "too large to parse") from e
     return Scene.from_json(text, file, _load_meshes(desc, path.parent, file))
 
 

@@ -30,6 +30,21 @@ pub enum Error {
     /// The render was cancelled by its progress callback.
     #[error("render cancelled")]
     Cancelled,
+    /// A stage would need more memory than the process can get (estimated before the
+    /// allocation, or an allocation that failed).
+    #[error(
+        "out of memory: {what} needs about {} but only {} is available",
+        crate::memory::human(*.needed),
+        crate::memory::human(*.available)
+    )]
+    OutOfMemory {
+        /// What the memory is for, e.g. "photon map (5000000 photons)".
+        what: String,
+        /// Estimated bytes needed.
+        needed: u64,
+        /// Bytes available to the process when checked.
+        available: u64,
+    },
 }
 
 /// Result alias for gi.

@@ -5,11 +5,13 @@
 //! world; pixel (0, 0) is the top-left of the image.
 
 pub mod bsdf;
+pub mod cancel;
 pub mod error;
 pub mod estimate;
 pub mod frame;
 pub mod gpu;
 pub mod image;
+pub mod memory;
 pub mod photon;
 pub mod raster;
 pub mod render;

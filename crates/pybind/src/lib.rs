@@ -2,6 +2,7 @@
 //! adds scene-file loading, image output and the CLI.
 
 mod errors;
+mod guard;
 mod render;
 mod scene;
 
@@ -18,6 +19,7 @@ fn _gi(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(render::methods, m)?)?;
     m.add_function(wrap_pyfunction!(render::adapter_report, m)?)?;
     m.add_function(wrap_pyfunction!(render::footprint_radii, m)?)?;
+    m.add_function(wrap_pyfunction!(guard::panic_for_tests, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -4,49 +4,10 @@ use crate::errors::to_py;
 use crate::scene::PyScene;
 use gi_core::frame::{FrameDesc, Images, Renderer};
 use gi_core::scene::update::UpdateTarget;
-use gi_core::{Image, Method, Progress, Settings};
+use gi_core::{Image, Method, Settings};
 use numpy::{IntoPyArray, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use std::sync::Mutex;
-use std::time::{Duration, Instant};
-
-/// Forwards progress to a Python callable `(stage: str, fraction: float) -> bool | None`
-/// at most every 100 ms, and cancels on Ctrl-C or when the callable returns `False`.
-struct PyProgress {
-    callback: Option<Py<PyAny>>,
-    last: Mutex<Option<Instant>>,
-    error: Mutex<Option<PyErr>>,
-}
-
-impl Progress for PyProgress {
-    fn update(&self, stage: &str, fraction: f64) -> bool {
-        {
-            let mut last = self.last.lock().unwrap_or_else(|p| p.into_inner());
-            let due =
-                last.is_none_or(|t| t.elapsed() >= Duration::from_millis(100)) || fraction >= 1.0;
-            if !due {
-                return true;
-            }
-            *last = Some(Instant::now());
-        }
-        Python::attach(|py| {
-            let result = py.check_signals().and_then(|_| match &self.callback {
-                Some(cb) => cb
-                    .call1(py, (stage, fraction))
-                    .map(|r| !r.bind(py).is(&*pyo3::types::PyBool::new(py, false))),
-                None => Ok(true),
-            });
-            match result {
-                Ok(go_on) => go_on,
-                Err(e) => {
-                    *self.error.lock().unwrap_or_else(|p| p.into_inner()) = Some(e);
-                    false
-                }
-            }
-        })
-    }
-}
 
 fn image_array<'py>(py: Python<'py>, img: Image) -> PyResult<Bound<'py, PyAny>> {
     let (w, h) = (img.width as usize, img.height as usize);
@@ -224,7 +185,9 @@ impl PyRenderer {
         settings: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
         let settings = settings_from(py, method, settings)?;
-        let inner = Renderer::new(&scene.inner, &settings).map_err(|e| to_py(py, e))?;
+        let inner = crate::guard::catch("Renderer", || {
+            Renderer::new(&scene.inner, &settings).map_err(|e| to_py(py, e))
+        })?;
         Ok(PyRenderer { inner })
     }
 
@@ -239,26 +202,14 @@ impl PyRenderer {
         seed: Option<u64>,
         progress: Option<Py<PyAny>>,
     ) -> PyResult<Bound<'py, PyDict>> {
-        let reporter = PyProgress {
-            callback: progress,
-            last: Mutex::new(None),
-            error: Mutex::new(None),
-        };
         let desc = FrameDesc {
             seed,
             images: Images { aovs, extras },
         };
         let inner = &mut self.inner;
-        let result = py.detach(|| inner.render(&desc, &reporter));
-        if let Some(e) = reporter
-            .error
-            .lock()
-            .unwrap_or_else(|p| p.into_inner())
-            .take()
-        {
-            return Err(e);
-        }
-        let out = result.map_err(|e| to_py(py, e))?;
+        let out = crate::guard::run(py, "Renderer.render", progress.as_ref(), |reporter| {
+            inner.render(&desc, reporter)
+        })?;
         output_dict(py, out, self.inner.settings().method)
     }
 
@@ -311,12 +262,18 @@ impl PyRenderer {
         let update = scene
             .update_from_json(&target, &value)
             .map_err(|e| to_py(py, e))?;
-        self.inner.update(&update).map_err(|e| to_py(py, e))
+        let inner = &mut self.inner;
+        crate::guard::catch("Renderer.update", || {
+            inner.update(&update).map_err(|e| to_py(py, e))
+        })
     }
 
     /// Changes the image size (targets are rebuilt at the next frame).
     fn resize(&mut self, py: Python<'_>, width: u32, height: u32) -> PyResult<()> {
-        self.inner.resize(width, height).map_err(|e| to_py(py, e))
+        let inner = &mut self.inner;
+        crate::guard::catch("Renderer.resize", || {
+            inner.resize(width, height).map_err(|e| to_py(py, e))
+        })
     }
 
     /// Frames rendered so far.
@@ -416,8 +373,9 @@ pub fn methods() -> Vec<&'static str> {
 #[pyfunction]
 #[pyo3(signature = (adapter = None))]
 pub fn adapter_report(py: Python<'_>, adapter: Option<String>) -> PyResult<String> {
-    py.detach(|| gi_core::gpu::adapter_report(adapter.as_deref()))
-        .map_err(|e| to_py(py, e))
+    crate::guard::run(py, "adapter_report", None, |_| {
+        gi_core::gpu::adapter_report(adapter.as_deref())
+    })
 }
 
 /// Footprint radii of photons traced with photon differentials, per path kind ("direct",
@@ -446,13 +404,21 @@ pub fn footprint_radii(
             "percentiles must be in [0, 100]",
         ));
     }
-    let rows = py.detach(|| {
-        let bvh = gi_core::trace::SceneBvh::build(&scene.inner);
+    let rows = crate::guard::run(py, "footprint_radii", None, |progress| {
+        let bvh = gi_core::trace::SceneBvh::try_build(&scene.inner)?;
         let mut ts = gi_core::render::gather_trace_settings(&scene.inner, &settings);
         ts.store_direct = true;
-        let set = gi_core::photon::emit_and_trace(&scene.inner, &bvh, photons, &ts, seed);
-        radius_percentiles(&set, &percentiles)
-    });
+        let control = gi_core::photon::trace::Checked::new(progress, "photon trace");
+        let set = gi_core::photon::emit_and_trace_checked(
+            &scene.inner,
+            &bvh,
+            photons,
+            &ts,
+            seed,
+            &control,
+        )?;
+        Ok(radius_percentiles(&set, &percentiles))
+    })?;
     Ok(rows
         .into_iter()
         .map(|(kind, n, r)| {

@@ -45,6 +45,10 @@ fn mesh_from_py(key: &str, value: &Bound<'_, PyAny>, source: &str) -> PyResult<M
     let (v, f, n, mats, face_mats): Entry = value.extract().map_err(|e| {
         SceneError::new_err(format!("{source}: mesh `{key}`: expected (vertices, faces, normals, materials, face_materials): {e}"))
     })?;
+    // The arrays are copied into the mesh, the scene (placed) and its normals.
+    let (nv, nf) = (v.as_array().nrows() as u64, f.as_array().nrows() as u64);
+    gi_core::memory::check(|| format!("mesh `{key}`"), (nv * 24 + nf * 16) * 3)
+        .map_err(|e| to_py(value.py(), e))?;
     let positions = vec3s(&v, "vertices", source)?;
     let faces = f.as_array();
     if faces.ncols() != 3 {
@@ -99,9 +103,9 @@ impl PyScene {
                 map.insert(key, data);
             }
         }
-        let inner = py
-            .detach(|| gi_core::Scene::from_json(text, &source, &map))
-            .map_err(|e| to_py(py, e))?;
+        let inner = crate::guard::run(py, "Scene.from_json", None, |_| {
+            gi_core::Scene::from_json(text, &source, &map)
+        })?;
         Ok(PyScene {
             inner,
             source,
@@ -112,7 +116,9 @@ impl PyScene {
     /// Loads a built-in scene by name.
     #[staticmethod]
     fn builtin(py: Python<'_>, name: &str) -> PyResult<Self> {
-        let inner = builtin::load(name).map_err(|e| to_py(py, e))?;
+        let inner = crate::guard::catch("Scene.builtin", || {
+            builtin::load(name).map_err(|e| to_py(py, e))
+        })?;
         Ok(PyScene {
             inner,
             source: name.to_string(),
@@ -222,18 +228,27 @@ impl PyScene {
                 "origins and directions differ in length",
             ));
         }
-        let (t, tri): (Vec<f32>, Vec<i64>) = py.detach(|| {
-            let bvh = self
-                .bvh
-                .get_or_init(|| gi_core::trace::SceneBvh::build(&self.inner));
-            o.par_iter()
-                .zip(d.par_iter())
-                .map(|(o, d)| match bvh.intersect(*o, *d, f32::INFINITY) {
-                    Some(h) => (h.t, h.triangle as i64),
-                    None => (f32::INFINITY, -1),
-                })
-                .unzip()
-        });
+        if let Some(i) = o.iter().chain(&d).position(|v| !v.is_finite()) {
+            let (what, row) = if i < o.len() {
+                ("origins", i)
+            } else {
+                ("directions", i - o.len())
+            };
+            return Err(pyo3::exceptions::PyValueError::new_err(format!(
+                "{what}[{row}] is not finite"
+            )));
+        }
+        let (t, tri): (Vec<f32>, Vec<i64>) =
+            crate::guard::run(py, "Scene.intersect", None, |_| {
+                let bvh = self.bvh()?;
+                Ok(o.par_iter()
+                    .zip(d.par_iter())
+                    .map(|(o, d)| match bvh.intersect(*o, *d, f32::INFINITY) {
+                        Some(h) => (h.t, h.triangle as i64),
+                        None => (f32::INFINITY, -1),
+                    })
+                    .unzip())
+            })?;
         Ok((
             t.into_pyarray(py).into_any(),
             tri.into_pyarray(py).into_any(),
@@ -241,11 +256,8 @@ impl PyScene {
     }
 
     /// Builds the ray-query BVH now (otherwise on the first `intersect`).
-    fn build_bvh(&self, py: Python<'_>) {
-        py.detach(|| {
-            self.bvh
-                .get_or_init(|| gi_core::trace::SceneBvh::build(&self.inner));
-        });
+    fn build_bvh(&self, py: Python<'_>) -> PyResult<()> {
+        crate::guard::run(py, "Scene.build_bvh", None, |_| self.bvh().map(|_| ()))
     }
 
     fn __repr__(&self) -> String {
@@ -257,6 +269,17 @@ impl PyScene {
             self.inner.camera.width,
             self.inner.camera.height
         )
+    }
+}
+
+impl PyScene {
+    /// The ray-query BVH, built (after a memory check) on first use.
+    fn bvh(&self) -> gi_core::Result<&gi_core::trace::SceneBvh> {
+        if let Some(b) = self.bvh.get() {
+            return Ok(b);
+        }
+        let built = gi_core::trace::SceneBvh::try_build(&self.inner)?;
+        Ok(self.bvh.get_or_init(|| built))
     }
 }
 

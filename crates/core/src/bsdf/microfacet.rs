@@ -12,7 +12,9 @@ pub fn d(h: Vec3, alpha: f32) -> f32 {
     }
     let a2 = alpha * alpha;
     let c2 = h.z * h.z;
-    let t = c2 * (a2 - 1.0) + 1.0;
+    // (1 − c²) + c²·α², not c²·(α² − 1) + 1: for α² below f32's epsilon, α² − 1 rounds to
+    // −1 and t to 0 at h = n, making D infinite (and radiance NaN).
+    let t = (1.0 - c2) + c2 * a2;
     a2 / (PI * t * t)
 }
 

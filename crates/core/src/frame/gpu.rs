@@ -442,8 +442,9 @@ impl Targets {
         let passes = Passes::get(ctx);
         let spp = self.spp;
         let mut done = 0;
+        let per_submit = crate::raster::samples_per_submit(self.width, self.height);
         while done < spp {
-            let batch = SAMPLES_PER_SUBMIT.min(spp - done);
+            let batch = per_submit.min(spp - done);
             if done > 0 {
                 // The previous batch's views are in use: submit it, then write the next.
                 ctx.queue.submit([encoder.finish()]);

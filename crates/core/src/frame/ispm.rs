@@ -20,7 +20,8 @@ use crate::gpu;
 use crate::image::Image;
 use crate::photon::lbvh::Aabb;
 use crate::photon::ring::PhotonRing;
-use crate::photon::{boundary, continue_paths, PhotonTraceSettings};
+use crate::photon::trace::Checked;
+use crate::photon::{boundary, continue_paths_checked, PhotonTraceSettings};
 use crate::raster::ispm::{bounce_layers, photon_hits, BounceTargets, IspmPasses, Z_RATIO};
 use crate::raster::specular::specular_paths;
 use crate::raster::volume_shape::{partition, VolumeRadius};
@@ -226,7 +227,9 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
                     .take_while(|&&l| l == light)
                     .count();
             let seed = settings.seed ^ (light as u64).wrapping_mul(0xA24B_AED4_963E_E407);
-            let photons = continue_paths(scene, bvh, &bm.rays[start..end], &pts, seed).photons;
+            let control = Checked::new(progress, "cpu trace");
+            let rays = &bm.rays[start..end];
+            let photons = continue_paths_checked(scene, bvh, rays, &pts, seed, &control)?.photons;
             traced += photons.len() as u64;
             // Volume radii are decided here, once, for the photon count the ring will hold
             // (the splat reads `footprint_radius`).
@@ -240,14 +243,17 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
             let mut compensated = photons.clone();
             if settings.boundary_compensation {
                 let tc = Instant::now();
-                boundary::compensate(
+                progress.update("boundary compensation", 0.0);
+                boundary::compensate_until(
                     scene,
                     bvh,
                     &mut compensated,
                     |p| p.footprint_radius,
                     Z_RATIO,
                     seed,
+                    &|| progress.cancelled(),
                 );
+                crate::cancel::check(progress)?;
                 compensation_seconds += tc.elapsed().as_secs_f64();
             }
             ring.push(frame, light as usize, photons, compensated);
@@ -309,6 +315,8 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         radius,
     );
     stats.volume_quads = quads as u64;
+    ctx.check_buffer("photon volumes", ordered.len() as u64 * 64)?;
+    crate::cancel::check(progress)?;
     state.volumes.write_params(&ctx, scene, radius);
     if !ordered.is_empty() && (photons_changed || changes.camera) {
         state.volumes.write_photons(&ctx, &ordered);

@@ -99,6 +99,7 @@ impl Renderer {
             settings.width.unwrap_or(scene.camera.width),
             settings.height.unwrap_or(scene.camera.height),
         );
+        crate::render::check_image_memory(&camera, settings.method)?;
         Ok(Renderer {
             scene: Scene {
                 camera,
@@ -165,7 +166,9 @@ impl Renderer {
             }
         }
         if (width, height) != (self.scene.camera.width, self.scene.camera.height) {
-            self.scene.camera = self.scene.camera.with_size(width, height);
+            let camera = self.scene.camera.with_size(width, height);
+            crate::render::check_image_memory(&camera, self.settings.method)?;
+            self.scene.camera = camera;
             self.resized = true;
         }
         Ok(())
@@ -184,8 +187,9 @@ impl Renderer {
     pub fn render(&mut self, desc: &FrameDesc, progress: &dyn Progress) -> Result<RenderOutput> {
         let t0 = Instant::now();
         let mut stages = Vec::new();
+        crate::cancel::check(progress)?;
         if self.bvh.is_none() || self.changes.geometry {
-            stages.push(self.update_bvh());
+            stages.push(self.update_bvh()?);
         }
         let settings = Settings {
             seed: desc.seed.unwrap_or_else(|| self.frame_seed()),
@@ -212,7 +216,7 @@ impl Renderer {
 
     /// Builds the BVH, or after objects moved rebuilds or refits it, whichever measured
     /// faster (each is tried once first).
-    fn update_bvh(&mut self) -> (String, f64) {
+    fn update_bvh(&mut self) -> Result<(String, f64)> {
         let t = Instant::now();
         let c = self.bvh_cost;
         let refit = match (&self.bvh, c.build, c.refit) {
@@ -237,13 +241,13 @@ impl Renderer {
             self.bvh_cost.refits += 1;
             ("bvh refit", s)
         } else {
-            self.bvh = Some(SceneBvh::build(&self.scene));
+            self.bvh = Some(SceneBvh::try_build(&self.scene)?);
             let s = t.elapsed().as_secs_f64();
             self.bvh_cost.build = Some(s);
             self.bvh_cost.refits = 0;
             ("bvh build", s)
         };
-        (name.to_string(), seconds)
+        Ok((name.to_string(), seconds))
     }
 
     fn gpu_frame(
@@ -292,6 +296,7 @@ impl Renderer {
         let layers = self.gpu.as_ref().map(|g| g.scene.layers);
         let fits = layers.is_some_and(|l| gpu::GpuScene::fits(scene, l));
         if !fits {
+            crate::raster::check_scene_buffers(ctx, scene)?;
             let gs = gpu::GpuScene::new(ctx, scene, settings.shadow_map_size);
             crate::raster::check_limits(ctx, scene, settings, gs.layers)?;
             let targets = gpu::Targets::new(ctx, &gs, scene, settings.spp);

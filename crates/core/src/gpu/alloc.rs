@@ -38,6 +38,19 @@ pub fn counters() -> Counters {
     COUNTERS.with(|c| c.borrow().clone())
 }
 
+/// Adds `other` (e.g. the counters of a worker thread that rendered on behalf of this one)
+/// to this thread's counters.
+pub fn merge(other: Counters) {
+    COUNTERS.with(|c| {
+        let mut c = c.borrow_mut();
+        c.buffers += other.buffers;
+        c.textures += other.textures;
+        c.bind_groups += other.bind_groups;
+        c.pipelines += other.pipelines;
+        c.uploads.extend(other.uploads);
+    })
+}
+
 pub(crate) enum Created {
     Buffer,
     Texture,

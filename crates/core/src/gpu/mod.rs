@@ -208,6 +208,21 @@ impl GpuContext {
         out
     }
 
+    /// Fails with [`Error::Gpu`] when a buffer of `bytes` exceeds the adapter's largest
+    /// buffer (checked before creating it, instead of a wgpu validation panic), and with
+    /// [`Error::OutOfMemory`] when the process can't hold its staging copy.
+    pub fn check_buffer(&self, what: &str, bytes: u64) -> Result<()> {
+        let max = self.device.limits().max_buffer_size;
+        if bytes > max {
+            return Err(Error::Gpu(format!(
+                "{what} need a {} buffer; the adapter allows at most {}",
+                crate::memory::human(bytes),
+                crate::memory::human(max)
+            )));
+        }
+        crate::memory::check(|| what.to_string(), bytes)
+    }
+
     /// Waits for all submitted work.
     pub fn wait(&self) -> Result<()> {
         self.device

@@ -107,7 +107,24 @@ pub fn compensate(
     z_ratio: f32,
     seed: u64,
 ) {
+    compensate_until(scene, bvh, photons, radius, z_ratio, seed, &|| false);
+}
+
+/// [`compensate`] that leaves the remaining photons alone once `stop()` holds (asked per
+/// photon); the caller then discards them.
+pub fn compensate_until(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    photons: &mut [Photon],
+    radius: impl Fn(&Photon) -> f32 + Sync,
+    z_ratio: f32,
+    seed: u64,
+    stop: &(dyn Fn() -> bool + Sync),
+) {
     photons.par_iter_mut().enumerate().for_each(|(i, p)| {
+        if stop() {
+            return;
+        }
         let mut rng = Rng::new(seed, 0xb0da, i as u64);
         let f = coverage(scene, bvh, p, radius(p), z_ratio, &mut rng).max(MIN_COVERAGE);
         p.power = (p.power() / f).into();

@@ -10,7 +10,10 @@
 //! (k − 1)/(πr²), the unbiased kNN density for uniformly spread photons.
 
 use super::{KdTree, Neighbour, Photon};
+use crate::cancel;
 use crate::error::{Error, Result};
+use crate::memory;
+use crate::render::Progress;
 use crate::trace::Interaction;
 use glam::Vec3;
 use std::f32::consts::PI;
@@ -95,6 +98,21 @@ impl PhotonMap {
             tree: KdTree::build(&positions),
             photons,
         }
+    }
+
+    /// [`PhotonMap::build`] after checking that the kd-tree fits in memory, cancelled
+    /// (between nodes) when `progress` asks.
+    pub fn try_build(photons: Vec<Photon>, progress: &dyn Progress) -> Result<Self> {
+        let n = photons.len() as u64;
+        // Positions, the (position, index) items being sorted, and the tree's arrays.
+        let bytes = n * (12 + 16 + 12 + 4 + 1);
+        memory::check(|| format!("the kd-tree over {n} photons"), bytes)?;
+        let stage = cancel::StageProgress::new(progress, "kd-tree build", 1);
+        let positions: Vec<Vec3> = photons.iter().map(Photon::position).collect();
+        let tree = KdTree::build_until(&positions, &|| stage.stopped()).ok_or(Error::Cancelled)?;
+        stage.advance(1);
+        stage.finish()?;
+        Ok(PhotonMap { tree, photons })
     }
 
     /// Radiance (W·sr⁻¹·m⁻² per channel) leaving `it` towards `wo` (world space, pointing

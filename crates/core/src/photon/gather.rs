@@ -6,6 +6,10 @@
 use super::footprint::{t_auto, Footprint};
 use super::lbvh::{Aabb, LinearBvh};
 use super::{Kernel, Photon, PhotonSet};
+use crate::cancel;
+use crate::error::Result;
+use crate::memory;
+use crate::render::Progress;
 use crate::trace::Interaction;
 use glam::Vec3;
 
@@ -68,6 +72,37 @@ impl FootprintMap {
             bvh,
             kernel,
         }
+    }
+
+    /// [`FootprintMap::build`] after checking that it fits in memory, and `Cancelled`
+    /// when `progress` asks (before and after the build).
+    pub fn try_build(
+        set: &PhotonSet,
+        min_bounce: u32,
+        scene_area: f64,
+        leaf: LeafSize,
+        kernel: Kernel,
+        progress: &dyn Progress,
+    ) -> Result<Self> {
+        let n = set.photons.len() as u64;
+        // A photon and footprint copy, bounds, centres, Morton keys and orders, nodes.
+        let per_photon = (std::mem::size_of::<Photon>()
+            + std::mem::size_of::<Footprint>()
+            + std::mem::size_of::<Aabb>()
+            + 12
+            + 8
+            + 8
+            + std::mem::size_of::<Aabb>()) as u64;
+        memory::check(
+            || format!("the footprint photon map over {n} photons"),
+            n * per_photon,
+        )?;
+        let stage = cancel::StageProgress::new(progress, "photon map build", 1);
+        stage.finish()?;
+        let map = Self::build(set, min_bounce, scene_area, leaf, kernel);
+        stage.advance(1);
+        stage.finish()?;
+        Ok(map)
     }
 
     pub fn len(&self) -> usize {

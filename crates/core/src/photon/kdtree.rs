@@ -13,6 +13,8 @@ use std::collections::BinaryHeap;
 const LEAF: usize = 8;
 /// Ranges longer than this are built in parallel.
 const PARALLEL_BUILD: usize = 1 << 14;
+/// Subtrees larger than this ask whether to stop before they are built.
+const STOP_CHECK: usize = 1 << 12;
 
 /// A found neighbour: index into the points the tree was built from, squared distance (m²).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -50,6 +52,12 @@ pub struct KdTree {
 impl KdTree {
     /// Builds the tree over `points` (O(n log n), parallel near the root).
     pub fn build(points: &[Vec3]) -> Self {
+        Self::build_until(points, &|| false).unwrap_or_default()
+    }
+
+    /// [`KdTree::build`] that gives up (`None`) once `stop()` holds, asked at every node
+    /// of more than a few thousand points.
+    pub fn build_until(points: &[Vec3], stop: &(dyn Fn() -> bool + Sync)) -> Option<Self> {
         let mut items: Vec<(Vec3, u32)> = points
             .iter()
             .enumerate()
@@ -61,13 +69,16 @@ impl KdTree {
             .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
                 (lo.min(*p), hi.max(*p))
             });
-        build_range(&mut items, &mut axes, bounds);
+        build_range(&mut items, &mut axes, bounds, stop);
+        if stop() {
+            return None;
+        }
         let (points, indices) = items.into_iter().unzip();
-        KdTree {
+        Some(KdTree {
             points,
             indices,
             axes,
-        }
+        })
     }
 
     pub fn len(&self) -> usize {
@@ -155,8 +166,13 @@ impl<F: Fn(u32) -> bool> Query<F> {
 
 /// Arranges `items` as the implicit subtree of their range, recording split axes. `bounds`
 /// (lower, upper corner) contains the items; each split cuts it at the median.
-fn build_range(items: &mut [(Vec3, u32)], axes: &mut [u8], bounds: (Vec3, Vec3)) {
-    if items.len() <= LEAF {
+fn build_range(
+    items: &mut [(Vec3, u32)],
+    axes: &mut [u8],
+    bounds: (Vec3, Vec3),
+    stop: &(dyn Fn() -> bool + Sync),
+) {
+    if items.len() <= LEAF || (items.len() > STOP_CHECK && stop()) {
         return;
     }
     let (lo, hi) = bounds;
@@ -182,12 +198,12 @@ fn build_range(items: &mut [(Vec3, u32)], axes: &mut [u8], bounds: (Vec3, Vec3))
     let (right, right_axes) = (&mut rest[1..], &mut rest_axes[1..]);
     if left.len() > PARALLEL_BUILD {
         rayon::join(
-            || build_range(left, left_axes, (lo, left_hi)),
-            || build_range(right, right_axes, (right_lo, hi)),
+            || build_range(left, left_axes, (lo, left_hi), stop),
+            || build_range(right, right_axes, (right_lo, hi), stop),
         );
     } else {
-        build_range(left, left_axes, (lo, left_hi));
-        build_range(right, right_axes, (right_lo, hi));
+        build_range(left, left_axes, (lo, left_hi), stop);
+        build_range(right, right_axes, (right_lo, hi), stop);
     }
 }
 

@@ -22,7 +22,10 @@ use glam::Vec3;
 
 pub use estimate::Kernel;
 pub use kdtree::{KdTree, Neighbour};
-pub use trace::{continue_paths, emit_and_trace, PhotonTraceSettings};
+pub use trace::{
+    continue_paths, continue_paths_checked, emit_and_trace, emit_and_trace_checked,
+    PhotonTraceSettings,
+};
 
 /// A stored photon, laid out for GPU upload (64 bytes; each `vec3` starts a 16-byte row).
 #[repr(C)]

@@ -12,11 +12,15 @@
 use super::differential::{self, Differentials};
 use super::{path_density_factor, FootprintAxes, PathKind, Photon, PhotonRay, PhotonSet};
 use crate::bsdf::Lobe;
+use crate::error::{Error, Result};
+use crate::memory;
+use crate::render::Progress;
 use crate::sampling::Rng;
 use crate::scene::Scene;
 use crate::trace::light_tracer::{choose_light, light_weights};
 use crate::trace::{Interaction, SceneBvh};
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 /// Paths per parallel work item.
 const CHUNK: u64 = 4096;
@@ -66,8 +70,22 @@ pub fn emit_and_trace(
     s: &PhotonTraceSettings,
     seed: u64,
 ) -> PhotonSet {
+    emit_and_trace_checked(scene, bvh, n_photons, s, seed, &Unchecked)
+        .unwrap_or_else(|e| panic!("photon trace: {e}"))
+}
+
+/// [`emit_and_trace`] under `control`: progress reported per chunk of paths, cancellation
+/// asked between paths, and the stored photons kept within the memory budget.
+pub fn emit_and_trace_checked(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    n_photons: u64,
+    s: &PhotonTraceSettings,
+    seed: u64,
+    control: &dyn TraceControl,
+) -> Result<PhotonSet> {
     let weights = light_weights(scene);
-    let mut set = trace_chunks(n_photons, |i, out| {
+    let mut set = trace_chunks(n_photons, control, |i, out| {
         let mut rng = Rng::new(seed, STREAM_EMIT, i);
         let Some((li, p_light)) = choose_light(&weights, rng.next_f32()) else {
             out.absorbed += 1;
@@ -85,10 +103,10 @@ pub fn emit_and_trace(
                 Differentials::emitted(e.direction).scaled(spacing / ds.spacing)
             });
         follow(scene, bvh, &ray, diff, s, &mut rng, out);
-    });
+    })?;
     set.emitted = n_photons;
     finish_footprints(&mut set, s);
-    set
+    Ok(set)
 }
 
 /// Continues photons that already scattered elsewhere (e.g. in the GPU bounce map): each
@@ -100,15 +118,28 @@ pub fn continue_paths(
     s: &PhotonTraceSettings,
     seed: u64,
 ) -> PhotonSet {
-    let mut set = trace_chunks(rays.len() as u64, |i, out| {
+    continue_paths_checked(scene, bvh, rays, s, seed, &Unchecked)
+        .unwrap_or_else(|e| panic!("photon trace: {e}"))
+}
+
+/// [`continue_paths`] under `control` (see [`emit_and_trace_checked`]).
+pub fn continue_paths_checked(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    rays: &[PhotonRay],
+    s: &PhotonTraceSettings,
+    seed: u64,
+    control: &dyn TraceControl,
+) -> Result<PhotonSet> {
+    let mut set = trace_chunks(rays.len() as u64, control, |i, out| {
         let mut rng = Rng::new(seed, STREAM_CONTINUE, i);
         let ray = &rays[i as usize];
         let diff = Differentials::emitted(ray.direction.into());
         follow(scene, bvh, ray, diff, s, &mut rng, out);
-    });
+    })?;
     set.emitted = rays.len() as u64;
     finish_footprints(&mut set, s);
-    set
+    Ok(set)
 }
 
 /// Once all photons are traced (§4.3, "after photon tracing has completed"): compresses the
@@ -138,27 +169,132 @@ fn finish_footprints(set: &mut PhotonSet, s: &PhotonTraceSettings) {
     }
 }
 
+/// What a photon trace reports to and asks of its caller.
+pub trait TraceControl: Sync {
+    /// Reports that `fraction` of the paths are traced.
+    fn advance(&self, fraction: f64);
+    /// True once the trace should stop (asked between paths).
+    fn stopped(&self) -> bool;
+    /// Most bytes the stored photons may take, if limited.
+    fn budget(&self) -> Option<u64>;
+}
+
+/// No progress, no cancellation, no memory budget.
+struct Unchecked;
+impl TraceControl for Unchecked {
+    fn advance(&self, _: f64) {}
+    fn stopped(&self) -> bool {
+        false
+    }
+    fn budget(&self) -> Option<u64> {
+        None
+    }
+}
+
+/// A trace reporting to a [`Progress`] as stage `name`, within the memory the process can
+/// get (a third of it for the stored photons: the chunks, their concatenation and the
+/// structure built over them each hold a copy or more).
+pub struct Checked<'a> {
+    progress: &'a dyn Progress,
+    name: &'a str,
+    budget: Option<u64>,
+    stop: AtomicBool,
+}
+
+impl<'a> Checked<'a> {
+    pub fn new(progress: &'a dyn Progress, name: &'a str) -> Self {
+        Checked {
+            progress,
+            name,
+            budget: memory::available().map(|a| a / 3),
+            stop: AtomicBool::new(false),
+        }
+    }
+}
+
+impl TraceControl for Checked<'_> {
+    fn advance(&self, fraction: f64) {
+        if !self.progress.update(self.name, fraction) {
+            self.stop.store(true, Ordering::Relaxed);
+        }
+    }
+    fn stopped(&self) -> bool {
+        self.stop.load(Ordering::Relaxed) || self.progress.cancelled()
+    }
+    fn budget(&self) -> Option<u64> {
+        self.budget
+    }
+}
+
+/// Chunks traced before the memory need of the whole trace is extrapolated from them.
+const EXTRAPOLATE_AFTER: u64 = 8;
+
+/// Bytes a stored photon takes while tracing (the record and its footprint).
+const STORED_BYTES: u64 =
+    (std::mem::size_of::<Photon>() + std::mem::size_of::<FootprintAxes>()) as u64;
+
 /// Runs `path(i, set)` for every `i < n` in parallel chunks and concatenates the chunks' sets
-/// in order.
-fn trace_chunks(n: u64, path: impl Fn(u64, &mut PhotonSet) + Sync) -> PhotonSet {
-    let sets: Vec<PhotonSet> = (0..n.div_ceil(CHUNK))
+/// in order. Stops with `Cancelled` when `control` asks, and with `OutOfMemory` when the
+/// stored photons outgrow its budget (the need is extrapolated from the chunks done).
+fn trace_chunks(
+    n: u64,
+    control: &dyn TraceControl,
+    path: impl Fn(u64, &mut PhotonSet) + Sync,
+) -> Result<PhotonSet> {
+    let chunks = n.div_ceil(CHUNK);
+    let done = AtomicU64::new(0);
+    let stored = AtomicU64::new(0);
+    let over_budget = AtomicBool::new(false);
+    let sets: Vec<PhotonSet> = (0..chunks)
         .into_par_iter()
         .map(|chunk| {
             let mut set = PhotonSet::default();
+            if over_budget.load(Ordering::Relaxed) {
+                return set;
+            }
             for i in chunk * CHUNK..((chunk + 1) * CHUNK).min(n) {
+                if i % 64 == 0 && control.stopped() {
+                    return set;
+                }
                 path(i, &mut set);
             }
+            let bytes = set.photons.len() as u64 * STORED_BYTES;
+            let total = stored.fetch_add(bytes, Ordering::Relaxed) + bytes;
+            let d = done.fetch_add(1, Ordering::Relaxed) + 1;
+            // Past the first chunks, stop as soon as the extrapolated total won't fit.
+            let expected = if d >= EXTRAPOLATE_AFTER {
+                (total as f64 * chunks as f64 / d as f64) as u64
+            } else {
+                total
+            };
+            if control.budget().is_some_and(|b| expected > b) {
+                over_budget.store(true, Ordering::Relaxed);
+            }
+            control.advance(d as f64 / chunks as f64);
             set
         })
         .collect();
+    if over_budget.load(Ordering::Relaxed) {
+        let done = done.load(Ordering::Relaxed).max(1);
+        let stored = stored.load(Ordering::Relaxed);
+        return Err(Error::OutOfMemory {
+            what: format!("the photons of {n} paths"),
+            needed: (stored as f64 * chunks as f64 / done as f64) as u64 * 3,
+            available: memory::available().unwrap_or(0),
+        });
+    }
+    if control.stopped() {
+        return Err(Error::Cancelled);
+    }
+    let count: usize = sets.iter().map(|s| s.photons.len()).sum();
     let mut all = PhotonSet {
-        photons: Vec::with_capacity(sets.iter().map(|s| s.photons.len()).sum()),
+        photons: memory::try_with_capacity(count, || format!("{count} photons"))?,
         ..Default::default()
     };
     for set in sets {
         all.append(set);
     }
-    all
+    Ok(all)
 }
 
 /// Follows one photon until it is absorbed, escapes or reaches the bounce limit.

@@ -228,6 +228,14 @@ pub(crate) fn oct_decode(e: Vec2) -> Vec3 {
     n.normalize_or_zero()
 }
 
+/// Samples per submission: up to [`SAMPLES_PER_SUBMIT`], fewer for large images so that
+/// one submission stays short (about 2¹⁸ pixel samples, about 0.1 s on
+/// lavapipe) and cancellation, checked between submissions, stays prompt.
+pub(crate) fn samples_per_submit(w: u32, h: u32) -> u32 {
+    let pixels = (w as u64 * h as u64).max(1);
+    ((1u64 << 18) / pixels).clamp(1, SAMPLES_PER_SUBMIT as u64) as u32
+}
+
 pub(crate) fn check_limits(
     ctx: &GpuContext,
     scene: &Scene,
@@ -255,6 +263,12 @@ pub(crate) fn check_limits(
         )));
     }
     Ok(())
+}
+
+/// Fails with a GPU error when the scene's vertex buffer exceeds the adapter's limits.
+pub(crate) fn check_scene_buffers(ctx: &GpuContext, scene: &Scene) -> Result<()> {
+    let bytes = scene.triangles.len() as u64 * 3 * std::mem::size_of::<VertexRaw>() as u64;
+    ctx.check_buffer("scene vertices", bytes)
 }
 
 #[cfg(test)]

@@ -28,7 +28,7 @@ pub fn specular_paths(
         let cam = &scene.camera;
         return Ok(Image::new(cam.width, cam.height));
     }
-    let map = PhotonMap::build(photons.to_vec());
+    let map = PhotonMap::try_build(photons.to_vec(), progress)?;
     let gather = crate::render::photon_map_gather(scene, settings);
     delta_image(
         scene,

@@ -3,7 +3,8 @@
 //! non-delta surface it reaches; assemble the image and the first-hit AOVs.
 
 use super::{Progress, RenderOutput, RenderStats, Settings};
-use crate::error::{Error, Result};
+use crate::cancel::StageProgress;
+use crate::error::Result;
 use crate::image::Image;
 use crate::sampling::Rng;
 use crate::scene::Scene;
@@ -11,7 +12,6 @@ use crate::trace::path::{self, FirstHit};
 use crate::trace::{Interaction, SceneBvh};
 use glam::Vec3;
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 /// Most delta scatterings a camera path follows before giving up.
 const MAX_DELTA_BOUNCES: u32 = 8;
@@ -37,33 +37,30 @@ pub fn render_image<S: Default + Send>(
 ) -> Result<RenderOutput> {
     let cam = &scene.camera;
     let (w, h) = (cam.width, cam.height);
-    let done = AtomicU64::new(0);
-    let cancelled = AtomicBool::new(false);
+    let stage = StageProgress::new(progress, "radiance estimate", h as u64);
     let rows: Vec<Vec<(Vec3, FirstHit)>> = (0..h)
         .into_par_iter()
         .map_init(S::default, |scratch, y| {
-            if cancelled.load(Ordering::Relaxed) {
+            if stage.stopped() {
                 return Vec::new();
             }
             let row = (0..w)
-                .map(|x| {
+                .map_while(|x| {
+                    if stage.stopped() {
+                        return None;
+                    }
                     let l = pixel_radiance(scene, bvh, settings, x, y, true, |it, wo| {
                         estimate(it, wo, scratch)
                     });
                     let centre = cam.direction(x as f32 + 0.5, y as f32 + 0.5);
-                    (l, path::first_hit(scene, bvh, cam.position, centre))
+                    Some((l, path::first_hit(scene, bvh, cam.position, centre)))
                 })
                 .collect();
-            let d = done.fetch_add(1, Ordering::Relaxed) + 1;
-            if !progress.update("radiance estimate", d as f64 / h as f64) {
-                cancelled.store(true, Ordering::Relaxed);
-            }
+            stage.advance(1);
             row
         })
         .collect();
-    if cancelled.load(Ordering::Relaxed) {
-        return Err(Error::Cancelled);
-    }
+    stage.finish()?;
     let mut out = RenderOutput {
         radiance: Image::new(w, h),
         albedo: Image::new(w, h),
@@ -106,29 +103,23 @@ pub fn delta_image<S: Default + Send>(
     if !scene.materials.iter().any(has_delta_lobe) {
         return Ok(image);
     }
-    let done = AtomicU64::new(0);
-    let cancelled = AtomicBool::new(false);
+    let stage = StageProgress::new(progress, "specular paths", h as u64);
     image
         .pixels
         .par_chunks_mut(w as usize)
         .enumerate()
         .for_each_init(S::default, |scratch, (y, row)| {
-            if cancelled.load(Ordering::Relaxed) {
-                return;
-            }
             for (x, px) in row.iter_mut().enumerate() {
+                if stage.stopped() {
+                    return;
+                }
                 *px = pixel_radiance(scene, bvh, settings, x as u32, y as u32, false, |it, wo| {
                     estimate(it, wo, scratch)
                 });
             }
-            let d = done.fetch_add(1, Ordering::Relaxed) + 1;
-            if !progress.update("specular paths", d as f64 / h as f64) {
-                cancelled.store(true, Ordering::Relaxed);
-            }
+            stage.advance(1);
         });
-    if cancelled.load(Ordering::Relaxed) {
-        return Err(Error::Cancelled);
-    }
+    stage.finish()?;
     Ok(image)
 }
 

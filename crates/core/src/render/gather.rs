@@ -6,11 +6,12 @@
 
 use super::camera_pass::{render_image, scene_diagonal, start_frame};
 use super::{Progress, RenderOutput, Settings};
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::photon::differential::global_spacing;
 use crate::photon::gather::{scene_area, FootprintMap, LeafSize};
+use crate::photon::trace::Checked;
 use crate::photon::trace::DifferentialSettings;
-use crate::photon::{emit_and_trace, PhotonTraceSettings};
+use crate::photon::{emit_and_trace_checked, PhotonTraceSettings};
 use crate::scene::Scene;
 use crate::trace::path::direct_light;
 use crate::trace::SceneBvh;
@@ -47,23 +48,21 @@ pub fn render(
         |name: &str, t: Instant| stats.stages.push((name.into(), t.elapsed().as_secs_f64()));
 
     let t = Instant::now();
-    let set = emit_and_trace(
+    let set = emit_and_trace_checked(
         scene,
         bvh,
         settings.photons,
         &trace_settings(scene, settings),
         settings.seed,
-    );
+        &Checked::new(progress, "photon trace"),
+    )?;
     stage("photon trace", t);
-    if !progress.update("photon trace", 1.0) {
-        return Err(Error::Cancelled);
-    }
 
     let t = Instant::now();
     let leaf = settings
         .leaf_size
         .map_or(LeafSize::Auto, |n| LeafSize::Fixed(n as usize));
-    let map = FootprintMap::build(&set, 1, scene_area(scene), leaf, settings.kernel);
+    let map = FootprintMap::try_build(&set, 1, scene_area(scene), leaf, settings.kernel, progress)?;
     stage("photon map build", t);
 
     let t = Instant::now();

@@ -305,6 +305,12 @@ pub struct RenderOutput {
 /// Receives progress; return `false` to cancel the render.
 pub trait Progress: Sync {
     fn update(&self, stage: &str, fraction: f64) -> bool;
+    /// True once the render should stop. Long loops ask between small work items, so it
+    /// must be cheap (the Python binding's is an atomic load). Default: only `update`
+    /// cancels.
+    fn cancelled(&self) -> bool {
+        false
+    }
 }
 
 /// No progress reporting.
@@ -313,6 +319,21 @@ impl Progress for Silent {
     fn update(&self, _: &str, _: f64) -> bool {
         true
     }
+}
+
+/// Checks that the images of a frame fit in memory: the outputs (six RGB images and the
+/// depth, 76 bytes a pixel), the per-pixel intermediates of the CPU methods, and the render
+/// targets and readbacks of the GPU methods (G-buffer, accumulation, copies).
+pub(crate) fn check_image_memory(camera: &crate::scene::Camera, method: Method) -> Result<()> {
+    let per_pixel: u64 = match method {
+        Method::Direct | Method::Ispm => 384,
+        _ => 160,
+    };
+    let pixels = camera.width as u64 * camera.height as u64;
+    crate::memory::check(
+        || format!("the images of a {}x{} frame", camera.width, camera.height),
+        pixels * per_pixel,
+    )
 }
 
 /// Renders `scene` with `settings`: one frame of a new [`Renderer`](crate::frame::Renderer)

@@ -10,9 +10,10 @@
 
 use super::camera_pass::{render_image, scene_diagonal, start_frame};
 use super::{Progress, RenderOutput, Settings};
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::photon::estimate::{Gather, PhotonMap};
-use crate::photon::{emit_and_trace, Neighbour, PhotonTraceSettings};
+use crate::photon::trace::Checked;
+use crate::photon::{emit_and_trace_checked, Neighbour, PhotonTraceSettings};
 use crate::scene::Scene;
 use crate::trace::SceneBvh;
 use std::time::Instant;
@@ -50,14 +51,12 @@ pub fn render(
         store_direct: true,
         differentials: None,
     };
-    let set = emit_and_trace(scene, bvh, settings.photons, &pts, settings.seed);
+    let control = Checked::new(progress, "photon trace");
+    let set = emit_and_trace_checked(scene, bvh, settings.photons, &pts, settings.seed, &control)?;
     stage("photon trace", t);
-    if !progress.update("photon trace", 1.0) {
-        return Err(Error::Cancelled);
-    }
 
     let t = Instant::now();
-    let map = PhotonMap::build(set.photons);
+    let map = PhotonMap::try_build(set.photons, progress)?;
     stage("kd-tree build", t);
 
     let t = Instant::now();

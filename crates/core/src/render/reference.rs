@@ -1,7 +1,8 @@
 //! Method `path`: the reference renderer (path tracing + light tracing for caustics).
 
 use super::{Progress, RenderOutput, RenderStats, Settings};
-use crate::error::{Error, Result};
+use crate::cancel::StageProgress;
+use crate::error::Result;
 use crate::image::Image;
 use crate::sampling::Rng;
 use crate::scene::Scene;
@@ -10,7 +11,6 @@ use crate::trace::path::{self, PathSettings};
 use crate::trace::SceneBvh;
 use glam::Vec3;
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::Instant;
 
 /// Light paths per parallel work item.
@@ -43,15 +43,13 @@ pub fn render(
     };
     // Progress counts camera rows and light-path chunks together.
     let light_chunks = light_paths.div_ceil(LIGHT_CHUNK);
-    let work_total = (h as u64 + light_chunks).max(1) as f64;
-    let done = AtomicU64::new(0);
-    let cancelled = AtomicBool::new(false);
-    let tick = || {
-        let d = done.fetch_add(1, Ordering::Relaxed) + 1;
-        if !progress.update("path", d as f64 / work_total) {
-            cancelled.store(true, Ordering::Relaxed);
-        }
-    };
+    // The camera connections of all light paths are kept until they are summed in order:
+    // about one (pixel, radiance) splat of 16 bytes per path.
+    crate::memory::check(
+        || format!("the camera splats of {light_paths} light paths"),
+        light_paths.saturating_mul(16),
+    )?;
+    let stage = StageProgress::new(progress, "path", h as u64 + light_chunks);
 
     // Camera paths, one row per work item.
     let t = Instant::now();
@@ -59,14 +57,21 @@ pub fn render(
     let rows: Vec<Vec<(Vec3, path::FirstHit)>> = (0..h)
         .into_par_iter()
         .map(|y| {
-            if cancelled.load(Ordering::Relaxed) {
+            if stage.stopped() {
                 return Vec::new();
             }
             let row = (0..w)
-                .map(|x| {
+                .map_while(|x| {
+                    // Cancellation is asked per pixel: a row at high spp takes seconds.
+                    if stage.stopped() {
+                        return None;
+                    }
                     let pixel = (y * w + x) as u64;
                     let mut sum = Vec3::ZERO;
                     for s in 0..spp {
+                        if s % 64 == 63 && stage.stopped() {
+                            return None;
+                        }
                         let mut rng = Rng::new(settings.seed, pixel, s as u64);
                         let j = rng.next_2d();
                         let dir = cam.direction(x as f32 + j.x, y as f32 + j.y);
@@ -79,19 +84,17 @@ pub fn render(
                         cam.position,
                         cam.direction(x as f32 + 0.5, y as f32 + 0.5),
                     );
-                    (sum / spp as f32, first)
+                    Some((sum / spp as f32, first))
                 })
                 .collect();
-            tick();
+            stage.advance(1);
             row
         })
         .collect();
     stats
         .stages
         .push(("camera paths".into(), t.elapsed().as_secs_f64()));
-    if cancelled.load(Ordering::Relaxed) {
-        return Err(Error::Cancelled);
-    }
+    stage.finish()?;
 
     // Light paths for caustics. Each chunk returns its camera connections, which are summed
     // in chunk order so that the image is bit-for-bit the same for a seed on any schedule.
@@ -105,11 +108,14 @@ pub fn render(
         .into_par_iter()
         .map(|chunk| {
             let mut splats = Vec::new();
-            if cancelled.load(Ordering::Relaxed) {
+            if stage.stopped() {
                 return splats;
             }
             let end = ((chunk + 1) * LIGHT_CHUNK).min(light_paths);
             for i in chunk * LIGHT_CHUNK..end {
+                if i % 256 == 0 && stage.stopped() {
+                    return splats;
+                }
                 let mut rng = Rng::new(settings.seed, u64::MAX - 1, i);
                 light_tracer::trace_path(
                     scene,
@@ -121,7 +127,7 @@ pub fn render(
                     &mut splats,
                 );
             }
-            tick();
+            stage.advance(1);
             splats
         })
         .collect();
@@ -132,9 +138,7 @@ pub fn render(
     stats
         .stages
         .push(("light paths".into(), t.elapsed().as_secs_f64()));
-    if cancelled.load(Ordering::Relaxed) {
-        return Err(Error::Cancelled);
-    }
+    stage.finish()?;
 
     let mut out = RenderOutput {
         radiance: Image::new(w, h),

@@ -63,6 +63,23 @@ fn finite3(v: V3) -> bool {
     v.iter().all(|x| x.is_finite())
 }
 
+/// Largest coordinate (m, absolute value per axis) of any point of a scene after its
+/// transform: f32 keeps steps of at most 8 mm there (2⁻⁷ m at 10⁵), and the BVH builders
+/// see bounded boxes whose sizes neither overflow nor lose all resolution.
+pub const MAX_EXTENT: f32 = 1.0e5;
+/// Largest scale factor (absolute value, per axis) of an object transform, and the inverse
+/// of the smallest: transforms stay invertible with well-conditioned normals.
+pub const MAX_SCALE: f32 = 1.0e6;
+/// Largest light intensity per channel (W/sr): emitted powers, photon powers and radiance
+/// estimates stay far from f32 overflow (3.4·10³⁸) even at millimetre distances.
+pub const MAX_INTENSITY: f32 = 1.0e10;
+/// Most vertices (and triangles) a scene may hold: indices are 32-bit.
+pub const MAX_VERTICES: usize = u32::MAX as usize;
+
+fn within_extent(v: V3) -> bool {
+    v.iter().all(|x| x.is_finite() && x.abs() <= MAX_EXTENT)
+}
+
 impl Scene {
     /// Parses and validates a JSON scene description. `source_name` names the file (or
     /// built-in) in error messages.
@@ -139,6 +156,13 @@ impl Scene {
                 ),
             };
             validate_mesh(&mesh).map_err(|m| err(at("shape"), &m))?;
+            if scene.positions.len() + mesh.positions.len() > MAX_VERTICES {
+                return Err(err(
+                    at("shape"),
+                    "the scene would exceed 2^32 - 1 vertices (MAX_VERTICES)",
+                ));
+            }
+            validate_placed(&mesh, xf).map_err(|(f, m)| err(at(&f), &m))?;
             let smoothing = smoothing(obj.smooth).map_err(|m| err(at("smooth"), m))?;
             let mesh = shading::shade(&mesh, smoothing);
             // Per-triangle materials: the object's own, else those of the file.
@@ -273,6 +297,11 @@ pub(crate) fn camera_from_desc(
             return Err((name.into(), "must be finite"));
         }
     }
+    for (name, v) in [("position", c.position), ("look_at", c.look_at)] {
+        if !within_extent(v) {
+            return Err((name.into(), "must lie within ±100000 m (MAX_EXTENT)"));
+        }
+    }
     let (pos, at, up) = (
         Vec3::from(c.position),
         Vec3::from(c.look_at),
@@ -302,6 +331,22 @@ fn check_intensity(v: V3) -> std::result::Result<Vec3, FieldError> {
     if !finite3(v) || v.iter().any(|x| *x < 0.0) {
         return Err(("intensity".into(), "must be finite and non-negative"));
     }
+    if v.iter().any(|x| *x > MAX_INTENSITY) {
+        return Err((
+            "intensity".into(),
+            "must be at most 1e10 W/sr per channel (MAX_INTENSITY)",
+        ));
+    }
+    Ok(Vec3::from(v))
+}
+
+fn check_light_position(v: V3) -> std::result::Result<Vec3, FieldError> {
+    if !finite3(v) {
+        return Err(("position".into(), "must be finite"));
+    }
+    if !within_extent(v) {
+        return Err(("position".into(), "must lie within ±100000 m (MAX_EXTENT)"));
+    }
     Ok(Vec3::from(v))
 }
 
@@ -311,11 +356,9 @@ pub(crate) fn light_from_desc(l: &LightDesc) -> std::result::Result<Light, Field
             position,
             intensity,
         } => {
-            if !finite3(position) {
-                return Err(("position".into(), "must be finite"));
-            }
+            let position = check_light_position(position)?;
             Ok(Light::Point {
-                position: position.into(),
+                position,
                 intensity: check_intensity(intensity)?,
             })
         }
@@ -326,9 +369,7 @@ pub(crate) fn light_from_desc(l: &LightDesc) -> std::result::Result<Light, Field
             inner_angle,
             outer_angle,
         } => {
-            if !finite3(position) {
-                return Err(("position".into(), "must be finite"));
-            }
+            let position = check_light_position(position)?;
             let d = Vec3::from(direction);
             if !finite3(direction) || d.length() < 1e-6 {
                 return Err(("direction".into(), "must be finite and non-zero"));
@@ -340,7 +381,7 @@ pub(crate) fn light_from_desc(l: &LightDesc) -> std::result::Result<Light, Field
                 return Err(("inner_angle".into(), "must be in [0, outer_angle] degrees"));
             }
             Ok(Light::Spot {
-                position: position.into(),
+                position,
                 direction: d.normalize(),
                 intensity: check_intensity(intensity)?,
                 cos_inner: inner_angle.to_radians().cos(),
@@ -386,6 +427,9 @@ pub(crate) fn transform_matrix(t: &desc::TransformDesc) -> std::result::Result<M
     if !finite3(t.translate) {
         return Err(("translate".into(), "must be finite"));
     }
+    if !within_extent(t.translate) {
+        return Err(("translate".into(), "must lie within ±100000 m (MAX_EXTENT)"));
+    }
     if !finite3(t.rotate) {
         return Err(("rotate".into(), "must be finite"));
     }
@@ -395,6 +439,12 @@ pub(crate) fn transform_matrix(t: &desc::TransformDesc) -> std::result::Result<M
     };
     if !scale.is_finite() || scale.abs().min_element() < 1e-12 {
         return Err(("scale".into(), "must be finite and non-zero"));
+    }
+    if scale.abs().max_element() > MAX_SCALE || scale.abs().min_element() < 1.0 / MAX_SCALE {
+        return Err((
+            "scale".into(),
+            "each factor's magnitude must be in [1e-6, 1e6] (MAX_SCALE)",
+        ));
     }
     let [rx, ry, rz] = t.rotate.map(f32::to_radians);
     // Rotate about x first, then y, then z: R = Rz·Ry·Rx.
@@ -408,10 +458,12 @@ pub(crate) fn transform_matrix(t: &desc::TransformDesc) -> std::result::Result<M
 
 fn primitive(shape: &ShapeDesc) -> std::result::Result<TriMesh, FieldError> {
     let positive = |name: &str, v: f32| {
-        if v.is_finite() && v > 0.0 {
-            Ok(v)
-        } else {
+        if !(v.is_finite() && v > 0.0) {
             Err((name.to_string(), "must be positive and finite"))
+        } else if v > MAX_EXTENT {
+            Err((name.to_string(), "must be at most 100000 m (MAX_EXTENT)"))
+        } else {
+            Ok(v)
         }
     };
     let segs = |s: u32| {
@@ -461,10 +513,10 @@ fn primitive(shape: &ShapeDesc) -> std::result::Result<TriMesh, FieldError> {
             segments,
         } => {
             let inner = positive("inner_radius", inner_radius)?;
-            if !(outer_radius.is_finite() && outer_radius > inner) {
+            if !(outer_radius.is_finite() && outer_radius > inner && outer_radius <= MAX_EXTENT) {
                 return Err((
                     "outer_radius".into(),
-                    "must be finite and larger than inner_radius",
+                    "must be finite, larger than inner_radius and at most 100000 m",
                 ));
             }
             primitives::ring(
@@ -475,6 +527,29 @@ fn primitive(shape: &ShapeDesc) -> std::result::Result<TriMesh, FieldError> {
             )
         }
     })
+}
+
+/// Checks that every vertex of `m` lies within [`MAX_EXTENT`] once placed by `xf`; blames
+/// the shape when its own coordinates are out of range, else the transform.
+fn validate_placed(m: &TriMesh, xf: Mat4) -> std::result::Result<(), (String, String)> {
+    let outside = |p: Vec3| !(p.is_finite() && p.abs().max_element() <= MAX_EXTENT);
+    if let Some(i) = m.positions.iter().position(|p| outside(*p)) {
+        return Err((
+            "shape".into(),
+            format!("vertex {i} lies outside ±100000 m (MAX_EXTENT)"),
+        ));
+    }
+    if let Some(i) = m
+        .positions
+        .iter()
+        .position(|p| outside(xf.transform_point3(*p)))
+    {
+        return Err((
+            "transform".into(),
+            format!("places vertex {i} outside ±100000 m (MAX_EXTENT)"),
+        ));
+    }
+    Ok(())
 }
 
 fn smoothing(s: Option<SmoothDesc>) -> std::result::Result<Smoothing, &'static str> {

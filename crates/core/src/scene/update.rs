@@ -3,7 +3,7 @@
 //! invalidates ([`Changes`]) so that a renderer re-uploads and rebuilds only that.
 
 use super::desc::{CameraDesc, LightDesc, MaterialDesc};
-use super::{camera_from_desc, light_from_desc, material_from_desc, Light, Scene};
+use super::{camera_from_desc, light_from_desc, material_from_desc, Light, Scene, MAX_EXTENT};
 use crate::error::{Error, Result};
 use glam::{Mat3, Mat4, Vec3};
 use std::ops::Range;
@@ -141,8 +141,12 @@ impl Scene {
                     .iter()
                     .map(|p| transform.transform_point3(*p))
                     .collect();
-                if placed.iter().any(|p| !p.is_finite()) {
-                    return Err(err(field, "moves vertices to non-finite positions"));
+                let outside = |p: &Vec3| !(p.is_finite() && p.abs().max_element() <= MAX_EXTENT);
+                if placed.iter().any(outside) {
+                    return Err(err(
+                        field,
+                        "moves vertices outside ±100000 m (MAX_EXTENT) or to non-finite positions",
+                    ));
                 }
                 let obj = &mut self.objects[*object];
                 obj.transform = *transform;

@@ -31,7 +31,8 @@ fn ggx_d(cos_h: f32, alpha: f32) -> f32 {
         return 0.0;
     }
     let a2 = alpha * alpha;
-    let t = cos_h * cos_h * (a2 - 1.0) + 1.0;
+    // (1 - c²) + c²·α²: stays positive when α² is below f32's epsilon (see microfacet.rs).
+    let t = (1.0 - cos_h * cos_h) + cos_h * cos_h * a2;
     return a2 / (PI * t * t);
 }
 

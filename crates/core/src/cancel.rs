@@ -1,0 +1,71 @@
+//! Progress of one stage shared by the threads that do its work, with cancellation: long
+//! loops ask [`StageProgress::stopped`] between small work items (an atomic load, plus
+//! [`Progress::cancelled`]) and report finished items with [`StageProgress::advance`].
+
+use crate::error::{Error, Result};
+use crate::render::Progress;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+
+/// A stage of `total` work items reported to a [`Progress`] under `name`.
+pub struct StageProgress<'a> {
+    progress: &'a dyn Progress,
+    name: &'a str,
+    total: u64,
+    done: AtomicU64,
+    stop: AtomicBool,
+}
+
+impl<'a> StageProgress<'a> {
+    /// Starts the stage, reporting it at 0 (so that the stage shows before its first
+    /// item, which may take long, is done).
+    pub fn new(progress: &'a dyn Progress, name: &'a str, total: u64) -> Self {
+        let stage = StageProgress {
+            progress,
+            name,
+            total: total.max(1),
+            done: AtomicU64::new(0),
+            stop: AtomicBool::new(false),
+        };
+        stage.advance(0);
+        stage
+    }
+
+    /// Counts `n` more finished items and reports the fraction done; a `false` from the
+    /// progress receiver stops the stage.
+    pub fn advance(&self, n: u64) {
+        let done = self.done.fetch_add(n, Ordering::Relaxed) + n;
+        let fraction = (done as f64 / self.total as f64).min(1.0);
+        if !self.progress.update(self.name, fraction) {
+            self.stop.store(true, Ordering::Relaxed);
+        }
+    }
+
+    /// Asks the stage to stop (e.g. when it ran out of memory).
+    pub fn stop(&self) {
+        self.stop.store(true, Ordering::Relaxed);
+    }
+
+    /// True once the stage should stop: cheap enough to ask per pixel or per photon path.
+    #[inline]
+    pub fn stopped(&self) -> bool {
+        self.stop.load(Ordering::Relaxed) || self.progress.cancelled()
+    }
+
+    /// `Err(Cancelled)` when the stage was stopped.
+    pub fn finish(&self) -> Result<()> {
+        if self.stopped() {
+            Err(Error::Cancelled)
+        } else {
+            Ok(())
+        }
+    }
+}
+
+/// `Err(Cancelled)` when `progress` asks to stop: for the seams between stages.
+pub fn check(progress: &dyn Progress) -> Result<()> {
+    if progress.cancelled() {
+        Err(Error::Cancelled)
+    } else {
+        Ok(())
+    }
+}
