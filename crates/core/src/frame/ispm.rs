@@ -351,12 +351,12 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     timer.collect(&ctx)?;
     stats.stages.append(&mut timer.totals);
 
-    let mut out = assemble(scene, &targets, &data, stats);
+    let mut out = assemble(scene, targets, &data, stats);
     if images.extras {
         let empty = || Image::new(w, h);
         let direct = data
             .get("accum")
-            .map(|a| normalized(&targets, a))
+            .map(|a| normalized(targets, a))
             .unwrap_or_else(empty);
         let indirect = data
             .get("indirect")
