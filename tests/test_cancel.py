@@ -7,7 +7,6 @@ each run for many seconds (tens of millions of samples or photon lookups), so a 
 ignored the request could not meet either bound.
 """
 
-import os
 import signal
 import subprocess
 import sys
@@ -35,13 +34,10 @@ def test_ctrl_c_exits_130_quickly(method, tmp_path):
     with subprocess.Popen([*cmd, *LONG[method]], stderr=subprocess.PIPE) as proc:
         assert proc.stderr is not None
         try:
-            # The progress bar's first output: the scene is loaded and the render is running.
-            seen = b""
-            while b"%" not in seen:
-                chunk = os.read(proc.stderr.fileno(), 256)
-                assert chunk, f"exited before rendering: {seen!r}"
-                seen += chunk
-            time.sleep(1.0)
+            # Python start-up, scene loading and the first stage take well under 3 s (the
+            # progress bar is quiet when stderr is not a terminal, so there is nothing to
+            # read); the render itself would run for minutes.
+            time.sleep(3.0)
             assert proc.poll() is None, "the render finished too soon to test"
             t0 = time.monotonic()
             proc.send_signal(signal.SIGINT)
