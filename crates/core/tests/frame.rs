@@ -333,3 +333,36 @@ fn bvh_update_is_chosen_by_measurement() {
     };
     assert_eq!(frames[2].0, expected, "{frames:?}");
 }
+
+/// Cancels at the first update of stage `at`.
+struct CancelAt(&'static str);
+impl gi_core::Progress for CancelAt {
+    fn update(&self, stage: &str, _: f64) -> bool {
+        stage != self.0
+    }
+}
+
+/// A frame cancelled half-way (after the direct light was recorded, during the photon
+/// trace) leaves the renderer consistent: the next frame equals the one-shot render.
+#[test]
+fn cancelled_frame_leaves_the_renderer_consistent() {
+    let scene = builtin::load("cornell").expect("scene");
+    for (method, stage) in [(Method::Ispm, "cpu trace"), (Method::Direct, "direct")] {
+        let s = settings(method);
+        let mut r = Renderer::new(&scene, &s).expect("renderer");
+        r.render(&all(), &Silent).expect("frame 0");
+        for u in pose(&scene, 1.0) {
+            r.update(&u).expect("update");
+        }
+        let e = r.render(&all(), &CancelAt(stage)).expect_err("cancelled");
+        assert!(matches!(e, gi_core::Error::Cancelled), "{e}");
+        let frame = r.render(&all(), &Silent).expect("frame after");
+        let one_shot = render(&posed(&scene, 1.0), &s, &Silent).expect("one-shot");
+        assert_eq!(
+            max_difference(&frame.radiance, &one_shot.radiance),
+            0.0,
+            "{}",
+            method.name()
+        );
+    }
+}

@@ -438,7 +438,6 @@ impl Targets {
         if self.direct_current {
             return Ok(encoder);
         }
-        self.direct_current = true;
         let passes = Passes::get(ctx);
         let spp = self.spp;
         let mut done = 0;
@@ -501,6 +500,8 @@ impl Targets {
                 ts,
             );
         }
+        // Current once recorded in full (a cancelled frame leaves it to the next).
+        self.direct_current = true;
         Ok(encoder)
     }
 

@@ -82,13 +82,20 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         images,
         progress,
     } = f;
-    let ctx = g.ctx.clone();
+    let GpuState {
+        ctx,
+        scene: gs,
+        targets,
+        timer,
+        ispm,
+    } = g;
+    let ctx = ctx.clone();
     let cam = &scene.camera;
     let (w, h) = (cam.width, cam.height);
-    g.timer.reset();
+    timer.reset();
     let mut stats = RenderStats {
         triangles: scene.triangles.len() as u64,
-        samples_per_pixel: g.targets.spp(),
+        samples_per_pixel: targets.spp(),
         ..Default::default()
     };
     let stage = |stats: &mut RenderStats, name: &str, t: Instant| {
@@ -100,42 +107,45 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     // Resources: created on the first frame at this size, else kept.
     let t = Instant::now();
     let layers = bounce_layers(scene, settings.photons);
-    let state = match g.ispm.take() {
-        Some(s) => s,
-        None => {
-            let volumes = Volumes::new(&ctx, &g.targets.gbuf, w, h, settings.subsample);
-            g.targets.bind_composite(&ctx, Some(volumes.output().1));
-            IspmState {
-                bounce: None,
-                volumes,
-                specular: scene
-                    .materials
-                    .iter()
-                    .any(crate::render::camera_pass::has_delta_lobe),
-                traced_seed: None,
-                specular_image: None,
-                splat_current: false,
-            }
-        }
+    if ispm.is_none() {
+        let volumes = Volumes::new(&ctx, &targets.gbuf, w, h, settings.subsample);
+        targets.bind_composite(&ctx, Some(volumes.output().1));
+        *ispm = Some(IspmState {
+            bounce: None,
+            volumes,
+            specular: scene
+                .materials
+                .iter()
+                .any(crate::render::camera_pass::has_delta_lobe),
+            traced_seed: None,
+            specular_image: None,
+            splat_current: false,
+        });
+    }
+    let Some(state) = ispm.as_mut() else {
+        return Err(Error::Gpu("ISPM state missing".into()));
     };
-    let mut state = state;
+    // Marked current again only when the frame completes: a cancelled or failed frame
+    // leaves the next one to redo its work.
+    let traced_seed = state.traced_seed.take();
+    let splat_current = std::mem::replace(&mut state.splat_current, false);
     if changes.lighting() {
-        state.traced_seed = None;
+        state.specular_image = None;
     }
     if changes.any() {
         state.specular_image = None;
     }
     // A still scene with frame-coherent random numbers has this frame's photons already.
-    let reuse = ring.frames() == 1 && state.traced_seed == Some(settings.seed);
+    let reuse = ring.frames() == 1 && !changes.lighting() && traced_seed == Some(settings.seed);
     if !reuse {
         if !state.bounce.as_ref().is_some_and(|b| b.fits(&layers)) {
-            state.bounce = BounceTargets::new(&ctx, &layers, &g.scene.materials)?;
+            state.bounce = BounceTargets::new(&ctx, &layers, &gs.materials)?;
         }
         if let Some(b) = &state.bounce {
             b.write_views(&ctx, &layers, settings.seed);
         }
     }
-    g.targets.write_eye(&ctx, scene);
+    targets.write_eye(&ctx, scene);
     stage(&mut stats, "upload", t);
 
     // 1. Bounce maps, submitted first with their readback copies.
@@ -149,8 +159,8 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
             IspmPasses::get(&ctx),
             &mut encoder,
             &layers,
-            &g.scene.geometry,
-            &mut g.timer,
+            &gs.geometry,
+            timer,
         );
     }
     let bounce_submission = ctx.queue.submit([encoder.finish()]);
@@ -161,15 +171,8 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         .create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("direct frame"),
         });
-    g.scene.record_shadows(
-        Passes::get(&ctx),
-        &mut encoder,
-        &mut g.timer,
-        scene.lights.len(),
-    );
-    let encoder = g
-        .targets
-        .record_direct(&ctx, &g.scene, encoder, &mut g.timer, progress)?;
+    gs.record_shadows(Passes::get(&ctx), &mut encoder, timer, scene.lights.len());
+    let encoder = targets.record_direct(&ctx, &*gs, encoder, timer, progress)?;
     ctx.queue.submit([encoder.finish()]);
 
     // 3. The bounce-map readback, then the CPU trace while the GPU lights the frame.
@@ -276,7 +279,6 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     stats.photons_stored = photons.splat.len() as u64;
     let _ = traced;
     let photons_changed = !reuse;
-    state.traced_seed = Some(settings.seed);
 
     // 5. Mirrors and glass seen by the camera; their gather uses the photons as traced.
     let t = Instant::now();
@@ -288,14 +290,14 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         let bytes: &[u8] = bytemuck::cast_slice(&texels);
         gpu::alloc::note_upload("specular paths", bytes.len() as u64);
         ctx.queue.write_texture(
-            g.targets.specular.as_image_copy(),
+            targets.specular.as_image_copy(),
             bytes,
             wgpu::TexelCopyBufferLayout {
                 offset: 0,
                 bytes_per_row: Some(w * 16),
                 rows_per_image: Some(h),
             },
-            g.targets.specular.size(),
+            targets.specular.size(),
         );
         Some(img)
     } else {
@@ -322,7 +324,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         state.volumes.write_photons(&ctx, &ordered);
     }
     // A still frame (same photons, nothing moved) keeps last frame's estimate.
-    let splat = photons_changed || changes.any() || !state.splat_current;
+    let splat = photons_changed || changes.any() || !splat_current;
     let mut encoder = ctx
         .device
         .create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -334,29 +336,27 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
             &mut encoder,
             ordered.len() as u32,
             quads as u32,
-            &mut g.timer,
+            timer,
         );
-        state.splat_current = true;
     }
-    g.targets.record_composite(&ctx, &mut encoder, &mut g.timer);
+    targets.record_composite(&ctx, &mut encoder, timer);
     let names = readback_names(images, true);
-    g.targets
-        .record_readback(&ctx, &mut encoder, &names, Some(state.volumes.output().0));
-    g.timer.resolve(&mut encoder);
+    targets.record_readback(&ctx, &mut encoder, &names, Some(state.volumes.output().0));
+    timer.resolve(&mut encoder);
     ctx.queue.submit([encoder.finish()]);
     stage(&mut stats, "photon upload", t);
     let t = Instant::now();
-    let data = g.targets.read(&ctx, &names)?;
+    let data = targets.read(&ctx, &names)?;
     stage(&mut stats, "readback", t);
-    g.timer.collect(&ctx)?;
-    stats.stages.append(&mut g.timer.totals);
+    timer.collect(&ctx)?;
+    stats.stages.append(&mut timer.totals);
 
-    let mut out = assemble(scene, &g.targets, &data, stats);
+    let mut out = assemble(scene, targets, &data, stats);
     if images.extras {
         let empty = || Image::new(w, h);
         let direct = data
             .get("accum")
-            .map(|a| normalized(&g.targets, a))
+            .map(|a| normalized(targets, a))
             .unwrap_or_else(empty);
         let indirect = data
             .get("indirect")
@@ -369,6 +369,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         out.aovs.push(("indirect".into(), indirect));
         out.aovs.push(("photons".into(), hits));
     }
-    g.ispm = Some(state);
+    state.traced_seed = Some(settings.seed);
+    state.splat_current = true;
     Ok(out)
 }
