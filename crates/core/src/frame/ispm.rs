@@ -160,6 +160,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
             &mut encoder,
             &layers,
             &gs.geometry,
+            &gs.textures.group,
             timer,
         );
     }

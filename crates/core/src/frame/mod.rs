@@ -191,6 +191,12 @@ impl Renderer {
         if self.bvh.is_none() || self.changes.geometry {
             stages.push(self.update_bvh()?);
         }
+        if self.changes.materials {
+            // Alpha masks may have changed with the materials.
+            if let Some(bvh) = self.bvh.as_mut() {
+                bvh.update_alpha(&self.scene);
+            }
+        }
         let settings = Settings {
             seed: desc.seed.unwrap_or_else(|| self.frame_seed()),
             ..self.settings.clone()
@@ -297,7 +303,7 @@ impl Renderer {
         let fits = layers.is_some_and(|l| gpu::GpuScene::fits(scene, l));
         if !fits {
             crate::raster::check_scene_buffers(ctx, scene)?;
-            let gs = gpu::GpuScene::new(ctx, scene, settings.shadow_map_size);
+            let gs = gpu::GpuScene::new(ctx, scene, settings.shadow_map_size)?;
             crate::raster::check_limits(ctx, scene, settings, gs.layers)?;
             let targets = gpu::Targets::new(ctx, &gs, scene, settings.spp);
             self.gpu = Some(GpuState {

@@ -5,9 +5,12 @@
 pub const COMMON: &str = include_str!("shaders/common/types.wgsl");
 /// The uber BSDF: the formulas of `bsdf::Material::eval`.
 pub const BSDF: &str = include_str!("shaders/common/bsdf.wgsl");
+/// Texture lookups and textured materials (group 1 of the passes that rasterize the scene).
+pub const TEXTURE: &str = include_str!("shaders/common/texture.wgsl");
 
 pub const GBUFFER: &str = include_str!("shaders/gbuffer.wgsl");
 pub const SHADOW: &str = include_str!("shaders/shadow.wgsl");
+pub const SHADOW_MASKED: &str = include_str!("shaders/shadow_masked.wgsl");
 pub const DIRECT: &str = include_str!("shaders/direct.wgsl");
 pub const BOUNCE: &str = include_str!("shaders/bounce.wgsl");
 pub const VOLUME: &str = include_str!("shaders/volume.wgsl");

@@ -31,8 +31,9 @@ const TARGETS: [(&str, wgpu::TextureFormat); 5] = [
 ];
 
 /// Vertex layout of [`VertexRaw`], shared with the shadow pass (which reads location 0 only).
-pub const VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 4] =
-    wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Uint32];
+pub const VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 6] = wgpu::vertex_attr_array![
+    0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Uint32, 4 => Float32x2, 5 => Float32x4
+];
 
 pub fn vertex_layout() -> wgpu::VertexBufferLayout<'static> {
     wgpu::VertexBufferLayout {
@@ -109,7 +110,7 @@ pub struct GBufferPass {
 }
 
 impl GBufferPass {
-    pub fn new(device: &wgpu::Device) -> Self {
+    pub fn new(device: &wgpu::Device, textures: &wgpu::BindGroupLayout) -> Self {
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("gbuffer bind group layout"),
             entries: &[
@@ -119,13 +120,18 @@ impl GBufferPass {
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("gbuffer pipeline layout"),
-            bind_group_layouts: &[Some(&layout)],
+            bind_group_layouts: &[Some(&layout), Some(textures)],
             immediate_size: 0,
         });
         let module = shaders::module(
             device,
             "gbuffer shader",
-            &[shaders::COMMON, shaders::BSDF, shaders::GBUFFER],
+            &[
+                shaders::COMMON,
+                shaders::BSDF,
+                shaders::TEXTURE,
+                shaders::GBUFFER,
+            ],
         );
         let targets: Vec<_> = TARGETS
             .iter()
@@ -173,6 +179,7 @@ impl GBufferPass {
         bind_group: &wgpu::BindGroup,
         view_offset: u32,
         geometry: &super::Geometry,
+        textures: &wgpu::BindGroup,
         timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) {
         let clear = wgpu::Operations {
@@ -208,6 +215,7 @@ impl GBufferPass {
         });
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, bind_group, &[view_offset]);
+        pass.set_bind_group(1, textures, &[]);
         pass.set_vertex_buffer(0, geometry.vertices.slice(..));
         pass.draw(0..geometry.count, 0..1);
     }

@@ -265,10 +265,11 @@ fn photon_attributes() -> [wgpu::VertexAttribute; 6] {
 
 impl IspmPasses {
     pub fn get(ctx: &GpuContext) -> &IspmPasses {
-        ctx.ispm_passes.get_or_init(|| IspmPasses::new(&ctx.device))
+        ctx.ispm_passes
+            .get_or_init(|| IspmPasses::new(&ctx.device, &super::Passes::get(ctx).textures))
     }
 
-    fn new(device: &wgpu::Device) -> Self {
+    fn new(device: &wgpu::Device, textures: &wgpu::BindGroupLayout) -> Self {
         let layout = |label, entries: &[wgpu::BindGroupLayoutEntry]| {
             device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some(label),
@@ -303,14 +304,25 @@ impl IspmPasses {
         let module = shaders::module(
             device,
             "bounce shader",
-            &[shaders::COMMON, shaders::BSDF, shaders::BOUNCE],
+            &[
+                shaders::COMMON,
+                shaders::BSDF,
+                shaders::TEXTURE,
+                shaders::BOUNCE,
+            ],
         );
+        let bounce_pipeline_layout =
+            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("bounce pipeline layout"),
+                bind_group_layouts: &[Some(&bounce_layout), Some(textures)],
+                immediate_size: 0,
+            });
         let targets: [_; 5] = std::array::from_fn(|_| Some(wgpu::ColorTargetState::from(TARGET)));
         let bounce = crate::gpu::create_render_pipeline(
             device,
             &wgpu::RenderPipelineDescriptor {
                 label: Some("bounce pipeline"),
-                layout: Some(&pipeline_layout(&bounce_layout)),
+                layout: Some(&bounce_pipeline_layout),
                 vertex: wgpu::VertexState {
                     module: &module,
                     entry_point: Some("vs_main"),
@@ -533,6 +545,8 @@ pub fn render_bounce_map(scene: &Scene, settings: &Settings) -> Result<BounceMap
             wgpu::BufferUsages::STORAGE,
         );
         let layers = bounce_layers(scene, settings.photons);
+        let textures =
+            super::textures::GpuTextures::new(&ctx, scene, &super::Passes::get(&ctx).textures)?;
         let Some(targets) = BounceTargets::new(&ctx, &layers, &materials)? else {
             return Ok(BounceMap::default());
         };
@@ -548,6 +562,7 @@ pub fn render_bounce_map(scene: &Scene, settings: &Settings) -> Result<BounceMap
             &mut encoder,
             &layers,
             &geometry,
+            &textures.group,
             &mut timer,
         );
         timer.resolve(&mut encoder);
@@ -753,6 +768,7 @@ impl BounceTargets {
         encoder: &mut wgpu::CommandEncoder,
         layers: &[BounceLayer],
         geometry: &Geometry,
+        textures: &wgpu::BindGroup,
         timer: &mut Timer,
     ) {
         for (i, layer) in layers.iter().enumerate() {
@@ -790,6 +806,7 @@ impl BounceTargets {
             pass.set_viewport(0.0, 0.0, layer.res as f32, layer.res as f32, 0.0, 1.0);
             pass.set_scissor_rect(0, 0, layer.res, layer.res);
             pass.set_bind_group(0, &self.group, &[(i as u64 * BOUNCE_VIEW_SIZE) as u32]);
+            pass.set_bind_group(1, textures, &[]);
             pass.set_vertex_buffer(0, geometry.vertices.slice(..));
             pass.draw(0..geometry.count, 0..1);
         }

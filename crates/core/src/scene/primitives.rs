@@ -1,6 +1,7 @@
 //! Tessellated primitive shapes, in their local frames. Normals point outwards.
 
-use glam::Vec3;
+use super::desc::ShapeDesc;
+use glam::{Vec2, Vec3};
 use std::collections::HashMap;
 use std::f32::consts::TAU;
 
@@ -225,6 +226,69 @@ pub fn ring(inner: f32, outer: f32, height: f32, segments: u32) -> TriMesh {
     push_annulus(&mut m, inner, outer, height, segments, true);
     push_annulus(&mut m, inner, outer, 0.0, segments, false);
     m
+}
+
+/// Texture coordinates per triangle corner of a primitive's mesh, v running down the image:
+/// a quad maps the whole texture once (u along x, v along z); each box face likewise; a
+/// sphere longitude/latitude (v = 0 at the top); cylinder and ring walls angle × height,
+/// their caps planar over the outer diameter.
+pub fn uvs(shape: &ShapeDesc, m: &TriMesh) -> Vec<[Vec2; 3]> {
+    let angular = |p: Vec3| 0.5 + p.z.atan2(p.x) / TAU;
+    m.indices
+        .iter()
+        .map(|tri| {
+            let p = tri.map(|i| m.positions[i as usize]);
+            let n = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero();
+            let mut c = match *shape {
+                ShapeDesc::Quad { size } => {
+                    p.map(|q| Vec2::new(q.x / size[0] + 0.5, q.z / size[1] + 0.5))
+                }
+                ShapeDesc::Box { size } => {
+                    let s = Vec3::from(size);
+                    let a = n.abs();
+                    p.map(|q| {
+                        let q = q / s;
+                        if a.x >= a.y && a.x >= a.z {
+                            Vec2::new(0.5 - q.z * n.x.signum(), 0.5 - q.y)
+                        } else if a.y >= a.z {
+                            Vec2::new(q.x + 0.5, 0.5 + q.z * n.y.signum())
+                        } else {
+                            Vec2::new(0.5 + q.x * n.z.signum(), 0.5 - q.y)
+                        }
+                    })
+                }
+                ShapeDesc::Sphere { radius, .. } => p.map(|q| {
+                    let y = (q.y / radius).clamp(-1.0, 1.0);
+                    Vec2::new(angular(q), y.acos() / std::f32::consts::PI)
+                }),
+                ShapeDesc::Cylinder { height, .. } | ShapeDesc::Ring { height, .. } => {
+                    let r = p
+                        .iter()
+                        .map(|q| Vec2::new(q.x, q.z).length())
+                        .fold(0.0f32, f32::max)
+                        .max(1e-12);
+                    if n.y.abs() > 0.9 {
+                        p.map(|q| Vec2::new(q.x / (2.0 * r) + 0.5, q.z / (2.0 * r) + 0.5))
+                    } else {
+                        p.map(|q| Vec2::new(angular(q), 1.0 - q.y / height))
+                    }
+                }
+                ShapeDesc::Mesh { .. } => [Vec2::ZERO; 3],
+            };
+            // Across the seam of angular coordinates, keep the triangle on one side.
+            let (lo, hi) = c.iter().fold((f32::MAX, f32::MIN), |(lo, hi), v| {
+                (lo.min(v.x), hi.max(v.x))
+            });
+            if hi - lo > 0.5 {
+                for v in &mut c {
+                    if v.x < 0.5 {
+                        v.x += 1.0;
+                    }
+                }
+            }
+            c
+        })
+        .collect()
 }
 
 #[cfg(test)]

@@ -32,6 +32,8 @@ struct VertexIn {
     @location(1) normal: vec3<f32>,
     @location(2) geometric_normal: vec3<f32>,
     @location(3) material: u32,
+    @location(4) uv: vec2<f32>,
+    @location(5) tangent: vec4<f32>,
 }
 
 struct VertexOut {
@@ -40,6 +42,8 @@ struct VertexOut {
     @location(1) normal: vec3<f32>,
     @location(2) @interpolate(flat) geometric_normal: vec3<f32>,
     @location(3) @interpolate(flat) material: u32,
+    @location(4) uv: vec2<f32>,
+    @location(5) @interpolate(flat) tangent: vec4<f32>,
 }
 
 @vertex
@@ -50,6 +54,8 @@ fn vs_main(v: VertexIn) -> VertexOut {
     o.normal = v.normal;
     o.geometric_normal = v.geometric_normal;
     o.material = v.material;
+    o.uv = v.uv;
+    o.tangent = v.tangent;
     return o;
 }
 
@@ -89,10 +95,16 @@ fn fs_main(in: VertexOut) -> BounceOut {
     let dwdy = dpdy(in.world);
     let dndx = dpdx(in.normal);
     let dndy = dpdy(in.normal);
+    let duvdx = dpdx(in.uv);
+    let duvdy = dpdy(in.uv);
     let texel = vec2<u32>(in.clip.xy);
     rng_state = hash_u32(view.seed ^ hash_u32(view.layer ^ hash_u32(texel.x ^ hash_u32(texel.y))));
     let jitter = vec2<f32>(rng_next(), rng_next()) - 0.5;
     let world = in.world + jitter.x * dwdx + jitter.y * dwdy;
+    let uv = in.uv + jitter.x * duvdx + jitter.y * duvdy;
+    if alpha_cut(in.material, uv) {
+        discard;
+    }
     let to_light = view.light_position - world;
     let wo = normalize(to_light);
     // Normals as in the eye G-buffer, oriented towards the light.
@@ -107,6 +119,7 @@ fn fs_main(in: VertexOut) -> BounceOut {
             ns = -ns;
         }
     }
+    ns = mapped_normal(in.material, ns, in.tangent, uv, duvdx, duvdy);
     if dot(wo, ns) * dot(wo, ng) <= 0.0 {
         ns = ng;
     }
@@ -121,7 +134,7 @@ fn fs_main(in: VertexOut) -> BounceOut {
         intensity *= falloff(dot(d, view.spot_direction));
     }
     let phi = intensity * view.texel_area * c * c * c;
-    let m = materials[in.material];
+    let m = textured_material(in.material, materials[in.material], uv, duvdx, duvdy);
     var o: BounceOut;
     o.incident = vec4<f32>(phi, 1.0);
     o.expected = vec4<f32>(phi * scatter_probability(m, dot(wo, ns)), 1.0);

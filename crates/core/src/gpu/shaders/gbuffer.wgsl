@@ -9,6 +9,8 @@ struct VertexIn {
     @location(1) normal: vec3<f32>,
     @location(2) geometric_normal: vec3<f32>,
     @location(3) material: u32,
+    @location(4) uv: vec2<f32>,
+    @location(5) tangent: vec4<f32>,
 }
 
 struct VertexOut {
@@ -17,6 +19,8 @@ struct VertexOut {
     @location(1) normal: vec3<f32>,
     @location(2) @interpolate(flat) geometric_normal: vec3<f32>,
     @location(3) @interpolate(flat) material: u32,
+    @location(4) uv: vec2<f32>,
+    @location(5) @interpolate(flat) tangent: vec4<f32>,
 }
 
 @vertex
@@ -27,6 +31,8 @@ fn vs_main(v: VertexIn) -> VertexOut {
     o.normal = v.normal;
     o.geometric_normal = v.geometric_normal;
     o.material = v.material;
+    o.uv = v.uv;
+    o.tangent = v.tangent;
     return o;
 }
 
@@ -45,7 +51,13 @@ struct GBufferOut {
 
 @fragment
 fn fs_main(in: VertexOut) -> GBufferOut {
-    let m = materials[in.material];
+    // Derivatives first (uniform control flow), then the alpha mask.
+    let duvdx = dpdx(in.uv);
+    let duvdy = dpdy(in.uv);
+    if alpha_cut(in.material, in.uv) {
+        discard;
+    }
+    let m = textured_material(in.material, materials[in.material], in.uv, duvdx, duvdy);
     let wo = normalize(view.eye - in.world);
     var ng = in.geometric_normal;
     // Shading normal as in trace::Interaction::new: on the side of ng, and replaced by ng
@@ -60,6 +72,7 @@ fn fs_main(in: VertexOut) -> GBufferOut {
             ns = -ns;
         }
     }
+    ns = mapped_normal(in.material, ns, in.tangent, in.uv, duvdx, duvdy);
     if dot(wo, ns) * dot(wo, ng) <= 0.0 {
         ns = ng;
     }

@@ -1,0 +1,138 @@
+// Texture lookups (see crates/core/src/texture.rs and raster/textures.rs): every mip level of
+// every texture is a rectangle of an Rgba16Float atlas; wrap (repeat), bilinear weights and
+// the blend between levels are done here with the arithmetic of `Texture::sample`, so the
+// CPU and the GPU read the same values.
+
+struct TexLevel {
+    x: u32,
+    y: u32,
+    w: u32,
+    h: u32,
+    page: u32,
+    _p0: u32,
+    _p1: u32,
+    _p2: u32,
+}
+
+// Texture indices of a material (0xffffffff: none).
+struct MaterialMaps {
+    diffuse: u32,
+    specular: u32,
+    roughness: u32,
+    normal: u32,
+    alpha: u32,
+    alpha_cutoff: f32,
+    _p0: u32,
+    _p1: u32,
+}
+
+const NO_TEXTURE: u32 = 0xffffffffu;
+
+@group(1) @binding(0) var tex_atlas: texture_2d_array<f32>;
+@group(1) @binding(1) var<storage, read> tex_levels: array<TexLevel>;
+// Per texture: first level, number of levels.
+@group(1) @binding(2) var<storage, read> tex_info: array<vec2<u32>>;
+@group(1) @binding(3) var<storage, read> material_maps: array<MaterialMaps>;
+
+fn tex_wrap(i: i32, n: u32) -> u32 {
+    let m = i32(n);
+    return u32(((i % m) + m) % m);
+}
+
+fn tex_texel(l: TexLevel, x: i32, y: i32) -> vec4<f32> {
+    let p = vec2<u32>(l.x + tex_wrap(x, l.w), l.y + tex_wrap(y, l.h));
+    return textureLoad(tex_atlas, p, l.page, 0);
+}
+
+fn tex_mix(a: vec4<f32>, b: vec4<f32>, t: f32) -> vec4<f32> {
+    return a * (1.0 - t) + b * t;
+}
+
+fn tex_bilinear(l: TexLevel, uv: vec2<f32>) -> vec4<f32> {
+    let f = uv - floor(uv);
+    let p = f * vec2<f32>(f32(l.w), f32(l.h)) - 0.5;
+    let p0 = floor(p);
+    let t = p - p0;
+    let x = i32(p0.x);
+    let y = i32(p0.y);
+    let top = tex_mix(tex_texel(l, x, y), tex_texel(l, x + 1, y), t.x);
+    let bottom = tex_mix(tex_texel(l, x, y + 1), tex_texel(l, x + 1, y + 1), t.x);
+    return tex_mix(top, bottom, t.y);
+}
+
+// Trilinear lookup of texture `t` at an explicit level of detail (clamped to its chain).
+fn tex_sample(t: u32, uv: vec2<f32>, lod: f32) -> vec4<f32> {
+    let info = tex_info[t];
+    let top = f32(info.y - 1u);
+    var l = 0.0;
+    if lod == lod {
+        l = clamp(lod, 0.0, top);
+    }
+    let l0 = floor(l);
+    let f = l - l0;
+    let a = tex_bilinear(tex_levels[info.x + u32(l0)], uv);
+    if f > 0.0 {
+        return tex_mix(a, tex_bilinear(tex_levels[info.x + u32(l0) + 1u], uv), f);
+    }
+    return a;
+}
+
+// Level of detail of texture `t` for texture-coordinate derivatives along the screen axes:
+// log2 of the longer footprint axis in texels of the finest level.
+fn tex_lod(t: u32, duvdx: vec2<f32>, duvdy: vec2<f32>) -> f32 {
+    let l = tex_levels[tex_info[t].x];
+    let size = vec2<f32>(f32(l.w), f32(l.h));
+    let r = max(dot(duvdx * size, duvdx * size), dot(duvdy * size, duvdy * size));
+    return 0.5 * log2(max(r, 1e-20));
+}
+
+// Material `mi` with its textures applied at `uv` (as `Scene::material_at`).
+fn textured_material(mi: u32, base: Material, uv: vec2<f32>, duvdx: vec2<f32>, duvdy: vec2<f32>) -> Material {
+    var m = base;
+    let maps = material_maps[mi];
+    if maps.diffuse != NO_TEXTURE {
+        let c = tex_sample(maps.diffuse, uv, tex_lod(maps.diffuse, duvdx, duvdy)).xyz;
+        m.diffuse *= c;
+        m.transmission *= c;
+    }
+    if maps.specular != NO_TEXTURE {
+        m.specular *= tex_sample(maps.specular, uv, tex_lod(maps.specular, duvdx, duvdy)).xyz;
+    }
+    if maps.roughness != NO_TEXTURE {
+        m.roughness *= tex_sample(maps.roughness, uv, tex_lod(maps.roughness, duvdx, duvdy)).y;
+    }
+    return m;
+}
+
+// Whether material `mi` is cut out at `uv` (finest level, as the CPU's any-hit test).
+fn alpha_cut(mi: u32, uv: vec2<f32>) -> bool {
+    let maps = material_maps[mi];
+    if maps.alpha == NO_TEXTURE {
+        return false;
+    }
+    return tex_sample(maps.alpha, uv, 0.0).w < maps.alpha_cutoff;
+}
+
+// The shading normal `ns` (on the winding's side) with material `mi`'s normal map applied,
+// as `surface::perturb_normal`; `tangent.w` = 0 marks degenerate texture coordinates.
+fn mapped_normal(mi: u32, ns: vec3<f32>, tangent: vec4<f32>, uv: vec2<f32>, duvdx: vec2<f32>, duvdy: vec2<f32>) -> vec3<f32> {
+    let maps = material_maps[mi];
+    if maps.normal == NO_TEXTURE || tangent.w == 0.0 {
+        return ns;
+    }
+    let texel = tex_sample(maps.normal, uv, tex_lod(maps.normal, duvdx, duvdy)).xyz;
+    let m = texel * 2.0 - vec3<f32>(1.0);
+    let tt = tangent.xyz - ns * dot(ns, tangent.xyz);
+    let len = length(tt);
+    if !(len > 0.0) {
+        return ns;
+    }
+    let t = tt / len;
+    let b = cross(ns, t) * tangent.w;
+    let n = t * m.x - b * m.y + ns * m.z;
+    let nl = length(n);
+    if !(nl > 0.0) {
+        return ns;
+    }
+    return n / nl;
+}
