@@ -239,6 +239,7 @@ pub fn uvs(shape: &ShapeDesc, m: &TriMesh) -> Vec<[Vec2; 3]> {
         .map(|tri| {
             let p = tri.map(|i| m.positions[i as usize]);
             let n = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero();
+            let mut seam = false;
             let mut c = match *shape {
                 ShapeDesc::Quad { size } => {
                     p.map(|q| Vec2::new(q.x / size[0] + 0.5, q.z / size[1] + 0.5))
@@ -257,10 +258,13 @@ pub fn uvs(shape: &ShapeDesc, m: &TriMesh) -> Vec<[Vec2; 3]> {
                         }
                     })
                 }
-                ShapeDesc::Sphere { radius, .. } => p.map(|q| {
-                    let y = (q.y / radius).clamp(-1.0, 1.0);
-                    Vec2::new(angular(q), y.acos() / std::f32::consts::PI)
-                }),
+                ShapeDesc::Sphere { radius, .. } => {
+                    seam = true;
+                    p.map(|q| {
+                        let y = (q.y / radius).clamp(-1.0, 1.0);
+                        Vec2::new(angular(q), y.acos() / std::f32::consts::PI)
+                    })
+                }
                 ShapeDesc::Cylinder { height, .. } | ShapeDesc::Ring { height, .. } => {
                     let r = p
                         .iter()
@@ -270,19 +274,34 @@ pub fn uvs(shape: &ShapeDesc, m: &TriMesh) -> Vec<[Vec2; 3]> {
                     if n.y.abs() > 0.9 {
                         p.map(|q| Vec2::new(q.x / (2.0 * r) + 0.5, q.z / (2.0 * r) + 0.5))
                     } else {
+                        seam = true;
                         p.map(|q| Vec2::new(angular(q), 1.0 - q.y / height))
                     }
                 }
                 ShapeDesc::Mesh { .. } => [Vec2::ZERO; 3],
             };
             // Across the seam of angular coordinates, keep the triangle on one side.
-            let (lo, hi) = c.iter().fold((f32::MAX, f32::MIN), |(lo, hi), v| {
-                (lo.min(v.x), hi.max(v.x))
-            });
-            if hi - lo > 0.5 {
+            // A pole's longitude is arbitrary: take the mean of the other corners'.
+            let pole = |q: Vec3| Vec2::new(q.x, q.z).length() < 1e-6 * q.length();
+            let poles = p.map(|q| seam && pole(q));
+            let (lo, hi) = c
+                .iter()
+                .zip(poles)
+                .filter(|(_, is_pole)| !is_pole)
+                .fold((f32::MAX, f32::MIN), |(lo, hi), (v, _)| (lo.min(v.x), hi.max(v.x)));
+            if seam && hi - lo > 0.5 {
                 for v in &mut c {
                     if v.x < 0.5 {
                         v.x += 1.0;
+                    }
+                }
+            }
+            if poles.iter().any(|p| *p) {
+                let others: Vec<f32> = (0..3).filter(|&i| !poles[i]).map(|i| c[i].x).collect();
+                let mean = others.iter().sum::<f32>() / others.len().max(1) as f32;
+                for i in 0..3 {
+                    if poles[i] {
+                        c[i].x = mean;
                     }
                 }
             }
@@ -342,6 +361,38 @@ mod tests {
                     );
                 }
             }
+        }
+    }
+}
+
+#[cfg(test)]
+mod uv_tests {
+    use super::*;
+
+    /// A quad maps the whole texture once; a box face too; sphere triangles never straddle
+    /// the seam (no triangle spans more than half the texture in u).
+    #[test]
+    fn primitive_uvs() {
+        let shape = ShapeDesc::Quad { size: [2.0, 4.0] };
+        let m = quad([2.0, 4.0]);
+        let uv = uvs(&shape, &m);
+        let all: Vec<Vec2> = uv.iter().flatten().copied().collect();
+        let lo = all.iter().fold(Vec2::splat(9.0), |a, b| a.min(*b));
+        let hi = all.iter().fold(Vec2::splat(-9.0), |a, b| a.max(*b));
+        assert_eq!((lo, hi), (Vec2::ZERO, Vec2::ONE));
+        let shape = ShapeDesc::Box {
+            size: [1.0, 2.0, 3.0],
+        };
+        for tri in uvs(&shape, &cuboid(Vec3::new(1.0, 2.0, 3.0))) {
+            assert!(tri.iter().all(|v| v.cmpge(Vec2::ZERO).all() && v.cmple(Vec2::ONE).all()));
+        }
+        let shape = ShapeDesc::Sphere {
+            radius: 1.0,
+            subdivisions: 3,
+        };
+        for tri in uvs(&shape, &sphere(1.0, 3)) {
+            let (a, b) = tri.iter().fold((9.0f32, -9.0f32), |(a, b), v| (a.min(v.x), b.max(v.x)));
+            assert!(b - a <= 0.5, "{tri:?}");
         }
     }
 }

@@ -218,3 +218,32 @@ mod tests {
         assert!((n + Vec3::Y).length() < 1e-6, "{n}");
     }
 }
+
+#[cfg(test)]
+mod scene_tests {
+    use super::*;
+    use crate::trace::{Interaction, SceneBvh};
+
+    /// A quad with a normal map tilting normals 30° towards +u (+x): the CPU hit's shading
+    /// normal follows it.
+    #[test]
+    fn normal_map_tilts_the_hit_normal() {
+        let tilt = 30f32.to_radians();
+        let texel = [tilt.sin() * 0.5 + 0.5, 0.5, tilt.cos() * 0.5 + 0.5, 1.0];
+        let tex = Texture::new(1, 1, &texel).unwrap();
+        let json = serde_json::json!({
+            "camera": {"position": [0, 2, 0.1], "look_at": [0, 0, 0]},
+            "materials": {"m": {"normal_texture": "n"}},
+            "objects": [{"shape": {"type": "quad", "size": [2, 2]}, "material": "m"}],
+        });
+        let textures: TextureMap = [("n".to_string(), Arc::new(tex))].into_iter().collect();
+        let scene =
+            Scene::from_json_textured(&json.to_string(), "t", &HashMap::new(), &textures).unwrap();
+        let bvh = SceneBvh::build(&scene);
+        let dir = Vec3::NEG_Y;
+        let hit = bvh.intersect(Vec3::new(0.1, 1.0, 0.2), dir, 10.0).unwrap();
+        let it = Interaction::new(&scene, &hit, dir);
+        let want = Vec3::new(tilt.sin(), tilt.cos(), 0.0);
+        assert!((it.frame.n - want).length() < 2e-3, "{}", it.frame.n);
+    }
+}
