@@ -7,7 +7,7 @@ import json
 import warnings
 
 import numpy as np
-import OpenImageIO as oiio
+import OpenImageIO as oiio  # noqa: N813 (the package's own usual alias)
 import pytest
 
 import gi

@@ -143,7 +143,6 @@ class _Reader:
             return np.maximum(out.astype(np.float64) / info.max, -1.0)
         return out
 
-
     def image(self, i: int, textures: TextureSet, colour: bool) -> str:
         """Image `i` read into `textures` (files by path; embedded ones via a temporary file)."""
         img = self.doc["images"][i]
@@ -273,10 +272,17 @@ def _material(
     pw = f"{where}.pbrMetallicRoughness"
     base_tex = mr_tex = None
     if "baseColorTexture" in pbr:
-        base_tex = _texture(reader, textures, pbr["baseColorTexture"], f"{pw}.baseColorTexture", True, warn)
+        base_tex = _texture(
+            reader, textures, pbr["baseColorTexture"], f"{pw}.baseColorTexture", True, warn
+        )
     if "metallicRoughnessTexture" in pbr:
         mr_tex = _texture(
-            reader, textures, pbr["metallicRoughnessTexture"], f"{pw}.metallicRoughnessTexture", False, warn
+            reader,
+            textures,
+            pbr["metallicRoughnessTexture"],
+            f"{pw}.metallicRoughnessTexture",
+            False,
+            warn,
         )
     if textures is not None and (base_tex or mr_tex):
         _bake_metallic(desc, textures, base_tex, mr_tex, base, metal, trans, i)
@@ -304,7 +310,7 @@ def _material(
             desc["alpha_cutoff"] = min(cutoff / alpha, 1.0) if alpha > 0 else 1.0
             if alpha <= 0 or cutoff / alpha > 1.0:
                 desc["alpha_texture"] = textures.add_array(
-                    f"(transparent)", np.zeros((1, 1, 4), np.float32)
+                    "(transparent)", np.zeros((1, 1, 4), np.float32)
                 )
         elif alpha < cutoff and textures is not None:
             # No texture and a factor below the cutoff: the whole surface is cut out.

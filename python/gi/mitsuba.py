@@ -225,7 +225,9 @@ class _Translator:
             return IOR_NAMES[value.lower()]
         return self.float(p, props, name, default)
 
-    def use_bitmap(self, desc: dict[str, Any], props: dict[str, Element], name: str, to: str) -> None:
+    def use_bitmap(
+        self, desc: dict[str, Any], props: dict[str, Element], name: str, to: str
+    ) -> None:
         """Where property `name` is a bitmap, material field `to` reads it as a texture (its
         factor 1) instead of its mean colour."""
         p = props.get(name)

@@ -80,9 +80,7 @@ def scene_from_desc(
     return Scene.from_json(text, source, meshes, textures.arrays)
 
 
-def _load_material_textures(
-    desc: Any, base_dir: Path, file: str, textures: TextureSet
-) -> bool:
+def _load_material_textures(desc: Any, base_dir: Path, file: str, textures: TextureSet) -> bool:
     """Reads the images the scene's materials name (relative to ``base_dir``) and renames
     the fields to the loaded textures; whether anything was renamed."""
     mats = desc.get("materials") if isinstance(desc, dict) else None

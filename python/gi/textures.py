@@ -24,7 +24,7 @@ def srgb_to_linear(c: np.ndarray) -> np.ndarray:
 def read_image(path: Path) -> tuple[np.ndarray, bool]:
     """Pixels (H, W, C) as float32 in [0, 1] for integer formats, and whether the file stores
     integers (colour maps in such files are sRGB)."""
-    import OpenImageIO as oiio
+    import OpenImageIO as oiio  # noqa: N813 (the package's own usual alias)
 
     inp = oiio.ImageInput.open(str(path))
     if inp is None:

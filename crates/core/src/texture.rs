@@ -205,7 +205,9 @@ mod tests {
                 assert_eq!(t.sample(uv, 0.0), want);
                 // Whole periods away, negative too: the same texel.
                 for k in [-3.0, -1.0, 1.0, 7.0] {
-                    let d = (t.sample(uv + Vec2::splat(k), 0.0) - want).abs().max_element();
+                    let d = (t.sample(uv + Vec2::splat(k), 0.0) - want)
+                        .abs()
+                        .max_element();
                     assert!(d < 1e-5, "{uv} + {k}: {d}");
                 }
             }
@@ -245,10 +247,11 @@ mod tests {
         assert!((l1.texels[0].x - 0.2).abs() < 1e-3, "{:?}", l1.texels);
         assert!((l1.texels[1].x - 0.2).abs() < 1e-3, "{:?}", l1.texels);
         // Every level keeps the mean.
-        let t = tex(7, 5, |x, y| [((x * 3 + y * 5) % 7) as f32 / 6.0, 0.0, 0.0, 1.0]);
-        let mean = |l: &Level| {
-            l.texels.iter().map(|v| v.x as f64).sum::<f64>() / l.texels.len() as f64
-        };
+        let t = tex(7, 5, |x, y| {
+            [((x * 3 + y * 5) % 7) as f32 / 6.0, 0.0, 0.0, 1.0]
+        });
+        let mean =
+            |l: &Level| l.texels.iter().map(|v| v.x as f64).sum::<f64>() / l.texels.len() as f64;
         let m0 = mean(&t.levels[0]);
         for l in &t.levels {
             assert!((mean(l) - m0).abs() < 2e-3, "{} vs {m0}", mean(l));
@@ -273,7 +276,10 @@ mod tests {
     #[test]
     fn values_are_clamped_rounded_and_checked() {
         let t = Texture::new(1, 1, &[2.0, -1.0, 0.1, 1.0]).unwrap();
-        assert_eq!(t.levels[0].texels[0], Vec4::new(1.0, 0.0, round_f16(0.1), 1.0));
+        assert_eq!(
+            t.levels[0].texels[0],
+            Vec4::new(1.0, 0.0, round_f16(0.1), 1.0)
+        );
         assert!(Texture::new(1, 1, &[f32::NAN, 0.0, 0.0, 1.0]).is_err());
         assert!(Texture::new(2, 1, &[0.0; 4]).is_err());
         assert!(Texture::new(0, 1, &[]).is_err());

@@ -94,7 +94,11 @@ fn mesh_from_py(key: &str, value: &Bound<'_, PyAny>, source: &str) -> PyResult<M
                     "{source}: mesh `{key}`: uvs must have shape (N, 2), one per vertex"
                 )));
             }
-            let per_vertex: Vec<Vec2> = a.rows().into_iter().map(|r| Vec2::new(r[0], r[1])).collect();
+            let per_vertex: Vec<Vec2> = a
+                .rows()
+                .into_iter()
+                .map(|r| Vec2::new(r[0], r[1]))
+                .collect();
             indices
                 .iter()
                 .map(|t| t.map(|i| per_vertex.get(i as usize).copied().unwrap_or(Vec2::ZERO)))

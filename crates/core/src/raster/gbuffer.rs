@@ -172,6 +172,7 @@ impl GBufferPass {
 
     /// Records the pass: clears the G-buffer and draws the geometry seen from the view at
     /// `view_offset` in the bind group's view buffer.
+    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
         encoder: &mut wgpu::CommandEncoder,

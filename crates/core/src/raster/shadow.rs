@@ -222,6 +222,7 @@ impl ShadowPass {
     }
 
     /// Records one layer's pass.
+    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
         encoder: &mut wgpu::CommandEncoder,

@@ -21,8 +21,8 @@ pub use surface::{MaterialMaps, TextureMap};
 pub use update::{Changes, SceneObject, SceneUpdate};
 
 use crate::bsdf::Material;
-use crate::texture::Texture;
 use crate::error::{Error, Result};
+use crate::texture::Texture;
 use desc::{LightDesc, MaterialDesc, Scale, ShapeDesc, SmoothDesc, V3};
 use glam::{EulerRot, Mat3, Mat4, Quat, Vec2, Vec3};
 use std::collections::HashMap;
@@ -242,9 +242,10 @@ impl Scene {
                     let base = scene.materials.len() as u32;
                     for (i, (name, m)) in data.materials.iter().enumerate() {
                         let refs = data.material_textures.get(i).cloned().unwrap_or_default();
-                        let maps = MaterialMaps::resolve(&refs, &texture_index).map_err(
-                            |(f, msg)| err(at(&format!("shape.file: materials.{name}.{f}")), &msg),
-                        )?;
+                        let maps =
+                            MaterialMaps::resolve(&refs, &texture_index).map_err(|(f, msg)| {
+                                err(at(&format!("shape.file: materials.{name}.{f}")), &msg)
+                            })?;
                         scene.materials.push(*m);
                         scene.material_names.push(name.clone());
                         scene.material_maps.push(maps);
@@ -311,8 +312,10 @@ impl Scene {
         }));
         self.triangle_materials.extend_from_slice(tri_materials);
         // Corners in the order of the (possibly flipped) triangles.
-        self.uvs
-            .extend(uvs.iter().map(|c| if flip { [c[0], c[2], c[1]] } else { *c }));
+        self.uvs.extend(
+            uvs.iter()
+                .map(|c| if flip { [c[0], c[2], c[1]] } else { *c }),
+        );
         let object = SceneObject {
             name,
             vertices: base..base + mesh.positions.len() as u32,

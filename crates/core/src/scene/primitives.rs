@@ -288,7 +288,9 @@ pub fn uvs(shape: &ShapeDesc, m: &TriMesh) -> Vec<[Vec2; 3]> {
                 .iter()
                 .zip(poles)
                 .filter(|(_, is_pole)| !is_pole)
-                .fold((f32::MAX, f32::MIN), |(lo, hi), (v, _)| (lo.min(v.x), hi.max(v.x)));
+                .fold((f32::MAX, f32::MIN), |(lo, hi), (v, _)| {
+                    (lo.min(v.x), hi.max(v.x))
+                });
             if seam && hi - lo > 0.5 {
                 for v in &mut c {
                     if v.x < 0.5 {
@@ -384,14 +386,18 @@ mod uv_tests {
             size: [1.0, 2.0, 3.0],
         };
         for tri in uvs(&shape, &cuboid(Vec3::new(1.0, 2.0, 3.0))) {
-            assert!(tri.iter().all(|v| v.cmpge(Vec2::ZERO).all() && v.cmple(Vec2::ONE).all()));
+            assert!(tri
+                .iter()
+                .all(|v| v.cmpge(Vec2::ZERO).all() && v.cmple(Vec2::ONE).all()));
         }
         let shape = ShapeDesc::Sphere {
             radius: 1.0,
             subdivisions: 3,
         };
         for tri in uvs(&shape, &sphere(1.0, 3)) {
-            let (a, b) = tri.iter().fold((9.0f32, -9.0f32), |(a, b), v| (a.min(v.x), b.max(v.x)));
+            let (a, b) = tri
+                .iter()
+                .fold((9.0f32, -9.0f32), |(a, b), v| (a.min(v.x), b.max(v.x)));
             assert!(b - a <= 0.5, "{tri:?}");
         }
     }

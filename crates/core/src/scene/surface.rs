@@ -99,7 +99,7 @@ pub fn triangle_tangent(p: [Vec3; 3], uv: [Vec2; 3]) -> Option<Vec4> {
     let (e1, e2) = (p[1] - p[0], p[2] - p[0]);
     let (d1, d2) = (uv[1] - uv[0], uv[2] - uv[0]);
     let det = d1.x * d2.y - d2.x * d1.y;
-    if !(det.abs() > 1e-20) {
+    if det.abs() <= 1e-20 || det.is_nan() {
         return None;
     }
     let t = (e1 * d2.y - e2 * d1.y) / det;

@@ -173,11 +173,9 @@ impl Scene {
                     .ok_or_else(|| err(format!("materials.{name}"), "no material of that name"))?;
                 let m = material_from_desc(material)
                     .map_err(|(f, m)| err(format!("materials.{name}.{f}"), m))?;
-                let maps = super::MaterialMaps::resolve(
-                    &material.texture_refs(),
-                    &self.texture_index(),
-                )
-                .map_err(|(f, m)| err(format!("materials.{name}.{f}"), &m))?;
+                let maps =
+                    super::MaterialMaps::resolve(&material.texture_refs(), &self.texture_index())
+                        .map_err(|(f, m)| err(format!("materials.{name}.{f}"), &m))?;
                 self.materials[i] = m;
                 self.material_maps[i] = maps;
                 Ok(Changes {

@@ -267,10 +267,12 @@ impl SceneBvh {
     #[inline]
     pub fn occluded(&self, origin: Vec3, dir: Vec3, tmax: f32) -> bool {
         let ray = make_ray(origin, dir, tmax);
-        !self.bvh.ray_traverse_miss(ray, |r, id| match self.tris[id].intersect(r) {
-            Some((t, u, v)) if !self.cut_out(id, u, v) => t,
-            _ => f32::INFINITY,
-        })
+        !self
+            .bvh
+            .ray_traverse_miss(ray, |r, id| match self.tris[id].intersect(r) {
+                Some((t, u, v)) if !self.cut_out(id, u, v) => t,
+                _ => f32::INFINITY,
+            })
     }
 
     /// Whether the hit (u, v) on BVH-ordered triangle `id` is cut out by an alpha mask.
