@@ -145,7 +145,10 @@ fn tiled_gives_the_same_image_as_volumes() {
         let dr = max_difference(&tiled.radiance, &volumes.radiance, rad_scale);
         assert!(dr < 1e-4, "{name}: radiance differs by {dr}");
         if kernel_scale == 4.0 && name == "cornell" {
-            assert!(regrown, "the large kernels did not overflow the first lists");
+            assert!(
+                regrown,
+                "the large kernels did not overflow the first lists"
+            );
         }
         if name == "cornell" && size == 64 && subsample == 1 {
             let smaller = run(

@@ -96,10 +96,7 @@ impl FromStr for Estimator {
                 let names: Vec<_> = Estimator::ALL.iter().map(|v| v.name()).collect();
                 Error::setting(
                     "estimator",
-                    format!(
-                        "unknown estimator `{s}` (available: {})",
-                        names.join(", ")
-                    ),
+                    format!("unknown estimator `{s}` (available: {})", names.join(", ")),
                 )
             })
     }

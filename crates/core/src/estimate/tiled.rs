@@ -473,7 +473,10 @@ impl Tiled {
         }
         // Whole rows: the last one padded with zero-power photons beyond `count` (never read).
         let mut texels = bytemuck::cast_slice::<Photon, u8>(photons).to_vec();
-        texels.resize((rows * PHOTON_ROW) as usize * std::mem::size_of::<Photon>(), 0);
+        texels.resize(
+            (rows * PHOTON_ROW) as usize * std::mem::size_of::<Photon>(),
+            0,
+        );
         gpu::alloc::note_upload("tiled photons", texels.len() as u64);
         ctx.queue.write_texture(
             self.photons.as_image_copy(),
@@ -578,7 +581,10 @@ impl Tiled {
             ("tile bounds", n * 32),
             ("tile counts, offsets, cursors", n * 12 + 4),
             ("photon texture", self.capacity.photons as u64 * 64),
-            ("photon lists (buffer + texture)", self.capacity.entries as u64 * 8),
+            (
+                "photon lists (buffer + texture)",
+                self.capacity.entries as u64 * 8,
+            ),
         ]
     }
 }

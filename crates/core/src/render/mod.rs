@@ -6,9 +6,9 @@ pub(crate) mod photon_map;
 pub(crate) mod reference;
 
 use crate::error::{Error, Result};
+pub use crate::estimate::Estimator;
 use crate::image::Image;
 pub use crate::photon::Kernel;
-pub use crate::estimate::Estimator;
 pub use crate::raster::volume_shape::VolumeShape;
 use crate::scene::Scene;
 pub use gather::trace_settings as gather_trace_settings;

@@ -61,20 +61,28 @@ fn sample_pixel(texel: vec2<u32>) -> vec2<i32> {
     return min(vec2<i32>(texel * k + k / 2u), dims - 1);
 }
 
-fn load_photon(i: u32) -> VolumePhoton {
-    let base = vec2<i32>(i32((i % PHOTON_ROW) * 4u), i32(i / PHOTON_ROW));
+fn photon_texel(i: u32) -> vec2<i32> {
+    return vec2<i32>(i32((i % PHOTON_ROW) * 4u), i32(i / PHOTON_ROW));
+}
+
+// Position, normal and radius of photon `i`: what the bounds and kernel tests need.
+fn load_photon_shape(i: u32) -> VolumePhoton {
+    let base = photon_texel(i);
     let a = textureLoad(photon_texels, base, 0);
-    let b = textureLoad(photon_texels, base + vec2<i32>(1, 0), 0);
-    let c = textureLoad(photon_texels, base + vec2<i32>(2, 0), 0);
     let d = textureLoad(photon_texels, base + vec2<i32>(3, 0), 0);
     var p: VolumePhoton;
     p.center = a.xyz;
-    p.incident = b.xyz;
-    p.power = c.xyz;
     p.normal = d.xyz;
     // volume.wgsl's `volume_radius`.
     p.radius = min(d.w, params.r_max);
     return p;
+}
+
+// The rest of photon `i`: what shading needs.
+fn load_photon_light(p: ptr<function, VolumePhoton>, i: u32) {
+    let base = photon_texel(i);
+    (*p).incident = textureLoad(photon_texels, base + vec2<i32>(1, 0), 0).xyz;
+    (*p).power = textureLoad(photon_texels, base + vec2<i32>(2, 0), 0).xyz;
 }
 
 var<workgroup> wg_min: array<vec3<f32>, 64>;
@@ -193,7 +201,7 @@ fn bin_count(
     if i >= params.photons {
         return;
     }
-    let p = load_photon(i);
+    let p = load_photon_shape(i);
     let r = tile_range(p);
     for (var y = r.y; y <= r.w; y++) {
         for (var x = r.x; x <= r.z; x++) {
@@ -249,7 +257,7 @@ fn bin_fill(
     if i >= params.photons {
         return;
     }
-    let p = load_photon(i);
+    let p = load_photon_shape(i);
     let r = tile_range(p);
     for (var y = r.y; y <= r.w; y++) {
         for (var x = r.x; x <= r.z; x++) {
@@ -282,7 +290,13 @@ fn shade(
         let end = min(begin + atomicLoad(&counts[t]), params.capacity);
         for (var j = begin; j < end; j++) {
             let i = textureLoad(list_texels, vec2<i32>(i32(j % LIST_ROW), i32(j / LIST_ROW)), 0).x;
-            sum += volume_term(load_photon(i), s, params.z_ratio);
+            // `volume_term`, loading the photon's light only for samples inside its volume.
+            var p = load_photon_shape(i);
+            let k = volume_kernel(p, s.position, params.z_ratio);
+            if k.y != 0.0 && volume_normal_agrees(p, s.normal) {
+                load_photon_light(&p, i);
+                sum += volume_shade(p, s, k.x);
+            }
         }
     }
     textureStore(low, vec2<i32>(texel), vec4<f32>(sum, 0.0));

@@ -44,14 +44,19 @@ fn volume_normal_agrees(p: VolumePhoton, ns: vec3<f32>) -> bool {
     return dot(ns, p.normal) > 0.5;
 }
 
+// The estimate term of photon `p` at view sample `s` for its kernel weight `kernel`.
+fn volume_shade(p: VolumePhoton, s: ViewSample, kernel: f32) -> vec3<f32> {
+    let f = bsdf_eval(s.material, s.normal, s.wo, p.incident);
+    return f * p.power * kernel;
+}
+
 // The estimate term of photon `p` at view sample `s` (zero outside its volume).
 fn volume_term(p: VolumePhoton, s: ViewSample, z_ratio: f32) -> vec3<f32> {
     let k = volume_kernel(p, s.position, z_ratio);
     if k.y == 0.0 || !volume_normal_agrees(p, s.normal) {
         return vec3<f32>(0.0);
     }
-    let f = bsdf_eval(s.material, s.normal, s.wo, p.incident);
-    return f * p.power * k.x;
+    return volume_shade(p, s, k.x);
 }
 
 // The view sample of G-buffer pixel `px`; `valid` is false where the pixel saw no surface.
