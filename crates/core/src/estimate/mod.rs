@@ -104,8 +104,8 @@ impl FromStr for Estimator {
 
 /// The estimator a renderer runs, with its GPU resources.
 pub enum IndirectEstimate {
-    Volumes(Volumes),
-    Tiled(Tiled),
+    Volumes(Box<Volumes>),
+    Tiled(Box<Tiled>),
 }
 
 impl IndirectEstimate {

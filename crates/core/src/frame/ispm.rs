@@ -114,9 +114,9 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         let (gbuf, k) = (&targets.gbuf, settings.subsample);
         let estimate = match kind {
             crate::estimate::Estimator::Tiled => {
-                IndirectEstimate::Tiled(Tiled::new(&ctx, gbuf, w, h, k))
+                IndirectEstimate::Tiled(Box::new(Tiled::new(&ctx, gbuf, w, h, k)))
             }
-            _ => IndirectEstimate::Volumes(Volumes::new(&ctx, gbuf, w, h, k)),
+            _ => IndirectEstimate::Volumes(Box::new(Volumes::new(&ctx, gbuf, w, h, k))),
         };
         targets.bind_composite(&ctx, Some(estimate.output().1));
         *ispm = Some(IspmState {
