@@ -291,3 +291,81 @@ def test_unknown_texture_name_in_a_mesh_material_is_a_scene_error():
     }
     with pytest.raises(gi.SceneError, match="no texture named"):
         gi.Scene.from_json(json.dumps(desc), "t", {"m": mesh})
+
+
+def test_specular_and_roughness_maps_multiply_their_factors(tmp_path):
+    """Uniform maps equal constant factors: specular 1 × a 0.5 map and roughness 1 × a 0.2
+    map render like specular 0.5, roughness 0.2 (within 2%: the 8-bit sRGB map decodes to
+    0.5 ± 0.002, 51/255 = 0.2 exactly), and unlike roughness 1 (the highlight spreads)."""
+    write_png(tmp_path / "half.png", np.full((4, 4, 4), 0.5) + [0, 0, 0, 0.5])
+    write_png(tmp_path / "r02.png", np.full((4, 4, 4), 0.2) + [0, 0, 0, 0.8], srgb=False)
+    base = {"diffuse": [0.2, 0.2, 0.2], "fresnel": False}
+    variants = {
+        "maps": {
+            **base,
+            "specular": [1, 1, 1],
+            "specular_texture": "../half.png",
+            "roughness": 1.0,
+            "roughness_texture": "../r02.png",
+        },
+        "factors": {**base, "specular": [0.5, 0.5, 0.5], "roughness": 0.2},
+        "rough": {**base, "specular": [0.5, 0.5, 0.5], "roughness": 1.0},
+    }
+    out = {}
+    for name, mat in variants.items():
+        (tmp_path / name).mkdir()
+        objects = [{"shape": {"type": "quad", "size": [2, 2]}, "material": "m"}]
+        # Light beside the camera: the highlight sits near the image centre.
+        path = top_down_scene(tmp_path / name, objects, light=(0.3, 2.5, 0), materials={"m": mat})
+        for method in METHODS:
+            out[name, method] = render(path, method, spp=4).radiance.mean(axis=2)
+    for method in METHODS:
+        maps, factors, rough = (out[v, method] for v in variants)
+        peak = np.unravel_index(np.argmax(factors), factors.shape)
+        window = tuple(slice(max(p - 3, 0), p + 4) for p in peak)
+        np.testing.assert_allclose(maps[window].mean(), factors[window].mean(), rtol=0.02)
+        np.testing.assert_allclose(maps.mean(), factors.mean(), rtol=0.02)
+        assert factors[window].mean() > 1.5 * rough[window].mean(), method
+
+
+def test_mtl_maps_become_textures(tmp_path):
+    """map_Ks, map_Ns, map_d and a height map in map_Bump are read into textures."""
+    write_png(tmp_path / "spec.png", np.full((2, 2, 4), 1.0))
+    write_png(tmp_path / "ns.png", np.full((2, 2, 4), 1.0), srgb=False)
+    grey = np.zeros((4, 4, 3))
+    grey[:, 2:] = 1.0
+    out = oiio.ImageOutput.create(str(tmp_path / "cut.png"))
+    out.open(str(tmp_path / "cut.png"), oiio.ImageSpec(4, 4, 1, oiio.UINT8))
+    out.write_image(np.ascontiguousarray((grey[..., :1] * 255).astype(np.uint8)))
+    out.close()
+    height = np.zeros((8, 8, 4))
+    height[..., :3] = np.linspace(0, 1, 8)[None, :, None]  # a ramp along u
+    height[..., 3] = 1
+    write_png(tmp_path / "h.png", height, srgb=False)
+    (tmp_path / "m.mtl").write_text(
+        "newmtl a\nKd 0.5 0.5 0.5\nKs 0.5 0.5 0.5\nNs 100\n"
+        "map_Ks spec.png\nmap_Ns ns.png\nmap_d cut.png\nmap_Bump -bm 2 h.png\n"
+    )
+    (tmp_path / "q.obj").write_text(
+        "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nusemtl a\nf 1/1 2/2 3/3\n"
+    )
+    from gi.meshes import load_mesh
+    from gi.textures import TextureSet
+
+    textures = TextureSet()
+    entry = load_mesh(tmp_path / "q.obj", "s", "f", textures)
+    [(_, desc)] = json.loads(entry[3])
+    assert desc["specular_texture"] in textures.arrays
+    # map_Ns: the exponent 100 × 1.0 → roughness (2/102)^(1/4), factor 1.
+    rough = textures.arrays[desc["roughness_texture"]]
+    assert desc["roughness"] == 1.0
+    np.testing.assert_allclose(rough[..., 1], (2 / 102) ** 0.25, rtol=1e-5)
+    # map_d of a grey image: coverage is its grey value; cut out below 0.5.
+    alpha = textures.arrays[desc["alpha_texture"]][..., 3]
+    assert (alpha[:, :2] == 0).all() and (alpha[:, 2:] == 1).all()
+    assert desc["alpha_cutoff"] == 0.5
+    # A height ramp along u becomes normals tilted towards -u (downhill), uniformly inside.
+    normal = textures.arrays[desc["normal_texture"]][2:6, 2:6, :3] * 2 - 1
+    assert (normal[..., 0] < -0.1).all() and np.allclose(normal[..., 1], 0, atol=1e-6)
+    # The UVs reach the core (OBJ's v flipped).
+    np.testing.assert_allclose(entry[5], [[0, 1], [1, 1], [1, 0]])
