@@ -152,7 +152,13 @@ impl Scene {
             m.specular *= self.texture(i).sample(uv, lod).xyz();
         }
         if let Some(i) = maps.roughness {
+            // A map never turns a glossy lobe into a mirror (a delta lobe the scene-level
+            // checks, e.g. whether to light-trace caustics, would not know of).
+            let glossy = !m.is_mirror();
             m.roughness *= self.texture(i).sample(uv, lod).y;
+            if glossy {
+                m.roughness = m.roughness.max(crate::bsdf::MIRROR_ROUGHNESS);
+            }
         }
         m
     }
@@ -245,5 +251,36 @@ mod scene_tests {
         let it = Interaction::new(&scene, &hit, dir);
         let want = Vec3::new(tilt.sin(), tilt.cos(), 0.0);
         assert!((it.frame.n - want).length() < 2e-3, "{}", it.frame.n);
+    }
+
+    /// Maps multiply their factors; a black roughness map keeps a glossy lobe glossy.
+    #[test]
+    fn maps_multiply_and_roughness_stays_glossy() {
+        let tex = Texture::new(1, 1, &[0.5, 0.25, 0.0, 1.0]).unwrap();
+        let json = serde_json::json!({
+            "camera": {"position": [0, 2, 0.1], "look_at": [0, 0, 0]},
+            "materials": {"m": {"diffuse": [0.8, 0.8, 0.8], "specular": [1, 1, 1],
+                                "roughness": 0.5, "diffuse_texture": "t",
+                                "specular_texture": "t", "roughness_texture": "black"}},
+            "objects": [{"shape": {"type": "quad", "size": [2, 2]}, "material": "m"}],
+        });
+        let black = Texture::new(1, 1, &[0.0, 0.0, 0.0, 1.0]).unwrap();
+        let textures: TextureMap = [
+            ("t".to_string(), Arc::new(tex)),
+            ("black".to_string(), Arc::new(black)),
+        ]
+        .into_iter()
+        .collect();
+        let scene =
+            Scene::from_json_textured(&json.to_string(), "t", &HashMap::new(), &textures).unwrap();
+        let m = scene.material_at(0, Vec2::splat(0.5), 0.0);
+        assert_eq!(m.diffuse, Vec3::new(0.4, 0.2, 0.0));
+        assert_eq!(m.specular, Vec3::new(0.5, 0.25, 0.0));
+        assert_eq!(m.roughness, crate::bsdf::MIRROR_ROUGHNESS);
+        assert!(!m.is_mirror());
+        // The description round-trips with its texture names.
+        let desc = scene.material_desc("m").unwrap();
+        assert_eq!(desc.roughness_texture.as_deref(), Some("black"));
+        assert_eq!(desc.alpha_texture, None);
     }
 }

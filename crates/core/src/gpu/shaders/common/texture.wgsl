@@ -27,6 +27,8 @@ struct MaterialMaps {
 }
 
 const NO_TEXTURE: u32 = 0xffffffffu;
+// bsdf.wgsl's MIRROR_ROUGHNESS (this file is also used without bsdf.wgsl).
+const TEX_MIRROR_ROUGHNESS: f32 = 1e-3;
 
 @group(1) @binding(0) var tex_atlas: texture_2d_array<f32>;
 @group(1) @binding(1) var<storage, read> tex_levels: array<TexLevel>;
@@ -99,7 +101,12 @@ fn textured_material(mi: u32, base: Material, uv: vec2<f32>, duvdx: vec2<f32>, d
         m.specular *= tex_sample(maps.specular, uv, tex_lod(maps.specular, duvdx, duvdy)).xyz;
     }
     if maps.roughness != NO_TEXTURE {
+        // As on the CPU: a map never turns a glossy lobe into a mirror.
+        let glossy = m.roughness >= TEX_MIRROR_ROUGHNESS;
         m.roughness *= tex_sample(maps.roughness, uv, tex_lod(maps.roughness, duvdx, duvdy)).y;
+        if glossy {
+            m.roughness = max(m.roughness, TEX_MIRROR_ROUGHNESS);
+        }
     }
     return m;
 }
