@@ -27,6 +27,8 @@ pub(crate) struct GpuScene {
     pub textures: raster::textures::GpuTextures,
     /// Whether any material is alpha-masked (the shadow pass then discards cut-outs).
     masked: bool,
+    /// The fragment shaders the scene needs (textures, alpha masks).
+    pub variant: raster::textures::Variant,
     pub lights: wgpu::Buffer,
     shadow_matrices: wgpu::Buffer,
     shadow_views: wgpu::Buffer,
@@ -108,6 +110,7 @@ impl GpuScene {
             materials: storage_init(ctx, "materials", bytemuck::cast_slice(&materials)),
             textures,
             masked: scene.has_alpha_masks(),
+            variant: raster::textures::Variant::of(scene),
             lights: storage_init(ctx, "lights", bytemuck::cast_slice(&shadows.lights)),
             shadow_matrices: storage_init(ctx, "shadow matrices", bytemuck::cast_slice(&matrices)),
             shadow_views,
@@ -161,6 +164,7 @@ impl GpuScene {
             self.shadows_stale = true;
         }
         self.masked = masked;
+        self.variant = raster::textures::Variant::of(scene);
     }
 
     /// Uploads the lights and their shadow views (they depend on the scene's bounds too).
@@ -485,7 +489,7 @@ impl Targets {
                     &self.gbuffer_group,
                     offset,
                     &gs.geometry,
-                    &gs.textures.group,
+                    (&gs.textures.group, gs.variant),
                     ts,
                 );
                 let ts = timer.pass("direct light");
@@ -513,7 +517,7 @@ impl Targets {
                 &self.gbuffer_group,
                 0,
                 &gs.geometry,
-                &gs.textures.group,
+                (&gs.textures.group, gs.variant),
                 ts,
             );
         }

@@ -58,6 +58,38 @@ impl MaterialMaps {
     }
 }
 
+/// Which fragment shader the passes that rasterize the scene use (`fs_main`, `fs_textured`,
+/// `fs_masked`): a scene without textures pays nothing for them, and only a scene with
+/// alpha masks gets a shader that may discard (which costs early depth testing).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Variant {
+    Plain,
+    Textured,
+    Masked,
+}
+
+impl Variant {
+    pub const ALL: [Variant; 3] = [Variant::Plain, Variant::Textured, Variant::Masked];
+
+    pub fn of(scene: &Scene) -> Variant {
+        if scene.has_alpha_masks() {
+            Variant::Masked
+        } else if scene.material_maps.iter().any(|m| !m.is_empty()) {
+            Variant::Textured
+        } else {
+            Variant::Plain
+        }
+    }
+
+    pub fn entry_point(self) -> &'static str {
+        match self {
+            Variant::Plain => "fs_main",
+            Variant::Textured => "fs_textured",
+            Variant::Masked => "fs_masked",
+        }
+    }
+}
+
 /// Where every level of every texture lies in the atlas.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Atlas {

@@ -83,8 +83,37 @@ fn falloff(cos_t: f32) -> f32 {
     return t * t * (3.0 - 2.0 * t);
 }
 
+// Three entry points, one per kind of scene (see gbuffer.wgsl): only `fs_masked` discards.
 @fragment
 fn fs_main(in: VertexOut) -> BounceOut {
+    return bounce(in, false);
+}
+
+@fragment
+fn fs_textured(in: VertexOut) -> BounceOut {
+    return bounce(in, true);
+}
+
+@fragment
+fn fs_masked(in: VertexOut) -> BounceOut {
+    // The alpha test at the photon's jittered origin (the same jitter `bounce` draws).
+    let duvdx = dpdx(in.uv);
+    let duvdy = dpdy(in.uv);
+    let jitter = texel_jitter(in);
+    if alpha_cut(in.material, in.uv + jitter.x * duvdx + jitter.y * duvdy) {
+        discard;
+    }
+    return bounce(in, true);
+}
+
+// Seeds the texel's random sequence and draws its jitter (the first two numbers).
+fn texel_jitter(in: VertexOut) -> vec2<f32> {
+    let texel = vec2<u32>(in.clip.xy);
+    rng_state = hash_u32(view.seed ^ hash_u32(view.layer ^ hash_u32(texel.x ^ hash_u32(texel.y))));
+    return vec2<f32>(rng_next(), rng_next()) - 0.5;
+}
+
+fn bounce(in: VertexOut, textured: bool) -> BounceOut {
     // Stratified jitter: the photon leaves the light through a uniformly random point of its
     // texel instead of the texel centre (the surface point and interpolated normal are moved
     // along their screen derivatives, exact within a planar triangle). Centre-sampled
@@ -97,14 +126,9 @@ fn fs_main(in: VertexOut) -> BounceOut {
     let dndy = dpdy(in.normal);
     let duvdx = dpdx(in.uv);
     let duvdy = dpdy(in.uv);
-    let texel = vec2<u32>(in.clip.xy);
-    rng_state = hash_u32(view.seed ^ hash_u32(view.layer ^ hash_u32(texel.x ^ hash_u32(texel.y))));
-    let jitter = vec2<f32>(rng_next(), rng_next()) - 0.5;
+    let jitter = texel_jitter(in);
     let world = in.world + jitter.x * dwdx + jitter.y * dwdy;
     let uv = in.uv + jitter.x * duvdx + jitter.y * duvdy;
-    if alpha_cut(in.material, uv) {
-        discard;
-    }
     let to_light = view.light_position - world;
     let wo = normalize(to_light);
     // Normals as in the eye G-buffer, oriented towards the light.
@@ -119,7 +143,9 @@ fn fs_main(in: VertexOut) -> BounceOut {
             ns = -ns;
         }
     }
-    ns = mapped_normal(in.material, ns, in.tangent, uv, duvdx, duvdy);
+    if textured {
+        ns = mapped_normal(in.material, ns, in.tangent, uv, duvdx, duvdy);
+    }
     if dot(wo, ns) * dot(wo, ng) <= 0.0 {
         ns = ng;
     }
@@ -134,7 +160,10 @@ fn fs_main(in: VertexOut) -> BounceOut {
         intensity *= falloff(dot(d, view.spot_direction));
     }
     let phi = intensity * view.texel_area * c * c * c;
-    let m = textured_material(in.material, materials[in.material], uv, duvdx, duvdy);
+    var m = materials[in.material];
+    if textured {
+        m = textured_material(in.material, m, uv, duvdx, duvdy);
+    }
     var o: BounceOut;
     o.incident = vec4<f32>(phi, 1.0);
     o.expected = vec4<f32>(phi * scatter_probability(m, dot(wo, ns)), 1.0);

@@ -49,15 +49,35 @@ struct GBufferOut {
     @location(4) albedo: vec4<f32>,
 }
 
+// Three entry points, one per kind of scene (`raster::textures::Variant`): without textures,
+// with textures, with alpha masks. Only the last discards: a shader that may discard loses
+// early depth testing on lavapipe and shades every overdrawn fragment (8x slower here).
 @fragment
 fn fs_main(in: VertexOut) -> GBufferOut {
+    return gbuffer(in, false, vec2<f32>(0.0), vec2<f32>(0.0));
+}
+
+@fragment
+fn fs_textured(in: VertexOut) -> GBufferOut {
+    return gbuffer(in, true, dpdx(in.uv), dpdy(in.uv));
+}
+
+@fragment
+fn fs_masked(in: VertexOut) -> GBufferOut {
     // Derivatives first (uniform control flow), then the alpha mask.
     let duvdx = dpdx(in.uv);
     let duvdy = dpdy(in.uv);
     if alpha_cut(in.material, in.uv) {
         discard;
     }
-    let m = textured_material(in.material, materials[in.material], in.uv, duvdx, duvdy);
+    return gbuffer(in, true, duvdx, duvdy);
+}
+
+fn gbuffer(in: VertexOut, textured: bool, duvdx: vec2<f32>, duvdy: vec2<f32>) -> GBufferOut {
+    var m = materials[in.material];
+    if textured {
+        m = textured_material(in.material, m, in.uv, duvdx, duvdy);
+    }
     let wo = normalize(view.eye - in.world);
     var ng = in.geometric_normal;
     // Shading normal as in trace::Interaction::new: on the side of ng, and replaced by ng
@@ -72,7 +92,9 @@ fn fs_main(in: VertexOut) -> GBufferOut {
             ns = -ns;
         }
     }
-    ns = mapped_normal(in.material, ns, in.tangent, in.uv, duvdx, duvdy);
+    if textured {
+        ns = mapped_normal(in.material, ns, in.tangent, in.uv, duvdx, duvdy);
+    }
     if dot(wo, ns) * dot(wo, ng) <= 0.0 {
         ns = ng;
     }
