@@ -17,6 +17,8 @@ use bytemuck::{Pod, Zeroable};
 use std::sync::Arc;
 
 pub const PAGE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+/// Entries per row of the table texture (`TEX_TABLE_WIDTH` in WGSL).
+pub const TABLE_WIDTH: u32 = 1024;
 
 /// One mip level's rectangle in the atlas (`TexLevel` in WGSL): 32 bytes.
 #[repr(C)]
@@ -102,6 +104,27 @@ pub struct Atlas {
 }
 
 impl Atlas {
+    /// The table the shaders read (see `texture.wgsl`): per texture (first level's entry,
+    /// levels, width | height << 16, 0), then per level (x | y << 16, width | height << 16,
+    /// page, 0). Sizes and positions fit 16 bits: pages are at most 4096 texels a side.
+    pub fn table(&self) -> Vec<[u32; 4]> {
+        let n = self.info.len() as u32;
+        let mut out: Vec<[u32; 4]> = self
+            .info
+            .iter()
+            .map(|&[first, count]| {
+                let l = self.levels[first as usize];
+                [n + first, count, l.width | l.height << 16, 0]
+            })
+            .collect();
+        out.extend(
+            self.levels
+                .iter()
+                .map(|l| [l.x | l.y << 16, l.width | l.height << 16, l.page, 0]),
+        );
+        out
+    }
+
     /// Packs the levels of `textures` on shelves of square pages as large as the largest
     /// texture.
     pub fn pack(textures: &[Arc<Texture>]) -> Atlas {
@@ -170,9 +193,17 @@ pub fn layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
                 },
                 count: None,
             },
-            super::storage_entry(1, vis),
+            wgpu::BindGroupLayoutEntry {
+                binding: 1,
+                visibility: vis,
+                ty: wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Uint,
+                    view_dimension: wgpu::TextureViewDimension::D2,
+                    multisampled: false,
+                },
+                count: None,
+            },
             super::storage_entry(2, vis),
-            super::storage_entry(3, vis),
         ],
     })
 }
@@ -272,8 +303,46 @@ impl GpuTextures {
                 wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             )
         };
-        let levels = storage("texture levels", bytemuck::cast_slice(&atlas.levels));
-        let info = storage("textures", bytemuck::cast_slice(&atlas.info));
+        let table = atlas.table();
+        let rows = (table.len() as u32).div_ceil(TABLE_WIDTH).max(1);
+        if rows > limits.max_texture_dimension_2d {
+            return Err(Error::Gpu(format!(
+                "{} texture levels exceed the GPU's texture table",
+                atlas.levels.len()
+            )));
+        }
+        let mut padded = table;
+        padded.resize((rows * TABLE_WIDTH) as usize, [0; 4]);
+        let table_texture = gpu::create_texture(
+            &ctx.device,
+            &wgpu::TextureDescriptor {
+                label: Some("texture table"),
+                size: wgpu::Extent3d {
+                    width: TABLE_WIDTH,
+                    height: rows,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::Rgba32Uint,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+                view_formats: &[],
+            },
+        );
+        let bytes: &[u8] = bytemuck::cast_slice(&padded);
+        crate::gpu::alloc::note_upload("texture table", bytes.len() as u64);
+        ctx.queue.write_texture(
+            table_texture.as_image_copy(),
+            bytes,
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(TABLE_WIDTH * 16),
+                rows_per_image: Some(rows),
+            },
+            table_texture.size(),
+        );
+        let table_view = table_texture.create_view(&Default::default());
         let maps = storage("material maps", bytemuck::cast_slice(&maps_raw(scene)));
         let group = gpu::create_bind_group(
             &ctx.device,
@@ -287,14 +356,10 @@ impl GpuTextures {
                     },
                     wgpu::BindGroupEntry {
                         binding: 1,
-                        resource: levels.as_entire_binding(),
+                        resource: wgpu::BindingResource::TextureView(&table_view),
                     },
                     wgpu::BindGroupEntry {
                         binding: 2,
-                        resource: info.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 3,
                         resource: maps.as_entire_binding(),
                     },
                 ],

@@ -100,7 +100,7 @@ fn fs_masked(in: VertexOut) -> BounceOut {
     let duvdx = dpdx(in.uv);
     let duvdy = dpdy(in.uv);
     let jitter = texel_jitter(in);
-    if alpha_cut(in.material, in.uv + jitter.x * duvdx + jitter.y * duvdy) {
+    if alpha_cut(material_maps[in.material], in.uv + jitter.x * duvdx + jitter.y * duvdy) {
         discard;
     }
     return bounce(in, true);
@@ -143,8 +143,10 @@ fn bounce(in: VertexOut, textured: bool) -> BounceOut {
             ns = -ns;
         }
     }
+    var maps: MaterialMaps;
     if textured {
-        ns = mapped_normal(in.material, ns, in.tangent, uv, duvdx, duvdy);
+        maps = material_maps[in.material];
+        ns = mapped_normal(maps, ns, in.tangent, uv, duvdx, duvdy);
     }
     if dot(wo, ns) * dot(wo, ng) <= 0.0 {
         ns = ng;
@@ -162,7 +164,7 @@ fn bounce(in: VertexOut, textured: bool) -> BounceOut {
     let phi = intensity * view.texel_area * c * c * c;
     var m = materials[in.material];
     if textured {
-        m = textured_material(in.material, m, uv, duvdx, duvdy);
+        m = textured_material(maps, m, uv, duvdx, duvdy);
     }
     var o: BounceOut;
     o.incident = vec4<f32>(phi, 1.0);

@@ -67,7 +67,7 @@ fn fs_masked(in: VertexOut) -> GBufferOut {
     // Derivatives first (uniform control flow), then the alpha mask.
     let duvdx = dpdx(in.uv);
     let duvdy = dpdy(in.uv);
-    if alpha_cut(in.material, in.uv) {
+    if alpha_cut(material_maps[in.material], in.uv) {
         discard;
     }
     return gbuffer(in, true, duvdx, duvdy);
@@ -75,8 +75,10 @@ fn fs_masked(in: VertexOut) -> GBufferOut {
 
 fn gbuffer(in: VertexOut, textured: bool, duvdx: vec2<f32>, duvdy: vec2<f32>) -> GBufferOut {
     var m = materials[in.material];
+    var maps: MaterialMaps;
     if textured {
-        m = textured_material(in.material, m, in.uv, duvdx, duvdy);
+        maps = material_maps[in.material];
+        m = textured_material(maps, m, in.uv, duvdx, duvdy);
     }
     let wo = normalize(view.eye - in.world);
     var ng = in.geometric_normal;
@@ -93,7 +95,7 @@ fn gbuffer(in: VertexOut, textured: bool, duvdx: vec2<f32>, duvdy: vec2<f32>) ->
         }
     }
     if textured {
-        ns = mapped_normal(in.material, ns, in.tangent, in.uv, duvdx, duvdy);
+        ns = mapped_normal(maps, ns, in.tangent, in.uv, duvdx, duvdy);
     }
     if dot(wo, ns) * dot(wo, ng) <= 0.0 {
         ns = ng;

@@ -24,7 +24,7 @@ fn vs_main(
 
 @fragment
 fn fs_main(in: VertexOut) {
-    if alpha_cut(in.material, in.uv) {
+    if alpha_cut(material_maps[in.material], in.uv) {
         discard;
     }
 }
