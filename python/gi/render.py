@@ -36,6 +36,10 @@ class RenderStats:
     estimator: str = ""
     estimator_reason: str = ""
     estimator_memory: list[tuple[str, int]] = field(default_factory=list)
+    #: Estimators "tiled" and "cluster": photon-list entries written, and of them the
+    #: cluster hierarchy's trivial accepts (one photon for a whole node of view samples).
+    list_entries: int = 0
+    trivial_accepts: int = 0
 
 
 @dataclass(frozen=True)
@@ -132,6 +136,8 @@ def _result(out: dict[str, Any]) -> RenderResult:
         estimator=s["estimator"],
         estimator_reason=s["estimator_reason"],
         estimator_memory=[(str(n), int(b)) for n, b in s["estimator_memory"]],
+        list_entries=s["list_entries"],
+        trivial_accepts=s["trivial_accepts"],
     )
     return RenderResult(
         radiance=out["radiance"],
