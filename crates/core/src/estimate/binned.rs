@@ -45,14 +45,16 @@ const ENTRIES_PER_PHOTON: u64 = 4;
 const CLUSTERS_PER_TILE: u32 = 4;
 /// Children per side of a hierarchy node (`FANOUT`).
 const FANOUT: u32 = 4;
-/// vec4s of a node's quadratic (`COEFFS`).
-const COEFFS: u64 = 10;
+/// vec4s of a node's quadratic or octant buckets, and its centroid (`COEFFS`).
+const COEFFS: u64 = 17;
 
 /// Which binning estimator.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Mode {
     Tiled,
     Cluster,
+    /// The cluster hierarchy with per-node octant flux buckets (Moreau et al. 4.7).
+    Directional,
 }
 
 /// `TiledParams` of tiled.wgsl.
@@ -102,6 +104,8 @@ struct ClusterPipelines {
     fill: wgpu::ComputePipeline,
     accumulate: wgpu::ComputePipeline,
     shade: wgpu::ComputePipeline,
+    directional_accumulate: wgpu::ComputePipeline,
+    directional_shade: wgpu::ComputePipeline,
 }
 
 fn entry(binding: u32, ty: wgpu::BindingType) -> wgpu::BindGroupLayoutEntry {
@@ -233,7 +237,18 @@ impl BinnedPasses {
 
     fn cluster(&self, device: &wgpu::Device) -> &ClusterPipelines {
         self.cluster.get_or_init(|| {
-            let [leaves, parents1, parents2, count, scan, fill, accumulate, shade] = self
+            let [
+                leaves,
+                parents1,
+                parents2,
+                count,
+                scan,
+                fill,
+                accumulate,
+                shade,
+                directional_accumulate,
+                directional_shade,
+            ] = self
                 .pipelines(
                     device,
                     "cluster shader",
@@ -253,6 +268,8 @@ impl BinnedPasses {
                         "cluster_fill",
                         "cluster_accumulate",
                         "cluster_shade",
+                        "directional_accumulate",
+                        "directional_shade",
                     ],
                 );
             ClusterPipelines {
@@ -264,6 +281,8 @@ impl BinnedPasses {
                 fill,
                 accumulate,
                 shade,
+                directional_accumulate,
+                directional_shade,
             }
         })
     }
@@ -363,7 +382,7 @@ impl Binned {
         let n0 = tiles[0] * tiles[1];
         let (nodes, slots) = match mode {
             Mode::Tiled => (n0, n0),
-            Mode::Cluster => {
+            Mode::Cluster | Mode::Directional => {
                 let leaves = n0 * CLUSTERS_PER_TILE;
                 let nodes = leaves + l1[0] * l1[1] + l2[0] * l2[1];
                 (nodes, nodes + leaves)
@@ -382,7 +401,7 @@ impl Binned {
             bytemuck::bytes_of(&TiledParamsRaw::zeroed()),
             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         );
-        let cluster = mode == Mode::Cluster;
+        let cluster = mode != Mode::Tiled;
         // Whole rows, for the copy into the node texture.
         let node_rows = nodes.div_ceil(NODE_ROW);
         let node_data = buffer(
@@ -746,7 +765,7 @@ impl Binned {
                     pass.dispatch_workgroups(gx, gy, 1);
                 }
             }
-            Mode::Cluster => {
+            Mode::Cluster | Mode::Directional => {
                 let p = passes.cluster(&ctx.device);
                 let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some("cluster hierarchy"),
@@ -819,9 +838,22 @@ impl Binned {
                 pass.set_pipeline(&p.shade);
                 pass.dispatch_workgroups(tx, ty, 1);
             }
+            Mode::Directional => {
+                let p = passes.cluster(&ctx.device);
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("directional shading"),
+                    timestamp_writes: timer.compute_pass("directional shading"),
+                });
+                pass.set_bind_group(0, &self.group, &[]);
+                let (nx, ny, _) = grid(self.nodes);
+                pass.set_pipeline(&p.directional_accumulate);
+                pass.dispatch_workgroups(nx, ny, 1);
+                pass.set_pipeline(&p.directional_shade);
+                pass.dispatch_workgroups(tx, ty, 1);
+            }
         }
         encoder.copy_buffer_to_buffer(&self.counts, self.slots as u64 * 4, &self.total, 0, 4);
-        if self.mode == Mode::Cluster {
+        if self.mode != Mode::Tiled {
             // Where the leaves' test lists start: the entries of the accept lists.
             encoder.copy_buffer_to_buffer(&self.offsets, self.nodes as u64 * 4, &self.total, 4, 4);
         }
@@ -856,11 +888,7 @@ impl Binned {
         let word =
             |i: usize| u32::from_le_bytes([bytes[i], bytes[i + 1], bytes[i + 2], bytes[i + 3]]);
         let total = word(0);
-        let accepted = if self.mode == Mode::Cluster {
-            word(4)
-        } else {
-            0
-        };
+        let accepted = if self.mode == Mode::Tiled { 0 } else { word(4) };
         self.entries = (total as u64, accepted as u64);
         if total <= self.capacity.entries {
             return Ok(false);
@@ -893,8 +921,8 @@ impl Binned {
                 self.capacity.entries as u64 * 8,
             ),
         ];
-        if self.mode == Mode::Cluster {
-            parts.push(("node quadratics", self.coeffs.size()));
+        if self.mode != Mode::Tiled {
+            parts.push(("node quadratics or octant fluxes", self.coeffs.size()));
             parts.push(("sample leaves", self.cluster_of.size()));
         }
         parts

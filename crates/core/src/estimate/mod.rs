@@ -31,6 +31,8 @@ pub enum Estimator {
     Tiled,
     /// The view-sample cluster hierarchy in compute.
     Cluster,
+    /// The cluster hierarchy's directional approximation (octant flux per node).
+    Directional,
 }
 
 impl Estimator {
@@ -39,6 +41,7 @@ impl Estimator {
         Estimator::Volumes,
         Estimator::Tiled,
         Estimator::Cluster,
+        Estimator::Directional,
     ];
 
     pub fn name(self) -> &'static str {
@@ -47,6 +50,7 @@ impl Estimator {
             Estimator::Volumes => "volumes",
             Estimator::Tiled => "tiled",
             Estimator::Cluster => "cluster",
+            Estimator::Directional => "directional",
         }
     }
 
@@ -124,6 +128,7 @@ impl IndirectEstimate {
             IndirectEstimate::Binned(b) => match b.mode() {
                 Mode::Tiled => Estimator::Tiled,
                 Mode::Cluster => Estimator::Cluster,
+                Mode::Directional => Estimator::Directional,
             },
         }
     }

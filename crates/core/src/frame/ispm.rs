@@ -117,6 +117,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         let estimate = match kind {
             Estimator::Tiled => binned(Mode::Tiled),
             Estimator::Cluster => binned(Mode::Cluster),
+            Estimator::Directional => binned(Mode::Directional),
             Estimator::Volumes | Estimator::Auto => {
                 IndirectEstimate::Volumes(Box::new(Volumes::new(&ctx, gbuf, w, h, k)))
             }

@@ -39,8 +39,9 @@ const COS_NORMAL_IN: f32 = 0.50086578; // cos(60° - 0.001)
 const SIN_NORMAL_IN: f32 = 0.86552497;
 const COS_HEMI_IN: f32 = 0.00100000; // cos(90° - 0.001)
 const SIN_HEMI_IN: f32 = 0.99999950;
-// vec4s a node's quadratic takes: A, B per channel, C per channel (diagonal, off-diagonal).
-const COEFFS: u32 = 10u;
+// vec4s per node: the cluster's quadratic (A, B per channel, C per channel: 10) or the
+// directional buckets (flux and mean direction per octant: 16), then the centroid.
+const COEFFS: u32 = 17u;
 
 struct Node {
     lo: vec3<f32>,
@@ -97,6 +98,15 @@ fn store_node(k: u32, n: Node) {
     nodes[3u * k + 2u] = vec4<f32>(n.axis, cos(min(n.half, PI)));
 }
 
+// The mean position of a node's samples and their count, in the last slot of its
+// coefficients (the directional approximation evaluates kernels there: on the surface,
+// where a box's centre need not be).
+const CENTROID: u32 = 16u;
+
+fn store_centroid(k: u32, sum: vec4<f32>) {
+    coeffs[k * COEFFS + CENTROID] = vec4<f32>(sum.xyz / max(sum.w, 1.0), sum.w);
+}
+
 fn angle_between(a: vec3<f32>, b: vec3<f32>) -> f32 {
     return acos(clamp(dot(a, b), -1.0, 1.0));
 }
@@ -115,6 +125,8 @@ var<workgroup> wg_hi: array<vec3<f32>, 64>;
 var<workgroup> wg_n: array<vec3<f32>, 64>;
 var<workgroup> wg_dot: array<f32, 64>;
 var<workgroup> wg_ok: array<u32, 64>;
+// Sum of the positions (xyz) and count (w) of the samples.
+var<workgroup> wg_p: array<vec4<f32>, 64>;
 
 // Reduction over the workgroup of this thread's box, normal sum and simplicity.
 fn reduce_node(li: u32) {
@@ -124,6 +136,7 @@ fn reduce_node(li: u32) {
             wg_hi[li] = max(wg_hi[li], wg_hi[li + s]);
             wg_n[li] = wg_n[li] + wg_n[li + s];
             wg_ok[li] = wg_ok[li] & wg_ok[li + s];
+            wg_p[li] = wg_p[li] + wg_p[li + s];
         }
         workgroupBarrier();
     }
@@ -192,6 +205,7 @@ fn cluster_leaves(
         wg_hi[li] = select(vec3<f32>(-3.4e38), pos, mine);
         wg_n[li] = select(vec3<f32>(0.0), ns, mine);
         wg_ok[li] = select(1u, u32(simple), mine);
+        wg_p[li] = select(vec4<f32>(0.0), vec4<f32>(pos, 1.0), mine);
         workgroupBarrier();
         reduce_node(li);
         let sum = wg_n[0];
@@ -208,6 +222,7 @@ fn cluster_leaves(
             n.simple = wg_ok[0] != 0u;
             n.used = select(0u, atomicLoad(&wg_used), c == 0u);
             store_node(t * CLUSTERS_PER_TILE + c, n);
+            store_centroid(t * CLUSTERS_PER_TILE + c, wg_p[0]);
         }
         workgroupBarrier();
     }
@@ -262,6 +277,7 @@ fn parents(l: u32, index: u32) {
     n.hi = vec3<f32>(-3.4e38);
     n.simple = true;
     var sum = vec3<f32>(0.0);
+    var centroid = vec4<f32>(0.0);
     var cone_ok = true;
     let c0 = xy * FANOUT;
     let c1 = min(c0 + FANOUT, below);
@@ -275,6 +291,8 @@ fn parents(l: u32, index: u32) {
                 n.lo = min(n.lo, child.lo);
                 n.hi = max(n.hi, child.hi);
                 n.simple = n.simple && child.simple;
+                let cc = coeffs[(node_index(l - 1u, vec2<u32>(x, y)) + c) * COEFFS + CENTROID];
+                centroid += vec4<f32>(cc.xyz * cc.w, cc.w);
                 cone_ok = cone_ok && child.half < NO_CONE;
                 sum += child.axis;
             }
@@ -296,6 +314,7 @@ fn parents(l: u32, index: u32) {
         n.half = NO_CONE;
     }
     store_node(node_index(l, xy), n);
+    store_centroid(node_index(l, xy), centroid);
 }
 
 // What a photon does at a node: 0 = reject, 1 = descend (or test, at a leaf), 2 = accept.
@@ -551,6 +570,132 @@ fn cluster_shade(
             if k.y != 0.0 && volume_normal_agrees(p, s.normal) {
                 load_photon_light(&p, i);
                 sum += volume_shade(p, s, k.x);
+            }
+        }
+    }
+    textureStore(low, vec2<i32>(texel), vec4<f32>(sum, 0.0));
+}
+
+// ---- Directional approximation (Moreau et al. section 4.7) ----
+// The same walk, but no per-sample photon loop: each node keeps, per octant of the incident
+// direction, the photons' flux density Φκ at the node's centroid and their mean incident
+// direction (weighted by luminance) — the photons of its accept list and, at a leaf, of its
+// test list, with the normal test against the node's cone axis. A view sample sums, over
+// its leaf and the leaf's ancestors, f(wo, ω̄)·E·w for each octant's mean direction ω̄ with
+// the 2·cos weighting w = clamp(½ + 2 cos θ, 0, 1) of θ between ω̄ and the sample's normal
+// (the octant's light counts in full when it arrives from more than 14.5° above the
+// tangent plane, not at all from more than 14.5° below). Irradiance is constant per node.
+// As in the paper, the approximation is for diffuse surfaces: samples of clusters that are
+// not simple (glossy) sum their leaf's photons exactly.
+
+fn octant_of(w: vec3<f32>) -> u32 {
+    return u32(w.x >= 0.0) | (u32(w.y >= 0.0) << 1u) | (u32(w.z >= 0.0) << 2u);
+}
+
+fn add_to_buckets(
+    buckets: ptr<function, array<vec3<f32>, 16>>,
+    begin: u32,
+    end: u32,
+    n: Node,
+    o: vec3<f32>,
+) {
+    for (var j = begin; j < end; j++) {
+        let i = list_entry(j);
+        var p = load_photon_shape(i);
+        let k = volume_kernel(p, o, params.z_ratio);
+        if k.y == 0.0 || dot(n.axis, p.normal) <= 0.5 {
+            continue;
+        }
+        load_photon_light(&p, i);
+        let b = octant_of(p.incident);
+        let e = p.power * k.x;
+        (*buckets)[2u * b] += e;
+        (*buckets)[2u * b + 1u] += dot(e, vec3<f32>(0.2126, 0.7152, 0.0722)) * p.incident;
+    }
+}
+
+@compute @workgroup_size(64)
+fn directional_accumulate(
+    @builtin(global_invocation_id) gid: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+) {
+    let k = gid.y * groups.x * 64u + gid.x;
+    if k >= params.nodes {
+        return;
+    }
+    var buckets = array<vec3<f32>, 16>();
+    let n = fetch_node(k);
+    let o = coeffs[k * COEFFS + CENTROID].xyz;
+    if !node_empty(n) {
+        let a0 = offsets[accept_slot(k)];
+        let a1 = min(a0 + atomicLoad(&counts[accept_slot(k)]), params.capacity);
+        add_to_buckets(&buckets, a0, a1, n, o);
+        if k < params.level_first[1] {
+            let t0 = offsets[test_slot(k)];
+            let t1 = min(t0 + atomicLoad(&counts[test_slot(k)]), params.capacity);
+            add_to_buckets(&buckets, t0, t1, n, o);
+        }
+    }
+    for (var o = 0u; o < 16u; o++) {
+        coeffs[k * COEFFS + o] = vec4<f32>(buckets[o], 0.0);
+    }
+}
+
+fn directional_radiance(k: u32, s: ViewSample) -> vec3<f32> {
+    var sum = vec3<f32>(0.0);
+    for (var o = 0u; o < 8u; o++) {
+        let e = coeffs[k * COEFFS + 2u * o].xyz;
+        let d = coeffs[k * COEFFS + 2u * o + 1u].xyz;
+        if all(e == vec3<f32>(0.0)) || all(d == vec3<f32>(0.0)) {
+            continue;
+        }
+        var wi = normalize(d);
+        let c = dot(s.normal, wi);
+        let w = clamp(0.5 + 2.0 * c, 0.0, 1.0);
+        if w == 0.0 {
+            continue;
+        }
+        // Light arriving about along the tangent plane: evaluate the BSDF just above it.
+        if c < 0.05 {
+            wi = normalize(wi + (0.05 - c) * s.normal);
+        }
+        sum += bsdf_eval(s.material, s.normal, s.wo, wi) * e * w;
+    }
+    return sum;
+}
+
+@compute @workgroup_size(8, 8)
+fn directional_shade(
+    @builtin(workgroup_id) tile: vec3<u32>,
+    @builtin(local_invocation_id) lid: vec3<u32>,
+) {
+    let texel = tile.xy * TILE + lid.xy;
+    if any(texel >= params.low_size) {
+        return;
+    }
+    let px = sample_pixel(texel);
+    var sum = vec3<f32>(0.0);
+    if textureLoad(g_position, px, 0).w != 0.0 {
+        let s = view_sample(g_position, g_normals, g_diffuse, g_specular, px, params.eye);
+        let leaf = cluster_of[texel.y * params.low_size.x + texel.x];
+        if fetch_node(leaf).simple {
+            sum = directional_radiance(leaf, s)
+                + directional_radiance(node_index(1u, tile.xy / FANOUT), s)
+                + directional_radiance(node_index(2u, tile.xy / (FANOUT * FANOUT)), s);
+        } else {
+            // Glossy (or otherwise not simple) clusters: 8 directions cannot stand for a
+            // lobe, so their samples sum their leaf's photons exactly (no ancestor of a
+            // non-simple leaf accepts photons).
+            let begin = offsets[test_slot(leaf)];
+            let end = min(begin + atomicLoad(&counts[test_slot(leaf)]), params.capacity);
+            for (var j = begin; j < end; j++) {
+                let i = list_entry(j);
+                var p = load_photon_shape(i);
+                let k = volume_kernel(p, s.position, params.z_ratio);
+                if k.y != 0.0 && volume_normal_agrees(p, s.normal) {
+                    load_photon_light(&p, i);
+                    sum += volume_shade(p, s, k.x);
+                }
             }
         }
     }
