@@ -234,7 +234,13 @@ def test_ispm_volume_shapes_agree():
     images = {}
     for shape in ("icosahedron", "quad", "auto"):
         r = gi.render(
-            scene, "ispm", spp=1, size=(48, 48), photons=20_000, volume_shape=shape, estimator="volumes"
+            scene,
+            "ispm",
+            spp=1,
+            size=(48, 48),
+            photons=20_000,
+            volume_shape=shape,
+            estimator="volumes",
         )
         images[shape] = r.aov("indirect")
         expected = {"icosahedron": 0, "quad": r.stats.photons_stored}.get(shape)
