@@ -9,6 +9,8 @@ pub const BSDF: &str = include_str!("shaders/common/bsdf.wgsl");
 pub const TEXTURE: &str = include_str!("shaders/common/texture.wgsl");
 /// The photon-volume estimate term shared by the indirect estimators (needs `BSDF`).
 pub const PHOTON_VOLUME: &str = include_str!("shaders/common/photon_volume.wgsl");
+/// Order-independent (fixed-point) sums of non-negative RGB terms.
+pub const FIXED_SUM: &str = include_str!("shaders/common/fixed_sum.wgsl");
 
 pub const GBUFFER: &str = include_str!("shaders/gbuffer.wgsl");
 pub const SHADOW: &str = include_str!("shaders/shadow.wgsl");
