@@ -94,9 +94,8 @@ def main() -> None:
     direct = np.stack([r.aov("direct") + r.aov("specular") for r in runs])
     noisy = [flip(ref, r.radiance) for r in runs]
     print(f"ispm FLIP per seed: mean {np.mean(noisy):.4f} ({min(noisy):.4f}..{max(noisy):.4f})")
-    print(
-        f"  with the reference's indirect: {np.mean([flip(ref, d + ref_indirect) for d in direct]):.4f}"
-    )
+    with_ref_indirect = np.mean([flip(ref, d + ref_indirect) for d in direct])
+    print(f"  with the reference's indirect: {with_ref_indirect:.4f}")
     print(
         f"  with the reference's direct:   {np.mean([flip(ref, ref_direct + i) for i in ind]):.4f}"
     )
@@ -123,11 +122,13 @@ def main() -> None:
         band = b
     print(
         f"indirect per-pixel MSE {mse.mean():.6f} = seed variance {var.mean():.6f} "
-        f"({var.mean() / mse.mean():.0%}) + bias² {bias2.mean():.6f} ({bias2.mean() / mse.mean():.0%}) "
+        f"({var.mean() / mse.mean():.0%}) + bias² {bias2.mean():.6f} "
+        f"({bias2.mean() / mse.mean():.0%}) "
         f"+ reference noise {ref_noise:.6f}"
     )
     print(
-        f"bias² inside the ±2 px edge band ({band.mean():.0%} of the pixels): {bias2[band].sum() / bias2.sum():.0%}"
+        f"bias² inside the ±2 px edge band ({band.mean():.0%} of the pixels): "
+        f"{bias2[band].sum() / bias2.sum():.0%}"
     )
     dev = ind - mean
     kept = [
@@ -135,7 +136,8 @@ def main() -> None:
         for s in (1, 2, 4)
     ]
     print(
-        f"seed-deviation energy kept by a Gaussian of sigma 1/2/4 px: {kept[0]:.2f}/{kept[1]:.2f}/{kept[2]:.2f} (white noise: 0.08/0.02/0.005)"
+        "seed-deviation energy kept by a Gaussian of sigma 1/2/4 px: "
+        f"{kept[0]:.2f}/{kept[1]:.2f}/{kept[2]:.2f} (white noise: 0.08/0.02/0.005)"
     )
 
     rows: dict[str, list[float]] = {}

@@ -83,15 +83,14 @@ pub fn power_heuristic(a: f32, b: f32) -> f32 {
 }
 
 /// Environment light arriving at `it` from one direction sampled by importance, times the
-/// BSDF towards `wo`; weighted against BSDF sampling by the power heuristic when `mis`
-/// (a BSDF-sampled continuation of the path may also reach the environment), else 1.
+/// BSDF towards `wo`, weighted against BSDF sampling (the path's BSDF-sampled continuation,
+/// which may also escape to the environment) by the power heuristic.
 pub fn environment_light(
     env: &Environment,
     bvh: &SceneBvh,
     it: &Interaction,
     wo: Vec3,
     rng: &mut Rng,
-    mis: bool,
 ) -> Vec3 {
     let u = rng.next_2d();
     let m = it.material;
@@ -109,11 +108,7 @@ pub fn environment_light(
     if f == Vec3::ZERO || bvh.occluded(it.spawn(s.wi), s.wi, f32::INFINITY) {
         return Vec3::ZERO;
     }
-    let w = if mis {
-        power_heuristic(s.pdf, m.pdf(wo_l, wi_l))
-    } else {
-        1.0
-    };
+    let w = power_heuristic(s.pdf, m.pdf(wo_l, wi_l));
     f * wi_l.z.abs() * s.radiance * (w / s.pdf)
 }
 
@@ -154,7 +149,11 @@ pub fn radiance(
     // left also sampled the environment (MIS applies); `None` for camera rays, delta
     // scattering and environments that are not sampled by importance.
     let mut bsdf_pdf: Option<f32> = None;
-    for depth in 0..s.max_depth {
+    // With an environment, the path goes one step beyond its last interaction: a BSDF
+    // sample from the last vertex that escapes still carries direct light from the sky
+    // (so `max_depth` 1 is direct light for both sampling strategies).
+    let steps = s.max_depth + u32::from(env.is_some());
+    for depth in 0..steps {
         let Some(hit) = bvh.intersect(o, d, f32::INFINITY) else {
             if let Some(env) = env {
                 let w = bsdf_pdf.map_or(1.0, |p| power_heuristic(p, env.pdf(d)));
@@ -162,17 +161,18 @@ pub fn radiance(
             }
             break;
         };
+        if depth == s.max_depth {
+            break; // a surface beyond the last interaction: only escapes count there
+        }
         let it = Interaction::new(scene, &hit, d);
         let wo = -d;
-        let last = depth + 1 == s.max_depth;
         // Next-event estimation.
         l += beta * direct_light(scene, bvh, &it, wo);
-        let env_mis = env.is_some_and(|e| e.importance) && !last;
+        let env_mis = env.is_some_and(|e| e.importance);
         if let Some(env) = env.filter(|e| e.importance) {
-            // At the last vertex no BSDF sample follows: light sampling takes all the weight.
-            l += beta * environment_light(env, bvh, &it, wo, rng, !last);
+            l += beta * environment_light(env, bvh, &it, wo, rng);
         }
-        if last {
+        if depth + 1 == steps {
             break;
         }
         // Continue the path by sampling the BSDF.
