@@ -1,9 +1,10 @@
 //! The reference path tracer: next-event estimation to every point and spot light, BSDF
 //! importance sampling and Russian roulette. An environment light is sampled by importance
 //! and by the BSDF, the two combined by multiple importance sampling (power heuristic); rays
-//! that leave the scene (camera rays included) take the environment's radiance. A camera path can never reach a point light
-//! through a delta (mirror or glass) scattering, so paths whose first bounce from the light
-//! is specular are left to the light tracer ([`super::light_tracer`]).
+//! that leave the scene (camera rays included) take the environment's radiance. A camera
+//! path can never reach a point light through a delta (mirror or glass) scattering, so paths
+//! whose first bounce from the light is specular are left to the light tracer
+//! ([`super::light_tracer`]).
 
 use super::{Interaction, SceneBvh};
 use crate::sampling::Rng;
