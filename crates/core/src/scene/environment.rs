@@ -78,8 +78,10 @@ pub struct EnvSample {
 /// Piecewise-constant 1D distribution over `n` equal cells of [0, 1).
 #[derive(Clone, Debug)]
 struct Distribution1D {
-    /// Cumulative sums normalized to 1, `n + 1` entries starting at 0.
-    cdf: Vec<f32>,
+    /// Cumulative sums normalized to 1, `n + 1` entries starting at 0. f64: with a sun
+    /// 10⁷ times brighter than the sky, f32 steps near 1 (6·10⁻⁸) would swallow the sky's
+    /// cells, which the sampler could then never pick although `density` says it does.
+    cdf: Vec<f64>,
     /// Cell weights (not normalized) and their sum.
     func: Vec<f32>,
     sum: f64,
@@ -96,9 +98,9 @@ impl Distribution1D {
             // A row with no weight at all is sampled uniformly (it is never chosen by the
             // marginal, but keeps the arithmetic finite).
             cdf.push(if sum > 0.0 {
-                (acc / sum) as f32
+                acc / sum
             } else {
-                cdf.len() as f32 / func.len() as f32
+                cdf.len() as f64 / func.len() as f64
             });
         }
         *cdf.last_mut().unwrap() = 1.0;
@@ -108,11 +110,12 @@ impl Distribution1D {
     /// A cell index and the position of `u` inside it, in [0, 1).
     fn sample(&self, u: f32) -> (usize, f32) {
         let n = self.func.len();
+        let u = u as f64;
         // The last cell whose cdf start is <= u, skipping empty cells.
         let i = (self.cdf.partition_point(|&c| c <= u) - 1).min(n - 1);
         let (lo, hi) = (self.cdf[i], self.cdf[i + 1]);
         let du = if hi > lo { (u - lo) / (hi - lo) } else { 0.5 };
-        (i, du.clamp(0.0, 1.0 - f32::EPSILON))
+        (i, (du as f32).clamp(0.0, 1.0 - f32::EPSILON))
     }
 
     /// Probability of cell `i` times `n` (the density over [0, 1)).
