@@ -8,10 +8,16 @@ correlated, and scores filters with FLIP: OIDN on the beauty, OIDN on the albedo
 indirect (full resolution and downsampled 2x/4x), and a joint bilateral filter of the
 demodulated indirect (normal and position guided) as a non-learned comparison.
 
-Usage: .venv/bin/python scripts/ispm_error_breakdown.py
+With ``--variants`` it also splits the indirect error of ispm with other settings
+(no subsampling, no boundary compensation, 4x the photons, half-size photon volumes), to see
+which of them moves the bias.
+
+Usage: .venv/bin/python scripts/ispm_error_breakdown.py [--variants]
 """
 
 from __future__ import annotations
+
+import sys
 
 import flip_evaluator
 import numpy as np
@@ -103,10 +109,15 @@ def main() -> None:
         f"  mean image of the {n} seeds:    {flip(ref, np.mean([r.radiance for r in runs], 0)):.4f}"
     )
 
-    mean = ind.mean(0)
-    var = ind.var(0, ddof=1).mean(-1)
-    mse = ((ind - ref_indirect) ** 2).mean(0).mean(-1)
-    bias2 = np.maximum(((mean - ref_indirect) ** 2).mean(-1) - var / n - ref_noise, 0)
+    def split(ind: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Per-pixel MSE, seed variance and bias² (less the reference's noise) of `ind`."""
+        mean = ind.mean(0)
+        var = ind.var(0, ddof=1).mean(-1)
+        mse = ((ind - ref_indirect) ** 2).mean(0).mean(-1)
+        bias2 = np.maximum(((mean - ref_indirect) ** 2).mean(-1) - var / n - ref_noise, 0)
+        return mean, var, mse, bias2
+
+    mean, var, mse, bias2 = split(ind)
     normal, depth = direct_refs[0].normal, direct_refs[0].depth
     grad_n = sum(
         np.abs(np.diff(normal, axis=a, append=normal.take([-1], axis=a))).sum(-1) for a in (0, 1)
@@ -160,6 +171,22 @@ def main() -> None:
         rows.setdefault(
             "joint bilateral (2 px, normal 0.1, position 0.2 m) on the demodulated indirect", []
         ).append(flip(ref, d + bilateral(dem, r.normal, r.position) * alb))
+    if "--variants" in sys.argv:
+        variants = {
+            "subsample=1": {"subsample": 1},
+            "boundary_compensation=False": {"boundary_compensation": False},
+            "photons=800000": {"photons": 800_000},
+            "kernel_scale=0.5": {"kernel_scale": 0.5},
+        }
+        for name, kw in variants.items():
+            rs = [gi.render(scene, "ispm", size=SIZE, seed=s, adapter="cpu", **kw) for s in SEEDS]
+            _, v, m, b = split(np.stack([r.aov("indirect") for r in rs]))
+            f = np.mean([flip(ref, r.radiance) for r in rs])
+            print(
+                f"{name}: FLIP {f:.4f}; indirect MSE {m.mean():.6f} = variance {v.mean():.6f} "
+                f"+ bias² {b.mean():.6f} ({b[band].sum() / b.sum():.0%} in the edge band)"
+            )
+
     base = np.mean(noisy[:4])
     print(f"FLIP, seeds 1-4 (noisy {base:.4f}):")
     for k, v in rows.items():
