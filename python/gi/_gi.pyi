@@ -42,6 +42,7 @@ class Scene:
         text: str,
         source: str = ...,
         meshes: dict[str, _MeshArrays | _MeshArraysUV] | None = None,
+        images: dict[str, npt.NDArray[np.float32]] | None = None,
         textures: dict[str, npt.NDArray[np.float32]] | None = None,
     ) -> Scene: ...
     @staticmethod
@@ -56,6 +57,8 @@ class Scene:
     def triangle_count(self) -> int: ...
     @property
     def light_count(self) -> int: ...
+    @property
+    def has_environment(self) -> bool: ...
     @property
     def material_names(self) -> list[str]: ...
     @property

@@ -2,7 +2,8 @@
 
 The JSON format is documented in ``docs/scene-format.md``; the Rust core validates every
 field. Mesh files named by a scene are resolved relative to it and read by
-:mod:`gi.meshes` (OBJ with MTL, PLY, glTF/GLB, STL). Mitsuba scenes are translated by
+:mod:`gi.meshes` (OBJ with MTL, PLY, glTF/GLB, STL), environment images by
+:mod:`gi.environment` (OpenImageIO). Mitsuba scenes are translated by
 :mod:`gi.mitsuba` (``docs/mitsuba.md``).
 """
 
@@ -13,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from gi._gi import Scene, builtin_scenes
+from gi.environment import load_environment
 from gi.meshes import MeshEntry, load_mesh
 from gi.meshes import scene_error as _scene_error
 from gi.textures import TextureError, TextureSet
@@ -71,13 +73,15 @@ def load_scene(source: str | Path) -> Scene:
 def scene_from_desc(
     desc: dict[str, Any], source: str, base_dir: Path, text: str | None = None
 ) -> Scene:
-    """A scene from a parsed scene description (the JSON format of ``load_scene``), its mesh
-    and texture files relative to ``base_dir``; ``source`` names it in errors."""
+    """A scene from a parsed scene description (the JSON format of ``load_scene``), its mesh,
+    texture and environment files relative to ``base_dir``; ``source`` names it in
+    errors. ``text``: the description as read (used unless texture names are rewritten)."""
     textures = TextureSet()
     meshes = _load_meshes(desc, base_dir, source, textures)
+    images = load_environment(desc, base_dir, source)
     if _load_material_textures(desc, base_dir, source, textures) or text is None:
         text = json.dumps(desc)
-    return Scene.from_json(text, source, meshes, textures.arrays)
+    return Scene.from_json(text, source, meshes, images, textures=textures.arrays)
 
 
 def _load_material_textures(desc: Any, base_dir: Path, file: str, textures: TextureSet) -> bool:

@@ -5,6 +5,7 @@ pub mod bench;
 pub mod builtin;
 pub mod camera;
 pub mod desc;
+pub mod environment;
 pub mod light;
 pub mod primitives;
 pub mod shading;
@@ -14,6 +15,7 @@ pub mod update;
 pub use animation::Animation;
 pub use camera::Camera;
 pub use desc::SceneDesc;
+pub use environment::{EnvImage, Environment};
 pub use light::Light;
 pub use primitives::TriMesh;
 pub use shading::Smoothing;
@@ -70,6 +72,8 @@ pub struct Scene {
     pub objects: Vec<SceneObject>,
     /// The description's keyframed tracks, if any (see [`animation`]).
     pub animation: Option<Animation>,
+    /// Light from infinitely far away (see [`environment`]); shared, as images are large.
+    pub environment: Option<std::sync::Arc<Environment>>,
     /// The camera as described (position, look-at point, up, fov), so that updates of some
     /// of its fields keep the others exactly (`Scene::camera_desc`).
     pub(crate) camera_source: desc::CameraDesc,
@@ -104,7 +108,24 @@ impl Scene {
         source_name: &str,
         meshes: &HashMap<String, MeshData>,
     ) -> Result<Scene> {
-        Scene::from_json_textured(text, source_name, meshes, &TextureMap::new())
+        Scene::from_json_with(
+            text,
+            source_name,
+            meshes,
+            &HashMap::new(),
+            &TextureMap::new(),
+        )
+    }
+
+    /// [`Scene::from_json`] with the environment images the description names (`file` of
+    /// its `environment` section), loaded by the caller.
+    pub fn from_json_with_images(
+        text: &str,
+        source_name: &str,
+        meshes: &HashMap<String, MeshData>,
+        images: &HashMap<String, EnvImage>,
+    ) -> Result<Scene> {
+        Scene::from_json_with(text, source_name, meshes, images, &TextureMap::new())
     }
 
     /// [`Scene::from_json`] with the textures that materials name.
@@ -112,6 +133,17 @@ impl Scene {
         text: &str,
         source_name: &str,
         meshes: &HashMap<String, MeshData>,
+        textures: &TextureMap,
+    ) -> Result<Scene> {
+        Scene::from_json_with(text, source_name, meshes, &HashMap::new(), textures)
+    }
+
+    /// [`Scene::from_json`] with environment images and material textures.
+    pub fn from_json_with(
+        text: &str,
+        source_name: &str,
+        meshes: &HashMap<String, MeshData>,
+        images: &HashMap<String, EnvImage>,
         textures: &TextureMap,
     ) -> Result<Scene> {
         let de = &mut serde_json::Deserializer::from_str(text);
@@ -123,7 +155,19 @@ impl Scene {
                 e.inner().to_string(),
             )
         })?;
-        Scene::from_desc_textured(&desc, source_name, meshes, textures)
+        let mut scene = Scene::from_desc_textured(&desc, source_name, meshes, textures)?;
+        if let Some(env) = &desc.environment {
+            let e = Environment::from_desc(env, images).map_err(|(f, m)| {
+                let field = if f == "(section)" {
+                    "environment".into()
+                } else {
+                    format!("environment.{f}")
+                };
+                Error::scene(source_name, field, m)
+            })?;
+            scene.environment = Some(std::sync::Arc::new(e));
+        }
+        Ok(scene)
     }
 
     /// Builds a scene from a parsed description, validating every field.
@@ -188,6 +232,7 @@ impl Scene {
             triangle_materials: Vec::new(),
             objects: Vec::new(),
             animation: None,
+            environment: None,
             camera_source: desc.camera.clone(),
         };
         for (i, obj) in desc.objects.iter().enumerate() {
