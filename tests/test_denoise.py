@@ -36,21 +36,25 @@ def test_denoising_lowers_flip_for_path_at_16_spp(reference):
     assert clean < 0.88 * noisy, (noisy, clean)
 
 
-def test_denoising_ispm_at_defaults_keeps_its_flip(reference):
-    r = gi.render(gi.load_scene("cornell"), "ispm", size=SIZE, seed=1, adapter="cpu")
-    noisy = flip(reference, r.radiance)
-    clean = flip(reference, gi.denoise(r).radiance)
-    # ispm's error at its defaults is not pixel noise that OIDN removes (docs/bench/denoise.md,
-    # scripts/ispm_error_breakdown.py): ~60 % of the indirect light's squared error is bias,
-    # 85 % of it along edges and corners, and the ~40 % that is seed variance is correlated
-    # over the photon volumes (smooth blotches), which OIDN keeps as signal: OIDN on the
-    # beauty, on the albedo-demodulated indirect, at 1/2 and 1/4 resolution and on smaller,
-    # noisier photon volumes all leave FLIP within 1 %. Measured denoised/noisy here =
-    # 1.001-1.016 over seeds 1-4. The bound says it does not make it worse.
-    assert clean < 1.03 * noisy, (noisy, clean)
-    assert noisy < 0.75 * flip(
-        reference, gi.render(gi.load_scene("cornell"), "path", spp=16, size=SIZE, seed=1).radiance
-    )
+@pytest.fixture(scope="module")
+def reference96():
+    return gi.render(gi.load_scene("cornell"), "path", spp=1024, size=(96, 96), seed=1000).radiance
+
+
+def test_denoising_lowers_flip_for_ispm_at_defaults(reference96):
+    r = gi.render(gi.load_scene("cornell"), "ispm", size=(96, 96), seed=1, adapter="cpu")
+    noisy = flip(reference96, r.radiance)
+    clean = flip(reference96, gi.denoise(r).radiance)
+    # ispm's error is not pixel noise (docs/bench/denoise.md): ~60 % of the indirect light's
+    # squared error is bias along edges and corners, which no filter removes, and the ~40 %
+    # that is seed variance comes as blotches the size of a photon volume, which OIDN keeps
+    # (alone: denoised/noisy 1.00-1.02). gi.denoise first filters the albedo-demodulated
+    # indirect light at that scale (`filter_indirect`, 1/32 of the width). Measured
+    # (scripts/ispm_denoise_sweep.py, seeds 1-3): 0.942 at 96², 0.874 at 192²; here seed 1
+    # 0.934. At 48² the volumes are 1-2 pixels and it does not help (1.02), so the test
+    # renders 96². Bound 0.98: the gain is a few percent, but a filter that does nothing
+    # (1.00) or blurs across edges (1.07-1.17 at twice the width) fails it.
+    assert clean < 0.98 * noisy, (noisy, clean)
 
 
 def test_denoise_result_keeps_the_noisy_image_and_its_time(tmp_path):
