@@ -36,6 +36,8 @@ pub struct Volumes {
     ico_vertices: u32,
     photons: wgpu::Buffer,
     capacity: usize,
+    /// Where in its pixel the eye G-buffer was sampled (0.5, 0.5 but in progressive passes).
+    centre: Vec2,
 }
 
 fn target(ctx: &GpuContext, label: &str, w: u32, h: u32) -> wgpu::Texture {
@@ -147,6 +149,7 @@ impl Volumes {
             full,
             params,
             last_params: None,
+            centre: Vec2::splat(0.5),
             up_params,
             volume_group,
             upsample_group,
@@ -170,10 +173,16 @@ impl Volumes {
         }
     }
 
+    /// Sets where in its pixel the eye G-buffer is sampled (the volumes are rasterized with
+    /// the same jitter, so coverage is tested where the G-buffer sample lies).
+    pub fn set_sample_centre(&mut self, centre: Vec2) {
+        self.centre = centre;
+    }
+
     /// Uploads the view-dependent parameters when they changed.
     pub fn write_params(&mut self, ctx: &GpuContext, scene: &Scene, radius: VolumeRadius) {
         let (w, h, k) = (scene.camera.width, scene.camera.height, self.subsample);
-        let eye = camera_view(scene, Vec2::splat(0.5), 0.0);
+        let eye = camera_view(scene, self.centre, 0.0);
         // Low-res texel i shades full-res pixel i·k + ⌊k/2⌋, whose centre is half a full-res
         // pixel off the low-res sample position when k is even: shift the volumes to match,
         // so that coverage is tested where the G-buffer sample lies.

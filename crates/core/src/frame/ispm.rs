@@ -195,7 +195,9 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     for &l in invalid.lights {
         ring.invalidate_light(l);
     }
-    let grow = VolumeRadius::of_scene(scene, settings.photons, settings.kernel_scale).r_max;
+    let grow = VolumeRadius::of_scene(scene, settings.photons, settings.kernel_scale)
+        .scaled(settings.radius_scale)
+        .r_max;
     for (object, before) in invalid.moved {
         let o = &scene.objects[*object];
         let after = super::object_bounds(scene, o);
@@ -238,7 +240,8 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
             // (the splat reads `footprint_radius`).
             let frames = (ring.held(light as usize) + 1).min(ring.frames()) as u64;
             let radius =
-                VolumeRadius::of_scene(scene, settings.photons * frames, settings.kernel_scale);
+                VolumeRadius::of_scene(scene, settings.photons * frames, settings.kernel_scale)
+                    .scaled(settings.radius_scale);
             let mut photons = photons;
             for p in &mut photons {
                 p.footprint_radius = radius.of(p);
@@ -308,7 +311,8 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
 
     // 6. Photon volumes, upsampling, composite, readback.
     let t = Instant::now();
-    let radius = VolumeRadius::of_scene(scene, settings.photons, settings.kernel_scale);
+    let radius = VolumeRadius::of_scene(scene, settings.photons, settings.kernel_scale)
+        .scaled(settings.radius_scale);
     let (ordered, quads) = partition(
         settings.volume_shape,
         &photons.splat,
@@ -319,6 +323,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     stats.volume_quads = quads as u64;
     ctx.check_buffer("photon volumes", ordered.len() as u64 * 64)?;
     crate::cancel::check(progress)?;
+    state.volumes.set_sample_centre(targets.sample_centre());
     state.volumes.write_params(&ctx, scene, radius);
     if !ordered.is_empty() && (photons_changed || changes.camera) {
         state.volumes.write_photons(&ctx, &ordered);

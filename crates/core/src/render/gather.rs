@@ -28,10 +28,11 @@ pub fn trace_settings(scene: &Scene, settings: &Settings) -> PhotonTraceSettings
         store_direct: false,
         differentials: Some(DifferentialSettings {
             spacing: global_spacing(4.0 * std::f32::consts::PI, settings.photons),
-            smoothing: settings.smoothing,
-            r_max: settings
-                .max_radius
-                .unwrap_or_else(|| DEFAULT_R_MAX_FRACTION * scene_diagonal(scene)),
+            smoothing: settings.smoothing * settings.radius_scale,
+            r_max: settings.radius_scale
+                * settings
+                    .max_radius
+                    .unwrap_or_else(|| DEFAULT_R_MAX_FRACTION * scene_diagonal(scene)),
         }),
     }
 }
