@@ -39,13 +39,12 @@ def test_error_falls_between_pass_4_and_64(method, cornell_reference):
         if n in (4, 64):
             errors[n] = relmse(frame.radiance, cornell_reference)
     print(method, errors)
-    # Measured: gather 0.0135 -> 0.0042, ispm 0.0139 -> 0.0074 (3.2x and 1.9x). Sixteen times
-    # the passes with radii shrinking to 16^-0.15 = 0.66x: variance alone falls ~7x, so a
-    # drop under 0.7x is far beyond seed-to-seed noise (a mode that averaged nothing, or
-    # whose kernels never shrank, keeps the pass-4 error or its floor). ispm's limit keeps
-    # the shadow-map and upsampling bias, hence the looser bound.
-    bound = 0.5 if method == "gather" else 0.7
-    assert errors[64] < bound * errors[4]
+    # Measured: gather 0.0161 -> 0.0039 (4.1x lower), ispm 0.0232 -> 0.0072 (3.2x). Sixteen
+    # times the passes with radii shrinking to 16^-0.15 = 0.66x: variance alone falls ~7x.
+    # Requiring half the pass-4 error leaves room for seed-to-seed noise (about ±20% at pass
+    # 4) and for ispm's bias that no pass removes (shadow maps, upsampling), while a mode
+    # that averaged nothing keeps the pass-4 error.
+    assert errors[64] < 0.5 * errors[4]
 
 
 def test_mean_of_passes_and_reset_on_change():

@@ -118,6 +118,8 @@ pub fn settings_from(
             "shadow_map_size" => s.shadow_map_size = int(v, "shadow_map_size")?,
             "temporal_frames" => s.temporal_frames = int(v, "temporal_frames")?,
             "progressive" => s.progressive = flag(v, "progressive")?,
+            "photon_focus" => s.photon_focus = float(v, "photon_focus")?,
+            "caustic_density_bound" => s.caustic_density_bound = flag(v, "caustic_density_bound")?,
             "progressive_alpha" => s.progressive_alpha = float(v, "progressive_alpha")?,
             other => {
                 return Err(setting_error(

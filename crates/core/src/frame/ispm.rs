@@ -246,6 +246,13 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
             for p in &mut photons {
                 p.footprint_radius = radius.of(p);
             }
+            if settings.caustic_density_bound {
+                crate::photon::density::bound_volume_radii(
+                    &mut photons,
+                    settings.radius_scale,
+                    radius.r_max,
+                );
+            }
             let mut compensated = photons.clone();
             if settings.boundary_compensation {
                 let tc = Instant::now();

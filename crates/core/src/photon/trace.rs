@@ -10,6 +10,7 @@
 //! in order, so the result depends on the seed only, not on the thread schedule.
 
 use super::differential::{self, Differentials};
+use super::focus::Focus;
 use super::{path_density_factor, FootprintAxes, PathKind, Photon, PhotonRay, PhotonSet};
 use crate::bsdf::Lobe;
 use crate::error::{Error, Result};
@@ -84,6 +85,21 @@ pub fn emit_and_trace_checked(
     seed: u64,
     control: &dyn TraceControl,
 ) -> Result<PhotonSet> {
+    emit_and_trace_focused(scene, bvh, n_photons, s, seed, control, &Focus::default())
+}
+
+/// [`emit_and_trace_checked`] with part of each light's photons aimed at the specular
+/// objects by its projection map (`focus`, see [`super::focus`]), weighted by the mixture
+/// density so that the estimate is unchanged.
+pub fn emit_and_trace_focused(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    n_photons: u64,
+    s: &PhotonTraceSettings,
+    seed: u64,
+    control: &dyn TraceControl,
+    focus: &Focus,
+) -> Result<PhotonSet> {
     let weights = light_weights(scene);
     let mut set = trace_chunks(n_photons, control, |i, out| {
         let mut rng = Rng::new(seed, STREAM_EMIT, i);
@@ -91,15 +107,33 @@ pub fn emit_and_trace_checked(
             out.absorbed += 1;
             return;
         };
-        let e = scene.lights[li].emit(&mut rng);
+        let light = &scene.lights[li];
+        let n_l = (n_photons as f32 * p_light).max(1.0);
+        // The emission and the squared angular spacing of this light's photons there.
+        let (e, spacing2) = if focus.active(li) {
+            let (direction, q) = focus.sample(light, li, &mut rng);
+            let power = if q > 0.0 {
+                light.intensity_towards(direction) / q
+            } else {
+                glam::Vec3::ZERO
+            };
+            let e = crate::scene::light::Emission {
+                origin: light.position(),
+                direction,
+                power,
+            };
+            (e, 1.0 / (n_l * q.max(1e-12)))
+        } else {
+            (light.emit(&mut rng), light.solid_angle() / n_l)
+        };
         let power = e.power / (p_light * n_photons as f32);
         let ray = PhotonRay::new(e.origin, e.direction, power, 1.0, 0);
-        // This light's photons are spaced by √(Ω_l / n_l) rather than the global Δ.
+        // This light's photons are spaced by √(1 / (n_l q(ω))) (√(Ω_l / n_l) unfocused)
+        // rather than the global Δ: aimed photons are denser, their footprints smaller.
         let diff = s
             .differentials
             .map_or(Differentials::emitted(e.direction), |ds| {
-                let n_l = (n_photons as f32 * p_light).max(1.0);
-                let spacing = (scene.lights[li].solid_angle() / n_l).sqrt();
+                let spacing = spacing2.sqrt();
                 Differentials::emitted(e.direction).scaled(spacing / ds.spacing)
             });
         follow(scene, bvh, &ray, diff, s, &mut rng, out);

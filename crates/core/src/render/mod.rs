@@ -140,6 +140,14 @@ pub struct Settings {
     /// Scale of every photon kernel radius (ISPM volumes, gather footprints and their
     /// caps), set per pass by the progressive mode; 1 otherwise.
     pub radius_scale: f32,
+    /// Bound each caustic photon's kernel radius by the distance to its k-th nearest caustic
+    /// neighbour (`photon::density`; methods `ispm` and `gather`): small where caustics
+    /// focus, wide where they spread.
+    pub caustic_density_bound: bool,
+    /// Share of each light's photons aimed at the mirrors and glass through its projection
+    /// map (method `gather`; `photon::focus`), weighted so that the estimate is unchanged.
+    /// 0 = none.
+    pub photon_focus: f32,
 }
 
 impl Default for Settings {
@@ -169,6 +177,8 @@ impl Default for Settings {
             progressive: false,
             progressive_alpha: 0.7,
             radius_scale: 1.0,
+            caustic_density_bound: true,
+            photon_focus: 0.5,
         }
     }
 }
@@ -269,6 +279,9 @@ impl Settings {
                 "temporal_frames",
                 format!("must be in 1..={MAX_TEMPORAL_FRAMES}"),
             ));
+        }
+        if !(0.0..=0.95).contains(&self.photon_focus) {
+            return Err(Error::setting("photon_focus", "must be in [0, 0.95]"));
         }
         if !(self.progressive_alpha > 0.0 && self.progressive_alpha < 1.0) {
             return Err(Error::setting("progressive_alpha", "must be in (0, 1)"));
