@@ -60,7 +60,9 @@ def flip(ref: np.ndarray, x: np.ndarray) -> float:
 
 def reference(scene_name: str, size: tuple[int, int], spp: int, seed: int) -> tuple:
     # Minutes at large spp: kept in target/ (a build directory) for the next run.
-    cache = Path("target") / f"bench-progressive-ref-{scene_name}-{size[0]}x{size[1]}-{spp}-{seed}.npz"
+    cache = (
+        Path("target") / f"bench-progressive-ref-{scene_name}-{size[0]}x{size[1]}-{spp}-{seed}.npz"
+    )
     if cache.exists():
         saved = np.load(cache)
         return saved["radiance"], float(saved["seconds"])
@@ -72,7 +74,9 @@ def reference(scene_name: str, size: tuple[int, int], spp: int, seed: int) -> tu
     return img, seconds
 
 
-def progressive_run(scene, method: str, size, seconds: float) -> list[tuple[int, float, np.ndarray]]:
+def progressive_run(
+    scene, method: str, size, seconds: float
+) -> list[tuple[int, float, np.ndarray]]:
     r = gi.Renderer(scene, method, size=size, progressive=True, **PROGRESSIVE[method])
     out = []
     elapsed = 0.0
@@ -93,28 +97,29 @@ def svg_plot(rows: list[dict], noise: dict, title: str) -> str:
     """Two log–log panels (relMSE, FLIP against seconds), one line per method."""
     colors = {"path": "#1f77b4", "gather": "#d62728", "ispm": "#2ca02c"}
     panels = [("relmse", "relMSE"), ("flip", "FLIP")]
-    W, H, pad = 360, 260, 48
+    w, h, pad = 360, 260, 48
     parts = [
-        f'<svg xmlns="http://www.w3.org/2000/svg" width="{2 * W}" height="{H + 30}"'
+        f'<svg xmlns="http://www.w3.org/2000/svg" width="{2 * w}" height="{h + 30}"'
         ' font-family="sans-serif" font-size="11">',
-        f'<text x="{W}" y="14" text-anchor="middle" font-size="13">{title}</text>',
+        f'<text x="{w}" y="14" text-anchor="middle" font-size="13">{title}</text>',
     ]
     ts = [r["seconds"] for r in rows]
     for i, (key, label) in enumerate(panels):
-        ox = i * W
+        ox = i * w
         vals = [r[key] for r in rows] + [noise[key]]
         lx0, lx1 = math.floor(math.log10(min(ts))), math.ceil(math.log10(max(ts)))
         ly0, ly1 = math.floor(math.log10(min(vals))), math.ceil(math.log10(max(vals)))
 
         def px(t: float, lx0=lx0, lx1=lx1, ox=ox) -> float:
-            return ox + pad + (math.log10(t) - lx0) / (lx1 - lx0) * (W - pad - 10)
+            return ox + pad + (math.log10(t) - lx0) / (lx1 - lx0) * (w - pad - 10)
 
         def py(v: float, ly0=ly0, ly1=ly1) -> float:
-            return 20 + (H - pad) - (math.log10(v) - ly0) / (ly1 - ly0) * (H - pad - 10)
+            return 20 + (h - pad) - (math.log10(v) - ly0) / (ly1 - ly0) * (h - pad - 10)
 
         x0, x1, y0, y1 = px(10.0**lx0), px(10.0**lx1), py(10.0**ly0), py(10.0**ly1)
         parts.append(
-            f'<rect x="{x0}" y="{y1}" width="{x1 - x0}" height="{y0 - y1}" fill="none" stroke="#000"/>'
+            f'<rect x="{x0}" y="{y1}" width="{x1 - x0}" height="{y0 - y1}"'
+            ' fill="none" stroke="#000"/>'
         )
         for e in range(lx0, lx1 + 1):
             x = px(10.0**e)
@@ -124,15 +129,15 @@ def svg_plot(rows: list[dict], noise: dict, title: str) -> str:
             y = py(10.0**e)
             parts.append(f'<line x1="{x0}" y1="{y}" x2="{x1}" y2="{y}" stroke="#ddd"/>')
             parts.append(f'<text x="{x0 - 4}" y="{y + 4}" text-anchor="end">1e{e}</text>')
-        parts.append(
-            f'<text x="{(x0 + x1) / 2}" y="{y0 + 28}" text-anchor="middle">seconds</text>'
-        )
+        parts.append(f'<text x="{(x0 + x1) / 2}" y="{y0 + 28}" text-anchor="middle">seconds</text>')
         parts.append(f'<text x="{x0 + 6}" y="{y1 + 14}">{label}</text>')
         y = py(noise[key])
         parts.append(
             f'<line x1="{x0}" y1="{y}" x2="{x1}" y2="{y}" stroke="#888" stroke-dasharray="4 3"/>'
         )
-        parts.append(f'<text x="{x1 - 4}" y="{y - 4}" text-anchor="end" fill="#888">reference noise</text>')
+        parts.append(
+            f'<text x="{x1 - 4}" y="{y - 4}" text-anchor="end" fill="#888">reference noise</text>'
+        )
         for j, method in enumerate(colors):
             pts = [(px(r["seconds"]), py(r[key])) for r in rows if r["method"] == method]
             if not pts:
@@ -204,12 +209,18 @@ def main() -> None:
                 f"| {r['method']} | {r['step']} | {r['seconds']:.3f} | {r['relmse']:.2e}"
                 f" | {r['flip']:.4f} |"
             )
-        path_1024 = next((r for r in rows if r["method"] == "path" and r["step"] == "1024 spp"), None)
+        path_1024 = next(
+            (r for r in rows if r["method"] == "path" and r["step"] == "1024 spp"), None
+        )
         if path_1024 is not None:
             lines.append("")
             for method in PROGRESSIVE:
                 hit = next(
-                    (r for r in rows if r["method"] == method and r["relmse"] <= path_1024["relmse"]),
+                    (
+                        r
+                        for r in rows
+                        if r["method"] == method and r["relmse"] <= path_1024["relmse"]
+                    ),
                     None,
                 )
                 lines.append(

@@ -390,6 +390,7 @@ def render(
     adapter: str | None = None,
     shadow_map_size: int = 1024,
     caustic_density_bound: bool = True,
+    photon_focus: float = 0.5,
     progress: bool | ProgressCallback = False,
     denoise: bool = False,
 ) -> RenderResult:
@@ -424,6 +425,8 @@ def render(
     ``caustic_density_bound`` (methods ``ispm`` and ``gather``) keeps each caustic photon's
     kernel radius within 0.75–1.5 times the distance to its 16th nearest caustic photon, so
     caustic kernels are small where caustics focus and wide where they spread.
+    ``photon_focus`` (method ``gather``) aims that share of each light's photons at the
+    mirrors and glass through a projection map, weighted so that the image is unchanged.
     ``progress`` is a callable ``(stage, fraction) -> bool | None`` (return ``False`` to
     cancel), or ``True`` for progress bars (tqdm; in a terminal or a notebook, nothing in
     logs). The GIL is released while rendering; Ctrl-C cancels with
@@ -458,6 +461,7 @@ def render(
         adapter=adapter,
         shadow_map_size=shadow_map_size,
         caustic_density_bound=caustic_density_bound,
+        photon_focus=photon_focus,
     )
     result = renderer.render(aovs=True, extras=True, progress=progress)
     if denoise:
