@@ -203,13 +203,35 @@ def test_ispm_boundary_compensation_restores_edge_energy():
     assert on.aov("indirect").mean() > 1.02 * off.aov("indirect").mean()
 
 
+def test_ispm_estimators_agree_and_report_themselves():
+    # The tiled compute estimator sums the same photon-volume terms as the raster volumes in
+    # another order (crates/core/tests/estimators.rs has the tight checks); "auto" names its
+    # choice and the reason, and every estimator reports its memory.
+    scene = gi.load_scene("cornell")
+    images = {}
+    for est in ("volumes", "tiled", "auto"):
+        r = gi.render(scene, "ispm", spp=1, size=(48, 48), photons=20_000, estimator=est)
+        images[est] = r.aov("indirect")
+        assert r.stats.estimator in ("volumes", "tiled")
+        assert r.stats.estimator == est or est == "auto"
+        assert r.stats.estimator_reason
+        assert sum(b for _, b in r.stats.estimator_memory) > 0
+    scale = images["volumes"].max()
+    assert scale > 0
+    np.testing.assert_allclose(images["tiled"], images["volumes"], rtol=0, atol=1e-4 * scale)
+    with pytest.raises(gi.SettingError, match="estimator"):
+        gi.render(scene, "ispm", spp=1, size=(16, 16), estimator="cluster-of-doom")
+
+
 def test_ispm_volume_shapes_agree():
     # Every shape feeds the same exact ellipsoid test: only the summation order differs
     # ("auto" draws small volumes first), so the images agree to float round-off.
     scene = gi.load_scene("cornell")
     images = {}
     for shape in ("icosahedron", "quad", "auto"):
-        r = gi.render(scene, "ispm", spp=1, size=(48, 48), photons=20_000, volume_shape=shape)
+        r = gi.render(
+            scene, "ispm", spp=1, size=(48, 48), photons=20_000, volume_shape=shape, estimator="volumes"
+        )
         images[shape] = r.aov("indirect")
         expected = {"icosahedron": 0, "quad": r.stats.photons_stored}.get(shape)
         if expected is not None:

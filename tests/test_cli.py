@@ -163,6 +163,17 @@ def test_volume_shape_option(tmp_path):
     assert p.returncode == 2 and "--volume-shape" in p.stderr
 
 
+def test_estimator_option(tmp_path):
+    out = tmp_path / "t.exr"
+    args = ["render", "cornell", "-o", str(out), "--spp", "1", "--size", "16x16"]
+    p = run(*args, "--photons", "5000", "--estimator", "tiled")
+    assert p.returncode == 0, p.stderr
+    assert "estimator tiled: chosen in the settings" in p.stderr
+    assert gi.read_image(out).mean() > 0
+    p = run(*args, "-q", "--estimator", "splat")
+    assert p.returncode == 2 and "--estimator" in p.stderr
+
+
 def test_footprints_of_all_three_path_kinds():
     # ring-room: the mirror ring's caustic amid diffusely reflected light (the paper's Table 3).
     p = run("footprints", "ring-room", "--photons", "20000")

@@ -148,6 +148,12 @@ def _parser() -> argparse.ArgumentParser:
         default=0.7,
         help="progressive: radius reduction α in (0, 1), r²ᵢ₊₁ = r²ᵢ (i + α)/(i + 1) (0.7)",
     )
+    r.add_argument(
+        "--estimator",
+        default="auto",
+        choices=["auto", "volumes", "tiled"],
+        help="how ISPM splats photons: raster volumes, tiled compute, or auto (per adapter)",
+    )
     r.add_argument("--adapter", help='GPU adapter: "cpu" (lavapipe), "gpu" or part of a name')
     r.add_argument("--shadow-map-size", type=int, default=1024, help="shadow map texels per side")
     r.add_argument(
@@ -292,6 +298,7 @@ def _settings(args: argparse.Namespace) -> dict[str, object]:
         footprint_volumes=args.footprint_volumes,
         boundary_compensation=not args.no_boundary_compensation,
         volume_shape=args.volume_shape,
+        estimator=args.estimator,
         adapter=args.adapter,
         shadow_map_size=args.shadow_map_size,
     )
@@ -320,6 +327,8 @@ def _render(args: argparse.Namespace) -> int:
         stages = ", ".join(f"{n} {t:.2f}s" for n, t in s.stages)
         files = ", ".join(map(str, written))
         print(f"wrote {files} ({s.method}, {s.total_seconds:.2f}s: {stages})", file=sys.stderr)
+        if s.estimator:
+            print(f"estimator {s.estimator}: {s.estimator_reason}", file=sys.stderr)
     return 0
 
 

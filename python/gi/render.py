@@ -34,6 +34,11 @@ class RenderStats:
     photons_stored: int = 0
     volume_quads: int = 0
     passes: int = 1
+    #: Method ``ispm``: the indirect estimator that ran ("volumes" or "tiled"), why it was
+    #: chosen, and its GPU memory beyond the image targets (bytes by part).
+    estimator: str = ""
+    estimator_reason: str = ""
+    estimator_memory: list[tuple[str, int]] = field(default_factory=list)
 
 
 @dataclass(frozen=True)
@@ -128,6 +133,9 @@ def _result(out: dict[str, Any]) -> RenderResult:
         photons_stored=s["photons_stored"],
         volume_quads=s["volume_quads"],
         passes=s["passes"],
+        estimator=s["estimator"],
+        estimator_reason=s["estimator_reason"],
+        estimator_memory=[(str(n), int(b)) for n, b in s["estimator_memory"]],
     )
     return RenderResult(
         radiance=out["radiance"],
@@ -387,6 +395,7 @@ def render(
     footprint_volumes: bool = False,
     boundary_compensation: bool = True,
     volume_shape: str = "auto",
+    estimator: str = "auto",
     adapter: str | None = None,
     shadow_map_size: int = 1024,
     caustic_density_bound: bool = True,
@@ -418,7 +427,10 @@ def render(
     ``volume_shape`` picks the shape drawn per
     photon volume: "icosahedron", "quad" (a screen-aligned bounding rectangle, cheaper for
     small volumes) or "auto" (quads for volumes under 16 pixels in radius, else icosahedra);
-    it changes the cost, not the image.
+    it changes the cost, not the image. ``estimator`` picks how the photons are splatted:
+    "volumes" (the rasterizer draws the volumes), "tiled" (compute passes bin the photons to
+    screen tiles; faster where the rasterizer is small or software) or "auto" (per adapter;
+    ``stats.estimator_reason`` says why). Same image up to float rounding.
     GPU methods (``direct``, ``ispm``) run on ``adapter`` ("cpu" for lavapipe, "gpu", or part of an
     adapter's name; default: the ``GI_ADAPTER`` environment variable, else a real GPU when
     present, else lavapipe) with ``shadow_map_size``² texels per shadow-map face.
@@ -458,6 +470,7 @@ def render(
         footprint_volumes=footprint_volumes,
         boundary_compensation=boundary_compensation,
         volume_shape=volume_shape,
+        estimator=estimator,
         adapter=adapter,
         shadow_map_size=shadow_map_size,
         caustic_density_bound=caustic_density_bound,

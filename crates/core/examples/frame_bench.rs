@@ -71,7 +71,7 @@ fn row(frames: &[RenderOutput], wall: Vec<f64>) -> Row {
     let m = |f: &dyn Fn(&RenderOutput) -> f64| median(frames.iter().map(f).collect());
     Row {
         frame: median(wall),
-        splat: m(&|o| stage(o, &["photon volumes"])),
+        splat: m(&|o| stage(o, &["photon volumes", "tiled binning", "tiled shading"])),
         trace: m(&|o| stage(o, &["cpu trace", "boundary compensation"])),
         direct: m(&|o| stage(o, &["shadow maps", "gbuffer", "direct light"])),
     }

@@ -36,7 +36,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ("cpu trace", &["cpu trace"]),
         ("boundary compensation", &["boundary compensation"]),
         ("specular paths", &["specular paths"]),
-        ("photon volumes (GPU)", &["photon volumes"]),
+        (
+            "indirect estimate (GPU)",
+            &["photon volumes", "tiled binning", "tiled shading"],
+        ),
         ("upsample + composite (GPU)", &["upsample", "composite"]),
         ("readback", &["readback"]),
     ];

@@ -116,6 +116,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let med_px = px[px.len() / 2];
         let with = |shape| Settings {
             volume_shape: shape,
+            estimator: gi_core::estimate::Estimator::Volumes,
             ..settings.clone()
         };
         for shape in SHAPES {

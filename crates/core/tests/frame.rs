@@ -74,14 +74,32 @@ fn max_difference(a: &Image, b: &Image) -> f32 {
         .fold(0.0, f32::max)
 }
 
+/// How far a frame may be from another render of the same pose: 0 (bitwise) except for the
+/// tiled estimator (`estimate::Tiled`), whose photon lists are built with atomics, so that a
+/// pixel sums the same terms in an order that varies between runs: 1e-5 of the largest
+/// pixel (an f32 sum of a few hundred terms is off by ~1e-6 relative; a wrong or missing
+/// photon term moves a pixel by far more, see tests/estimators.rs).
+fn tolerance(out: &RenderOutput) -> f32 {
+    if out.stats.estimator == "tiled" {
+        1e-5 * out
+            .radiance
+            .pixels
+            .iter()
+            .map(|p| p.max_element())
+            .fold(0.0, f32::max)
+    } else {
+        0.0
+    }
+}
+
 fn mean(img: &Image) -> f32 {
     img.pixels.iter().map(|p| p.element_sum()).sum::<f32>() / (3 * img.pixels.len()) as f32
 }
 
 /// Every method: a renderer that rendered other poses first (so its BVH, GPU buffers,
 /// targets and photon ring were all updated, not built) renders pose 1 exactly as a new
-/// renderer of pose 1 does. Bitwise: every method is deterministic for a seed (the CPU
-/// methods sum in a fixed chunk order; the GPU blends in primitive order per pixel).
+/// renderer of pose 1 does. Bitwise, except for the tiled estimator ([`tolerance`]): the
+/// CPU methods sum in a fixed chunk order; the GPU blends in primitive order per pixel.
 #[test]
 fn updated_renderer_equals_one_shot() {
     let scene = builtin::load("cornell").expect("scene");
@@ -99,7 +117,11 @@ fn updated_renderer_equals_one_shot() {
         let frame = r.render(&all(), &Silent).expect("frame 2");
         let one_shot = render(&posed(&scene, 1.0), &s, &Silent).expect("one-shot");
         let d = max_difference(&frame.radiance, &one_shot.radiance);
-        assert_eq!(d, 0.0, "{}: frames differ by {d}", method.name());
+        assert!(
+            d <= tolerance(&one_shot),
+            "{}: frames differ by {d}",
+            method.name()
+        );
         assert_eq!(
             frame.albedo.pixels,
             one_shot.albedo.pixels,
@@ -136,7 +158,9 @@ fn steady_state_creates_nothing_and_uploads_what_changed() {
         // image is the same.
         let passes: Vec<&str> = still.stats.stages.iter().map(|(n, _)| n.as_str()).collect();
         assert!(
-            !passes.contains(&"direct light") && !passes.contains(&"photon volumes"),
+            !passes.contains(&"direct light")
+                && !passes.contains(&"photon volumes")
+                && !passes.contains(&"tiled shading"),
             "{passes:?}"
         );
         assert_eq!(still.radiance.pixels, first.radiance.pixels);
@@ -157,8 +181,12 @@ fn steady_state_creates_nothing_and_uploads_what_changed() {
         r.render(&frame, &Silent).expect("camera frame");
         let c2 = counters();
         assert_eq!(c2.created_since(&c1), 0, "{}: camera", method.name());
+        // The raster volumes re-sort their photons for the new view (small ones as quads);
+        // the tiled estimator keeps them.
+        let tiled = first.stats.estimator == "tiled";
         let expected: &[&str] = match method {
             Method::Direct => &["eye views"],
+            _ if tiled => &["eye views", "tiled params", "upsample params"],
             _ => &["eye views", "photons", "upsample params", "volume params"],
         };
         assert_eq!(
@@ -182,6 +210,15 @@ fn steady_state_creates_nothing_and_uploads_what_changed() {
         assert_eq!(c3.created_since(&c2), 0, "{}: light", method.name());
         let expected: &[&str] = match method {
             Method::Direct => &["lights", "shadow matrices", "shadow views"],
+            _ if tiled => &[
+                "bounce views",
+                "lights",
+                "shadow matrices",
+                "shadow views",
+                // The photon count is a parameter.
+                "tiled params",
+                "tiled photons",
+            ],
             _ => &[
                 "bounce views",
                 "lights",
@@ -237,11 +274,8 @@ fn animation_frames_equal_one_shot_poses() {
         }
         let frame = r.render(&all(), &Silent).expect("frame");
         let one_shot = render(&posed(&scene, t), &s, &Silent).expect("one-shot");
-        assert_eq!(
-            max_difference(&frame.radiance, &one_shot.radiance),
-            0.0,
-            "frame {step}"
-        );
+        let d = max_difference(&frame.radiance, &one_shot.radiance);
+        assert!(d <= tolerance(&one_shot), "frame {step}: {d}");
     }
     // Only the object moves: direct (shadow) and indirect light both change.
     let object = scene.objects.len() - 1;
@@ -358,11 +392,7 @@ fn cancelled_frame_leaves_the_renderer_consistent() {
         assert!(matches!(e, gi_core::Error::Cancelled), "{e}");
         let frame = r.render(&all(), &Silent).expect("frame after");
         let one_shot = render(&posed(&scene, 1.0), &s, &Silent).expect("one-shot");
-        assert_eq!(
-            max_difference(&frame.radiance, &one_shot.radiance),
-            0.0,
-            "{}",
-            method.name()
-        );
+        let d = max_difference(&frame.radiance, &one_shot.radiance);
+        assert!(d <= tolerance(&one_shot), "{}: {d}", method.name());
     }
 }

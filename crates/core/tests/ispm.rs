@@ -529,6 +529,7 @@ fn indirect_with(scene: &Scene, s: &Settings, shape: VolumeShape) -> (gi_core::I
         scene,
         &Settings {
             volume_shape: shape,
+            estimator: gi_core::estimate::Estimator::Volumes,
             ..s.clone()
         },
     );

@@ -108,6 +108,7 @@ pub fn settings_from(
             "volume_shape" => {
                 s.volume_shape = text(v, "volume_shape")?.parse().map_err(|e| to_py(py, e))?
             }
+            "estimator" => s.estimator = text(v, "estimator")?.parse().map_err(|e| to_py(py, e))?,
             "adapter" => {
                 s.adapter = if v.is_none() {
                     None
@@ -168,6 +169,9 @@ fn output_dict<'py>(
     stats.set_item("photons_stored", s.photons_stored)?;
     stats.set_item("volume_quads", s.volume_quads)?;
     stats.set_item("passes", s.passes)?;
+    stats.set_item("estimator", s.estimator.clone())?;
+    stats.set_item("estimator_reason", s.estimator_reason.clone())?;
+    stats.set_item("estimator_memory", s.estimator_memory.clone())?;
     d.set_item("stats", stats)?;
     Ok(d)
 }

@@ -1,6 +1,156 @@
 //! Indirect-light estimators over one photon set, run by the frame engine after the eye
-//! G-buffer: today the raster photon volumes of ISPM ([`volumes::Volumes`]).
+//! G-buffer. Each writes the same estimate (the photon-volume term of
+//! `gpu/shaders/common/photon_volume.wgsl` summed over the photons) into an
+//! [`target::IndirectTarget`], by a different route:
+//! - [`volumes::Volumes`]: the rasterizer draws a bounding shape per photon (ISPM, section 5);
+//! - [`tiled::Tiled`]: compute passes bin the photons to screen tiles and each view sample
+//!   sums its tile's list (Mara et al. 2013, Moreau et al. 2016 section 3.2).
+//!
+//! [`Estimator`] is the user's choice; `auto` picks per adapter ([`Estimator::resolve`]).
 
+pub mod target;
+pub mod tiled;
 pub mod volumes;
 
+pub use tiled::Tiled;
 pub use volumes::Volumes;
+
+use crate::error::{Error, Result};
+use std::str::FromStr;
+
+/// Which indirect estimator splats the photons (method `ispm`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Estimator {
+    /// Picked per adapter ([`Estimator::resolve`]).
+    #[default]
+    Auto,
+    /// Raster photon volumes.
+    Volumes,
+    /// Tiled splatting in compute.
+    Tiled,
+}
+
+impl Estimator {
+    pub const ALL: &'static [Estimator] = &[Estimator::Auto, Estimator::Volumes, Estimator::Tiled];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Estimator::Auto => "auto",
+            Estimator::Volumes => "volumes",
+            Estimator::Tiled => "tiled",
+        }
+    }
+
+    /// The estimator to run on `adapter` and why: an explicit choice stands; `auto` follows
+    /// the measurements in docs/bench/estimators.md.
+    pub fn resolve(self, adapter: &wgpu::AdapterInfo) -> (Estimator, String) {
+        if self != Estimator::Auto {
+            return (self, "chosen in the settings".into());
+        }
+        auto_choice(adapter)
+    }
+}
+
+/// `auto`: CPU rasterizers (lavapipe, llvmpipe) and GPUs measured or documented to
+/// rasterize on a small part of the chip run compute; the rest keep the raster volumes.
+fn auto_choice(adapter: &wgpu::AdapterInfo) -> (Estimator, String) {
+    let name = adapter.name.to_lowercase();
+    if adapter.device_type == wgpu::DeviceType::Cpu {
+        return (
+            Estimator::Tiled,
+            format!(
+                "`{}` is a CPU device: tiled was the fastest estimator at the default settings \
+                 there (docs/bench/estimators.md)",
+                adapter.name
+            ),
+        );
+    }
+    const DATACENTER: &[&str] = &["h100", "h200", "h800", "a100", "a800", "b100", "b200"];
+    if DATACENTER.iter().any(|d| name.contains(d)) {
+        return (
+            Estimator::Tiled,
+            format!(
+                "`{}` is a datacenter GPU: it runs vertex and fragment work on few of its \
+                 units (an H100 on 2 of 66 TPCs), compute on all of them",
+                adapter.name
+            ),
+        );
+    }
+    (
+        Estimator::Volumes,
+        format!(
+            "`{}` has full raster hardware: the ISPM photon volumes",
+            adapter.name
+        ),
+    )
+}
+
+impl FromStr for Estimator {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        Estimator::ALL
+            .iter()
+            .copied()
+            .find(|v| v.name() == s)
+            .ok_or_else(|| {
+                let names: Vec<_> = Estimator::ALL.iter().map(|v| v.name()).collect();
+                Error::setting(
+                    "estimator",
+                    format!("unknown estimator `{s}` (available: {})", names.join(", ")),
+                )
+            })
+    }
+}
+
+/// The estimator a renderer runs, with its GPU resources.
+pub enum IndirectEstimate {
+    Volumes(Box<Volumes>),
+    Tiled(Box<Tiled>),
+}
+
+impl IndirectEstimate {
+    pub fn kind(&self) -> Estimator {
+        match self {
+            IndirectEstimate::Volumes(_) => Estimator::Volumes,
+            IndirectEstimate::Tiled(_) => Estimator::Tiled,
+        }
+    }
+
+    /// Records the estimate of the uploaded photons and its upsampling.
+    pub fn record(
+        &self,
+        ctx: &crate::gpu::GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        timer: &mut crate::raster::timer::Timer,
+    ) {
+        match self {
+            IndirectEstimate::Volumes(v) => v.record(ctx, encoder, timer),
+            IndirectEstimate::Tiled(t) => t.record(ctx, encoder, timer),
+        }
+    }
+
+    /// GPU memory held beyond the targets (bytes by part), like Moreau et al.'s Table 1.
+    pub fn memory(&self) -> Vec<(String, u64)> {
+        let parts = match self {
+            IndirectEstimate::Volumes(v) => v.memory(),
+            IndirectEstimate::Tiled(t) => t.memory(),
+        };
+        parts.into_iter().map(|(n, b)| (n.to_string(), b)).collect()
+    }
+
+    /// Sets where in its pixel the eye G-buffer is sampled (progressive passes move it).
+    pub fn set_sample_centre(&mut self, centre: glam::Vec2) {
+        match self {
+            IndirectEstimate::Volumes(v) => v.target.set_sample_centre(centre),
+            IndirectEstimate::Tiled(t) => t.target.set_sample_centre(centre),
+        }
+    }
+
+    /// The estimate at full resolution.
+    pub fn output(&self) -> (&wgpu::Texture, &wgpu::TextureView) {
+        match self {
+            IndirectEstimate::Volumes(v) => v.output(),
+            IndirectEstimate::Tiled(t) => t.output(),
+        }
+    }
+}

@@ -15,7 +15,7 @@ use super::direct::{assemble, normalized, readback_names};
 use super::gpu::rgb_image;
 use super::{GpuState, Images};
 use crate::error::{Error, Result};
-use crate::estimate::Volumes;
+use crate::estimate::{IndirectEstimate, Tiled, Volumes};
 use crate::gpu;
 use crate::image::Image;
 use crate::photon::lbvh::Aabb;
@@ -35,7 +35,9 @@ use std::time::Instant;
 /// The ISPM resources beyond the direct light's: bounce maps and the estimator.
 pub(super) struct IspmState {
     bounce: Option<BounceTargets>,
-    volumes: Volumes,
+    estimate: IndirectEstimate,
+    /// Why the estimator was chosen (`Estimator::resolve`).
+    estimate_reason: String,
     /// Whether the scene has mirrors or glass (the specular texture is written each frame).
     specular: bool,
     /// The seed of the photons in the ring, when they are those of the current scene: a
@@ -108,11 +110,19 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     let t = Instant::now();
     let layers = bounce_layers(scene, settings.photons);
     if ispm.is_none() {
-        let volumes = Volumes::new(&ctx, &targets.gbuf, w, h, settings.subsample);
-        targets.bind_composite(&ctx, Some(volumes.output().1));
+        let (kind, estimate_reason) = settings.estimator.resolve(&ctx.info);
+        let (gbuf, k) = (&targets.gbuf, settings.subsample);
+        let estimate = match kind {
+            crate::estimate::Estimator::Tiled => {
+                IndirectEstimate::Tiled(Box::new(Tiled::new(&ctx, gbuf, w, h, k)))
+            }
+            _ => IndirectEstimate::Volumes(Box::new(Volumes::new(&ctx, gbuf, w, h, k))),
+        };
+        targets.bind_composite(&ctx, Some(estimate.output().1));
         *ispm = Some(IspmState {
             bounce: None,
-            volumes,
+            estimate,
+            estimate_reason,
             specular: scene
                 .materials
                 .iter()
@@ -316,51 +326,73 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     state.specular_image = specular.clone();
     stage(&mut stats, "specular paths", t);
 
-    // 6. Photon volumes, upsampling, composite, readback.
+    // 6. The indirect estimate, upsampling, composite, readback.
     let t = Instant::now();
     let radius = VolumeRadius::of_scene(scene, settings.photons, settings.kernel_scale)
         .scaled(settings.radius_scale);
-    let (ordered, quads) = partition(
-        settings.volume_shape,
-        &photons.splat,
-        cam,
-        settings.subsample.max(1),
-        radius,
-    );
-    stats.volume_quads = quads as u64;
-    ctx.check_buffer("photon volumes", ordered.len() as u64 * 64)?;
+    state.estimate.set_sample_centre(targets.sample_centre());
+    stats.estimator = state.estimate.kind().name().into();
+    stats.estimator_reason = state.estimate_reason.clone();
     crate::cancel::check(progress)?;
-    state.volumes.set_sample_centre(targets.sample_centre());
-    state.volumes.write_params(&ctx, scene, radius);
-    if !ordered.is_empty() && (photons_changed || changes.camera) {
-        state.volumes.write_photons(&ctx, &ordered);
+    match &mut state.estimate {
+        IndirectEstimate::Volumes(v) => {
+            let (ordered, quads) = partition(
+                settings.volume_shape,
+                &photons.splat,
+                cam,
+                settings.subsample.max(1),
+                radius,
+            );
+            stats.volume_quads = quads as u64;
+            ctx.check_buffer("photon volumes", ordered.len() as u64 * 64)?;
+            v.write_params(&ctx, scene, radius);
+            if !ordered.is_empty() && (photons_changed || changes.camera) {
+                v.write_photons(&ctx, &ordered);
+            }
+            v.set_draw(ordered.len() as u32, quads as u32);
+        }
+        IndirectEstimate::Tiled(tl) => {
+            if photons_changed {
+                tl.write_photons(&ctx, &targets.gbuf, &photons.splat)?;
+            }
+            tl.write_params(&ctx, scene, radius);
+        }
     }
+    stats.estimator_memory = state.estimate.memory();
     // A still frame (same photons, nothing moved) keeps last frame's estimate.
     let splat = photons_changed || changes.any() || !splat_current;
-    let mut encoder = ctx
-        .device
-        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("photon volumes"),
-        });
-    if splat {
-        state.volumes.record(
-            &ctx,
-            &mut encoder,
-            ordered.len() as u32,
-            quads as u32,
-            timer,
-        );
-    }
-    targets.record_composite(&ctx, &mut encoder, timer);
     let names = readback_names(images, true);
-    targets.record_readback(&ctx, &mut encoder, &names, Some(state.volumes.output().0));
-    timer.resolve(&mut encoder);
-    ctx.queue.submit([encoder.finish()]);
-    stage(&mut stats, "photon upload", t);
-    let t = Instant::now();
-    let data = targets.read(&ctx, &names)?;
-    stage(&mut stats, "readback", t);
-    timer.collect(&ctx)?;
+    let data = loop {
+        let mut encoder = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("indirect estimate"),
+            });
+        if splat {
+            state.estimate.record(&ctx, &mut encoder, timer);
+        }
+        targets.record_composite(&ctx, &mut encoder, timer);
+        targets.record_readback(&ctx, &mut encoder, &names, Some(state.estimate.output().0));
+        timer.resolve(&mut encoder);
+        ctx.queue.submit([encoder.finish()]);
+        stage(&mut stats, "photon upload", t);
+        let t = Instant::now();
+        let data = targets.read(&ctx, &names)?;
+        stage(&mut stats, "readback", t);
+        timer.collect(&ctx)?;
+        // The tiled estimator's lists are sized from the last frame: when they overflowed,
+        // they have grown and the estimate is redone.
+        if let (true, IndirectEstimate::Tiled(tl)) = (splat, &mut state.estimate) {
+            let t = Instant::now();
+            if tl.overflowed(&ctx, &targets.gbuf)? {
+                tl.write_params(&ctx, scene, radius);
+                stats.estimator_memory = state.estimate.memory();
+                stage(&mut stats, "tiled lists regrown", t);
+                continue;
+            }
+        }
+        break data;
+    };
     stats.stages.append(&mut timer.totals);
 
     let mut out = assemble(scene, targets, &data, stats);

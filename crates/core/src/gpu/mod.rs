@@ -32,6 +32,8 @@ pub struct GpuContext {
     pub(crate) passes: OnceLock<crate::raster::Passes>,
     /// The ISPM passes, compiled on first use of method `ispm`.
     pub(crate) ispm_passes: OnceLock<crate::raster::ispm::IspmPasses>,
+    /// The tiled estimator's compute passes, compiled on first use.
+    pub(crate) tiled_passes: OnceLock<crate::estimate::tiled::TiledPasses>,
 }
 
 /// How the user chose the adapter.
@@ -149,6 +151,7 @@ fn create_context(choice: &Choice) -> Result<GpuContext> {
         timestamps,
         passes: OnceLock::new(),
         ispm_passes: OnceLock::new(),
+        tiled_passes: OnceLock::new(),
     })
 }
 
@@ -328,6 +331,15 @@ pub fn create_render_pipeline(
 ) -> wgpu::RenderPipeline {
     alloc::note(alloc::Created::Pipeline);
     device.create_render_pipeline(desc)
+}
+
+/// `Device::create_compute_pipeline`, counted.
+pub fn create_compute_pipeline(
+    device: &wgpu::Device,
+    desc: &wgpu::ComputePipelineDescriptor,
+) -> wgpu::ComputePipeline {
+    alloc::note(alloc::Created::Pipeline);
+    device.create_compute_pipeline(desc)
 }
 
 /// `Queue::write_buffer`, counted as an upload of `label`.

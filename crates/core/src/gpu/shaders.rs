@@ -5,12 +5,15 @@
 pub const COMMON: &str = include_str!("shaders/common/types.wgsl");
 /// The uber BSDF: the formulas of `bsdf::Material::eval`.
 pub const BSDF: &str = include_str!("shaders/common/bsdf.wgsl");
+/// The photon-volume estimate term shared by the indirect estimators (needs `BSDF`).
+pub const PHOTON_VOLUME: &str = include_str!("shaders/common/photon_volume.wgsl");
 
 pub const GBUFFER: &str = include_str!("shaders/gbuffer.wgsl");
 pub const SHADOW: &str = include_str!("shaders/shadow.wgsl");
 pub const DIRECT: &str = include_str!("shaders/direct.wgsl");
 pub const BOUNCE: &str = include_str!("shaders/bounce.wgsl");
 pub const VOLUME: &str = include_str!("shaders/volume.wgsl");
+pub const TILED: &str = include_str!("shaders/tiled.wgsl");
 pub const UPSAMPLE: &str = include_str!("shaders/upsample.wgsl");
 pub const COMPOSITE: &str = include_str!("shaders/composite.wgsl");
 

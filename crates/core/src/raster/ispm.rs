@@ -351,7 +351,12 @@ impl IspmPasses {
         let module = shaders::module(
             device,
             "volume shader",
-            &[shaders::COMMON, shaders::BSDF, shaders::VOLUME],
+            &[
+                shaders::COMMON,
+                shaders::BSDF,
+                shaders::PHOTON_VOLUME,
+                shaders::VOLUME,
+            ],
         );
         let corner_attr = wgpu::vertex_attr_array![0 => Float32x3];
         let photon_attr = photon_attributes();

@@ -68,6 +68,23 @@ impl Timer {
         })
     }
 
+    /// Timestamp writes for the next compute pass of stage `label` (see [`Timer::pass`]).
+    pub fn compute_pass(
+        &mut self,
+        label: &'static str,
+    ) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
+        let first = self.labels.len() as u32 * 2;
+        if self.set.is_none() || first + 2 > self.capacity {
+            return None;
+        }
+        self.labels.push(label);
+        Some(wgpu::ComputePassTimestampWrites {
+            query_set: self.set.as_ref()?,
+            beginning_of_pass_write_index: Some(first),
+            end_of_pass_write_index: Some(first + 1),
+        })
+    }
+
     /// Records the copy of this submission's timestamps to the readback buffer.
     pub fn resolve(&self, encoder: &mut wgpu::CommandEncoder) {
         let (Some(set), n) = (&self.set, self.labels.len() as u32 * 2) else {

@@ -6,6 +6,7 @@ pub(crate) mod photon_map;
 pub(crate) mod reference;
 
 use crate::error::{Error, Result};
+pub use crate::estimate::Estimator;
 use crate::image::Image;
 pub use crate::photon::Kernel;
 pub use crate::raster::volume_shape::VolumeShape;
@@ -125,6 +126,10 @@ pub struct Settings {
     /// Bounding shape of the ISPM photon volumes: icosahedra, screen-aligned quads, or per
     /// photon by projected size (`Auto`). Changes the cost only, not the image.
     pub volume_shape: VolumeShape,
+    /// Indirect estimator of method `ispm` (`estimate::Estimator`): raster photon volumes,
+    /// tiled compute splatting, or per adapter (`Auto`). Changes the cost, not the image
+    /// (up to float summation order).
+    pub estimator: Estimator,
     /// Temporal photon reuse (method `ispm`, Jozwowski 2002): a frame splats the photons
     /// of the last `temporal_frames` frames of a `Renderer`, each frame tracing `photons`
     /// new ones; 1 = no reuse (and frame-coherent random numbers).
@@ -173,6 +178,7 @@ impl Default for Settings {
             footprint_volumes: false,
             boundary_compensation: true,
             volume_shape: VolumeShape::Auto,
+            estimator: Estimator::Auto,
             temporal_frames: 1,
             progressive: false,
             progressive_alpha: 0.7,
@@ -338,6 +344,11 @@ pub struct RenderStats {
     /// Passes averaged into the radiance: 1, or in progressive mode the passes since the
     /// last change.
     pub passes: u64,
+    /// Method `ispm`: the indirect estimator that ran, and why it was chosen.
+    pub estimator: String,
+    pub estimator_reason: String,
+    /// Method `ispm`: GPU memory of the estimator beyond its targets (bytes by part).
+    pub estimator_memory: Vec<(String, u64)>,
 }
 
 /// A rendered frame: radiance and auxiliary images, all `width × height`.

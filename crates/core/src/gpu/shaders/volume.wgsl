@@ -8,12 +8,10 @@
 //   of the ellipsoid's oriented bounding box; the whole screen when the box reaches behind
 //   the eye, nothing when it lies entirely behind it. Cheaper for small volumes: 2 triangles
 //   instead of 20, at the price of more rejected fragments.
-// There is no depth attachment: the fragment reads the eye G-buffer and rejects surface
-// points outside the exact ellipsoid or facing away from the photon's normal
-// (photon::estimate::NORMAL_AGREEMENT). The shape only decides which pixels are tested, so
-// as long as it is conservative the image does not depend on it. Accepted points add the
-// photon-map estimate term f(wo, wi)·Φ·κ with the 2D Epanechnikov kernel
-// κ = 2/(πr²)(1 − d²/r²) over the disc. Blending adds the photons up. At subsample k the
+// There is no depth attachment: the fragment reads the eye G-buffer and adds the estimate
+// term of common/photon_volume.wgsl (zero outside the exact ellipsoid or facing away from the
+// photon's normal). The shape only decides which pixels are tested, so as long as it is
+// conservative the image does not depend on it. Blending adds the photons up. At subsample k the
 // target is 1/k the size and each texel shades the G-buffer pixel at the centre of its k×k
 // block.
 
@@ -162,31 +160,16 @@ fn fs_main(in: VolumeOut) -> @location(0) vec4<f32> {
     if pos.w == 0.0 {
         discard;
     }
-    let d = pos.xyz - in.center;
-    let dz = dot(d, in.normal);
-    let r = in.radius;
-    let d2 = max(dot(d, d) - dz * dz, 0.0);
-    let r2 = r * r;
-    // Inside the ellipsoid (not merely its bounding cylinder), which every bounding shape
-    // contains: the result does not depend on the shape drawn.
-    let rz = r * params.z_ratio;
-    if d2 / r2 + dz * dz / (rz * rz) >= 1.0 {
+    var p: VolumePhoton;
+    p.center = in.center;
+    p.incident = in.incident;
+    p.power = in.power;
+    p.normal = in.normal;
+    p.radius = in.radius;
+    // The cheap ellipsoid test first: most fragments of a bounding shape fail it.
+    if volume_kernel(p, pos.xyz, params.z_ratio).y == 0.0 {
         discard;
     }
-    let nn = textureLoad(g_normals, px, 0);
-    let ns = oct_decode(nn.xy);
-    if dot(ns, in.normal) <= 0.5 {
-        discard;
-    }
-    let dm = textureLoad(g_diffuse, px, 0);
-    let sp = textureLoad(g_specular, px, 0);
-    var m: Material;
-    m.diffuse = dm.xyz;
-    m.roughness = dm.w;
-    m.specular = sp.xyz;
-    m.fresnel = u32(sp.w > 0.5);
-    let wo = normalize(params.eye - pos.xyz);
-    let kernel = 2.0 / (PI * r2) * (1.0 - d2 / r2);
-    let f = bsdf_eval(m, ns, wo, in.incident);
-    return vec4<f32>(f * in.power * kernel, 0.0);
+    let s = view_sample(g_position, g_normals, g_diffuse, g_specular, px, params.eye);
+    return vec4<f32>(volume_term(p, s, params.z_ratio), 0.0);
 }

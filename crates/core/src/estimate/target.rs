@@ -1,0 +1,178 @@
+//! The indirect-light target every estimator writes: one texel per G-buffer sample at the
+//! centre of a `subsample` × `subsample` block, and its joint bilateral upsampling to full
+//! resolution (ISPM section 5.2) when `subsample` > 1.
+
+use crate::gpu::{self, GpuContext};
+use crate::raster::gbuffer::GBuffer;
+use crate::raster::ispm::{tex, IspmPasses, UpsampleParamsRaw, TARGET};
+use crate::raster::timer::Timer;
+use crate::raster::{buffer_init, camera_view};
+use crate::scene::Scene;
+use glam::{Mat4, Vec2, Vec3};
+
+pub struct IndirectTarget {
+    pub subsample: u32,
+    /// Low-resolution size (texels).
+    pub low_size: [u32; 2],
+    pub low: wgpu::Texture,
+    pub low_view: wgpu::TextureView,
+    /// Full-resolution output of the upsampling (`None` when `subsample` is 1).
+    full: Option<(wgpu::Texture, wgpu::TextureView)>,
+    up_params: wgpu::Buffer,
+    last_eye: Option<[f32; 3]>,
+    upsample_group: Option<wgpu::BindGroup>,
+    /// Where in its pixel the eye G-buffer is sampled: the centre, but in progressive passes
+    /// (`frame::progressive`), whose sub-pixel samples move per pass.
+    centre: Vec2,
+}
+
+/// An `Rgba32Float` texture the estimators render to, write as storage, read and copy.
+pub(crate) fn float_target(ctx: &GpuContext, label: &str, w: u32, h: u32) -> wgpu::Texture {
+    gpu::create_texture(
+        &ctx.device,
+        &wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: TARGET,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::STORAGE_BINDING
+                | wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        },
+    )
+}
+
+impl IndirectTarget {
+    pub fn new(ctx: &GpuContext, gbuf: &GBuffer, width: u32, height: u32, subsample: u32) -> Self {
+        let passes = IspmPasses::get(ctx);
+        let k = subsample.max(1);
+        let low_size = [width.div_ceil(k), height.div_ceil(k)];
+        let low = float_target(ctx, "indirect (subsampled)", low_size[0], low_size[1]);
+        let low_view = low.create_view(&Default::default());
+        let up_params = buffer_init(
+            ctx,
+            "upsample params",
+            bytemuck::bytes_of(&bytemuck::Zeroable::zeroed() as &UpsampleParamsRaw),
+            wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        );
+        let inputs = gbuf.lighting_inputs();
+        let (full, upsample_group) = if k > 1 {
+            let full = float_target(ctx, "indirect", width, height);
+            let full_view = full.create_view(&Default::default());
+            let group = gpu::create_bind_group(
+                &ctx.device,
+                &wgpu::BindGroupDescriptor {
+                    label: Some("upsample bind group"),
+                    layout: &passes.upsample_layout,
+                    entries: &[
+                        wgpu::BindGroupEntry {
+                            binding: 0,
+                            resource: up_params.as_entire_binding(),
+                        },
+                        tex(1, &inputs[0]),
+                        tex(2, &inputs[1]),
+                        tex(3, &low_view),
+                    ],
+                },
+            );
+            (Some((full, full_view)), Some(group))
+        } else {
+            (None, None)
+        };
+        IndirectTarget {
+            subsample: k,
+            low_size,
+            low,
+            low_view,
+            full,
+            up_params,
+            last_eye: None,
+            upsample_group,
+            centre: Vec2::splat(0.5),
+        }
+    }
+
+    /// The estimate at full resolution.
+    pub fn output(&self) -> (&wgpu::Texture, &wgpu::TextureView) {
+        match &self.full {
+            Some((t, v)) => (t, v),
+            None => (&self.low, &self.low_view),
+        }
+    }
+
+    /// World → clip of the low-resolution target. Low-res texel i shades full-res pixel
+    /// i·k + ⌊k/2⌋, whose centre is half a full-res pixel off the low-res sample position
+    /// when k is even: the view is shifted to match, so that coverage is tested where the
+    /// G-buffer sample lies.
+    pub fn view_proj(&self, scene: &Scene) -> Mat4 {
+        let (w, h, k) = (scene.camera.width, scene.camera.height, self.subsample);
+        let eye = camera_view(scene, self.centre, 0.0);
+        let half = if k % 2 == 0 { 1.0 } else { 0.0 };
+        let shift = Mat4::from_translation(Vec3::new(-half / w as f32, half / h as f32, 0.0));
+        shift * Mat4::from_cols_array_2d(&eye.view_proj)
+    }
+
+    /// Sets where in its pixel the eye G-buffer is sampled; the estimators' view follows.
+    pub fn set_sample_centre(&mut self, centre: Vec2) {
+        self.centre = centre;
+    }
+
+    /// Uploads the upsampling parameters when the eye moved.
+    pub fn write_params(&mut self, ctx: &GpuContext, scene: &Scene) {
+        let eye: [f32; 3] = scene.camera.position.into();
+        if self.last_eye == Some(eye) {
+            return;
+        }
+        let up = UpsampleParamsRaw {
+            eye,
+            subsample: self.subsample,
+        };
+        gpu::write_buffer(
+            &ctx.queue,
+            "upsample params",
+            &self.up_params,
+            0,
+            bytemuck::bytes_of(&up),
+        );
+        self.last_eye = Some(eye);
+    }
+
+    /// Records the upsampling (nothing at subsample 1).
+    pub fn record_upsample(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        timer: &mut Timer,
+    ) {
+        let (Some((_, full_view)), Some(group)) = (&self.full, &self.upsample_group) else {
+            return;
+        };
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("upsample pass"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: full_view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes: timer.pass("upsample"),
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&IspmPasses::get(ctx).upsample);
+        pass.set_bind_group(0, group, &[]);
+        pass.draw(0..3, 0..1);
+    }
+}
