@@ -209,16 +209,17 @@ def test_ispm_estimators_agree_and_report_themselves():
     # choice and the reason, and every estimator reports its memory.
     scene = gi.load_scene("cornell")
     images = {}
-    for est in ("volumes", "tiled", "auto"):
+    for est in ("volumes", "tiled", "cluster", "auto"):
         r = gi.render(scene, "ispm", spp=1, size=(48, 48), photons=20_000, estimator=est)
         images[est] = r.aov("indirect")
-        assert r.stats.estimator in ("volumes", "tiled")
+        assert r.stats.estimator in ("volumes", "tiled", "cluster", "directional")
         assert r.stats.estimator == est or est == "auto"
         assert r.stats.estimator_reason
         assert sum(b for _, b in r.stats.estimator_memory) > 0
     scale = images["volumes"].max()
     assert scale > 0
-    np.testing.assert_allclose(images["tiled"], images["volumes"], rtol=0, atol=1e-4 * scale)
+    for est in ("tiled", "cluster"):
+        np.testing.assert_allclose(images[est], images["volumes"], rtol=0, atol=1e-4 * scale)
     with pytest.raises(gi.SettingError, match="estimator"):
         gi.render(scene, "ispm", spp=1, size=(16, 16), estimator="cluster-of-doom")
 

@@ -151,8 +151,9 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument(
         "--estimator",
         default="auto",
-        choices=["auto", "volumes", "tiled"],
-        help="how ISPM splats photons: raster volumes, tiled compute, or auto (per adapter)",
+        choices=["auto", "volumes", "tiled", "cluster", "directional"],
+        help="how ISPM splats photons: raster volumes; tiled, cluster-hierarchy or its "
+        "directional approximation in compute; or auto (per adapter)",
     )
     r.add_argument("--adapter", help='GPU adapter: "cpu" (lavapipe), "gpu" or part of a name')
     r.add_argument("--shadow-map-size", type=int, default=1024, help="shadow map texels per side")

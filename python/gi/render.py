@@ -34,11 +34,15 @@ class RenderStats:
     photons_stored: int = 0
     volume_quads: int = 0
     passes: int = 1
-    #: Method ``ispm``: the indirect estimator that ran ("volumes" or "tiled"), why it was
+    #: Method ``ispm``: the indirect estimator that ran ("volumes", "tiled", ...), why it was
     #: chosen, and its GPU memory beyond the image targets (bytes by part).
     estimator: str = ""
     estimator_reason: str = ""
     estimator_memory: list[tuple[str, int]] = field(default_factory=list)
+    #: Estimators "tiled" and "cluster": photon-list entries written, and of them the
+    #: cluster hierarchy's trivial accepts (one photon for a whole node of view samples).
+    list_entries: int = 0
+    trivial_accepts: int = 0
 
 
 @dataclass(frozen=True)
@@ -136,6 +140,8 @@ def _result(out: dict[str, Any]) -> RenderResult:
         estimator=s["estimator"],
         estimator_reason=s["estimator_reason"],
         estimator_memory=[(str(n), int(b)) for n, b in s["estimator_memory"]],
+        list_entries=s["list_entries"],
+        trivial_accepts=s["trivial_accepts"],
     )
     return RenderResult(
         radiance=out["radiance"],
@@ -429,8 +435,10 @@ def render(
     small volumes) or "auto" (quads for volumes under 16 pixels in radius, else icosahedra);
     it changes the cost, not the image. ``estimator`` picks how the photons are splatted:
     "volumes" (the rasterizer draws the volumes), "tiled" (compute passes bin the photons to
-    screen tiles; faster where the rasterizer is small or software) or "auto" (per adapter;
-    ``stats.estimator_reason`` says why). Same image up to float rounding.
+    screen tiles), "cluster" (a hierarchy over the view samples with whole nodes accepted at
+    once; Moreau et al. 2016), all three the same image up to float rounding; "directional"
+    (the cluster hierarchy's approximation: per-cluster irradiance from 8 directions,
+    faster, blockier) or "auto" (per adapter; ``stats.estimator_reason`` says why).
     GPU methods (``direct``, ``ispm``) run on ``adapter`` ("cpu" for lavapipe, "gpu", or part of an
     adapter's name; default: the ``GI_ADAPTER`` environment variable, else a real GPU when
     present, else lavapipe) with ``shadow_map_size``² texels per shadow-map face.

@@ -12,9 +12,13 @@ use gi_core::frame::{FrameDesc, Renderer};
 use gi_core::render::Silent;
 use gi_core::scene::{builtin, SceneUpdate};
 use gi_core::{Method, RenderOutput, Scene, Settings};
-use std::time::Instant;
 
-const ESTIMATORS: [Estimator; 2] = [Estimator::Volumes, Estimator::Tiled];
+const ESTIMATORS: [Estimator; 4] = [
+    Estimator::Volumes,
+    Estimator::Tiled,
+    Estimator::Cluster,
+    Estimator::Directional,
+];
 
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
@@ -31,7 +35,18 @@ fn stage(out: &RenderOutput, names: &[&str]) -> f64 {
 }
 
 fn estimate_seconds(out: &RenderOutput) -> f64 {
-    stage(out, &["photon volumes", "tiled binning", "tiled shading"])
+    stage(
+        out,
+        &[
+            "photon volumes",
+            "tiled binning",
+            "tiled shading",
+            "cluster hierarchy",
+            "cluster binning",
+            "cluster shading",
+            "directional shading",
+        ],
+    )
 }
 
 struct Measured {
@@ -39,7 +54,8 @@ struct Measured {
     /// Tiled: binning and shading separately.
     binning: f64,
     shading: f64,
-    frame: f64,
+    /// Cluster: share of list entries that are trivial accepts.
+    accepts: f64,
     photons: u64,
     memory: u64,
 }
@@ -52,22 +68,32 @@ fn measure(
     let mut r = Renderer::new(scene, settings)?;
     let first = r.render(&FrameDesc::default(), &Silent)?;
     let mut camera = r.scene().camera_desc();
-    let (mut est, mut wall, mut bin, mut shade) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let (mut est, mut bin, mut shade) = (Vec::new(), Vec::new(), Vec::new());
+    let mut accepts = Vec::new();
     for i in 0..runs {
         camera.fov += if i % 2 == 0 { 1e-3 } else { -1e-3 };
         r.update(&SceneUpdate::Camera(camera.clone()))?;
-        let t = Instant::now();
         let out = r.render(&FrameDesc::default(), &Silent)?;
-        wall.push(t.elapsed().as_secs_f64());
         est.push(estimate_seconds(&out));
-        bin.push(stage(&out, &["tiled binning"]));
-        shade.push(stage(&out, &["tiled shading"]));
+        bin.push(stage(
+            &out,
+            &["tiled binning", "cluster hierarchy", "cluster binning"],
+        ));
+        if std::env::var("GI_BENCH_STAGES").is_ok() {
+            eprintln!("{:?}", out.stats.stages);
+        }
+        shade.push(stage(
+            &out,
+            &["tiled shading", "cluster shading", "directional shading"],
+        ));
+        let s = &out.stats;
+        accepts.push(s.trivial_accepts as f64 / s.list_entries.max(1) as f64);
     }
     Ok(Measured {
         estimate: median(est),
         binning: median(bin),
         shading: median(shade),
-        frame: median(wall),
+        accepts: median(accepts),
         photons: first.stats.photons_stored,
         memory: first.stats.estimator_memory.iter().map(|(_, b)| b).sum(),
     })
@@ -101,11 +127,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     let scales: &[f32] = if quick { &[1.0] } else { &[0.5, 1.0, 2.0] };
     println!(
-        "| size | photons | kernel scale | stored | volumes (ms) | tiled (ms) | tiled / volumes \
-         | fastest | tiled binning (ms) | tiled shading (ms) | volumes frame (ms) | tiled frame (ms) \
-         | volumes memory (MiB) | tiled memory (MiB) |"
+        "| size | photons | kernel scale | stored | volumes (ms) | tiled (ms) | cluster (ms) \
+         | directional (ms) | tiled / volumes | cluster / volumes | directional / volumes \
+         | fastest exact | tiled binning + shading (ms) | cluster binning + shading (ms) \
+         | cluster trivial accepts | memory volumes / tiled / cluster / directional (MiB) |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     let mib = |b: u64| b as f64 / (1 << 20) as f64;
     for &(w, h) in sizes {
         for &photons in budgets {
@@ -124,25 +151,35 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     };
                     m.push(measure(&scene, &settings, runs)?);
                 }
-                let (v, t) = (&m[0], &m[1]);
-                let fastest = if t.estimate < v.estimate {
-                    "tiled"
-                } else {
-                    "volumes"
-                };
+                let (v, t, c, d) = (&m[0], &m[1], &m[2], &m[3]);
+                // The fastest of those that give the volumes' image (directional does not).
+                let fastest = ESTIMATORS[..3]
+                    .iter()
+                    .zip(&m)
+                    .min_by(|a, b| a.1.estimate.total_cmp(&b.1.estimate))
+                    .map(|(e, _)| e.name())
+                    .unwrap_or("");
                 println!(
-                    "| {w}×{h} | {photons} | {kernel_scale} | {} | {:.1} | {:.1} | {:.2} | {fastest} \
-                     | {:.1} | {:.1} | {:.0} | {:.0} | {:.1} | {:.1} |",
+                    "| {w}×{h} | {photons} | {kernel_scale} | {} | {:.1} | {:.1} | {:.1} | {:.1} \
+                     | {:.2} | {:.2} | {:.2} | {fastest} | {:.1} + {:.1} | {:.1} + {:.1} \
+                     | {:.0}% | {:.1} / {:.1} / {:.1} / {:.1} |",
                     v.photons,
                     v.estimate * 1e3,
                     t.estimate * 1e3,
+                    c.estimate * 1e3,
+                    d.estimate * 1e3,
                     t.estimate / v.estimate,
+                    c.estimate / v.estimate,
+                    d.estimate / v.estimate,
                     t.binning * 1e3,
                     t.shading * 1e3,
-                    v.frame * 1e3,
-                    t.frame * 1e3,
+                    c.binning * 1e3,
+                    c.shading * 1e3,
+                    100.0 * c.accepts,
                     mib(v.memory),
                     mib(t.memory),
+                    mib(c.memory),
+                    mib(d.memory),
                 );
             }
         }

@@ -86,7 +86,7 @@ fn lit_pixels(img: &gi_core::Image) -> usize {
     img.pixels.iter().filter(|p| p.max_element() > 0.0).count()
 }
 
-/// `tiled` equals `volumes` on: the Cornell box at subsample 1 and 2 (the half-texel shift
+/// `tiled` and `cluster` equal `volumes` on: the Cornell box at subsample 1 and 2 (the half-texel shift
 /// of the low-resolution view); the furnace, whose camera sits inside the sphere among the
 /// photons (volumes reaching behind the eye plane: full-screen tile ranges); a spot light on
 /// glossy and metallic surfaces; the Cornell box with glass and a mirror (caustic photons
@@ -98,7 +98,7 @@ fn lit_pixels(img: &gi_core::Image) -> usize {
 /// counts check that no photon is dropped or added at a tile edge. The tolerance is checked
 /// to be tight: 3% smaller kernels differ by more than 100× it.
 #[test]
-fn tiled_gives_the_same_image_as_volumes() {
+fn binned_estimators_give_the_same_image_as_volumes() {
     let cases = [
         ("cornell", 64, 1, 1.0),
         ("cornell", 64, 2, 1.0),
@@ -111,44 +111,54 @@ fn tiled_gives_the_same_image_as_volumes() {
         let sc = scene(name);
         let s = settings(size, subsample, kernel_scale);
         let volumes = run(&sc, &s, Estimator::Volumes);
-        let tiled = run(&sc, &s, Estimator::Tiled);
         assert_eq!(volumes.stats.estimator, "volumes");
-        assert_eq!(tiled.stats.estimator, "tiled");
-        let (v, t) = (indirect(&volumes), indirect(&tiled));
+        let v = indirect(&volumes);
         let scale = v.pixels.iter().map(|p| p.max_element()).fold(0.0, f32::max);
-        let d = max_difference(t, v, scale);
         let lit = lit_pixels(v);
-        let regrown = tiled
-            .stats
-            .stages
-            .iter()
-            .any(|(n, _)| n == "tiled lists regrown");
-        eprintln!(
-            "{name} {size}² k={subsample} ks={kernel_scale}: max pixel {scale:.4}, lit {lit}/{}, \
-             |tiled − volumes| {d:.2e} of the max pixel; photons {}; tiled memory {:?}; \
-             lists regrown: {regrown}",
-            size * size,
-            tiled.stats.photons_stored,
-            tiled.stats.estimator_memory,
-        );
         assert!(scale > 0.0, "{name}: no indirect light");
         assert!(lit > size as usize * size as usize / 4, "{lit} lit pixels");
-        assert_eq!(lit_pixels(t), lit, "{name}: tiled lights other pixels");
-        assert!(d < 1e-4, "{name}: tiled differs from volumes by {d}");
-        // The composite adds the same indirect light: the radiance agrees as closely.
         let rad_scale = volumes
             .radiance
             .pixels
             .iter()
             .map(|p| p.max_element())
             .fold(0.0, f32::max);
-        let dr = max_difference(&tiled.radiance, &volumes.radiance, rad_scale);
-        assert!(dr < 1e-4, "{name}: radiance differs by {dr}");
-        if kernel_scale == 4.0 && name == "cornell" {
-            assert!(
-                regrown,
-                "the large kernels did not overflow the first lists"
+        for estimator in [Estimator::Tiled, Estimator::Cluster] {
+            let out = run(&sc, &s, estimator);
+            let e = estimator.name();
+            assert_eq!(out.stats.estimator, e);
+            let t = indirect(&out);
+            let d = max_difference(t, v, scale);
+            let regrown = out
+                .stats
+                .stages
+                .iter()
+                .any(|(n, _)| n == "photon lists regrown");
+            eprintln!(
+                "{name} {size}² k={subsample} ks={kernel_scale} {e}: max pixel {scale:.4}, \
+                 lit {lit}/{}, |{e} − volumes| {d:.2e} of the max pixel; photons {}; \
+                 list entries {} (trivial accepts {}); lists regrown: {regrown}",
+                size * size,
+                out.stats.photons_stored,
+                out.stats.list_entries,
+                out.stats.trivial_accepts,
             );
+            assert_eq!(lit_pixels(t), lit, "{name}: {e} lights other pixels");
+            assert!(d < 1e-4, "{name}: {e} differs from volumes by {d}");
+            // The composite adds the same indirect light: the radiance agrees as closely.
+            let dr = max_difference(&out.radiance, &volumes.radiance, rad_scale);
+            assert!(dr < 1e-4, "{name}: {e} radiance differs by {dr}");
+            if kernel_scale == 4.0 && name == "cornell" {
+                assert!(
+                    regrown,
+                    "the large kernels did not overflow the first lists"
+                );
+            }
+            // Wide kernels over the box's diffuse walls: the hierarchy must accept whole
+            // nodes, or it is only a finer tiling.
+            if estimator == Estimator::Cluster && name != "spot-glossy" && kernel_scale >= 1.0 {
+                assert!(out.stats.trivial_accepts > 0, "{name}: no trivial accepts");
+            }
         }
         if name == "cornell" && size == 64 && subsample == 1 {
             let smaller = run(
@@ -157,7 +167,7 @@ fn tiled_gives_the_same_image_as_volumes() {
                     kernel_scale: 0.97,
                     ..s.clone()
                 },
-                Estimator::Tiled,
+                Estimator::Cluster,
             );
             let d = max_difference(indirect(&smaller), v, scale);
             eprintln!("cornell with 3% smaller kernels: {d:.2e}");
@@ -178,10 +188,98 @@ fn estimator_setting_parses_and_auto_reports_its_choice() {
     let sc = scene("cornell");
     let out = run(&sc, &settings(32, 2, 1.0), Estimator::Auto);
     assert!(
-        ["volumes", "tiled"].contains(&out.stats.estimator.as_str()),
+        ["volumes", "tiled", "cluster"].contains(&out.stats.estimator.as_str()),
         "{}",
         out.stats.estimator
     );
     assert!(!out.stats.estimator_reason.is_empty());
     assert!(out.stats.estimator_memory.iter().all(|(_, b)| *b > 0));
+}
+
+/// Luminance of each pixel.
+fn luminance(img: &gi_core::Image) -> Vec<f64> {
+    img.pixels
+        .iter()
+        .map(|p| (0.2126 * p.x + 0.7152 * p.y + 0.0722 * p.z) as f64)
+        .collect()
+}
+
+/// PSNR (dB) of `b` against `a`, peak = `a`'s largest luminance.
+fn psnr(a: &gi_core::Image, b: &gi_core::Image) -> f64 {
+    let (la, lb) = (luminance(a), luminance(b));
+    let peak = la.iter().cloned().fold(0.0, f64::max);
+    let mse = la
+        .iter()
+        .zip(&lb)
+        .map(|(x, y)| (x - y).powi(2))
+        .sum::<f64>()
+        / la.len() as f64;
+    10.0 * (peak * peak / mse).log10()
+}
+
+/// Mean SSIM of the luminance over 8×8 windows (stride 4), the usual constants with the
+/// dynamic range of `a` (Wang et al. 2004).
+fn ssim(a: &gi_core::Image, b: &gi_core::Image) -> f64 {
+    let (la, lb) = (luminance(a), luminance(b));
+    let w = a.width as usize;
+    let h = a.height as usize;
+    let range = la.iter().cloned().fold(0.0, f64::max);
+    let (c1, c2) = ((0.01 * range).powi(2), (0.03 * range).powi(2));
+    let mut total = 0.0;
+    let mut windows = 0;
+    for y0 in (0..=h - 8).step_by(4) {
+        for x0 in (0..=w - 8).step_by(4) {
+            let idx = (0..64).map(|i| (y0 + i / 8) * w + x0 + i % 8);
+            let xs: Vec<f64> = idx.clone().map(|i| la[i]).collect();
+            let ys: Vec<f64> = idx.map(|i| lb[i]).collect();
+            let mx = xs.iter().sum::<f64>() / 64.0;
+            let my = ys.iter().sum::<f64>() / 64.0;
+            let vx = xs.iter().map(|x| (x - mx).powi(2)).sum::<f64>() / 63.0;
+            let vy = ys.iter().map(|y| (y - my).powi(2)).sum::<f64>() / 63.0;
+            let cxy = xs
+                .iter()
+                .zip(&ys)
+                .map(|(x, y)| (x - mx) * (y - my))
+                .sum::<f64>()
+                / 63.0;
+            total += ((2.0 * mx * my + c1) * (2.0 * cxy + c2))
+                / ((mx * mx + my * my + c1) * (vx + vy + c2));
+            windows += 1;
+        }
+    }
+    total / windows as f64
+}
+
+/// The directional approximation against the exact cluster estimate (the same photons and
+/// hierarchy). Its irradiance is constant per node and it sees 8 mean directions, so it is
+/// close, not equal. Measured at 256² (subsample 2, 100k photons): the Cornell box PSNR
+/// 25.7 dB, SSIM 0.767, mean +2.0% (diffuse walls: the approximation everywhere, blocky at
+/// 16-pixel leaves); the spot-lit glossy scene 46.5 dB, 0.988, mean −0.2% (its glossy
+/// clusters are summed exactly). Bounds: 23 dB / 0.72 and 40 dB / 0.95, means within 5%.
+/// Smaller sizes make the leaves coarse relative to the image (128²: 18 dB), larger ones
+/// better (512²: 29.3 dB, 0.875). A lost octant, a wrong weight or double-counted
+/// ancestors fail them (the first version, weighting by octant centres, lost 19%).
+#[test]
+fn directional_is_close_to_cluster() {
+    for (name, min_psnr, min_ssim) in [("cornell", 23.0, 0.72), ("spot-glossy", 40.0, 0.95)] {
+        let sc = scene(name);
+        let s = Settings {
+            photons: 100_000,
+            ..settings(256, 2, 1.0)
+        };
+        let cluster = run(&sc, &s, Estimator::Cluster);
+        let directional = run(&sc, &s, Estimator::Directional);
+        assert_eq!(directional.stats.estimator, "directional");
+        let (c, d) = (indirect(&cluster), indirect(&directional));
+        let mean =
+            |img: &gi_core::Image| luminance(img).iter().sum::<f64>() / img.pixels.len() as f64;
+        let (p, q) = (psnr(c, d), ssim(c, d));
+        let ratio = mean(d) / mean(c);
+        eprintln!(
+            "{name}: directional vs cluster: PSNR {p:.2} dB, SSIM {q:.4}, mean ratio {ratio:.4}"
+        );
+        assert!(p > min_psnr, "{name}: PSNR {p}");
+        assert!(q > min_ssim, "{name}: SSIM {q}");
+        assert!((ratio - 1.0).abs() < 0.05, "{name}: mean ratio {ratio}");
+    }
 }

@@ -172,6 +172,8 @@ fn output_dict<'py>(
     stats.set_item("estimator", s.estimator.clone())?;
     stats.set_item("estimator_reason", s.estimator_reason.clone())?;
     stats.set_item("estimator_memory", s.estimator_memory.clone())?;
+    stats.set_item("list_entries", s.list_entries)?;
+    stats.set_item("trivial_accepts", s.trivial_accepts)?;
     d.set_item("stats", stats)?;
     Ok(d)
 }

@@ -3,16 +3,17 @@
 //! `gpu/shaders/common/photon_volume.wgsl` summed over the photons) into an
 //! [`target::IndirectTarget`], by a different route:
 //! - [`volumes::Volumes`]: the rasterizer draws a bounding shape per photon (ISPM, section 5);
-//! - [`tiled::Tiled`]: compute passes bin the photons to screen tiles and each view sample
-//!   sums its tile's list (Mara et al. 2013, Moreau et al. 2016 section 3.2).
+//! - [`binned::Binned`]: compute passes bin the photons into lists: per screen tile
+//!   (`tiled`: Mara et al. 2013, Moreau et al. 2016 section 3.2) or per node of a view-sample
+//!   cluster hierarchy with trivial acceptance (`cluster`: Moreau et al. section 4).
 //!
 //! [`Estimator`] is the user's choice; `auto` picks per adapter ([`Estimator::resolve`]).
 
+pub mod binned;
 pub mod target;
-pub mod tiled;
 pub mod volumes;
 
-pub use tiled::Tiled;
+pub use binned::{Binned, Mode};
 pub use volumes::Volumes;
 
 use crate::error::{Error, Result};
@@ -28,16 +29,28 @@ pub enum Estimator {
     Volumes,
     /// Tiled splatting in compute.
     Tiled,
+    /// The view-sample cluster hierarchy in compute.
+    Cluster,
+    /// The cluster hierarchy's directional approximation (octant flux per node).
+    Directional,
 }
 
 impl Estimator {
-    pub const ALL: &'static [Estimator] = &[Estimator::Auto, Estimator::Volumes, Estimator::Tiled];
+    pub const ALL: &'static [Estimator] = &[
+        Estimator::Auto,
+        Estimator::Volumes,
+        Estimator::Tiled,
+        Estimator::Cluster,
+        Estimator::Directional,
+    ];
 
     pub fn name(self) -> &'static str {
         match self {
             Estimator::Auto => "auto",
             Estimator::Volumes => "volumes",
             Estimator::Tiled => "tiled",
+            Estimator::Cluster => "cluster",
+            Estimator::Directional => "directional",
         }
     }
 
@@ -105,14 +118,18 @@ impl FromStr for Estimator {
 /// The estimator a renderer runs, with its GPU resources.
 pub enum IndirectEstimate {
     Volumes(Box<Volumes>),
-    Tiled(Box<Tiled>),
+    Binned(Box<Binned>),
 }
 
 impl IndirectEstimate {
     pub fn kind(&self) -> Estimator {
         match self {
             IndirectEstimate::Volumes(_) => Estimator::Volumes,
-            IndirectEstimate::Tiled(_) => Estimator::Tiled,
+            IndirectEstimate::Binned(b) => match b.mode() {
+                Mode::Tiled => Estimator::Tiled,
+                Mode::Cluster => Estimator::Cluster,
+                Mode::Directional => Estimator::Directional,
+            },
         }
     }
 
@@ -125,7 +142,15 @@ impl IndirectEstimate {
     ) {
         match self {
             IndirectEstimate::Volumes(v) => v.record(ctx, encoder, timer),
-            IndirectEstimate::Tiled(t) => t.record(ctx, encoder, timer),
+            IndirectEstimate::Binned(t) => t.record(ctx, encoder, timer),
+        }
+    }
+
+    /// Photon-list entries of the last estimate: all, and trivial accepts (binned only).
+    pub fn list_entries(&self) -> (u64, u64) {
+        match self {
+            IndirectEstimate::Volumes(_) => (0, 0),
+            IndirectEstimate::Binned(b) => b.entries(),
         }
     }
 
@@ -133,7 +158,7 @@ impl IndirectEstimate {
     pub fn memory(&self) -> Vec<(String, u64)> {
         let parts = match self {
             IndirectEstimate::Volumes(v) => v.memory(),
-            IndirectEstimate::Tiled(t) => t.memory(),
+            IndirectEstimate::Binned(t) => t.memory(),
         };
         parts.into_iter().map(|(n, b)| (n.to_string(), b)).collect()
     }
@@ -142,7 +167,7 @@ impl IndirectEstimate {
     pub fn set_sample_centre(&mut self, centre: glam::Vec2) {
         match self {
             IndirectEstimate::Volumes(v) => v.target.set_sample_centre(centre),
-            IndirectEstimate::Tiled(t) => t.target.set_sample_centre(centre),
+            IndirectEstimate::Binned(b) => b.target.set_sample_centre(centre),
         }
     }
 
@@ -150,7 +175,7 @@ impl IndirectEstimate {
     pub fn output(&self) -> (&wgpu::Texture, &wgpu::TextureView) {
         match self {
             IndirectEstimate::Volumes(v) => v.output(),
-            IndirectEstimate::Tiled(t) => t.output(),
+            IndirectEstimate::Binned(t) => t.output(),
         }
     }
 }

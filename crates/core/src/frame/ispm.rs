@@ -15,7 +15,7 @@ use super::direct::{assemble, normalized, readback_names};
 use super::gpu::rgb_image;
 use super::{GpuState, Images};
 use crate::error::{Error, Result};
-use crate::estimate::{IndirectEstimate, Tiled, Volumes};
+use crate::estimate::{Binned, Estimator, IndirectEstimate, Mode, Volumes};
 use crate::gpu;
 use crate::image::Image;
 use crate::photon::lbvh::Aabb;
@@ -113,11 +113,15 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     if ispm.is_none() {
         let (kind, estimate_reason) = settings.estimator.resolve(&ctx.info);
         let (gbuf, k) = (&targets.gbuf, settings.subsample);
+        let binned =
+            |mode| IndirectEstimate::Binned(Box::new(Binned::new(&ctx, gbuf, mode, [w, h], k)));
         let estimate = match kind {
-            crate::estimate::Estimator::Tiled => {
-                IndirectEstimate::Tiled(Box::new(Tiled::new(&ctx, gbuf, w, h, k)))
+            Estimator::Tiled => binned(Mode::Tiled),
+            Estimator::Cluster => binned(Mode::Cluster),
+            Estimator::Directional => binned(Mode::Directional),
+            Estimator::Volumes | Estimator::Auto => {
+                IndirectEstimate::Volumes(Box::new(Volumes::new(&ctx, gbuf, w, h, k)))
             }
-            _ => IndirectEstimate::Volumes(Box::new(Volumes::new(&ctx, gbuf, w, h, k))),
         };
         targets.bind_composite(&ctx, Some(estimate.output().1));
         *ispm = Some(IspmState {
@@ -358,7 +362,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
             }
             v.set_draw(ordered.len() as u32, quads as u32);
         }
-        IndirectEstimate::Tiled(tl) => {
+        IndirectEstimate::Binned(tl) => {
             if photons_changed {
                 tl.write_photons(&ctx, &targets.gbuf, &photons.splat)?;
             }
@@ -387,19 +391,22 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         let data = targets.read(&ctx, &names)?;
         stage(&mut stats, "readback", t);
         timer.collect(&ctx)?;
-        // The tiled estimator's lists are sized from the last frame: when they overflowed,
+        // The binned estimators' lists are sized from the last frame: when they overflowed,
         // they have grown and the estimate is redone.
-        if let (true, IndirectEstimate::Tiled(tl)) = (splat, &mut state.estimate) {
+        if let (true, IndirectEstimate::Binned(tl)) = (splat, &mut state.estimate) {
             let t = Instant::now();
             if tl.overflowed(&ctx, &targets.gbuf)? {
                 tl.write_params(&ctx, scene, radius);
                 stats.estimator_memory = state.estimate.memory();
-                stage(&mut stats, "tiled lists regrown", t);
+                stage(&mut stats, "photon lists regrown", t);
                 continue;
             }
         }
         break data;
     };
+    if splat {
+        (stats.list_entries, stats.trivial_accepts) = state.estimate.list_entries();
+    }
     stats.stages.append(&mut timer.totals);
 
     let mut out = assemble(scene, targets, &data, stats);

@@ -32,8 +32,8 @@ pub struct GpuContext {
     pub(crate) passes: OnceLock<crate::raster::Passes>,
     /// The ISPM passes, compiled on first use of method `ispm`.
     pub(crate) ispm_passes: OnceLock<crate::raster::ispm::IspmPasses>,
-    /// The tiled estimator's compute passes, compiled on first use.
-    pub(crate) tiled_passes: OnceLock<crate::estimate::tiled::TiledPasses>,
+    /// The binning estimators' compute passes, compiled on first use.
+    pub(crate) binned_passes: OnceLock<crate::estimate::binned::BinnedPasses>,
 }
 
 /// How the user chose the adapter.
@@ -151,7 +151,7 @@ fn create_context(choice: &Choice) -> Result<GpuContext> {
         timestamps,
         passes: OnceLock::new(),
         ispm_passes: OnceLock::new(),
-        tiled_passes: OnceLock::new(),
+        binned_passes: OnceLock::new(),
     })
 }
 

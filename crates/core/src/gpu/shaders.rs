@@ -14,6 +14,7 @@ pub const DIRECT: &str = include_str!("shaders/direct.wgsl");
 pub const BOUNCE: &str = include_str!("shaders/bounce.wgsl");
 pub const VOLUME: &str = include_str!("shaders/volume.wgsl");
 pub const TILED: &str = include_str!("shaders/tiled.wgsl");
+pub const CLUSTER: &str = include_str!("shaders/cluster.wgsl");
 pub const UPSAMPLE: &str = include_str!("shaders/upsample.wgsl");
 pub const COMPOSITE: &str = include_str!("shaders/composite.wgsl");
 

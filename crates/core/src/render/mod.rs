@@ -349,6 +349,10 @@ pub struct RenderStats {
     pub estimator_reason: String,
     /// Method `ispm`: GPU memory of the estimator beyond its targets (bytes by part).
     pub estimator_memory: Vec<(String, u64)>,
+    /// Method `ispm`, estimators `tiled` and `cluster`: photon-list entries written, and of
+    /// them the cluster hierarchy's trivial accepts (a photon for a whole node).
+    pub list_entries: u64,
+    pub trivial_accepts: u64,
 }
 
 /// A rendered frame: radiance and auxiliary images, all `width × height`.

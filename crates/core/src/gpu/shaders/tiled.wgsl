@@ -3,7 +3,7 @@
 // 1. `tile_bounds`: the world-space bounding box of each screen tile's view samples;
 // 2. `bin_count`: each photon counts itself into every tile whose box meets its bounding
 //    sphere, among the tiles under the screen rectangle of its ellipsoid's bounding box;
-// 3. `scan`: the tiles' list offsets (exclusive prefix sum of the counts) and the total;
+// 3. `scan`: the lists' offsets (exclusive prefix sum of the counts) and the total;
 // 4. `bin_fill`: each photon writes its index into those tiles' lists;
 // 5. (the lists are copied into a texture: on lavapipe, loops that read textures run
 //    10-35x faster than loops over storage buffers)
@@ -19,6 +19,7 @@
 
 const TILE: u32 = 8u;
 const PHOTON_ROW: u32 = 1024u;
+const NODE_ROW: u32 = 1024u;
 // Width of the list texture (entries a row).
 const LIST_ROW: u32 = 4096u;
 const SCAN_THREADS: u32 = 256u;
@@ -37,6 +38,14 @@ struct TiledParams {
     photons: u32,
     capacity: u32,
     z_ratio: f32,
+    // The cluster hierarchy (cluster.wgsl): nodes per row and rows of levels 1 and 2, the
+    // first node of each level and the node count.
+    l1: vec2<u32>,
+    l2: vec2<u32>,
+    level_first: vec4<u32>,
+    nodes: u32,
+    // Photon lists (tiled: one per tile; cluster: accept lists, then leaf test lists).
+    slots: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: TiledParams;
@@ -45,8 +54,9 @@ struct TiledParams {
 @group(0) @binding(3) var g_diffuse: texture_2d<f32>;
 @group(0) @binding(4) var g_specular: texture_2d<f32>;
 @group(0) @binding(5) var photon_texels: texture_2d<f32>;
-// Per tile: min and max corner of its view samples (min > max: no sample).
-@group(0) @binding(6) var<storage, read_write> bounds: array<vec4<f32>>;
+// Per node (here a tile), 3 vec4s: min corner of its view samples | flags, max corner |
+// cone half-angle, cone axis (cluster.wgsl). min > max: no sample.
+@group(0) @binding(6) var<storage, read_write> nodes: array<vec4<f32>>;
 // Per tile: photons in its list; the last entry is the total (set by `scan`).
 @group(0) @binding(7) var<storage, read_write> counts: array<atomic<u32>>;
 @group(0) @binding(8) var<storage, read_write> offsets: array<u32>;
@@ -54,6 +64,11 @@ struct TiledParams {
 @group(0) @binding(10) var<storage, read_write> list: array<u32>;
 @group(0) @binding(11) var list_texels: texture_2d<u32>;
 @group(0) @binding(12) var low: texture_storage_2d<rgba32float, write>;
+// The cluster hierarchy's per-node quadratics and per-texel leaf (cluster.wgsl).
+@group(0) @binding(13) var<storage, read_write> coeffs: array<vec4<f32>>;
+@group(0) @binding(14) var<storage, read_write> cluster_of: array<u32>;
+// A copy of `nodes` made once they are built (NODE_ROW nodes a row, 3 texels each).
+@group(0) @binding(15) var node_texels: texture_2d<f32>;
 
 fn sample_pixel(texel: vec2<u32>) -> vec2<i32> {
     let k = params.subsample;
@@ -116,8 +131,8 @@ fn tile_bounds(
     }
     if li == 0u {
         let t = tile.y * params.tiles.x + tile.x;
-        bounds[2u * t] = vec4<f32>(wg_min[0], 0.0);
-        bounds[2u * t + 1u] = vec4<f32>(wg_max[0], 0.0);
+        nodes[3u * t] = vec4<f32>(wg_min[0], 0.0);
+        nodes[3u * t + 1u] = vec4<f32>(wg_max[0], 0.0);
     }
 }
 
@@ -178,8 +193,9 @@ fn tile_range(p: VolumePhoton) -> vec4<i32> {
 
 // Whether the photon's bounding sphere meets tile `t`'s box.
 fn meets(p: VolumePhoton, t: u32) -> bool {
-    let lo = bounds[2u * t].xyz;
-    let hi = bounds[2u * t + 1u].xyz;
+    let base = vec2<i32>(i32((t % NODE_ROW) * 3u), i32(t / NODE_ROW));
+    let lo = textureLoad(node_texels, base, 0).xyz;
+    let hi = textureLoad(node_texels, base + vec2<i32>(1, 0), 0).xyz;
     if any(lo > hi) {
         return false;
     }
@@ -217,7 +233,7 @@ var<workgroup> wg_sum: array<u32, SCAN_THREADS>;
 
 @compute @workgroup_size(256)
 fn scan(@builtin(local_invocation_index) li: u32) {
-    let n = params.tiles.x * params.tiles.y;
+    let n = params.slots;
     let per = (n + SCAN_THREADS - 1u) / SCAN_THREADS;
     let begin = min(li * per, n);
     let end = min(begin + per, n);

@@ -1,0 +1,930 @@
+//! The compute estimators that bin photons into lists before shading the view samples
+//! (`gpu/shaders/tiled.wgsl` and `cluster.wgsl`), over the same photons, kernels, BSDF and
+//! normal test as the raster photon volumes ([`super::Volumes`]), so the same image up to
+//! the order of the float sums; the work runs on compute units instead of the rasterizer.
+//! - [`Mode::Tiled`] (Mara et al. 2013, as Moreau et al. 2016 section 3.2 describe it): the
+//!   photons are binned to screen tiles (counting, prefix sum, list build; each tile bounded
+//!   by the world-space box of its view samples) and every view sample sums its tile's list.
+//! - [`Mode::Cluster`] (Moreau et al. 2016 section 4): the view samples of each tile are
+//!   split into depth clusters, a 3-level hierarchy of boxes and normal cones is built over
+//!   them, each photon walks it top-down (rejecting by bounds and cone, *trivially accepting*
+//!   nodes wholly inside its kernel), and accepted photons are summed per node exactly as a
+//!   quadratic in the sample position, so a sample pays for the photons that only overlap
+//!   its leaf.
+//!
+//! The photon lists are sized from the last frame's total: a frame whose lists overflow is
+//! detected at readback ([`Binned::overflowed`]) and splatted again with room for them.
+
+use super::target::IndirectTarget;
+use crate::error::{Error, Result};
+use crate::gpu::{self, shaders, GpuContext};
+use crate::photon::Photon;
+use crate::raster::buffer_init;
+use crate::raster::gbuffer::GBuffer;
+use crate::raster::ispm::{tex, Z_RATIO};
+use crate::raster::timer::Timer;
+use crate::raster::volume_shape::VolumeRadius;
+use crate::scene::Scene;
+use bytemuck::{Pod, Zeroable};
+use std::sync::OnceLock;
+
+/// Tile side in low-resolution texels (`TILE` of tiled.wgsl).
+pub const TILE: u32 = 8;
+/// Photons per row of the photon texture (`PHOTON_ROW`), 4 texels each.
+const PHOTON_ROW: u32 = 1024;
+/// List entries per row of the list texture (`LIST_ROW`).
+const LIST_ROW: u32 = 4096;
+/// Nodes per row of the node texture (`NODE_ROW`), 3 texels each.
+const NODE_ROW: u32 = 1024;
+/// Threads of the per-photon passes' workgroups.
+const PHOTON_GROUP: u32 = 64;
+/// List entries per photon allocated before the first frame has measured them.
+const ENTRIES_PER_PHOTON: u64 = 4;
+
+/// Leaf clusters per tile (`CLUSTERS_PER_TILE` of cluster.wgsl).
+const CLUSTERS_PER_TILE: u32 = 4;
+/// Children per side of a hierarchy node (`FANOUT`).
+const FANOUT: u32 = 4;
+/// vec4s of a node's quadratic or octant buckets, and its centroid (`COEFFS`).
+const COEFFS: u64 = 17;
+
+/// Which binning estimator.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Mode {
+    Tiled,
+    Cluster,
+    /// The cluster hierarchy with per-node octant flux buckets (Moreau et al. 4.7).
+    Directional,
+}
+
+/// `TiledParams` of tiled.wgsl.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct TiledParamsRaw {
+    view_proj: [[f32; 4]; 4],
+    eye: [f32; 3],
+    r_max: f32,
+    low_size: [u32; 2],
+    tiles: [u32; 2],
+    subsample: u32,
+    photons: u32,
+    capacity: u32,
+    z_ratio: f32,
+    l1: [u32; 2],
+    l2: [u32; 2],
+    level_first: [u32; 4],
+    nodes: u32,
+    slots: u32,
+    _pad: [u32; 2],
+}
+
+/// The binding layout shared by both modes, and each mode's pipelines, compiled on first
+/// use (a pipeline costs 20-360 ms on lavapipe).
+pub struct BinnedPasses {
+    layout: wgpu::BindGroupLayout,
+    pipeline_layout: wgpu::PipelineLayout,
+    tiled: OnceLock<TiledPipelines>,
+    cluster: OnceLock<ClusterPipelines>,
+}
+
+struct TiledPipelines {
+    tile_bounds: wgpu::ComputePipeline,
+    bin_count: wgpu::ComputePipeline,
+    scan: wgpu::ComputePipeline,
+    bin_fill: wgpu::ComputePipeline,
+    shade: wgpu::ComputePipeline,
+}
+
+struct ClusterPipelines {
+    leaves: wgpu::ComputePipeline,
+    parents1: wgpu::ComputePipeline,
+    parents2: wgpu::ComputePipeline,
+    count: wgpu::ComputePipeline,
+    scan: wgpu::ComputePipeline,
+    fill: wgpu::ComputePipeline,
+    accumulate: wgpu::ComputePipeline,
+    shade: wgpu::ComputePipeline,
+    directional_accumulate: wgpu::ComputePipeline,
+    directional_shade: wgpu::ComputePipeline,
+}
+
+fn entry(binding: u32, ty: wgpu::BindingType) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty,
+        count: None,
+    }
+}
+
+fn texture(sample_type: wgpu::TextureSampleType) -> wgpu::BindingType {
+    wgpu::BindingType::Texture {
+        sample_type,
+        view_dimension: wgpu::TextureViewDimension::D2,
+        multisampled: false,
+    }
+}
+
+fn storage() -> wgpu::BindingType {
+    wgpu::BindingType::Buffer {
+        ty: wgpu::BufferBindingType::Storage { read_only: false },
+        has_dynamic_offset: false,
+        min_binding_size: None,
+    }
+}
+
+impl BinnedPasses {
+    pub fn get(ctx: &GpuContext) -> &BinnedPasses {
+        ctx.binned_passes
+            .get_or_init(|| BinnedPasses::new(&ctx.device))
+    }
+
+    fn new(device: &wgpu::Device) -> Self {
+        let float = texture(wgpu::TextureSampleType::Float { filterable: false });
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("binned bind group layout"),
+            entries: &[
+                entry(
+                    0,
+                    wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                ),
+                entry(1, float),
+                entry(2, float),
+                entry(3, float),
+                entry(4, float),
+                entry(5, float),
+                entry(6, storage()),
+                entry(7, storage()),
+                entry(8, storage()),
+                entry(9, storage()),
+                entry(10, storage()),
+                entry(11, texture(wgpu::TextureSampleType::Uint)),
+                entry(
+                    12,
+                    wgpu::BindingType::StorageTexture {
+                        access: wgpu::StorageTextureAccess::WriteOnly,
+                        format: crate::raster::ispm::TARGET,
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                    },
+                ),
+                entry(13, storage()),
+                entry(14, storage()),
+                entry(15, float),
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("binned pipeline layout"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        BinnedPasses {
+            layout,
+            pipeline_layout,
+            tiled: OnceLock::new(),
+            cluster: OnceLock::new(),
+        }
+    }
+
+    fn pipelines<const N: usize>(
+        &self,
+        device: &wgpu::Device,
+        label: &str,
+        parts: &[&str],
+        entry_points: [&str; N],
+    ) -> [wgpu::ComputePipeline; N] {
+        let module = shaders::module(device, label, parts);
+        entry_points.map(|entry_point| {
+            gpu::create_compute_pipeline(
+                device,
+                &wgpu::ComputePipelineDescriptor {
+                    label: Some(entry_point),
+                    layout: Some(&self.pipeline_layout),
+                    module: &module,
+                    entry_point: Some(entry_point),
+                    compilation_options: Default::default(),
+                    cache: None,
+                },
+            )
+        })
+    }
+
+    fn tiled(&self, device: &wgpu::Device) -> &TiledPipelines {
+        self.tiled.get_or_init(|| {
+            let [tile_bounds, bin_count, scan, bin_fill, shade] = self.pipelines(
+                device,
+                "tiled shader",
+                &[
+                    shaders::COMMON,
+                    shaders::BSDF,
+                    shaders::PHOTON_VOLUME,
+                    shaders::TILED,
+                ],
+                ["tile_bounds", "bin_count", "scan", "bin_fill", "shade"],
+            );
+            TiledPipelines {
+                tile_bounds,
+                bin_count,
+                scan,
+                bin_fill,
+                shade,
+            }
+        })
+    }
+
+    fn cluster(&self, device: &wgpu::Device) -> &ClusterPipelines {
+        self.cluster.get_or_init(|| {
+            let [
+                leaves,
+                parents1,
+                parents2,
+                count,
+                scan,
+                fill,
+                accumulate,
+                shade,
+                directional_accumulate,
+                directional_shade,
+            ] = self
+                .pipelines(
+                    device,
+                    "cluster shader",
+                    &[
+                        shaders::COMMON,
+                        shaders::BSDF,
+                        shaders::PHOTON_VOLUME,
+                        shaders::TILED,
+                        shaders::CLUSTER,
+                    ],
+                    [
+                        "cluster_leaves",
+                        "cluster_parents1",
+                        "cluster_parents2",
+                        "cluster_count",
+                        "scan",
+                        "cluster_fill",
+                        "cluster_accumulate",
+                        "cluster_shade",
+                        "directional_accumulate",
+                        "directional_shade",
+                    ],
+                );
+            ClusterPipelines {
+                leaves,
+                parents1,
+                parents2,
+                count,
+                scan,
+                fill,
+                accumulate,
+                shade,
+                directional_accumulate,
+                directional_shade,
+            }
+        })
+    }
+}
+
+/// Sizes of the growable resources.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Capacity {
+    /// Photons the photon texture holds (a multiple of `PHOTON_ROW`).
+    photons: u32,
+    /// List entries (a multiple of `LIST_ROW`).
+    entries: u32,
+}
+
+pub struct Binned {
+    mode: Mode,
+    pub(super) target: IndirectTarget,
+    tiles: [u32; 2],
+    /// Nodes per row and rows of hierarchy levels 1 and 2 (cluster mode).
+    l1: [u32; 2],
+    l2: [u32; 2],
+    /// Hierarchy nodes (tiled: one per tile) and photon lists.
+    nodes: u32,
+    slots: u32,
+    params: wgpu::Buffer,
+    last_params: Option<TiledParamsRaw>,
+    photons: wgpu::Texture,
+    node_data: wgpu::Buffer,
+    node_texels: wgpu::Texture,
+    coeffs: wgpu::Buffer,
+    cluster_of: wgpu::Buffer,
+    counts: wgpu::Buffer,
+    offsets: wgpu::Buffer,
+    cursor: wgpu::Buffer,
+    list: wgpu::Buffer,
+    list_texels: wgpu::Texture,
+    total: wgpu::Buffer,
+    group: wgpu::BindGroup,
+    capacity: Capacity,
+    /// Photons uploaded for this frame.
+    count: u32,
+    /// List entries of the last estimate: all, and those of trivially accepted photons.
+    entries: (u64, u64),
+}
+
+fn texture_2d(
+    ctx: &GpuContext,
+    label: &str,
+    size: [u32; 2],
+    format: wgpu::TextureFormat,
+) -> wgpu::Texture {
+    gpu::create_texture(
+        &ctx.device,
+        &wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d {
+                width: size[0],
+                height: size[1],
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            view_formats: &[],
+        },
+    )
+}
+
+fn buffer(ctx: &GpuContext, label: &str, size: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {
+    gpu::create_buffer(
+        &ctx.device,
+        &wgpu::BufferDescriptor {
+            label: Some(label),
+            size: size.max(16),
+            usage,
+            mapped_at_creation: false,
+        },
+    )
+}
+
+impl Binned {
+    /// Resources for a `width × height` image over the G-buffer `gbuf`.
+    pub fn new(
+        ctx: &GpuContext,
+        gbuf: &GBuffer,
+        mode: Mode,
+        size: [u32; 2],
+        subsample: u32,
+    ) -> Self {
+        let target = IndirectTarget::new(ctx, gbuf, size[0], size[1], subsample);
+        let [lw, lh] = target.low_size;
+        let tiles = [lw.div_ceil(TILE), lh.div_ceil(TILE)];
+        let l1 = [tiles[0].div_ceil(FANOUT), tiles[1].div_ceil(FANOUT)];
+        let l2 = [l1[0].div_ceil(FANOUT), l1[1].div_ceil(FANOUT)];
+        let n0 = tiles[0] * tiles[1];
+        let (nodes, slots) = match mode {
+            Mode::Tiled => (n0, n0),
+            Mode::Cluster | Mode::Directional => {
+                let leaves = n0 * CLUSTERS_PER_TILE;
+                let nodes = leaves + l1[0] * l1[1] + l2[0] * l2[1];
+                (nodes, nodes + leaves)
+            }
+        };
+        let rw = wgpu::BufferUsages::STORAGE;
+        let capacity = Capacity {
+            photons: PHOTON_ROW,
+            entries: LIST_ROW,
+        };
+        let photons = Self::photon_texture(ctx, capacity.photons);
+        let (list, list_texels) = Self::lists(ctx, capacity.entries);
+        let params = buffer_init(
+            ctx,
+            "tiled params",
+            bytemuck::bytes_of(&TiledParamsRaw::zeroed()),
+            wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        );
+        let cluster = mode != Mode::Tiled;
+        // Whole rows, for the copy into the node texture.
+        let node_rows = nodes.div_ceil(NODE_ROW);
+        let node_data = buffer(
+            ctx,
+            "hierarchy nodes",
+            (node_rows * NODE_ROW) as u64 * 48,
+            rw | wgpu::BufferUsages::COPY_SRC,
+        );
+        let node_texels = texture_2d(
+            ctx,
+            "hierarchy node texels",
+            [3 * NODE_ROW, node_rows],
+            crate::raster::ispm::TARGET,
+        );
+        let coeffs = buffer(
+            ctx,
+            "node quadratics",
+            if cluster {
+                nodes as u64 * COEFFS * 16
+            } else {
+                16
+            },
+            rw,
+        );
+        let cluster_of = buffer(
+            ctx,
+            "sample leaves",
+            if cluster { (lw * lh) as u64 * 4 } else { 16 },
+            rw,
+        );
+        let slots64 = slots as u64;
+        let counts = buffer(
+            ctx,
+            "list counts",
+            (slots64 + 1) * 4,
+            rw | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
+        );
+        let offsets = buffer(
+            ctx,
+            "list offsets",
+            slots64 * 4,
+            rw | wgpu::BufferUsages::COPY_SRC,
+        );
+        let cursor = buffer(ctx, "list cursors", slots64 * 4, rw);
+        let total = buffer(
+            ctx,
+            "list total",
+            8,
+            wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        );
+        let group = Self::bind_group(
+            ctx,
+            gbuf,
+            &target,
+            [
+                &params,
+                &node_data,
+                &counts,
+                &offsets,
+                &cursor,
+                &list,
+                &coeffs,
+                &cluster_of,
+            ],
+            [&photons, &list_texels, &node_texels],
+        );
+        Binned {
+            mode,
+            target,
+            tiles,
+            l1,
+            l2,
+            nodes,
+            slots,
+            params,
+            last_params: None,
+            photons,
+            node_data,
+            node_texels,
+            coeffs,
+            cluster_of,
+            counts,
+            offsets,
+            cursor,
+            list,
+            list_texels,
+            total,
+            group,
+            capacity,
+            count: 0,
+            entries: (0, 0),
+        }
+    }
+
+    pub fn mode(&self) -> Mode {
+        self.mode
+    }
+
+    /// List entries of the last estimate (after [`Binned::overflowed`] read them): all, and
+    /// those that trivially accepted a photon for a whole node.
+    pub fn entries(&self) -> (u64, u64) {
+        self.entries
+    }
+
+    /// The photon texture for `photons` photons.
+    fn photon_texture(ctx: &GpuContext, photons: u32) -> wgpu::Texture {
+        texture_2d(
+            ctx,
+            "tiled photons",
+            [4 * PHOTON_ROW, photons / PHOTON_ROW],
+            crate::raster::ispm::TARGET,
+        )
+    }
+
+    /// The list buffer and the list texture for `entries` entries.
+    fn lists(ctx: &GpuContext, entries: u32) -> (wgpu::Buffer, wgpu::Texture) {
+        let list = buffer(
+            ctx,
+            "tile lists",
+            entries as u64 * 4,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        );
+        let list_texels = texture_2d(
+            ctx,
+            "tile list texels",
+            [LIST_ROW, entries / LIST_ROW],
+            wgpu::TextureFormat::R32Uint,
+        );
+        (list, list_texels)
+    }
+
+    fn bind_group(
+        ctx: &GpuContext,
+        gbuf: &GBuffer,
+        target: &IndirectTarget,
+        buffers: [&wgpu::Buffer; 8],
+        textures: [&wgpu::Texture; 3],
+    ) -> wgpu::BindGroup {
+        let inputs = gbuf.lighting_inputs();
+        let [photons, list_texels, node_texels] =
+            textures.map(|t| t.create_view(&Default::default()));
+        let [params, nodes, counts, offsets, cursor, list, coeffs, cluster_of] = buffers;
+        fn buf(binding: u32, b: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
+            wgpu::BindGroupEntry {
+                binding,
+                resource: b.as_entire_binding(),
+            }
+        }
+        gpu::create_bind_group(
+            &ctx.device,
+            &wgpu::BindGroupDescriptor {
+                label: Some("binned bind group"),
+                layout: &BinnedPasses::get(ctx).layout,
+                entries: &[
+                    buf(0, params),
+                    tex(1, &inputs[0]),
+                    tex(2, &inputs[1]),
+                    tex(3, &inputs[2]),
+                    tex(4, &inputs[3]),
+                    tex(5, &photons),
+                    buf(6, nodes),
+                    buf(7, counts),
+                    buf(8, offsets),
+                    buf(9, cursor),
+                    buf(10, list),
+                    tex(11, &list_texels),
+                    tex(12, &target.low_view),
+                    buf(13, coeffs),
+                    buf(14, cluster_of),
+                    tex(15, &node_texels),
+                ],
+            },
+        )
+    }
+
+    /// Grows the photon texture or the lists to `want` (never shrinks).
+    fn grow(&mut self, ctx: &GpuContext, gbuf: &GBuffer, want: Capacity) -> Result<()> {
+        let limits = ctx.device.limits();
+        let max_rows = limits.max_texture_dimension_2d as u64;
+        let max_entries = (max_rows * LIST_ROW as u64)
+            .min(limits.max_storage_buffer_binding_size / 4)
+            .min(limits.max_buffer_size / 4);
+        if want.entries as u64 > max_entries {
+            return Err(Error::Gpu(format!(
+                "the binned estimator's photon lists need {} entries; the adapter holds at \
+                 most {max_entries} (use a smaller kernel_scale, fewer photons, or \
+                 estimator \"volumes\")",
+                want.entries
+            )));
+        }
+        if (want.photons / PHOTON_ROW) as u64 > max_rows {
+            return Err(Error::Gpu(format!(
+                "the binned estimators hold at most {} photons on this adapter",
+                max_rows * PHOTON_ROW as u64
+            )));
+        }
+        let capacity = Capacity {
+            photons: want.photons.max(self.capacity.photons),
+            entries: want.entries.max(self.capacity.entries),
+        };
+        if capacity == self.capacity {
+            return Ok(());
+        }
+        // The photon texture keeps its contents unless it grows (then the caller uploads).
+        if capacity.photons > self.capacity.photons {
+            self.photons = Self::photon_texture(ctx, capacity.photons);
+        }
+        if capacity.entries > self.capacity.entries {
+            (self.list, self.list_texels) = Self::lists(ctx, capacity.entries);
+        }
+        self.group = Self::bind_group(
+            ctx,
+            gbuf,
+            &self.target,
+            [
+                &self.params,
+                &self.node_data,
+                &self.counts,
+                &self.offsets,
+                &self.cursor,
+                &self.list,
+                &self.coeffs,
+                &self.cluster_of,
+            ],
+            [&self.photons, &self.list_texels, &self.node_texels],
+        );
+        self.capacity = capacity;
+        self.last_params = None;
+        Ok(())
+    }
+
+    /// The estimate at full resolution.
+    pub fn output(&self) -> (&wgpu::Texture, &wgpu::TextureView) {
+        self.target.output()
+    }
+
+    /// Uploads the parameters when they changed.
+    pub fn write_params(&mut self, ctx: &GpuContext, scene: &Scene, radius: VolumeRadius) {
+        self.target.write_params(ctx, scene);
+        let params = TiledParamsRaw {
+            view_proj: self.target.view_proj(scene).to_cols_array_2d(),
+            eye: scene.camera.position.into(),
+            r_max: radius.r_max,
+            low_size: self.target.low_size,
+            tiles: self.tiles,
+            subsample: self.target.subsample,
+            photons: self.count,
+            capacity: self.capacity.entries,
+            z_ratio: Z_RATIO,
+            l1: self.l1,
+            l2: self.l2,
+            level_first: [
+                0,
+                self.tiles[0] * self.tiles[1] * CLUSTERS_PER_TILE,
+                self.tiles[0] * self.tiles[1] * CLUSTERS_PER_TILE + self.l1[0] * self.l1[1],
+                self.nodes,
+            ],
+            nodes: self.nodes,
+            slots: self.slots,
+            _pad: [0; 2],
+        };
+        if self
+            .last_params
+            .is_some_and(|p| bytemuck::bytes_of(&p) == bytemuck::bytes_of(&params))
+        {
+            return;
+        }
+        gpu::write_buffer(
+            &ctx.queue,
+            "tiled params",
+            &self.params,
+            0,
+            bytemuck::bytes_of(&params),
+        );
+        self.last_params = Some(params);
+    }
+
+    /// Uploads the photons to splat, growing the photon texture (and, before the first
+    /// frame has measured them, the lists) when they don't fit.
+    pub fn write_photons(
+        &mut self,
+        ctx: &GpuContext,
+        gbuf: &GBuffer,
+        photons: &[Photon],
+    ) -> Result<()> {
+        let n = photons.len() as u32;
+        let rows = n.div_ceil(PHOTON_ROW).max(1);
+        let entries = (n as u64 * ENTRIES_PER_PHOTON).min(u32::MAX as u64) as u32;
+        self.grow(
+            ctx,
+            gbuf,
+            Capacity {
+                photons: (2 * rows).next_power_of_two() * PHOTON_ROW,
+                entries: entries.div_ceil(LIST_ROW).max(1) * LIST_ROW,
+            },
+        )?;
+        self.count = n;
+        if n == 0 {
+            return Ok(());
+        }
+        // Whole rows: the last one padded with zero-power photons beyond `count` (never read).
+        let mut texels = bytemuck::cast_slice::<Photon, u8>(photons).to_vec();
+        texels.resize(
+            (rows * PHOTON_ROW) as usize * std::mem::size_of::<Photon>(),
+            0,
+        );
+        gpu::alloc::note_upload("tiled photons", texels.len() as u64);
+        ctx.queue.write_texture(
+            self.photons.as_image_copy(),
+            &texels,
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(4 * PHOTON_ROW * 16),
+                rows_per_image: Some(rows),
+            },
+            wgpu::Extent3d {
+                width: 4 * PHOTON_ROW,
+                height: rows,
+                depth_or_array_layers: 1,
+            },
+        );
+        Ok(())
+    }
+
+    /// Records the binning, the shading and the upsampling of the uploaded photons.
+    pub fn record(&self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder, timer: &mut Timer) {
+        let passes = BinnedPasses::get(ctx);
+        let [tx, ty] = self.tiles;
+        encoder.clear_buffer(&self.counts, 0, None);
+        let max = ctx.device.limits().max_compute_workgroups_per_dimension;
+        let grid = |n: u32| {
+            let groups = n.div_ceil(PHOTON_GROUP);
+            (groups.min(max), groups.div_ceil(max).max(1), groups > 0)
+        };
+        let (gx, gy, any) = grid(self.count);
+        match self.mode {
+            Mode::Tiled => {
+                let p = passes.tiled(&ctx.device);
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("tile bounds"),
+                    timestamp_writes: timer.compute_pass("tiled binning"),
+                });
+                pass.set_bind_group(0, &self.group, &[]);
+                pass.set_pipeline(&p.tile_bounds);
+                pass.dispatch_workgroups(tx, ty, 1);
+                drop(pass);
+                self.record_node_copy(encoder);
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("tiled binning"),
+                    timestamp_writes: timer.compute_pass("tiled binning"),
+                });
+                pass.set_bind_group(0, &self.group, &[]);
+                if any {
+                    pass.set_pipeline(&p.bin_count);
+                    pass.dispatch_workgroups(gx, gy, 1);
+                }
+                pass.set_pipeline(&p.scan);
+                pass.dispatch_workgroups(1, 1, 1);
+                if any {
+                    pass.set_pipeline(&p.bin_fill);
+                    pass.dispatch_workgroups(gx, gy, 1);
+                }
+            }
+            Mode::Cluster | Mode::Directional => {
+                let p = passes.cluster(&ctx.device);
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("cluster hierarchy"),
+                    timestamp_writes: timer.compute_pass("cluster hierarchy"),
+                });
+                pass.set_bind_group(0, &self.group, &[]);
+                pass.set_pipeline(&p.leaves);
+                pass.dispatch_workgroups(tx, ty, 1);
+                pass.set_pipeline(&p.parents1);
+                pass.dispatch_workgroups((self.l1[0] * self.l1[1]).div_ceil(64), 1, 1);
+                pass.set_pipeline(&p.parents2);
+                pass.dispatch_workgroups((self.l2[0] * self.l2[1]).div_ceil(64), 1, 1);
+                drop(pass);
+                self.record_node_copy(encoder);
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("cluster binning"),
+                    timestamp_writes: timer.compute_pass("cluster binning"),
+                });
+                pass.set_bind_group(0, &self.group, &[]);
+                if any {
+                    pass.set_pipeline(&p.count);
+                    pass.dispatch_workgroups(gx, gy, 1);
+                }
+                pass.set_pipeline(&p.scan);
+                pass.dispatch_workgroups(1, 1, 1);
+                if any {
+                    pass.set_pipeline(&p.fill);
+                    pass.dispatch_workgroups(gx, gy, 1);
+                }
+            }
+        }
+        let rows = self.capacity.entries / LIST_ROW;
+        encoder.copy_buffer_to_texture(
+            wgpu::TexelCopyBufferInfo {
+                buffer: &self.list,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(LIST_ROW * 4),
+                    rows_per_image: Some(rows),
+                },
+            },
+            self.list_texels.as_image_copy(),
+            wgpu::Extent3d {
+                width: LIST_ROW,
+                height: rows,
+                depth_or_array_layers: 1,
+            },
+        );
+        match self.mode {
+            Mode::Tiled => {
+                let p = passes.tiled(&ctx.device);
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("tiled shading"),
+                    timestamp_writes: timer.compute_pass("tiled shading"),
+                });
+                pass.set_bind_group(0, &self.group, &[]);
+                pass.set_pipeline(&p.shade);
+                pass.dispatch_workgroups(tx, ty, 1);
+            }
+            Mode::Cluster => {
+                let p = passes.cluster(&ctx.device);
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("cluster shading"),
+                    timestamp_writes: timer.compute_pass("cluster shading"),
+                });
+                pass.set_bind_group(0, &self.group, &[]);
+                let (nx, ny, _) = grid(self.nodes);
+                pass.set_pipeline(&p.accumulate);
+                pass.dispatch_workgroups(nx, ny, 1);
+                pass.set_pipeline(&p.shade);
+                pass.dispatch_workgroups(tx, ty, 1);
+            }
+            Mode::Directional => {
+                let p = passes.cluster(&ctx.device);
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("directional shading"),
+                    timestamp_writes: timer.compute_pass("directional shading"),
+                });
+                pass.set_bind_group(0, &self.group, &[]);
+                let (nx, ny, _) = grid(self.nodes);
+                pass.set_pipeline(&p.directional_accumulate);
+                pass.dispatch_workgroups(nx, ny, 1);
+                pass.set_pipeline(&p.directional_shade);
+                pass.dispatch_workgroups(tx, ty, 1);
+            }
+        }
+        encoder.copy_buffer_to_buffer(&self.counts, self.slots as u64 * 4, &self.total, 0, 4);
+        if self.mode != Mode::Tiled {
+            // Where the leaves' test lists start: the entries of the accept lists.
+            encoder.copy_buffer_to_buffer(&self.offsets, self.nodes as u64 * 4, &self.total, 4, 4);
+        }
+        self.target.record_upsample(ctx, encoder, timer);
+    }
+
+    /// Copies the built nodes into the node texture the later passes read.
+    fn record_node_copy(&self, encoder: &mut wgpu::CommandEncoder) {
+        let rows = self.node_texels.height();
+        encoder.copy_buffer_to_texture(
+            wgpu::TexelCopyBufferInfo {
+                buffer: &self.node_data,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(3 * NODE_ROW * 16),
+                    rows_per_image: Some(rows),
+                },
+            },
+            self.node_texels.as_image_copy(),
+            wgpu::Extent3d {
+                width: 3 * NODE_ROW,
+                height: rows,
+                depth_or_array_layers: 1,
+            },
+        );
+    }
+
+    /// After the frame's submission: whether the lists overflowed (the estimate missed
+    /// photons). If so the lists have grown to hold them and the caller records again.
+    pub fn overflowed(&mut self, ctx: &GpuContext, gbuf: &GBuffer) -> Result<bool> {
+        let bytes = ctx.read_buffer(&self.total)?;
+        let word =
+            |i: usize| u32::from_le_bytes([bytes[i], bytes[i + 1], bytes[i + 2], bytes[i + 3]]);
+        let total = word(0);
+        let accepted = if self.mode == Mode::Tiled { 0 } else { word(4) };
+        self.entries = (total as u64, accepted as u64);
+        if total <= self.capacity.entries {
+            return Ok(false);
+        }
+        // Room for a little growth, so that a slowly changing view does not redo every frame.
+        let entries = (total as u64 + total as u64 / 4).min(u32::MAX as u64) as u32;
+        self.grow(
+            ctx,
+            gbuf,
+            Capacity {
+                photons: self.capacity.photons,
+                entries: entries.div_ceil(LIST_ROW) * LIST_ROW,
+            },
+        )?;
+        Ok(true)
+    }
+
+    /// Bytes of GPU memory the estimator holds beyond its targets, by part (for the stats).
+    pub fn memory(&self) -> Vec<(&'static str, u64)> {
+        let slots = self.slots as u64;
+        let mut parts = vec![
+            (
+                "node bounds and cones (buffer + texture)",
+                2 * self.node_data.size(),
+            ),
+            ("list counts, offsets, cursors", slots * 12 + 4),
+            ("photon texture", self.capacity.photons as u64 * 64),
+            (
+                "photon lists (buffer + texture)",
+                self.capacity.entries as u64 * 8,
+            ),
+        ];
+        if self.mode != Mode::Tiled {
+            parts.push(("node quadratics or octant fluxes", self.coeffs.size()));
+            parts.push(("sample leaves", self.cluster_of.size()));
+        }
+        parts
+    }
+}
