@@ -157,7 +157,10 @@ def test_ispm_method_end_to_end():
     ref = gi.render(scene, "path", spp=64, size=(32, 32))
     s = r.stats
     assert s.photons_first_bounce > 0 and s.photons_stored > 0
-    assert {"bounce maps", "cpu trace", "photon volumes", "upsample"} <= {n for n, _ in s.stages}
+    stages = {n for n, _ in s.stages}
+    assert {"bounce maps", "cpu trace", "upsample"} <= stages
+    # The estimator's passes (which one runs depends on the adapter: `estimator="auto"`).
+    assert stages & {"photon volumes", "tiled shading", "cluster shading"}, stages
     # The Rust tests check accuracy per region; here the image mean within 5%.
     assert r.radiance.mean() == pytest.approx(ref.radiance.mean(), rel=0.05)
     # AOVs: direct + specular + indirect = radiance; photon hits are counts.
@@ -231,7 +234,13 @@ def test_ispm_volume_shapes_agree():
     images = {}
     for shape in ("icosahedron", "quad", "auto"):
         r = gi.render(
-            scene, "ispm", spp=1, size=(48, 48), photons=20_000, volume_shape=shape, estimator="volumes"
+            scene,
+            "ispm",
+            spp=1,
+            size=(48, 48),
+            photons=20_000,
+            volume_shape=shape,
+            estimator="volumes",
         )
         images[shape] = r.aov("indirect")
         expected = {"icosahedron": 0, "quad": r.stats.photons_stored}.get(shape)

@@ -102,7 +102,7 @@ def test_progress_bars_in_a_terminal_and_quiet_in_logs(tmp_path):
     os.close(leader)
     assert proc.wait(timeout=300) == 0
     text = b"".join(chunks).decode(errors="replace")
-    assert "100.0%|" in text and "\r" in text and "photon volumes" in text, text
+    assert "100.0%|" in text and "\r" in text and "cpu trace" in text, text
 
 
 def test_scenes_lists_builtins():

@@ -149,7 +149,7 @@ def write(tmp_path, body):
             '<emitter type="area">',
             7,
         ),
-        ('<emitter type="envmap"/>', '<emitter type="envmap">', 6),
+        ('<emitter type="directional"/>', '<emitter type="directional">', 6),
         ('<shape type="cube"><ref id="missing"/></shape>', "<ref>", 6),
         (
             '<shape type="sphere"><float name="radius" value="$r"/></shape>',

@@ -42,7 +42,7 @@ def test_only_requested_images_are_returned(cornell: gi.Scene) -> None:
 
 def test_steady_state_creates_no_gpu_objects(cornell: gi.Scene) -> None:
     r = gi.Renderer(cornell, "ispm", **SMALL)
-    r.render()
+    estimator = r.render().stats.estimator
     before = gi.gpu_counters()
     r.render()
     r.update(camera={"position": [0.1, 1.0, 3.4]})
@@ -51,7 +51,12 @@ def test_steady_state_creates_no_gpu_objects(cornell: gi.Scene) -> None:
     for kind in ("buffers", "textures", "bind_groups", "pipelines"):
         assert after[kind] == before[kind], kind
     labels = {label for label, _ in after["uploads"][len(before["uploads"]) :]}
-    assert labels == {"eye views", "photons", "volume params", "upsample params"}
+    # A camera move re-sorts the raster volumes' photons (small ones as quads); the compute
+    # estimators keep theirs and update their parameters.
+    if estimator == "volumes":
+        assert labels == {"eye views", "photons", "volume params", "upsample params"}
+    else:
+        assert labels == {"eye views", "tiled params", "upsample params"}
 
 
 def test_moving_an_object_and_a_material(cornell: gi.Scene) -> None:

@@ -30,7 +30,10 @@ _MeshArrays = tuple[
 class Scene:
     @staticmethod
     def from_json(
-        text: str, source: str = ..., meshes: dict[str, _MeshArrays] | None = None
+        text: str,
+        source: str = ...,
+        meshes: dict[str, _MeshArrays] | None = None,
+        images: dict[str, npt.NDArray[np.float32]] | None = None,
     ) -> Scene: ...
     @staticmethod
     def builtin(name: str) -> Scene: ...
@@ -44,6 +47,8 @@ class Scene:
     def triangle_count(self) -> int: ...
     @property
     def light_count(self) -> int: ...
+    @property
+    def has_environment(self) -> bool: ...
     @property
     def material_names(self) -> list[str]: ...
     @property

@@ -119,6 +119,8 @@ class _Translator:
         self.lights: list[dict[str, Any]] = []
         self.camera: dict[str, Any] | None = None
         self.notes: dict[str, str] = {}
+        self.environment: dict[str, Any] | None = None
+        self.env_images: dict[str, np.ndarray] = {}
 
     # -- errors and attribute access ------------------------------------------------------
 
@@ -550,6 +552,8 @@ class _Translator:
 
     def emitter(self, el: Element) -> None:
         kind = el.attrs.get("type")
+        if kind in ("envmap", "constant"):
+            return self.env_emitter(el, kind)
         props = self.props(el)
         known = {"intensity", "to_world", "position", "cutoff_angle", "beam_width"}
         self.note_unknown(props, known)
@@ -574,15 +578,53 @@ class _Translator:
                 }
             )
         else:
-            raise self.error(el, "unsupported emitter (gi has point and spot lights)")
+            raise self.error(
+                el, "unsupported emitter (gi has point, spot, envmap and constant emitters)"
+            )
+
+    def env_emitter(self, el: Element, kind: str) -> None:
+        """`envmap` (an equirectangular image, `scale`, a rotation about +y) or `constant`
+        (`radiance`) → the scene's `environment` section."""
+        if self.environment is not None:
+            raise self.error(el, "a second environment emitter (gi takes one)")
+        props = self.props(el)
+        if kind == "constant":
+            self.note_unknown(props, {"radiance"})
+            radiance = self.color(props, "radiance", 1.0)
+            self.environment = {"radiance": radiance.tolist()}
+            return
+        self.note_unknown(props, {"filename", "scale", "to_world"})
+        if "filename" not in props:
+            raise self.error(el, "an envmap needs a `filename`")
+        name = self.string(props, "filename", "")
+        from gi.environment import load_environment_image
+
+        self.env_images[name] = load_environment_image(self.path.parent / name, self.file, el.label)
+        m = self.transform(props.get("to_world"))[:3, :3]
+        cols = m / np.linalg.norm(m, axis=0)
+        # gi rotates environments about +y only: to_world must be such a rotation (any
+        # uniform scale is irrelevant for directions).
+        if not np.allclose(cols[:, 1], [0.0, 1.0, 0.0], atol=1e-5) or abs(cols[1, 0]) > 1e-5:
+            raise self.error(
+                props["to_world"], "only rotations about the y axis are supported for envmaps"
+            )
+        rotation = math.degrees(math.atan2(cols[0, 2], cols[0, 0]))
+        self.environment = {
+            "file": name,
+            "intensity": self.float(el, props, "scale", 1.0),
+            "rotation": rotation,
+        }
 
     def description(self) -> dict[str, Any]:
-        return {
+        desc = {
             "camera": self.camera,
             "lights": self.lights,
             "materials": self.materials,
             "objects": self.objects,
         }
+        if self.environment is not None:
+            desc["environment"] = self.environment
+        return desc
 
 
 def _cube() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -610,4 +652,4 @@ def load_mitsuba(path: Path) -> Scene:
     t = _Translator(path)
     t.run(parse_xml(text, str(path)))
     report(path, t.notes)
-    return Scene.from_json(json.dumps(t.description()), str(path), t.meshes)
+    return Scene.from_json(json.dumps(t.description()), str(path), t.meshes, t.env_images)

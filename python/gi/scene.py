@@ -2,7 +2,8 @@
 
 The JSON format is documented in ``docs/scene-format.md``; the Rust core validates every
 field. Mesh files named by a scene are resolved relative to it and read by
-:mod:`gi.meshes` (OBJ with MTL, PLY, glTF/GLB, STL). Mitsuba scenes are translated by
+:mod:`gi.meshes` (OBJ with MTL, PLY, glTF/GLB, STL), environment images by
+:mod:`gi.environment` (OpenImageIO). Mitsuba scenes are translated by
 :mod:`gi.mitsuba` (``docs/mitsuba.md``).
 """
 
@@ -13,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from gi._gi import Scene, builtin_scenes
+from gi.environment import load_environment
 from gi.meshes import MeshEntry, load_mesh
 from gi.meshes import scene_error as _scene_error
 
@@ -55,13 +57,23 @@ def load_scene(source: str | Path) -> Scene:
         raise _scene_error(file, "(root)", "invalid JSON: nested too deeply") from e
     except MemoryError as e:
         raise _scene_error(file, "(file)", "too large to parse") from e
-    return Scene.from_json(text, file, _load_meshes(desc, path.parent, file))
+    return Scene.from_json(
+        text,
+        file,
+        _load_meshes(desc, path.parent, file),
+        load_environment(desc, path.parent, file),
+    )
 
 
 def scene_from_desc(desc: dict[str, Any], source: str, base_dir: Path) -> Scene:
     """A scene from a parsed scene description (the JSON format of ``load_scene``), its mesh
     files relative to ``base_dir``; ``source`` names it in errors."""
-    return Scene.from_json(json.dumps(desc), source, _load_meshes(desc, base_dir, source))
+    return Scene.from_json(
+        json.dumps(desc),
+        source,
+        _load_meshes(desc, base_dir, source),
+        load_environment(desc, base_dir, source),
+    )
 
 
 def _load_meshes(desc: Any, base_dir: Path, file: str) -> dict[str, MeshEntry]:

@@ -176,6 +176,20 @@ fn binned_estimators_give_the_same_image_as_volumes() {
     }
 }
 
+/// The compute estimators build their lists with atomics, in an order that varies between
+/// runs, but sum in fixed point: the same settings give the same bits.
+#[test]
+fn binned_estimators_are_reproducible() {
+    let sc = scene("cornell");
+    let s = settings(96, 2, 2.0);
+    for estimator in [Estimator::Tiled, Estimator::Cluster, Estimator::Directional] {
+        let a = run(&sc, &s, estimator);
+        let b = run(&sc, &s, estimator);
+        assert!(a.stats.list_entries > 0);
+        assert_eq!(a.radiance.pixels, b.radiance.pixels, "{}", estimator.name());
+    }
+}
+
 #[test]
 fn estimator_setting_parses_and_auto_reports_its_choice() {
     assert_eq!(Settings::default().estimator, Estimator::Auto);
@@ -194,60 +208,6 @@ fn estimator_setting_parses_and_auto_reports_its_choice() {
     );
     assert!(!out.stats.estimator_reason.is_empty());
     assert!(out.stats.estimator_memory.iter().all(|(_, b)| *b > 0));
-}
-
-/// Luminance of each pixel.
-fn luminance(img: &gi_core::Image) -> Vec<f64> {
-    img.pixels
-        .iter()
-        .map(|p| (0.2126 * p.x + 0.7152 * p.y + 0.0722 * p.z) as f64)
-        .collect()
-}
-
-/// PSNR (dB) of `b` against `a`, peak = `a`'s largest luminance.
-fn psnr(a: &gi_core::Image, b: &gi_core::Image) -> f64 {
-    let (la, lb) = (luminance(a), luminance(b));
-    let peak = la.iter().cloned().fold(0.0, f64::max);
-    let mse = la
-        .iter()
-        .zip(&lb)
-        .map(|(x, y)| (x - y).powi(2))
-        .sum::<f64>()
-        / la.len() as f64;
-    10.0 * (peak * peak / mse).log10()
-}
-
-/// Mean SSIM of the luminance over 8×8 windows (stride 4), the usual constants with the
-/// dynamic range of `a` (Wang et al. 2004).
-fn ssim(a: &gi_core::Image, b: &gi_core::Image) -> f64 {
-    let (la, lb) = (luminance(a), luminance(b));
-    let w = a.width as usize;
-    let h = a.height as usize;
-    let range = la.iter().cloned().fold(0.0, f64::max);
-    let (c1, c2) = ((0.01 * range).powi(2), (0.03 * range).powi(2));
-    let mut total = 0.0;
-    let mut windows = 0;
-    for y0 in (0..=h - 8).step_by(4) {
-        for x0 in (0..=w - 8).step_by(4) {
-            let idx = (0..64).map(|i| (y0 + i / 8) * w + x0 + i % 8);
-            let xs: Vec<f64> = idx.clone().map(|i| la[i]).collect();
-            let ys: Vec<f64> = idx.map(|i| lb[i]).collect();
-            let mx = xs.iter().sum::<f64>() / 64.0;
-            let my = ys.iter().sum::<f64>() / 64.0;
-            let vx = xs.iter().map(|x| (x - mx).powi(2)).sum::<f64>() / 63.0;
-            let vy = ys.iter().map(|y| (y - my).powi(2)).sum::<f64>() / 63.0;
-            let cxy = xs
-                .iter()
-                .zip(&ys)
-                .map(|(x, y)| (x - mx) * (y - my))
-                .sum::<f64>()
-                / 63.0;
-            total += ((2.0 * mx * my + c1) * (2.0 * cxy + c2))
-                / ((mx * mx + my * my + c1) * (vx + vy + c2));
-            windows += 1;
-        }
-    }
-    total / windows as f64
 }
 
 /// The directional approximation against the exact cluster estimate (the same photons and
@@ -272,8 +232,8 @@ fn directional_is_close_to_cluster() {
         assert_eq!(directional.stats.estimator, "directional");
         let (c, d) = (indirect(&cluster), indirect(&directional));
         let mean =
-            |img: &gi_core::Image| luminance(img).iter().sum::<f64>() / img.pixels.len() as f64;
-        let (p, q) = (psnr(c, d), ssim(c, d));
+            |img: &gi_core::Image| img.luminance().iter().sum::<f64>() / img.pixels.len() as f64;
+        let (p, q) = (c.psnr(d), c.ssim(d));
         let ratio = mean(d) / mean(c);
         eprintln!(
             "{name}: directional vs cluster: PSNR {p:.2} dB, SSIM {q:.4}, mean ratio {ratio:.4}"

@@ -74,32 +74,14 @@ fn max_difference(a: &Image, b: &Image) -> f32 {
         .fold(0.0, f32::max)
 }
 
-/// How far a frame may be from another render of the same pose: 0 (bitwise) except for the
-/// tiled estimator (`estimate::Tiled`), whose photon lists are built with atomics, so that a
-/// pixel sums the same terms in an order that varies between runs: 1e-5 of the largest
-/// pixel (an f32 sum of a few hundred terms is off by ~1e-6 relative; a wrong or missing
-/// photon term moves a pixel by far more, see tests/estimators.rs).
-fn tolerance(out: &RenderOutput) -> f32 {
-    if ["tiled", "cluster", "directional"].contains(&out.stats.estimator.as_str()) {
-        1e-5 * out
-            .radiance
-            .pixels
-            .iter()
-            .map(|p| p.max_element())
-            .fold(0.0, f32::max)
-    } else {
-        0.0
-    }
-}
-
 fn mean(img: &Image) -> f32 {
     img.pixels.iter().map(|p| p.element_sum()).sum::<f32>() / (3 * img.pixels.len()) as f32
 }
 
 /// Every method: a renderer that rendered other poses first (so its BVH, GPU buffers,
 /// targets and photon ring were all updated, not built) renders pose 1 exactly as a new
-/// renderer of pose 1 does. Bitwise, except for the tiled estimator ([`tolerance`]): the
-/// CPU methods sum in a fixed chunk order; the GPU blends in primitive order per pixel.
+/// renderer of pose 1 does. Bitwise: the CPU methods sum in a fixed chunk order; the GPU
+/// blends in primitive order per pixel, and the compute estimators sum in fixed point.
 #[test]
 fn updated_renderer_equals_one_shot() {
     let scene = builtin::load("cornell").expect("scene");
@@ -117,11 +99,7 @@ fn updated_renderer_equals_one_shot() {
         let frame = r.render(&all(), &Silent).expect("frame 2");
         let one_shot = render(&posed(&scene, 1.0), &s, &Silent).expect("one-shot");
         let d = max_difference(&frame.radiance, &one_shot.radiance);
-        assert!(
-            d <= tolerance(&one_shot),
-            "{}: frames differ by {d}",
-            method.name()
-        );
+        assert_eq!(d, 0.0, "{}: frames differ by {d}", method.name());
         assert_eq!(
             frame.albedo.pixels,
             one_shot.albedo.pixels,
@@ -277,7 +255,7 @@ fn animation_frames_equal_one_shot_poses() {
         let frame = r.render(&all(), &Silent).expect("frame");
         let one_shot = render(&posed(&scene, t), &s, &Silent).expect("one-shot");
         let d = max_difference(&frame.radiance, &one_shot.radiance);
-        assert!(d <= tolerance(&one_shot), "frame {step}: {d}");
+        assert_eq!(d, 0.0, "frame {step}");
     }
     // Only the object moves: direct (shadow) and indirect light both change.
     let object = scene.objects.len() - 1;
@@ -395,6 +373,6 @@ fn cancelled_frame_leaves_the_renderer_consistent() {
         let frame = r.render(&all(), &Silent).expect("frame after");
         let one_shot = render(&posed(&scene, 1.0), &s, &Silent).expect("one-shot");
         let d = max_difference(&frame.radiance, &one_shot.radiance);
-        assert!(d <= tolerance(&one_shot), "{}: {d}", method.name());
+        assert_eq!(d, 0.0, "{}", method.name());
     }
 }

@@ -1,9 +1,9 @@
 //! `Scene`: built-in scenes, and JSON descriptions with mesh arrays loaded by Python.
 
 use crate::errors::{to_py, SceneError};
-use gi_core::scene::{builtin, MeshData, TriMesh};
+use gi_core::scene::{builtin, EnvImage, MeshData, TriMesh};
 use glam::Vec3;
-use numpy::{PyReadonlyArray1, PyReadonlyArray2};
+use numpy::{PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::collections::HashMap;
@@ -83,18 +83,61 @@ fn mesh_from_py(key: &str, value: &Bound<'_, PyAny>, source: &str) -> PyResult<M
     })
 }
 
+/// Converts one `images` entry: an equirectangular environment image, float32 (H, W, 3),
+/// rows from the top (up). Values are checked by the core.
+fn env_image_from_py(key: &str, value: &Bound<'_, PyAny>, source: &str) -> PyResult<EnvImage> {
+    let a: PyReadonlyArray3<'_, f32> = value.extract().map_err(|e| {
+        SceneError::new_err(format!(
+            "{source}: environment image `{key}`: expected a float32 array (H, W, 3): {e}"
+        ))
+    })?;
+    let view = a.as_array();
+    let (h, w, c) = view.dim();
+    if c != 3 || h == 0 || w == 0 {
+        return Err(SceneError::new_err(format!(
+            "{source}: environment image `{key}` must have shape (H, W, 3), got {:?}",
+            view.shape()
+        )));
+    }
+    gi_core::memory::check(|| format!("environment image `{key}`"), (h * w) as u64 * 24)
+        .map_err(|e| to_py(value.py(), e))?;
+    let texels = view
+        .outer_iter()
+        .flat_map(|row| {
+            row.outer_iter()
+                .map(|t| Vec3::new(t[0], t[1], t[2]))
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    Ok(EnvImage {
+        width: w as u32,
+        height: h as u32,
+        texels,
+    })
+}
+
 #[pymethods]
 impl PyScene {
     /// Parses a JSON scene description. `meshes` maps each `mesh` object's `file` string to
-    /// its arrays (see `gi.scene` for the loader that fills it).
+    /// its arrays (see `gi.scene` for the loader that fills it); `images` maps the
+    /// `environment` section's `file` to its float32 (H, W, 3) image.
     #[staticmethod]
-    #[pyo3(signature = (text, source = "<string>".to_string(), meshes = None))]
+    #[pyo3(signature = (text, source = "<string>".to_string(), meshes = None, images = None))]
     fn from_json(
         py: Python<'_>,
         text: &str,
         source: String,
         meshes: Option<&Bound<'_, PyDict>>,
+        images: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
+        let mut env_images = HashMap::new();
+        if let Some(images) = images {
+            for (k, v) in images.iter() {
+                let key: String = k.extract()?;
+                let image = env_image_from_py(&key, &v, &source)?;
+                env_images.insert(key, image);
+            }
+        }
         let mut map = HashMap::new();
         if let Some(meshes) = meshes {
             for (k, v) in meshes.iter() {
@@ -104,7 +147,7 @@ impl PyScene {
             }
         }
         let inner = crate::guard::run(py, "Scene.from_json", None, |_| {
-            gi_core::Scene::from_json(text, &source, &map)
+            gi_core::Scene::from_json_with_images(text, &source, &map, &env_images)
         })?;
         Ok(PyScene {
             inner,
@@ -146,6 +189,11 @@ impl PyScene {
     #[getter]
     fn light_count(&self) -> usize {
         self.inner.lights.len()
+    }
+    /// Whether the scene has an environment light.
+    #[getter]
+    fn has_environment(&self) -> bool {
+        self.inner.environment.is_some()
     }
     #[getter]
     fn material_names(&self) -> Vec<String> {

@@ -80,6 +80,26 @@ pub struct Renderer {
     accum: Option<progressive::Accumulation>,
 }
 
+/// Only `path` lights a scene with its environment light so far; the other methods refuse
+/// rather than render the scene without it.
+fn check_environment(scene: &Scene, method: Method) -> Result<()> {
+    if scene.environment.is_none() || method == Method::Path {
+        return Ok(());
+    }
+    let how = match method {
+        Method::Direct | Method::Ispm => "its GPU passes have no environment light yet",
+        _ => "its photons are emitted by point and spot lights only",
+    };
+    Err(Error::setting(
+        "method",
+        format!(
+            "method `{}` cannot render a scene with an environment light ({how}); \
+             use method `path`",
+            method.name()
+        ),
+    ))
+}
+
 /// Most refits before the BVH is built anew (a refitted tree keeps its topology and slows
 /// down as objects travel).
 const MAX_REFITS: u32 = 16;
@@ -98,6 +118,7 @@ impl Renderer {
     /// failing that, the scene camera's.
     pub fn new(scene: &Scene, settings: &Settings) -> Result<Self> {
         settings.validate()?;
+        check_environment(scene, settings.method)?;
         let camera = scene.camera.with_size(
             settings.width.unwrap_or(scene.camera.width),
             settings.height.unwrap_or(scene.camera.height),

@@ -7,6 +7,8 @@ pub const COMMON: &str = include_str!("shaders/common/types.wgsl");
 pub const BSDF: &str = include_str!("shaders/common/bsdf.wgsl");
 /// The photon-volume estimate term shared by the indirect estimators (needs `BSDF`).
 pub const PHOTON_VOLUME: &str = include_str!("shaders/common/photon_volume.wgsl");
+/// Order-independent (fixed-point) sums of non-negative RGB terms.
+pub const FIXED_SUM: &str = include_str!("shaders/common/fixed_sum.wgsl");
 
 pub const GBUFFER: &str = include_str!("shaders/gbuffer.wgsl");
 pub const SHADOW: &str = include_str!("shaders/shadow.wgsl");

@@ -18,6 +18,9 @@ pub struct SceneDesc {
     /// Keyframed tracks (see `scene::animation`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub animation: Option<AnimationDesc>,
+    /// Light from infinitely far away: an HDR image or a constant (see `scene::environment`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub environment: Option<super::environment::EnvironmentDesc>,
 }
 
 /// Pinhole camera.

@@ -5,6 +5,7 @@ pub mod bench;
 pub mod builtin;
 pub mod camera;
 pub mod desc;
+pub mod environment;
 pub mod light;
 pub mod primitives;
 pub mod shading;
@@ -13,6 +14,7 @@ pub mod update;
 pub use animation::Animation;
 pub use camera::Camera;
 pub use desc::SceneDesc;
+pub use environment::{EnvImage, Environment};
 pub use light::Light;
 pub use primitives::TriMesh;
 pub use shading::Smoothing;
@@ -54,6 +56,8 @@ pub struct Scene {
     pub objects: Vec<SceneObject>,
     /// The description's keyframed tracks, if any (see [`animation`]).
     pub animation: Option<Animation>,
+    /// Light from infinitely far away (see [`environment`]); shared, as images are large.
+    pub environment: Option<std::sync::Arc<Environment>>,
     /// The camera as described (position, look-at point, up, fov), so that updates of some
     /// of its fields keep the others exactly (`Scene::camera_desc`).
     pub(crate) camera_source: desc::CameraDesc,
@@ -88,6 +92,17 @@ impl Scene {
         source_name: &str,
         meshes: &HashMap<String, MeshData>,
     ) -> Result<Scene> {
+        Scene::from_json_with_images(text, source_name, meshes, &HashMap::new())
+    }
+
+    /// [`Scene::from_json`] with the environment images the description names (`file` of
+    /// its `environment` section), loaded by the caller.
+    pub fn from_json_with_images(
+        text: &str,
+        source_name: &str,
+        meshes: &HashMap<String, MeshData>,
+        images: &HashMap<String, EnvImage>,
+    ) -> Result<Scene> {
         let de = &mut serde_json::Deserializer::from_str(text);
         let desc: SceneDesc = serde_path_to_error::deserialize(de).map_err(|e| {
             let field = e.path().to_string();
@@ -97,7 +112,19 @@ impl Scene {
                 e.inner().to_string(),
             )
         })?;
-        Scene::from_desc(&desc, source_name, meshes)
+        let mut scene = Scene::from_desc(&desc, source_name, meshes)?;
+        if let Some(env) = &desc.environment {
+            let e = Environment::from_desc(env, images).map_err(|(f, m)| {
+                let field = if f == "(section)" {
+                    "environment".into()
+                } else {
+                    format!("environment.{f}")
+                };
+                Error::scene(source_name, field, m)
+            })?;
+            scene.environment = Some(std::sync::Arc::new(e));
+        }
+        Ok(scene)
     }
 
     /// Builds a scene from a parsed description, validating every field.
@@ -137,6 +164,7 @@ impl Scene {
             triangle_materials: Vec::new(),
             objects: Vec::new(),
             animation: None,
+            environment: None,
             camera_source: desc.camera.clone(),
         };
         for (i, obj) in desc.objects.iter().enumerate() {

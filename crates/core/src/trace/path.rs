@@ -1,11 +1,14 @@
 //! The reference path tracer: next-event estimation to every point and spot light, BSDF
-//! importance sampling and Russian roulette. A camera path can never reach a point light
-//! through a delta (mirror or glass) scattering, so paths whose first bounce from the light
-//! is specular are left to the light tracer ([`super::light_tracer`]).
+//! importance sampling and Russian roulette. An environment light is sampled by importance
+//! and by the BSDF, the two combined by multiple importance sampling (power heuristic); rays
+//! that leave the scene (camera rays included) take the environment's radiance. A camera
+//! path can never reach a point light through a delta (mirror or glass) scattering, so paths
+//! whose first bounce from the light is specular are left to the light tracer
+//! ([`super::light_tracer`]).
 
 use super::{Interaction, SceneBvh};
 use crate::sampling::Rng;
-use crate::scene::Scene;
+use crate::scene::{Environment, Scene};
 use glam::Vec3;
 
 /// Path tracer settings.
@@ -67,6 +70,49 @@ pub fn direct_light(scene: &Scene, bvh: &SceneBvh, it: &Interaction, wo: Vec3) -
     sum
 }
 
+/// Power heuristic (β = 2) weight of a strategy of density `a` against one of density `b`.
+#[inline]
+pub fn power_heuristic(a: f32, b: f32) -> f32 {
+    let (a2, b2) = (a * a, b * b);
+    if a2 + b2 > 0.0 && a2.is_finite() {
+        a2 / (a2 + b2)
+    } else if a2.is_infinite() {
+        1.0
+    } else {
+        0.0
+    }
+}
+
+/// Environment light arriving at `it` from one direction sampled by importance, times the
+/// BSDF towards `wo`, weighted against BSDF sampling (the path's BSDF-sampled continuation,
+/// which may also escape to the environment) by the power heuristic.
+pub fn environment_light(
+    env: &Environment,
+    bvh: &SceneBvh,
+    it: &Interaction,
+    wo: Vec3,
+    rng: &mut Rng,
+) -> Vec3 {
+    let u = rng.next_2d();
+    let m = it.material;
+    if m.is_purely_specular() {
+        return Vec3::ZERO;
+    }
+    let Some(s) = env.sample(u) else {
+        return Vec3::ZERO;
+    };
+    if s.pdf <= 0.0 || s.radiance == Vec3::ZERO || s.wi.dot(it.ng) * wo.dot(it.ng) <= 0.0 {
+        return Vec3::ZERO;
+    }
+    let (wo_l, wi_l) = (it.frame.to_local(wo), it.frame.to_local(s.wi));
+    let f = m.eval(wo_l, wi_l);
+    if f == Vec3::ZERO || bvh.occluded(it.spawn(s.wi), s.wi, f32::INFINITY) {
+        return Vec3::ZERO;
+    }
+    let w = power_heuristic(s.pdf, m.pdf(wo_l, wi_l));
+    f * wi_l.z.abs() * s.radiance * (w / s.pdf)
+}
+
 /// What the ray `origin + t·dir` hits first.
 pub fn first_hit(scene: &Scene, bvh: &SceneBvh, origin: Vec3, dir: Vec3) -> FirstHit {
     let Some(hit) = bvh.intersect(origin, dir, f32::INFINITY) else {
@@ -99,15 +145,35 @@ pub fn radiance(
     let mut l = Vec3::ZERO;
     let mut beta = Vec3::ONE;
     let (mut o, mut d) = (origin, dir);
-    for depth in 0..s.max_depth {
+    let env = scene.environment.as_deref();
+    // Solid-angle density of the BSDF sample that made the current ray, when the vertex it
+    // left also sampled the environment (MIS applies); `None` for camera rays, delta
+    // scattering and environments that are not sampled by importance.
+    let mut bsdf_pdf: Option<f32> = None;
+    // With an environment, the path goes one step beyond its last interaction: a BSDF
+    // sample from the last vertex that escapes still carries direct light from the sky
+    // (so `max_depth` 1 is direct light for both sampling strategies).
+    let steps = s.max_depth + u32::from(env.is_some());
+    for depth in 0..steps {
         let Some(hit) = bvh.intersect(o, d, f32::INFINITY) else {
+            if let Some(env) = env {
+                let w = bsdf_pdf.map_or(1.0, |p| power_heuristic(p, env.pdf(d)));
+                l += beta * env.radiance(d) * w;
+            }
             break;
         };
+        if depth == s.max_depth {
+            break; // a surface beyond the last interaction: only escapes count there
+        }
         let it = Interaction::new(scene, &hit, d);
         let wo = -d;
         // Next-event estimation.
         l += beta * direct_light(scene, bvh, &it, wo);
-        if depth + 1 == s.max_depth {
+        let env_mis = env.is_some_and(|e| e.importance);
+        if let Some(env) = env.filter(|e| e.importance) {
+            l += beta * environment_light(env, bvh, &it, wo, rng);
+        }
+        if depth + 1 == steps {
             break;
         }
         // Continue the path by sampling the BSDF.
@@ -123,6 +189,7 @@ pub fn radiance(
             break;
         }
         beta *= bs.weight;
+        bsdf_pdf = (env_mis && !bs.lobe.is_delta()).then_some(bs.pdf);
         // Possibly terminate the path with Russian roulette.
         if depth + 1 >= s.rr_depth {
             let q = beta.max_element().min(0.95);

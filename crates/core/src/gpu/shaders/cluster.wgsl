@@ -483,10 +483,11 @@ fn cluster_accumulate(
     if k >= params.nodes {
         return;
     }
-    var a_sum = vec3<f32>(0.0);
-    var b_sum = array<vec3<f32>, 3>(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0));
-    var c_diag = array<vec3<f32>, 3>(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0));
-    var c_off = array<vec3<f32>, 3>(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0));
+    // Fixed-point sums: the list's order varies between runs (atomics).
+    var a_sum = fixed_zero();
+    var b_sum = array<FixedSum, 3>(fixed_zero(), fixed_zero(), fixed_zero());
+    var c_diag = array<FixedSum, 3>(fixed_zero(), fixed_zero(), fixed_zero());
+    var c_off = array<FixedSum, 3>(fixed_zero(), fixed_zero(), fixed_zero());
     let begin = offsets[accept_slot(k)];
     let end = min(begin + atomicLoad(&counts[accept_slot(k)]), params.capacity);
     if end > begin {
@@ -505,21 +506,21 @@ fn cluster_accumulate(
             let n = p.normal;
             let diag = vec3<f32>(1.0) - n * n;
             let off = -vec3<f32>(n.x * n.y, n.x * n.z, n.y * n.z);
-            a_sum += p.power * (a - b * umu);
+            a_sum = fixed_add_signed(a_sum, p.power * (a - b * umu));
             for (var c = 0u; c < 3u; c++) {
                 let w = p.power[c] * b;
-                b_sum[c] += 2.0 * w * mu;
-                c_diag[c] += w * diag;
-                c_off[c] += w * off;
+                b_sum[c] = fixed_add_signed(b_sum[c], 2.0 * w * mu);
+                c_diag[c] = fixed_add_signed(c_diag[c], w * diag);
+                c_off[c] = fixed_add_signed(c_off[c], w * off);
             }
         }
     }
     let base = k * COEFFS;
-    coeffs[base] = vec4<f32>(a_sum, 0.0);
+    coeffs[base] = vec4<f32>(fixed_value_signed(a_sum), 0.0);
     for (var c = 0u; c < 3u; c++) {
-        coeffs[base + 1u + c] = vec4<f32>(b_sum[c], 0.0);
-        coeffs[base + 4u + 2u * c] = vec4<f32>(c_diag[c], 0.0);
-        coeffs[base + 5u + 2u * c] = vec4<f32>(c_off[c], 0.0);
+        coeffs[base + 1u + c] = vec4<f32>(fixed_value_signed(b_sum[c]), 0.0);
+        coeffs[base + 4u + 2u * c] = vec4<f32>(fixed_value_signed(c_diag[c]), 0.0);
+        coeffs[base + 5u + 2u * c] = vec4<f32>(fixed_value_signed(c_off[c]), 0.0);
     }
 }
 
@@ -539,6 +540,23 @@ fn accepted_flux(k: u32, x: vec3<f32>) -> vec3<f32> {
         out[c] += dot(coeffs[base + 1u + c].xyz, y) - quad;
     }
     return out;
+}
+
+// The estimate terms of leaf `leaf`'s test list at sample `s`, summed in fixed point.
+fn leaf_sum(leaf: u32, s: ViewSample) -> vec3<f32> {
+    var acc = fixed_zero();
+    let begin = offsets[test_slot(leaf)];
+    let end = min(begin + atomicLoad(&counts[test_slot(leaf)]), params.capacity);
+    for (var j = begin; j < end; j++) {
+        let i = list_entry(j);
+        var p = load_photon_shape(i);
+        let k = volume_kernel(p, s.position, params.z_ratio);
+        if k.y != 0.0 && volume_normal_agrees(p, s.normal) {
+            load_photon_light(&p, i);
+            acc = fixed_add(acc, volume_shade(p, s, k.x));
+        }
+    }
+    return fixed_value(acc);
 }
 
 @compute @workgroup_size(8, 8)
@@ -561,17 +579,7 @@ fn cluster_shade(
         flux += accepted_flux(node_index(1u, tile.xy / FANOUT), s.position);
         flux += accepted_flux(node_index(2u, tile.xy / (FANOUT * FANOUT)), s.position);
         sum = s.material.diffuse / PI * flux;
-        let begin = offsets[test_slot(leaf)];
-        let end = min(begin + atomicLoad(&counts[test_slot(leaf)]), params.capacity);
-        for (var j = begin; j < end; j++) {
-            let i = list_entry(j);
-            var p = load_photon_shape(i);
-            let k = volume_kernel(p, s.position, params.z_ratio);
-            if k.y != 0.0 && volume_normal_agrees(p, s.normal) {
-                load_photon_light(&p, i);
-                sum += volume_shade(p, s, k.x);
-            }
-        }
+        sum += leaf_sum(leaf, s);
     }
     textureStore(low, vec2<i32>(texel), vec4<f32>(sum, 0.0));
 }
@@ -593,7 +601,7 @@ fn octant_of(w: vec3<f32>) -> u32 {
 }
 
 fn add_to_buckets(
-    buckets: ptr<function, array<vec3<f32>, 16>>,
+    buckets: ptr<function, array<FixedSum, 16>>,
     begin: u32,
     end: u32,
     n: Node,
@@ -609,8 +617,9 @@ fn add_to_buckets(
         load_photon_light(&p, i);
         let b = octant_of(p.incident);
         let e = p.power * k.x;
-        (*buckets)[2u * b] += e;
-        (*buckets)[2u * b + 1u] += dot(e, vec3<f32>(0.2126, 0.7152, 0.0722)) * p.incident;
+        (*buckets)[2u * b] = fixed_add((*buckets)[2u * b], e);
+        let lum = dot(e, vec3<f32>(0.2126, 0.7152, 0.0722));
+        (*buckets)[2u * b + 1u] = fixed_add_signed((*buckets)[2u * b + 1u], lum * p.incident);
     }
 }
 
@@ -623,7 +632,11 @@ fn directional_accumulate(
     if k >= params.nodes {
         return;
     }
-    var buckets = array<vec3<f32>, 16>();
+    // Fixed-point sums: the lists' order varies between runs (atomics).
+    var buckets: array<FixedSum, 16>;
+    for (var o = 0u; o < 16u; o++) {
+        buckets[o] = fixed_zero();
+    }
     let n = fetch_node(k);
     let o = coeffs[k * COEFFS + CENTROID].xyz;
     if !node_empty(n) {
@@ -636,8 +649,9 @@ fn directional_accumulate(
             add_to_buckets(&buckets, t0, t1, n, o);
         }
     }
-    for (var o = 0u; o < 16u; o++) {
-        coeffs[k * COEFFS + o] = vec4<f32>(buckets[o], 0.0);
+    for (var o = 0u; o < 8u; o++) {
+        coeffs[k * COEFFS + 2u * o] = vec4<f32>(fixed_value(buckets[2u * o]), 0.0);
+        coeffs[k * COEFFS + 2u * o + 1u] = vec4<f32>(fixed_value_signed(buckets[2u * o + 1u]), 0.0);
     }
 }
 
@@ -686,17 +700,7 @@ fn directional_shade(
             // Glossy (or otherwise not simple) clusters: 8 directions cannot stand for a
             // lobe, so their samples sum their leaf's photons exactly (no ancestor of a
             // non-simple leaf accepts photons).
-            let begin = offsets[test_slot(leaf)];
-            let end = min(begin + atomicLoad(&counts[test_slot(leaf)]), params.capacity);
-            for (var j = begin; j < end; j++) {
-                let i = list_entry(j);
-                var p = load_photon_shape(i);
-                let k = volume_kernel(p, s.position, params.z_ratio);
-                if k.y != 0.0 && volume_normal_agrees(p, s.normal) {
-                    load_photon_light(&p, i);
-                    sum += volume_shade(p, s, k.x);
-                }
-            }
+            sum = leaf_sum(leaf, s);
         }
     }
     textureStore(low, vec2<i32>(texel), vec4<f32>(sum, 0.0));

@@ -8,9 +8,10 @@
 // 5. (the lists are copied into a texture: on lavapipe, loops that read textures run
 //    10-35x faster than loops over storage buffers)
 // 6. `shade`: each view sample sums the estimate term (common/photon_volume.wgsl) of the
-//    photons in its tile's list.
+//    photons in its tile's list, in fixed point (common/fixed_sum.wgsl), so that the image
+//    does not depend on the list order the atomics of step 4 leave.
 // Every step is conservative, so a sample gets exactly the photons whose ellipsoid holds it:
-// the image equals the raster splat's up to the order of the float sums.
+// the image equals the raster splat's up to float rounding, and is bitwise reproducible.
 //
 // Photons live in an Rgba32Float texture, 4 texels each (the 64-byte `Photon` as stored on
 // the CPU: position|bounce, incident|path density, power|pad, normal|radius), PHOTON_ROW
@@ -304,6 +305,8 @@ fn shade(
         let t = tile.y * params.tiles.x + tile.x;
         let begin = offsets[t];
         let end = min(begin + atomicLoad(&counts[t]), params.capacity);
+        // The list's order varies between runs (atomics): an order-independent sum.
+        var acc = fixed_zero();
         for (var j = begin; j < end; j++) {
             let i = textureLoad(list_texels, vec2<i32>(i32(j % LIST_ROW), i32(j / LIST_ROW)), 0).x;
             // `volume_term`, loading the photon's light only for samples inside its volume.
@@ -311,9 +314,10 @@ fn shade(
             let k = volume_kernel(p, s.position, params.z_ratio);
             if k.y != 0.0 && volume_normal_agrees(p, s.normal) {
                 load_photon_light(&p, i);
-                sum += volume_shade(p, s, k.x);
+                acc = fixed_add(acc, volume_shade(p, s, k.x));
             }
         }
+        sum = fixed_value(acc);
     }
     textureStore(low, vec2<i32>(texel), vec4<f32>(sum, 0.0));
 }
