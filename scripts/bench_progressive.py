@@ -29,7 +29,7 @@ import gi
 # photon count, kernels that start narrow) converge fastest per second; ISPM splats at full
 # resolution (subsample 1), since the bilateral upsampling is a bias no pass removes.
 PROGRESSIVE = {
-    "gather": dict(photons=10_000, spp=1, smoothing=0.3),
+    "gather": dict(photons=10_000, spp=1, smoothing=0.3, photon_focus=0.5),
     "ispm": dict(photons=20_000, spp=1, subsample=1, kernel_scale=0.5, adapter="cpu"),
 }
 

@@ -405,7 +405,7 @@ def render(
     adapter: str | None = None,
     shadow_map_size: int = 1024,
     caustic_density_bound: bool = True,
-    photon_focus: float = 0.5,
+    photon_focus: float = 0.25,
     progress: bool | ProgressCallback = False,
     denoise: bool = False,
 ) -> RenderResult:
