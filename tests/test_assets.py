@@ -261,7 +261,8 @@ def test_unrendered_features_warn_once_naming_file_and_field(tmp_path):
         tmp_path,
         "lamp.gltf",
         [
-            {"name": "glow", "emissiveFactor": [1, 0.5, 0], "alphaMode": "MASK",
+            # BLEND is rendered as a mask; the texture names no image.
+            {"name": "glow", "emissiveFactor": [1, 0.5, 0], "alphaMode": "BLEND",
              "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}},
             {"name": "glow2", "emissiveFactor": [1, 0.5, 0]},
         ],

@@ -5,6 +5,7 @@ import json
 import math
 import subprocess
 import sys
+import warnings
 
 import numpy as np
 import pytest
@@ -213,22 +214,46 @@ up="0, 0, 1"/></transform><float name="cutoff_angle" value="30"/></emitter>"""
     assert scene.triangle_count > 12 + 2
 
 
-def test_obj_shape_with_bitmap_texture_warns_and_uses_its_mean(tmp_path):
-    trimesh.creation.box(extents=(1, 1, 1)).export(tmp_path / "box.obj", include_normals=False)
+def test_bitmap_texture_is_rendered_as_a_texture(tmp_path):
+    """A rectangle facing the camera with a bitmap reflectance, red on the image's left half
+    and black on its right: the albedo shows both halves, upright (the mean colour used to
+    be taken instead, with a warning)."""
     texture = np.zeros((4, 4, 3), np.float32)
-    texture[:, :2] = [1, 0, 0]  # half red, half black: linear mean (0.5, 0, 0)
+    texture[:, :2] = [1, 0, 0]
     gi.save_image(tmp_path / "t.exr", texture)
+    body = """<shape type="rectangle">
+<transform name="to_world"><translate x="0" y="1" z="0"/></transform>
+<bsdf type="diffuse"><texture type="bitmap" name="reflectance">
+<string name="filename" value="t.exr"/></texture></bsdf></shape>
+<emitter type="point"><point name="position" x="0" y="1" z="3"/></emitter>"""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        scene = gi.load_scene(write(tmp_path, body))
+    r = gi.render(scene, "path", spp=1, seed=1, size=(32, 32))
+    hit = r.depth > 0
+    cols = np.nonzero(hit.any(axis=0))[0]
+    mid = (cols.min() + cols.max()) // 2
+    left = r.albedo[:, cols.min() + 1 : mid - 1][hit[:, cols.min() + 1 : mid - 1]]
+    right = r.albedo[:, mid + 2 : cols.max()][hit[:, mid + 2 : cols.max()]]
+    # Bilinear filtering blends the halves within half a texel of their borders (the
+    # texture repeats, so the outer edges too): medians, not every pixel.
+    assert len(left) > 10 and np.median(left[:, 0]) > 0.95, left.mean(0)
+    assert len(right) > 10 and np.median(right[:, 0]) < 0.05, right.mean(0)
+    assert np.allclose(left[:, 1:], 0) and np.allclose(right[:, 1:], 0)
+
+
+def test_obj_shape_with_bitmap_texture_flat_shading(tmp_path):
+    trimesh.creation.box(extents=(1, 1, 1)).export(tmp_path / "box.obj", include_normals=False)
+    gi.save_image(tmp_path / "t.exr", np.full((2, 2, 3), 0.5, np.float32))
     body = """<shape type="obj"><string name="filename" value="box.obj"/>
 <boolean name="face_normals" value="true"/>
 <bsdf type="diffuse"><texture type="bitmap" name="reflectance">
 <string name="filename" value="t.exr"/></texture></bsdf></shape>
 <emitter type="point"><point name="position" x="0" y="1" z="3"/></emitter>"""
-    with pytest.warns(gi.AssetWarning, match=r"mean colour \(0\.500, 0\.000, 0\.000\)") as rec:
-        scene = gi.load_scene(write(tmp_path, body))
-    assert rec[0].message.field == '<texture type="bitmap"> (line 8)'
+    scene = gi.load_scene(write(tmp_path, body))
     r = gi.render(scene, "path", spp=1, seed=1)
     seen = r.albedo[r.depth > 0]
-    assert len(seen) > 10 and np.allclose(seen, [0.5, 0, 0], atol=1e-3)
+    assert len(seen) > 10 and np.allclose(seen, 0.5, atol=1e-3)
     # face_normals: flat shading, as in Mitsuba (two faces in view from this camera).
     assert len(np.unique(np.round(r.normal[r.depth > 0], 3), axis=0)) <= 3
 

@@ -25,6 +25,15 @@ _MeshArrays = tuple[
     str | None,
     npt.NDArray[np.uint32] | None,
 ]
+# ... optionally followed by texture coordinates per vertex (N, 2) or None (v runs down).
+_MeshArraysUV = tuple[
+    npt.NDArray[np.float32],
+    npt.NDArray[np.uint32],
+    npt.NDArray[np.float32] | None,
+    str | None,
+    npt.NDArray[np.uint32] | None,
+    npt.NDArray[np.float32] | None,
+]
 
 @final
 class Scene:
@@ -32,8 +41,9 @@ class Scene:
     def from_json(
         text: str,
         source: str = ...,
-        meshes: dict[str, _MeshArrays] | None = None,
+        meshes: dict[str, _MeshArrays | _MeshArraysUV] | None = None,
         images: dict[str, npt.NDArray[np.float32]] | None = None,
+        textures: dict[str, npt.NDArray[np.float32]] | None = None,
     ) -> Scene: ...
     @staticmethod
     def builtin(name: str) -> Scene: ...

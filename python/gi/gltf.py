@@ -2,8 +2,9 @@
 
 gi reads glTF itself rather than through trimesh so that material factors keep their exact
 float values (trimesh stores ``baseColorFactor`` as 8-bit), missing factors get the glTF
-defaults, and features gi does not render (textures, emission, vertex colours, alpha) are
-reported by name instead of dropped.
+defaults, and features gi does not render (emission, vertex colours, occlusion maps) are
+reported by name instead of dropped. Base colour, metallic-roughness and normal textures
+(``TEXCOORD_0``, repeat wrap) and alpha masks are read into a :class:`gi.textures.TextureSet`.
 """
 
 from __future__ import annotations
@@ -18,16 +19,13 @@ from typing import Any
 
 import numpy as np
 
+from gi.textures import TextureError, TextureSet, resample
+
 _DTYPES = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32}
 _DTYPES[5126] = np.float32
 _COMPONENTS = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT4": 16}
-_TEXTURES = (
-    ("pbrMetallicRoughness", "baseColorTexture"),
-    ("pbrMetallicRoughness", "metallicRoughnessTexture"),
-    (None, "normalTexture"),
-    (None, "occlusionTexture"),
-    (None, "emissiveTexture"),
-)
+_UNSUPPORTED_TEXTURES = ("occlusionTexture", "emissiveTexture")
+_REPEAT = 10497
 
 
 # Required extensions gi can read a file with (textures and emission are reported anyway).
@@ -59,6 +57,7 @@ class GltfMesh:
     face_materials: np.ndarray  # int64 (M,), index into `materials`, -1: none
     materials: list[tuple[str, dict[str, Any]]]  # (name, gi material description)
     warnings: dict[str, str] = field(default_factory=dict)  # JSON path -> what is ignored
+    uvs: np.ndarray | None = None  # float64 (N, 2), TEXCOORD_0 (v down), zero where none
 
 
 def _read_document(path: Path) -> tuple[dict[str, Any], bytes | None]:
@@ -144,6 +143,33 @@ class _Reader:
             return np.maximum(out.astype(np.float64) / info.max, -1.0)
         return out
 
+    def image(self, i: int, textures: TextureSet, colour: bool) -> str:
+        """Image `i` read into `textures` (files by path; embedded ones via a temporary file)."""
+        img = self.doc["images"][i]
+        uri = img.get("uri")
+        if uri is not None and not uri.startswith("data:"):
+            return textures.add(self.path.parent / urllib.parse.unquote(uri), colour)
+        key = f"{self.path}#image{i}"
+        if (key if colour else f"{key}#linear") in textures.arrays:
+            return key if colour else f"{key}#linear"
+        if uri is not None:
+            data = base64.b64decode(uri.split(",", 1)[1])
+            mime = uri[5:].split(";", 1)[0]
+        else:
+            view = self.doc["bufferViews"][img["bufferView"]]
+            start = view.get("byteOffset", 0)
+            data = self.buffer(view["buffer"])[start : start + view["byteLength"]]
+            mime = img.get("mimeType", "")
+        suffix = {"image/png": ".png", "image/jpeg": ".jpg"}.get(mime, ".png")
+        import tempfile
+
+        with tempfile.TemporaryDirectory() as tmp:
+            file = Path(tmp) / f"image{i}{suffix}"
+            file.write_bytes(data)
+            name = textures.add(file, colour)
+            arr = textures.arrays.pop(name)
+        return textures.add_array(key if colour else f"{key}#linear", arr)
+
 
 def _node_matrix(node: dict[str, Any]) -> np.ndarray:
     if "matrix" in node:
@@ -181,7 +207,46 @@ def _triangles(mode: int, idx: np.ndarray, where: str) -> np.ndarray | None:
     return None  # points and lines have no surface
 
 
-def _material(doc: dict[str, Any], i: int, warn: dict[str, str]) -> dict[str, Any]:
+def _texture(
+    reader: _Reader | None,
+    textures: TextureSet | None,
+    info: dict[str, Any],
+    where: str,
+    colour: bool,
+    warn: dict[str, str],
+) -> str | None:
+    """The texture a material's texture-info refers to, read into `textures`; None (with a
+    warning) where gi cannot use it."""
+    if reader is None or textures is None:
+        return None
+    doc = reader.doc
+    try:
+        tex = doc["textures"][info["index"]]
+        source = tex["source"]
+    except (KeyError, IndexError, TypeError):
+        warn[where] = "the texture has no image gi can read; the constant factor is used"
+        return None
+    if info.get("texCoord", 0) != 0:
+        warn[f"{where}.texCoord"] = "only TEXCOORD_0 is read; the first set is used"
+    if "KHR_texture_transform" in info.get("extensions", {}):
+        warn[f"{where}.extensions.KHR_texture_transform"] = "texture transforms are ignored"
+    sampler = doc.get("samplers", [])[tex["sampler"]] if "sampler" in tex else {}
+    if sampler.get("wrapS", _REPEAT) != _REPEAT or sampler.get("wrapT", _REPEAT) != _REPEAT:
+        warn[f"{where}.sampler"] = "only repeat wrapping is supported; it repeats"
+    try:
+        return reader.image(source, textures, colour)
+    except (TextureError, OSError, KeyError, IndexError, ValueError) as e:
+        warn[where] = f"cannot read the image ({e}); the constant factor is used"
+        return None
+
+
+def _material(
+    doc: dict[str, Any],
+    i: int,
+    warn: dict[str, str],
+    reader: _Reader | None = None,
+    textures: TextureSet | None = None,
+) -> dict[str, Any]:
     """glTF metallic-roughness (with the glTF defaults) onto the uber BSDF."""
     mat = doc["materials"][i]
     where = f"materials[{i}]"
@@ -204,23 +269,108 @@ def _material(doc: dict[str, Any], i: int, warn: dict[str, str]) -> dict[str, An
     if trans > 0:
         desc["transmission"] = (dielectric * trans).tolist()
         desc["ior"] = min(max(ior, 1.0), 4.0)
-    for group, name in _TEXTURES:
-        holder = pbr if group else mat
-        if name in holder:
-            path = f"{where}.{group + '.' if group else ''}{name}"
-            warn[path] = "textures are not supported yet; the constant factor is used"
+    pw = f"{where}.pbrMetallicRoughness"
+    base_tex = mr_tex = None
+    if "baseColorTexture" in pbr:
+        base_tex = _texture(
+            reader, textures, pbr["baseColorTexture"], f"{pw}.baseColorTexture", True, warn
+        )
+    if "metallicRoughnessTexture" in pbr:
+        mr_tex = _texture(
+            reader,
+            textures,
+            pbr["metallicRoughnessTexture"],
+            f"{pw}.metallicRoughnessTexture",
+            False,
+            warn,
+        )
+    if textures is not None and (base_tex or mr_tex):
+        _bake_metallic(desc, textures, base_tex, mr_tex, base, metal, trans, i)
+    if "normalTexture" in mat:
+        info = mat["normalTexture"]
+        normal = _texture(reader, textures, info, f"{where}.normalTexture", False, warn)
+        if normal:
+            desc["normal_texture"] = normal
+            if float(info.get("scale", 1.0)) != 1.0:
+                warn[f"{where}.normalTexture.scale"] = "normal map scales are ignored (1 is used)"
+    for name in _UNSUPPORTED_TEXTURES:
+        if name in mat:
+            warn[f"{where}.{name}"] = "this texture is not supported; it is ignored"
     if any(float(c) > 0 for c in mat.get("emissiveFactor", [0, 0, 0])):
         warn[f"{where}.emissiveFactor"] = "emission is not supported; the surface is not a light"
-    if mat.get("alphaMode", "OPAQUE") != "OPAQUE":
-        warn[f"{where}.alphaMode"] = "alpha masks and blending are not supported; it is opaque"
+    mode = mat.get("alphaMode", "OPAQUE")
+    if mode != "OPAQUE":
+        cutoff = float(mat.get("alphaCutoff", 0.5)) if mode == "MASK" else 0.5
+        if mode == "BLEND":
+            warn[f"{where}.alphaMode"] = "blending is not supported; it is a mask at alpha 0.5"
+        alpha = float(pbr.get("baseColorFactor", [1, 1, 1, 1])[3])
+        if base_tex is not None and textures is not None:
+            # Coverage = factor × texture alpha: the texture's alpha against cutoff / factor.
+            desc["alpha_texture"] = base_tex
+            desc["alpha_cutoff"] = min(cutoff / alpha, 1.0) if alpha > 0 else 1.0
+            if alpha <= 0 or cutoff / alpha > 1.0:
+                desc["alpha_texture"] = textures.add_array(
+                    "(transparent)", np.zeros((1, 1, 4), np.float32)
+                )
+        elif alpha < cutoff and textures is not None:
+            # No texture and a factor below the cutoff: the whole surface is cut out.
+            desc["alpha_texture"] = textures.add_array(
+                "(transparent)", np.zeros((1, 1, 4), np.float32)
+            )
+            desc["alpha_cutoff"] = 0.5
     for name in ext:
         if name not in ("KHR_materials_transmission", "KHR_materials_ior"):
             warn[f"{where}.extensions.{name}"] = "this material extension is ignored"
     return desc
 
 
-def load_gltf(path: Path) -> GltfMesh:
-    """Reads the default scene of a glTF file into world-space triangles."""
+def _bake_metallic(
+    desc: dict[str, Any],
+    textures: TextureSet,
+    base_tex: str | None,
+    mr_tex: str | None,
+    base: np.ndarray,
+    metal: float,
+    trans: float,
+    i: int,
+) -> None:
+    """Textured metallic-roughness onto the uber BSDF's maps. Roughness is the map's green
+    channel (times the factor, as the core does). Diffuse and specular depend on base colour
+    and metallic together: unless the material is a plain dielectric with a base-colour
+    texture (diffuse = base texture × factor, specular 0.04), they are baked per texel at the
+    larger map's resolution (nearest-texel resampling)."""
+    if mr_tex:
+        desc["roughness_texture"] = mr_tex
+    if base_tex and not mr_tex and metal == 0.0:
+        desc["diffuse_texture"] = base_tex
+        return
+    arrays = [textures.arrays[k] for k in (base_tex, mr_tex) if k]
+    h = max(a.shape[0] for a in arrays)
+    w = max(a.shape[1] for a in arrays)
+    rgb = np.broadcast_to(base, (h, w, 3)).astype(np.float32)
+    if base_tex:
+        rgb = rgb * resample(textures.arrays[base_tex], h, w)[..., :3]
+    m = np.full((h, w, 1), metal, np.float32)
+    if mr_tex:
+        m = m * resample(textures.arrays[mr_tex], h, w)[..., 2:3]
+    one = np.ones((h, w, 1), np.float32)
+    diffuse = np.concatenate([rgb * (1.0 - m), one], axis=2)
+    specular = np.concatenate([0.04 * (1.0 - m) + rgb * m, one], axis=2)
+    key = f"{base_tex or mr_tex}#material{i}"
+    desc["diffuse_texture"] = textures.add_array(f"{key}#diffuse", diffuse)
+    desc["specular_texture"] = textures.add_array(f"{key}#specular", specular)
+    # The maps hold the colours: the factors become 1 (transmission keeps its share).
+    desc["diffuse"] = [1.0 - trans] * 3
+    desc["specular"] = [1.0, 1.0, 1.0]
+    if trans > 0:
+        desc["transmission"] = [trans] * 3
+
+
+def load_gltf(path: Path, textures: TextureSet | None = None) -> GltfMesh:
+    """Reads the default scene of a glTF file into world-space triangles; its textures go
+    into `textures` (without one, textures are reported and not read)."""
+    if textures is None:
+        textures = TextureSet()
     doc, glb_bin = _read_document(path)
     unsupported = [e for e in doc.get("extensionsRequired", []) if e not in _READABLE]
     if unsupported:
@@ -237,7 +387,7 @@ def load_gltf(path: Path) -> GltfMesh:
         children = {c for n in nodes for c in n.get("children", [])}
         roots = [i for i in range(len(nodes)) if i not in children]
 
-    verts, faces, normals, face_mats = [], [], [], []
+    verts, faces, normals, face_mats, uvs = [], [], [], [], []
     used: dict[int, int] = {}  # glTF material index -> our index
     materials: list[tuple[str, dict[str, Any]]] = []
     names: set[str] = set()
@@ -294,6 +444,11 @@ def load_gltf(path: Path) -> GltfMesh:
                 normals.append(np.nan_to_num(n, nan=0.0, posinf=0.0, neginf=0.0))
             else:
                 normals.append(None)
+            if "TEXCOORD_0" in attrs:
+                uv = reader.accessor(attrs["TEXCOORD_0"]).astype(np.float64)[:, :2]
+                uvs.append(np.nan_to_num(uv) if len(uv) == len(p) else np.zeros((len(p), 2)))
+            else:
+                uvs.append(np.zeros((len(p), 2)))
             if prim.get("targets"):
                 warn[f"{where}.targets"] = "morph targets are ignored (the base shape is used)"
             for a in attrs:
@@ -306,7 +461,7 @@ def load_gltf(path: Path) -> GltfMesh:
                 face_mats.append(np.full(len(tri), -1, np.int64))
                 continue
             if mi not in used:
-                desc = _material(doc, mi, warn)
+                desc = _material(doc, mi, warn, reader, textures)
                 base = f"{path.name}:{doc['materials'][mi].get('name') or f'material{mi}'}"
                 name = base if base not in names else f"{base}#{mi}"
                 names.add(name)
@@ -338,4 +493,5 @@ def load_gltf(path: Path) -> GltfMesh:
         face_materials=face_materials,
         materials=materials,
         warnings=warn,
+        uvs=np.concatenate(uvs),
     )

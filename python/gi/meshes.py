@@ -3,7 +3,8 @@ PLY and STL by trimesh, MTL materials by :func:`parse_mtl`.
 
 Normals are taken only where a file stores them; the core shades the rest flat (or as the
 object's ``smooth`` asks), so no normals are computed here and trimesh never needs scipy.
-What a file holds that gi does not render (textures, emission, vertex colours) is reported
+Texture maps are read into a :class:`gi.textures.TextureSet` (see ``docs/scene-format.md``);
+what a file holds that gi does not render (emission, vertex colours, some maps) is reported
 once per file and field as an :class:`AssetWarning`.
 """
 
@@ -19,8 +20,9 @@ from typing import Any
 import numpy as np
 
 from gi._gi import GiError, OutOfMemoryError, SceneError
+from gi.textures import TextureError, TextureSet, height_to_normal
 
-MeshEntry = tuple[Any, Any, Any, "str | None", Any]
+MeshEntry = tuple[Any, Any, Any, "str | None", Any, Any]
 
 
 class AssetWarning(UserWarning):
@@ -54,13 +56,42 @@ def _unit_rows(n: np.ndarray) -> np.ndarray:
     return np.nan_to_num(n, nan=0.0, posinf=0.0, neginf=0.0)
 
 
-# MTL keys gi reads; the texture maps it reports (map_* is matched by prefix).
+# MTL texture maps gi reads (key -> role); others (map_Ka, map_Ke, disp, decal, refl) are
+# reported. `bump`/`map_bump` hold a height map or a normal map (told apart by content).
+_MTL_MAPS = {
+    "map_kd": "diffuse",
+    "map_ks": "specular",
+    "map_ns": "shininess",
+    "map_pr": "roughness",
+    "map_d": "alpha",
+    "map_bump": "bump",
+    "bump": "bump",
+    "norm": "normal",
+}
 _MTL_TEXTURES = ("bump", "norm", "disp", "decal", "refl")
 
 
+def _map_file(args: list[str]) -> tuple[str, float]:
+    """The file name of an MTL map statement (after options such as ``-bm 1.0``) and its
+    bump multiplier."""
+    bm, i = 1.0, 0
+    takes = {"-bm": 1, "-blendu": 1, "-blendv": 1, "-boost": 1, "-cc": 1, "-clamp": 1}
+    takes |= {"-imfchan": 1, "-texres": 1, "-type": 1, "-mm": 2, "-o": 3, "-s": 3, "-t": 3}
+    while i < len(args) and args[i].startswith("-") and args[i].lower() in takes:
+        n = takes[args[i].lower()]
+        if args[i].lower() == "-bm" and i + 1 < len(args):
+            try:
+                bm = float(args[i + 1])
+            except ValueError:
+                pass
+        i += 1 + n
+    return " ".join(args[i:]), bm
+
+
 def parse_mtl(path: Path, notes: dict[str, str]) -> dict[str, dict[str, Any]]:
-    """An MTL file's materials as uber-BSDF descriptions, keyed by name. Unsupported fields
-    (texture maps, emission ``Ke``, dissolve ``d``/``Tr``) are added to ``notes``."""
+    """An MTL file's materials as uber-BSDF descriptions, keyed by name; texture maps as
+    ``_maps`` (role -> (file, bump multiplier)). Unsupported fields (some maps, emission
+    ``Ke``, dissolve ``d``/``Tr`` without a map) are added to ``notes``."""
     out: dict[str, dict[str, Any]] = {}
     try:
         lines = path.read_text(encoding="utf-8", errors="replace").splitlines()
@@ -81,6 +112,11 @@ def parse_mtl(path: Path, notes: dict[str, str]) -> dict[str, dict[str, Any]]:
         if cur is None:
             continue
         where = f"{path.name}: newmtl {name}: {parts[0]}"
+        if key in _MTL_MAPS:
+            file, bm = _map_file(args)
+            if file:
+                cur.setdefault("_maps", {})[_MTL_MAPS[key]] = (path.parent / file, bm, where)
+            continue
         try:
             vals = [float(x) for x in args[:3]] if not key.startswith("map_") else []
         except ValueError:
@@ -94,14 +130,16 @@ def parse_mtl(path: Path, notes: dict[str, str]) -> dict[str, dict[str, Any]]:
         elif key == "ns" and "roughness" not in cur:
             # Blinn-Phong exponent to GGX: alpha = sqrt(2 / (n + 2)); roughness = sqrt(alpha).
             cur["_ns"] = math.sqrt(math.sqrt(2.0 / (max(vals[0], 0.0) + 2.0)))
+            cur["_nsexp"] = max(vals[0], 0.0)
         elif key == "pr":
             cur["roughness"] = min(max(vals[0], 0.0), 1.0)
+            cur["_pr"] = True
         elif key == "ke" and max(vals) > 0:
             notes[where] = "emission is not supported; the surface is not a light"
         elif key in ("d", "tr") and (vals[0] < 1.0 if key == "d" else vals[0] > 0.0):
             notes[where] = "dissolve (transparency) is not supported; the surface is opaque"
         elif key.startswith("map_") or key in _MTL_TEXTURES:
-            notes[where] = "textures are not supported yet; the constant colour is used"
+            notes[where] = "this texture map is not supported; it is ignored"
     for desc in out.values():
         ns = desc.pop("_ns", None)
         if max(desc.get("specular", [0.0])) > 0:
@@ -109,6 +147,58 @@ def parse_mtl(path: Path, notes: dict[str, str]) -> dict[str, dict[str, Any]]:
         else:
             desc.pop("specular", None)
             desc.pop("roughness", None)
+    return out
+
+
+def _shininess_to_roughness(exponent: np.ndarray) -> np.ndarray:
+    """Blinn-Phong exponent to GGX roughness, as for a constant ``Ns``."""
+    return np.sqrt(np.sqrt(2.0 / (np.maximum(exponent, 0.0) + 2.0)))
+
+
+def apply_mtl_maps(
+    desc: dict[str, Any], textures: TextureSet, notes: dict[str, str]
+) -> dict[str, Any]:
+    """An MTL material description with its maps read into ``textures`` (a map that cannot
+    be read is reported and left out); the private keys of :func:`parse_mtl` removed."""
+    out = {k: v for k, v in desc.items() if not k.startswith("_")}
+    has_spec = "specular" in out
+    for role, (file, bm, where) in desc.get("_maps", {}).items():
+        try:
+            if role == "diffuse":
+                out["diffuse_texture"] = textures.add(file, True)
+            elif role == "specular" and has_spec:
+                out["specular_texture"] = textures.add(file, True)
+            elif role == "shininess" and has_spec:
+                key = textures.add(file, False)
+                img = textures.arrays[key]
+                rough = _shininess_to_roughness(desc.get("_nsexp", 0.0) * img[..., 0])
+                baked = np.repeat(rough[..., None], 4, axis=2).astype(np.float32)
+                out["roughness_texture"] = textures.add_array(f"{key}#roughness", baked)
+                out["roughness"] = 1.0
+            elif role == "roughness" and has_spec:
+                out["roughness_texture"] = textures.add(file, False)
+                if not desc.get("_pr"):
+                    out["roughness"] = 1.0
+            elif role == "alpha":
+                key = textures.add(file, False)
+                if textures.channels(key) in (1, 3):  # coverage is the grey value
+                    img = textures.arrays[key].copy()
+                    img[..., 3] = img[..., 0]
+                    key = textures.add_array(f"{key}#coverage", img)
+                out["alpha_texture"] = key
+                out["alpha_cutoff"] = 0.5
+            elif role in ("bump", "normal"):
+                key = textures.add(file, False)
+                img = textures.arrays[key]
+                looks_normal = textures.channels(key) >= 3 and (
+                    img[..., 2].mean() > 0.7 and abs(img[..., :2].mean() - 0.5) < 0.15
+                )
+                if role == "bump" and not looks_normal:
+                    baked = height_to_normal(img[..., 0].astype(np.float64), bm)
+                    key = textures.add_array(f"{key}#normal{bm}", baked)
+                out["normal_texture"] = key
+        except (TextureError, OSError) as e:
+            notes[where] = f"cannot read the map ({e}); it is ignored"
     return out
 
 
@@ -126,8 +216,11 @@ def _obj_colours(path: Path) -> bool:
     return re.search(rb"^v[ \t]+(\S+[ \t]+){5}\S+", text, flags=re.MULTILINE) is not None
 
 
-def load_mesh(path: Path, scene_file: str, field: str) -> MeshEntry:
-    """Loads a mesh file into the arrays the core takes (see ``Scene.from_json``).
+def load_mesh(
+    path: Path, scene_file: str, field: str, textures: TextureSet | None = None
+) -> MeshEntry:
+    """Loads a mesh file into the arrays the core takes (see ``Scene.from_json``); the
+    textures its materials use go into ``textures``.
 
     Every failure is a typed error: :class:`gi.SceneError` naming the scene's field (a
     malformed file trimesh or numpy choke on included), :class:`gi.OutOfMemoryError`."""
@@ -138,9 +231,10 @@ def load_mesh(path: Path, scene_file: str, field: str) -> MeshEntry:
     if not is_file:
         raise scene_error(scene_file, field, f"mesh file not found: {path}")
     try:
+        textures = TextureSet() if textures is None else textures
         if path.suffix.lower() in (".gltf", ".glb"):
-            return _load_gltf(path, scene_file, field)
-        return _load_trimesh(path, scene_file, field)
+            return _load_gltf(path, scene_file, field, textures)
+        return _load_trimesh(path, scene_file, field, textures)
     except GiError:
         raise
     except MemoryError as e:
@@ -158,6 +252,7 @@ def _entry(
     normals: np.ndarray | None,
     materials: list[tuple[str, dict[str, Any]]],
     face_mats: np.ndarray | None,
+    uvs: np.ndarray | None = None,
 ) -> MeshEntry:
     if len(faces) == 0:
         raise scene_error(scene_file, field, f"mesh file has no triangles: {path}")
@@ -184,25 +279,34 @@ def _entry(
         None if normals is None else np.ascontiguousarray(normals, dtype=np.float32),
         json.dumps(materials) if has_mats else None,
         np.ascontiguousarray(face_mats, dtype=np.uint32) if has_mats else None,
+        None if uvs is None else np.ascontiguousarray(uvs, dtype=np.float32),
     )
 
 
-def _load_gltf(path: Path, scene_file: str, field: str) -> MeshEntry:
+def _load_gltf(path: Path, scene_file: str, field: str, textures: TextureSet) -> MeshEntry:
     from gi.gltf import GltfError, load_gltf
 
     try:
-        m = load_gltf(path)
+        m = load_gltf(path, textures)
     except GltfError as e:
         raise scene_error(scene_file, field, f"{path}: {e.field}: {e.reason}") from e
     except (OSError, ValueError, KeyError, IndexError, TypeError) as e:
         raise scene_error(scene_file, field, f"cannot load glTF {path}: {e!r}") from e
     report(path, m.warnings)
     return _entry(
-        path, scene_file, field, m.vertices, m.faces, m.normals, m.materials, m.face_materials
+        path,
+        scene_file,
+        field,
+        m.vertices,
+        m.faces,
+        m.normals,
+        m.materials,
+        m.face_materials,
+        m.uvs,
     )
 
 
-def _load_trimesh(path: Path, scene_file: str, field: str) -> MeshEntry:
+def _load_trimesh(path: Path, scene_file: str, field: str, textures: TextureSet) -> MeshEntry:
     import trimesh
 
     try:
@@ -217,7 +321,7 @@ def _load_trimesh(path: Path, scene_file: str, field: str) -> MeshEntry:
             mtl.update(parse_mtl(lib, notes))
         if _obj_colours(path):
             notes["v (vertex colours)"] = "vertex colours are not supported"
-    verts, faces, normals, face_mats = [], [], [], []
+    verts, faces, normals, face_mats, uvs = [], [], [], [], []
     materials: list[tuple[str, dict[str, Any]]] = []
     index: dict[str, int] = {}
     offset = 0
@@ -251,6 +355,13 @@ def _load_trimesh(path: Path, scene_file: str, field: str) -> MeshEntry:
             normals.append(None)
         faces.append(f + offset)
         offset += len(v)
+        uv = getattr(geom.visual, "uv", None)
+        if uv is not None and len(uv) == len(v):
+            # OBJ's v runs up the image, gi's down.
+            uv = np.nan_to_num(np.asarray(uv, np.float64)[:, :2])
+            uvs.append(np.stack([uv[:, 0], 1.0 - uv[:, 1]], axis=1))
+        else:
+            uvs.append(np.zeros((len(v), 2)))
         kind = getattr(geom.visual, "kind", None)
         if kind in ("vertex", "face") and not is_obj:
             notes[f"{kind} colours"] = f"{kind} colours are not supported"
@@ -259,7 +370,8 @@ def _load_trimesh(path: Path, scene_file: str, field: str) -> MeshEntry:
         if is_obj and name in mtl:
             if name not in index:
                 index[name] = len(materials)
-                materials.append((f"{path.name}:{name}", mtl[name]))
+                desc = apply_mtl_maps(mtl[name], textures, notes)
+                materials.append((f"{path.name}:{name}", desc))
             face_mats.append(np.full(len(f), index[name], np.int64))
         else:
             face_mats.append(np.full(len(f), -1, np.int64))
@@ -285,4 +397,5 @@ def _load_trimesh(path: Path, scene_file: str, field: str) -> MeshEntry:
         ),
         materials,
         np.concatenate(face_mats),
+        np.concatenate(uvs),
     )

@@ -21,6 +21,7 @@ import numpy as np
 
 from gi._gi import Scene, SceneError
 from gi.meshes import MeshEntry, load_mesh, report, scene_error
+from gi.textures import TextureError, TextureSet
 
 # Interior/exterior indices Mitsuba knows by name (its `ior` table, the common ones).
 IOR_NAMES = {
@@ -119,6 +120,7 @@ class _Translator:
         self.lights: list[dict[str, Any]] = []
         self.camera: dict[str, Any] | None = None
         self.notes: dict[str, str] = {}
+        self.textures = TextureSet()
         self.environment: dict[str, Any] | None = None
         self.env_images: dict[str, np.ndarray] = {}
 
@@ -225,6 +227,27 @@ class _Translator:
             return IOR_NAMES[value.lower()]
         return self.float(p, props, name, default)
 
+    def use_bitmap(
+        self, desc: dict[str, Any], props: dict[str, Element], name: str, to: str
+    ) -> None:
+        """Where property `name` is a bitmap, material field `to` reads it as a texture (its
+        factor 1) instead of its mean colour."""
+        p = props.get(name)
+        if p is None or p.tag not in ("texture", "ref"):
+            return
+        tex = self.resolve(p) if p.tag == "ref" else p
+        file = self.path.parent / self.string(self.props(tex), "filename", "")
+        raw = self.boolean(self.props(tex), "raw", False)
+        try:
+            desc[f"{to}_texture"] = self.textures.add(file, not raw)
+        except (TextureError, OSError) as e:
+            raise self.error(tex, str(e)) from e
+        desc[to] = np.ones(3)
+        self.notes.pop(tex.label, None)
+        wrap = self.string(self.props(tex), "wrap_mode", "repeat")
+        if wrap != "repeat":
+            self.notes[tex.label] = f"wrap_mode {wrap!r} is not supported; it repeats"
+
     def bitmap_mean(self, tex: Element) -> np.ndarray:
         if tex.tag != "texture" or tex.attrs.get("type") != "bitmap":
             raise self.error(tex, "only bitmap textures are supported")
@@ -245,8 +268,8 @@ class _Translator:
             img = np.where(img <= 0.04045, img / 12.92, ((img + 0.055) / 1.055) ** 2.4)
         mean = img.reshape(-1, 3).mean(axis=0)
         self.notes[tex.label] = (
-            f"textures are not supported yet; {file.name}'s mean colour "
-            f"({mean[0]:.3f}, {mean[1]:.3f}, {mean[2]:.3f}) is used"
+            f"textures are read as diffuse reflectance only; {file.name}'s mean colour "
+            f"({mean[0]:.3f}, {mean[1]:.3f}, {mean[2]:.3f}) is used here"
         )
         return mean
 
@@ -417,6 +440,7 @@ class _Translator:
         desc: dict[str, Any]
         if kind == "diffuse":
             desc = {"diffuse": self.color(props, "reflectance", 0.5)}
+            self.use_bitmap(desc, props, "reflectance", "diffuse")
         elif kind in ("conductor", "roughconductor"):
             metal = self.string(props, "material", "none")
             if "eta" in props or "k" in props:
@@ -447,6 +471,7 @@ class _Translator:
                 "specular": f0 * self.color(props, "specular_reflectance", 1.0),
                 "fresnel": True,
             }
+            self.use_bitmap(desc, props, "diffuse_reflectance", "diffuse")
         else:
             raise self.error(el, "unsupported BSDF (see docs/mitsuba.md for the list)")
         if kind in ("roughconductor", "roughplastic"):
@@ -482,7 +507,9 @@ class _Translator:
         if kind in ("obj", "ply"):
             file = self.string(props, "filename", "")
             field = f"{el.label} filename"
-            v, f, n, _mats, _fm = load_mesh(self.path.parent / file, self.file, field)
+            v, f, n, _m, _fm, uv = load_mesh(
+                self.path.parent / file, self.file, field, self.textures
+            )
             v, f = np.asarray(v, np.float64), np.asarray(f, np.int64)
             n = None if n is None else np.asarray(n, np.float64)
             # Like Mitsuba: `face_normals` shades flat; a file without normals, smooth.
@@ -494,8 +521,11 @@ class _Translator:
             v = np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], np.float64)
             f = np.array([[0, 1, 2], [0, 2, 3]])
             n = np.tile([0.0, 0.0, 1.0], (4, 1))
+            # The image upright seen from +z (v runs down the image).
+            uv = np.stack([(v[:, 0] + 1) / 2, (1 - v[:, 1]) / 2], axis=1)
         elif kind == "cube":
             v, f, n = _cube()
+            uv = None
         elif kind == "sphere":
             import trimesh
 
@@ -504,6 +534,7 @@ class _Translator:
             c = self.vec3(props["center"]) if "center" in props else np.zeros(3)
             n = np.asarray(ico.vertices, np.float64)
             v, f = n * r + c, np.asarray(ico.faces, np.int64)
+            uv = None
         else:
             raise self.error(el, "unsupported shape (gi reads obj, ply, rectangle, cube, sphere)")
         known = {"filename", "face_normals", "flip_normals", "to_world", "center", "radius", "bsdf"}
@@ -544,6 +575,7 @@ class _Translator:
             None if n is None else np.ascontiguousarray(n, np.float32),
             None,
             None,
+            None if uv is None else np.ascontiguousarray(uv, np.float32),
         )
         obj: dict[str, Any] = {"shape": {"type": "mesh", "file": key}, "material": material}
         if smooth is not None:
@@ -652,4 +684,10 @@ def load_mitsuba(path: Path) -> Scene:
     t = _Translator(path)
     t.run(parse_xml(text, str(path)))
     report(path, t.notes)
-    return Scene.from_json(json.dumps(t.description()), str(path), t.meshes, t.env_images)
+    return Scene.from_json(
+        json.dumps(t.description()),
+        str(path),
+        t.meshes,
+        t.env_images,
+        textures=t.textures.arrays,
+    )

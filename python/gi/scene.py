@@ -17,6 +17,16 @@ from gi._gi import Scene, builtin_scenes
 from gi.environment import load_environment
 from gi.meshes import MeshEntry, load_mesh
 from gi.meshes import scene_error as _scene_error
+from gi.textures import TextureError, TextureSet
+
+# Material texture fields and whether they hold colours (sRGB-decoded from integer files).
+_TEXTURE_FIELDS = {
+    "diffuse_texture": True,
+    "specular_texture": True,
+    "roughness_texture": False,
+    "normal_texture": False,
+    "alpha_texture": False,
+}
 
 
 def load_scene(source: str | Path) -> Scene:
@@ -57,26 +67,46 @@ def load_scene(source: str | Path) -> Scene:
         raise _scene_error(file, "(root)", "invalid JSON: nested too deeply") from e
     except MemoryError as e:
         raise _scene_error(file, "(file)", "too large to parse") from e
-    return Scene.from_json(
-        text,
-        file,
-        _load_meshes(desc, path.parent, file),
-        load_environment(desc, path.parent, file),
-    )
+    return scene_from_desc(desc, file, path.parent, text)
 
 
-def scene_from_desc(desc: dict[str, Any], source: str, base_dir: Path) -> Scene:
-    """A scene from a parsed scene description (the JSON format of ``load_scene``), its mesh
-    files relative to ``base_dir``; ``source`` names it in errors."""
-    return Scene.from_json(
-        json.dumps(desc),
-        source,
-        _load_meshes(desc, base_dir, source),
-        load_environment(desc, base_dir, source),
-    )
+def scene_from_desc(
+    desc: dict[str, Any], source: str, base_dir: Path, text: str | None = None
+) -> Scene:
+    """A scene from a parsed scene description (the JSON format of ``load_scene``), its mesh,
+    texture and environment files relative to ``base_dir``; ``source`` names it in
+    errors. ``text``: the description as read (used unless texture names are rewritten)."""
+    textures = TextureSet()
+    meshes = _load_meshes(desc, base_dir, source, textures)
+    images = load_environment(desc, base_dir, source)
+    if _load_material_textures(desc, base_dir, source, textures) or text is None:
+        text = json.dumps(desc)
+    return Scene.from_json(text, source, meshes, images, textures=textures.arrays)
 
 
-def _load_meshes(desc: Any, base_dir: Path, file: str) -> dict[str, MeshEntry]:
+def _load_material_textures(desc: Any, base_dir: Path, file: str, textures: TextureSet) -> bool:
+    """Reads the images the scene's materials name (relative to ``base_dir``) and renames
+    the fields to the loaded textures; whether anything was renamed."""
+    mats = desc.get("materials") if isinstance(desc, dict) else None
+    changed = False
+    for name, mat in (mats or {}).items() if isinstance(mats, dict) else []:
+        if not isinstance(mat, dict):
+            continue
+        for field, colour in _TEXTURE_FIELDS.items():
+            value = mat.get(field)
+            if not isinstance(value, str):
+                continue  # the core reports a mistyped field
+            try:
+                mat[field] = textures.add(base_dir / value, colour)
+            except (TextureError, OSError, ValueError) as e:
+                raise _scene_error(file, f"materials.{name}.{field}", str(e)) from e
+            changed = True
+    return changed
+
+
+def _load_meshes(
+    desc: Any, base_dir: Path, file: str, textures: TextureSet
+) -> dict[str, MeshEntry]:
     meshes: dict[str, MeshEntry] = {}
     objects = desc.get("objects", []) if isinstance(desc, dict) else []
     for i, obj in enumerate(objects if isinstance(objects, list) else []):
@@ -86,5 +116,5 @@ def _load_meshes(desc: Any, base_dir: Path, file: str) -> dict[str, MeshEntry]:
         name = shape.get("file")
         if not isinstance(name, str) or name in meshes:
             continue  # the core reports a missing or mistyped `file`
-        meshes[name] = load_mesh(base_dir / name, file, f"objects[{i}].shape.file")
+        meshes[name] = load_mesh(base_dir / name, file, f"objects[{i}].shape.file", textures)
     return meshes

@@ -17,6 +17,7 @@ pub mod raster;
 pub mod render;
 pub mod sampling;
 pub mod scene;
+pub mod texture;
 pub mod trace;
 
 pub use error::{Error, Result};

@@ -228,7 +228,9 @@ fn steady_state_creates_nothing_and_uploads_what_changed() {
             .filter(|(l, _)| l == "scene vertices")
             .map(|(_, b)| b)
             .collect();
-        let bytes = (o.triangles.end - o.triangles.start) as u64 * 3 * 40;
+        let bytes = (o.triangles.end - o.triangles.start) as u64
+            * 3
+            * std::mem::size_of::<gi_core::gpu::raw::VertexRaw>() as u64;
         assert_eq!(
             vertices,
             vec![bytes],

@@ -2,7 +2,7 @@
 
 use crate::errors::{to_py, SceneError};
 use gi_core::scene::{builtin, EnvImage, MeshData, TriMesh};
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use numpy::{PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -33,7 +33,7 @@ fn vec3s(a: &PyReadonlyArray2<'_, f32>, what: &str, source: &str) -> PyResult<Ve
 
 /// Converts one `meshes` entry: (vertices f32 (N,3), faces u32 (M,3), normals f32 (N,3) | None
 /// (zero rows: none for that vertex), materials JSON `[[name, material], ...]` | None,
-/// face_materials u32 (M,) | None, indices into the materials).
+/// face_materials u32 (M,) | None, indices into the materials[, uvs f32 (N,2) | None]).
 fn mesh_from_py(key: &str, value: &Bound<'_, PyAny>, source: &str) -> PyResult<MeshData> {
     type Entry<'py> = (
         PyReadonlyArray2<'py, f32>,
@@ -41,10 +41,18 @@ fn mesh_from_py(key: &str, value: &Bound<'_, PyAny>, source: &str) -> PyResult<M
         Option<PyReadonlyArray2<'py, f32>>,
         Option<String>,
         Option<PyReadonlyArray1<'py, u32>>,
+        Option<PyReadonlyArray2<'py, f32>>,
     );
-    let (v, f, n, mats, face_mats): Entry = value.extract().map_err(|e| {
-        SceneError::new_err(format!("{source}: mesh `{key}`: expected (vertices, faces, normals, materials, face_materials): {e}"))
-    })?;
+    let with_uvs: PyResult<Entry> = value.extract();
+    let (v, f, n, mats, face_mats, uv) = match with_uvs {
+        Ok(e) => e,
+        Err(_) => {
+            let (v, f, n, m, fm) = value.extract().map_err(|e| {
+                SceneError::new_err(format!("{source}: mesh `{key}`: expected (vertices, faces, normals, materials, face_materials[, uvs]): {e}"))
+            })?;
+            (v, f, n, m, fm, None)
+        }
+    };
     // The arrays are copied into the mesh, the scene (placed) and its normals.
     let (nv, nf) = (v.as_array().nrows() as u64, f.as_array().nrows() as u64);
     gi_core::memory::check(|| format!("mesh `{key}`"), (nv * 24 + nf * 16) * 3)
@@ -67,11 +75,36 @@ fn mesh_from_py(key: &str, value: &Bound<'_, PyAny>, source: &str) -> PyResult<M
         None => Vec::new(),
     };
     let materials = match mats {
-        Some(json) => gi_core::scene::parse_materials(&json, source)
+        Some(ref json) => gi_core::scene::parse_materials(json, source)
+            .map_err(|e| Python::attach(|py| to_py(py, e)))?,
+        None => Vec::new(),
+    };
+    let material_textures = match &mats {
+        Some(json) => gi_core::scene::parse_material_textures(json, source)
             .map_err(|e| Python::attach(|py| to_py(py, e)))?,
         None => Vec::new(),
     };
     let face_materials = face_mats.map(|a| a.as_array().to_vec()).unwrap_or_default();
+    let uvs = match uv {
+        None => Vec::new(),
+        Some(a) => {
+            let a = a.as_array();
+            if a.ncols() != 2 || a.nrows() != positions.len() {
+                return Err(SceneError::new_err(format!(
+                    "{source}: mesh `{key}`: uvs must have shape (N, 2), one per vertex"
+                )));
+            }
+            let per_vertex: Vec<Vec2> = a
+                .rows()
+                .into_iter()
+                .map(|r| Vec2::new(r[0], r[1]))
+                .collect();
+            indices
+                .iter()
+                .map(|t| t.map(|i| per_vertex.get(i as usize).copied().unwrap_or(Vec2::ZERO)))
+                .collect()
+        }
+    };
     Ok(MeshData {
         mesh: TriMesh {
             positions,
@@ -80,7 +113,43 @@ fn mesh_from_py(key: &str, value: &Bound<'_, PyAny>, source: &str) -> PyResult<M
         },
         materials,
         face_materials,
+        material_textures,
+        uvs,
     })
+}
+
+/// Converts the `textures` argument: name -> f32 array (H, W, 4), linear RGBA, top row first.
+fn textures_from_py(
+    textures: Option<&Bound<'_, PyDict>>,
+    source: &str,
+) -> PyResult<gi_core::scene::TextureMap> {
+    let mut out = gi_core::scene::TextureMap::new();
+    let Some(textures) = textures else {
+        return Ok(out);
+    };
+    for (k, v) in textures.iter() {
+        let name: String = k.extract()?;
+        let a: PyReadonlyArray3<'_, f32> = v.extract().map_err(|e| {
+            SceneError::new_err(format!(
+                "{source}: texture `{name}`: expected a float32 array (H, W, 4): {e}"
+            ))
+        })?;
+        let a = a.as_array();
+        let (h, w, c) = a.dim();
+        if c != 4 || w == 0 || h == 0 || w > u32::MAX as usize || h > u32::MAX as usize {
+            return Err(SceneError::new_err(format!(
+                "{source}: texture `{name}`: expected shape (H, W, 4), got {:?}",
+                a.shape()
+            )));
+        }
+        gi_core::memory::check(|| format!("texture `{name}`"), (w * h * 16 * 2) as u64)
+            .map_err(|e| to_py(v.py(), e))?;
+        let data: Vec<f32> = a.iter().copied().collect();
+        let tex = gi_core::texture::Texture::new(w as u32, h as u32, &data)
+            .map_err(|m| SceneError::new_err(format!("{source}: texture `{name}`: {m}")))?;
+        out.insert(name, std::sync::Arc::new(tex));
+    }
+    Ok(out)
 }
 
 /// Converts one `images` entry: an equirectangular environment image, float32 (H, W, 3),
@@ -122,13 +191,14 @@ impl PyScene {
     /// its arrays (see `gi.scene` for the loader that fills it); `images` maps the
     /// `environment` section's `file` to its float32 (H, W, 3) image.
     #[staticmethod]
-    #[pyo3(signature = (text, source = "<string>".to_string(), meshes = None, images = None))]
+    #[pyo3(signature = (text, source = "<string>".to_string(), meshes = None, images = None, textures = None))]
     fn from_json(
         py: Python<'_>,
         text: &str,
         source: String,
         meshes: Option<&Bound<'_, PyDict>>,
         images: Option<&Bound<'_, PyDict>>,
+        textures: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
         let mut env_images = HashMap::new();
         if let Some(images) = images {
@@ -146,8 +216,9 @@ impl PyScene {
                 map.insert(key, data);
             }
         }
+        let textures = textures_from_py(textures, &source)?;
         let inner = crate::guard::run(py, "Scene.from_json", None, |_| {
-            gi_core::Scene::from_json_with_images(text, &source, &map, &env_images)
+            gi_core::Scene::from_json_with(text, &source, &map, &env_images, &textures)
         })?;
         Ok(PyScene {
             inner,

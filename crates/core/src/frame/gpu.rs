@@ -23,6 +23,12 @@ const TIMER_PASSES: u32 = wgpu::QUERY_SET_MAX_QUERIES / 2;
 pub(crate) struct GpuScene {
     pub geometry: Geometry,
     pub materials: wgpu::Buffer,
+    /// Textures and material maps (group 1 of the passes that rasterize the scene).
+    pub textures: raster::textures::GpuTextures,
+    /// Whether any material is alpha-masked (the shadow pass then discards cut-outs).
+    masked: bool,
+    /// The fragment shaders the scene needs (textures, alpha masks).
+    pub variant: raster::textures::Variant,
     pub lights: wgpu::Buffer,
     shadow_matrices: wgpu::Buffer,
     shadow_views: wgpu::Buffer,
@@ -41,8 +47,9 @@ fn storage_init(ctx: &GpuContext, label: &str, bytes: &[u8]) -> wgpu::Buffer {
 }
 
 impl GpuScene {
-    pub fn new(ctx: &GpuContext, scene: &Scene, shadow_map_size: u32) -> Self {
+    pub fn new(ctx: &GpuContext, scene: &Scene, shadow_map_size: u32) -> Result<Self> {
         let passes = Passes::get(ctx);
+        let textures = raster::textures::GpuTextures::new(ctx, scene, &passes.textures)?;
         let shadows = shadow::ShadowViews::new(scene, shadow_map_size);
         let layers = (shadows.matrices.len() as u32).max(1);
         let materials: Vec<_> = scene.materials.iter().map(|m| m.to_raw()).collect();
@@ -98,9 +105,12 @@ impl GpuScene {
                 }],
             },
         );
-        GpuScene {
+        Ok(GpuScene {
             geometry: Geometry::upload(ctx, scene),
             materials: storage_init(ctx, "materials", bytemuck::cast_slice(&materials)),
+            textures,
+            masked: scene.has_alpha_masks(),
+            variant: raster::textures::Variant::of(scene),
             lights: storage_init(ctx, "lights", bytemuck::cast_slice(&shadows.lights)),
             shadow_matrices: storage_init(ctx, "shadow matrices", bytemuck::cast_slice(&matrices)),
             shadow_views,
@@ -109,7 +119,7 @@ impl GpuScene {
             shadow_group,
             layers,
             shadows_stale: true,
-        }
+        })
     }
 
     /// Whether the scene's lights still fit these shadow maps (same number of layers).
@@ -138,7 +148,7 @@ impl GpuScene {
         );
     }
 
-    pub fn write_materials(&self, ctx: &GpuContext, scene: &Scene) {
+    pub fn write_materials(&mut self, ctx: &GpuContext, scene: &Scene) {
         let materials: Vec<_> = scene.materials.iter().map(|m| m.to_raw()).collect();
         gpu::write_buffer(
             &ctx.queue,
@@ -147,6 +157,14 @@ impl GpuScene {
             0,
             bytemuck::cast_slice(&materials),
         );
+        self.textures.write_maps(ctx, scene);
+        let masked = scene.has_alpha_masks();
+        if masked || self.masked {
+            // Cut-outs appeared, changed or went: the shadow maps change with them.
+            self.shadows_stale = true;
+        }
+        self.masked = masked;
+        self.variant = raster::textures::Variant::of(scene);
     }
 
     /// Uploads the lights and their shadow views (they depend on the scene's bounds too).
@@ -198,6 +216,7 @@ impl GpuScene {
                 &self.shadow_group,
                 offset,
                 &self.geometry,
+                self.masked.then_some(&self.textures.group),
                 ts,
             );
         }
@@ -491,6 +510,7 @@ impl Targets {
                     &self.gbuffer_group,
                     offset,
                     &gs.geometry,
+                    (&gs.textures.group, gs.variant),
                     ts,
                 );
                 let ts = timer.pass("direct light");
@@ -518,6 +538,7 @@ impl Targets {
                 &self.gbuffer_group,
                 0,
                 &gs.geometry,
+                (&gs.textures.group, gs.variant),
                 ts,
             );
         }

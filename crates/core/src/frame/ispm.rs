@@ -175,6 +175,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
             &mut encoder,
             &layers,
             &gs.geometry,
+            (&gs.textures.group, gs.variant),
             timer,
         );
     }

@@ -225,6 +225,12 @@ impl Renderer {
         if self.bvh.is_none() || self.changes.geometry {
             stages.push(self.update_bvh()?);
         }
+        if self.changes.materials {
+            // Alpha masks may have changed with the materials.
+            if let Some(bvh) = self.bvh.as_mut() {
+                bvh.update_alpha(&self.scene);
+            }
+        }
         let pass = self.passes();
         let settings = if self.settings.progressive {
             progressive::pass_settings(&self.settings, desc.seed, pass)
@@ -349,7 +355,7 @@ impl Renderer {
         let fits = layers.is_some_and(|l| gpu::GpuScene::fits(scene, l));
         if !fits {
             crate::raster::check_scene_buffers(ctx, scene)?;
-            let gs = gpu::GpuScene::new(ctx, scene, settings.shadow_map_size);
+            let gs = gpu::GpuScene::new(ctx, scene, settings.shadow_map_size)?;
             crate::raster::check_limits(ctx, scene, settings, gs.layers)?;
             let targets = gpu::Targets::new(ctx, &gs, scene, settings.spp);
             self.gpu = Some(GpuState {

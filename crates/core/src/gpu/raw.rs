@@ -103,7 +103,8 @@ impl ViewRaw {
 }
 
 /// One vertex of the non-indexed triangle list: position, shading normal, geometric normal
-/// (from the winding, the same for the triangle's three vertices) and material index.
+/// (from the winding, the same for the triangle's three vertices), material index, texture
+/// coordinates and the triangle's tangent (w: handedness, 0 where the UVs are degenerate).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct VertexRaw {
@@ -111,4 +112,6 @@ pub struct VertexRaw {
     pub normal: [f32; 3],
     pub geometric_normal: [f32; 3],
     pub material: u32,
+    pub uv: [f32; 2],
+    pub tangent: [f32; 4],
 }

@@ -5,6 +5,8 @@
 pub const COMMON: &str = include_str!("shaders/common/types.wgsl");
 /// The uber BSDF: the formulas of `bsdf::Material::eval`.
 pub const BSDF: &str = include_str!("shaders/common/bsdf.wgsl");
+/// Texture lookups and textured materials (group 1 of the passes that rasterize the scene).
+pub const TEXTURE: &str = include_str!("shaders/common/texture.wgsl");
 /// The photon-volume estimate term shared by the indirect estimators (needs `BSDF`).
 pub const PHOTON_VOLUME: &str = include_str!("shaders/common/photon_volume.wgsl");
 /// Order-independent (fixed-point) sums of non-negative RGB terms.
@@ -12,6 +14,7 @@ pub const FIXED_SUM: &str = include_str!("shaders/common/fixed_sum.wgsl");
 
 pub const GBUFFER: &str = include_str!("shaders/gbuffer.wgsl");
 pub const SHADOW: &str = include_str!("shaders/shadow.wgsl");
+pub const SHADOW_MASKED: &str = include_str!("shaders/shadow_masked.wgsl");
 pub const DIRECT: &str = include_str!("shaders/direct.wgsl");
 pub const BOUNCE: &str = include_str!("shaders/bounce.wgsl");
 pub const VOLUME: &str = include_str!("shaders/volume.wgsl");

@@ -494,7 +494,7 @@ fn follow(
                 _ => PathKind::Diffuse,
             };
         }
-        density *= path_density_factor(it.material, bs.lobe);
+        density *= path_density_factor(&it.material, bs.lobe);
         bounce += 1;
         o = it.spawn(wi);
         d = wi;

@@ -31,8 +31,9 @@ const TARGETS: [(&str, wgpu::TextureFormat); 5] = [
 ];
 
 /// Vertex layout of [`VertexRaw`], shared with the shadow pass (which reads location 0 only).
-pub const VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 4] =
-    wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Uint32];
+pub const VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 6] = wgpu::vertex_attr_array![
+    0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Uint32, 4 => Float32x2, 5 => Float32x4
+];
 
 pub fn vertex_layout() -> wgpu::VertexBufferLayout<'static> {
     wgpu::VertexBufferLayout {
@@ -103,13 +104,14 @@ impl GBuffer {
 
 /// Pipeline and bind group layout of the G-buffer pass.
 pub struct GBufferPass {
-    pub pipeline: wgpu::RenderPipeline,
+    /// One per [`super::textures::Variant`], in `Variant::ALL` order.
+    pub pipelines: Vec<wgpu::RenderPipeline>,
     /// Group 0: the view (uniform, dynamic offset) and the materials (storage).
     pub layout: wgpu::BindGroupLayout,
 }
 
 impl GBufferPass {
-    pub fn new(device: &wgpu::Device) -> Self {
+    pub fn new(device: &wgpu::Device, textures: &wgpu::BindGroupLayout) -> Self {
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("gbuffer bind group layout"),
             entries: &[
@@ -119,53 +121,65 @@ impl GBufferPass {
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("gbuffer pipeline layout"),
-            bind_group_layouts: &[Some(&layout)],
+            bind_group_layouts: &[Some(&layout), Some(textures)],
             immediate_size: 0,
         });
         let module = shaders::module(
             device,
             "gbuffer shader",
-            &[shaders::COMMON, shaders::BSDF, shaders::GBUFFER],
+            &[
+                shaders::COMMON,
+                shaders::BSDF,
+                shaders::TEXTURE,
+                shaders::GBUFFER,
+            ],
         );
         let targets: Vec<_> = TARGETS
             .iter()
             .map(|(_, f)| Some(wgpu::ColorTargetState::from(*f)))
             .collect();
-        let pipeline = crate::gpu::create_render_pipeline(
-            device,
-            &wgpu::RenderPipelineDescriptor {
-                label: Some("gbuffer pipeline"),
-                layout: Some(&pipeline_layout),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("vs_main"),
-                    compilation_options: Default::default(),
-                    buffers: &[Some(vertex_layout())],
+        let pipeline = |entry: &str| {
+            crate::gpu::create_render_pipeline(
+                device,
+                &wgpu::RenderPipelineDescriptor {
+                    label: Some("gbuffer pipeline"),
+                    layout: Some(&pipeline_layout),
+                    vertex: wgpu::VertexState {
+                        module: &module,
+                        entry_point: Some("vs_main"),
+                        compilation_options: Default::default(),
+                        buffers: &[Some(vertex_layout())],
+                    },
+                    primitive: wgpu::PrimitiveState::default(),
+                    depth_stencil: Some(wgpu::DepthStencilState {
+                        format: DEPTH,
+                        depth_write_enabled: Some(true),
+                        depth_compare: Some(wgpu::CompareFunction::Less),
+                        stencil: Default::default(),
+                        bias: Default::default(),
+                    }),
+                    multisample: Default::default(),
+                    fragment: Some(wgpu::FragmentState {
+                        module: &module,
+                        entry_point: Some(entry),
+                        compilation_options: Default::default(),
+                        targets: &targets,
+                    }),
+                    multiview_mask: None,
+                    cache: None,
                 },
-                primitive: wgpu::PrimitiveState::default(),
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: DEPTH,
-                    depth_write_enabled: Some(true),
-                    depth_compare: Some(wgpu::CompareFunction::Less),
-                    stencil: Default::default(),
-                    bias: Default::default(),
-                }),
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("fs_main"),
-                    compilation_options: Default::default(),
-                    targets: &targets,
-                }),
-                multiview_mask: None,
-                cache: None,
-            },
-        );
-        GBufferPass { pipeline, layout }
+            )
+        };
+        let pipelines = super::textures::Variant::ALL
+            .iter()
+            .map(|v| pipeline(v.entry_point()))
+            .collect();
+        GBufferPass { pipelines, layout }
     }
 
     /// Records the pass: clears the G-buffer and draws the geometry seen from the view at
     /// `view_offset` in the bind group's view buffer.
+    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
         encoder: &mut wgpu::CommandEncoder,
@@ -173,6 +187,7 @@ impl GBufferPass {
         bind_group: &wgpu::BindGroup,
         view_offset: u32,
         geometry: &super::Geometry,
+        textures: (&wgpu::BindGroup, super::textures::Variant),
         timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) {
         let clear = wgpu::Operations {
@@ -206,8 +221,9 @@ impl GBufferPass {
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_pipeline(&self.pipeline);
+        pass.set_pipeline(&self.pipelines[textures.1 as usize]);
         pass.set_bind_group(0, bind_group, &[view_offset]);
+        pass.set_bind_group(1, textures.0, &[]);
         pass.set_vertex_buffer(0, geometry.vertices.slice(..));
         pass.draw(0..geometry.count, 0..1);
     }

@@ -211,7 +211,8 @@ fn spot_falloff(cos: f32, cos_inner: f32, cos_outer: f32) -> f32 {
 
 /// Pipelines of method `ispm`, compiled once per device.
 pub struct IspmPasses {
-    pub(crate) bounce: wgpu::RenderPipeline,
+    /// One per [`super::textures::Variant`], in `Variant::ALL` order.
+    pub(crate) bounce: Vec<wgpu::RenderPipeline>,
     pub(crate) bounce_layout: wgpu::BindGroupLayout,
     /// Photon volumes as icosahedra.
     pub(crate) volume: wgpu::RenderPipeline,
@@ -265,10 +266,11 @@ fn photon_attributes() -> [wgpu::VertexAttribute; 6] {
 
 impl IspmPasses {
     pub fn get(ctx: &GpuContext) -> &IspmPasses {
-        ctx.ispm_passes.get_or_init(|| IspmPasses::new(&ctx.device))
+        ctx.ispm_passes
+            .get_or_init(|| IspmPasses::new(&ctx.device, &super::Passes::get(ctx).textures))
     }
 
-    fn new(device: &wgpu::Device) -> Self {
+    fn new(device: &wgpu::Device, textures: &wgpu::BindGroupLayout) -> Self {
         let layout = |label, entries: &[wgpu::BindGroupLayoutEntry]| {
             device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some(label),
@@ -303,39 +305,56 @@ impl IspmPasses {
         let module = shaders::module(
             device,
             "bounce shader",
-            &[shaders::COMMON, shaders::BSDF, shaders::BOUNCE],
+            &[
+                shaders::COMMON,
+                shaders::BSDF,
+                shaders::TEXTURE,
+                shaders::BOUNCE,
+            ],
         );
+        let bounce_pipeline_layout =
+            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("bounce pipeline layout"),
+                bind_group_layouts: &[Some(&bounce_layout), Some(textures)],
+                immediate_size: 0,
+            });
         let targets: [_; 5] = std::array::from_fn(|_| Some(wgpu::ColorTargetState::from(TARGET)));
-        let bounce = crate::gpu::create_render_pipeline(
-            device,
-            &wgpu::RenderPipelineDescriptor {
-                label: Some("bounce pipeline"),
-                layout: Some(&pipeline_layout(&bounce_layout)),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("vs_main"),
-                    compilation_options: Default::default(),
-                    buffers: &[Some(gbuffer::vertex_layout())],
+        let bounce_pipeline = |entry: &str| {
+            crate::gpu::create_render_pipeline(
+                device,
+                &wgpu::RenderPipelineDescriptor {
+                    label: Some("bounce pipeline"),
+                    layout: Some(&bounce_pipeline_layout),
+                    vertex: wgpu::VertexState {
+                        module: &module,
+                        entry_point: Some("vs_main"),
+                        compilation_options: Default::default(),
+                        buffers: &[Some(gbuffer::vertex_layout())],
+                    },
+                    primitive: wgpu::PrimitiveState::default(),
+                    depth_stencil: Some(wgpu::DepthStencilState {
+                        format: gbuffer::DEPTH,
+                        depth_write_enabled: Some(true),
+                        depth_compare: Some(wgpu::CompareFunction::Less),
+                        stencil: Default::default(),
+                        bias: Default::default(),
+                    }),
+                    multisample: Default::default(),
+                    fragment: Some(wgpu::FragmentState {
+                        module: &module,
+                        entry_point: Some(entry),
+                        compilation_options: Default::default(),
+                        targets: &targets,
+                    }),
+                    multiview_mask: None,
+                    cache: None,
                 },
-                primitive: wgpu::PrimitiveState::default(),
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: gbuffer::DEPTH,
-                    depth_write_enabled: Some(true),
-                    depth_compare: Some(wgpu::CompareFunction::Less),
-                    stencil: Default::default(),
-                    bias: Default::default(),
-                }),
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("fs_main"),
-                    compilation_options: Default::default(),
-                    targets: &targets,
-                }),
-                multiview_mask: None,
-                cache: None,
-            },
-        );
+            )
+        };
+        let bounce = super::textures::Variant::ALL
+            .iter()
+            .map(|v| bounce_pipeline(v.entry_point()))
+            .collect();
 
         // Photon volumes.
         let volume_layout = layout(
@@ -538,6 +557,8 @@ pub fn render_bounce_map(scene: &Scene, settings: &Settings) -> Result<BounceMap
             wgpu::BufferUsages::STORAGE,
         );
         let layers = bounce_layers(scene, settings.photons);
+        let textures =
+            super::textures::GpuTextures::new(&ctx, scene, &super::Passes::get(&ctx).textures)?;
         let Some(targets) = BounceTargets::new(&ctx, &layers, &materials)? else {
             return Ok(BounceMap::default());
         };
@@ -553,6 +574,7 @@ pub fn render_bounce_map(scene: &Scene, settings: &Settings) -> Result<BounceMap
             &mut encoder,
             &layers,
             &geometry,
+            (&textures.group, super::textures::Variant::of(scene)),
             &mut timer,
         );
         timer.resolve(&mut encoder);
@@ -758,6 +780,7 @@ impl BounceTargets {
         encoder: &mut wgpu::CommandEncoder,
         layers: &[BounceLayer],
         geometry: &Geometry,
+        textures: (&wgpu::BindGroup, super::textures::Variant),
         timer: &mut Timer,
     ) {
         for (i, layer) in layers.iter().enumerate() {
@@ -791,10 +814,11 @@ impl BounceTargets {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            pass.set_pipeline(&passes.bounce);
+            pass.set_pipeline(&passes.bounce[textures.1 as usize]);
             pass.set_viewport(0.0, 0.0, layer.res as f32, layer.res as f32, 0.0, 1.0);
             pass.set_scissor_rect(0, 0, layer.res, layer.res);
             pass.set_bind_group(0, &self.group, &[(i as u64 * BOUNCE_VIEW_SIZE) as u32]);
+            pass.set_bind_group(1, textures.0, &[]);
             pass.set_vertex_buffer(0, geometry.vertices.slice(..));
             pass.draw(0..geometry.count, 0..1);
         }

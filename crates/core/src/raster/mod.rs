@@ -7,6 +7,7 @@ pub mod gbuffer;
 pub mod ispm;
 pub mod shadow;
 pub(crate) mod specular;
+pub mod textures;
 pub(crate) mod timer;
 pub mod volume_shape;
 
@@ -23,15 +24,21 @@ pub struct Passes {
     pub shadow: shadow::ShadowPass,
     pub direct: direct::DirectPass,
     pub composite: composite::CompositePass,
+    /// Group 1 of the passes that rasterize the scene ([`textures::layout`]).
+    pub textures: wgpu::BindGroupLayout,
 }
 
 impl Passes {
     pub fn get(ctx: &GpuContext) -> &Passes {
-        ctx.passes.get_or_init(|| Passes {
-            gbuffer: gbuffer::GBufferPass::new(&ctx.device),
-            shadow: shadow::ShadowPass::new(&ctx.device),
-            direct: direct::DirectPass::new(&ctx.device),
-            composite: composite::CompositePass::new(&ctx.device),
+        ctx.passes.get_or_init(|| {
+            let textures = textures::layout(&ctx.device);
+            Passes {
+                gbuffer: gbuffer::GBufferPass::new(&ctx.device, &textures),
+                shadow: shadow::ShadowPass::new(&ctx.device, &textures),
+                direct: direct::DirectPass::new(&ctx.device),
+                composite: composite::CompositePass::new(&ctx.device),
+                textures,
+            }
         })
     }
 }
@@ -180,12 +187,15 @@ pub(crate) fn vertices_of(scene: &Scene, range: std::ops::Range<usize>) -> Vec<V
         let tri = &scene.triangles[t];
         let [p0, p1, p2] = scene.triangle(t);
         let ng = (p1 - p0).cross(p2 - p0).normalize_or_zero();
-        for &i in tri {
+        let tangent = scene.tangent_of(t).unwrap_or(glam::Vec4::ZERO);
+        for (c, &i) in tri.iter().enumerate() {
             out.push(VertexRaw {
                 position: scene.positions[i as usize].into(),
                 normal: scene.normals[i as usize].into(),
                 geometric_normal: ng.into(),
                 material: scene.triangle_materials[t],
+                uv: scene.uvs[t][c].into(),
+                tangent: tangent.into(),
             });
         }
     }

@@ -113,12 +113,15 @@ pub(crate) fn corners(lo: Vec3, hi: Vec3) -> [Vec3; 8] {
 /// Pipeline of the shadow pass (depth only).
 pub struct ShadowPass {
     pub pipeline: wgpu::RenderPipeline,
+    /// For scenes with alpha-masked materials: discards cut-out fragments (group 1: the
+    /// textures).
+    pub masked: wgpu::RenderPipeline,
     /// Group 0: the layer's view (uniform, dynamic offset).
     pub layout: wgpu::BindGroupLayout,
 }
 
 impl ShadowPass {
-    pub fn new(device: &wgpu::Device) -> Self {
+    pub fn new(device: &wgpu::Device, textures: &wgpu::BindGroupLayout) -> Self {
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("shadow bind group layout"),
             entries: &[super::view_entry(0)],
@@ -129,6 +132,51 @@ impl ShadowPass {
             immediate_size: 0,
         });
         let module = shaders::module(device, "shadow shader", &[shaders::COMMON, shaders::SHADOW]);
+        let masked_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("masked shadow pipeline layout"),
+            bind_group_layouts: &[Some(&layout), Some(textures)],
+            immediate_size: 0,
+        });
+        let masked_module = shaders::module(
+            device,
+            "masked shadow shader",
+            &[shaders::COMMON, shaders::TEXTURE, shaders::SHADOW_MASKED],
+        );
+        let attributes = super::gbuffer::VERTEX_ATTRIBUTES;
+        let masked_attributes = [attributes[0], attributes[3], attributes[4]];
+        let masked = crate::gpu::create_render_pipeline(
+            device,
+            &wgpu::RenderPipelineDescriptor {
+                label: Some("masked shadow pipeline"),
+                layout: Some(&masked_layout),
+                vertex: wgpu::VertexState {
+                    module: &masked_module,
+                    entry_point: Some("vs_main"),
+                    compilation_options: Default::default(),
+                    buffers: &[Some(wgpu::VertexBufferLayout {
+                        attributes: &masked_attributes,
+                        ..super::gbuffer::vertex_layout()
+                    })],
+                },
+                primitive: wgpu::PrimitiveState::default(),
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: FORMAT,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(wgpu::CompareFunction::Less),
+                    stencil: Default::default(),
+                    bias: DEPTH_BIAS,
+                }),
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &masked_module,
+                    entry_point: Some("fs_main"),
+                    compilation_options: Default::default(),
+                    targets: &[],
+                }),
+                multiview_mask: None,
+                cache: None,
+            },
+        );
         let pipeline = crate::gpu::create_render_pipeline(
             device,
             &wgpu::RenderPipelineDescriptor {
@@ -157,7 +205,11 @@ impl ShadowPass {
                 cache: None,
             },
         );
-        ShadowPass { pipeline, layout }
+        ShadowPass {
+            pipeline,
+            masked,
+            layout,
+        }
     }
 
     /// The views to render, one per layer, for the view uniform buffer.
@@ -170,6 +222,7 @@ impl ShadowPass {
     }
 
     /// Records one layer's pass.
+    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
         encoder: &mut wgpu::CommandEncoder,
@@ -177,6 +230,7 @@ impl ShadowPass {
         bind_group: &wgpu::BindGroup,
         view_offset: u32,
         geometry: &super::Geometry,
+        masks: Option<&wgpu::BindGroup>,
         timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) {
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -194,7 +248,13 @@ impl ShadowPass {
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_pipeline(&self.pipeline);
+        match masks {
+            Some(textures) => {
+                pass.set_pipeline(&self.masked);
+                pass.set_bind_group(1, textures, &[]);
+            }
+            None => pass.set_pipeline(&self.pipeline),
+        }
         pass.set_bind_group(0, bind_group, &[view_offset]);
         pass.set_vertex_buffer(0, geometry.vertices.slice(..));
         pass.draw(0..geometry.count, 0..1);

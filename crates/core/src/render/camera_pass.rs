@@ -189,7 +189,7 @@ fn radiance(
         if (depth > 0 || estimate_first) && !it.material.is_purely_specular() {
             l += beta * estimate(&it, wo);
         }
-        if depth == 0 && !estimate_first && !has_delta_lobe(it.material) {
+        if depth == 0 && !estimate_first && !has_delta_lobe(&it.material) {
             break;
         }
         // Continue only through a delta lobe, geometrically consistent.

@@ -96,6 +96,50 @@ pub struct MaterialDesc {
     pub transmission: V3,
     #[serde(default = "default_ior")]
     pub ior: f32,
+    /// Textures (names of the scene's textures, see `docs/scene-format.md`): RGB multiplies
+    /// `diffuse` and `transmission`; its alpha is the coverage when `alpha_cutoff` is set.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub diffuse_texture: Option<String>,
+    /// RGB multiplies `specular`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub specular_texture: Option<String>,
+    /// Green channel multiplies `roughness` (glTF's metallic-roughness layout).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub roughness_texture: Option<String>,
+    /// Tangent-space normal map (RGB = (n + 1) / 2, +z out of the surface, +y towards -v).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub normal_texture: Option<String>,
+    /// Coverage in the alpha channel: surfaces are cut out where it is below `alpha_cutoff`.
+    /// Defaults to `diffuse_texture` when only `alpha_cutoff` is given.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub alpha_texture: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub alpha_cutoff: Option<f32>,
+}
+
+impl MaterialDesc {
+    /// The texture fields alone.
+    pub fn texture_refs(&self) -> TextureRefs {
+        TextureRefs {
+            diffuse: self.diffuse_texture.clone(),
+            specular: self.specular_texture.clone(),
+            roughness: self.roughness_texture.clone(),
+            normal: self.normal_texture.clone(),
+            alpha: self.alpha_texture.clone(),
+            alpha_cutoff: self.alpha_cutoff,
+        }
+    }
+}
+
+/// The texture names of a material description.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct TextureRefs {
+    pub diffuse: Option<String>,
+    pub specular: Option<String>,
+    pub roughness: Option<String>,
+    pub normal: Option<String>,
+    pub alpha: Option<String>,
+    pub alpha_cutoff: Option<f32>,
 }
 
 fn default_diffuse() -> V3 {

@@ -9,6 +9,7 @@ pub mod environment;
 pub mod light;
 pub mod primitives;
 pub mod shading;
+pub mod surface;
 pub mod update;
 
 pub use animation::Animation;
@@ -18,13 +19,16 @@ pub use environment::{EnvImage, Environment};
 pub use light::Light;
 pub use primitives::TriMesh;
 pub use shading::Smoothing;
+pub use surface::{MaterialMaps, TextureMap};
 pub use update::{Changes, SceneObject, SceneUpdate};
 
 use crate::bsdf::Material;
 use crate::error::{Error, Result};
+use crate::texture::Texture;
 use desc::{LightDesc, MaterialDesc, Scale, ShapeDesc, SmoothDesc, V3};
-use glam::{EulerRot, Mat3, Mat4, Quat, Vec3};
+use glam::{EulerRot, Mat3, Mat4, Quat, Vec2, Vec3};
 use std::collections::HashMap;
+use std::sync::Arc;
 
 /// Triangle mesh data supplied by the caller for `mesh` objects (loaded from files by the
 /// Python layer), keyed by the `file` string of the scene description.
@@ -37,6 +41,11 @@ pub struct MeshData {
     /// and an index into them per triangle. Used when the object names no material.
     pub materials: Vec<(String, Material)>,
     pub face_materials: Vec<u32>,
+    /// The texture fields of `materials` (same order; empty: none), names of the textures
+    /// passed with the description.
+    pub material_textures: Vec<desc::TextureRefs>,
+    /// Texture coordinates per triangle corner (empty: none, all zero).
+    pub uvs: Vec<[Vec2; 3]>,
 }
 
 /// A renderable scene. Triangles are stored flat in world space.
@@ -46,6 +55,13 @@ pub struct Scene {
     pub lights: Vec<Light>,
     pub materials: Vec<Material>,
     pub material_names: Vec<String>,
+    /// The textures each material reads (same order as `materials`).
+    pub material_maps: Vec<MaterialMaps>,
+    /// Textures, referenced by index from `material_maps`, and their names.
+    pub textures: Vec<Arc<Texture>>,
+    pub texture_names: Vec<String>,
+    /// Texture coordinates per triangle corner (same order as `triangles`).
+    pub uvs: Vec<[Vec2; 3]>,
     pub positions: Vec<Vec3>,
     pub normals: Vec<Vec3>,
     pub triangles: Vec<[u32; 3]>,
@@ -92,7 +108,13 @@ impl Scene {
         source_name: &str,
         meshes: &HashMap<String, MeshData>,
     ) -> Result<Scene> {
-        Scene::from_json_with_images(text, source_name, meshes, &HashMap::new())
+        Scene::from_json_with(
+            text,
+            source_name,
+            meshes,
+            &HashMap::new(),
+            &TextureMap::new(),
+        )
     }
 
     /// [`Scene::from_json`] with the environment images the description names (`file` of
@@ -103,6 +125,27 @@ impl Scene {
         meshes: &HashMap<String, MeshData>,
         images: &HashMap<String, EnvImage>,
     ) -> Result<Scene> {
+        Scene::from_json_with(text, source_name, meshes, images, &TextureMap::new())
+    }
+
+    /// [`Scene::from_json`] with the textures that materials name.
+    pub fn from_json_textured(
+        text: &str,
+        source_name: &str,
+        meshes: &HashMap<String, MeshData>,
+        textures: &TextureMap,
+    ) -> Result<Scene> {
+        Scene::from_json_with(text, source_name, meshes, &HashMap::new(), textures)
+    }
+
+    /// [`Scene::from_json`] with environment images and material textures.
+    pub fn from_json_with(
+        text: &str,
+        source_name: &str,
+        meshes: &HashMap<String, MeshData>,
+        images: &HashMap<String, EnvImage>,
+        textures: &TextureMap,
+    ) -> Result<Scene> {
         let de = &mut serde_json::Deserializer::from_str(text);
         let desc: SceneDesc = serde_path_to_error::deserialize(de).map_err(|e| {
             let field = e.path().to_string();
@@ -112,7 +155,7 @@ impl Scene {
                 e.inner().to_string(),
             )
         })?;
-        let mut scene = Scene::from_desc(&desc, source_name, meshes)?;
+        let mut scene = Scene::from_desc_textured(&desc, source_name, meshes, textures)?;
         if let Some(env) = &desc.environment {
             let e = Environment::from_desc(env, images).map_err(|(f, m)| {
                 let field = if f == "(section)" {
@@ -133,6 +176,16 @@ impl Scene {
         source_name: &str,
         meshes: &HashMap<String, MeshData>,
     ) -> Result<Scene> {
+        Scene::from_desc_textured(desc, source_name, meshes, &TextureMap::new())
+    }
+
+    /// [`Scene::from_desc`] with the textures that materials name.
+    pub fn from_desc_textured(
+        desc: &SceneDesc,
+        source_name: &str,
+        meshes: &HashMap<String, MeshData>,
+        textures: &TextureMap,
+    ) -> Result<Scene> {
         let err = |field: String, msg: &str| Error::scene(source_name, field, msg);
         let camera =
             camera_from_desc(&desc.camera).map_err(|(f, m)| err(format!("camera.{f}"), m))?;
@@ -142,15 +195,26 @@ impl Scene {
             lights.push(light_from_desc(l).map_err(|(f, m)| err(format!("lights[{i}].{f}"), m))?);
         }
 
+        let mut texture_names: Vec<String> = textures.keys().cloned().collect();
+        texture_names.sort();
+        let texture_index: HashMap<String, u32> = texture_names
+            .iter()
+            .enumerate()
+            .map(|(i, n)| (n.clone(), i as u32))
+            .collect();
         let mut materials = Vec::new();
         let mut material_names = Vec::new();
+        let mut material_maps = Vec::new();
         let mut index_of: HashMap<String, u32> = HashMap::new();
         for (name, m) in &desc.materials {
             let mat = material_from_desc(m)
                 .map_err(|(f, msg)| err(format!("materials.{name}.{f}"), msg))?;
+            let maps = MaterialMaps::resolve(&m.texture_refs(), &texture_index)
+                .map_err(|(f, msg)| err(format!("materials.{name}.{f}"), &msg))?;
             index_of.insert(name.clone(), materials.len() as u32);
             materials.push(mat);
             material_names.push(name.clone());
+            material_maps.push(maps);
         }
 
         let mut scene = Scene {
@@ -158,6 +222,10 @@ impl Scene {
             lights,
             materials,
             material_names,
+            material_maps,
+            textures: texture_names.iter().map(|n| textures[n].clone()).collect(),
+            texture_names,
+            uvs: Vec::new(),
             positions: Vec::new(),
             normals: Vec::new(),
             triangles: Vec::new(),
@@ -171,17 +239,31 @@ impl Scene {
             let at = |f: &str| format!("objects[{i}].{f}");
             let xf = transform_matrix(&obj.transform)
                 .map_err(|(f, m)| err(at(&format!("transform.{f}")), m))?;
-            let (mesh, file_materials) = match &obj.shape {
+            let (mesh, file_materials, uvs) = match &obj.shape {
                 ShapeDesc::Mesh { file } => {
                     let data = meshes.get(file).ok_or_else(|| {
                         err(at("shape.file"), &format!("mesh `{file}` was not loaded"))
                     })?;
-                    (data.mesh.clone(), Some(data))
+                    let uvs = if data.uvs.is_empty() {
+                        vec![[Vec2::ZERO; 3]; data.mesh.indices.len()]
+                    } else if data.uvs.len() == data.mesh.indices.len()
+                        && data.uvs.iter().flatten().all(|u| u.is_finite())
+                    {
+                        data.uvs.clone()
+                    } else {
+                        return Err(err(
+                            at("shape.file"),
+                            "texture coordinates must be finite, one per vertex",
+                        ));
+                    };
+                    (data.mesh.clone(), Some(data), uvs)
                 }
-                shape => (
-                    primitive(shape).map_err(|(f, m)| err(at(&format!("shape.{f}")), m))?,
-                    None,
-                ),
+                shape => {
+                    let mesh =
+                        primitive(shape).map_err(|(f, m)| err(at(&format!("shape.{f}")), m))?;
+                    let uvs = primitives::uvs(shape, &mesh);
+                    (mesh, None, uvs)
+                }
             };
             validate_mesh(&mesh).map_err(|m| err(at("shape"), &m))?;
             if scene.positions.len() + mesh.positions.len() > MAX_VERTICES {
@@ -203,9 +285,15 @@ impl Scene {
                 }
                 (None, Some(data)) if !data.materials.is_empty() => {
                     let base = scene.materials.len() as u32;
-                    for (name, m) in &data.materials {
+                    for (i, (name, m)) in data.materials.iter().enumerate() {
+                        let refs = data.material_textures.get(i).cloned().unwrap_or_default();
+                        let maps =
+                            MaterialMaps::resolve(&refs, &texture_index).map_err(|(f, msg)| {
+                                err(at(&format!("shape.file: materials.{name}.{f}")), &msg)
+                            })?;
                         scene.materials.push(*m);
                         scene.material_names.push(name.clone());
+                        scene.material_maps.push(maps);
                     }
                     if data.face_materials.len() != mesh.indices.len()
                         || data
@@ -236,7 +324,7 @@ impl Scene {
                     return Err(err(at("name"), "another object has this name"));
                 }
             }
-            scene.append(obj.name.clone(), &mesh, xf, &tri_mats);
+            scene.append(obj.name.clone(), &mesh, xf, &tri_mats, &uvs);
         }
         if let Some(anim) = &desc.animation {
             scene.animation = Some(Animation::from_desc(anim, desc, &scene, source_name)?);
@@ -244,7 +332,14 @@ impl Scene {
         Ok(scene)
     }
 
-    fn append(&mut self, name: Option<String>, mesh: &TriMesh, xf: Mat4, tri_materials: &[u32]) {
+    fn append(
+        &mut self,
+        name: Option<String>,
+        mesh: &TriMesh,
+        xf: Mat4,
+        tri_materials: &[u32],
+        uvs: &[[Vec2; 3]],
+    ) {
         let base = self.positions.len() as u32;
         let first_triangle = self.triangles.len() as u32;
         let flip = Mat3::from_mat4(xf).determinant() < 0.0;
@@ -261,6 +356,11 @@ impl Scene {
             }
         }));
         self.triangle_materials.extend_from_slice(tri_materials);
+        // Corners in the order of the (possibly flipped) triangles.
+        self.uvs.extend(
+            uvs.iter()
+                .map(|c| if flip { [c[0], c[2], c[1]] } else { *c }),
+        );
         let object = SceneObject {
             name,
             vertices: base..base + mesh.positions.len() as u32,
@@ -290,6 +390,19 @@ impl Scene {
 }
 
 pub(crate) type FieldError = (String, &'static str);
+
+/// The texture fields of the materials in [`parse_materials`]'s format, in order.
+pub fn parse_material_textures(json: &str, source_name: &str) -> Result<Vec<desc::TextureRefs>> {
+    let de = &mut serde_json::Deserializer::from_str(json);
+    let descs: Vec<(String, MaterialDesc)> = serde_path_to_error::deserialize(de).map_err(|e| {
+        Error::scene(
+            source_name,
+            format!("materials{}", e.path()),
+            e.inner().to_string(),
+        )
+    })?;
+    Ok(descs.iter().map(|(_, d)| d.texture_refs()).collect())
+}
 
 /// Parses the materials carried by a mesh file (e.g. OBJ + MTL), as turned into descriptions
 /// by its loader: a JSON array of `[name, material]` pairs in the `materials` section's

@@ -1,6 +1,7 @@
 //! Tessellated primitive shapes, in their local frames. Normals point outwards.
 
-use glam::Vec3;
+use super::desc::ShapeDesc;
+use glam::{Vec2, Vec3};
 use std::collections::HashMap;
 use std::f32::consts::TAU;
 
@@ -227,6 +228,90 @@ pub fn ring(inner: f32, outer: f32, height: f32, segments: u32) -> TriMesh {
     m
 }
 
+/// Texture coordinates per triangle corner of a primitive's mesh, v running down the image:
+/// a quad maps the whole texture once (u along x, v along z); each box face likewise; a
+/// sphere longitude/latitude (v = 0 at the top); cylinder and ring walls angle × height,
+/// their caps planar over the outer diameter.
+pub fn uvs(shape: &ShapeDesc, m: &TriMesh) -> Vec<[Vec2; 3]> {
+    let angular = |p: Vec3| 0.5 + p.z.atan2(p.x) / TAU;
+    m.indices
+        .iter()
+        .map(|tri| {
+            let p = tri.map(|i| m.positions[i as usize]);
+            let n = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero();
+            let mut seam = false;
+            let mut c = match *shape {
+                ShapeDesc::Quad { size } => {
+                    p.map(|q| Vec2::new(q.x / size[0] + 0.5, q.z / size[1] + 0.5))
+                }
+                ShapeDesc::Box { size } => {
+                    let s = Vec3::from(size);
+                    let a = n.abs();
+                    p.map(|q| {
+                        let q = q / s;
+                        if a.x >= a.y && a.x >= a.z {
+                            Vec2::new(0.5 - q.z * n.x.signum(), 0.5 - q.y)
+                        } else if a.y >= a.z {
+                            Vec2::new(q.x + 0.5, 0.5 + q.z * n.y.signum())
+                        } else {
+                            Vec2::new(0.5 + q.x * n.z.signum(), 0.5 - q.y)
+                        }
+                    })
+                }
+                ShapeDesc::Sphere { radius, .. } => {
+                    seam = true;
+                    p.map(|q| {
+                        let y = (q.y / radius).clamp(-1.0, 1.0);
+                        Vec2::new(angular(q), y.acos() / std::f32::consts::PI)
+                    })
+                }
+                ShapeDesc::Cylinder { height, .. } | ShapeDesc::Ring { height, .. } => {
+                    let r = p
+                        .iter()
+                        .map(|q| Vec2::new(q.x, q.z).length())
+                        .fold(0.0f32, f32::max)
+                        .max(1e-12);
+                    if n.y.abs() > 0.9 {
+                        p.map(|q| Vec2::new(q.x / (2.0 * r) + 0.5, q.z / (2.0 * r) + 0.5))
+                    } else {
+                        seam = true;
+                        p.map(|q| Vec2::new(angular(q), 1.0 - q.y / height))
+                    }
+                }
+                ShapeDesc::Mesh { .. } => [Vec2::ZERO; 3],
+            };
+            // Across the seam of angular coordinates, keep the triangle on one side.
+            // A pole's longitude is arbitrary: take the mean of the other corners'.
+            let pole = |q: Vec3| Vec2::new(q.x, q.z).length() < 1e-6 * q.length();
+            let poles = p.map(|q| seam && pole(q));
+            let (lo, hi) = c
+                .iter()
+                .zip(poles)
+                .filter(|(_, is_pole)| !is_pole)
+                .fold((f32::MAX, f32::MIN), |(lo, hi), (v, _)| {
+                    (lo.min(v.x), hi.max(v.x))
+                });
+            if seam && hi - lo > 0.5 {
+                for v in &mut c {
+                    if v.x < 0.5 {
+                        v.x += 1.0;
+                    }
+                }
+            }
+            if poles.iter().any(|p| *p) {
+                let others: Vec<f32> = (0..3).filter(|&i| !poles[i]).map(|i| c[i].x).collect();
+                let mean = others.iter().sum::<f32>() / others.len().max(1) as f32;
+                for i in 0..3 {
+                    if poles[i] {
+                        c[i].x = mean;
+                    }
+                }
+            }
+            c
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -278,6 +363,42 @@ mod tests {
                     );
                 }
             }
+        }
+    }
+}
+
+#[cfg(test)]
+mod uv_tests {
+    use super::*;
+
+    /// A quad maps the whole texture once; a box face too; sphere triangles never straddle
+    /// the seam (no triangle spans more than half the texture in u).
+    #[test]
+    fn primitive_uvs() {
+        let shape = ShapeDesc::Quad { size: [2.0, 4.0] };
+        let m = quad([2.0, 4.0]);
+        let uv = uvs(&shape, &m);
+        let all: Vec<Vec2> = uv.iter().flatten().copied().collect();
+        let lo = all.iter().fold(Vec2::splat(9.0), |a, b| a.min(*b));
+        let hi = all.iter().fold(Vec2::splat(-9.0), |a, b| a.max(*b));
+        assert_eq!((lo, hi), (Vec2::ZERO, Vec2::ONE));
+        let shape = ShapeDesc::Box {
+            size: [1.0, 2.0, 3.0],
+        };
+        for tri in uvs(&shape, &cuboid(Vec3::new(1.0, 2.0, 3.0))) {
+            assert!(tri
+                .iter()
+                .all(|v| v.cmpge(Vec2::ZERO).all() && v.cmple(Vec2::ONE).all()));
+        }
+        let shape = ShapeDesc::Sphere {
+            radius: 1.0,
+            subdivisions: 3,
+        };
+        for tri in uvs(&shape, &sphere(1.0, 3)) {
+            let (a, b) = tri
+                .iter()
+                .fold((9.0f32, -9.0f32), |(a, b), v| (a.min(v.x), b.max(v.x)));
+            assert!(b - a <= 0.5, "{tri:?}");
         }
     }
 }

@@ -171,8 +171,13 @@ impl Scene {
                     .iter()
                     .position(|m| m == name)
                     .ok_or_else(|| err(format!("materials.{name}"), "no material of that name"))?;
-                self.materials[i] = material_from_desc(material)
+                let m = material_from_desc(material)
                     .map_err(|(f, m)| err(format!("materials.{name}.{f}"), m))?;
+                let maps =
+                    super::MaterialMaps::resolve(&material.texture_refs(), &self.texture_index())
+                        .map_err(|(f, m)| err(format!("materials.{name}.{f}"), &m))?;
+                self.materials[i] = m;
+                self.material_maps[i] = maps;
                 Ok(Changes {
                     materials: true,
                     ..Default::default()
@@ -229,6 +234,7 @@ impl Scene {
     pub fn material_desc(&self, name: &str) -> Option<MaterialDesc> {
         let i = self.material_names.iter().position(|m| m == name)?;
         let m = &self.materials[i];
+        let t = self.material_maps[i].refs(&self.texture_names);
         Some(MaterialDesc {
             diffuse: m.diffuse.into(),
             specular: m.specular.into(),
@@ -236,6 +242,12 @@ impl Scene {
             fresnel: m.fresnel,
             transmission: m.transmission.into(),
             ior: m.ior,
+            diffuse_texture: t.diffuse,
+            specular_texture: t.specular,
+            roughness_texture: t.roughness,
+            normal_texture: t.normal,
+            alpha_texture: t.alpha,
+            alpha_cutoff: t.alpha_cutoff,
         })
     }
 }

@@ -73,11 +73,65 @@ fn make_ray(origin: Vec3, dir: Vec3, tmax: f32) -> Ray {
 /// can [`SceneBvh::refit`] it instead of building anew.
 pub struct SceneBvh {
     bvh: CwBvh,
+    /// Alpha masks of the scene's materials (none: every hit counts).
+    alpha: Option<AlphaTest>,
     tris: Vec<Tri>,
     /// Scene triangle index of each BVH-ordered triangle.
     ids: Vec<u32>,
     bvh2: Bvh2,
     triangles: Vec<Triangle>,
+}
+
+/// The any-hit test of alpha-masked materials: a hit where the mask's coverage is below the
+/// cutoff is skipped, as the GPU passes discard those fragments.
+struct AlphaTest {
+    /// Per scene triangle: index into `masks`, or `u32::MAX` when opaque.
+    mask_of: Vec<u32>,
+    /// Coverage texture and cutoff per masked material.
+    masks: Vec<(std::sync::Arc<crate::texture::Texture>, f32)>,
+    uvs: Vec<[glam::Vec2; 3]>,
+}
+
+impl AlphaTest {
+    fn new(scene: &Scene) -> Option<AlphaTest> {
+        if !scene.has_alpha_masks() {
+            return None;
+        }
+        let mut masks = Vec::new();
+        let per_material: Vec<u32> = scene
+            .material_maps
+            .iter()
+            .map(|m| match m.alpha {
+                Some(t) => {
+                    masks.push((scene.textures[t as usize].clone(), m.alpha_cutoff));
+                    (masks.len() - 1) as u32
+                }
+                None => u32::MAX,
+            })
+            .collect();
+        Some(AlphaTest {
+            mask_of: scene
+                .triangle_materials
+                .iter()
+                .map(|&m| per_material[m as usize])
+                .collect(),
+            masks,
+            uvs: scene.uvs.clone(),
+        })
+    }
+
+    /// Whether the hit at barycentrics (u, v) of scene triangle `t` is cut out.
+    #[inline]
+    fn cut(&self, t: u32, u: f32, v: f32) -> bool {
+        let m = self.mask_of[t as usize];
+        if m == u32::MAX {
+            return false;
+        }
+        let (tex, cutoff) = &self.masks[m as usize];
+        let c = &self.uvs[t as usize];
+        let uv = c[0] * (1.0 - u - v) + c[1] * u + c[2] * v;
+        tex.sample(uv, 0.0).w < *cutoff
+    }
 }
 
 fn scene_triangles(scene: &Scene) -> Vec<Triangle> {
@@ -96,7 +150,14 @@ fn scene_triangles(scene: &Scene) -> Vec<Triangle> {
 impl SceneBvh {
     /// Builds the BVH over every triangle of `scene` (parallel PLOC + reinsertion).
     pub fn build(scene: &Scene) -> Self {
-        Self::from_triangles(&scene_triangles(scene))
+        let mut bvh = Self::from_triangles(&scene_triangles(scene));
+        bvh.alpha = AlphaTest::new(scene);
+        bvh
+    }
+
+    /// Re-reads the alpha masks of the scene's materials (after a material update).
+    pub fn update_alpha(&mut self, scene: &Scene) {
+        self.alpha = AlphaTest::new(scene);
     }
 
     /// [`SceneBvh::build`] after checking that the build fits in memory.
@@ -141,6 +202,7 @@ impl SceneBvh {
             .collect();
         SceneBvh {
             bvh,
+            alpha: None,
             tris,
             ids,
             bvh2,
@@ -172,7 +234,9 @@ impl SceneBvh {
             }
         }
         bvh2.refit_all();
-        Self::from_bvh2(bvh2, triangles)
+        let mut bvh = Self::from_bvh2(bvh2, triangles);
+        bvh.alpha = AlphaTest::new(scene);
+        bvh
     }
 
     /// Closest hit along `origin + t·dir`, t in (0, tmax).
@@ -183,11 +247,11 @@ impl SceneBvh {
         let mut hit = obvhs::ray::RayHit::none();
         self.bvh
             .ray_traverse(ray, &mut hit, |r, id| match self.tris[id].intersect(r) {
-                Some((t, u, v)) => {
+                Some((t, u, v)) if !self.cut_out(id, u, v) => {
                     best = Some((id as u32, t, u, v));
                     t
                 }
-                None => f32::INFINITY,
+                _ => f32::INFINITY,
             });
         // The traversal only reports hits closer than the running tmax, so the last one
         // recorded is the closest.
@@ -203,9 +267,20 @@ impl SceneBvh {
     #[inline]
     pub fn occluded(&self, origin: Vec3, dir: Vec3, tmax: f32) -> bool {
         let ray = make_ray(origin, dir, tmax);
-        !self.bvh.ray_traverse_miss(ray, |r, id| {
-            self.tris[id].intersect(r).map_or(f32::INFINITY, |h| h.0)
-        })
+        !self
+            .bvh
+            .ray_traverse_miss(ray, |r, id| match self.tris[id].intersect(r) {
+                Some((t, u, v)) if !self.cut_out(id, u, v) => t,
+                _ => f32::INFINITY,
+            })
+    }
+
+    /// Whether the hit (u, v) on BVH-ordered triangle `id` is cut out by an alpha mask.
+    #[inline]
+    fn cut_out(&self, id: usize, u: f32, v: f32) -> bool {
+        self.alpha
+            .as_ref()
+            .is_some_and(|a| a.cut(self.ids[id], u, v))
     }
 }
 

@@ -3,23 +3,26 @@
 use super::Hit;
 use crate::bsdf::Material;
 use crate::sampling::Frame;
-use crate::scene::Scene;
-use glam::Vec3;
+use crate::scene::{surface, Scene};
+use glam::{Vec2, Vec3};
 
-/// Geometry and material at a ray hit.
+/// Geometry and material at a ray hit. The material is the triangle's with its textures
+/// looked up at the hit (finest level), the shading normal includes its normal map.
 #[derive(Clone, Copy, Debug)]
-pub struct Interaction<'a> {
+pub struct Interaction {
     pub position: Vec3,
     /// Geometric normal (from the winding; outward for closed meshes).
     pub ng: Vec3,
     /// Shading frame (interpolated vertex normal, same side as `ng`).
     pub frame: Frame,
-    pub material: &'a Material,
+    pub material: Material,
     pub triangle: u32,
+    /// Texture coordinates of the hit.
+    pub uv: Vec2,
 }
 
-impl<'a> Interaction<'a> {
-    pub fn new(scene: &'a Scene, hit: &Hit, dir: Vec3) -> Self {
+impl Interaction {
+    pub fn new(scene: &Scene, hit: &Hit, dir: Vec3) -> Self {
         let t = hit.triangle as usize;
         let [i0, i1, i2] = scene.triangles[t].map(|i| i as usize);
         let (p0, p1, p2) = (
@@ -37,6 +40,18 @@ impl<'a> Interaction<'a> {
         } else if ns.dot(ng) < 0.0 {
             ns = -ns;
         }
+        let uv = scene.uv_at(t, hit.u, hit.v);
+        let lod = 0.0;
+        if let Some(i) = scene.maps_of(t).normal {
+            if let Some(tangent) = scene.tangent_of(t) {
+                // ns is on the winding's side here, as the tangent frame.
+                let texel = scene.texture(i).sample(uv, lod).truncate();
+                let n = surface::perturb_normal(ns, tangent, texel);
+                if n != Vec3::ZERO && n.is_finite() {
+                    ns = n;
+                }
+            }
+        }
         // Shading normals must not disagree with the geometry about which side the ray
         // came from, or light leaks; fall back to the geometric normal there.
         if dir.dot(ns) * dir.dot(ng) <= 0.0 {
@@ -46,8 +61,9 @@ impl<'a> Interaction<'a> {
             position: p0 * w + p1 * hit.u + p2 * hit.v,
             ng,
             frame: Frame::new(ns),
-            material: scene.material_of(t),
+            material: scene.material_at(t, uv, lod),
             triangle: hit.triangle,
+            uv,
         }
     }
 

@@ -32,6 +32,8 @@ struct VertexIn {
     @location(1) normal: vec3<f32>,
     @location(2) geometric_normal: vec3<f32>,
     @location(3) material: u32,
+    @location(4) uv: vec2<f32>,
+    @location(5) tangent: vec4<f32>,
 }
 
 struct VertexOut {
@@ -40,6 +42,8 @@ struct VertexOut {
     @location(1) normal: vec3<f32>,
     @location(2) @interpolate(flat) geometric_normal: vec3<f32>,
     @location(3) @interpolate(flat) material: u32,
+    @location(4) uv: vec2<f32>,
+    @location(5) @interpolate(flat) tangent: vec4<f32>,
 }
 
 @vertex
@@ -50,6 +54,8 @@ fn vs_main(v: VertexIn) -> VertexOut {
     o.normal = v.normal;
     o.geometric_normal = v.geometric_normal;
     o.material = v.material;
+    o.uv = v.uv;
+    o.tangent = v.tangent;
     return o;
 }
 
@@ -77,8 +83,37 @@ fn falloff(cos_t: f32) -> f32 {
     return t * t * (3.0 - 2.0 * t);
 }
 
+// Three entry points, one per kind of scene (see gbuffer.wgsl): only `fs_masked` discards.
 @fragment
 fn fs_main(in: VertexOut) -> BounceOut {
+    return bounce(in, false);
+}
+
+@fragment
+fn fs_textured(in: VertexOut) -> BounceOut {
+    return bounce(in, true);
+}
+
+@fragment
+fn fs_masked(in: VertexOut) -> BounceOut {
+    // The alpha test at the photon's jittered origin (the same jitter `bounce` draws).
+    let duvdx = dpdx(in.uv);
+    let duvdy = dpdy(in.uv);
+    let jitter = texel_jitter(in);
+    if alpha_cut(material_maps[in.material], in.uv + jitter.x * duvdx + jitter.y * duvdy) {
+        discard;
+    }
+    return bounce(in, true);
+}
+
+// Seeds the texel's random sequence and draws its jitter (the first two numbers).
+fn texel_jitter(in: VertexOut) -> vec2<f32> {
+    let texel = vec2<u32>(in.clip.xy);
+    rng_state = hash_u32(view.seed ^ hash_u32(view.layer ^ hash_u32(texel.x ^ hash_u32(texel.y))));
+    return vec2<f32>(rng_next(), rng_next()) - 0.5;
+}
+
+fn bounce(in: VertexOut, textured: bool) -> BounceOut {
     // Stratified jitter: the photon leaves the light through a uniformly random point of its
     // texel instead of the texel centre (the surface point and interpolated normal are moved
     // along their screen derivatives, exact within a planar triangle). Centre-sampled
@@ -89,10 +124,11 @@ fn fs_main(in: VertexOut) -> BounceOut {
     let dwdy = dpdy(in.world);
     let dndx = dpdx(in.normal);
     let dndy = dpdy(in.normal);
-    let texel = vec2<u32>(in.clip.xy);
-    rng_state = hash_u32(view.seed ^ hash_u32(view.layer ^ hash_u32(texel.x ^ hash_u32(texel.y))));
-    let jitter = vec2<f32>(rng_next(), rng_next()) - 0.5;
+    let duvdx = dpdx(in.uv);
+    let duvdy = dpdy(in.uv);
+    let jitter = texel_jitter(in);
     let world = in.world + jitter.x * dwdx + jitter.y * dwdy;
+    let uv = in.uv + jitter.x * duvdx + jitter.y * duvdy;
     let to_light = view.light_position - world;
     let wo = normalize(to_light);
     // Normals as in the eye G-buffer, oriented towards the light.
@@ -106,6 +142,11 @@ fn fs_main(in: VertexOut) -> BounceOut {
         if dot(ns, ng) < 0.0 {
             ns = -ns;
         }
+    }
+    var maps: MaterialMaps;
+    if textured {
+        maps = material_maps[in.material];
+        ns = mapped_normal(maps, ns, in.tangent, uv, duvdx, duvdy);
     }
     if dot(wo, ns) * dot(wo, ng) <= 0.0 {
         ns = ng;
@@ -121,7 +162,10 @@ fn fs_main(in: VertexOut) -> BounceOut {
         intensity *= falloff(dot(d, view.spot_direction));
     }
     let phi = intensity * view.texel_area * c * c * c;
-    let m = materials[in.material];
+    var m = materials[in.material];
+    if textured {
+        m = textured_material(maps, m, uv, duvdx, duvdy);
+    }
     var o: BounceOut;
     o.incident = vec4<f32>(phi, 1.0);
     o.expected = vec4<f32>(phi * scatter_probability(m, dot(wo, ns)), 1.0);

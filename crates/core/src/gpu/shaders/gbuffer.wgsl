@@ -9,6 +9,8 @@ struct VertexIn {
     @location(1) normal: vec3<f32>,
     @location(2) geometric_normal: vec3<f32>,
     @location(3) material: u32,
+    @location(4) uv: vec2<f32>,
+    @location(5) tangent: vec4<f32>,
 }
 
 struct VertexOut {
@@ -17,6 +19,8 @@ struct VertexOut {
     @location(1) normal: vec3<f32>,
     @location(2) @interpolate(flat) geometric_normal: vec3<f32>,
     @location(3) @interpolate(flat) material: u32,
+    @location(4) uv: vec2<f32>,
+    @location(5) @interpolate(flat) tangent: vec4<f32>,
 }
 
 @vertex
@@ -27,6 +31,8 @@ fn vs_main(v: VertexIn) -> VertexOut {
     o.normal = v.normal;
     o.geometric_normal = v.geometric_normal;
     o.material = v.material;
+    o.uv = v.uv;
+    o.tangent = v.tangent;
     return o;
 }
 
@@ -43,9 +49,37 @@ struct GBufferOut {
     @location(4) albedo: vec4<f32>,
 }
 
+// Three entry points, one per kind of scene (`raster::textures::Variant`): without textures,
+// with textures, with alpha masks. Only the last discards: a shader that may discard loses
+// early depth testing on lavapipe and shades every overdrawn fragment (8x slower here).
 @fragment
 fn fs_main(in: VertexOut) -> GBufferOut {
-    let m = materials[in.material];
+    return gbuffer(in, false, vec2<f32>(0.0), vec2<f32>(0.0));
+}
+
+@fragment
+fn fs_textured(in: VertexOut) -> GBufferOut {
+    return gbuffer(in, true, dpdx(in.uv), dpdy(in.uv));
+}
+
+@fragment
+fn fs_masked(in: VertexOut) -> GBufferOut {
+    // Derivatives first (uniform control flow), then the alpha mask.
+    let duvdx = dpdx(in.uv);
+    let duvdy = dpdy(in.uv);
+    if alpha_cut(material_maps[in.material], in.uv) {
+        discard;
+    }
+    return gbuffer(in, true, duvdx, duvdy);
+}
+
+fn gbuffer(in: VertexOut, textured: bool, duvdx: vec2<f32>, duvdy: vec2<f32>) -> GBufferOut {
+    var m = materials[in.material];
+    var maps: MaterialMaps;
+    if textured {
+        maps = material_maps[in.material];
+        m = textured_material(maps, m, in.uv, duvdx, duvdy);
+    }
     let wo = normalize(view.eye - in.world);
     var ng = in.geometric_normal;
     // Shading normal as in trace::Interaction::new: on the side of ng, and replaced by ng
@@ -59,6 +93,9 @@ fn fs_main(in: VertexOut) -> GBufferOut {
         if dot(ns, ng) < 0.0 {
             ns = -ns;
         }
+    }
+    if textured {
+        ns = mapped_normal(maps, ns, in.tangent, in.uv, duvdx, duvdy);
     }
     if dot(wo, ns) * dot(wo, ng) <= 0.0 {
         ns = ng;
