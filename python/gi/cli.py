@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import math
 import re
+import signal
 import sys
 import time
 import warnings
@@ -130,6 +131,22 @@ def _parser() -> argparse.ArgumentParser:
         default="auto",
         choices=["auto", "icosahedron", "quad"],
         help="shape drawn per ISPM photon volume (default auto: quads for small volumes)",
+    )
+    r.add_argument(
+        "--progressive",
+        action="store_true",
+        help="progressive photon mapping: average independent passes with shrinking kernels"
+        " until --time or --passes (ispm, gather, path, direct); Ctrl-C writes the passes so far",
+    )
+    r.add_argument(
+        "--time", type=_fps, metavar="SECONDS", help="progressive: stop after this many seconds"
+    )
+    r.add_argument("--passes", type=int, help="progressive: stop after this many passes")
+    r.add_argument(
+        "--alpha",
+        type=float,
+        default=0.7,
+        help="progressive: radius reduction α in (0, 1), r²ᵢ₊₁ = r²ᵢ (i + α)/(i + 1) (0.7)",
     )
     r.add_argument(
         "--estimator",
@@ -293,6 +310,8 @@ def _render(args: argparse.Namespace) -> int:
     if args.frames is not None or any(o.video or o.numbered for o in outputs):
         return _render_sequence(args, outputs)
     aovs = _check_outputs(args)
+    if args.progressive or args.time is not None or args.passes is not None:
+        return _render_progressive(args, aovs)
     scene = _load(args.scene)
     result = gi.render(
         scene,
@@ -311,6 +330,53 @@ def _render(args: argparse.Namespace) -> int:
         print(f"wrote {files} ({s.method}, {s.total_seconds:.2f}s: {stages})", file=sys.stderr)
         if s.estimator:
             print(f"estimator {s.estimator}: {s.estimator_reason}", file=sys.stderr)
+    return 0
+
+
+def _render_progressive(args: argparse.Namespace, aovs: list[str]) -> int:
+    """``--progressive``: passes until ``--time`` or ``--passes``; Ctrl-C keeps the passes
+    done so far and writes them."""
+    if not args.progressive:
+        raise ValueError("--time and --passes need --progressive")
+    if args.time is None and args.passes is None:
+        raise ValueError("--progressive needs --time SECONDS or --passes N")
+    if args.passes is not None and args.passes < 1:
+        raise ValueError("--passes must be at least 1")
+    scene = _load(args.scene)
+    renderer = gi.Renderer(
+        scene, args.method, progressive=True, progressive_alpha=args.alpha, **_settings(args)
+    )
+    interrupted = False
+
+    def on_interrupt(_sig: int, _frame: object) -> None:
+        nonlocal interrupted
+        interrupted = True
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGINT, on_interrupt)
+    try:
+        result = renderer.render_progressive(
+            passes=args.passes,
+            seconds=args.time,
+            aovs=True,
+            extras=any(a not in gi.RenderResult.BASE for a in aovs),
+            progress=not args.quiet,
+        )
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    if args.denoise:
+        result = gi.denoise(result)
+    written: list[Path] = []
+    for out in args.output:
+        written += save_result(out, result, aovs, tonemap=args.tonemap, exposure=args.exposure)
+    if not args.quiet or interrupted:
+        files = ", ".join(map(str, written))
+        why = "interrupted, " if interrupted else ""
+        print(
+            f"wrote {files} ({result.stats.method}, progressive: {why}{result.stats.passes}"
+            " passes)",
+            file=sys.stderr,
+        )
     return 0
 
 

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import json
+import math
+import time
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from typing import Any
@@ -31,6 +33,7 @@ class RenderStats:
     photons_first_bounce: int = 0
     photons_stored: int = 0
     volume_quads: int = 0
+    passes: int = 1
     #: Method ``ispm``: the indirect estimator that ran ("volumes", "tiled", ...), why it was
     #: chosen, and its GPU memory beyond the image targets (bytes by part).
     estimator: str = ""
@@ -133,6 +136,7 @@ def _result(out: dict[str, Any]) -> RenderResult:
         photons_first_bounce=s["photons_first_bounce"],
         photons_stored=s["photons_stored"],
         volume_quads=s["volume_quads"],
+        passes=s["passes"],
         estimator=s["estimator"],
         estimator_reason=s["estimator_reason"],
         estimator_memory=[(str(n), int(b)) for n, b in s["estimator_memory"]],
@@ -161,6 +165,15 @@ class Renderer:
     >>> r = gi.Renderer(gi.load_scene("cornell"), "ispm", size=(320, 240), photons=50_000)
     >>> r.update(lights={0: {"position": [0.2, 1.9, 0.0]}})
     >>> frame = r.render()                    # radiance only; aovs=True for the rest
+
+    With ``progressive=True`` (methods ``ispm``, ``gather``, ``path``, ``direct``) each
+    :meth:`render` is one pass of probabilistic progressive photon mapping (Knaus & Zwicker
+    2011): an independent estimate with new photons, pixel jitter and light samples, whose
+    photon kernels shrink as r²ᵢ₊₁ = r²ᵢ (i + α)/(i + 1) (``progressive_alpha``, α = 0.7),
+    and the returned radiance is the mean of the passes since the last :meth:`update` or
+    :meth:`resize` (which start over). It converges to the reference as passes are added;
+    :meth:`render_progressive` runs passes for a time or a count. The AOVs and ``extra``
+    images are those of the last pass.
     """
 
     def __init__(self, scene: Scene, method: str = "ispm", **settings: Any) -> None:
@@ -182,6 +195,11 @@ class Renderer:
     def frame_index(self) -> int:
         """Frames rendered so far."""
         return self._native.frame_index
+
+    @property
+    def passes(self) -> int:
+        """Progressive mode: passes averaged into the current image (0 after a change)."""
+        return self._native.passes
 
     @property
     def object_names(self) -> list[str | None]:
@@ -235,6 +253,76 @@ class Renderer:
         images not asked for are empty arrays. ``seed`` overrides the frame's random seed."""
         out = self._native.render(aovs=aovs, extras=extras, seed=seed, progress=_progress(progress))
         return _result(out)
+
+    def render_progressive(
+        self,
+        *,
+        passes: int | None = None,
+        seconds: float | None = None,
+        aovs: bool = False,
+        extras: bool = False,
+        progress: bool | ProgressCallback = False,
+        on_pass: Callable[[RenderResult], bool | None] | None = None,
+    ) -> RenderResult:
+        """Adds progressive passes (the renderer needs ``progressive=True``) until
+        ``passes`` in all are averaged or ``seconds`` have passed (at least one pass; both
+        may be given, the first reached stops), and returns the mean image.
+
+        ``progress=True`` draws a bar over the passes (or the time); a callable gets
+        ``("passes", fraction done)`` and stops the run by returning ``False``. ``on_pass``
+        gets each pass's running mean and stops the run by returning ``False``. Ctrl-C
+        (:class:`KeyboardInterrupt`) or a cancel during a pass stops at once and returns the
+        mean of the passes done so far (``stats.passes`` says how many); with none done it
+        raises.
+        """
+        if not self._native.progressive:
+            raise _checks.setting_error(
+                "progressive", "render_progressive needs gi.Renderer(..., progressive=True)"
+            )
+        if passes is None and seconds is None:
+            raise _checks.setting_error("passes", "give passes=N or seconds=S")
+        if passes is not None and (not isinstance(passes, int) or passes < 1):
+            raise _checks.setting_error("passes", f"must be a positive integer, got {passes!r}")
+        if seconds is not None and not (
+            isinstance(seconds, (int, float)) and math.isfinite(seconds) and seconds > 0
+        ):
+            raise _checks.setting_error("seconds", f"must be a positive number, got {seconds!r}")
+        report = _progress(progress)
+        start = time.monotonic()
+        result: RenderResult | None = None
+        # Read between passes only: the native renderer is busy during one.
+        done = self.passes
+
+        def done_fraction() -> float:
+            f = 0.0
+            if passes is not None:
+                f = max(f, done / passes)
+            if seconds is not None:
+                f = max(f, (time.monotonic() - start) / seconds)
+            return min(f, 1.0)
+
+        def within_pass(stage: str, fraction: float) -> bool:
+            # The bar follows the run, not the stages of a pass; a False from the callback
+            # cancels the pass at once (the passes done so far are returned).
+            if report is None:
+                return True
+            return report("passes", min(done_fraction(), 0.999)) is not False
+
+        try:
+            while result is None or done_fraction() < 1.0:
+                out = self._native.render(aovs=aovs, extras=extras, seed=None, progress=within_pass)
+                result = _result(out)
+                done = result.stats.passes
+                stop = report is not None and report("passes", done_fraction()) is False
+                if (on_pass is not None and on_pass(result) is False) or stop:
+                    break
+        except (KeyboardInterrupt, _gi.RenderCancelled):
+            if result is None:
+                raise
+        finally:
+            if isinstance(report, ProgressBar):
+                report.close()
+        return result
 
     @property
     def animation_duration(self) -> float | None:
@@ -316,6 +404,8 @@ def render(
     estimator: str = "auto",
     adapter: str | None = None,
     shadow_map_size: int = 1024,
+    caustic_density_bound: bool = True,
+    photon_focus: float = 0.25,
     progress: bool | ProgressCallback = False,
     denoise: bool = False,
 ) -> RenderResult:
@@ -352,6 +442,11 @@ def render(
     GPU methods (``direct``, ``ispm``) run on ``adapter`` ("cpu" for lavapipe, "gpu", or part of an
     adapter's name; default: the ``GI_ADAPTER`` environment variable, else a real GPU when
     present, else lavapipe) with ``shadow_map_size``² texels per shadow-map face.
+    ``caustic_density_bound`` (methods ``ispm`` and ``gather``) keeps each caustic photon's
+    kernel radius within 0.75–1.5 times the distance to its 16th nearest caustic photon, so
+    caustic kernels are small where caustics focus and wide where they spread.
+    ``photon_focus`` (method ``gather``) aims that share of each light's photons at the
+    mirrors and glass through a projection map, weighted so that the image is unchanged.
     ``progress`` is a callable ``(stage, fraction) -> bool | None`` (return ``False`` to
     cancel), or ``True`` for progress bars (tqdm; in a terminal or a notebook, nothing in
     logs). The GIL is released while rendering; Ctrl-C cancels with
@@ -386,6 +481,8 @@ def render(
         estimator=estimator,
         adapter=adapter,
         shadow_map_size=shadow_map_size,
+        caustic_density_bound=caustic_density_bound,
+        photon_focus=photon_focus,
     )
     result = renderer.render(aovs=True, extras=True, progress=progress)
     if denoise:

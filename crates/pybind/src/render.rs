@@ -118,6 +118,10 @@ pub fn settings_from(
             }
             "shadow_map_size" => s.shadow_map_size = int(v, "shadow_map_size")?,
             "temporal_frames" => s.temporal_frames = int(v, "temporal_frames")?,
+            "progressive" => s.progressive = flag(v, "progressive")?,
+            "photon_focus" => s.photon_focus = float(v, "photon_focus")?,
+            "caustic_density_bound" => s.caustic_density_bound = flag(v, "caustic_density_bound")?,
+            "progressive_alpha" => s.progressive_alpha = float(v, "progressive_alpha")?,
             other => {
                 return Err(setting_error(
                     py,
@@ -164,6 +168,7 @@ fn output_dict<'py>(
     stats.set_item("photons_first_bounce", s.photons_first_bounce)?;
     stats.set_item("photons_stored", s.photons_stored)?;
     stats.set_item("volume_quads", s.volume_quads)?;
+    stats.set_item("passes", s.passes)?;
     stats.set_item("estimator", s.estimator.clone())?;
     stats.set_item("estimator_reason", s.estimator_reason.clone())?;
     stats.set_item("estimator_memory", s.estimator_memory.clone())?;
@@ -280,6 +285,18 @@ impl PyRenderer {
         crate::guard::catch("Renderer.resize", || {
             inner.resize(width, height).map_err(|e| to_py(py, e))
         })
+    }
+
+    /// Whether each frame is a progressive pass (setting `progressive`).
+    #[getter]
+    fn progressive(&self) -> bool {
+        self.inner.settings().progressive
+    }
+
+    /// Progressive mode: passes in the current running mean (0 after a change).
+    #[getter]
+    fn passes(&self) -> u64 {
+        self.inner.passes()
     }
 
     /// Frames rendered so far.

@@ -301,7 +301,7 @@ struct Capacity {
 
 pub struct Binned {
     mode: Mode,
-    target: IndirectTarget,
+    pub(super) target: IndirectTarget,
     tiles: [u32; 2],
     /// Nodes per row and rows of hierarchy levels 1 and 2 (cluster mode).
     l1: [u32; 2],

@@ -163,6 +163,14 @@ impl IndirectEstimate {
         parts.into_iter().map(|(n, b)| (n.to_string(), b)).collect()
     }
 
+    /// Sets where in its pixel the eye G-buffer is sampled (progressive passes move it).
+    pub fn set_sample_centre(&mut self, centre: glam::Vec2) {
+        match self {
+            IndirectEstimate::Volumes(v) => v.target.set_sample_centre(centre),
+            IndirectEstimate::Binned(b) => b.target.set_sample_centre(centre),
+        }
+    }
+
     /// The estimate at full resolution.
     pub fn output(&self) -> (&wgpu::Texture, &wgpu::TextureView) {
         match self {

@@ -21,6 +21,9 @@ pub struct IndirectTarget {
     up_params: wgpu::Buffer,
     last_eye: Option<[f32; 3]>,
     upsample_group: Option<wgpu::BindGroup>,
+    /// Where in its pixel the eye G-buffer is sampled: the centre, but in progressive passes
+    /// (`frame::progressive`), whose sub-pixel samples move per pass.
+    centre: Vec2,
 }
 
 /// An `Rgba32Float` texture the estimators render to, write as storage, read and copy.
@@ -93,6 +96,7 @@ impl IndirectTarget {
             up_params,
             last_eye: None,
             upsample_group,
+            centre: Vec2::splat(0.5),
         }
     }
 
@@ -110,10 +114,15 @@ impl IndirectTarget {
     /// G-buffer sample lies.
     pub fn view_proj(&self, scene: &Scene) -> Mat4 {
         let (w, h, k) = (scene.camera.width, scene.camera.height, self.subsample);
-        let eye = camera_view(scene, Vec2::splat(0.5), 0.0);
+        let eye = camera_view(scene, self.centre, 0.0);
         let half = if k % 2 == 0 { 1.0 } else { 0.0 };
         let shift = Mat4::from_translation(Vec3::new(-half / w as f32, half / h as f32, 0.0));
         shift * Mat4::from_cols_array_2d(&eye.view_proj)
+    }
+
+    /// Sets where in its pixel the eye G-buffer is sampled; the estimators' view follows.
+    pub fn set_sample_centre(&mut self, centre: Vec2) {
+        self.centre = centre;
     }
 
     /// Uploads the upsampling parameters when the eye moved.

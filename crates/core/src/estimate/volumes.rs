@@ -20,7 +20,7 @@ use crate::scene::Scene;
 const MIN_CAPACITY: usize = 1 << 16;
 
 pub struct Volumes {
-    target: IndirectTarget,
+    pub(super) target: IndirectTarget,
     params: wgpu::Buffer,
     last_params: Option<VolumeParamsRaw>,
     volume_group: wgpu::BindGroup,

@@ -232,6 +232,9 @@ pub(crate) struct Targets {
     eye: wgpu::Buffer,
     /// The jittered sample views of the current camera (all `spp`).
     sample_views: Vec<ViewRaw>,
+    /// Offset (mod 1) of every sub-pixel sample position, the pixel centre's included: a
+    /// new one per progressive pass (`frame::progressive`), zero otherwise.
+    sample_offset: Vec2,
     /// Whether `eye` holds the current camera's views (false after a camera change).
     pub eye_current: bool,
     /// Whether the accumulated direct light and the centre G-buffer are those of the
@@ -375,6 +378,7 @@ impl Targets {
             spp,
             eye,
             sample_views: Vec::new(),
+            sample_offset: Vec2::ZERO,
             eye_current: false,
             direct_current: false,
             gbuf,
@@ -420,6 +424,21 @@ impl Targets {
         self.composite_group.is_some()
     }
 
+    /// Where in its pixel the centre G-buffer is sampled.
+    pub fn sample_centre(&self) -> Vec2 {
+        (Vec2::splat(0.5) + self.sample_offset).fract()
+    }
+
+    /// Moves every sub-pixel sample by `offset` (mod 1); the eye views and the direct light
+    /// are redone at the next frame when it changes.
+    pub fn set_sample_offset(&mut self, offset: Vec2) {
+        if offset != self.sample_offset {
+            self.sample_offset = offset;
+            self.eye_current = false;
+            self.direct_current = false;
+        }
+    }
+
     /// Writes the eye views of the current camera (the pixel centre, then the first batch of
     /// jittered samples) if the camera changed.
     pub fn write_eye(&mut self, ctx: &GpuContext, scene: &Scene) {
@@ -427,11 +446,13 @@ impl Targets {
             return;
         }
         let spp = self.spp;
+        let o = self.sample_offset;
+        let shift = |j: Vec2| (j + o).fract();
         self.sample_views = sample_positions(spp)
             .into_iter()
-            .map(|j| camera_view(scene, j, 1.0 / spp as f32))
+            .map(|j| camera_view(scene, shift(j), 1.0 / spp as f32))
             .collect();
-        let mut views = vec![camera_view(scene, Vec2::splat(0.5), 0.0)];
+        let mut views = vec![camera_view(scene, shift(Vec2::splat(0.5)), 0.0)];
         views.extend_from_slice(&self.sample_views[..SAMPLES_PER_SUBMIT.min(spp) as usize]);
         gpu::write_buffer(
             &ctx.queue,

@@ -21,7 +21,8 @@ use crate::image::Image;
 use crate::photon::lbvh::Aabb;
 use crate::photon::ring::PhotonRing;
 use crate::photon::trace::Checked;
-use crate::photon::{boundary, continue_paths_checked, PhotonTraceSettings};
+use crate::photon::trace::{continue_paths_from, FirstSegment};
+use crate::photon::{boundary, PhotonTraceSettings};
 use crate::raster::ispm::{bounce_layers, photon_hits, BounceTargets, IspmPasses, Z_RATIO};
 use crate::raster::specular::specular_paths;
 use crate::raster::volume_shape::{partition, VolumeRadius};
@@ -210,7 +211,9 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     for &l in invalid.lights {
         ring.invalidate_light(l);
     }
-    let grow = VolumeRadius::of_scene(scene, settings.photons, settings.kernel_scale).r_max;
+    let grow = VolumeRadius::of_scene(scene, settings.photons, settings.kernel_scale)
+        .scaled(settings.radius_scale)
+        .r_max;
     for (object, before) in invalid.moved {
         let o = &scene.objects[*object];
         let after = super::object_bounds(scene, o);
@@ -247,16 +250,30 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
             let seed = settings.seed ^ (light as u64).wrapping_mul(0xA24B_AED4_963E_E407);
             let control = Checked::new(progress, "cpu trace");
             let rays = &bm.rays[start..end];
-            let photons = continue_paths_checked(scene, bvh, rays, &pts, seed, &control)?.photons;
+            // With footprints, photons that met a mirror or glass first carry the footprint
+            // of their first segment from the light (re-cast on the CPU).
+            let first = settings
+                .footprint_volumes
+                .then(|| first_segment(scene, &layers, light as usize));
+            let photons =
+                continue_paths_from(scene, bvh, rays, &pts, seed, &control, first)?.photons;
             traced += photons.len() as u64;
             // Volume radii are decided here, once, for the photon count the ring will hold
             // (the splat reads `footprint_radius`).
             let frames = (ring.held(light as usize) + 1).min(ring.frames()) as u64;
             let radius =
-                VolumeRadius::of_scene(scene, settings.photons * frames, settings.kernel_scale);
+                VolumeRadius::of_scene(scene, settings.photons * frames, settings.kernel_scale)
+                    .scaled(settings.radius_scale);
             let mut photons = photons;
             for p in &mut photons {
                 p.footprint_radius = radius.of(p);
+            }
+            if settings.caustic_density_bound {
+                crate::photon::density::bound_volume_radii(
+                    &mut photons,
+                    settings.radius_scale,
+                    radius.r_max,
+                );
             }
             let mut compensated = photons.clone();
             if settings.boundary_compensation {
@@ -323,7 +340,9 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
 
     // 6. The indirect estimate, upsampling, composite, readback.
     let t = Instant::now();
-    let radius = VolumeRadius::of_scene(scene, settings.photons, settings.kernel_scale);
+    let radius = VolumeRadius::of_scene(scene, settings.photons, settings.kernel_scale)
+        .scaled(settings.radius_scale);
+    state.estimate.set_sample_centre(targets.sample_centre());
     stats.estimator = state.estimate.kind().name().into();
     stats.estimator_reason = state.estimate_reason.clone();
     crate::cancel::check(progress)?;
@@ -412,4 +431,27 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     state.traced_seed = Some(settings.seed);
     state.splat_current = true;
     Ok(out)
+}
+
+/// The light of bounce-map photons of `light` and their angular spacing: the light's solid
+/// angle over its bounce-map texels (a spot's square map covers about 4/π of its cone).
+fn first_segment(
+    scene: &Scene,
+    layers: &[crate::raster::ispm::BounceLayer],
+    light: usize,
+) -> FirstSegment {
+    let l = &scene.lights[light];
+    let texels: f64 = layers
+        .iter()
+        .filter(|b| b.light == light)
+        .map(|b| (b.res as f64).powi(2))
+        .sum();
+    let omega = match l {
+        crate::scene::Light::Point { .. } => l.solid_angle(),
+        crate::scene::Light::Spot { .. } => l.solid_angle() * 4.0 / std::f32::consts::PI,
+    };
+    FirstSegment {
+        position: l.position(),
+        spacing: (omega as f64 / texels.max(1.0)).sqrt() as f32,
+    }
 }

@@ -11,6 +11,7 @@ mod cpu;
 mod direct;
 mod gpu;
 mod ispm;
+mod progressive;
 
 use crate::error::{Error, Result};
 use crate::gpu::GpuContext;
@@ -75,6 +76,8 @@ pub struct Renderer {
     ring: PhotonRing,
     frame_index: u64,
     bvh_cost: BvhCost,
+    /// Progressive mode: the running sum of the passes since the last change.
+    accum: Option<progressive::Accumulation>,
 }
 
 /// Only `path` lights a scene with its environment light so far; the other methods refuse
@@ -136,6 +139,7 @@ impl Renderer {
             ring: PhotonRing::new(settings.temporal_frames as usize),
             frame_index: 0,
             bvh_cost: BvhCost::default(),
+            accum: None,
         })
     }
 
@@ -152,6 +156,11 @@ impl Renderer {
         self.frame_index
     }
 
+    /// Progressive mode: the passes in the current running mean (0 after a change).
+    pub fn passes(&self) -> u64 {
+        self.accum.as_ref().map_or(0, |a| a.passes)
+    }
+
     /// Applies a change to the scene before the next frame.
     pub fn update(&mut self, update: &SceneUpdate) -> Result<()> {
         let before = match update {
@@ -164,6 +173,9 @@ impl Renderer {
         };
         let c = self.scene.apply(update)?;
         self.changes = self.changes.union(c);
+        if c.any() {
+            self.accum = None;
+        }
         match update {
             SceneUpdate::Transform { object, .. } => {
                 if let Some(b) = before {
@@ -191,6 +203,7 @@ impl Renderer {
             crate::render::check_image_memory(&camera, self.settings.method)?;
             self.scene.camera = camera;
             self.resized = true;
+            self.accum = None;
         }
         Ok(())
     }
@@ -218,10 +231,19 @@ impl Renderer {
                 bvh.update_alpha(&self.scene);
             }
         }
-        let settings = Settings {
-            seed: desc.seed.unwrap_or_else(|| self.frame_seed()),
-            ..self.settings.clone()
+        let pass = self.passes();
+        let settings = if self.settings.progressive {
+            progressive::pass_settings(&self.settings, desc.seed, pass)
+        } else {
+            Settings {
+                seed: desc.seed.unwrap_or_else(|| self.frame_seed()),
+                ..self.settings.clone()
+            }
         };
+        if let Some(g) = self.gpu.as_mut() {
+            g.targets
+                .set_sample_offset(progressive::sample_offset(&self.settings, pass));
+        }
         let mut out = match settings.method {
             Method::Path | Method::Photon | Method::Gather => {
                 let bvh = self.bvh.as_ref().ok_or(Error::Cancelled)?;
@@ -232,6 +254,15 @@ impl Renderer {
         stages.append(&mut out.stats.stages);
         out.stats.stages = stages;
         keep_requested(&mut out, desc.images);
+        if self.settings.progressive {
+            let acc = self
+                .accum
+                .get_or_insert_with(|| progressive::Accumulation::new(&out.radiance));
+            out.radiance = acc.add(&out.radiance);
+            out.stats.passes = acc.passes;
+        } else {
+            out.stats.passes = 1;
+        }
         self.changes = Changes::default();
         self.moved.clear();
         self.lights_changed.clear();

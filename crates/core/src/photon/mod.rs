@@ -7,8 +7,10 @@
 //! bounce (in expectation).
 
 pub mod boundary;
+pub mod density;
 pub mod differential;
 pub mod estimate;
+pub mod focus;
 pub mod footprint;
 pub mod gather;
 pub mod kdtree;

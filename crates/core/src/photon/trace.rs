@@ -10,6 +10,7 @@
 //! in order, so the result depends on the seed only, not on the thread schedule.
 
 use super::differential::{self, Differentials};
+use super::focus::Focus;
 use super::{path_density_factor, FootprintAxes, PathKind, Photon, PhotonRay, PhotonSet};
 use crate::bsdf::Lobe;
 use crate::error::{Error, Result};
@@ -84,6 +85,21 @@ pub fn emit_and_trace_checked(
     seed: u64,
     control: &dyn TraceControl,
 ) -> Result<PhotonSet> {
+    emit_and_trace_focused(scene, bvh, n_photons, s, seed, control, &Focus::default())
+}
+
+/// [`emit_and_trace_checked`] with part of each light's photons aimed at the specular
+/// objects by its projection map (`focus`, see [`super::focus`]), weighted by the mixture
+/// density so that the estimate is unchanged.
+pub fn emit_and_trace_focused(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    n_photons: u64,
+    s: &PhotonTraceSettings,
+    seed: u64,
+    control: &dyn TraceControl,
+    focus: &Focus,
+) -> Result<PhotonSet> {
     let weights = light_weights(scene);
     let mut set = trace_chunks(n_photons, control, |i, out| {
         let mut rng = Rng::new(seed, STREAM_EMIT, i);
@@ -91,18 +107,36 @@ pub fn emit_and_trace_checked(
             out.absorbed += 1;
             return;
         };
-        let e = scene.lights[li].emit(&mut rng);
+        let light = &scene.lights[li];
+        let n_l = (n_photons as f32 * p_light).max(1.0);
+        // The emission and the squared angular spacing of this light's photons there.
+        let (e, spacing2) = if focus.active(li) {
+            let (direction, q) = focus.sample(light, li, &mut rng);
+            let power = if q > 0.0 {
+                light.intensity_towards(direction) / q
+            } else {
+                glam::Vec3::ZERO
+            };
+            let e = crate::scene::light::Emission {
+                origin: light.position(),
+                direction,
+                power,
+            };
+            (e, 1.0 / (n_l * q.max(1e-12)))
+        } else {
+            (light.emit(&mut rng), light.solid_angle() / n_l)
+        };
         let power = e.power / (p_light * n_photons as f32);
         let ray = PhotonRay::new(e.origin, e.direction, power, 1.0, 0);
-        // This light's photons are spaced by √(Ω_l / n_l) rather than the global Δ.
+        // This light's photons are spaced by √(1 / (n_l q(ω))) (√(Ω_l / n_l) unfocused)
+        // rather than the global Δ: aimed photons are denser, their footprints smaller.
         let diff = s
             .differentials
             .map_or(Differentials::emitted(e.direction), |ds| {
-                let n_l = (n_photons as f32 * p_light).max(1.0);
-                let spacing = (scene.lights[li].solid_angle() / n_l).sqrt();
+                let spacing = spacing2.sqrt();
                 Differentials::emitted(e.direction).scaled(spacing / ds.spacing)
             });
-        follow(scene, bvh, &ray, diff, s, &mut rng, out);
+        follow(scene, bvh, &ray, diff, None, s, &mut rng, out);
     })?;
     set.emitted = n_photons;
     finish_footprints(&mut set, s);
@@ -131,15 +165,90 @@ pub fn continue_paths_checked(
     seed: u64,
     control: &dyn TraceControl,
 ) -> Result<PhotonSet> {
+    continue_paths_from(scene, bvh, rays, s, seed, control, None)
+}
+
+/// Where continued photons came from: a light at `position` whose photons are spaced by
+/// the angle `spacing` (rad), for the differentials of the first segment.
+#[derive(Clone, Copy, Debug)]
+pub struct FirstSegment {
+    pub position: glam::Vec3,
+    pub spacing: f32,
+}
+
+/// [`continue_paths_checked`] for photons that left a light at `first.position` (the ISPM
+/// bounce map): with differentials, the first segment is re-cast on the CPU from the light
+/// to the ray's origin, so that photons whose first scattering was a mirror or glass carry
+/// that segment's footprint (and count as caustic photons) instead of starting with a zero
+/// footprint; after a diffuse or glossy first scattering they start at their origin, as
+/// after any re-emission.
+pub fn continue_paths_from(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    rays: &[PhotonRay],
+    s: &PhotonTraceSettings,
+    seed: u64,
+    control: &dyn TraceControl,
+    first: Option<FirstSegment>,
+) -> Result<PhotonSet> {
     let mut set = trace_chunks(rays.len() as u64, control, |i, out| {
         let mut rng = Rng::new(seed, STREAM_CONTINUE, i);
         let ray = &rays[i as usize];
-        let diff = Differentials::emitted(ray.direction.into());
-        follow(scene, bvh, ray, diff, s, &mut rng, out);
+        let recast = match (first, &s.differentials) {
+            (Some(f), Some(ds)) => recast_first_segment(scene, bvh, ray, f, ds),
+            _ => None,
+        };
+        let (diff, kind) = match recast {
+            Some((diff, kind)) => (diff, Some(kind)),
+            None => (Differentials::emitted(ray.direction.into()), None),
+        };
+        follow(scene, bvh, ray, diff, kind, s, &mut rng, out);
     })?;
     set.emitted = rays.len() as u64;
     finish_footprints(&mut set, s);
     Ok(set)
+}
+
+/// The differentials of a continued photon after its first segment, from the light at
+/// `f.position` to the ray's origin, and its first scattering when that was through a delta
+/// lobe (the lobe is told from the ray's direction); `None` otherwise.
+fn recast_first_segment(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    ray: &PhotonRay,
+    f: FirstSegment,
+    ds: &DifferentialSettings,
+) -> Option<(Differentials, PathKind)> {
+    let origin = glam::Vec3::from(ray.origin);
+    let wi = glam::Vec3::from(ray.direction);
+    let to = origin - f.position;
+    let dist = to.length();
+    if dist <= 0.0 || !dist.is_finite() {
+        return None;
+    }
+    let d = to / dist;
+    let hit = bvh.intersect(f.position, d, dist * 1.01 + 1e-3)?;
+    let it = Interaction::new(scene, &hit, d);
+    // The ray's origin is offset off the surface: the re-cast hit must be that surface.
+    if (it.position - origin).length() > 1e-2 * dist + 1e-3 {
+        return None;
+    }
+    let n = it.frame.n * if d.dot(it.ng) < 0.0 { 1.0 } else { -1.0 };
+    let m = it.material;
+    let reflected = wi.dot(d - 2.0 * d.dot(n) * n) > 0.9999;
+    let lobe = if reflected && m.has_specular() && m.is_mirror() {
+        Lobe::Mirror
+    } else if reflected && m.has_transmission() {
+        Lobe::GlassReflect
+    } else if m.has_transmission() && wi.dot(n) < 0.0 {
+        Lobe::GlassRefract
+    } else {
+        return None;
+    };
+    let mut diff = Differentials::emitted(d).scaled(f.spacing / ds.spacing);
+    diff.transfer(d, hit.t, it.ng);
+    scatter_differentials(scene, &it, &hit, d, wi, lobe, &mut diff);
+    Some((diff, PathKind::Caustic))
 }
 
 /// Once all photons are traced (§4.3, "after photon tracing has completed"): compresses the
@@ -298,11 +407,13 @@ fn trace_chunks(
 }
 
 /// Follows one photon until it is absorbed, escapes or reaches the bounce limit.
+#[allow(clippy::too_many_arguments)]
 fn follow(
     scene: &Scene,
     bvh: &SceneBvh,
     ray: &PhotonRay,
     mut diff: Differentials,
+    first_kind: Option<PathKind>,
     s: &PhotonTraceSettings,
     rng: &mut Rng,
     out: &mut PhotonSet,
@@ -313,10 +424,10 @@ fn follow(
     let mut bounce = ray.bounce;
     // Photons continued from elsewhere (the ISPM bounce map) start their differentials at
     // their origin, as after a diffuse re-emission.
-    let mut kind = if bounce == 0 {
-        PathKind::Direct
-    } else {
-        PathKind::Diffuse
+    let mut kind = match first_kind {
+        Some(k) => k,
+        None if bounce == 0 => PathKind::Direct,
+        None => PathKind::Diffuse,
     };
     if power.max_element() <= 0.0 || !power.is_finite() {
         out.absorbed += 1;

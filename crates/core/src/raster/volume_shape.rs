@@ -94,6 +94,14 @@ impl VolumeRadius {
         }
     }
 
+    /// Every radius times `s` (the progressive mode's shrinking kernels).
+    pub fn scaled(self, s: f32) -> Self {
+        VolumeRadius {
+            r_base: self.r_base * s,
+            r_max: self.r_max * s,
+        }
+    }
+
     /// The ellipsoid's radius in the surface plane (m), also the radius of a sphere around it
     /// (the normal axis is shorter): the footprint when traced with differentials, else
     /// from the path density (section 5.1), r_base·clamp(ρp^(−α), 1, G). Dense (caustic)

@@ -9,9 +9,10 @@ use super::{Progress, RenderOutput, Settings};
 use crate::error::Result;
 use crate::photon::differential::global_spacing;
 use crate::photon::gather::{scene_area, FootprintMap, LeafSize};
+use crate::photon::trace::emit_and_trace_focused;
 use crate::photon::trace::Checked;
 use crate::photon::trace::DifferentialSettings;
-use crate::photon::{emit_and_trace_checked, PhotonTraceSettings};
+use crate::photon::PhotonTraceSettings;
 use crate::scene::Scene;
 use crate::trace::path::direct_light;
 use crate::trace::SceneBvh;
@@ -28,10 +29,11 @@ pub fn trace_settings(scene: &Scene, settings: &Settings) -> PhotonTraceSettings
         store_direct: false,
         differentials: Some(DifferentialSettings {
             spacing: global_spacing(4.0 * std::f32::consts::PI, settings.photons),
-            smoothing: settings.smoothing,
-            r_max: settings
-                .max_radius
-                .unwrap_or_else(|| DEFAULT_R_MAX_FRACTION * scene_diagonal(scene)),
+            smoothing: settings.smoothing * settings.radius_scale,
+            r_max: settings.radius_scale
+                * settings
+                    .max_radius
+                    .unwrap_or_else(|| DEFAULT_R_MAX_FRACTION * scene_diagonal(scene)),
         }),
     }
 }
@@ -48,14 +50,20 @@ pub fn render(
         |name: &str, t: Instant| stats.stages.push((name.into(), t.elapsed().as_secs_f64()));
 
     let t = Instant::now();
-    let set = emit_and_trace_checked(
+    let pts = trace_settings(scene, settings);
+    let focus = crate::photon::focus::Focus::of_scene(scene, settings.photon_focus);
+    let mut set = emit_and_trace_focused(
         scene,
         bvh,
         settings.photons,
-        &trace_settings(scene, settings),
+        &pts,
         settings.seed,
         &Checked::new(progress, "photon trace"),
+        &focus,
     )?;
+    if let (true, Some(ds)) = (settings.caustic_density_bound, &pts.differentials) {
+        crate::photon::density::bound_footprints(&mut set, settings.radius_scale, ds.r_max);
+    }
     stage("photon trace", t);
 
     let t = Instant::now();

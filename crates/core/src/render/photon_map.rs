@@ -24,11 +24,14 @@ const DEFAULT_RADIUS_FRACTION: f32 = 0.05;
 /// The kNN estimate of `settings` (`k`, `max_radius` or its default, `kernel`); also the
 /// gather of ISPM's specular paths.
 pub fn gather_settings(scene: &Scene, settings: &Settings) -> Gather {
+    // Progressive passes shrink the k-NN radius by `radius_scale` through k ∝ r².
+    let s2 = settings.radius_scale * settings.radius_scale;
     Gather {
-        k: settings.k as usize,
-        max_radius: settings
-            .max_radius
-            .unwrap_or_else(|| DEFAULT_RADIUS_FRACTION * scene_diagonal(scene)),
+        k: ((settings.k as f32 * s2).round() as usize).max(1),
+        max_radius: settings.radius_scale
+            * settings
+                .max_radius
+                .unwrap_or_else(|| DEFAULT_RADIUS_FRACTION * scene_diagonal(scene)),
         kernel: settings.kernel,
     }
 }

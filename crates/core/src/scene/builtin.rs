@@ -27,6 +27,11 @@ pub const BUILTINS: &[(&str, &str, &str)] = &[
         include_str!("../../scenes/caustic-ring.json"),
     ),
     (
+        "mirror-shadow",
+        "mirror sphere throwing a dim, spread-out caustic onto a floor a wall shadows",
+        include_str!("../../scenes/mirror-shadow.json"),
+    ),
+    (
         "ring-room",
         "the caustic-ring's mirror ring in a closed white room (caustic amid indirect light)",
         include_str!("../../scenes/ring-room.json"),

@@ -1,0 +1,250 @@
+"""Progressive mode against a converged `path` reference, error versus time.
+
+Per scene: a `path` reference at --ref-spp (and a second one of another seed, whose error
+against the first is the reference's own noise), `path` at 4, 16, ... spp (one render each),
+and progressive `gather` and `ispm` (one `gi.Renderer(progressive=True)` each, passes added
+for --seconds, the running mean scored at every power-of-two pass). Errors: relMSE
+(mean of (x − ref)² / (ref² + 0.01)) and HDR-FLIP (flip-evaluator). Times are wall seconds
+of the renders only (scoring excluded), all in the same run. Writes a Markdown table and a
+log–log SVG plot per scene.
+
+    .venv/bin/python scripts/bench_progressive.py --out docs/bench/progressive.md
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import platform
+import time
+from pathlib import Path
+
+import flip_evaluator
+import numpy as np
+
+import gi
+
+# Per-pass settings of the progressive runs: small passes (one sub-pixel sample, a modest
+# photon count, kernels that start narrow) converge fastest per second; ISPM splats at full
+# resolution (subsample 1), since the bilateral upsampling is a bias no pass removes.
+PROGRESSIVE = {
+    "gather": dict(photons=10_000, spp=1, smoothing=0.3, photon_focus=0.5),
+    "ispm": dict(photons=20_000, spp=1, subsample=1, kernel_scale=0.5, adapter="cpu"),
+}
+
+
+def cpu_name() -> str:
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.machine()
+
+
+def relmse(x: np.ndarray, ref: np.ndarray) -> float:
+    return float(np.mean((x - ref) ** 2 / (ref**2 + 1e-2)))
+
+
+def flip(ref: np.ndarray, x: np.ndarray) -> float:
+    _, mean, _ = flip_evaluator.evaluate(
+        np.ascontiguousarray(ref, np.float32),
+        np.ascontiguousarray(np.maximum(x, 0.0), np.float32),
+        "HDR",
+        applyMagma=False,
+    )
+    return float(mean)
+
+
+def reference(scene_name: str, size: tuple[int, int], spp: int, seed: int) -> tuple:
+    # Minutes at large spp: kept in target/ (a build directory) for the next run.
+    cache = (
+        Path("target") / f"bench-progressive-ref-{scene_name}-{size[0]}x{size[1]}-{spp}-{seed}.npz"
+    )
+    if cache.exists():
+        saved = np.load(cache)
+        return saved["radiance"], float(saved["seconds"])
+    t = time.perf_counter()
+    img = gi.render(gi.load_scene(scene_name), "path", spp=spp, size=size, seed=seed).radiance
+    seconds = time.perf_counter() - t
+    cache.parent.mkdir(exist_ok=True)
+    np.savez(cache, radiance=img, seconds=seconds)
+    return img, seconds
+
+
+def progressive_run(
+    scene, method: str, size, seconds: float
+) -> list[tuple[int, float, np.ndarray]]:
+    r = gi.Renderer(scene, method, size=size, progressive=True, **PROGRESSIVE[method])
+    out = []
+    elapsed = 0.0
+    n = 0
+    while elapsed < seconds:
+        t = time.perf_counter()
+        frame = r.render()
+        elapsed += time.perf_counter() - t
+        n += 1
+        if n & (n - 1) == 0:
+            out.append((n, elapsed, frame.radiance.copy()))
+    if out[-1][0] != n:
+        out.append((n, elapsed, frame.radiance.copy()))
+    return out
+
+
+def svg_plot(rows: list[dict], noise: dict, title: str) -> str:
+    """Two log–log panels (relMSE, FLIP against seconds), one line per method."""
+    colors = {"path": "#1f77b4", "gather": "#d62728", "ispm": "#2ca02c"}
+    panels = [("relmse", "relMSE"), ("flip", "FLIP")]
+    w, h, pad = 360, 260, 48
+    parts = [
+        f'<svg xmlns="http://www.w3.org/2000/svg" width="{2 * w}" height="{h + 30}"'
+        ' font-family="sans-serif" font-size="11">',
+        f'<text x="{w}" y="14" text-anchor="middle" font-size="13">{title}</text>',
+    ]
+    ts = [r["seconds"] for r in rows]
+    for i, (key, label) in enumerate(panels):
+        ox = i * w
+        vals = [r[key] for r in rows] + [noise[key]]
+        lx0, lx1 = math.floor(math.log10(min(ts))), math.ceil(math.log10(max(ts)))
+        ly0, ly1 = math.floor(math.log10(min(vals))), math.ceil(math.log10(max(vals)))
+
+        def px(t: float, lx0=lx0, lx1=lx1, ox=ox) -> float:
+            return ox + pad + (math.log10(t) - lx0) / (lx1 - lx0) * (w - pad - 10)
+
+        def py(v: float, ly0=ly0, ly1=ly1) -> float:
+            return 20 + (h - pad) - (math.log10(v) - ly0) / (ly1 - ly0) * (h - pad - 10)
+
+        x0, x1, y0, y1 = px(10.0**lx0), px(10.0**lx1), py(10.0**ly0), py(10.0**ly1)
+        parts.append(
+            f'<rect x="{x0}" y="{y1}" width="{x1 - x0}" height="{y0 - y1}"'
+            ' fill="none" stroke="#000"/>'
+        )
+        for e in range(lx0, lx1 + 1):
+            x = px(10.0**e)
+            parts.append(f'<line x1="{x}" y1="{y0}" x2="{x}" y2="{y1}" stroke="#ddd"/>')
+            parts.append(f'<text x="{x}" y="{y0 + 14}" text-anchor="middle">1e{e}</text>')
+        for e in range(ly0, ly1 + 1):
+            y = py(10.0**e)
+            parts.append(f'<line x1="{x0}" y1="{y}" x2="{x1}" y2="{y}" stroke="#ddd"/>')
+            parts.append(f'<text x="{x0 - 4}" y="{y + 4}" text-anchor="end">1e{e}</text>')
+        parts.append(f'<text x="{(x0 + x1) / 2}" y="{y0 + 28}" text-anchor="middle">seconds</text>')
+        parts.append(f'<text x="{x0 + 6}" y="{y1 + 14}">{label}</text>')
+        y = py(noise[key])
+        parts.append(
+            f'<line x1="{x0}" y1="{y}" x2="{x1}" y2="{y}" stroke="#888" stroke-dasharray="4 3"/>'
+        )
+        parts.append(
+            f'<text x="{x1 - 4}" y="{y - 4}" text-anchor="end" fill="#888">reference noise</text>'
+        )
+        for j, method in enumerate(colors):
+            pts = [(px(r["seconds"]), py(r[key])) for r in rows if r["method"] == method]
+            if not pts:
+                continue
+            path = " ".join(f"{x:.1f},{y:.1f}" for x, y in pts)
+            c = colors[method]
+            parts.append(f'<polyline points="{path}" fill="none" stroke="{c}" stroke-width="1.5"/>')
+            parts += [f'<circle cx="{x:.1f}" cy="{y:.1f}" r="2" fill="{c}"/>' for x, y in pts]
+            label_m = method if method == "path" else f"{method} progressive"
+            parts.append(f'<text x="{x1 - 110}" y="{y1 + 16 + 13 * j}" fill="{c}">{label_m}</text>')
+    parts.append("</svg>")
+    return "\n".join(parts)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--scenes", default="cornell,mirror-shadow")
+    ap.add_argument("--size", default="48x48")
+    ap.add_argument("--ref-spp", type=int, default=16384)
+    ap.add_argument("--seconds", type=float, default=30.0, help="progressive run length")
+    ap.add_argument("--max-path-spp", type=int, default=4096)
+    ap.add_argument("--out", type=Path)
+    args = ap.parse_args()
+    w, h = (int(v) for v in args.size.split("x"))
+    size = (w, h)
+    lines = [
+        "# Progressive mode: error against the converged image versus time",
+        "",
+        "Made by `.venv/bin/python scripts/bench_progressive.py --out docs/bench/progressive.md`"
+        f" ({args.size}, reference `path` at {args.ref_spp} spp, progressive runs of"
+        f" {args.seconds:g} s) on {cpu_name()}, {os.cpu_count()} logical CPUs shared with"
+        " other jobs, lavapipe for `ispm`. relMSE = mean (x − ref)² / (ref² + 0.01); FLIP ="
+        " mean HDR-FLIP. *Reference noise*: the same errors of a second reference of another"
+        " seed, the floor below which no comparison can see. Progressive settings per pass:"
+        f" {PROGRESSIVE}.",
+        "",
+    ]
+    for name in args.scenes.split(","):
+        scene = gi.load_scene(name)
+        ref, ref_s = reference(name, size, args.ref_spp, 1234)
+        ref2, _ = reference(name, size, args.ref_spp, 4321)
+        noise = {"relmse": relmse(ref2, ref), "flip": flip(ref, ref2)}
+        rows: list[dict] = []
+        spp = 4
+        while spp <= args.max_path_spp:
+            t = time.perf_counter()
+            img = gi.render(scene, "path", spp=spp, size=size, seed=7).radiance
+            s = time.perf_counter() - t
+            rows.append(dict(method="path", step=f"{spp} spp", seconds=s, image=img))
+            spp *= 4
+        for method in PROGRESSIVE:
+            gi.render(scene, method, size=(8, 8), photons=1000, spp=1)  # warm-up (pipelines)
+            for n, s, img in progressive_run(scene, method, size, args.seconds):
+                rows.append(dict(method=method, step=f"{n} passes", seconds=s, image=img))
+        for r in rows:
+            r["relmse"] = relmse(r["image"], ref)
+            r["flip"] = flip(ref, r["image"])
+        lines += [
+            f"## {name}",
+            "",
+            f"Reference: {ref_s:.1f} s; reference noise: relMSE {noise['relmse']:.2e},"
+            f" FLIP {noise['flip']:.4f}.",
+            "",
+            "| method | step | seconds | relMSE | FLIP |",
+            "|---|---|---:|---:|---:|",
+        ]
+        for r in rows:
+            lines.append(
+                f"| {r['method']} | {r['step']} | {r['seconds']:.3f} | {r['relmse']:.2e}"
+                f" | {r['flip']:.4f} |"
+            )
+        path_1024 = next(
+            (r for r in rows if r["method"] == "path" and r["step"] == "1024 spp"), None
+        )
+        if path_1024 is not None:
+            lines.append("")
+            for method in PROGRESSIVE:
+                hit = next(
+                    (
+                        r
+                        for r in rows
+                        if r["method"] == method and r["relmse"] <= path_1024["relmse"]
+                    ),
+                    None,
+                )
+                lines.append(
+                    f"- `path` at 1024 spp: relMSE {path_1024['relmse']:.2e} in"
+                    f" {path_1024['seconds']:.2f} s; progressive `{method}` reaches it "
+                    + (
+                        f"at {hit['step']} in {hit['seconds']:.2f} s"
+                        f" ({path_1024['seconds'] / hit['seconds']:.2f}x path's speed)."
+                        if hit
+                        else f"not within {args.seconds:g} s."
+                    )
+                )
+        lines.append("")
+        if args.out:
+            svg = args.out.with_name(f"progressive-{name}.svg")
+            svg.write_text(svg_plot(rows, noise, f"{name}, {args.size}: error vs time"))
+            lines += [f"![{name}]({svg.name})", ""]
+        print("\n".join(lines[-len(rows) - 12 :]), flush=True)
+    text = "\n".join(lines)
+    if args.out:
+        args.out.write_text(text)
+    else:
+        print(text)
+
+
+if __name__ == "__main__":
+    main()
