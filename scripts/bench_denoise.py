@@ -94,8 +94,9 @@ def main() -> None:
         for seed in seeds:
             common = {"size": (w, h), "seed": seed, "adapter": args.adapter, **settings}
             noisy, dt = timed_render(scene, method, **common)
+            # gi.denoise: OIDN, after the photon-scale indirect filter for ispm.
             t = time.perf_counter()
-            clean = denoise_image(noisy.radiance, noisy.albedo, noisy.normal)
+            clean = gi.denoise(noisy).radiance
             denoise_seconds.append(time.perf_counter() - t)
             pre = denoise_image(noisy.radiance, noisy.albedo, noisy.normal, clean_aux=False)
             seconds.append(dt)
@@ -133,9 +134,10 @@ def main() -> None:
         "",
         f"Scene `{args.scene}`, {w}x{h}, adapter `{args.adapter}`; reference: `path` at"
         f" {args.ref_spp} spp ({ref_seconds:.0f} s). HDR-FLIP (flip-evaluator, 67 ppd; lower is"
-        " better). Denoised: Intel Open Image Denoise (pyoidn), filter RT, hdr, quality high,"
-        " guided by gi's albedo and normal AOVs; *clean aux* (gi's default) tells OIDN the"
-        " pixel-centre AOVs are noise-free, *prefiltered aux* lets OIDN clean them first."
+        " better). Denoised: `gi.denoise` = Intel Open Image Denoise (pyoidn), filter RT, hdr,"
+        " quality high, guided by gi's albedo and normal AOVs, after (ispm only) the"
+        " photon-scale filter of the indirect light (`gi.denoising.filter_indirect`); *clean aux* (gi's default) tells OIDN the"
+        " pixel-centre AOVs are noise-free, *prefiltered aux* lets OIDN clean them first (OIDN alone, on the beauty)."
         " Equal time: the same method with its budget scaled by (render + denoise) / render."
         f" Each row is the mean over seeds 1-{args.seeds}; times after untimed warm-ups (OIDN's"
         f" first call in a process also sets up its device: {oidn_init:.2f} s here).",
