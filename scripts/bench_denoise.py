@@ -136,8 +136,9 @@ def main() -> None:
         f" {args.ref_spp} spp ({ref_seconds:.0f} s). HDR-FLIP (flip-evaluator, 67 ppd; lower is"
         " better). Denoised: `gi.denoise` = Intel Open Image Denoise (pyoidn), filter RT, hdr,"
         " quality high, guided by gi's albedo and normal AOVs, after (ispm only) the"
-        " photon-scale filter of the indirect light (`gi.denoising.filter_indirect`); *clean aux* (gi's default) tells OIDN the"
-        " pixel-centre AOVs are noise-free, *prefiltered aux* lets OIDN clean them first (OIDN alone, on the beauty)."
+        " photon-scale filter of the indirect light (`gi.denoising.filter_indirect`);"
+        " *clean aux* (gi's default) tells OIDN the pixel-centre AOVs are noise-free,"
+        " *prefiltered aux* lets OIDN clean them first (OIDN alone, on the beauty)."
         " Equal time: the same method with its budget scaled by (render + denoise) / render."
         f" Each row is the mean over seeds 1-{args.seeds}; times after untimed warm-ups (OIDN's"
         f" first call in a process also sets up its device: {oidn_init:.2f} s here).",
