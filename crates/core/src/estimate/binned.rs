@@ -12,8 +12,10 @@
 //!   quadratic in the sample position, so a sample pays for the photons that only overlap
 //!   its leaf.
 //!
-//! The photon lists are sized from the last frame's total: a frame whose lists overflow is
-//! detected at readback ([`Binned::overflowed`]) and splatted again with room for them.
+//! The photon lists are sized when photons are uploaded, from a CPU estimate of the tiles
+//! under each photon's projected kernel (usually 2–4× what the GPU writes); a frame whose
+//! lists overflow anyway is detected at readback ([`Binned::overflowed`]) and splatted again
+//! with room for them.
 
 use super::target::IndirectTarget;
 use crate::error::{Error, Result};
@@ -23,8 +25,8 @@ use crate::raster::buffer_init;
 use crate::raster::gbuffer::GBuffer;
 use crate::raster::ispm::{tex, Z_RATIO};
 use crate::raster::timer::Timer;
-use crate::raster::volume_shape::VolumeRadius;
-use crate::scene::Scene;
+use crate::raster::volume_shape::{projected_radius, VolumeRadius};
+use crate::scene::{Camera, Scene};
 use bytemuck::{Pod, Zeroable};
 use std::sync::OnceLock;
 
@@ -38,8 +40,12 @@ const LIST_ROW: u32 = 4096;
 const NODE_ROW: u32 = 1024;
 /// Threads of the per-photon passes' workgroups.
 const PHOTON_GROUP: u32 = 64;
-/// List entries per photon allocated before the first frame has measured them.
-const ENTRIES_PER_PHOTON: u64 = 4;
+/// Leaf clusters and accept lists per tile a photon's rectangle covers, on average, in the
+/// first list estimate of the hierarchy modes ([`Binned::estimate_entries`]).
+const HIERARCHY_ENTRIES_PER_TILE: u64 = 2;
+/// Environment variable scaling the first list estimate (default 1): small values force the
+/// overflow-regrow-redo path, which tests exercise with it.
+pub const LIST_ESTIMATE_ENV: &str = "GI_LIST_ESTIMATE";
 
 /// Leaf clusters per tile (`CLUSTERS_PER_TILE` of cluster.wgsl).
 const CLUSTERS_PER_TILE: u32 = 4;
@@ -688,10 +694,11 @@ impl Binned {
         ctx: &GpuContext,
         gbuf: &GBuffer,
         photons: &[Photon],
+        camera: &Camera,
     ) -> Result<()> {
         let n = photons.len() as u32;
         let rows = n.div_ceil(PHOTON_ROW).max(1);
-        let entries = (n as u64 * ENTRIES_PER_PHOTON).min(u32::MAX as u64) as u32;
+        let entries = self.estimate_entries(photons, camera).min(u32::MAX as u64) as u32;
         self.grow(
             ctx,
             gbuf,
@@ -726,6 +733,40 @@ impl Binned {
             },
         );
         Ok(())
+    }
+
+    /// List entries the photons will need, estimated on the CPU from the tiles under each
+    /// photon's projected kernel (before the box and cone tests, so usually an
+    /// overestimate): lists sized from it are rarely redone ([`Binned::overflowed`]), which
+    /// matters for one-shot renders, whose first frame is their only one.
+    fn estimate_entries(&self, photons: &[Photon], camera: &Camera) -> u64 {
+        let all = (self.tiles[0] * self.tiles[1]) as u64;
+        let tile = TILE as f32;
+        let per_photon = |p: &Photon| {
+            let r = projected_radius(
+                camera,
+                self.target.subsample,
+                p.position(),
+                p.footprint_radius,
+            );
+            if !r.is_finite() {
+                return all;
+            }
+            // The shader's rectangle spans 2r + 2 texels; its tiles per axis ≤ that / TILE + 2.
+            let side = ((2.0 * r + 2.0) / tile + 2.0).min(1e6) as u64;
+            (side * side).min(all)
+        };
+        let tiles: u64 = photons.iter().map(per_photon).sum();
+        let entries = match self.mode {
+            Mode::Tiled => tiles,
+            Mode::Cluster | Mode::Directional => tiles * HIERARCHY_ENTRIES_PER_TILE,
+        };
+        let scale = std::env::var(LIST_ESTIMATE_ENV)
+            .ok()
+            .and_then(|v| v.parse::<f64>().ok())
+            .filter(|v| v.is_finite() && *v > 0.0)
+            .unwrap_or(1.0);
+        (entries as f64 * scale) as u64
     }
 
     /// Records the binning, the shading and the upsampling of the uploaded photons.

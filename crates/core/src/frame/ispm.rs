@@ -365,7 +365,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         }
         IndirectEstimate::Binned(tl) => {
             if photons_changed {
-                tl.write_photons(&ctx, &targets.gbuf, &photons.splat)?;
+                tl.write_photons(&ctx, &targets.gbuf, &photons.splat, cam)?;
             }
             tl.write_params(&ctx, scene, radius);
         }
