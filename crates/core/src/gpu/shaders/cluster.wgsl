@@ -465,10 +465,6 @@ fn cluster_fill(
     }
 }
 
-fn list_entry(j: u32) -> u32 {
-    return textureLoad(list_texels, vec2<i32>(i32(j % LIST_ROW), i32(j / LIST_ROW)), 0).x;
-}
-
 fn node_centre(n: Node) -> vec3<f32> {
     return 0.5 * (n.lo + n.hi);
 }
@@ -542,23 +538,6 @@ fn accepted_flux(k: u32, x: vec3<f32>) -> vec3<f32> {
     return out;
 }
 
-// The estimate terms of leaf `leaf`'s test list at sample `s`, summed in fixed point.
-fn leaf_sum(leaf: u32, s: ViewSample) -> vec3<f32> {
-    var acc = fixed_zero();
-    let begin = offsets[test_slot(leaf)];
-    let end = min(begin + atomicLoad(&counts[test_slot(leaf)]), params.capacity);
-    for (var j = begin; j < end; j++) {
-        let i = list_entry(j);
-        var p = load_photon_shape(i);
-        let k = volume_kernel(p, s.position, params.z_ratio);
-        if k.y != 0.0 && volume_normal_agrees(p, s.normal) {
-            load_photon_light(&p, i);
-            acc = fixed_add(acc, volume_shade(p, s, k.x));
-        }
-    }
-    return fixed_value(acc);
-}
-
 @compute @workgroup_size(8, 8)
 fn cluster_shade(
     @builtin(workgroup_id) tile: vec3<u32>,
@@ -579,7 +558,7 @@ fn cluster_shade(
         flux += accepted_flux(node_index(1u, tile.xy / FANOUT), s.position);
         flux += accepted_flux(node_index(2u, tile.xy / (FANOUT * FANOUT)), s.position);
         sum = s.material.diffuse / PI * flux;
-        sum += leaf_sum(leaf, s);
+        sum += list_sum(test_slot(leaf), s);
     }
     textureStore(low, vec2<i32>(texel), vec4<f32>(sum, 0.0));
 }
@@ -700,7 +679,7 @@ fn directional_shade(
             // Glossy (or otherwise not simple) clusters: 8 directions cannot stand for a
             // lobe, so their samples sum their leaf's photons exactly (no ancestor of a
             // non-simple leaf accepts photons).
-            sum = leaf_sum(leaf, s);
+            sum = list_sum(test_slot(leaf), s);
         }
     }
     textureStore(low, vec2<i32>(texel), vec4<f32>(sum, 0.0));

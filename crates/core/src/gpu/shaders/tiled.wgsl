@@ -289,6 +289,29 @@ fn bin_fill(
     }
 }
 
+fn list_entry(j: u32) -> u32 {
+    return textureLoad(list_texels, vec2<i32>(i32(j % LIST_ROW), i32(j / LIST_ROW)), 0).x;
+}
+
+// The estimate terms of list `slot`'s photons at sample `s`: `volume_term`, loading a
+// photon's light only for samples inside its volume, summed in fixed point (the list's order
+// varies between runs).
+fn list_sum(slot: u32, s: ViewSample) -> vec3<f32> {
+    var acc = fixed_zero();
+    let begin = offsets[slot];
+    let end = min(begin + atomicLoad(&counts[slot]), params.capacity);
+    for (var j = begin; j < end; j++) {
+        let i = list_entry(j);
+        var p = load_photon_shape(i);
+        let k = volume_kernel(p, s.position, params.z_ratio);
+        if k.y != 0.0 && volume_normal_agrees(p, s.normal) {
+            load_photon_light(&p, i);
+            acc = fixed_add(acc, volume_shade(p, s, k.x));
+        }
+    }
+    return fixed_value(acc);
+}
+
 @compute @workgroup_size(8, 8)
 fn shade(
     @builtin(workgroup_id) tile: vec3<u32>,
@@ -302,22 +325,7 @@ fn shade(
     var sum = vec3<f32>(0.0);
     if textureLoad(g_position, px, 0).w != 0.0 {
         let s = view_sample(g_position, g_normals, g_diffuse, g_specular, px, params.eye);
-        let t = tile.y * params.tiles.x + tile.x;
-        let begin = offsets[t];
-        let end = min(begin + atomicLoad(&counts[t]), params.capacity);
-        // The list's order varies between runs (atomics): an order-independent sum.
-        var acc = fixed_zero();
-        for (var j = begin; j < end; j++) {
-            let i = textureLoad(list_texels, vec2<i32>(i32(j % LIST_ROW), i32(j / LIST_ROW)), 0).x;
-            // `volume_term`, loading the photon's light only for samples inside its volume.
-            var p = load_photon_shape(i);
-            let k = volume_kernel(p, s.position, params.z_ratio);
-            if k.y != 0.0 && volume_normal_agrees(p, s.normal) {
-                load_photon_light(&p, i);
-                acc = fixed_add(acc, volume_shade(p, s, k.x));
-            }
-        }
-        sum = fixed_value(acc);
+        sum = list_sum(tile.y * params.tiles.x + tile.x, s);
     }
     textureStore(low, vec2<i32>(texel), vec4<f32>(sum, 0.0));
 }
