@@ -783,20 +783,12 @@ impl Binned {
         match self.mode {
             Mode::Tiled => {
                 let p = passes.tiled(&ctx.device);
-                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some("tile bounds"),
-                    timestamp_writes: timer.compute_pass("tiled binning"),
-                });
-                pass.set_bind_group(0, &self.group, &[]);
+                let mut pass = self.compute_pass(encoder, timer, "tile bounds", "tiled binning");
                 pass.set_pipeline(&p.tile_bounds);
                 pass.dispatch_workgroups(tx, ty, 1);
                 drop(pass);
                 self.record_node_copy(encoder);
-                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some("tiled binning"),
-                    timestamp_writes: timer.compute_pass("tiled binning"),
-                });
-                pass.set_bind_group(0, &self.group, &[]);
+                let mut pass = self.compute_pass(encoder, timer, "tiled binning", "tiled binning");
                 if any {
                     pass.set_pipeline(&p.bin_count);
                     pass.dispatch_workgroups(gx, gy, 1);
@@ -810,11 +802,8 @@ impl Binned {
             }
             Mode::Cluster | Mode::Directional => {
                 let p = passes.cluster(&ctx.device);
-                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some("cluster hierarchy"),
-                    timestamp_writes: timer.compute_pass("cluster hierarchy"),
-                });
-                pass.set_bind_group(0, &self.group, &[]);
+                let mut pass =
+                    self.compute_pass(encoder, timer, "cluster hierarchy", "cluster hierarchy");
                 pass.set_pipeline(&p.leaves);
                 pass.dispatch_workgroups(tx, ty, 1);
                 pass.set_pipeline(&p.parents1);
@@ -823,11 +812,8 @@ impl Binned {
                 pass.dispatch_workgroups((self.l2[0] * self.l2[1]).div_ceil(64), 1, 1);
                 drop(pass);
                 self.record_node_copy(encoder);
-                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some("cluster binning"),
-                    timestamp_writes: timer.compute_pass("cluster binning"),
-                });
-                pass.set_bind_group(0, &self.group, &[]);
+                let mut pass =
+                    self.compute_pass(encoder, timer, "cluster binning", "cluster binning");
                 if any {
                     pass.set_pipeline(&p.count);
                     pass.dispatch_workgroups(gx, gy, 1);
@@ -860,21 +846,14 @@ impl Binned {
         match self.mode {
             Mode::Tiled => {
                 let p = passes.tiled(&ctx.device);
-                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some("tiled shading"),
-                    timestamp_writes: timer.compute_pass("tiled shading"),
-                });
-                pass.set_bind_group(0, &self.group, &[]);
+                let mut pass = self.compute_pass(encoder, timer, "tiled shading", "tiled shading");
                 pass.set_pipeline(&p.shade);
                 pass.dispatch_workgroups(tx, ty, 1);
             }
             Mode::Cluster => {
                 let p = passes.cluster(&ctx.device);
-                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some("cluster shading"),
-                    timestamp_writes: timer.compute_pass("cluster shading"),
-                });
-                pass.set_bind_group(0, &self.group, &[]);
+                let mut pass =
+                    self.compute_pass(encoder, timer, "cluster shading", "cluster shading");
                 let (nx, ny, _) = grid(self.nodes);
                 pass.set_pipeline(&p.accumulate);
                 pass.dispatch_workgroups(nx, ny, 1);
@@ -883,11 +862,8 @@ impl Binned {
             }
             Mode::Directional => {
                 let p = passes.cluster(&ctx.device);
-                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some("directional shading"),
-                    timestamp_writes: timer.compute_pass("directional shading"),
-                });
-                pass.set_bind_group(0, &self.group, &[]);
+                let mut pass =
+                    self.compute_pass(encoder, timer, "directional shading", "directional shading");
                 let (nx, ny, _) = grid(self.nodes);
                 pass.set_pipeline(&p.directional_accumulate);
                 pass.dispatch_workgroups(nx, ny, 1);
@@ -901,6 +877,22 @@ impl Binned {
             encoder.copy_buffer_to_buffer(&self.offsets, self.nodes as u64 * 4, &self.total, 4, 4);
         }
         self.target.record_upsample(ctx, encoder, timer);
+    }
+
+    /// A compute pass with the estimator's bind group set, timed under stage `stage`.
+    fn compute_pass<'e>(
+        &'e self,
+        encoder: &'e mut wgpu::CommandEncoder,
+        timer: &'e mut Timer,
+        label: &str,
+        stage: &'static str,
+    ) -> wgpu::ComputePass<'e> {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(label),
+            timestamp_writes: timer.compute_pass(stage),
+        });
+        pass.set_bind_group(0, &self.group, &[]);
+        pass
     }
 
     /// Copies the built nodes into the node texture the later passes read.
