@@ -58,16 +58,42 @@ def flip(ref: np.ndarray, x: np.ndarray) -> float:
     return float(mean)
 
 
-def reference(scene_name: str, size: tuple[int, int], spp: int, seed: int) -> tuple:
+def reference(
+    scene_name: str,
+    size: tuple[int, int],
+    spp: int,
+    seed: int,
+    light_paths: int | None = None,
+    parts: int = 1,
+) -> tuple:
+    """A `path` reference: the mean of `parts` renders of `spp` samples per pixel (and
+    `light_paths` light paths each, default one per camera sample) with seeds derived from
+    `seed`, and the seconds they took. Splitting into parts bounds the light tracer's
+    memory (16 bytes per light path) and lets a reference grow one cached part at a time."""
+    imgs, seconds = [], 0.0
+    for part in range(parts):
+        img, s = reference_part(scene_name, size, spp, seed + 1_000_003 * part, light_paths)
+        imgs.append(img)
+        seconds += s
+    return np.mean(imgs, axis=0), seconds
+
+
+def reference_part(
+    scene_name: str, size: tuple[int, int], spp: int, seed: int, light_paths: int | None
+) -> tuple:
     # Minutes at large spp: kept in target/ (a build directory) for the next run.
+    lp = "" if light_paths is None else f"-lp{light_paths}"
     cache = (
-        Path("target") / f"bench-progressive-ref-{scene_name}-{size[0]}x{size[1]}-{spp}-{seed}.npz"
+        Path("target")
+        / f"bench-progressive-ref-{scene_name}-{size[0]}x{size[1]}-{spp}{lp}-{seed}.npz"
     )
     if cache.exists():
         saved = np.load(cache)
         return saved["radiance"], float(saved["seconds"])
     t = time.perf_counter()
-    img = gi.render(gi.load_scene(scene_name), "path", spp=spp, size=size, seed=seed).radiance
+    extra = {} if light_paths is None else {"light_paths": light_paths}
+    scene = gi.load_scene(scene_name)
+    img = gi.render(scene, "path", spp=spp, size=size, seed=seed, **extra).radiance
     seconds = time.perf_counter() - t
     cache.parent.mkdir(exist_ok=True)
     np.savez(cache, radiance=img, seconds=seconds)

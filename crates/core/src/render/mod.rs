@@ -155,6 +155,11 @@ pub struct Settings {
     /// most of 0.5's gain where caustics dominate (mirror-shadow FLIP 0.290 → 0.156, 0.147
     /// at 0.5) and little of its cost elsewhere (cornell-glass 0.078 → 0.080, 0.085 at 0.5).
     pub photon_focus: f32,
+    /// Compute the first-hit images (albedo, normal, position, depth) of the CPU methods:
+    /// one extra camera ray per pixel through its centre. A `frame::Renderer` clears it for
+    /// frames whose AOVs are not asked for (at one sample per pixel, as in a progressive
+    /// pass of `gather`, that ray is about a sixth of the frame).
+    pub first_hit_aovs: bool,
 }
 
 impl Default for Settings {
@@ -187,6 +192,7 @@ impl Default for Settings {
             radius_scale: 1.0,
             caustic_density_bound: true,
             photon_focus: 0.25,
+            first_hit_aovs: true,
         }
     }
 }
