@@ -428,7 +428,7 @@ def render(
     photon-differential footprints with ``footprint_volumes``), at 1/``subsample``
     resolution with joint bilateral upsampling; ``boundary_compensation`` divides each
     photon's power by the fraction of its kernel that lies on surfaces (probe rays), so
-    edges and corners keep their energy. Mirrors and glass seen by the camera are traced
+    edges and corners keep their energy (for ``gather`` too, on its footprints). Mirrors and glass seen by the camera are traced
     backwards on the CPU with a photon-map gather (``k``, ``max_radius``, ``kernel``).
     ``volume_shape`` picks the shape drawn per
     photon volume: "icosahedron", "quad" (a screen-aligned bounding rectangle, cheaper for
