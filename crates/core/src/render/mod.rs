@@ -160,7 +160,7 @@ pub struct Settings {
     /// Compute the first-hit images (albedo, normal, position, depth) of the CPU methods:
     /// one extra camera ray per pixel through its centre. A `frame::Renderer` clears it for
     /// frames whose AOVs are not asked for (at one sample per pixel, as in a progressive
-    /// pass of `gather`, that ray is about a sixth of the frame).
+    /// pass of `gather`, that ray was about a tenth of the camera pass on `cornell`).
     pub first_hit_aovs: bool,
 }
 
