@@ -6,7 +6,7 @@
 //!   photons are binned to screen tiles (counting, prefix sum, list build; each tile bounded
 //!   by the world-space box of its view samples) and every view sample sums its tile's list.
 //! - [`Mode::Cluster`] (Moreau et al. 2016 section 4): the view samples of each tile are
-//!   split into depth clusters, a 3-level hierarchy of boxes and normal cones is built over
+//!   split into clusters by depth and normal, a 3-level hierarchy of boxes and normal cones is built over
 //!   them, each photon walks it top-down (rejecting by bounds and cone, *trivially accepting*
 //!   nodes wholly inside its kernel), and accepted photons are summed per node exactly as a
 //!   quadratic in the sample position, so a sample pays for the photons that only overlap
@@ -48,7 +48,7 @@ const HIERARCHY_ENTRIES_PER_TILE: u64 = 2;
 pub const LIST_ESTIMATE_ENV: &str = "GI_LIST_ESTIMATE";
 
 /// Leaf clusters per tile (`CLUSTERS_PER_TILE` of cluster.wgsl).
-const CLUSTERS_PER_TILE: u32 = 4;
+const CLUSTERS_PER_TILE: u32 = 8;
 /// Children per side of a hierarchy node (`FANOUT`).
 const FANOUT: u32 = 4;
 /// vec4s of a node's quadratic or octant buckets, and its centroid (`COEFFS`).

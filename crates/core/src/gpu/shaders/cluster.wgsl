@@ -1,7 +1,7 @@
 // The view-sample cluster hierarchy of Moreau et al. 2016 (section 4), appended to
 // tiled.wgsl (its bindings, photon loads, tile ranges and scan):
 // 1. `cluster_leaves`: each leaf cluster (the view samples of a screen tile, split by depth
-//    slice: up to CLUSTERS_PER_TILE clusters a tile) gets its bounding box, normal cone
+//    slice and by normal: up to CLUSTERS_PER_TILE clusters a tile) gets its bounding box, normal cone
 //    and whether it is *simple* (every sample purely diffuse and facing the eye, so that a
 //    photon's BSDF term is ρ/π for all of them);
 // 2. `cluster_parents` (once per upper level): boxes, cones and flags of 4×4 children;
@@ -21,7 +21,12 @@
 // channel Σ Φᵢκᵢ = A + B·y − yᵀCy with A = Σ Φᵢ(aᵢ − bᵢ uᵢᵀMᵢuᵢ), B = Σ 2Φᵢbᵢ Mᵢuᵢ,
 // C = Σ Φᵢbᵢ Mᵢ: the same estimate as the per-photon sum, up to float rounding.
 
-const CLUSTERS_PER_TILE: u32 = 4u;
+const CLUSTERS_PER_TILE: u32 = 8u;
+// Depth ranks of a tile's clusters (each split in two by normal).
+const DEPTH_RANKS: u32 = 4u;
+// cos 45°: a sample whose normal is farther than this from its tile's reference normal
+// goes to the second cluster of its depth rank.
+const COS_NORMAL_SPLIT: f32 = 0.70710678;
 // Child nodes per side of a parent.
 const FANOUT: u32 = 4u;
 // Angles (radians) of the cone tests: 60° is the normal agreement (cos = 0.5), 90° the
@@ -120,6 +125,9 @@ fn depth_slice(p: vec3<f32>) -> u32 {
 
 var<workgroup> wg_first: atomic<u32>;
 var<workgroup> wg_used: atomic<u32>;
+// The tile's first covered sample (local index) and its normal.
+var<workgroup> wg_ref: atomic<u32>;
+var<workgroup> wg_ref_normal: vec3<f32>;
 var<workgroup> wg_lo: array<vec3<f32>, 64>;
 var<workgroup> wg_hi: array<vec3<f32>, 64>;
 var<workgroup> wg_n: array<vec3<f32>, 64>;
@@ -151,9 +159,13 @@ fn reduce_min_dot(li: u32) {
     }
 }
 
-// The leaf clusters of one tile: the tile's samples are split by depth slice, counted from
-// the tile's nearest: slices 0 .. CLUSTERS_PER_TILE - 2 get a cluster each, the farther
-// samples share the last one (a depth discontinuity separates fore- and background).
+// The leaf clusters of one tile, keyed by depth and normal (Moreau et al. §4.1): the tile's
+// samples are split by depth slice, counted from the tile's nearest (slices
+// 0 .. DEPTH_RANKS - 2 get a rank each, the farther samples share the last: a depth
+// discontinuity separates fore- and background), and each rank in two by normal: within
+// 45° of the tile's reference normal (its first covered sample's) or not. Where two walls
+// meet in a tile, each wall gets a cluster with a narrow normal cone, which can accept
+// photons whole; one cluster spanning both has a 90° cone and never can.
 @compute @workgroup_size(8, 8)
 fn cluster_leaves(
     @builtin(workgroup_id) tile: vec3<u32>,
@@ -184,12 +196,20 @@ fn cluster_leaves(
     }
     if li == 0u {
         atomicStore(&wg_first, 0xffffffffu);
+        atomicStore(&wg_ref, 0xffffffffu);
     }
     workgroupBarrier();
     atomicMin(&wg_first, slice);
+    if valid {
+        atomicMin(&wg_ref, li);
+    }
     workgroupBarrier();
-    let rank = slice - atomicLoad(&wg_first);
-    let cluster = min(rank, CLUSTERS_PER_TILE - 1u);
+    if li == atomicLoad(&wg_ref) {
+        wg_ref_normal = ns;
+    }
+    workgroupBarrier();
+    let rank = min(slice - atomicLoad(&wg_first), DEPTH_RANKS - 1u);
+    let cluster = 2u * rank + u32(dot(ns, wg_ref_normal) < COS_NORMAL_SPLIT);
     if li == 0u {
         atomicStore(&wg_used, 0u);
     }
