@@ -246,7 +246,8 @@ fn estimator_setting_parses_and_auto_reports_its_choice() {
 /// 16-pixel leaves; 25.7 dB / 0.767 before the leaves were split by normal); the spot-lit
 /// glossy scene 49.9 dB, 0.993, mean +0.1% (its glossy clusters are summed exactly).
 /// Bounds: 26 dB / 0.77 and 45 dB / 0.98, means within 5% (about 3 dB and a third of the
-/// SSIM gap to 1 below the measurements: photon noise at 100k photons moves them by less).
+/// SSIM gap to 1 below the measurements, which are deterministic for the seed: the margin
+/// leaves room for changes to the photon kernels, not for a broken approximation).
 /// A lost octant, a wrong weight or double-counted ancestors fail them (the first version,
 /// weighting by octant centres, lost 19%).
 #[test]
