@@ -203,6 +203,22 @@ fn lists_regrow_when_the_estimate_is_short() {
         let d = max_difference(&short.radiance, &volumes.radiance, scale);
         assert!(d < 1e-4, "{e}: {d}");
     }
+    // The cluster walk's job lists alone too short: jobs beyond them are lost to the walk,
+    // so the frame must notice, grow them and walk again.
+    let normal = run(&sc, &s, Estimator::Cluster);
+    std::env::set_var(gi_core::estimate::binned::JOB_ESTIMATE_ENV, "0.001");
+    let short = run(&sc, &s, Estimator::Cluster);
+    std::env::remove_var(gi_core::estimate::binned::JOB_ESTIMATE_ENV);
+    assert!(
+        short
+            .stats
+            .stages
+            .iter()
+            .any(|(n, _)| n == "photon lists regrown"),
+        "short job lists did not overflow"
+    );
+    assert_eq!(short.stats.list_entries, normal.stats.list_entries);
+    assert_eq!(short.radiance.pixels, normal.radiance.pixels);
 }
 
 /// The compute estimators build their lists with atomics, in an order that varies between
