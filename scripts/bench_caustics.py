@@ -76,10 +76,10 @@ def main() -> None:
     )
     ap.add_argument(
         "--ref-parts",
-        default="cornell-glass=8,caustic-ring=8,mirror-shadow=16",
+        default="cornell-glass=8,caustic-ring=4,mirror-shadow=24",
         help="parts per reference, per scene (its light-traced caustics set its noise)",
     )
-    ap.add_argument("--seeds", type=int, default=3)
+    ap.add_argument("--seeds", type=int, default=2)
     ap.add_argument("--out", type=Path)
     args = ap.parse_args()
     w, h = (int(v) for v in args.size.split("x"))
