@@ -70,8 +70,16 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--scenes", default="cornell-glass,caustic-ring,mirror-shadow")
     ap.add_argument("--size", default="48x48")
-    ap.add_argument("--ref-spp", type=int, default=16384)
-    ap.add_argument("--seeds", type=int, default=3)
+    ap.add_argument("--ref-spp", type=int, default=1024, help="camera samples per reference part")
+    ap.add_argument(
+        "--ref-light-paths", type=int, default=64_000_000, help="light paths per reference part"
+    )
+    ap.add_argument(
+        "--ref-parts",
+        default="cornell-glass=8,caustic-ring=4,mirror-shadow=24",
+        help="parts per reference, per scene (its light-traced caustics set its noise)",
+    )
+    ap.add_argument("--seeds", type=int, default=2)
     ap.add_argument("--out", type=Path)
     args = ap.parse_args()
     w, h = (int(v) for v in args.size.split("x"))
@@ -80,7 +88,9 @@ def main() -> None:
         "# Caustic kernels: the local-density bound, before and after",
         "",
         "Made by `.venv/bin/python scripts/bench_caustics.py --out docs/bench/caustics.md`"
-        f" ({args.size}, reference `path` at {args.ref_spp} spp, means over {args.seeds} seeds)"
+        f" ({args.size}; reference: `path`, the mean of parts of {args.ref_spp} spp and"
+        f" {args.ref_light_paths:.3g} light paths each, parts per scene {args.ref_parts};"
+        f" means over {args.seeds} seeds)"
         f" on {cpu_name()}, {os.cpu_count()} logical CPUs, lavapipe for `ispm`."
         f" Settings: {SETTINGS}."
         " *fireflies*: share of pixels whose error is over 4x the median error of the 9x9"
@@ -94,8 +104,10 @@ def main() -> None:
     ]
     for name in args.scenes.split(","):
         scene = gi.load_scene(name)
-        ref, _ = reference(name, size, args.ref_spp, 1234)
-        ref2, _ = reference(name, size, args.ref_spp, 4321)
+        parts = dict(kv.split("=") for kv in args.ref_parts.split(","))
+        recipe = (args.ref_spp, args.ref_light_paths, int(parts.get(name, 8)))
+        ref, _ = reference(name, size, recipe[0], 1234, recipe[1], recipe[2])
+        ref2, _ = reference(name, size, recipe[0], 4321, recipe[1], recipe[2])
         lines.append(
             f"| {name} | path (2nd reference) | | {fireflies(ref2, ref):.4f} | {dots(ref2):.4f}"
             f" | {flip(ref, ref2):.4f}"

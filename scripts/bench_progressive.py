@@ -17,6 +17,7 @@ import argparse
 import math
 import os
 import platform
+import sys
 import time
 from pathlib import Path
 
@@ -28,8 +29,12 @@ import gi
 # Per-pass settings of the progressive runs: small passes (one sub-pixel sample, a modest
 # photon count, kernels that start narrow) converge fastest per second; ISPM splats at full
 # resolution (subsample 1), since the bilateral upsampling is a bias no pass removes.
+# gather: 30k photons with smoothing 0.6 and alpha 0.9 had the lowest error per path-sample
+# equivalent of cost among 12 settings tried on cornell 128x128 (photons 3k-100k, smoothing
+# 0.15-0.6, alpha 0.5-0.95; docs/bench/progressive.md): with boundary compensation its bias
+# is small, so radii may shrink slowly and the variance falls nearly as 1/passes.
 PROGRESSIVE = {
-    "gather": dict(photons=10_000, spp=1, smoothing=0.3, photon_focus=0.5),
+    "gather": dict(photons=30_000, spp=1, smoothing=0.6, progressive_alpha=0.9, photon_focus=0.5),
     "ispm": dict(photons=20_000, spp=1, subsample=1, kernel_scale=0.5, adapter="cpu"),
 }
 
@@ -58,16 +63,42 @@ def flip(ref: np.ndarray, x: np.ndarray) -> float:
     return float(mean)
 
 
-def reference(scene_name: str, size: tuple[int, int], spp: int, seed: int) -> tuple:
+def reference(
+    scene_name: str,
+    size: tuple[int, int],
+    spp: int,
+    seed: int,
+    light_paths: int | None = None,
+    parts: int = 1,
+) -> tuple:
+    """A `path` reference: the mean of `parts` renders of `spp` samples per pixel (and
+    `light_paths` light paths each, default one per camera sample) with seeds derived from
+    `seed`, and the seconds they took. Splitting into parts bounds the light tracer's
+    memory (16 bytes per light path) and lets a reference grow one cached part at a time."""
+    imgs, seconds = [], 0.0
+    for part in range(parts):
+        img, s = reference_part(scene_name, size, spp, seed + 1_000_003 * part, light_paths)
+        imgs.append(img)
+        seconds += s
+    return np.mean(imgs, axis=0), seconds
+
+
+def reference_part(
+    scene_name: str, size: tuple[int, int], spp: int, seed: int, light_paths: int | None
+) -> tuple:
     # Minutes at large spp: kept in target/ (a build directory) for the next run.
+    lp = "" if light_paths is None else f"-lp{light_paths}"
     cache = (
-        Path("target") / f"bench-progressive-ref-{scene_name}-{size[0]}x{size[1]}-{spp}-{seed}.npz"
+        Path("target")
+        / f"bench-progressive-ref-{scene_name}-{size[0]}x{size[1]}-{spp}{lp}-{seed}.npz"
     )
     if cache.exists():
         saved = np.load(cache)
         return saved["radiance"], float(saved["seconds"])
     t = time.perf_counter()
-    img = gi.render(gi.load_scene(scene_name), "path", spp=spp, size=size, seed=seed).radiance
+    extra = {} if light_paths is None else {"light_paths": light_paths}
+    scene = gi.load_scene(scene_name)
+    img = gi.render(scene, "path", spp=spp, size=size, seed=seed, **extra).radiance
     seconds = time.perf_counter() - t
     cache.parent.mkdir(exist_ok=True)
     np.savez(cache, radiance=img, seconds=seconds)
@@ -159,26 +190,45 @@ def main() -> None:
     ap.add_argument("--ref-spp", type=int, default=16384)
     ap.add_argument("--seconds", type=float, default=30.0, help="progressive run length")
     ap.add_argument("--max-path-spp", type=int, default=4096)
+    ap.add_argument(
+        "--ref-light-paths", type=int, help="light paths per reference part (default: per sample)"
+    )
+    ap.add_argument("--ref-parts", type=int, default=1, help="reference = mean of this many parts")
     ap.add_argument("--out", type=Path)
+    ap.add_argument("--append", action="store_true", help="add the scenes' sections to --out")
     args = ap.parse_args()
     w, h = (int(v) for v in args.size.split("x"))
     size = (w, h)
-    lines = [
-        "# Progressive mode: error against the converged image versus time",
-        "",
-        "Made by `.venv/bin/python scripts/bench_progressive.py --out docs/bench/progressive.md`"
-        f" ({args.size}, reference `path` at {args.ref_spp} spp, progressive runs of"
-        f" {args.seconds:g} s) on {cpu_name()}, {os.cpu_count()} logical CPUs shared with"
-        " other jobs, lavapipe for `ispm`. relMSE = mean (x − ref)² / (ref² + 0.01); FLIP ="
-        " mean HDR-FLIP. *Reference noise*: the same errors of a second reference of another"
-        " seed, the floor below which no comparison can see. Progressive settings per pass:"
-        f" {PROGRESSIVE}.",
+    ref_desc = f"{args.ref_spp} spp" + (
+        "" if args.ref_light_paths is None else f" and {args.ref_light_paths:.3g} light paths"
+    )
+    if args.ref_parts > 1:
+        ref_desc = f"the mean of {args.ref_parts} parts of {ref_desc}"
+    command = " ".join(["scripts/bench_progressive.py", *sys.argv[1:]])
+    lines = (
+        []
+        if args.append
+        else [
+            "# Progressive mode: error against the converged image versus time",
+            "",
+            f"On {cpu_name()}, {os.cpu_count()} logical CPUs shared with other jobs, lavapipe"
+            " for `ispm`. relMSE = mean (x − ref)² / (ref² + 0.01); FLIP = mean HDR-FLIP."
+            " *Reference noise*: the same errors of a second reference of another seed, the"
+            " floor below which no comparison can see. Times are same-run wall seconds on a"
+            f" loaded machine. Progressive settings per pass: {PROGRESSIVE}.",
+            "",
+        ]
+    )
+    lines += [
+        f"Made by `.venv/bin/python {command}` ({args.size}, reference `path` at {ref_desc},"
+        f" progressive runs of {args.seconds:g} s):",
         "",
     ]
     for name in args.scenes.split(","):
         scene = gi.load_scene(name)
-        ref, ref_s = reference(name, size, args.ref_spp, 1234)
-        ref2, _ = reference(name, size, args.ref_spp, 4321)
+        recipe = (args.ref_spp, args.ref_light_paths, args.ref_parts)
+        ref, ref_s = reference(name, size, recipe[0], 1234, recipe[1], recipe[2])
+        ref2, _ = reference(name, size, recipe[0], 4321, recipe[1], recipe[2])
         noise = {"relmse": relmse(ref2, ref), "flip": flip(ref, ref2)}
         rows: list[dict] = []
         spp = 4
@@ -240,7 +290,10 @@ def main() -> None:
             lines += [f"![{name}]({svg.name})", ""]
         print("\n".join(lines[-len(rows) - 12 :]), flush=True)
     text = "\n".join(lines)
-    if args.out:
+    if args.out and args.append:
+        with args.out.open("a") as f:
+            f.write("\n" + text)
+    elif args.out:
         args.out.write_text(text)
     else:
         print(text)

@@ -141,7 +141,13 @@ def test_gather_method_matches_furnace_and_reports_stages():
     expected = 0.5 * 1.0 / (np.pi * 1.0 * 0.5)
     assert r.radiance.mean() == pytest.approx(expected, rel=0.03)
     stages = [n for n, _ in r.stats.stages]
-    assert stages == ["bvh build", "photon trace", "photon map build", "radiance estimate"]
+    assert stages == [
+        "bvh build",
+        "photon trace",
+        "boundary compensation",
+        "photon map build",
+        "radiance estimate",
+    ]
 
 
 def test_footprint_radii_per_kind():

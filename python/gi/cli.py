@@ -124,7 +124,7 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument(
         "--no-boundary-compensation",
         action="store_true",
-        help="don't correct ISPM photon power for kernels that fall off surfaces",
+        help="don't correct ISPM/gather photon power for kernels that fall off surfaces",
     )
     r.add_argument(
         "--volume-shape",

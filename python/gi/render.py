@@ -428,10 +428,10 @@ def render(
     photon-differential footprints with ``footprint_volumes``), at 1/``subsample``
     resolution with joint bilateral upsampling; ``boundary_compensation`` divides each
     photon's power by the fraction of its kernel that lies on surfaces (probe rays), so
-    edges and corners keep their energy. Mirrors and glass seen by the camera are traced
-    backwards on the CPU with a photon-map gather (``k``, ``max_radius``, ``kernel``).
-    ``volume_shape`` picks the shape drawn per
-    photon volume: "icosahedron", "quad" (a screen-aligned bounding rectangle, cheaper for
+    edges and corners keep their energy (for ``gather`` too, on its footprints). Mirrors
+    and glass seen by the camera are traced backwards on the CPU with a photon-map gather
+    (``k``, ``max_radius``, ``kernel``). ``volume_shape`` picks the shape drawn per photon
+    volume: "icosahedron", "quad" (a screen-aligned bounding rectangle, cheaper for
     small volumes) or "auto" (quads for volumes under 16 pixels in radius, else icosahedra);
     it changes the cost, not the image. ``estimator`` picks how the photons are splatted:
     "volumes" (the rasterizer draws the volumes), "tiled" (compute passes bin the photons to

@@ -232,7 +232,7 @@ impl Renderer {
             }
         }
         let pass = self.passes();
-        let settings = if self.settings.progressive {
+        let mut settings = if self.settings.progressive {
             progressive::pass_settings(&self.settings, desc.seed, pass)
         } else {
             Settings {
@@ -240,6 +240,9 @@ impl Renderer {
                 ..self.settings.clone()
             }
         };
+        // Not asked for: the CPU methods skip their first-hit rays (`keep_requested` drops
+        // the images anyway).
+        settings.first_hit_aovs &= desc.images.aovs;
         if let Some(g) = self.gpu.as_mut() {
             g.targets
                 .set_sample_offset(progressive::sample_offset(&self.settings, pass));

@@ -10,11 +10,13 @@
 //! down through the volume: the point counts if the ray meets a surface within the volume
 //! whose normal agrees with the photon's, which is the test the splat applies per pixel.
 
+use super::estimate::Kernel;
 use super::estimate::NORMAL_AGREEMENT;
-use super::Photon;
+use super::{Photon, PhotonSet};
 use crate::sampling::{Frame, Rng};
 use crate::scene::Scene;
 use crate::trace::{Interaction, SceneBvh};
+use glam::Vec3;
 use rayon::prelude::*;
 
 /// Probe rays per photon that may be off a surface (stratified in angle and radius).
@@ -32,8 +34,12 @@ const MIN_COVERAGE: f32 = 0.25;
 /// Whether the surface the splat would shade is under the point at offset (`d`, angle `a`)
 /// in the photon's tangent plane.
 fn probe(scene: &Scene, bvh: &SceneBvh, p: &Photon, frame: &Frame, d: f32, a: f32, h: f32) -> bool {
-    let n = frame.n;
     let q = p.position() + d * (a.cos() * frame.t + a.sin() * frame.b);
+    probe_at(scene, bvh, q, frame.n, h)
+}
+
+/// Whether a surface facing `n` lies within `h` of the point `q` along `n`.
+fn probe_at(scene: &Scene, bvh: &SceneBvh, q: Vec3, n: Vec3, h: f32) -> bool {
     let Some(hit) = bvh.intersect(q + h * n, -n, 2.0 * h) else {
         return false;
     };
@@ -131,6 +137,77 @@ pub fn compensate_until(
     });
 }
 
+/// Radius fraction u = d/r of a point distributed like `kernel` over the unit disc (radial
+/// density ∝ kernel(u)·u), from ξ in [0, 1).
+fn kernel_radius(kernel: Kernel, xi: f32) -> f32 {
+    match kernel {
+        Kernel::Box => xi.sqrt(),
+        // Density 6u(1 − u), CDF 3u² − 2u³ (a Beta(2, 2)): its closed-form inverse.
+        Kernel::Cone => 0.5 - (((1.0 - 2.0 * xi).clamp(-1.0, 1.0)).asin() / 3.0).sin(),
+        Kernel::Epanechnikov => (1.0 - (1.0 - xi).sqrt()).sqrt(),
+    }
+}
+
+/// Fraction of the elliptical footprint of a gather photon (semi-axes `axes` in its surface
+/// plane, half-thickness `h`, weighted by `kernel`) that lies on surfaces the gather would
+/// shade: the probes of [`coverage`], placed on the ellipse.
+pub fn footprint_coverage(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    p: &Photon,
+    axes: [Vec3; 2],
+    h: f32,
+    kernel: Kernel,
+    rng: &mut Rng,
+) -> f32 {
+    let r = axes[0].length().max(axes[1].length());
+    if !(r.is_finite() && r > 0.0) || disc_inside_triangle(scene, bvh, p, r, h) {
+        return 1.0;
+    }
+    let n = p.normal();
+    let at = |u: f32, a: f32| p.position() + u * (a.cos() * axes[0] + a.sin() * axes[1]);
+    let turn = rng.next_f32();
+    if (0..RING_PROBES).all(|i| {
+        let a = (i as f32 + turn) / RING_PROBES as f32 * std::f32::consts::TAU;
+        probe_at(scene, bvh, at(RING_RADIUS, a), n, h)
+    }) {
+        return 1.0;
+    }
+    let hits = (0..PROBES)
+        .filter(|&i| {
+            let a = (i as f32 + rng.next_f32()) / PROBES as f32 * std::f32::consts::TAU;
+            let xi = (((i * 3) % PROBES) as f32 + rng.next_f32()) / PROBES as f32;
+            probe_at(scene, bvh, at(kernel_radius(kernel, xi), a), n, h)
+        })
+        .count();
+    hits as f32 / PROBES as f32
+}
+
+/// Divides the power of every gather photon of `set` (with footprints) by its footprint
+/// coverage; `thickness` is the footprints' half-thickness over their smaller semi-axis.
+pub fn compensate_footprints(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    set: &mut PhotonSet,
+    thickness: f32,
+    kernel: Kernel,
+    seed: u64,
+) {
+    if set.footprints.len() != set.photons.len() {
+        return;
+    }
+    set.photons
+        .par_iter_mut()
+        .zip(&set.footprints)
+        .enumerate()
+        .for_each(|(i, (p, f))| {
+            let mut rng = Rng::new(seed, 0xb0db, i as u64);
+            let h = thickness * f.axes[0].length().min(f.axes[1].length());
+            let c = footprint_coverage(scene, bvh, p, f.axes, h, kernel, &mut rng);
+            p.power = (p.power() / c.max(MIN_COVERAGE)).into();
+        });
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -166,6 +243,43 @@ mod tests {
         assert_eq!(middle, 1.0);
         assert!((wall - 0.5).abs() < 0.05, "{wall}");
         assert!((corner - 0.25).abs() < 0.05, "{corner}");
+    }
+
+    /// A gather footprint 0.1 from the left wall of the Cornell floor: with its long semi-axis
+    /// (0.2) along the wall it is whole; across the wall the cone kernel beyond half that
+    /// axis is cut off, 11.0% of its weight (numerical integral: 0.890 stays). Mean of 400
+    /// estimates of 8 probes, standard error ≈ 0.006: 0.03 is five of them.
+    #[test]
+    fn footprint_coverage_follows_the_ellipse() {
+        let scene = builtin::load("cornell").unwrap();
+        let bvh = SceneBvh::build(&scene);
+        let p = photon_at([-0.9, 0.0, 0.3], [0.0, 1.0, 0.0]);
+        let (x, z) = (Vec3::X, Vec3::Z);
+        let mean = |axes: [Vec3; 2]| {
+            (0..400)
+                .map(|s| {
+                    let mut rng = Rng::new(s, 1, 0);
+                    footprint_coverage(&scene, &bvh, &p, axes, 0.015, Kernel::Cone, &mut rng)
+                })
+                .sum::<f32>()
+                / 400.0
+        };
+        assert_eq!(mean([0.05 * x, 0.2 * z]), 1.0);
+        let across = mean([0.2 * x, 0.05 * z]);
+        assert!((across - 0.890).abs() < 0.03, "{across}");
+        // The radial samples follow each kernel: mean radius fraction 2/3 (box), 1/2 (cone),
+        // 8/15 (Epanechnikov).
+        for (k, want) in [
+            (Kernel::Box, 2.0 / 3.0),
+            (Kernel::Cone, 0.5),
+            (Kernel::Epanechnikov, 8.0 / 15.0),
+        ] {
+            let m = (0..10_000)
+                .map(|i| kernel_radius(k, (i as f32 + 0.5) / 10_000.0))
+                .sum::<f32>()
+                / 10_000.0;
+            assert!((m - want).abs() < 1e-3, "{k:?} {m}");
+        }
     }
 
     /// The one-ray shortcut: a disc well inside one floor triangle is recognised, one that

@@ -17,7 +17,7 @@ use glam::Vec3;
 /// to count, which keeps light from leaking through thin walls.
 const NORMAL_AGREEMENT: f32 = 0.5;
 /// Footprint half-thickness along the normal, as a fraction of its smaller semi-axis.
-const THICKNESS: f32 = 0.3;
+pub(crate) const THICKNESS: f32 = 0.3;
 
 /// How many footprints a BVH leaf holds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

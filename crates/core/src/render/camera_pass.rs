@@ -53,7 +53,12 @@ pub fn render_image<S: Default + Send>(
                         estimate(it, wo, scratch)
                     });
                     let centre = cam.direction(x as f32 + 0.5, y as f32 + 0.5);
-                    Some((l, path::first_hit(scene, bvh, cam.position, centre)))
+                    let first = if settings.first_hit_aovs {
+                        path::first_hit(scene, bvh, cam.position, centre)
+                    } else {
+                        FirstHit::default()
+                    };
+                    Some((l, first))
                 })
                 .collect();
             stage.advance(1);

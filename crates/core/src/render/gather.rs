@@ -65,6 +65,22 @@ pub fn render(
         crate::photon::density::bound_footprints(&mut set, settings.radius_scale, ds.r_max);
     }
     stage("photon trace", t);
+    if settings.boundary_compensation {
+        // Footprints cut by an edge lose the energy off the surface: a darkening along
+        // edges and corners that shrinks only as fast as the radius (in progressive mode
+        // the slowest term of the error), so each photon's power is divided by the
+        // share of its footprint on surfaces.
+        let t = Instant::now();
+        crate::photon::boundary::compensate_footprints(
+            scene,
+            bvh,
+            &mut set,
+            crate::photon::gather::THICKNESS,
+            settings.kernel,
+            settings.seed,
+        );
+        stage("boundary compensation", t);
+    }
 
     let t = Instant::now();
     let leaf = settings

@@ -78,12 +78,16 @@ pub fn render(
                         sum += path::radiance(scene, bvh, cam.position, dir, &mut rng, &ps);
                     }
                     // Auxiliary images through the pixel centre are noise-free.
-                    let first = path::first_hit(
-                        scene,
-                        bvh,
-                        cam.position,
-                        cam.direction(x as f32 + 0.5, y as f32 + 0.5),
-                    );
+                    let first = if settings.first_hit_aovs {
+                        path::first_hit(
+                            scene,
+                            bvh,
+                            cam.position,
+                            cam.direction(x as f32 + 0.5, y as f32 + 0.5),
+                        )
+                    } else {
+                        path::FirstHit::default()
+                    };
                     Some((sum / spp as f32, first))
                 })
                 .collect();
