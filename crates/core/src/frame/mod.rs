@@ -7,6 +7,7 @@
 //! One file per method runs its passes in order: [`direct`], [`ispm`]; the CPU methods
 //! (`path`, `photon`, `gather`) reuse the renderer's BVH ([`cpu`]).
 
+mod bidir;
 mod cpu;
 mod direct;
 mod gpu;
@@ -59,6 +60,7 @@ struct GpuState {
     targets: gpu::Targets,
     timer: crate::raster::timer::Timer,
     ispm: Option<ispm::IspmState>,
+    bidir: Option<bidir::BidirState>,
 }
 
 /// A persistent renderer of one scene with one method.
@@ -87,7 +89,9 @@ fn check_environment(scene: &Scene, method: Method) -> Result<()> {
         return Ok(());
     }
     let how = match method {
-        Method::Direct | Method::Ispm => "its GPU passes have no environment light yet",
+        Method::Direct | Method::Ispm | Method::Bidir => {
+            "its GPU passes have no environment light yet"
+        }
         _ => "its photons are emitted by point and spot lights only",
     };
     Err(Error::setting(
@@ -249,7 +253,9 @@ impl Renderer {
                 let bvh = self.bvh.as_ref().ok_or(Error::Cancelled)?;
                 cpu::frame(&self.scene, bvh, &settings, progress)?
             }
-            Method::Direct | Method::Ispm => self.gpu_frame(&settings, desc.images, progress)?,
+            Method::Direct | Method::Ispm | Method::Bidir => {
+                self.gpu_frame(&settings, desc.images, progress)?
+            }
         };
         stages.append(&mut out.stats.stages);
         out.stats.stages = stages;
@@ -342,6 +348,7 @@ impl Renderer {
                         progress,
                     })
                 }
+                Method::Bidir => bidir::frame(gpu, &self.scene, settings, images, progress),
                 _ => direct::frame(gpu, &self.scene, images, progress),
             }
         })
@@ -364,6 +371,7 @@ impl Renderer {
                 targets,
                 timer: gpu::frame_timer(ctx),
                 ispm: None,
+                bidir: None,
             });
             return Ok(());
         }
@@ -391,6 +399,7 @@ impl Renderer {
             crate::raster::check_limits(ctx, scene, settings, g.scene.layers)?;
             g.targets = gpu::Targets::new(ctx, &g.scene, scene, settings.spp);
             g.ispm = None;
+            g.bidir = None;
         } else {
             if c.camera || c.geometry {
                 // The eye views' depth range follows the scene's bounds.

@@ -5,11 +5,13 @@ pub mod composite;
 pub mod direct;
 pub mod gbuffer;
 pub mod ispm;
+pub mod rsm;
 pub mod shadow;
 pub(crate) mod specular;
 pub mod textures;
 pub(crate) mod timer;
 pub mod volume_shape;
+pub mod vpl;
 
 use crate::error::{Error, Result};
 use crate::gpu::raw::{VertexRaw, ViewRaw};

@@ -35,6 +35,10 @@ pub enum Method {
     /// CPU photon tracing of the later bounces, and photon volumes splatted on the GPU
     /// (optionally at 1/`subsample` resolution with joint bilateral upsampling).
     Ispm,
+    /// Real-time bidirectional path tracing by rasterization (Tokuyoshi & Ogaki 2012): GPU
+    /// direct light as `direct`, plus one-bounce indirect light from virtual point lights
+    /// drawn from reflective shadow maps, each with its own cube shadow map.
+    Bidir,
 }
 
 impl Method {
@@ -44,6 +48,7 @@ impl Method {
         Method::Gather,
         Method::Direct,
         Method::Ispm,
+        Method::Bidir,
     ];
 
     pub fn name(self) -> &'static str {
@@ -53,6 +58,7 @@ impl Method {
             Method::Gather => "gather",
             Method::Direct => "direct",
             Method::Ispm => "ispm",
+            Method::Bidir => "bidir",
         }
     }
 }
@@ -155,6 +161,14 @@ pub struct Settings {
     /// most of 0.5's gain where caustics dominate (mirror-shadow FLIP 0.290 → 0.156, 0.147
     /// at 0.5) and little of its cost elsewhere (cornell-glass 0.078 → 0.080, 0.085 at 0.5).
     pub photon_focus: f32,
+    /// Virtual point lights per light and frame (method `bidir`), drawn from the light's
+    /// reflective shadow map with probability proportional to texel flux.
+    pub vpls_per_light: u32,
+    /// Reflective-shadow-map texels a side per view for a light of average power (method
+    /// `bidir`); views of brighter lights get more (the split of the ISPM bounce map).
+    pub rsm_size: u32,
+    /// Cube shadow-map resolution of each VPL, texels per face side (method `bidir`).
+    pub vpl_shadow_map_size: u32,
 }
 
 impl Default for Settings {
@@ -187,6 +201,9 @@ impl Default for Settings {
             radius_scale: 1.0,
             caustic_density_bound: true,
             photon_focus: 0.25,
+            vpls_per_light: 64,
+            rsm_size: 64,
+            vpl_shadow_map_size: 128,
         }
     }
 }
@@ -198,7 +215,7 @@ impl Settings {
     /// (`docs/bench/defaults.md`).
     pub fn for_method(method: Method) -> Settings {
         let spp = match method {
-            Method::Direct | Method::Ispm => GPU_DEFAULT_SPP,
+            Method::Direct | Method::Ispm | Method::Bidir => GPU_DEFAULT_SPP,
             _ => Settings::default().spp,
         };
         Settings {
@@ -218,6 +235,8 @@ pub const MAX_LIGHT_PATHS: u64 = 1 << 36;
 pub const MAX_PHOTONS: u64 = 1_000_000_000;
 pub const MAX_K: u32 = 1 << 16;
 pub const MAX_TEMPORAL_FRAMES: u32 = 64;
+/// VPLs per light (each takes six shadow-map layers).
+pub const MAX_VPLS_PER_LIGHT: u32 = 1024;
 
 impl Settings {
     pub fn validate(&self) -> Result<()> {
@@ -291,6 +310,21 @@ impl Settings {
         if !(0.0..=0.95).contains(&self.photon_focus) {
             return Err(Error::setting("photon_focus", "must be in [0, 0.95]"));
         }
+        if !(1..=MAX_VPLS_PER_LIGHT).contains(&self.vpls_per_light) {
+            return Err(Error::setting(
+                "vpls_per_light",
+                format!("must be in 1..={MAX_VPLS_PER_LIGHT}"),
+            ));
+        }
+        if !(1..=4096).contains(&self.rsm_size) {
+            return Err(Error::setting("rsm_size", "must be in 1..=4096"));
+        }
+        if !(16..=4096).contains(&self.vpl_shadow_map_size) {
+            return Err(Error::setting(
+                "vpl_shadow_map_size",
+                "must be in 16..=4096",
+            ));
+        }
         if !(self.progressive_alpha > 0.0 && self.progressive_alpha < 1.0) {
             return Err(Error::setting("progressive_alpha", "must be in (0, 1)"));
         }
@@ -355,6 +389,8 @@ pub struct RenderStats {
     /// them the cluster hierarchy's trivial accepts (a photon for a whole node).
     pub list_entries: u64,
     pub trivial_accepts: u64,
+    /// Method `bidir`: virtual point lights of the frame (all lights).
+    pub vpls: u64,
 }
 
 /// A rendered frame: radiance and auxiliary images, all `width × height`.
@@ -402,7 +438,7 @@ impl Progress for Silent {
 /// targets and readbacks of the GPU methods (G-buffer, accumulation, copies).
 pub(crate) fn check_image_memory(camera: &crate::scene::Camera, method: Method) -> Result<()> {
     let per_pixel: u64 = match method {
-        Method::Direct | Method::Ispm => 384,
+        Method::Direct | Method::Ispm | Method::Bidir => 400,
         _ => 160,
     };
     let pixels = camera.width as u64 * camera.height as u64;

@@ -1,0 +1,548 @@
+//! Method `bidir` (Tokuyoshi & Ogaki 2012, "Real-time bidirectional path tracing via
+//! rasterization") as a frame of the engine. Built so far: the light subpaths of §4.1.
+//!
+//! 1. Shadow maps and reflective shadow maps of the lights (the RSM with the copies of its
+//!    targets), one submission; the RSM is read back.
+//! 2. VPLs (§4.1): per light `vpls_per_light` texels drawn with probability ∝ flux
+//!    (stratified), each VPL carrying its light's covered flux / N; a cube shadow map each.
+//! 3. Direct light (the frame of method `direct`), then the one-bounce light of the VPLs at
+//!    the pixel-centre G-buffer with shadow-map visibility (`vpl.wgsl`), the composite and
+//!    the readback of what was asked for.
+
+use super::direct::{assemble, normalized, readback_names};
+use super::gpu::rgb_image;
+use super::{GpuState, Images};
+use crate::error::{Error, Result};
+use crate::gpu::{self, raw::ViewRaw, GpuContext};
+use crate::raster::ispm::{bounce_layers, BounceLayer};
+use crate::raster::rsm::{RsmTargets, RsmTexel};
+use crate::raster::vpl::{cube_views, BidirPasses, VplParamsRaw, VplRaw};
+use crate::raster::{buffer_init, shadow, Passes, VIEW_SIZE};
+use crate::render::{Progress, RenderOutput, RenderStats, Settings};
+use crate::sampling::Rng;
+use crate::scene::Scene;
+use glam::{Mat4, Vec3};
+use std::time::Instant;
+
+/// What `bidir` keeps between frames: the RSM targets, the VPL buffers and their shadow maps,
+/// the indirect target. Rebuilt when the image size, the light views or the VPL count change.
+pub(super) struct BidirState {
+    layers: Vec<BounceLayer>,
+    rsm: Option<RsmTargets>,
+    /// VPL slots (all lights together).
+    capacity: u32,
+    vpl_size: u32,
+    vpls: wgpu::Buffer,
+    params: wgpu::Buffer,
+    matrices: wgpu::Buffer,
+    views: wgpu::Buffer,
+    view_group: wgpu::BindGroup,
+    layer_views: Vec<wgpu::TextureView>,
+    group: wgpu::BindGroup,
+    indirect: wgpu::Texture,
+}
+
+/// A VPL drawn from the RSM, before upload.
+#[derive(Clone, Copy, Debug)]
+pub struct Vpl {
+    pub light: usize,
+    pub texel: RsmTexel,
+    /// Flux it carries (W): the light's covered flux / N, in the texel's colour.
+    pub flux: Vec3,
+}
+
+/// Draws `per_light` VPLs from each light's covered RSM texels with probability ∝ flux
+/// (summed over channels), stratified over the texels' cumulative flux. The VPLs of a light
+/// carry its covered flux in total: Φ_v = Φ_texel · W / (N · w_texel).
+pub fn sample_vpls(texels: &[RsmTexel], lights: usize, per_light: u32, seed: u64) -> Vec<Vpl> {
+    let mut out = Vec::new();
+    for light in 0..lights {
+        let ts: Vec<&RsmTexel> = texels.iter().filter(|t| t.light == light).collect();
+        let mut cdf = Vec::with_capacity(ts.len());
+        let mut total = 0.0f64;
+        for t in &ts {
+            total += t.flux.element_sum() as f64;
+            cdf.push(total);
+        }
+        if total <= 0.0 || total.is_nan() {
+            continue;
+        }
+        let mut rng = Rng::new(seed, 0xb1d1, light as u64);
+        let n = per_light as f64;
+        for k in 0..per_light {
+            let u = (k as f64 + rng.next_f32() as f64) / n * total;
+            let i = cdf.partition_point(|&c| c <= u).min(ts.len() - 1);
+            let t = *ts[i];
+            let w = t.flux.element_sum() as f64;
+            let flux = t.flux * (total / (n * w)) as f32;
+            out.push(Vpl {
+                light,
+                texel: t,
+                flux,
+            });
+        }
+    }
+    out
+}
+
+impl BidirState {
+    fn new(
+        ctx: &GpuContext,
+        g: &GpuState,
+        layers: Vec<BounceLayer>,
+        capacity: u32,
+        vpl_size: u32,
+    ) -> Result<Self> {
+        let passes = Passes::get(ctx);
+        let bp = BidirPasses::get(ctx);
+        let device = &ctx.device;
+        let n_layers = capacity.max(1) * 6;
+        let max_layers = device.limits().max_texture_array_layers;
+        if n_layers > max_layers {
+            return Err(Error::setting(
+                "vpls_per_light",
+                format!(
+                    "{capacity} VPLs need {n_layers} shadow-map layers; the GPU allows {max_layers}"
+                ),
+            ));
+        }
+        let max_dim = device.limits().max_texture_dimension_2d;
+        if vpl_size > max_dim {
+            return Err(Error::setting(
+                "vpl_shadow_map_size",
+                format!("the GPU allows at most {max_dim}"),
+            ));
+        }
+        let bytes = n_layers as u64 * vpl_size as u64 * vpl_size as u64 * 4;
+        crate::memory::check(|| "the VPL shadow maps".to_string(), bytes)?;
+        let rsm = RsmTargets::new(ctx, &bp.rsm, &layers, &g.scene.materials)?;
+        let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
+        let vpls = buffer_init(
+            ctx,
+            "vpls",
+            &vec![0u8; capacity.max(1) as usize * std::mem::size_of::<VplRaw>()],
+            storage,
+        );
+        let params = buffer_init(
+            ctx,
+            "vpl params",
+            bytemuck::bytes_of(&VplParamsRaw {
+                eye: [0.0; 3],
+                count: 0,
+            }),
+            wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        );
+        let matrices = buffer_init(
+            ctx,
+            "vpl shadow matrices",
+            &vec![0u8; n_layers as usize * 64],
+            storage,
+        );
+        let views = buffer_init(
+            ctx,
+            "vpl shadow views",
+            &vec![0u8; n_layers as usize * VIEW_SIZE as usize],
+            wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        );
+        let view_group = gpu::create_bind_group(
+            device,
+            &wgpu::BindGroupDescriptor {
+                label: Some("vpl shadow bind group"),
+                layout: &passes.shadow.layout,
+                entries: &[wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: crate::raster::view_binding(&views),
+                }],
+            },
+        );
+        let maps = gpu::create_texture(
+            device,
+            &wgpu::TextureDescriptor {
+                label: Some("vpl shadow maps"),
+                size: wgpu::Extent3d {
+                    width: vpl_size,
+                    height: vpl_size,
+                    depth_or_array_layers: n_layers,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: shadow::FORMAT,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                    | wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            },
+        );
+        let layer_views = (0..n_layers)
+            .map(|i| {
+                maps.create_view(&wgpu::TextureViewDescriptor {
+                    label: Some("vpl shadow layer"),
+                    dimension: Some(wgpu::TextureViewDimension::D2),
+                    base_array_layer: i,
+                    array_layer_count: Some(1),
+                    ..Default::default()
+                })
+            })
+            .collect();
+        let array = maps.create_view(&wgpu::TextureViewDescriptor {
+            label: Some("vpl shadow array"),
+            dimension: Some(wgpu::TextureViewDimension::D2Array),
+            ..Default::default()
+        });
+        let group = gpu::create_bind_group(
+            device,
+            &wgpu::BindGroupDescriptor {
+                label: Some("vpl bind group"),
+                layout: &bp.vpl.layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: params.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: vpls.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: matrices.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 3,
+                        resource: wgpu::BindingResource::TextureView(&array),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 4,
+                        resource: wgpu::BindingResource::Sampler(&passes.direct.shadow_sampler),
+                    },
+                ],
+            },
+        );
+        let (w, h) = (g.targets.width, g.targets.height);
+        let indirect = gpu::create_texture(
+            device,
+            &wgpu::TextureDescriptor {
+                label: Some("bidir indirect"),
+                size: wgpu::Extent3d {
+                    width: w,
+                    height: h,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: crate::raster::vpl::TARGET,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                    | wgpu::TextureUsages::TEXTURE_BINDING
+                    | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[],
+            },
+        );
+        Ok(BidirState {
+            layers,
+            rsm,
+            capacity,
+            vpl_size,
+            vpls,
+            params,
+            matrices,
+            views,
+            view_group,
+            layer_views,
+            group,
+            indirect,
+        })
+    }
+
+    fn fits(&self, layers: &[BounceLayer], capacity: u32, vpl_size: u32) -> bool {
+        self.capacity == capacity
+            && self.vpl_size == vpl_size
+            && self.layers.len() == layers.len()
+            && self.rsm.as_ref().is_none_or(|r| r.fits(layers))
+    }
+}
+
+/// The RSM layers: the bounce-map views with `rsm_size`² texels per view for a light of
+/// average power.
+fn rsm_layers(scene: &Scene, settings: &Settings) -> Vec<BounceLayer> {
+    let views: u64 = scene
+        .lights
+        .iter()
+        .map(|l| match l {
+            crate::scene::Light::Point { .. } => 6,
+            crate::scene::Light::Spot { .. } => 1,
+        })
+        .sum();
+    let texels = (settings.rsm_size as u64).pow(2) * views.max(1);
+    bounce_layers(scene, texels)
+}
+
+/// VPL records and their cube-face matrices for the GPU.
+fn vpl_records(scene: &Scene, vpls: &[Vpl], size: u32) -> (Vec<VplRaw>, Vec<Mat4>) {
+    let (lo, hi) = shadow::bounds(scene);
+    let diag = (hi - lo).length().max(1e-6);
+    let mut raws = Vec::with_capacity(vpls.len());
+    let mut matrices = Vec::with_capacity(vpls.len() * 6);
+    for (i, v) in vpls.iter().enumerate() {
+        let t = &v.texel;
+        let light = scene.lights[v.light].position();
+        let to_light = (light - t.position).normalize_or_zero();
+        // Off its own surface, so that the VPL's cube map does not see it edge-on.
+        let p = t.position + t.ng * (1e-4 * diag);
+        let (m, texel_scale) = cube_views(p, lo, hi, size);
+        matrices.extend_from_slice(&m);
+        // The path tracer's cosine at x1 is the shading one (f·|ns·ω1,0|); the RSM flux
+        // carries the geometric one (the texel's projected area).
+        let cos_g = t.ng.dot(to_light).abs().max(1e-6);
+        let ratio = (t.ns.dot(to_light).abs() / cos_g).min(10.0);
+        raws.push(VplRaw {
+            position: p.into(),
+            first_layer: i as u32 * 6,
+            flux: (v.flux * ratio).into(),
+            texel_scale,
+            to_light: to_light.into(),
+            fresnel: t.fresnel as u32,
+            diffuse: t.diffuse.into(),
+            roughness: t.roughness,
+            specular: t.specular.into(),
+            _pad0: 0.0,
+            ns: t.ns.into(),
+            _pad1: 0.0,
+            ng: t.ng.into(),
+            _pad2: 0.0,
+        });
+    }
+    (raws, matrices)
+}
+
+pub(super) fn frame(
+    g: &mut GpuState,
+    scene: &Scene,
+    settings: &Settings,
+    images: Images,
+    progress: &dyn Progress,
+) -> Result<RenderOutput> {
+    let ctx = g.ctx.clone();
+    let passes = Passes::get(&ctx);
+    let bp = BidirPasses::get(&ctx);
+    g.timer.reset();
+    let layers = rsm_layers(scene, settings);
+    let capacity = settings.vpls_per_light * scene.lights.len() as u32;
+    let size = settings.vpl_shadow_map_size;
+    if !g
+        .bidir
+        .as_ref()
+        .is_some_and(|b| b.fits(&layers, capacity, size))
+    {
+        let state = BidirState::new(&ctx, g, layers.clone(), capacity, size)?;
+        let view = state.indirect.create_view(&Default::default());
+        g.targets.bind_composite(&ctx, Some(&view));
+        g.bidir = Some(state);
+    }
+    let Some(state) = g.bidir.as_mut() else {
+        return Err(Error::Cancelled);
+    };
+    state.layers = layers;
+    if let Some(rsm) = &state.rsm {
+        rsm.write_views(&ctx, &state.layers);
+    }
+    let t = Instant::now();
+    g.targets.write_eye(&ctx, scene);
+    let mut upload = t.elapsed().as_secs_f64();
+
+    // 1. Shadow maps and reflective shadow maps.
+    let mut encoder = ctx
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("bidir lights"),
+        });
+    g.scene
+        .record_shadows(passes, &mut encoder, &mut g.timer, scene.lights.len());
+    let textures = (&g.scene.textures.group, g.scene.variant);
+    if let Some(rsm) = &state.rsm {
+        rsm.record(
+            &bp.rsm,
+            &mut encoder,
+            &state.layers,
+            &g.scene.geometry,
+            textures,
+            &mut g.timer,
+        );
+    }
+    let index = ctx.queue.submit([encoder.finish()]);
+    let t = Instant::now();
+    let texels = match &state.rsm {
+        Some(rsm) => rsm.read(&ctx, &state.layers, Some(index))?,
+        None => Vec::new(),
+    };
+    let rsm_readback = t.elapsed().as_secs_f64();
+    crate::cancel::check(progress)?;
+
+    // 2. VPLs and their shadow maps.
+    let t = Instant::now();
+    let vpls = sample_vpls(
+        &texels,
+        scene.lights.len(),
+        settings.vpls_per_light,
+        settings.seed,
+    );
+    let (raws, matrices) = vpl_records(scene, &vpls, size);
+    let vpl_seconds = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let q = &ctx.queue;
+    if !raws.is_empty() {
+        gpu::write_buffer(q, "vpls", &state.vpls, 0, bytemuck::cast_slice(&raws));
+        let m: Vec<[f32; 16]> = matrices.iter().map(|m| m.to_cols_array()).collect();
+        gpu::write_buffer(
+            q,
+            "vpl shadow matrices",
+            &state.matrices,
+            0,
+            bytemuck::cast_slice(&m),
+        );
+        let views: Vec<ViewRaw> = matrices
+            .iter()
+            .map(|m| ViewRaw::new(*m, Vec3::ZERO, 1.0))
+            .collect();
+        gpu::write_buffer(
+            q,
+            "vpl shadow views",
+            &state.views,
+            0,
+            bytemuck::cast_slice(&views),
+        );
+    }
+    let eye = scene.camera.position;
+    gpu::write_buffer(
+        q,
+        "vpl params",
+        &state.params,
+        0,
+        bytemuck::bytes_of(&VplParamsRaw {
+            eye: eye.into(),
+            count: raws.len() as u32,
+        }),
+    );
+    upload += t.elapsed().as_secs_f64();
+    let mut encoder = ctx
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("bidir frame"),
+        });
+    for (layer, view) in state.layer_views.iter().take(raws.len() * 6).enumerate() {
+        let offset = (layer as u64 * VIEW_SIZE) as u32;
+        let ts = g.timer.pass("vpl shadow maps");
+        passes.shadow.record(
+            &mut encoder,
+            view,
+            &state.view_group,
+            offset,
+            &g.scene.geometry,
+            g.scene.shadow_masks(),
+            ts,
+        );
+    }
+
+    // 3. Direct light, the VPLs' one-bounce light, composite.
+    let mut encoder = g
+        .targets
+        .record_direct(&ctx, &g.scene, encoder, &mut g.timer, progress)?;
+    let indirect_view = state.indirect.create_view(&Default::default());
+    let ts = g.timer.pass("vpl lighting");
+    bp.vpl.record(
+        &mut encoder,
+        &indirect_view,
+        [&state.group, g.targets.lighting_group()],
+        ts,
+    );
+    g.targets.record_composite(&ctx, &mut encoder, &mut g.timer);
+    let names = readback_names(images, true);
+    g.targets
+        .record_readback(&ctx, &mut encoder, &names, Some(&state.indirect));
+    g.timer.resolve(&mut encoder);
+    ctx.queue.submit([encoder.finish()]);
+    let t = Instant::now();
+    let data = g.targets.read(&ctx, &names)?;
+    let readback = t.elapsed().as_secs_f64();
+    g.timer.collect(&ctx)?;
+
+    let mut stats = RenderStats {
+        triangles: scene.triangles.len() as u64,
+        samples_per_pixel: g.targets.spp(),
+        vpls: raws.len() as u64,
+        ..Default::default()
+    };
+    stats.stages.push(("upload".into(), upload));
+    stats.stages.push(("rsm readback".into(), rsm_readback));
+    stats.stages.push(("vpl sampling".into(), vpl_seconds));
+    stats.stages.append(&mut g.timer.totals);
+    stats.stages.push(("readback".into(), readback));
+    let mut out = assemble(scene, &g.targets, &data, stats);
+    if images.extras {
+        if let Some(a) = data.get("accum") {
+            out.aovs.push(("direct".into(), normalized(&g.targets, a)));
+        }
+        if let Some(i) = data.get("indirect") {
+            out.aovs.push((
+                "indirect".into(),
+                rgb_image(g.targets.width, g.targets.height, i),
+            ));
+        }
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn texel(light: usize, flux: Vec3) -> RsmTexel {
+        RsmTexel {
+            light,
+            position: Vec3::ZERO,
+            ns: Vec3::Y,
+            ng: Vec3::Y,
+            diffuse: Vec3::splat(0.5),
+            roughness: 1.0,
+            specular: Vec3::ZERO,
+            fresnel: false,
+            flux,
+        }
+    }
+
+    /// The VPLs of a light carry its covered flux in total (per channel, exactly for a
+    /// light of one colour), each light gets `per_light`, and bright texels are drawn more.
+    #[test]
+    fn vpls_carry_each_lights_flux() {
+        let mut texels = Vec::new();
+        for i in 0..100 {
+            texels.push(texel(0, Vec3::splat(if i < 50 { 0.01 } else { 0.03 })));
+            texels.push(texel(1, Vec3::new(2.0, 1.0, 0.5) * 0.1));
+        }
+        let vpls = sample_vpls(&texels, 3, 16, 9);
+        assert_eq!(vpls.len(), 32, "light 2 has no texels: no VPLs");
+        for light in 0..2 {
+            let total: Vec3 = texels
+                .iter()
+                .filter(|t| t.light == light)
+                .map(|t| t.flux)
+                .sum();
+            let got: Vec3 = vpls
+                .iter()
+                .filter(|v| v.light == light)
+                .map(|v| v.flux)
+                .sum();
+            assert!(
+                ((got - total).abs() / total).max_element() < 1e-4,
+                "{got} vs {total}"
+            );
+        }
+        // Stratified by cumulative flux: the texels of flux 0.03 (half of light 0's texels,
+        // 3/4 of its flux) get exactly 12 of its 16 VPLs.
+        let bright = vpls
+            .iter()
+            .filter(|v| v.light == 0 && v.texel.flux.x > 0.025)
+            .count();
+        assert_eq!(bright, 12);
+    }
+}

@@ -1,0 +1,193 @@
+//! Virtual point lights for method `bidir`: their GPU record, the cube shadow-map views of a
+//! VPL (six faces, rendered by the ordinary [`super::shadow::ShadowPass`]) and the full-screen
+//! pass that adds their one-bounce light to every G-buffer pixel (`vpl.wgsl`).
+
+use super::shadow::{corners, perspective, CUBE_FACES};
+use crate::gpu::{self, shaders};
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec3};
+
+/// `Vpl` of `vpl.wgsl`: 112 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct VplRaw {
+    pub position: [f32; 3],
+    pub first_layer: u32,
+    pub flux: [f32; 3],
+    pub texel_scale: f32,
+    pub to_light: [f32; 3],
+    pub fresnel: u32,
+    pub diffuse: [f32; 3],
+    pub roughness: f32,
+    pub specular: [f32; 3],
+    pub _pad0: f32,
+    pub ns: [f32; 3],
+    pub _pad1: f32,
+    pub ng: [f32; 3],
+    pub _pad2: f32,
+}
+
+/// `VplParams` of `vpl.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct VplParamsRaw {
+    pub eye: [f32; 3],
+    pub count: u32,
+}
+
+/// Extra field of view of a VPL's cube faces, in shadow texels on each side (as the lights').
+const MARGIN_TEXELS: f32 = 8.0;
+
+/// World -> clip of the six cube faces of a source at `p` (depth range: the scene bounds
+/// `lo`..`hi`), and the world size of one texel at unit distance.
+pub fn cube_views(p: Vec3, lo: Vec3, hi: Vec3, size: u32) -> ([Mat4; 6], f32) {
+    let far = corners(lo, hi)
+        .map(|c| (c - p).length())
+        .into_iter()
+        .fold(0.0f32, f32::max)
+        * 1.01
+        + 1e-3;
+    let near = (far * 1e-3).max(1e-5);
+    let t = 1.0 + 2.0 * MARGIN_TEXELS / size as f32;
+    let m =
+        CUBE_FACES.map(|(forward, up)| perspective(t, near, far) * super::look_to(p, forward, up));
+    (m, 2.0 * t / size as f32)
+}
+
+/// The VPL lighting pipeline and its layouts.
+pub struct VplPass {
+    pub pipeline: wgpu::RenderPipeline,
+    /// Group 0: params (uniform), VPLs, shadow matrices, shadow maps, comparison sampler.
+    pub layout: wgpu::BindGroupLayout,
+}
+
+/// The target of the VPL pass.
+pub const TARGET: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+
+impl VplPass {
+    /// `gbuffer_layout`: the direct pass's group 1 (the G-buffer's lighting inputs).
+    pub fn new(device: &wgpu::Device, gbuffer_layout: &wgpu::BindGroupLayout) -> Self {
+        let frag = wgpu::ShaderStages::FRAGMENT;
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("vpl bind group layout"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: frag,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+                super::storage_entry(1, frag),
+                super::storage_entry(2, frag),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 3,
+                    visibility: frag,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Depth,
+                        view_dimension: wgpu::TextureViewDimension::D2Array,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 4,
+                    visibility: frag,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison),
+                    count: None,
+                },
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("vpl pipeline layout"),
+            bind_group_layouts: &[Some(&layout), Some(gbuffer_layout)],
+            immediate_size: 0,
+        });
+        let module = shaders::module(
+            device,
+            "vpl shader",
+            &[
+                shaders::COMMON,
+                shaders::BSDF,
+                shaders::SHADOW_LOOKUP,
+                shaders::VPL,
+            ],
+        );
+        let pipeline = gpu::create_render_pipeline(
+            device,
+            &wgpu::RenderPipelineDescriptor {
+                label: Some("vpl pipeline"),
+                layout: Some(&pipeline_layout),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("vs_main"),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                primitive: wgpu::PrimitiveState::default(),
+                depth_stencil: None,
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("fs_main"),
+                    compilation_options: Default::default(),
+                    targets: &[Some(wgpu::ColorTargetState::from(TARGET))],
+                }),
+                multiview_mask: None,
+                cache: None,
+            },
+        );
+        VplPass { pipeline, layout }
+    }
+
+    /// Records the pass into `target` (cleared).
+    pub fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        target: &wgpu::TextureView,
+        [group, gbuffer_group]: [&wgpu::BindGroup; 2],
+        timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
+    ) {
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("vpl pass"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: target,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes: timestamps,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, group, &[]);
+        pass.set_bind_group(1, gbuffer_group, &[]);
+        pass.draw(0..3, 0..1);
+    }
+}
+
+/// Pipelines of method `bidir`, compiled once per device on first use.
+pub struct BidirPasses {
+    pub rsm: super::rsm::RsmPass,
+    pub vpl: VplPass,
+}
+
+impl BidirPasses {
+    pub fn get(ctx: &crate::gpu::GpuContext) -> &BidirPasses {
+        ctx.bidir_passes.get_or_init(|| {
+            let p = super::Passes::get(ctx);
+            BidirPasses {
+                rsm: super::rsm::RsmPass::new(&ctx.device, &p.textures),
+                vpl: VplPass::new(&ctx.device, &p.direct.gbuffer_layout),
+            }
+        })
+    }
+}
