@@ -1,26 +1,32 @@
 //! Method `bidir` (Tokuyoshi & Ogaki 2012, "Real-time bidirectional path tracing via
-//! rasterization") as a frame of the engine. Built so far: the light subpaths of §4.1.
+//! rasterization") as a frame of the engine:
 //!
 //! 1. Shadow maps and reflective shadow maps of the lights (the RSM with the copies of its
 //!    targets), one submission; the RSM is read back.
 //! 2. VPLs (§4.1): per light `vpls_per_light` texels drawn with probability ∝ flux
 //!    (stratified), each VPL carrying its light's covered flux / N; a cube shadow map each.
-//! 3. Direct light (the frame of method `direct`), then the one-bounce light of the VPLs at
-//!    the pixel-centre G-buffer with shadow-map visibility (`vpl.wgsl`), the composite and
-//!    the readback of what was asked for.
+//! 3. Global ray bundles (§3.2): `bundles` directions, each uniform over the sphere and
+//!    together stratified ([`bundle_directions`]), the scene rasterized along each into
+//!    per-pixel fragment lists.
+//! 4. Direct light (the frame of method `direct`), then at the pixel-centre G-buffer the
+//!    one-bounce light of the VPLs and of the bundles combined by MIS (§4.2) and the
+//!    two-bounce light (§4.3, when `max_depth` ≥ 3) in one pass (`bidir.wgsl`), the
+//!    composite and the readback of what was asked for.
 
 use super::direct::{assemble, normalized, readback_names};
 use super::gpu::rgb_image;
 use super::{GpuState, Images};
 use crate::error::{Error, Result};
 use crate::gpu::{self, raw::ViewRaw, GpuContext};
+use crate::raster::bundles::{bundle_view, BundleBuffers, BundleViewRaw};
 use crate::raster::ispm::{bounce_layers, BounceLayer};
 use crate::raster::rsm::{RsmTargets, RsmTexel};
-use crate::raster::vpl::{cube_views, BidirPasses, VplParamsRaw, VplRaw};
+use crate::raster::vpl::{cube_views, BidirParamsRaw, BidirPasses, VplRaw};
 use crate::raster::{buffer_init, shadow, Passes, VIEW_SIZE};
-use crate::render::{Progress, RenderOutput, RenderStats, Settings};
+use crate::render::{BidirStrategy, Progress, RenderOutput, RenderStats, Settings};
 use crate::sampling::Rng;
 use crate::scene::Scene;
+use bytemuck::Zeroable;
 use glam::{Mat4, Vec3};
 use std::time::Instant;
 
@@ -40,6 +46,9 @@ pub(super) struct BidirState {
     layer_views: Vec<wgpu::TextureView>,
     group: wgpu::BindGroup,
     indirect: wgpu::Texture,
+    bundles: BundleBuffers,
+    /// (bundles, resolution, memory MiB) the bundle buffers were made for.
+    bundle_key: (u32, u32, u32),
 }
 
 /// A VPL drawn from the RSM, before upload.
@@ -49,6 +58,8 @@ pub struct Vpl {
     pub texel: RsmTexel,
     /// Flux it carries (W): the light's covered flux / N, in the texel's colour.
     pub flux: Vec3,
+    /// The light's covered flux W (sum of channels).
+    pub light_flux: f32,
 }
 
 /// Draws `per_light` VPLs from each light's covered RSM texels with probability ∝ flux
@@ -79,6 +90,7 @@ pub fn sample_vpls(texels: &[RsmTexel], lights: usize, per_light: u32, seed: u64
                 light,
                 texel: t,
                 flux,
+                light_flux: total as f32,
             });
         }
     }
@@ -92,6 +104,7 @@ impl BidirState {
         layers: Vec<BounceLayer>,
         capacity: u32,
         vpl_size: u32,
+        bundle_key: (u32, u32, u32),
     ) -> Result<Self> {
         let passes = Passes::get(ctx);
         let bp = BidirPasses::get(ctx);
@@ -125,13 +138,20 @@ impl BidirState {
         );
         let params = buffer_init(
             ctx,
-            "vpl params",
-            bytemuck::bytes_of(&VplParamsRaw {
-                eye: [0.0; 3],
-                count: 0,
-            }),
+            "bidir params",
+            bytemuck::bytes_of(&BidirParamsRaw::zeroed()),
             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         );
+        let (n_bundles, res, mb) = bundle_key;
+        let bundles = BundleBuffers::new(
+            ctx,
+            &bp.bundles,
+            &g.scene.materials,
+            n_bundles,
+            res,
+            mb as u64 * (1 << 20),
+        )?;
+        let (light_views, light_maps) = g.scene.shadow_lookup();
         let matrices = buffer_init(
             ctx,
             "vpl shadow matrices",
@@ -215,6 +235,30 @@ impl BidirState {
                         binding: 4,
                         resource: wgpu::BindingResource::Sampler(&passes.direct.shadow_sampler),
                     },
+                    wgpu::BindGroupEntry {
+                        binding: 5,
+                        resource: g.scene.lights.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 6,
+                        resource: light_views.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 7,
+                        resource: wgpu::BindingResource::TextureView(light_maps),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 8,
+                        resource: bundles.views.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 9,
+                        resource: bundles.heads.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 10,
+                        resource: bundles.nodes.as_entire_binding(),
+                    },
                 ],
             },
         );
@@ -251,12 +295,21 @@ impl BidirState {
             layer_views,
             group,
             indirect,
+            bundles,
+            bundle_key,
         })
     }
 
-    fn fits(&self, layers: &[BounceLayer], capacity: u32, vpl_size: u32) -> bool {
+    fn fits(
+        &self,
+        layers: &[BounceLayer],
+        capacity: u32,
+        vpl_size: u32,
+        bundle_key: (u32, u32, u32),
+    ) -> bool {
         self.capacity == capacity
             && self.vpl_size == vpl_size
+            && self.bundle_key == bundle_key
             && self.layers.len() == layers.len()
             && self.rsm.as_ref().is_none_or(|r| r.fits(layers))
     }
@@ -277,27 +330,36 @@ fn rsm_layers(scene: &Scene, settings: &Settings) -> Vec<BounceLayer> {
     bounce_layers(scene, texels)
 }
 
-/// VPL records and their cube-face matrices for the GPU.
-fn vpl_records(scene: &Scene, vpls: &[Vpl], size: u32) -> (Vec<VplRaw>, Vec<Mat4>) {
+/// VPL records and their cube-face matrices for the GPU: `per_light` slots per light, light
+/// by light (the lighting pass finds a light's VPLs and covered flux by slot); a light
+/// without covered texels keeps zero-flux slots.
+fn vpl_records(scene: &Scene, vpls: &[Vpl], per_light: u32, size: u32) -> (Vec<VplRaw>, Vec<Mat4>) {
     let (lo, hi) = shadow::bounds(scene);
     let diag = (hi - lo).length().max(1e-6);
-    let mut raws = Vec::with_capacity(vpls.len());
-    let mut matrices = Vec::with_capacity(vpls.len() * 6);
-    for (i, v) in vpls.iter().enumerate() {
+    let slots = per_light as usize * scene.lights.len();
+    let mut raws = vec![VplRaw::zeroed(); slots];
+    let mut matrices = vec![Mat4::IDENTITY; slots * 6];
+    let mut next = vec![0usize; scene.lights.len()];
+    for v in vpls {
+        let slot = v.light * per_light as usize + next[v.light];
+        next[v.light] += 1;
         let t = &v.texel;
-        let light = scene.lights[v.light].position();
-        let to_light = (light - t.position).normalize_or_zero();
+        let light = &scene.lights[v.light];
+        let to = t.position - light.position();
+        let d2 = to.length_squared().max(1e-12);
+        let to_light = -to.normalize_or_zero();
         // Off its own surface, so that the VPL's cube map does not see it edge-on.
         let p = t.position + t.ng * (1e-4 * diag);
         let (m, texel_scale) = cube_views(p, lo, hi, size);
-        matrices.extend_from_slice(&m);
+        matrices[slot * 6..slot * 6 + 6].copy_from_slice(&m);
         // The path tracer's cosine at x1 is the shading one (f·|ns·ω1,0|); the RSM flux
         // carries the geometric one (the texel's projected area).
         let cos_g = t.ng.dot(to_light).abs().max(1e-6);
         let ratio = (t.ns.dot(to_light).abs() / cos_g).min(10.0);
-        raws.push(VplRaw {
+        let intensity = light.intensity_towards(-to_light).element_sum();
+        raws[slot] = VplRaw {
             position: p.into(),
-            first_layer: i as u32 * 6,
+            first_layer: slot as u32 * 6,
             flux: (v.flux * ratio).into(),
             texel_scale,
             to_light: to_light.into(),
@@ -305,15 +367,66 @@ fn vpl_records(scene: &Scene, vpls: &[Vpl], size: u32) -> (Vec<VplRaw>, Vec<Mat4
             diffuse: t.diffuse.into(),
             roughness: t.roughness,
             specular: t.specular.into(),
-            _pad0: 0.0,
+            pdf: intensity * cos_g / (d2 * v.light_flux.max(1e-30)),
             ns: t.ns.into(),
-            _pad1: 0.0,
+            light_flux: v.light_flux,
             ng: t.ng.into(),
-            _pad2: 0.0,
-        });
+            _pad: 0.0,
+        };
+    }
+    for (slot, r) in raws.iter_mut().enumerate() {
+        r.first_layer = slot as u32 * 6;
     }
     (raws, matrices)
 }
+
+/// The frame's `n` bundle directions: a spherical Fibonacci set under a uniformly random
+/// rotation. Each direction alone is uniform over the sphere (p_r = 1/4π, 1/2π over a
+/// hemisphere with ±ω), as §3.3's; together they are stratified, which matters because
+/// every pixel shares them: with independent directions the image mean of 16 bundles
+/// wanders by ±7% in the furnace (all pixels err alike).
+pub fn bundle_directions(n: u32, seed: u64) -> Vec<Vec3> {
+    let mut rng = Rng::new(seed, 0xb0d1e, 0);
+    // Uniform random rotation (Shoemake 1992).
+    let (u1, u2, u3) = (rng.next_f32(), rng.next_f32(), rng.next_f32());
+    let tau = std::f32::consts::TAU;
+    let (a, b) = ((1.0 - u1).sqrt(), u1.sqrt());
+    let rot = glam::Quat::from_xyzw(
+        a * (tau * u2).sin(),
+        a * (tau * u2).cos(),
+        b * (tau * u3).sin(),
+        b * (tau * u3).cos(),
+    )
+    .normalize();
+    let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
+    (0..n)
+        .map(|i| {
+            let z = 1.0 - (2 * i + 1) as f32 / n as f32;
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let phi = golden * i as f32;
+            rot * Vec3::new(r * phi.cos(), r * phi.sin(), z)
+        })
+        .collect()
+}
+
+/// The views of the frame's bundles.
+fn bundle_views(scene: &Scene, settings: &Settings, b: &BundleBuffers) -> Vec<BundleViewRaw> {
+    let (lo, hi) = shadow::bounds(scene);
+    let centre = (lo + hi) * 0.5;
+    let radius = (hi - lo).length() * 0.5;
+    bundle_directions(settings.bundles, settings.seed)
+        .into_iter()
+        .enumerate()
+        .map(|(i, dir)| bundle_view(dir, centre, radius, i as u32, b.res, b.capacity))
+        .collect()
+}
+
+/// Longest fragment list the lighting pass walks (a guard against runaway loops).
+const MAX_WALK: u32 = 4096;
+
+/// The two-bounce term's lower bound on ‖x1 − x2‖, as a fraction of the scene's bounding
+/// diagonal (§4.3 clamps it; the paper gives no value).
+const TWO_BOUNCE_MIN_DIST: f32 = 0.02;
 
 pub(super) fn frame(
     g: &mut GpuState,
@@ -327,14 +440,21 @@ pub(super) fn frame(
     let bp = BidirPasses::get(&ctx);
     g.timer.reset();
     let layers = rsm_layers(scene, settings);
-    let capacity = settings.vpls_per_light * scene.lights.len() as u32;
+    let per_light = settings.vpls_per_light;
+    let capacity = per_light * scene.lights.len() as u32;
     let size = settings.vpl_shadow_map_size;
+    let bundle_key = (
+        settings.bundles.max(1),
+        settings.bundle_resolution,
+        settings.bundle_memory_mb,
+    );
     if !g
         .bidir
         .as_ref()
-        .is_some_and(|b| b.fits(&layers, capacity, size))
+        .is_some_and(|b| b.fits(&layers, capacity, size, bundle_key))
     {
-        let state = BidirState::new(&ctx, g, layers.clone(), capacity, size)?;
+        g.bidir = None;
+        let state = BidirState::new(&ctx, g, layers.clone(), capacity, size, bundle_key)?;
         let view = state.indirect.create_view(&Default::default());
         g.targets.bind_composite(&ctx, Some(&view));
         g.bidir = Some(state);
@@ -343,11 +463,15 @@ pub(super) fn frame(
         return Err(Error::Cancelled);
     };
     state.layers = layers;
+    let t = Instant::now();
     if let Some(rsm) = &state.rsm {
         rsm.write_views(&ctx, &state.layers);
     }
-    let t = Instant::now();
     g.targets.write_eye(&ctx, scene);
+    let views = bundle_views(scene, settings, &state.bundles);
+    if !views.is_empty() {
+        state.bundles.write_views(&ctx, &views);
+    }
     let mut upload = t.elapsed().as_secs_f64();
 
     // 1. Shadow maps and reflective shadow maps.
@@ -380,13 +504,8 @@ pub(super) fn frame(
 
     // 2. VPLs and their shadow maps.
     let t = Instant::now();
-    let vpls = sample_vpls(
-        &texels,
-        scene.lights.len(),
-        settings.vpls_per_light,
-        settings.seed,
-    );
-    let (raws, matrices) = vpl_records(scene, &vpls, size);
+    let vpls = sample_vpls(&texels, scene.lights.len(), per_light, settings.seed);
+    let (raws, matrices) = vpl_records(scene, &vpls, per_light, size);
     let vpl_seconds = t.elapsed().as_secs_f64();
     let t = Instant::now();
     let q = &ctx.queue;
@@ -412,16 +531,30 @@ pub(super) fn frame(
             bytemuck::cast_slice(&views),
         );
     }
-    let eye = scene.camera.position;
+    let (lo, hi) = shadow::bounds(scene);
+    let min_dist = TWO_BOUNCE_MIN_DIST * (hi - lo).length();
+    let params = BidirParamsRaw {
+        eye: scene.camera.position.into(),
+        vpl_count: raws.len() as u32,
+        vpls_per_light: per_light,
+        bundles: settings.bundles,
+        mode: match settings.bidir_strategy {
+            BidirStrategy::Mis => 0,
+            BidirStrategy::Vpl => 1,
+            BidirStrategy::Bundle => 2,
+        },
+        two_bounce: (settings.max_depth >= 3) as u32,
+        min_dist2: min_dist * min_dist,
+        max_walk: MAX_WALK,
+        pair_offset: Rng::new(settings.seed, 0xfa17, 0).next_f32(),
+        _pad: 0,
+    };
     gpu::write_buffer(
         q,
-        "vpl params",
+        "bidir params",
         &state.params,
         0,
-        bytemuck::bytes_of(&VplParamsRaw {
-            eye: eye.into(),
-            count: raws.len() as u32,
-        }),
+        bytemuck::bytes_of(&params),
     );
     upload += t.elapsed().as_secs_f64();
     let mut encoder = ctx
@@ -429,26 +562,42 @@ pub(super) fn frame(
         .create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("bidir frame"),
         });
-    for (layer, view) in state.layer_views.iter().take(raws.len() * 6).enumerate() {
-        let offset = (layer as u64 * VIEW_SIZE) as u32;
-        let ts = g.timer.pass("vpl shadow maps");
-        passes.shadow.record(
-            &mut encoder,
-            view,
-            &state.view_group,
-            offset,
-            &g.scene.geometry,
-            g.scene.shadow_masks(),
-            ts,
-        );
+    let lit = vpls.len();
+    for (slot, chunk) in state.layer_views.chunks(6).take(raws.len()).enumerate() {
+        if raws[slot].flux == [0.0; 3] && lit < raws.len() {
+            continue;
+        }
+        for (face, view) in chunk.iter().enumerate() {
+            let offset = ((slot * 6 + face) as u64 * VIEW_SIZE) as u32;
+            let ts = g.timer.pass("vpl shadow maps");
+            passes.shadow.record(
+                &mut encoder,
+                view,
+                &state.view_group,
+                offset,
+                &g.scene.geometry,
+                g.scene.shadow_masks(),
+                ts,
+            );
+        }
     }
 
-    // 3. Direct light, the VPLs' one-bounce light, composite.
+    // 3. Ray bundles.
+    state.bundles.record(
+        &bp.bundles,
+        &mut encoder,
+        settings.bundles,
+        &g.scene.geometry,
+        textures,
+        &mut g.timer,
+    );
+
+    // 4. Direct light, the indirect light, composite.
     let mut encoder = g
         .targets
         .record_direct(&ctx, &g.scene, encoder, &mut g.timer, progress)?;
     let indirect_view = state.indirect.create_view(&Default::default());
-    let ts = g.timer.pass("vpl lighting");
+    let ts = g.timer.pass("bidir lighting");
     bp.vpl.record(
         &mut encoder,
         &indirect_view,
@@ -460,16 +609,24 @@ pub(super) fn frame(
     g.targets
         .record_readback(&ctx, &mut encoder, &names, Some(&state.indirect));
     g.timer.resolve(&mut encoder);
-    ctx.queue.submit([encoder.finish()]);
+    let index = ctx.queue.submit([encoder.finish()]);
     let t = Instant::now();
     let data = g.targets.read(&ctx, &names)?;
+    let (fragments, overflow) = if settings.bundles > 0 {
+        state.bundles.fragments(&ctx, Some(index))?
+    } else {
+        (0, 0)
+    };
     let readback = t.elapsed().as_secs_f64();
     g.timer.collect(&ctx)?;
 
     let mut stats = RenderStats {
         triangles: scene.triangles.len() as u64,
         samples_per_pixel: g.targets.spp(),
-        vpls: raws.len() as u64,
+        vpls: vpls.len() as u64,
+        bundles: settings.bundles as u64,
+        bundle_fragments: fragments,
+        bundle_overflow: overflow,
         ..Default::default()
     };
     stats.stages.push(("upload".into(), upload));

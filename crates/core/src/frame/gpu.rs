@@ -196,6 +196,11 @@ impl GpuScene {
         self.shadows_stale = true;
     }
 
+    /// The lights' shadow matrices and maps (for lookups outside the direct pass).
+    pub fn shadow_lookup(&self) -> (&wgpu::Buffer, &wgpu::TextureView) {
+        (&self.shadow_matrices, &self.shadow_array)
+    }
+
     /// The texture group for shadow passes of scenes with alpha masks (they discard
     /// cut-outs), `None` otherwise.
     pub fn shadow_masks(&self) -> Option<&wgpu::BindGroup> {

@@ -11,7 +11,9 @@ pub const TEXTURE: &str = include_str!("shaders/common/texture.wgsl");
 pub const PHOTON_VOLUME: &str = include_str!("shaders/common/photon_volume.wgsl");
 /// Order-independent (fixed-point) sums of non-negative RGB terms.
 pub const FIXED_SUM: &str = include_str!("shaders/common/fixed_sum.wgsl");
-/// Shadow-map layer choice and PCF lookup (the including pass declares the bindings).
+/// Global ray-bundle views and fragment nodes (`bidir`).
+pub const BUNDLE_TYPES: &str = include_str!("shaders/common/bundle_types.wgsl");
+/// Shadow-map layer choice and PCF lookup.
 pub const SHADOW_LOOKUP: &str = include_str!("shaders/common/shadow_lookup.wgsl");
 
 pub const GBUFFER: &str = include_str!("shaders/gbuffer.wgsl");
@@ -25,7 +27,8 @@ pub const CLUSTER: &str = include_str!("shaders/cluster.wgsl");
 pub const UPSAMPLE: &str = include_str!("shaders/upsample.wgsl");
 pub const COMPOSITE: &str = include_str!("shaders/composite.wgsl");
 pub const RSM: &str = include_str!("shaders/rsm.wgsl");
-pub const VPL: &str = include_str!("shaders/vpl.wgsl");
+pub const BIDIR: &str = include_str!("shaders/bidir.wgsl");
+pub const BUNDLES: &str = include_str!("shaders/bundles.wgsl");
 
 /// Creates a shader module from `parts`, concatenated in order (common code first).
 pub fn module(device: &wgpu::Device, label: &str, parts: &[&str]) -> wgpu::ShaderModule {

@@ -1,6 +1,7 @@
 //! GPU rasterization passes and the `direct` frame: shadow maps, then per sub-pixel sample an
 //! eye G-buffer and deferred direct lighting accumulated into one image.
 
+pub mod bundles;
 pub mod composite;
 pub mod direct;
 pub mod gbuffer;

@@ -1,13 +1,14 @@
 //! Virtual point lights for method `bidir`: their GPU record, the cube shadow-map views of a
 //! VPL (six faces, rendered by the ordinary [`super::shadow::ShadowPass`]) and the full-screen
-//! pass that adds their one-bounce light to every G-buffer pixel (`vpl.wgsl`).
+//! pass that adds the indirect light of VPLs and ray bundles to every G-buffer pixel
+//! (`bidir.wgsl`).
 
 use super::shadow::{corners, perspective, CUBE_FACES};
 use crate::gpu::{self, shaders};
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 
-/// `Vpl` of `vpl.wgsl`: 112 bytes.
+/// `Vpl` of `bidir.wgsl`: 112 bytes.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct VplRaw {
@@ -20,19 +21,31 @@ pub struct VplRaw {
     pub diffuse: [f32; 3],
     pub roughness: f32,
     pub specular: [f32; 3],
-    pub _pad0: f32,
+    /// Area density of the VPL's point per draw: I(ω)·|ng·ω1,0| / (d²·W).
+    pub pdf: f32,
     pub ns: [f32; 3],
-    pub _pad1: f32,
+    /// Covered flux W of the VPL's light (sum of channels).
+    pub light_flux: f32,
     pub ng: [f32; 3],
-    pub _pad2: f32,
+    pub _pad: f32,
 }
 
-/// `VplParams` of `vpl.wgsl`.
+/// `Params` of `bidir.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub struct VplParamsRaw {
+pub struct BidirParamsRaw {
     pub eye: [f32; 3],
-    pub count: u32,
+    pub vpl_count: u32,
+    pub vpls_per_light: u32,
+    pub bundles: u32,
+    /// 0: MIS, 1: VPLs only, 2: bundles only (one-bounce light).
+    pub mode: u32,
+    pub two_bounce: u32,
+    pub min_dist2: f32,
+    pub max_walk: u32,
+    /// Random offset in [0, 1) of the two-bounce term's bundle-to-VPL pairing.
+    pub pair_offset: f32,
+    pub _pad: u32,
 }
 
 /// Extra field of view of a VPL's cube faces, in shadow texels on each side (as the lights').
@@ -57,7 +70,8 @@ pub fn cube_views(p: Vec3, lo: Vec3, hi: Vec3, size: u32) -> ([Mat4; 6], f32) {
 /// The VPL lighting pipeline and its layouts.
 pub struct VplPass {
     pub pipeline: wgpu::RenderPipeline,
-    /// Group 0: params (uniform), VPLs, shadow matrices, shadow maps, comparison sampler.
+    /// Group 0: params (uniform), VPLs, their shadow matrices and maps, comparison sampler,
+    /// lights, their shadow matrices and maps, bundle views, heads, nodes.
     pub layout: wgpu::BindGroupLayout,
 }
 
@@ -68,8 +82,18 @@ impl VplPass {
     /// `gbuffer_layout`: the direct pass's group 1 (the G-buffer's lighting inputs).
     pub fn new(device: &wgpu::Device, gbuffer_layout: &wgpu::BindGroupLayout) -> Self {
         let frag = wgpu::ShaderStages::FRAGMENT;
+        let depth_array = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: frag,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Depth,
+                view_dimension: wgpu::TextureViewDimension::D2Array,
+                multisampled: false,
+            },
+            count: None,
+        };
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("vpl bind group layout"),
+            label: Some("bidir bind group layout"),
             entries: &[
                 wgpu::BindGroupLayoutEntry {
                     binding: 0,
@@ -83,43 +107,41 @@ impl VplPass {
                 },
                 super::storage_entry(1, frag),
                 super::storage_entry(2, frag),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 3,
-                    visibility: frag,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Depth,
-                        view_dimension: wgpu::TextureViewDimension::D2Array,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
+                depth_array(3),
                 wgpu::BindGroupLayoutEntry {
                     binding: 4,
                     visibility: frag,
                     ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison),
                     count: None,
                 },
+                super::storage_entry(5, frag),
+                super::storage_entry(6, frag),
+                depth_array(7),
+                super::storage_entry(8, frag),
+                super::storage_entry(9, frag),
+                super::storage_entry(10, frag),
             ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("vpl pipeline layout"),
+            label: Some("bidir pipeline layout"),
             bind_group_layouts: &[Some(&layout), Some(gbuffer_layout)],
             immediate_size: 0,
         });
         let module = shaders::module(
             device,
-            "vpl shader",
+            "bidir shader",
             &[
                 shaders::COMMON,
                 shaders::BSDF,
                 shaders::SHADOW_LOOKUP,
-                shaders::VPL,
+                shaders::BUNDLE_TYPES,
+                shaders::BIDIR,
             ],
         );
         let pipeline = gpu::create_render_pipeline(
             device,
             &wgpu::RenderPipelineDescriptor {
-                label: Some("vpl pipeline"),
+                label: Some("bidir pipeline"),
                 layout: Some(&pipeline_layout),
                 vertex: wgpu::VertexState {
                     module: &module,
@@ -152,7 +174,7 @@ impl VplPass {
         timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) {
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("vpl pass"),
+            label: Some("bidir lighting pass"),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {
                 view: target,
                 depth_slice: None,
@@ -177,6 +199,7 @@ impl VplPass {
 /// Pipelines of method `bidir`, compiled once per device on first use.
 pub struct BidirPasses {
     pub rsm: super::rsm::RsmPass,
+    pub bundles: super::bundles::BundlePass,
     pub vpl: VplPass,
 }
 
@@ -186,6 +209,7 @@ impl BidirPasses {
             let p = super::Passes::get(ctx);
             BidirPasses {
                 rsm: super::rsm::RsmPass::new(&ctx.device, &p.textures),
+                bundles: super::bundles::BundlePass::new(&ctx.device, &p.textures),
                 vpl: VplPass::new(&ctx.device, &p.direct.gbuffer_layout),
             }
         })

@@ -80,6 +80,49 @@ impl FromStr for Method {
     }
 }
 
+/// Which strategies method `bidir` uses for the one-bounce light (Tokuyoshi & Ogaki 2012
+/// §4.2): both combined by multiple importance sampling, or one alone (Figure 4: VPLs spike
+/// where a VPL lies close to a receiver, bundles are noisy near bright spots).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum BidirStrategy {
+    #[default]
+    Mis,
+    Vpl,
+    Bundle,
+}
+
+impl BidirStrategy {
+    pub const ALL: &'static [BidirStrategy] = &[
+        BidirStrategy::Mis,
+        BidirStrategy::Vpl,
+        BidirStrategy::Bundle,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            BidirStrategy::Mis => "mis",
+            BidirStrategy::Vpl => "vpl",
+            BidirStrategy::Bundle => "bundle",
+        }
+    }
+}
+
+impl FromStr for BidirStrategy {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        BidirStrategy::ALL
+            .iter()
+            .copied()
+            .find(|v| v.name() == s)
+            .ok_or_else(|| {
+                Error::setting(
+                    "bidir_strategy",
+                    format!("unknown strategy `{s}` (available: mis, vpl, bundle)"),
+                )
+            })
+    }
+}
+
 /// Render settings. Sizes of `None` use the scene camera's.
 #[derive(Clone, Debug)]
 pub struct Settings {
@@ -169,6 +212,15 @@ pub struct Settings {
     pub rsm_size: u32,
     /// Cube shadow-map resolution of each VPL, texels per face side (method `bidir`).
     pub vpl_shadow_map_size: u32,
+    /// Global ray bundles per frame (method `bidir`); 0 = VPLs only.
+    pub bundles: u32,
+    /// Ray-bundle resolution, pixels a side of the parallel projection (method `bidir`).
+    pub bundle_resolution: u32,
+    /// Memory for the ray bundles' fragment lists, MiB (method `bidir`); fragments beyond it
+    /// are dropped and counted in `RenderStats::bundle_overflow`.
+    pub bundle_memory_mb: u32,
+    /// Strategies of `bidir`'s one-bounce light.
+    pub bidir_strategy: BidirStrategy,
 }
 
 impl Default for Settings {
@@ -204,6 +256,10 @@ impl Default for Settings {
             vpls_per_light: 64,
             rsm_size: 64,
             vpl_shadow_map_size: 128,
+            bundles: 16,
+            bundle_resolution: 128,
+            bundle_memory_mb: 64,
+            bidir_strategy: BidirStrategy::Mis,
         }
     }
 }
@@ -237,6 +293,8 @@ pub const MAX_K: u32 = 1 << 16;
 pub const MAX_TEMPORAL_FRAMES: u32 = 64;
 /// VPLs per light (each takes six shadow-map layers).
 pub const MAX_VPLS_PER_LIGHT: u32 = 1024;
+/// Ray bundles per frame.
+pub const MAX_BUNDLES: u32 = 4096;
 
 impl Settings {
     pub fn validate(&self) -> Result<()> {
@@ -325,6 +383,24 @@ impl Settings {
                 "must be in 16..=4096",
             ));
         }
+        if self.bundles > MAX_BUNDLES {
+            return Err(Error::setting(
+                "bundles",
+                format!("must be in 0..={MAX_BUNDLES}"),
+            ));
+        }
+        if !(16..=4096).contains(&self.bundle_resolution) {
+            return Err(Error::setting("bundle_resolution", "must be in 16..=4096"));
+        }
+        if !(1..=4096).contains(&self.bundle_memory_mb) {
+            return Err(Error::setting("bundle_memory_mb", "must be in 1..=4096"));
+        }
+        if self.bundles == 0 && self.bidir_strategy == BidirStrategy::Bundle {
+            return Err(Error::setting(
+                "bidir_strategy",
+                "strategy `bundle` needs bundles > 0",
+            ));
+        }
         if !(self.progressive_alpha > 0.0 && self.progressive_alpha < 1.0) {
             return Err(Error::setting("progressive_alpha", "must be in (0, 1)"));
         }
@@ -391,6 +467,11 @@ pub struct RenderStats {
     pub trivial_accepts: u64,
     /// Method `bidir`: virtual point lights of the frame (all lights).
     pub vpls: u64,
+    /// Method `bidir`: ray bundles of the frame, the fragments they stored in their lists,
+    /// and the fragments dropped because the list memory (`bundle_memory_mb`) was full.
+    pub bundles: u64,
+    pub bundle_fragments: u64,
+    pub bundle_overflow: u64,
 }
 
 /// A rendered frame: radiance and auxiliary images, all `width × height`.

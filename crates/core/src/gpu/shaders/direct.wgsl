@@ -33,7 +33,8 @@ fn spot_falloff(l: Light, cos_t: f32) -> f32 {
 
 // Shadow-map visibility of `p` from light `l` (common/shadow_lookup.wgsl).
 fn visibility(l: Light, p: vec3<f32>) -> f32 {
-    return shadow_visibility(l.first_layer, l.layers, l.position, p);
+    let layer = shadow_layer_of(l.first_layer, l.layers, p - l.position);
+    return shadow_pcf(shadow_maps, shadow_sampler, shadow_views[layer], layer, p);
 }
 
 @fragment

@@ -1,10 +1,8 @@
-// Shadow-map lookups shared by the lighting passes. The including file declares
-// `shadow_views` (world -> clip per layer), `shadow_maps` (a depth 2D array) and
-// `shadow_sampler` (a comparison sampler). A point source (a point light or a VPL) has six
-// cube-face layers (+x -x +y -y +z -z) from `first_layer`; a spot light one.
+// Shadow-map lookups shared by the lighting passes. A point source (a point light or a VPL)
+// has six cube-face layers (+x -x +y -y +z -z) from `first_layer`; a spot light one.
 
-// The shadow layer of a source at `origin` with `layers` layers that sees `p`: the cube face
-// of the major axis of p − origin when there are six.
+// The layer of a source with `layers` layers from `first_layer` that sees direction `d`
+// (from the source): the cube face of the major axis when there are six.
 fn shadow_layer_of(first_layer: u32, layers: u32, d: vec3<f32>) -> u32 {
     if layers == 1u {
         return first_layer;
@@ -21,22 +19,22 @@ fn shadow_layer_of(first_layer: u32, layers: u32, d: vec3<f32>) -> u32 {
     return first_layer + face;
 }
 
-// Percentage-closer filtering: 3×3 bilinear comparison taps one texel apart (a 4×4-texel
-// tent), so the lit fraction varies smoothly across a shadow edge.
-fn shadow_visibility(first_layer: u32, layers: u32, origin: vec3<f32>, p: vec3<f32>) -> f32 {
-    let layer = shadow_layer_of(first_layer, layers, p - origin);
-    let clip = shadow_views[layer] * vec4<f32>(p, 1.0);
+// Percentage-closer filtering of `p` in `layer` of `maps` (world -> clip `m`): 3×3 bilinear
+// comparison taps one texel apart (a 4×4-texel tent), so the lit fraction varies smoothly
+// across a shadow edge.
+fn shadow_pcf(maps: texture_depth_2d_array, smp: sampler_comparison, m: mat4x4<f32>, layer: u32, p: vec3<f32>) -> f32 {
+    let clip = m * vec4<f32>(p, 1.0);
     if clip.w <= 0.0 {
         return 0.0;
     }
     let ndc = clip.xyz / clip.w;
     let uv = ndc.xy * vec2<f32>(0.5, -0.5) + 0.5;
-    let texel = 1.0 / vec2<f32>(textureDimensions(shadow_maps));
+    let texel = 1.0 / vec2<f32>(textureDimensions(maps));
     var lit = 0.0;
     for (var y = -1; y <= 1; y++) {
         for (var x = -1; x <= 1; x++) {
             let o = vec2<f32>(f32(x), f32(y)) * texel;
-            lit += textureSampleCompareLevel(shadow_maps, shadow_sampler, uv + o, layer, ndc.z);
+            lit += textureSampleCompareLevel(maps, smp, uv + o, layer, ndc.z);
         }
     }
     return lit / 9.0;

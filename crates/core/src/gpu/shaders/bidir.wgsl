@@ -1,0 +1,319 @@
+// Indirect light of method `bidir` (Tokuyoshi & Ogaki 2012 §4) at every G-buffer pixel x3:
+//
+// - one bounce through a VPL x1 (light subpath, §4.1), for every VPL:
+//     Φ1 · f(x1; ω1,3, ω1,0) · f(x3; ω3,4, ω3,1) · |n3·ω3,1| · |ng1·ω1,3| / ‖x1 − x3‖² · V
+//   with V from the VPL's cube shadow map;
+// - one bounce through a ray-bundle hit x2 (camera subpath, §3): per bundle the nearest
+//   fragment along ±ω (the side of n3), lit by the lights with their shadow maps:
+//     f(x3)·|n3·ω|·f(x2)·|n2·ω2,0|·I/‖x2 − x0‖²·V / p_r,   p_r = 1/2π;
+// - both combined by MIS (§4.2, balance heuristic, β = 1) on the area densities of the
+//   middle vertex: VPLs p1 = n1·I(ω0,j)·|ng_j·ω_j,0| / (‖x_j − x0‖²·W) (W: the light's
+//   covered flux, VPLs drawn ∝ flux), bundles p2 = n2·p_r·|ng_j·ω_j,3| / ‖x_j − x3‖²;
+// - two bounces x0 → x1 → x2 → x3 (§4.3): each bundle paired with one VPL of every light,
+//   the VPL's shadow map testing (x1, x2), ‖x1 − x2‖² clamped from below.
+// `mode`: 0 MIS, 1 VPLs only, 2 bundles only (for the one-bounce light).
+
+struct Vpl {
+    position: vec3<f32>,
+    first_layer: u32,
+    flux: vec3<f32>,
+    // World size of one shadow texel at unit distance from the VPL.
+    texel_scale: f32,
+    // Unit direction from the VPL towards its light (ω1,0).
+    to_light: vec3<f32>,
+    fresnel: u32,
+    diffuse: vec3<f32>,
+    roughness: f32,
+    specular: vec3<f32>,
+    // Area density of this VPL's point per VPL draw (I(ω)·cos / (d²·W)).
+    pdf: f32,
+    ns: vec3<f32>,
+    // The covered flux W (sum of channels) of the VPL's light.
+    light_flux: f32,
+    ng: vec3<f32>,
+    _pad: f32,
+}
+
+struct Params {
+    eye: vec3<f32>,
+    // VPL slots: `vpls_per_light` per light, light by light.
+    vpl_count: u32,
+    vpls_per_light: u32,
+    bundles: u32,
+    mode: u32,
+    two_bounce: u32,
+    // Lower bound of ‖x1 − x2‖² in the two-bounce term.
+    min_dist2: f32,
+    // Longest list walked (a guard: lists longer than this are cut).
+    max_walk: u32,
+    // Random offset in [0, 1) of the bundle-to-VPL pairing of the two-bounce term.
+    pair_offset: f32,
+    _pad: u32,
+}
+
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(1) var<storage, read> vpls: array<Vpl>;
+@group(0) @binding(2) var<storage, read> vpl_views: array<mat4x4<f32>>;
+@group(0) @binding(3) var vpl_maps: texture_depth_2d_array;
+@group(0) @binding(4) var shadow_sampler: sampler_comparison;
+@group(0) @binding(5) var<storage, read> lights: array<Light>;
+@group(0) @binding(6) var<storage, read> light_views: array<mat4x4<f32>>;
+@group(0) @binding(7) var light_maps: texture_depth_2d_array;
+@group(0) @binding(8) var<storage, read> bundle_views: array<BundleView>;
+@group(0) @binding(9) var<storage, read> heads: array<u32>;
+@group(0) @binding(10) var<storage, read> nodes: array<Node>;
+@group(1) @binding(0) var g_position: texture_2d<f32>;
+@group(1) @binding(1) var g_normals: texture_2d<f32>;
+@group(1) @binding(2) var g_diffuse: texture_2d<f32>;
+@group(1) @binding(3) var g_specular: texture_2d<f32>;
+
+const TWO_PI: f32 = 6.28318530718;
+
+@vertex
+fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
+    let uv = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
+    return vec4<f32>(uv * 2.0 - 1.0, 0.0, 1.0);
+}
+
+fn spot(l: Light, cos_t: f32) -> f32 {
+    if l.kind != 1u || cos_t >= l.cos_inner {
+        return 1.0;
+    }
+    if cos_t <= l.cos_outer {
+        return 0.0;
+    }
+    let t = (cos_t - l.cos_outer) / (l.cos_inner - l.cos_outer);
+    return t * t * (3.0 - 2.0 * t);
+}
+
+fn vpl_material(v: Vpl) -> Material {
+    var m: Material;
+    m.diffuse = v.diffuse;
+    m.roughness = v.roughness;
+    m.specular = v.specular;
+    m.fresnel = v.fresnel;
+    return m;
+}
+
+// Visibility of `p` (geometric normal `ng`, towards the VPL) from VPL `v`.
+fn vpl_visibility(v: Vpl, p: vec3<f32>, ng: vec3<f32>) -> f32 {
+    let d = v.position - p;
+    let dist = length(d);
+    let c = dot(d / dist, ng);
+    let q = p + ng * (v.texel_scale * dist * (1.0 - c) + 1e-4 * dist);
+    let layer = shadow_layer_of(v.first_layer, 6u, q - v.position);
+    return shadow_pcf(vpl_maps, shadow_sampler, vpl_views[layer], layer, q);
+}
+
+fn light_visibility(l: Light, p: vec3<f32>, ng: vec3<f32>) -> f32 {
+    let d = l.position - p;
+    let dist = length(d);
+    let c = dot(d / dist, ng);
+    let q = p + ng * (l.texel_scale * dist * (1.0 - c) + 1e-4 * dist);
+    let layer = shadow_layer_of(l.first_layer, l.layers, q - l.position);
+    return shadow_pcf(light_maps, shadow_sampler, light_views[layer], layer, q);
+}
+
+// The light VPL `v` sends from x1 to a point `p` (normals `ns`, `ng`; material `m`, seen
+// from `wo`), visibility included: Φ1·f1·f·|ns·ωp,1|·|ng1·ω1,p|/d².
+fn vpl_light(v: Vpl, p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, wo: vec3<f32>, min_d2: f32) -> vec3<f32> {
+    let to_vpl = v.position - p;
+    let d2 = dot(to_vpl, to_vpl);
+    let wi = to_vpl / sqrt(d2);
+    let cos1 = -dot(wi, v.ng);
+    if dot(wi, ng) <= 0.0 || cos1 <= 0.0 || max3(v.flux) <= 0.0 {
+        return vec3<f32>(0.0);
+    }
+    let f1 = bsdf_eval(vpl_material(v), v.ns, -wi, v.to_light);
+    let f = bsdf_eval(m, ns, wo, wi);
+    let t = v.flux * f1 * f * (abs(dot(ns, wi)) * cos1 / max(d2, min_d2));
+    if max3(t) <= 0.0 {
+        return vec3<f32>(0.0);
+    }
+    return t * vpl_visibility(v, p, ng);
+}
+
+struct Hit {
+    found: bool,
+    t: f32,
+    node: Node,
+}
+
+fn node_position(n: Node) -> vec3<f32> {
+    return vec3<f32>(n.x, n.y, n.z);
+}
+
+// The nearest fragment of bundle `bv` from `p` along `dir` = ±ω: the smallest distance along
+// `dir` beyond `eps`, skipping fragments whose plane passes within `plane_eps` of `p` (p's
+// own surface, and its neighbouring triangles on a finely tessellated curve).
+fn trace_bundle(bv: BundleView, p: vec3<f32>, dir: vec3<f32>, eps: f32, plane_eps: f32) -> Hit {
+    var hit: Hit;
+    hit.found = false;
+    let clip = bv.view_proj * vec4<f32>(p, 1.0);
+    let uv = clip.xy * vec2<f32>(0.5, -0.5) + 0.5;
+    if any(uv < vec2<f32>(0.0)) || any(uv >= vec2<f32>(1.0)) {
+        return hit;
+    }
+    let px = vec2<u32>(uv * f32(bv.res));
+    var best = 3.4e38;
+    var next = heads[bv.index * bv.res * bv.res + px.y * bv.res + px.x];
+    var steps = 0u;
+    while next != 0u && steps < params.max_walk {
+        let n = nodes[next - 1u];
+        let q = node_position(n) - p;
+        let t = dot(q, dir);
+        if t > eps && t < best {
+            let ng = oct_decode(unpack2x16snorm(n.ng));
+            if abs(dot(q, ng)) > plane_eps {
+                best = t;
+                hit.node = n;
+                hit.found = true;
+            }
+        }
+        next = n.next;
+        steps++;
+    }
+    hit.t = best;
+    return hit;
+}
+
+fn node_material(n: Node) -> Material {
+    let a = unpack2x16float(n.m0);
+    let b = unpack2x16float(n.m1);
+    let c = unpack2x16float(n.m2);
+    let d = unpack2x16float(n.m3);
+    var m: Material;
+    m.diffuse = vec3<f32>(a, b.x);
+    m.roughness = b.y;
+    m.specular = vec3<f32>(c, d.x);
+    m.fresnel = u32(d.y > 0.5);
+    return m;
+}
+
+@fragment
+fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
+    let px = vec2<i32>(frag.xy);
+    let pos = textureLoad(g_position, px, 0);
+    if pos.w == 0.0 {
+        return vec4<f32>(0.0);
+    }
+    let p = pos.xyz;
+    let nn = textureLoad(g_normals, px, 0);
+    let ns = oct_decode(nn.xy);
+    let ng = oct_decode(nn.zw);
+    let d = textureLoad(g_diffuse, px, 0);
+    let s = textureLoad(g_specular, px, 0);
+    var m: Material;
+    m.diffuse = d.xyz;
+    m.roughness = d.w;
+    m.specular = s.xyz;
+    m.fresnel = u32(s.w > 0.5);
+    let wo = normalize(params.eye - p);
+    let n1 = f32(params.vpls_per_light);
+    let n2 = f32(params.bundles);
+    var sum = vec3<f32>(0.0);
+
+    // One bounce through the VPLs.
+    if params.mode != 2u {
+        for (var i = 0u; i < params.vpl_count; i++) {
+            let v = vpls[i];
+            var t = vpl_light(v, p, ns, ng, m, wo, 0.0);
+            if max3(t) <= 0.0 {
+                continue;
+            }
+            if params.mode == 0u && params.bundles > 0u {
+                let to_vpl = v.position - p;
+                let d2 = dot(to_vpl, to_vpl);
+                let cos13 = abs(dot(to_vpl, v.ng)) / sqrt(d2);
+                let p1 = n1 * v.pdf;
+                let p2 = n2 * cos13 / (TWO_PI * d2);
+                t *= p1 / (p1 + p2);
+            }
+            sum += t;
+        }
+    }
+
+    // Camera subpaths through the ray bundles.
+    let bundle_one = params.mode != 1u;
+    if params.bundles > 0u && (bundle_one || params.two_bounce != 0u) {
+        for (var b = 0u; b < params.bundles; b++) {
+            let bv = bundle_views[b];
+            let c = dot(ng, bv.dir);
+            if c == 0.0 {
+                continue;
+            }
+            let sgn = select(-1.0, 1.0, c > 0.0);
+            let dir = bv.dir * sgn;
+            let f3 = bsdf_eval(m, ns, wo, dir);
+            if max3(f3) <= 0.0 {
+                continue;
+            }
+            let texel = bv.depth_range / f32(bv.res);
+            // Fragments whose plane passes within a quarter texel of x3 are its own surface
+            // (or, on a tessellated curve, a neighbouring triangle of it; the pixel-centre
+            // samples lie up to 0.71 texels off the ray): skipped, at the cost of hits in the
+            // last quarter texel of a corner.
+            let hit = trace_bundle(bv, p, dir, 0.02 * texel, 0.25 * texel);
+            if !hit.found {
+                continue;
+            }
+            // The fragment's own point (on its surface, up to 0.71 texels off the ray).
+            let x2 = node_position(hit.node);
+            var ns2 = oct_decode(unpack2x16snorm(hit.node.ns));
+            var ng2 = oct_decode(unpack2x16snorm(hit.node.ng));
+            if dot(ng2, dir) > 0.0 {
+                ng2 = -ng2;
+            }
+            if dot(ns2, ng2) < 0.0 {
+                ns2 = -ns2;
+            }
+            let m2 = node_material(hit.node);
+            let throughput = f3 * abs(dot(ns, dir)) * TWO_PI / n2;
+            let cos23 = -dot(ng2, dir);
+            // One bounce: the lights' direct light at x2.
+            if bundle_one {
+                for (var j = 0u; j < arrayLength(&lights); j++) {
+                    let l = lights[j];
+                    let to_l = l.position - x2;
+                    let dl2 = dot(to_l, to_l);
+                    let wl = to_l / sqrt(dl2);
+                    let cos2l = dot(wl, ng2);
+                    if cos2l <= 0.0 {
+                        continue;
+                    }
+                    let falloff = spot(l, dot(-wl, l.direction));
+                    let f2 = bsdf_eval(m2, ns2, -dir, wl);
+                    var t = throughput * f2 * abs(dot(ns2, wl)) * l.intensity * (falloff / dl2);
+                    if max3(t) <= 0.0 {
+                        continue;
+                    }
+                    t *= light_visibility(l, x2, ng2);
+                    if params.mode == 0u && params.vpls_per_light > 0u {
+                        let w = vpls[j * params.vpls_per_light].light_flux;
+                        let i_sum = (l.intensity.x + l.intensity.y + l.intensity.z) * falloff;
+                        var p1 = 0.0;
+                        if w > 0.0 {
+                            p1 = n1 * i_sum * cos2l / (dl2 * w);
+                        }
+                        let d23 = x2 - p;
+                        let p2 = n2 * cos23 / (TWO_PI * dot(d23, d23));
+                        t *= p2 / (p1 + p2);
+                    }
+                    sum += t;
+                }
+            }
+            // Two bounces: one VPL of every light lights x2, bundle b taking VPL
+            // ⌊(b + u)·n1/n2⌋ (the VPLs are in stratified order over the RSM, so every part
+            // of it is paired; each VPL is picked n2/n1 times in expectation).
+            if params.two_bounce != 0u && params.vpls_per_light > 0u {
+                let k = min(u32((f32(b) + params.pair_offset) * n1 / n2), params.vpls_per_light - 1u);
+                for (var j = 0u; j * params.vpls_per_light < params.vpl_count; j++) {
+                    let v = vpls[j * params.vpls_per_light + k];
+                    let t = vpl_light(v, x2, ns2, ng2, m2, -dir, params.min_dist2);
+                    sum += throughput * t * n1;
+                }
+            }
+        }
+    }
+    return vec4<f32>(sum, 1.0);
+}
