@@ -371,7 +371,7 @@ fn vpl_records(scene: &Scene, vpls: &[Vpl], per_light: u32, size: u32) -> (Vec<V
             ns: t.ns.into(),
             light_flux: v.light_flux,
             ng: t.ng.into(),
-            _pad: 0.0,
+            light_dist2: d2,
         };
     }
     for (slot, r) in raws.iter_mut().enumerate() {
@@ -547,7 +547,7 @@ pub(super) fn frame(
         min_dist2: min_dist * min_dist,
         max_walk: MAX_WALK,
         pair_offset: Rng::new(settings.seed, 0xfa17, 0).next_f32(),
-        _pad: 0,
+        clamp_roughness: settings.roughness_clamping as u32,
     };
     gpu::write_buffer(
         q,

@@ -27,7 +27,8 @@ pub struct VplRaw {
     /// Covered flux W of the VPL's light (sum of channels).
     pub light_flux: f32,
     pub ng: [f32; 3],
-    pub _pad: f32,
+    /// Squared distance from the VPL to its light.
+    pub light_dist2: f32,
 }
 
 /// `Params` of `bidir.wgsl`.
@@ -45,7 +46,8 @@ pub struct BidirParamsRaw {
     pub max_walk: u32,
     /// Random offset in [0, 1) of the two-bounce term's bundle-to-VPL pairing.
     pub pair_offset: f32,
-    pub _pad: u32,
+    /// Roughness clamping (§5): 1 on, 0 off.
+    pub clamp_roughness: u32,
 }
 
 /// Extra field of view of a VPL's cube faces, in shadow texels on each side (as the lights').

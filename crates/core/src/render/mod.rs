@@ -221,6 +221,9 @@ pub struct Settings {
     pub bundle_memory_mb: u32,
     /// Strategies of `bidir`'s one-bounce light.
     pub bidir_strategy: BidirStrategy,
+    /// Roughness clamping of glossy BSDFs at `bidir`'s path vertices (Tokuyoshi & Ogaki
+    /// 2012 §5): the GGX α is raised where the samples are too sparse for its peak.
+    pub roughness_clamping: bool,
 }
 
 impl Default for Settings {
@@ -260,6 +263,7 @@ impl Default for Settings {
             bundle_resolution: 128,
             bundle_memory_mb: 64,
             bidir_strategy: BidirStrategy::Mis,
+            roughness_clamping: true,
         }
     }
 }

@@ -11,6 +11,11 @@
 //   covered flux, VPLs drawn ∝ flux), bundles p2 = n2·p_r·|ng_j·ω_j,3| / ‖x_j − x3‖²;
 // - two bounces x0 → x1 → x2 → x3 (§4.3): each bundle paired with one VPL of every light,
 //   the VPL's shadow map testing (x1, x2), ‖x1 − x2‖² clamped from below.
+// - roughness clamping (§5): the GGX α of the BSDF at a path vertex is raised so that the
+//   distribution's peak D(0) = 1/(πα²) stays under d̂/m (kernel radius estimation, eq. 9),
+//   with d̂ the density of samples per unit solid angle there (eqs. 13–17, from the area
+//   density A = n1·p1 + n2·p2 of the middle vertex: d = A·dist²/cos towards either end)
+//   and m = 16 (the paper's m').
 // `mode`: 0 MIS, 1 VPLs only, 2 bundles only (for the one-bounce light).
 
 struct Vpl {
@@ -31,7 +36,8 @@ struct Vpl {
     // The covered flux W (sum of channels) of the VPL's light.
     light_flux: f32,
     ng: vec3<f32>,
-    _pad: f32,
+    // Squared distance from the VPL to its light.
+    light_dist2: f32,
 }
 
 struct Params {
@@ -48,7 +54,8 @@ struct Params {
     max_walk: u32,
     // Random offset in [0, 1) of the bundle-to-VPL pairing of the two-bounce term.
     pair_offset: f32,
-    _pad: u32,
+    // Roughness clamping (§5) on (1) or off (0).
+    clamp_roughness: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
@@ -116,7 +123,7 @@ fn light_visibility(l: Light, p: vec3<f32>, ng: vec3<f32>) -> f32 {
 
 // The light VPL `v` sends from x1 to a point `p` (normals `ns`, `ng`; material `m`, seen
 // from `wo`), visibility included: Φ1·f1·f·|ns·ωp,1|·|ng1·ω1,p|/d².
-fn vpl_light(v: Vpl, p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, wo: vec3<f32>, min_d2: f32) -> vec3<f32> {
+fn vpl_light(v: Vpl, m1: Material, p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, wo: vec3<f32>, min_d2: f32) -> vec3<f32> {
     let to_vpl = v.position - p;
     let d2 = dot(to_vpl, to_vpl);
     let wi = to_vpl / sqrt(d2);
@@ -124,13 +131,36 @@ fn vpl_light(v: Vpl, p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, wo
     if dot(wi, ng) <= 0.0 || cos1 <= 0.0 || max3(v.flux) <= 0.0 {
         return vec3<f32>(0.0);
     }
-    let f1 = bsdf_eval(vpl_material(v), v.ns, -wi, v.to_light);
+    let f1 = bsdf_eval(m1, v.ns, -wi, v.to_light);
     let f = bsdf_eval(m, ns, wo, wi);
     let t = v.flux * f1 * f * (abs(dot(ns, wi)) * cos1 / max(d2, min_d2));
     if max3(t) <= 0.0 {
         return vec3<f32>(0.0);
     }
     return t * vpl_visibility(v, p, ng);
+}
+
+// §5: the material with its GGX α raised to √(m/(π·d̂)) (no change when off), where
+// m = m'·f·cos/D with m' = 16: for the GGX lobe f·cos θi/D = F·G2/(4 cos θo), taken with
+// G2 ≈ 1 and the mean Fresnel reflectance; `cos_o`: the cosine on the side the light leaves.
+fn clamped(m_in: Material, dhat: f32, cos_o: f32) -> Material {
+    var m = m_in;
+    if params.clamp_roughness == 0u || max3(m.specular) <= 0.0 || !(dhat > 0.0) {
+        return m;
+    }
+    let weight = 16.0 * avg3(fresnel_avg(m)) / (4.0 * max(abs(cos_o), 0.05));
+    let alpha_min = sqrt(weight / (PI * dhat));
+    m.roughness = max(m.roughness, sqrt(min(alpha_min, 1.0)));
+    return m;
+}
+
+// d̂ of eq. 13 from the two solid-angle densities.
+fn avg3(v: vec3<f32>) -> f32 {
+    return (v.x + v.y + v.z) / 3.0;
+}
+
+fn combine(d_a: f32, d_b: f32) -> f32 {
+    return 1.0 / (1.0 / d_a + 1.0 / d_b);
 }
 
 struct Hit {
@@ -217,16 +247,21 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
     if params.mode != 2u {
         for (var i = 0u; i < params.vpl_count; i++) {
             let v = vpls[i];
-            var t = vpl_light(v, p, ns, ng, m, wo, 0.0);
+            let to_vpl = v.position - p;
+            let d2 = dot(to_vpl, to_vpl);
+            let cos13 = abs(dot(to_vpl, v.ng)) / sqrt(d2);
+            // Area densities of x1: drawn as a VPL, and as a bundle hit from x3.
+            let p1 = n1 * v.pdf;
+            let p2 = n2 * cos13 / (TWO_PI * d2);
+            let area = p1 + select(p2, 0.0, params.mode == 1u);
+            let d13 = area * d2 / max(cos13, 1e-6);
+            let d10 = area * v.light_dist2 / max(abs(dot(v.ng, v.to_light)), 1e-6);
+            let m1 = clamped(vpl_material(v), combine(d10, d13), cos13);
+            var t = vpl_light(v, m1, p, ns, ng, clamped(m, d13, dot(ns, wo)), wo, 0.0);
             if max3(t) <= 0.0 {
                 continue;
             }
             if params.mode == 0u && params.bundles > 0u {
-                let to_vpl = v.position - p;
-                let d2 = dot(to_vpl, to_vpl);
-                let cos13 = abs(dot(to_vpl, v.ng)) / sqrt(d2);
-                let p1 = n1 * v.pdf;
-                let p2 = n2 * cos13 / (TWO_PI * d2);
                 t *= p1 / (p1 + p2);
             }
             sum += t;
@@ -244,8 +279,7 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
             }
             let sgn = select(-1.0, 1.0, c > 0.0);
             let dir = bv.dir * sgn;
-            let f3 = bsdf_eval(m, ns, wo, dir);
-            if max3(f3) <= 0.0 {
+            if max3(bsdf_eval(m, ns, wo, dir)) <= 0.0 {
                 continue;
             }
             let texel = bv.depth_range / f32(bv.res);
@@ -268,8 +302,11 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
                 ns2 = -ns2;
             }
             let m2 = node_material(hit.node);
-            let throughput = f3 * abs(dot(ns, dir)) * TWO_PI / n2;
+            // Per bundle sample: |n3·ω|/p_r / n2, times f3 (clamped per path below).
+            let weight = abs(dot(ns, dir)) * TWO_PI / n2;
             let cos23 = -dot(ng2, dir);
+            let d23 = x2 - p;
+            let d23_2 = dot(d23, d23);
             // One bounce: the lights' direct light at x2.
             if bundle_one {
                 for (var j = 0u; j < arrayLength(&lights); j++) {
@@ -282,21 +319,25 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
                         continue;
                     }
                     let falloff = spot(l, dot(-wl, l.direction));
-                    let f2 = bsdf_eval(m2, ns2, -dir, wl);
-                    var t = throughput * f2 * abs(dot(ns2, wl)) * l.intensity * (falloff / dl2);
+                    // Area densities of x2: drawn as a VPL of light j, and as this hit.
+                    let w = vpls[j * params.vpls_per_light].light_flux;
+                    let i_sum = (l.intensity.x + l.intensity.y + l.intensity.z) * falloff;
+                    var p1 = 0.0;
+                    if w > 0.0 && params.mode != 2u {
+                        p1 = n1 * i_sum * cos2l / (dl2 * w);
+                    }
+                    let p2 = n2 * max(cos23, 0.0) / (TWO_PI * d23_2);
+                    let d23s = (p1 + p2) * d23_2 / max(cos23, 1e-6);
+                    let d20 = (p1 + p2) * dl2 / cos2l;
+                    let f3 = bsdf_eval(clamped(m, d23s, dot(ns, wo)), ns, wo, dir);
+                    let m2c = clamped(m2, combine(d20, d23s), cos23);
+                    let f2 = bsdf_eval(m2c, ns2, -dir, wl);
+                    var t = f3 * weight * f2 * abs(dot(ns2, wl)) * l.intensity * (falloff / dl2);
                     if max3(t) <= 0.0 {
                         continue;
                     }
                     t *= light_visibility(l, x2, ng2);
-                    if params.mode == 0u && params.vpls_per_light > 0u {
-                        let w = vpls[j * params.vpls_per_light].light_flux;
-                        let i_sum = (l.intensity.x + l.intensity.y + l.intensity.z) * falloff;
-                        var p1 = 0.0;
-                        if w > 0.0 {
-                            p1 = n1 * i_sum * cos2l / (dl2 * w);
-                        }
-                        let d23 = x2 - p;
-                        let p2 = n2 * cos23 / (TWO_PI * dot(d23, d23));
+                    if params.mode == 0u {
                         t *= p2 / (p1 + p2);
                     }
                     sum += t;
@@ -307,10 +348,12 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
             // of it is paired; each VPL is picked n2/n1 times in expectation).
             if params.two_bounce != 0u && params.vpls_per_light > 0u {
                 let k = min(u32((f32(b) + params.pair_offset) * n1 / n2), params.vpls_per_light - 1u);
+                // d̂ at x3 of eq. 14: the bundles' density n2·p_r.
+                let f3 = bsdf_eval(clamped(m, n2 / TWO_PI, dot(ns, wo)), ns, wo, dir);
                 for (var j = 0u; j * params.vpls_per_light < params.vpl_count; j++) {
                     let v = vpls[j * params.vpls_per_light + k];
-                    let t = vpl_light(v, x2, ns2, ng2, m2, -dir, params.min_dist2);
-                    sum += throughput * t * n1;
+                    let t = vpl_light(v, vpl_material(v), x2, ns2, ng2, m2, -dir, params.min_dist2);
+                    sum += f3 * weight * t * n1;
                 }
             }
         }
