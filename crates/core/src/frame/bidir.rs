@@ -25,7 +25,7 @@ use crate::raster::vpl::{cube_views, BidirParamsRaw, BidirPasses, VplRaw};
 use crate::raster::{buffer_init, shadow, Passes, VIEW_SIZE};
 use crate::render::{BidirStrategy, Progress, RenderOutput, RenderStats, Settings};
 use crate::sampling::Rng;
-use crate::scene::Scene;
+use crate::scene::{Environment, Scene};
 use bytemuck::Zeroable;
 use glam::{Mat4, Vec3};
 use std::time::Instant;
@@ -105,6 +105,7 @@ impl BidirState {
         capacity: u32,
         vpl_size: u32,
         bundle_key: (u32, u32, u32),
+        env: Option<&Environment>,
     ) -> Result<Self> {
         let passes = Passes::get(ctx);
         let bp = BidirPasses::get(ctx);
@@ -152,6 +153,7 @@ impl BidirState {
             mb as u64 * (1 << 20),
         )?;
         let (light_views, light_maps) = g.scene.shadow_lookup();
+        let env_table = env_table(ctx, env);
         let matrices = buffer_init(
             ctx,
             "vpl shadow matrices",
@@ -259,6 +261,12 @@ impl BidirState {
                         binding: 10,
                         resource: bundles.nodes.as_entire_binding(),
                     },
+                    wgpu::BindGroupEntry {
+                        binding: 11,
+                        resource: wgpu::BindingResource::TextureView(
+                            &env_table.create_view(&Default::default()),
+                        ),
+                    },
                 ],
             },
         );
@@ -313,6 +321,47 @@ impl BidirState {
             && self.layers.len() == layers.len()
             && self.rsm.as_ref().is_none_or(|r| r.fits(layers))
     }
+}
+
+/// The environment's radiance table as an `Rgba32Float` texture (1×1 black without one).
+fn env_table(ctx: &GpuContext, env: Option<&Environment>) -> wgpu::Texture {
+    let (w, h, texels) = match env {
+        Some(e) => {
+            let (w, h, t, _) = e.gpu_table();
+            (w, h, t)
+        }
+        None => (1, 1, vec![Vec3::ZERO]),
+    };
+    let data: Vec<[f32; 4]> = texels.iter().map(|t| t.extend(1.0).to_array()).collect();
+    let texture = gpu::create_texture(
+        &ctx.device,
+        &wgpu::TextureDescriptor {
+            label: Some("environment table"),
+            size: wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba32Float,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            view_formats: &[],
+        },
+    );
+    crate::gpu::alloc::note_upload("environment table", data.len() as u64 * 16);
+    ctx.queue.write_texture(
+        texture.as_image_copy(),
+        bytemuck::cast_slice(&data),
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(w * 16),
+            rows_per_image: Some(h),
+        },
+        texture.size(),
+    );
+    texture
 }
 
 /// The RSM layers: the bounce-map views with `rsm_size`² texels per view for a light of
@@ -435,6 +484,12 @@ pub(super) fn frame(
     images: Images,
     progress: &dyn Progress,
 ) -> Result<RenderOutput> {
+    if scene.environment.is_some() && settings.bundles == 0 {
+        return Err(Error::setting(
+            "bundles",
+            "the environment light reaches `bidir` through its ray bundles: use bundles > 0",
+        ));
+    }
     let ctx = g.ctx.clone();
     let passes = Passes::get(&ctx);
     let bp = BidirPasses::get(&ctx);
@@ -454,7 +509,8 @@ pub(super) fn frame(
         .is_some_and(|b| b.fits(&layers, capacity, size, bundle_key))
     {
         g.bidir = None;
-        let state = BidirState::new(&ctx, g, layers.clone(), capacity, size, bundle_key)?;
+        let env = scene.environment.as_deref();
+        let state = BidirState::new(&ctx, g, layers.clone(), capacity, size, bundle_key, env)?;
         let view = state.indirect.create_view(&Default::default());
         g.targets.bind_composite(&ctx, Some(&view));
         g.bidir = Some(state);
@@ -533,6 +589,10 @@ pub(super) fn frame(
     }
     let (lo, hi) = shadow::bounds(scene);
     let min_dist = TWO_BOUNCE_MIN_DIST * (hi - lo).length();
+    let env_rot = scene
+        .environment
+        .as_ref()
+        .map_or((1.0, 0.0), |e| e.rotation());
     let params = BidirParamsRaw {
         eye: scene.camera.position.into(),
         vpl_count: raws.len() as u32,
@@ -548,6 +608,15 @@ pub(super) fn frame(
         max_walk: MAX_WALK,
         pair_offset: Rng::new(settings.seed, 0xfa17, 0).next_f32(),
         clamp_roughness: settings.roughness_clamping as u32,
+        inv_view_proj: glam::Mat4::from_cols_array_2d(
+            &crate::raster::camera_view(scene, glam::Vec2::splat(0.5), 0.0).view_proj,
+        )
+        .inverse()
+        .to_cols_array_2d(),
+        has_env: scene.environment.is_some() as u32,
+        env_cos: env_rot.0,
+        env_sin: env_rot.1,
+        _pad: 0,
     };
     gpu::write_buffer(
         q,

@@ -82,10 +82,14 @@ pub struct Renderer {
     accum: Option<progressive::Accumulation>,
 }
 
-/// Only `path` lights a scene with its environment light so far; the other methods refuse
-/// rather than render the scene without it.
+/// Only `path` and `bidir` light a scene with its environment light so far; the other
+/// methods refuse rather than render the scene without it.
 fn check_environment(scene: &Scene, method: Method) -> Result<()> {
     if scene.environment.is_none() || method == Method::Path {
+        return Ok(());
+    }
+    if method == Method::Bidir {
+        // Seen through the ray bundles (§6); without bundles it would be missing.
         return Ok(());
     }
     let how = match method {

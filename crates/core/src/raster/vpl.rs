@@ -48,6 +48,13 @@ pub struct BidirParamsRaw {
     pub pair_offset: f32,
     /// Roughness clamping (§5): 1 on, 0 off.
     pub clamp_roughness: u32,
+    /// Camera clip -> world.
+    pub inv_view_proj: [[f32; 4]; 4],
+    /// 1 when the scene has an environment light; (cos, sin) of its rotation.
+    pub has_env: u32,
+    pub env_cos: f32,
+    pub env_sin: f32,
+    pub _pad: u32,
 }
 
 /// Extra field of view of a VPL's cube faces, in shadow texels on each side (as the lights').
@@ -73,7 +80,8 @@ pub fn cube_views(p: Vec3, lo: Vec3, hi: Vec3, size: u32) -> ([Mat4; 6], f32) {
 pub struct VplPass {
     pub pipeline: wgpu::RenderPipeline,
     /// Group 0: params (uniform), VPLs, their shadow matrices and maps, comparison sampler,
-    /// lights, their shadow matrices and maps, bundle views, heads, nodes.
+    /// lights, their shadow matrices and maps, bundle views, heads, nodes, the environment's
+    /// radiance table.
     pub layout: wgpu::BindGroupLayout,
 }
 
@@ -122,6 +130,16 @@ impl VplPass {
                 super::storage_entry(8, frag),
                 super::storage_entry(9, frag),
                 super::storage_entry(10, frag),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 11,
+                    visibility: frag,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
             ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {

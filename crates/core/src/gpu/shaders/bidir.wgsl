@@ -16,6 +16,9 @@
 //   with d̂ the density of samples per unit solid angle there (eqs. 13–17, from the area
 //   density A = n1·p1 + n2·p2 of the middle vertex: d = A·dist²/cos towards either end)
 //   and m = 16 (the paper's m').
+// - environment light (§6): a bundle direction with no fragment along it sees the
+//   environment: f3·|n3·ω|·L_env(ω)/p_r (its direct light; its indirect light is not
+//   traced).
 // `mode`: 0 MIS, 1 VPLs only, 2 bundles only (for the one-bounce light).
 
 struct Vpl {
@@ -56,6 +59,13 @@ struct Params {
     pair_offset: f32,
     // Roughness clamping (§5) on (1) or off (0).
     clamp_roughness: u32,
+    // Camera clip -> world (for the environment behind pixels the scene does not cover).
+    inv_view_proj: mat4x4<f32>,
+    // Environment light: 1 when the scene has one; (cos, sin) of its rotation about +y.
+    has_env: u32,
+    env_cos: f32,
+    env_sin: f32,
+    _pad: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
@@ -69,6 +79,8 @@ struct Params {
 @group(0) @binding(8) var<storage, read> bundle_views: array<BundleView>;
 @group(0) @binding(9) var<storage, read> heads: array<u32>;
 @group(0) @binding(10) var<storage, read> nodes: array<Node>;
+// Radiance table of the environment (equirectangular; 1×1 for a constant colour).
+@group(0) @binding(11) var env_table: texture_2d<f32>;
 @group(1) @binding(0) var g_position: texture_2d<f32>;
 @group(1) @binding(1) var g_normals: texture_2d<f32>;
 @group(1) @binding(2) var g_diffuse: texture_2d<f32>;
@@ -163,6 +175,21 @@ fn combine(d_a: f32, d_b: f32) -> f32 {
     return 1.0 / (1.0 / d_a + 1.0 / d_b);
 }
 
+// Radiance of the environment from world direction `d` (`Environment::radiance`).
+fn env_radiance(d: vec3<f32>) -> vec3<f32> {
+    let c = params.env_cos;
+    let s = params.env_sin;
+    let l = vec3<f32>(c * d.x - s * d.z, d.y, s * d.x + c * d.z);
+    let sin_t = sqrt(l.x * l.x + l.z * l.z);
+    var u = atan2(l.x, -l.z) / TWO_PI;
+    u = u - floor(u);
+    let v = atan2(sin_t, l.y) / PI;
+    let size = textureDimensions(env_table);
+    let x = min(u32(u * f32(size.x)), size.x - 1u);
+    let y = min(u32(v * f32(size.y)), size.y - 1u);
+    return textureLoad(env_table, vec2<u32>(x, y), 0).xyz;
+}
+
 struct Hit {
     found: bool,
     t: f32,
@@ -225,7 +252,14 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
     let px = vec2<i32>(frag.xy);
     let pos = textureLoad(g_position, px, 0);
     if pos.w == 0.0 {
-        return vec4<f32>(0.0);
+        if params.has_env == 0u {
+            return vec4<f32>(0.0);
+        }
+        // The environment seen through the pixel centre.
+        let size = vec2<f32>(textureDimensions(g_position));
+        let ndc = vec2<f32>(frag.x / size.x * 2.0 - 1.0, 1.0 - frag.y / size.y * 2.0);
+        let w = params.inv_view_proj * vec4<f32>(ndc, 1.0, 1.0);
+        return vec4<f32>(env_radiance(normalize(w.xyz / w.w - params.eye)), 1.0);
     }
     let p = pos.xyz;
     let nn = textureLoad(g_normals, px, 0);
@@ -270,7 +304,7 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
 
     // Camera subpaths through the ray bundles.
     let bundle_one = params.mode != 1u;
-    if params.bundles > 0u && (bundle_one || params.two_bounce != 0u) {
+    if params.bundles > 0u && (bundle_one || params.two_bounce != 0u || params.has_env != 0u) {
         for (var b = 0u; b < params.bundles; b++) {
             let bv = bundle_views[b];
             let c = dot(ng, bv.dir);
@@ -289,6 +323,11 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
             // last quarter texel of a corner.
             let hit = trace_bundle(bv, p, dir, 0.02 * texel, 0.25 * texel);
             if !hit.found {
+                // §6: nothing along ±ω, the environment is seen (the only strategy for it).
+                if params.has_env != 0u {
+                    let f3 = bsdf_eval(clamped(m, n2 / TWO_PI, dot(ns, wo)), ns, wo, dir);
+                    sum += f3 * env_radiance(dir) * (abs(dot(ns, dir)) * TWO_PI / n2);
+                }
                 continue;
             }
             // The fragment's own point (on its surface, up to 0.71 texels off the ray).
