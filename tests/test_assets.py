@@ -211,6 +211,11 @@ def write_gltf(tmp_path, name, materials, extra_attrs=None):
         accessors.append({"bufferView": 2, "componentType": 5126, "count": len(v), "type": "VEC4"})
         attrs["COLOR_0"] = 2
         blob += colours.tobytes()
+        tangents = np.tile(np.float32([1, 0, 0, 1]), (len(v), 1))
+        views.append({"buffer": 0, "byteOffset": len(blob), "byteLength": tangents.nbytes})
+        accessors.append({"bufferView": 3, "componentType": 5126, "count": len(v), "type": "VEC4"})
+        attrs["TANGENT"] = 3
+        blob += tangents.tobytes()
     uri = "data:application/octet-stream;base64," + base64.b64encode(blob).decode()
     doc = {
         "asset": {"version": "2.0"},
@@ -278,7 +283,9 @@ def test_unrendered_features_warn_once_naming_file_and_field(tmp_path):
             "materials[0].pbrMetallicRoughness.baseColorTexture",
             "materials[1].emissiveFactor",
             "meshes[0].primitives[0].attributes.COLOR_0",
+            "meshes[0].primitives[0].attributes.TANGENT",
             "meshes[1].primitives[0].attributes.COLOR_0",
+            "meshes[1].primitives[0].attributes.TANGENT",
         ]
     )
     assert all(w.message.file == str(path) for w in record)

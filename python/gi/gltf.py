@@ -451,6 +451,11 @@ def load_gltf(path: Path, textures: TextureSet | None = None) -> GltfMesh:
                 uvs.append(np.zeros((len(p), 2)))
             if prim.get("targets"):
                 warn[f"{where}.targets"] = "morph targets are ignored (the base shape is used)"
+            if "TANGENT" in attrs:
+                warn[f"{where}.attributes.TANGENT"] = (
+                    "stored tangents are ignored: normal maps use each triangle's tangent "
+                    "frame from its UVs (MikkTSpace-baked maps may shade slightly differently)"
+                )
             for a in attrs:
                 if a.startswith("COLOR_"):
                     warn[f"{where}.attributes.{a}"] = "vertex colours are not supported"

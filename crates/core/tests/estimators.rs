@@ -203,6 +203,22 @@ fn lists_regrow_when_the_estimate_is_short() {
         let d = max_difference(&short.radiance, &volumes.radiance, scale);
         assert!(d < 1e-4, "{e}: {d}");
     }
+    // The cluster walk's job lists alone too short: jobs beyond them are lost to the walk,
+    // so the frame must notice, grow them and walk again.
+    let normal = run(&sc, &s, Estimator::Cluster);
+    std::env::set_var(gi_core::estimate::binned::JOB_ESTIMATE_ENV, "0.001");
+    let short = run(&sc, &s, Estimator::Cluster);
+    std::env::remove_var(gi_core::estimate::binned::JOB_ESTIMATE_ENV);
+    assert!(
+        short
+            .stats
+            .stages
+            .iter()
+            .any(|(n, _)| n == "photon lists regrown"),
+        "short job lists did not overflow"
+    );
+    assert_eq!(short.stats.list_entries, normal.stats.list_entries);
+    assert_eq!(short.radiance.pixels, normal.radiance.pixels);
 }
 
 /// The compute estimators build their lists with atomics, in an order that varies between
@@ -242,15 +258,17 @@ fn estimator_setting_parses_and_auto_reports_its_choice() {
 /// The directional approximation against the exact cluster estimate (the same photons and
 /// hierarchy). Its irradiance is constant per node and it sees 8 mean directions, so it is
 /// close, not equal. Measured at 256² (subsample 2, 100k photons): the Cornell box PSNR
-/// 25.7 dB, SSIM 0.767, mean +2.0% (diffuse walls: the approximation everywhere, blocky at
-/// 16-pixel leaves); the spot-lit glossy scene 46.5 dB, 0.988, mean −0.2% (its glossy
-/// clusters are summed exactly). Bounds: 23 dB / 0.72 and 40 dB / 0.95, means within 5%.
-/// Smaller sizes make the leaves coarse relative to the image (128²: 18 dB), larger ones
-/// better (512²: 29.3 dB, 0.875). A lost octant, a wrong weight or double-counted
-/// ancestors fail them (the first version, weighting by octant centres, lost 19%).
+/// 28.7 dB, SSIM 0.807, mean +1.8% (diffuse walls: the approximation everywhere, blocky at
+/// 16-pixel leaves; 25.7 dB / 0.767 before the leaves were split by normal); the spot-lit
+/// glossy scene 49.9 dB, 0.993, mean +0.1% (its glossy clusters are summed exactly).
+/// Bounds: 26 dB / 0.77 and 45 dB / 0.98, means within 5% (about 3 dB and a third of the
+/// SSIM gap to 1 below the measurements, which are deterministic for the seed: the margin
+/// leaves room for changes to the photon kernels, not for a broken approximation).
+/// A lost octant, a wrong weight or double-counted ancestors fail them (the first version,
+/// weighting by octant centres, lost 19%).
 #[test]
 fn directional_is_close_to_cluster() {
-    for (name, min_psnr, min_ssim) in [("cornell", 23.0, 0.72), ("spot-glossy", 40.0, 0.95)] {
+    for (name, min_psnr, min_ssim) in [("cornell", 26.0, 0.77), ("spot-glossy", 45.0, 0.98)] {
         let sc = scene(name);
         let s = Settings {
             photons: 100_000,

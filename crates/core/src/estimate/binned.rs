@@ -6,7 +6,7 @@
 //!   photons are binned to screen tiles (counting, prefix sum, list build; each tile bounded
 //!   by the world-space box of its view samples) and every view sample sums its tile's list.
 //! - [`Mode::Cluster`] (Moreau et al. 2016 section 4): the view samples of each tile are
-//!   split into depth clusters, a 3-level hierarchy of boxes and normal cones is built over
+//!   split into clusters by depth and normal, a 3-level hierarchy of boxes and normal cones is built over
 //!   them, each photon walks it top-down (rejecting by bounds and cone, *trivially accepting*
 //!   nodes wholly inside its kernel), and accepted photons are summed per node exactly as a
 //!   quadratic in the sample position, so a sample pays for the photons that only overlap
@@ -46,9 +46,25 @@ const HIERARCHY_ENTRIES_PER_TILE: u64 = 2;
 /// Environment variable scaling the first list estimate (default 1): small values force the
 /// overflow-regrow-redo path, which tests exercise with it.
 pub const LIST_ESTIMATE_ENV: &str = "GI_LIST_ESTIMATE";
+/// The same for the cluster walk's job lists alone.
+pub const JOB_ESTIMATE_ENV: &str = "GI_JOB_ESTIMATE";
 
+/// A test knob: the positive number in environment variable `name`, else 1.
+fn estimate_scale(name: &str) -> f64 {
+    std::env::var(name)
+        .ok()
+        .and_then(|v| v.parse::<f64>().ok())
+        .filter(|v| v.is_finite() && *v > 0.0)
+        .unwrap_or(1.0)
+}
+
+/// Words of `counts` after the lists' counts: their total, the two job counts, a spare,
+/// and the two job passes' (x, y, z) dispatch arguments (cluster.wgsl).
+const COUNTS_TAIL: u64 = 10;
+/// Smallest capacity of each job list.
+const MIN_JOBS: u32 = 64;
 /// Leaf clusters per tile (`CLUSTERS_PER_TILE` of cluster.wgsl).
-const CLUSTERS_PER_TILE: u32 = 4;
+const CLUSTERS_PER_TILE: u32 = 8;
 /// Children per side of a hierarchy node (`FANOUT`).
 const FANOUT: u32 = 4;
 /// vec4s of a node's quadratic or octant buckets, and its centroid (`COEFFS`).
@@ -81,7 +97,8 @@ struct TiledParamsRaw {
     level_first: [u32; 4],
     nodes: u32,
     slots: u32,
-    _pad: [u32; 2],
+    jobs: u32,
+    _pad: u32,
 }
 
 /// The binding layout shared by both modes, and each mode's pipelines, compiled on first
@@ -105,9 +122,15 @@ struct ClusterPipelines {
     leaves: wgpu::ComputePipeline,
     parents1: wgpu::ComputePipeline,
     parents2: wgpu::ComputePipeline,
-    count: wgpu::ComputePipeline,
+    top_count: wgpu::ComputePipeline,
+    jobs0: wgpu::ComputePipeline,
+    mid_count: wgpu::ComputePipeline,
+    jobs1: wgpu::ComputePipeline,
+    low_count: wgpu::ComputePipeline,
     scan: wgpu::ComputePipeline,
-    fill: wgpu::ComputePipeline,
+    top_fill: wgpu::ComputePipeline,
+    mid_fill: wgpu::ComputePipeline,
+    low_fill: wgpu::ComputePipeline,
     accumulate: wgpu::ComputePipeline,
     shade: wgpu::ComputePipeline,
     directional_accumulate: wgpu::ComputePipeline,
@@ -180,6 +203,7 @@ impl BinnedPasses {
                 entry(13, storage()),
                 entry(14, storage()),
                 entry(15, float),
+                entry(16, storage()),
             ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -248,9 +272,15 @@ impl BinnedPasses {
                 leaves,
                 parents1,
                 parents2,
-                count,
+                top_count,
+                jobs0,
+                mid_count,
+                jobs1,
+                low_count,
                 scan,
-                fill,
+                top_fill,
+                mid_fill,
+                low_fill,
                 accumulate,
                 shade,
                 directional_accumulate,
@@ -271,9 +301,15 @@ impl BinnedPasses {
                         "cluster_leaves",
                         "cluster_parents1",
                         "cluster_parents2",
-                        "cluster_count",
+                        "cluster_top_count",
+                        "cluster_jobs0",
+                        "cluster_mid_count",
+                        "cluster_jobs1",
+                        "cluster_low_count",
                         "scan",
-                        "cluster_fill",
+                        "cluster_top_fill",
+                        "cluster_mid_fill",
+                        "cluster_low_fill",
                         "cluster_accumulate",
                         "cluster_shade",
                         "directional_accumulate",
@@ -284,9 +320,15 @@ impl BinnedPasses {
                 leaves,
                 parents1,
                 parents2,
-                count,
+                top_count,
+                jobs0,
+                mid_count,
+                jobs1,
+                low_count,
                 scan,
-                fill,
+                top_fill,
+                mid_fill,
+                low_fill,
                 accumulate,
                 shade,
                 directional_accumulate,
@@ -303,6 +345,8 @@ struct Capacity {
     photons: u32,
     /// List entries (a multiple of `LIST_ROW`).
     entries: u32,
+    /// Jobs of each of the cluster walk's two job lists.
+    jobs: u32,
 }
 
 pub struct Binned {
@@ -327,6 +371,8 @@ pub struct Binned {
     cursor: wgpu::Buffer,
     list: wgpu::Buffer,
     list_texels: wgpu::Texture,
+    jobs: wgpu::Buffer,
+    job_args: wgpu::Buffer,
     total: wgpu::Buffer,
     group: wgpu::BindGroup,
     capacity: Capacity,
@@ -400,9 +446,11 @@ impl Binned {
         let capacity = Capacity {
             photons: PHOTON_ROW,
             entries: LIST_ROW,
+            jobs: if mode == Mode::Tiled { 0 } else { MIN_JOBS },
         };
         let photons = Self::photon_texture(ctx, capacity.photons);
         let (list, list_texels) = Self::lists(ctx, capacity.entries);
+        let jobs = Self::job_lists(ctx, capacity.jobs);
         let params = buffer_init(
             ctx,
             "tiled params",
@@ -441,11 +489,21 @@ impl Binned {
             rw,
         );
         let slots64 = slots as u64;
+        // The lists' counts, their total, the job counts and the job passes' indirect
+        // dispatch arguments (cluster.wgsl).
         let counts = buffer(
             ctx,
             "list counts",
-            (slots64 + 1) * 4,
+            (slots64 + COUNTS_TAIL) * 4,
             rw | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
+        );
+        // The job passes' dispatch arguments, copied out of `counts` (a buffer cannot be
+        // bound for writing and read as indirect arguments by the same dispatch).
+        let job_args = buffer(
+            ctx,
+            "cluster job dispatch",
+            24,
+            wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
         );
         let offsets = buffer(
             ctx,
@@ -457,7 +515,7 @@ impl Binned {
         let total = buffer(
             ctx,
             "list total",
-            8,
+            16,
             wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
         );
         let group = Self::bind_group(
@@ -473,6 +531,7 @@ impl Binned {
                 &list,
                 &coeffs,
                 &cluster_of,
+                &jobs,
             ],
             [&photons, &list_texels, &node_texels],
         );
@@ -496,6 +555,8 @@ impl Binned {
             cursor,
             list,
             list_texels,
+            jobs,
+            job_args,
             total,
             group,
             capacity,
@@ -541,17 +602,27 @@ impl Binned {
         (list, list_texels)
     }
 
+    /// The two job lists of the cluster walk, `jobs` (photon, node) pairs each.
+    fn job_lists(ctx: &GpuContext, jobs: u32) -> wgpu::Buffer {
+        buffer(
+            ctx,
+            "cluster job lists",
+            2 * jobs as u64 * 8,
+            wgpu::BufferUsages::STORAGE,
+        )
+    }
+
     fn bind_group(
         ctx: &GpuContext,
         gbuf: &GBuffer,
         target: &IndirectTarget,
-        buffers: [&wgpu::Buffer; 8],
+        buffers: [&wgpu::Buffer; 9],
         textures: [&wgpu::Texture; 3],
     ) -> wgpu::BindGroup {
         let inputs = gbuf.lighting_inputs();
         let [photons, list_texels, node_texels] =
             textures.map(|t| t.create_view(&Default::default()));
-        let [params, nodes, counts, offsets, cursor, list, coeffs, cluster_of] = buffers;
+        let [params, nodes, counts, offsets, cursor, list, coeffs, cluster_of, jobs] = buffers;
         fn buf(binding: u32, b: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
             wgpu::BindGroupEntry {
                 binding,
@@ -580,6 +651,7 @@ impl Binned {
                     buf(13, coeffs),
                     buf(14, cluster_of),
                     tex(15, &node_texels),
+                    buf(16, jobs),
                 ],
             },
         )
@@ -609,6 +681,7 @@ impl Binned {
         let capacity = Capacity {
             photons: want.photons.max(self.capacity.photons),
             entries: want.entries.max(self.capacity.entries),
+            jobs: want.jobs.max(self.capacity.jobs),
         };
         if capacity == self.capacity {
             return Ok(());
@@ -619,6 +692,9 @@ impl Binned {
         }
         if capacity.entries > self.capacity.entries {
             (self.list, self.list_texels) = Self::lists(ctx, capacity.entries);
+        }
+        if capacity.jobs > self.capacity.jobs {
+            self.jobs = Self::job_lists(ctx, capacity.jobs);
         }
         self.group = Self::bind_group(
             ctx,
@@ -633,6 +709,7 @@ impl Binned {
                 &self.list,
                 &self.coeffs,
                 &self.cluster_of,
+                &self.jobs,
             ],
             [&self.photons, &self.list_texels, &self.node_texels],
         );
@@ -669,7 +746,8 @@ impl Binned {
             ],
             nodes: self.nodes,
             slots: self.slots,
-            _pad: [0; 2],
+            jobs: self.capacity.jobs,
+            _pad: 0,
         };
         if self
             .last_params
@@ -699,12 +777,22 @@ impl Binned {
         let n = photons.len() as u32;
         let rows = n.div_ceil(PHOTON_ROW).max(1);
         let entries = self.estimate_entries(photons, camera).min(u32::MAX as u64) as u32;
+        // Each job list holds at most a job per photon and node of its level under the
+        // photon's rectangle: the nodes of level 1 cover 16 tiles, so a quarter of the tiles
+        // under the rectangles (the hierarchy's estimate is twice those) is generous.
+        let jobs = match self.mode {
+            Mode::Tiled => 0,
+            Mode::Cluster | Mode::Directional => {
+                { ((entries / 8) as f64 * estimate_scale(JOB_ESTIMATE_ENV)) as u32 }.max(MIN_JOBS)
+            }
+        };
         self.grow(
             ctx,
             gbuf,
             Capacity {
                 photons: (2 * rows).next_power_of_two() * PHOTON_ROW,
                 entries: entries.div_ceil(LIST_ROW).max(1) * LIST_ROW,
+                jobs,
             },
         )?;
         self.count = n;
@@ -761,11 +849,7 @@ impl Binned {
             Mode::Tiled => tiles,
             Mode::Cluster | Mode::Directional => tiles * HIERARCHY_ENTRIES_PER_TILE,
         };
-        let scale = std::env::var(LIST_ESTIMATE_ENV)
-            .ok()
-            .and_then(|v| v.parse::<f64>().ok())
-            .filter(|v| v.is_finite() && *v > 0.0)
-            .unwrap_or(1.0);
+        let scale = estimate_scale(LIST_ESTIMATE_ENV);
         (entries as f64 * scale) as u64
     }
 
@@ -812,17 +896,49 @@ impl Binned {
                 pass.dispatch_workgroups((self.l2[0] * self.l2[1]).div_ceil(64), 1, 1);
                 drop(pass);
                 self.record_node_copy(encoder);
+                // The walk in sub-passes over job lists, counting then filling; the job
+                // passes' sizes come from the GPU (indirect dispatch, arguments copied out
+                // of `counts` between passes).
+                if any {
+                    for (level, count, args) in
+                        [(0, &p.top_count, &p.jobs0), (1, &p.mid_count, &p.jobs1)]
+                    {
+                        let mut pass =
+                            self.compute_pass(encoder, timer, "cluster walk", "cluster binning");
+                        pass.set_pipeline(count);
+                        if level == 0 {
+                            pass.dispatch_workgroups(gx, gy, 1);
+                        } else {
+                            pass.dispatch_workgroups_indirect(&self.job_args, 0);
+                        }
+                        pass.set_pipeline(args);
+                        pass.dispatch_workgroups(1, 1, 1);
+                        drop(pass);
+                        let from = (self.slots as u64 + 4 + 3 * level) * 4;
+                        encoder.copy_buffer_to_buffer(
+                            &self.counts,
+                            from,
+                            &self.job_args,
+                            12 * level,
+                            12,
+                        );
+                    }
+                }
                 let mut pass =
                     self.compute_pass(encoder, timer, "cluster binning", "cluster binning");
                 if any {
-                    pass.set_pipeline(&p.count);
-                    pass.dispatch_workgroups(gx, gy, 1);
+                    pass.set_pipeline(&p.low_count);
+                    pass.dispatch_workgroups_indirect(&self.job_args, 12);
                 }
                 pass.set_pipeline(&p.scan);
                 pass.dispatch_workgroups(1, 1, 1);
                 if any {
-                    pass.set_pipeline(&p.fill);
+                    pass.set_pipeline(&p.top_fill);
                     pass.dispatch_workgroups(gx, gy, 1);
+                    pass.set_pipeline(&p.mid_fill);
+                    pass.dispatch_workgroups_indirect(&self.job_args, 0);
+                    pass.set_pipeline(&p.low_fill);
+                    pass.dispatch_workgroups_indirect(&self.job_args, 12);
                 }
             }
         }
@@ -873,8 +989,16 @@ impl Binned {
         }
         encoder.copy_buffer_to_buffer(&self.counts, self.slots as u64 * 4, &self.total, 0, 4);
         if self.mode != Mode::Tiled {
-            // Where the leaves' test lists start: the entries of the accept lists.
+            // Where the leaves' test lists start: the entries of the accept lists; the two
+            // job counts.
             encoder.copy_buffer_to_buffer(&self.offsets, self.nodes as u64 * 4, &self.total, 4, 4);
+            encoder.copy_buffer_to_buffer(
+                &self.counts,
+                (self.slots as u64 + 1) * 4,
+                &self.total,
+                8,
+                8,
+            );
         }
         self.target.record_upsample(ctx, encoder, timer);
     }
@@ -923,19 +1047,23 @@ impl Binned {
         let word =
             |i: usize| u32::from_le_bytes([bytes[i], bytes[i + 1], bytes[i + 2], bytes[i + 3]]);
         let total = word(0);
-        let accepted = if self.mode == Mode::Tiled { 0 } else { word(4) };
+        let (accepted, jobs) = match self.mode {
+            Mode::Tiled => (0, 0),
+            Mode::Cluster | Mode::Directional => (word(4), word(8).max(word(12))),
+        };
         self.entries = (total as u64, accepted as u64);
-        if total <= self.capacity.entries {
+        if total <= self.capacity.entries && jobs <= self.capacity.jobs {
             return Ok(false);
         }
         // Room for a little growth, so that a slowly changing view does not redo every frame.
-        let entries = (total as u64 + total as u64 / 4).min(u32::MAX as u64) as u32;
+        let room = |n: u32| (n as u64 + n as u64 / 4).min(u32::MAX as u64) as u32;
         self.grow(
             ctx,
             gbuf,
             Capacity {
                 photons: self.capacity.photons,
-                entries: entries.div_ceil(LIST_ROW) * LIST_ROW,
+                entries: room(total).div_ceil(LIST_ROW) * LIST_ROW,
+                jobs: room(jobs),
             },
         )?;
         Ok(true)
@@ -957,6 +1085,7 @@ impl Binned {
             ),
         ];
         if self.mode != Mode::Tiled {
+            parts.push(("walk job lists", self.jobs.size()));
             parts.push(("node quadratics or octant fluxes", self.coeffs.size()));
             parts.push(("sample leaves", self.cluster_of.size()));
         }

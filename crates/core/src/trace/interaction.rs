@@ -41,6 +41,8 @@ impl Interaction {
             ns = -ns;
         }
         let uv = scene.uv_at(t, hit.u, hit.v);
+        // Point samples read the finest level (as the bounce maps do); only the eye passes
+        // filter by screen footprint.
         let lod = 0.0;
         if let Some(i) = scene.maps_of(t).normal {
             if let Some(tangent) = scene.tangent_of(t) {

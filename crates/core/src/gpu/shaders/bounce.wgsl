@@ -129,6 +129,11 @@ fn bounce(in: VertexOut, textured: bool) -> BounceOut {
     let jitter = texel_jitter(in);
     let world = in.world + jitter.x * dwdx + jitter.y * dwdy;
     let uv = in.uv + jitter.x * duvdx + jitter.y * duvdy;
+    // Materials at the finest level (zero derivatives): a photon is a point sample, as in
+    // the CPU photon tracer and `path`, so the first scatter sees the material the CPU sees
+    // at the same point (a texel's mip-filtered albedo would weight every photon of a
+    // minified texture with the texture's local mean instead of the albedo where it lands).
+    let point = vec2<f32>(0.0);
     let to_light = view.light_position - world;
     let wo = normalize(to_light);
     // Normals as in the eye G-buffer, oriented towards the light.
@@ -146,7 +151,7 @@ fn bounce(in: VertexOut, textured: bool) -> BounceOut {
     var maps: MaterialMaps;
     if textured {
         maps = material_maps[in.material];
-        ns = mapped_normal(maps, ns, in.tangent, uv, duvdx, duvdy);
+        ns = mapped_normal(maps, ns, in.tangent, uv, point, point);
     }
     if dot(wo, ns) * dot(wo, ng) <= 0.0 {
         ns = ng;
@@ -164,7 +169,7 @@ fn bounce(in: VertexOut, textured: bool) -> BounceOut {
     let phi = intensity * view.texel_area * c * c * c;
     var m = materials[in.material];
     if textured {
-        m = textured_material(maps, m, uv, duvdx, duvdy);
+        m = textured_material(maps, m, uv, point, point);
     }
     var o: BounceOut;
     o.incident = vec4<f32>(phi, 1.0);

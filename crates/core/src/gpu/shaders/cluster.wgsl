@@ -1,11 +1,12 @@
 // The view-sample cluster hierarchy of Moreau et al. 2016 (section 4), appended to
 // tiled.wgsl (its bindings, photon loads, tile ranges and scan):
 // 1. `cluster_leaves`: each leaf cluster (the view samples of a screen tile, split by depth
-//    slice: up to CLUSTERS_PER_TILE clusters a tile) gets its bounding box, normal cone
+//    slice and by normal: up to CLUSTERS_PER_TILE clusters a tile) gets its bounding box, normal cone
 //    and whether it is *simple* (every sample purely diffuse and facing the eye, so that a
 //    photon's BSDF term is ρ/π for all of them);
 // 2. `cluster_parents` (once per upper level): boxes, cones and flags of 4×4 children;
-// 3. `cluster_count` / `scan` / `cluster_fill`: each photon walks the hierarchy top-down,
+// 3. `cluster_{top,mid,low}_count` / `scan` / `cluster_{top,mid,low}_fill`: each photon
+//    walks the hierarchy top-down, one level per sub-pass over job lists (below),
 //    rejecting nodes by bounds and normal cone; a node wholly inside its ellipsoid whose
 //    cone passes the normal and hemisphere tests, and that is simple, *trivially accepts*
 //    the photon (its accept list; no descent); a leaf it only overlaps gets it in its test
@@ -21,7 +22,12 @@
 // channel Σ Φᵢκᵢ = A + B·y − yᵀCy with A = Σ Φᵢ(aᵢ − bᵢ uᵢᵀMᵢuᵢ), B = Σ 2Φᵢbᵢ Mᵢuᵢ,
 // C = Σ Φᵢbᵢ Mᵢ: the same estimate as the per-photon sum, up to float rounding.
 
-const CLUSTERS_PER_TILE: u32 = 4u;
+const CLUSTERS_PER_TILE: u32 = 8u;
+// Depth ranks of a tile's clusters (each split in two by normal).
+const DEPTH_RANKS: u32 = 4u;
+// cos 45°: a sample whose normal is farther than this from its tile's reference normal
+// goes to the second cluster of its depth rank.
+const COS_NORMAL_SPLIT: f32 = 0.70710678;
 // Child nodes per side of a parent.
 const FANOUT: u32 = 4u;
 // Angles (radians) of the cone tests: 60° is the normal agreement (cos = 0.5), 90° the
@@ -120,6 +126,9 @@ fn depth_slice(p: vec3<f32>) -> u32 {
 
 var<workgroup> wg_first: atomic<u32>;
 var<workgroup> wg_used: atomic<u32>;
+// The tile's first covered sample (local index) and its normal.
+var<workgroup> wg_ref: atomic<u32>;
+var<workgroup> wg_ref_normal: vec3<f32>;
 var<workgroup> wg_lo: array<vec3<f32>, 64>;
 var<workgroup> wg_hi: array<vec3<f32>, 64>;
 var<workgroup> wg_n: array<vec3<f32>, 64>;
@@ -151,9 +160,13 @@ fn reduce_min_dot(li: u32) {
     }
 }
 
-// The leaf clusters of one tile: the tile's samples are split by depth slice, counted from
-// the tile's nearest: slices 0 .. CLUSTERS_PER_TILE - 2 get a cluster each, the farther
-// samples share the last one (a depth discontinuity separates fore- and background).
+// The leaf clusters of one tile, keyed by depth and normal (Moreau et al. §4.1): the tile's
+// samples are split by depth slice, counted from the tile's nearest (slices
+// 0 .. DEPTH_RANKS - 2 get a rank each, the farther samples share the last: a depth
+// discontinuity separates fore- and background), and each rank in two by normal: within
+// 45° of the tile's reference normal (its first covered sample's) or not. Where two walls
+// meet in a tile, each wall gets a cluster with a narrow normal cone, which can accept
+// photons whole; one cluster spanning both has a 90° cone and never can.
 @compute @workgroup_size(8, 8)
 fn cluster_leaves(
     @builtin(workgroup_id) tile: vec3<u32>,
@@ -184,12 +197,20 @@ fn cluster_leaves(
     }
     if li == 0u {
         atomicStore(&wg_first, 0xffffffffu);
+        atomicStore(&wg_ref, 0xffffffffu);
     }
     workgroupBarrier();
     atomicMin(&wg_first, slice);
+    if valid {
+        atomicMin(&wg_ref, li);
+    }
     workgroupBarrier();
-    let rank = slice - atomicLoad(&wg_first);
-    let cluster = min(rank, CLUSTERS_PER_TILE - 1u);
+    if li == atomicLoad(&wg_ref) {
+        wg_ref_normal = ns;
+    }
+    workgroupBarrier();
+    let rank = min(slice - atomicLoad(&wg_first), DEPTH_RANKS - 1u);
+    let cluster = 2u * rank + u32(dot(ns, wg_ref_normal) < COS_NORMAL_SPLIT);
     if li == 0u {
         atomicStore(&wg_used, 0u);
     }
@@ -371,61 +392,129 @@ fn test_slot(leaf: u32) -> u32 {
     return params.nodes + leaf;
 }
 
-// Walks photon i through the hierarchy; `fill` writes list entries, else counts them.
-fn walk(i: u32, fill: bool) {
+// ---- The walk in sub-passes with job lists (Moreau et al. section 4.3) ----
+// The walk runs level by level: `top` takes each photon through the top level, `mid` is
+// one thread per (photon, level-2 node) job the top level descended into, `low` one per
+// (photon, level-1 node) job of the middle level. A photon that overlaps many nodes spreads
+// its work over as many threads, instead of one thread walking them all while its
+// neighbours idle. Each level runs twice: counting, which also appends the next level's
+// jobs, and (after the prefix sum) filling the lists from the same jobs. The job counts and
+// the indirect dispatch arguments of the two job passes follow the list total in `counts`:
+// [slots] total, [slots + 1 + l] jobs of job level l (0: level-2 nodes, 1: level-1 nodes),
+// [slots + 4 + 3l ..] that level's (x, y, z) workgroups.
+
+@group(0) @binding(16) var<storage, read_write> jobs: array<vec2<u32>>;
+
+// wgpu's default `max_compute_workgroups_per_dimension`.
+const MAX_GROUPS: u32 = 65535u;
+
+fn job_count_slot(level: u32) -> u32 {
+    return params.slots + 1u + level;
+}
+
+fn job_args_slot(level: u32) -> u32 {
+    return params.slots + 4u + 3u * level;
+}
+
+fn push_job(level: u32, job: vec2<u32>) {
+    let at = atomicAdd(&counts[job_count_slot(level)], 1u);
+    if at < params.jobs {
+        jobs[level * params.jobs + at] = job;
+    }
+}
+
+// Jobs of `level` that were kept (the count beyond the capacity is an overflow the CPU
+// sees, and redoes the frame with room).
+fn job_total(level: u32) -> u32 {
+    return min(atomicLoad(&counts[job_count_slot(level)]), params.jobs);
+}
+
+// (x, y) of node `k` of level `l` ≥ 1.
+fn node_xy(l: u32, k: u32) -> vec2<u32> {
+    let idx = k - level_first(l);
+    let w = level_dims(l).x;
+    return vec2<u32>(idx % w, idx / w);
+}
+
+// A photon with its light, and its tile range as (t0, t1); t0.x > t1.x when it covers none.
+struct WalkPhoton {
+    p: VolumePhoton,
+    t0: vec2<u32>,
+    t1: vec2<u32>,
+    covers: bool,
+}
+
+fn walk_photon(i: u32) -> WalkPhoton {
     var p = load_photon_shape(i);
     load_photon_light(&p, i);
+    var w: WalkPhoton;
+    w.p = p;
     let r = tile_range(p);
-    if r.x > r.z {
+    w.covers = r.x <= r.z;
+    w.t0 = vec2<u32>(max(r.xy, vec2<i32>(0)));
+    w.t1 = vec2<u32>(max(r.zw, vec2<i32>(0)));
+    return w;
+}
+
+fn walk_top(i: u32, fill: bool) {
+    let w = walk_photon(i);
+    if !w.covers {
         return;
     }
-    let t0 = vec2<u32>(r.xy);
-    let t1 = vec2<u32>(r.zw);
-    let per1 = FANOUT;
     let per2 = FANOUT * FANOUT;
-    for (var y2 = t0.y / per2; y2 <= t1.y / per2; y2++) {
-        for (var x2 = t0.x / per2; x2 <= t1.x / per2; x2++) {
+    for (var y2 = w.t0.y / per2; y2 <= w.t1.y / per2; y2++) {
+        for (var x2 = w.t0.x / per2; x2 <= w.t1.x / per2; x2++) {
             let k2 = node_index(2u, vec2<u32>(x2, y2));
-            let c2 = classify(p, p.incident, fetch_node(k2));
-            if c2 == 2u {
+            let c = classify(w.p, w.p.incident, fetch_node(k2));
+            if c == 2u {
                 emit(accept_slot(k2), i, fill);
+            } else if c == 1u && !fill {
+                push_job(0u, vec2<u32>(i, k2));
             }
-            if c2 != 1u {
-                continue;
+        }
+    }
+}
+
+fn walk_mid(job: vec2<u32>, fill: bool) {
+    let i = job.x;
+    let w = walk_photon(i);
+    let xy2 = node_xy(2u, job.y);
+    let a1 = max(xy2 * FANOUT, w.t0 / FANOUT);
+    let b1 = min(xy2 * FANOUT + FANOUT - 1u, w.t1 / FANOUT);
+    for (var y1 = a1.y; y1 <= b1.y; y1++) {
+        for (var x1 = a1.x; x1 <= b1.x; x1++) {
+            let k1 = node_index(1u, vec2<u32>(x1, y1));
+            let c = classify(w.p, w.p.incident, fetch_node(k1));
+            if c == 2u {
+                emit(accept_slot(k1), i, fill);
+            } else if c == 1u && !fill {
+                push_job(1u, vec2<u32>(i, k1));
             }
-            let a1 = max(vec2<u32>(x2, y2) * FANOUT, t0 / per1);
-            let b1 = min(vec2<u32>(x2, y2) * FANOUT + FANOUT - 1u, t1 / per1);
-            for (var y1 = a1.y; y1 <= b1.y; y1++) {
-                for (var x1 = a1.x; x1 <= b1.x; x1++) {
-                    let k1 = node_index(1u, vec2<u32>(x1, y1));
-                    let c1 = classify(p, p.incident, fetch_node(k1));
-                    if c1 == 2u {
-                        emit(accept_slot(k1), i, fill);
-                    }
-                    if c1 != 1u {
-                        continue;
-                    }
-                    let a0 = max(vec2<u32>(x1, y1) * FANOUT, t0);
-                    let b0 = min(vec2<u32>(x1, y1) * FANOUT + FANOUT - 1u, t1);
-                    for (var y = a0.y; y <= b0.y; y++) {
-                        for (var x = a0.x; x <= b0.x; x++) {
-                            let leaves = node_index(0u, vec2<u32>(x, y));
-                            var used = 1u;
-                            for (var c = 0u; c < used; c++) {
-                                let k = leaves + c;
-                                let leaf = fetch_node(k);
-                                if c == 0u {
-                                    used = leaf.used;
-                                }
-                                let c0 = classify(p, p.incident, leaf);
-                                if c0 == 2u {
-                                    emit(accept_slot(k), i, fill);
-                                } else if c0 == 1u {
-                                    emit(test_slot(k), i, fill);
-                                }
-                            }
-                        }
-                    }
+        }
+    }
+}
+
+fn walk_low(job: vec2<u32>, fill: bool) {
+    let i = job.x;
+    let w = walk_photon(i);
+    let xy1 = node_xy(1u, job.y);
+    let a0 = max(xy1 * FANOUT, w.t0);
+    let b0 = min(xy1 * FANOUT + FANOUT - 1u, w.t1);
+    for (var y = a0.y; y <= b0.y; y++) {
+        for (var x = a0.x; x <= b0.x; x++) {
+            let leaves = node_index(0u, vec2<u32>(x, y));
+            var used = 1u;
+            for (var c = 0u; c < used; c++) {
+                let k = leaves + c;
+                let leaf = fetch_node(k);
+                if c == 0u {
+                    used = leaf.used;
+                }
+                let r = classify(w.p, w.p.incident, leaf);
+                if r == 2u {
+                    emit(accept_slot(k), i, fill);
+                } else if r == 1u {
+                    emit(test_slot(k), i, fill);
                 }
             }
         }
@@ -443,25 +532,88 @@ fn emit(slot: u32, i: u32, fill: bool) {
     }
 }
 
+// The indirect dispatch of job level `level`: 64 jobs a workgroup, rows of MAX_GROUPS.
+fn write_job_args(level: u32) {
+    let groups = (job_total(level) + 63u) / 64u;
+    let s = job_args_slot(level);
+    atomicStore(&counts[s], min(groups, MAX_GROUPS));
+    atomicStore(&counts[s + 1u], max((groups + MAX_GROUPS - 1u) / MAX_GROUPS, 1u));
+    atomicStore(&counts[s + 2u], 1u);
+}
+
+@compute @workgroup_size(1)
+fn cluster_jobs0() {
+    write_job_args(0u);
+}
+
+@compute @workgroup_size(1)
+fn cluster_jobs1() {
+    write_job_args(1u);
+}
+
 @compute @workgroup_size(64)
-fn cluster_count(
+fn cluster_top_count(
     @builtin(global_invocation_id) gid: vec3<u32>,
     @builtin(num_workgroups) groups: vec3<u32>,
 ) {
     let i = photon_index(gid, groups);
     if i < params.photons {
-        walk(i, false);
+        walk_top(i, false);
     }
 }
 
 @compute @workgroup_size(64)
-fn cluster_fill(
+fn cluster_top_fill(
     @builtin(global_invocation_id) gid: vec3<u32>,
     @builtin(num_workgroups) groups: vec3<u32>,
 ) {
     let i = photon_index(gid, groups);
     if i < params.photons {
-        walk(i, true);
+        walk_top(i, true);
+    }
+}
+
+@compute @workgroup_size(64)
+fn cluster_mid_count(
+    @builtin(global_invocation_id) gid: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+) {
+    let j = photon_index(gid, groups);
+    if j < job_total(0u) {
+        walk_mid(jobs[j], false);
+    }
+}
+
+@compute @workgroup_size(64)
+fn cluster_mid_fill(
+    @builtin(global_invocation_id) gid: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+) {
+    let j = photon_index(gid, groups);
+    if j < job_total(0u) {
+        walk_mid(jobs[j], true);
+    }
+}
+
+@compute @workgroup_size(64)
+fn cluster_low_count(
+    @builtin(global_invocation_id) gid: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+) {
+    let j = photon_index(gid, groups);
+    if j < job_total(1u) {
+        walk_low(jobs[params.jobs + j], false);
+    }
+}
+
+@compute @workgroup_size(64)
+fn cluster_low_fill(
+    @builtin(global_invocation_id) gid: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+) {
+    let j = photon_index(gid, groups);
+    if j < job_total(1u) {
+        walk_low(jobs[params.jobs + j], true);
     }
 }
 

@@ -47,6 +47,8 @@ struct TiledParams {
     nodes: u32,
     // Photon lists (tiled: one per tile; cluster: accept lists, then leaf test lists).
     slots: u32,
+    // Capacity of each of the cluster walk's two job lists (cluster.wgsl).
+    jobs: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: TiledParams;
