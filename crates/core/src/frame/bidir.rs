@@ -474,8 +474,11 @@ fn bundle_views(scene: &Scene, settings: &Settings, b: &BundleBuffers) -> Vec<Bu
 const MAX_WALK: u32 = 4096;
 
 /// The two-bounce term's lower bound on ‖x1 − x2‖, as a fraction of the scene's bounding
-/// diagonal (§4.3 clamps it; the paper gives no value).
-const TWO_BOUNCE_MIN_DIST: f32 = 0.02;
+/// diagonal (§4.3 clamps it; the paper gives no value). Measured on `cornell` at 80×60,
+/// depth 3, 64 VPLs / 16 bundles, two seeds: RMSE against `path` 0.154/0.061 at 2%,
+/// 0.060/0.061 at 5%, 0.046/0.053 at 10%, 0.038/0.046 at 20%; image mean −1…+2% at 10%,
+/// −3% at 20%.
+const TWO_BOUNCE_MIN_DIST: f32 = 0.1;
 
 pub(super) fn frame(
     g: &mut GpuState,

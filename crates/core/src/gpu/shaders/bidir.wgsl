@@ -121,7 +121,7 @@ fn vpl_visibility(v: Vpl, p: vec3<f32>, ng: vec3<f32>) -> f32 {
     let c = dot(d / dist, ng);
     let q = p + ng * (v.texel_scale * dist * (1.0 - c) + 1e-4 * dist);
     let layer = shadow_layer_of(v.first_layer, 6u, q - v.position);
-    return shadow_pcf(vpl_maps, shadow_sampler, vpl_views[layer], layer, q);
+    return shadow_tap(vpl_maps, shadow_sampler, vpl_views[layer], layer, q);
 }
 
 fn light_visibility(l: Light, p: vec3<f32>, ng: vec3<f32>) -> f32 {
@@ -130,7 +130,7 @@ fn light_visibility(l: Light, p: vec3<f32>, ng: vec3<f32>) -> f32 {
     let c = dot(d / dist, ng);
     let q = p + ng * (l.texel_scale * dist * (1.0 - c) + 1e-4 * dist);
     let layer = shadow_layer_of(l.first_layer, l.layers, q - l.position);
-    return shadow_pcf(light_maps, shadow_sampler, light_views[layer], layer, q);
+    return shadow_tap(light_maps, shadow_sampler, light_views[layer], layer, q);
 }
 
 // The light VPL `v` sends from x1 to a point `p` (normals `ns`, `ng`; material `m`, seen

@@ -39,3 +39,16 @@ fn shadow_pcf(maps: texture_depth_2d_array, smp: sampler_comparison, m: mat4x4<f
     }
     return lit / 9.0;
 }
+
+// One bilinear comparison tap (2×2 texels): for the many VPL and bundle-hit lookups of
+// `bidir`, where the average over many lights already smooths the edges and nine taps
+// would cost nine times the texture reads.
+fn shadow_tap(maps: texture_depth_2d_array, smp: sampler_comparison, m: mat4x4<f32>, layer: u32, p: vec3<f32>) -> f32 {
+    let clip = m * vec4<f32>(p, 1.0);
+    if clip.w <= 0.0 {
+        return 0.0;
+    }
+    let ndc = clip.xyz / clip.w;
+    let uv = ndc.xy * vec2<f32>(0.5, -0.5) + 0.5;
+    return textureSampleCompareLevel(maps, smp, uv, layer, ndc.z);
+}
