@@ -131,3 +131,22 @@ def test_hdr_sky_scene_renders_in_bidir_and_path(tmp_path):
     assert np.isfinite(r.radiance).all()
     ratio = r.radiance.mean(axis=(0, 1)) / path.mean(axis=(0, 1))
     assert (np.abs(ratio - 1) < 0.05).all(), ratio
+
+
+def test_progressive_passes_draw_new_vpls_and_bundles(cornell):
+    # Each progressive pass is an independent frame (fresh VPLs and bundle directions from
+    # its seed); their mean converges to the path tracer's image where one frame is
+    # coherent and keeps its error. 8 passes of 8 VPLs and 4 bundles against one: measured
+    # RMSE 0.083 → 0.029 (24×24, one bounce, reference 512 spp); bound: below 0.7× one
+    # pass (1/√8 = 0.35 for pure noise, minus the reference's own noise).
+    settings = dict(SMALL, max_depth=2)
+    ref = gi.render(cornell, "path", size=(24, 24), spp=512, max_depth=2, seed=9).radiance
+    one = gi.render(cornell, "bidir", **settings).radiance
+    r = gi.Renderer(cornell, "bidir", progressive=True, **settings)
+    mean = r.render_progressive(passes=8).radiance
+    assert r.passes == 8
+
+    def rmse(img):
+        return float(np.sqrt(((img - ref) ** 2).mean()))
+
+    assert rmse(mean) < 0.7 * rmse(one), (rmse(mean), rmse(one))
