@@ -47,6 +47,8 @@ pub(super) struct BidirState {
     group: wgpu::BindGroup,
     indirect: wgpu::Texture,
     bundles: BundleBuffers,
+    /// 1 / ∫ lum(L_env) dω of an image environment drawn by importance (§3.3); 0 otherwise.
+    env_pdf_scale: f32,
     /// (bundles, resolution, memory MiB) the bundle buffers were made for.
     bundle_key: (u32, u32, u32),
 }
@@ -153,7 +155,7 @@ impl BidirState {
             mb as u64 * (1 << 20),
         )?;
         let (light_views, light_maps) = g.scene.shadow_lookup();
-        let env_table = env_table(ctx, env);
+        let (env_table, env_pdf_scale) = env_table(ctx, env);
         let matrices = buffer_init(
             ctx,
             "vpl shadow matrices",
@@ -304,6 +306,7 @@ impl BidirState {
             group,
             indirect,
             bundles,
+            env_pdf_scale,
             bundle_key,
         })
     }
@@ -323,14 +326,32 @@ impl BidirState {
     }
 }
 
-/// The environment's radiance table as an `Rgba32Float` texture (1×1 black without one).
-fn env_table(ctx: &GpuContext, env: Option<&Environment>) -> wgpu::Texture {
+/// The environment's radiance table as an `Rgba32Float` texture (1×1 black without one),
+/// and for an image drawn by importance (§3.3) 1 / ∫ lum(L) dω (0 otherwise).
+fn env_table(ctx: &GpuContext, env: Option<&Environment>) -> (wgpu::Texture, f32) {
     let (w, h, texels) = match env {
         Some(e) => {
             let (w, h, t, _) = e.gpu_table();
             (w, h, t)
         }
         None => (1, 1, vec![Vec3::ZERO]),
+    };
+    let luminance = |c: Vec3| 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z;
+    let integral: f64 = texels
+        .iter()
+        .enumerate()
+        .map(|(i, t)| {
+            let theta = std::f64::consts::PI * ((i as u32 / w) as f64 + 0.5) / h as f64;
+            let d_omega = 2.0 * std::f64::consts::PI * std::f64::consts::PI * theta.sin()
+                / (w as f64 * h as f64);
+            luminance(*t).max(0.0) as f64 * d_omega
+        })
+        .sum();
+    let importance = env.is_some_and(|e| e.importance) && w * h > 1 && integral > 0.0;
+    let pdf_scale = if importance {
+        (1.0 / integral) as f32
+    } else {
+        0.0
     };
     let data: Vec<[f32; 4]> = texels.iter().map(|t| t.extend(1.0).to_array()).collect();
     let texture = gpu::create_texture(
@@ -361,7 +382,7 @@ fn env_table(ctx: &GpuContext, env: Option<&Environment>) -> wgpu::Texture {
         },
         texture.size(),
     );
-    texture
+    (texture, pdf_scale)
 }
 
 /// The RSM layers: the bounce-map views with `rsm_size`² texels per view for a light of
@@ -458,15 +479,61 @@ pub fn bundle_directions(n: u32, seed: u64) -> Vec<Vec3> {
         .collect()
 }
 
-/// The views of the frame's bundles.
-fn bundle_views(scene: &Scene, settings: &Settings, b: &BundleBuffers) -> Vec<BundleViewRaw> {
+/// Share of the bundles drawn from an image environment's luminance (§3.3; the paper's
+/// offset L_o for indirect light is this mixture's uniform part).
+const ENV_BUNDLE_SHARE: f32 = 0.75;
+
+/// How many of `n` bundles are drawn from the environment (the rest uniform).
+fn env_bundles(n: u32, env_pdf_scale: f32) -> u32 {
+    if env_pdf_scale > 0.0 && n >= 4 {
+        (n as f32 * ENV_BUNDLE_SHARE).round() as u32
+    } else {
+        0
+    }
+}
+
+/// The views of the frame's bundles: `n_env` directions drawn from the environment (a
+/// stratified 2D lattice through `Environment::sample`, each axis flipped with probability
+/// ½) and the rest uniform ([`bundle_directions`]); each with 1 / D, D = n_uniform/2π +
+/// n_env·(p_env(ω) + p_env(−ω)) the multi-sample density of the frame's directions over a
+/// hemisphere.
+fn bundle_views(
+    scene: &Scene,
+    settings: &Settings,
+    b: &BundleBuffers,
+    n_env: u32,
+) -> Vec<BundleViewRaw> {
     let (lo, hi) = shadow::bounds(scene);
     let centre = (lo + hi) * 0.5;
     let radius = (hi - lo).length() * 0.5;
-    bundle_directions(settings.bundles, settings.seed)
-        .into_iter()
+    let n_uni = settings.bundles - n_env;
+    let mut dirs = bundle_directions(n_uni, settings.seed);
+    let env = scene.environment.as_deref().filter(|_| n_env > 0);
+    if let Some(env) = env {
+        let mut rng = Rng::new(settings.seed, 0xe17, 0);
+        let (j1, j2) = (rng.next_f32(), rng.next_f32());
+        let golden = 0.618_034f32;
+        for i in 0..n_env {
+            let u = glam::Vec2::new(
+                ((i as f32 + j1) / n_env as f32).min(0.999_999),
+                (i as f32 * golden + j2).fract(),
+            );
+            let d = env
+                .sample(u)
+                .map_or_else(|| crate::sampling::uniform_sphere(rng.next_2d()), |s| s.wi);
+            dirs.push(if rng.next_f32() < 0.5 { d } else { -d });
+        }
+    }
+    let density = |d: Vec3| {
+        let uniform = n_uni as f32 / std::f32::consts::TAU;
+        uniform + env.map_or(0.0, |e| n_env as f32 * (e.pdf(d) + e.pdf(-d)))
+    };
+    dirs.into_iter()
         .enumerate()
-        .map(|(i, dir)| bundle_view(dir, centre, radius, i as u32, b.res, b.capacity))
+        .map(|(i, dir)| BundleViewRaw {
+            inv_density: 1.0 / density(dir).max(1e-12),
+            ..bundle_view(dir, centre, radius, i as u32, b.res, b.capacity)
+        })
         .collect()
 }
 
@@ -527,7 +594,8 @@ pub(super) fn frame(
         rsm.write_views(&ctx, &state.layers);
     }
     g.targets.write_eye(&ctx, scene);
-    let views = bundle_views(scene, settings, &state.bundles);
+    let n_env = env_bundles(settings.bundles, state.env_pdf_scale);
+    let views = bundle_views(scene, settings, &state.bundles, n_env);
     if !views.is_empty() {
         state.bundles.write_views(&ctx, &views);
     }
@@ -619,7 +687,10 @@ pub(super) fn frame(
         has_env: scene.environment.is_some() as u32,
         env_cos: env_rot.0,
         env_sin: env_rot.1,
-        _pad: 0,
+        bundles_env: n_env as f32,
+        bundles_uniform: (settings.bundles - n_env) as f32,
+        env_pdf_scale: state.env_pdf_scale,
+        _pad1: [0.0; 2],
     };
     gpu::write_buffer(
         q,

@@ -24,7 +24,8 @@ pub struct BundleViewRaw {
     pub index: u32,
     pub res: u32,
     pub capacity: u32,
-    pub _pad0: u32,
+    /// 1 / (the frame's bundle-direction density at ±`dir` over a hemisphere, all bundles).
+    pub inv_density: f32,
     pub _pad1: [f32; 40],
 }
 
@@ -58,7 +59,7 @@ pub fn bundle_view(
         index,
         res,
         capacity,
-        _pad0: 0,
+        inv_density: 0.0,
         _pad1: [0.0; 40],
     }
 }

@@ -54,7 +54,12 @@ pub struct BidirParamsRaw {
     pub has_env: u32,
     pub env_cos: f32,
     pub env_sin: f32,
-    pub _pad: u32,
+    /// Bundles drawn from the environment and uniformly (their densities' weights).
+    pub bundles_env: f32,
+    pub bundles_uniform: f32,
+    /// 1 / ∫ lum(L_env) dω when bundles are drawn from the environment.
+    pub env_pdf_scale: f32,
+    pub _pad1: [f32; 2],
 }
 
 /// Extra field of view of a VPL's cube faces, in shadow texels on each side (as the lights').

@@ -17,8 +17,11 @@
 //   density A = n1·p1 + n2·p2 of the middle vertex: d = A·dist²/cos towards either end)
 //   and m = 16 (the paper's m').
 // - environment light (§6): a bundle direction with no fragment along it sees the
-//   environment: f3·|n3·ω|·L_env(ω)/p_r (its direct light; its indirect light is not
-//   traced).
+//   environment: f3·|n3·ω|·L_env(ω)/D(ω) (its direct light; its indirect light is not
+//   traced). With an image environment (and its `importance`), part of the bundles are
+//   drawn by the sky's luminance (§3.3); D, the density of all the frame's bundle
+//   directions (a multi-sample balance heuristic over the two ways of drawing them),
+//   replaces n2·p_r everywhere.
 // `mode`: 0 MIS, 1 VPLs only, 2 bundles only (for the one-bounce light).
 
 struct Vpl {
@@ -65,7 +68,12 @@ struct Params {
     has_env: u32,
     env_cos: f32,
     env_sin: f32,
-    _pad: u32,
+    // Bundles drawn from the environment (§3.3) and uniformly: D(ω) =
+    // n_uniform/2π + n_env·(p_env(ω) + p_env(−ω)), p_env(ω) ≈ lum(L_env(ω))·env_pdf_scale.
+    bundles_env: f32,
+    bundles_uniform: f32,
+    env_pdf_scale: f32,
+    _pad1: vec2<f32>,
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
@@ -190,6 +198,22 @@ fn env_radiance(d: vec3<f32>) -> vec3<f32> {
     return textureLoad(env_table, vec2<u32>(x, y), 0).xyz;
 }
 
+fn luminance(c: vec3<f32>) -> f32 {
+    return dot(c, vec3<f32>(0.2126, 0.7152, 0.0722));
+}
+
+// The frame's density of bundle directions over a hemisphere at a point, towards `d`
+// (the sum over bundles; n2/2π when all are uniform). Used in the MIS weights and the
+// clamping densities; a bundle's own sample is divided by its exact value (`inv_density`).
+fn bundle_density(d: vec3<f32>) -> f32 {
+    var dens = params.bundles_uniform / TWO_PI;
+    if params.bundles_env > 0.0 {
+        let l = luminance(env_radiance(d)) + luminance(env_radiance(-d));
+        dens += params.bundles_env * l * params.env_pdf_scale;
+    }
+    return dens;
+}
+
 struct Hit {
     found: bool,
     t: f32,
@@ -286,7 +310,7 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
             let cos13 = abs(dot(to_vpl, v.ng)) / sqrt(d2);
             // Area densities of x1: drawn as a VPL, and as a bundle hit from x3.
             let p1 = n1 * v.pdf;
-            let p2 = n2 * cos13 / (TWO_PI * d2);
+            let p2 = bundle_density(to_vpl / sqrt(d2)) * cos13 / d2;
             let area = p1 + select(p2, 0.0, params.mode == 1u);
             let d13 = area * d2 / max(cos13, 1e-6);
             let d10 = area * v.light_dist2 / max(abs(dot(v.ng, v.to_light)), 1e-6);
@@ -325,8 +349,8 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
             if !hit.found {
                 // §6: nothing along ±ω, the environment is seen (the only strategy for it).
                 if params.has_env != 0u {
-                    let f3 = bsdf_eval(clamped(m, n2 / TWO_PI, dot(ns, wo)), ns, wo, dir);
-                    sum += f3 * env_radiance(dir) * (abs(dot(ns, dir)) * TWO_PI / n2);
+                    let f3 = bsdf_eval(clamped(m, 1.0 / bv.inv_density, dot(ns, wo)), ns, wo, dir);
+                    sum += f3 * env_radiance(dir) * (abs(dot(ns, dir)) * bv.inv_density);
                 }
                 continue;
             }
@@ -342,7 +366,7 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
             }
             let m2 = node_material(hit.node);
             // Per bundle sample: |n3·ω|/p_r / n2, times f3 (clamped per path below).
-            let weight = abs(dot(ns, dir)) * TWO_PI / n2;
+            let weight = abs(dot(ns, dir)) * bv.inv_density;
             let cos23 = -dot(ng2, dir);
             let d23 = x2 - p;
             let d23_2 = dot(d23, d23);
@@ -365,7 +389,7 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
                     if w > 0.0 && params.mode != 2u {
                         p1 = n1 * i_sum * cos2l / (dl2 * w);
                     }
-                    let p2 = n2 * max(cos23, 0.0) / (TWO_PI * d23_2);
+                    let p2 = max(cos23, 0.0) / (bv.inv_density * d23_2);
                     let d23s = (p1 + p2) * d23_2 / max(cos23, 1e-6);
                     let d20 = (p1 + p2) * dl2 / cos2l;
                     let f3 = bsdf_eval(clamped(m, d23s, dot(ns, wo)), ns, wo, dir);
@@ -388,7 +412,7 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
             if params.two_bounce != 0u && params.vpls_per_light > 0u {
                 let k = min(u32((f32(b) + params.pair_offset) * n1 / n2), params.vpls_per_light - 1u);
                 // d̂ at x3 of eq. 14: the bundles' density n2·p_r.
-                let f3 = bsdf_eval(clamped(m, n2 / TWO_PI, dot(ns, wo)), ns, wo, dir);
+                let f3 = bsdf_eval(clamped(m, 1.0 / bv.inv_density, dot(ns, wo)), ns, wo, dir);
                 for (var j = 0u; j * params.vpls_per_light < params.vpl_count; j++) {
                     let v = vpls[j * params.vpls_per_light + k];
                     let t = vpl_light(v, vpl_material(v), x2, ns2, ng2, m2, -dir, params.min_dist2);

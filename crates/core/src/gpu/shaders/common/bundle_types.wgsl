@@ -16,7 +16,10 @@ struct BundleView {
     res: u32,
     // Node slots in the fragment buffer (all bundles together).
     capacity: u32,
-    _pad0: u32,
+    // 1 / D(ω): D is the frame's density of bundle directions over a hemisphere of
+    // directions at a point, summed over bundles (n2/2π for uniform directions; see
+    // `bidir.wgsl`'s `bundle_density`).
+    inv_density: f32,
     _pad1: array<vec4<f32>, 10>,
 }
 
