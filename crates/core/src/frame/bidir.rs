@@ -38,7 +38,8 @@ pub(super) struct BidirState {
     /// VPL slots (all lights together).
     capacity: u32,
     vpl_size: u32,
-    vpls: wgpu::Buffer,
+    /// The VPL records as texels ([`VplRaw::texels`]): 7 per VPL in a row, a row per VPL.
+    vpls: wgpu::Texture,
     params: wgpu::Buffer,
     matrices: wgpu::Buffer,
     views: wgpu::Buffer,
@@ -133,12 +134,26 @@ impl BidirState {
         crate::memory::check(|| "the VPL shadow maps".to_string(), bytes)?;
         let rsm = RsmTargets::new(ctx, &bp.rsm, &layers, &g.scene.materials)?;
         let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
-        let vpls = buffer_init(
-            ctx,
-            "vpls",
-            &vec![0u8; capacity.max(1) as usize * std::mem::size_of::<VplRaw>()],
-            storage,
+        // A texture, not a storage buffer: the lighting pass loops over the VPLs, and
+        // lavapipe reads textures in loops many times faster.
+        let vpls = gpu::create_texture(
+            device,
+            &wgpu::TextureDescriptor {
+                label: Some("vpls"),
+                size: wgpu::Extent3d {
+                    width: VplRaw::TEXELS,
+                    height: capacity.max(1),
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::Rgba32Float,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+                view_formats: &[],
+            },
         );
+        let vpls_view = vpls.create_view(&Default::default());
         let params = buffer_init(
             ctx,
             "bidir params",
@@ -225,7 +240,7 @@ impl BidirState {
                     },
                     wgpu::BindGroupEntry {
                         binding: 1,
-                        resource: vpls.as_entire_binding(),
+                        resource: wgpu::BindingResource::TextureView(&vpls_view),
                     },
                     wgpu::BindGroupEntry {
                         binding: 2,
@@ -637,7 +652,22 @@ pub(super) fn frame(
     let t = Instant::now();
     let q = &ctx.queue;
     if !raws.is_empty() {
-        gpu::write_buffer(q, "vpls", &state.vpls, 0, bytemuck::cast_slice(&raws));
+        let texels: Vec<[f32; 4]> = raws.iter().flat_map(VplRaw::texels).collect();
+        crate::gpu::alloc::note_upload("vpls", texels.len() as u64 * 16);
+        q.write_texture(
+            state.vpls.as_image_copy(),
+            bytemuck::cast_slice(&texels),
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(VplRaw::TEXELS * 16),
+                rows_per_image: Some(raws.len() as u32),
+            },
+            wgpu::Extent3d {
+                width: VplRaw::TEXELS,
+                height: raws.len() as u32,
+                depth_or_array_layers: 1,
+            },
+        );
         let m: Vec<[f32; 16]> = matrices.iter().map(|m| m.to_cols_array()).collect();
         gpu::write_buffer(
             q,

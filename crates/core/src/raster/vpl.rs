@@ -31,6 +31,26 @@ pub struct VplRaw {
     pub light_dist2: f32,
 }
 
+impl VplRaw {
+    /// Texels per VPL in the VPL texture.
+    pub const TEXELS: u32 = 7;
+
+    /// The record as seven RGBA float texels (`vpl_at` of `bidir.wgsl`), the integer fields
+    /// as float values (their bit patterns would be denormals, which a GPU may flush).
+    pub fn texels(&self) -> [[f32; 4]; 7] {
+        let v = |a: [f32; 3], w: f32| [a[0], a[1], a[2], w];
+        [
+            v(self.position, self.first_layer as f32),
+            v(self.flux, self.texel_scale),
+            v(self.to_light, self.fresnel as f32),
+            v(self.diffuse, self.roughness),
+            v(self.specular, self.pdf),
+            v(self.ns, self.light_flux),
+            v(self.ng, self.light_dist2),
+        ]
+    }
+}
+
 /// `Params` of `bidir.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -84,7 +104,7 @@ pub fn cube_views(p: Vec3, lo: Vec3, hi: Vec3, size: u32) -> ([Mat4; 6], f32) {
 /// The VPL lighting pipeline and its layouts.
 pub struct VplPass {
     pub pipeline: wgpu::RenderPipeline,
-    /// Group 0: params (uniform), VPLs, their shadow matrices and maps, comparison sampler,
+    /// Group 0: params (uniform), VPLs (texture), their shadow matrices and maps, comparison sampler,
     /// lights, their shadow matrices and maps, bundle views, heads, nodes, the environment's
     /// radiance table.
     pub layout: wgpu::BindGroupLayout,
@@ -120,7 +140,16 @@ impl VplPass {
                     },
                     count: None,
                 },
-                super::storage_entry(1, frag),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: frag,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
                 super::storage_entry(2, frag),
                 depth_array(3),
                 wgpu::BindGroupLayoutEntry {

@@ -77,7 +77,8 @@ struct Params {
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
-@group(0) @binding(1) var<storage, read> vpls: array<Vpl>;
+// The VPL records, seven texels a row, a row per VPL (`VplRaw::texels`).
+@group(0) @binding(1) var vpl_tex: texture_2d<f32>;
 @group(0) @binding(2) var<storage, read> vpl_views: array<mat4x4<f32>>;
 @group(0) @binding(3) var vpl_maps: texture_depth_2d_array;
 @group(0) @binding(4) var shadow_sampler: sampler_comparison;
@@ -111,6 +112,32 @@ fn spot(l: Light, cos_t: f32) -> f32 {
     }
     let t = (cos_t - l.cos_outer) / (l.cos_inner - l.cos_outer);
     return t * t * (3.0 - 2.0 * t);
+}
+
+fn vpl_at(i: u32) -> Vpl {
+    let t0 = textureLoad(vpl_tex, vec2<u32>(0u, i), 0);
+    let t1 = textureLoad(vpl_tex, vec2<u32>(1u, i), 0);
+    let t2 = textureLoad(vpl_tex, vec2<u32>(2u, i), 0);
+    let t3 = textureLoad(vpl_tex, vec2<u32>(3u, i), 0);
+    let t4 = textureLoad(vpl_tex, vec2<u32>(4u, i), 0);
+    let t5 = textureLoad(vpl_tex, vec2<u32>(5u, i), 0);
+    let t6 = textureLoad(vpl_tex, vec2<u32>(6u, i), 0);
+    var v: Vpl;
+    v.position = t0.xyz;
+    v.first_layer = u32(t0.w + 0.5);
+    v.flux = t1.xyz;
+    v.texel_scale = t1.w;
+    v.to_light = t2.xyz;
+    v.fresnel = u32(t2.w + 0.5);
+    v.diffuse = t3.xyz;
+    v.roughness = t3.w;
+    v.specular = t4.xyz;
+    v.pdf = t4.w;
+    v.ns = t5.xyz;
+    v.light_flux = t5.w;
+    v.ng = t6.xyz;
+    v.light_dist2 = t6.w;
+    return v;
 }
 
 fn vpl_material(v: Vpl) -> Material {
@@ -304,7 +331,7 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
     // One bounce through the VPLs.
     if params.mode != 2u {
         for (var i = 0u; i < params.vpl_count; i++) {
-            let v = vpls[i];
+            let v = vpl_at(i);
             let to_vpl = v.position - p;
             let d2 = dot(to_vpl, to_vpl);
             let cos13 = abs(dot(to_vpl, v.ng)) / sqrt(d2);
@@ -383,7 +410,7 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
                     }
                     let falloff = spot(l, dot(-wl, l.direction));
                     // Area densities of x2: drawn as a VPL of light j, and as this hit.
-                    let w = vpls[j * params.vpls_per_light].light_flux;
+                    let w = vpl_at(j * params.vpls_per_light).light_flux;
                     let i_sum = (l.intensity.x + l.intensity.y + l.intensity.z) * falloff;
                     var p1 = 0.0;
                     if w > 0.0 && params.mode != 2u {
@@ -414,7 +441,7 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
                 // d̂ at x3 of eq. 14: the bundles' density n2·p_r.
                 let f3 = bsdf_eval(clamped(m, 1.0 / bv.inv_density, dot(ns, wo)), ns, wo, dir);
                 for (var j = 0u; j * params.vpls_per_light < params.vpl_count; j++) {
-                    let v = vpls[j * params.vpls_per_light + k];
+                    let v = vpl_at(j * params.vpls_per_light + k);
                     let t = vpl_light(v, vpl_material(v), x2, ns2, ng2, m2, -dir, params.min_dist2);
                     sum += f3 * weight * t * n1;
                 }
