@@ -476,7 +476,8 @@ def render(
     importance sampling (``bidir_strategy`` "mis"; "vpl" or "bundle" for one strategy alone),
     with a clamped two-bounce term when ``max_depth`` ≥ 3 and, with ``roughness_clamping``,
     glossy lobes widened where samples are sparse. It lights scenes with an environment
-    light through the bundles (direct light from the sky).
+    light through the bundles (direct light from the sky; 3/4 of the bundle directions
+    drawn from an image sky's luminance).
     ``progress`` is a callable ``(stage, fraction) -> bool | None`` (return ``False`` to
     cancel), or ``True`` for progress bars (tqdm; in a terminal or a notebook, nothing in
     logs). The GIL is released while rendering; Ctrl-C cancels with

@@ -4,8 +4,8 @@
 //! of one size, the estimator's resources and the temporal photon ring. A frame re-uploads
 //! only what changed and reads back only the images asked for ([`FrameDesc`]).
 //!
-//! One file per method runs its passes in order: [`direct`], [`ispm`]; the CPU methods
-//! (`path`, `photon`, `gather`) reuse the renderer's BVH ([`cpu`]).
+//! One file per method runs its passes in order: [`direct`], [`ispm`], [`bidir`]; the CPU
+//! methods (`path`, `photon`, `gather`) reuse the renderer's BVH ([`cpu`]).
 
 mod bidir;
 mod cpu;
@@ -93,9 +93,7 @@ fn check_environment(scene: &Scene, method: Method) -> Result<()> {
         return Ok(());
     }
     let how = match method {
-        Method::Direct | Method::Ispm | Method::Bidir => {
-            "its GPU passes have no environment light yet"
-        }
+        Method::Direct | Method::Ispm => "its GPU passes have no environment light yet",
         _ => "its photons are emitted by point and spot lights only",
     };
     Err(Error::setting(

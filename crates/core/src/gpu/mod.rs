@@ -34,7 +34,7 @@ pub struct GpuContext {
     pub(crate) ispm_passes: OnceLock<crate::raster::ispm::IspmPasses>,
     /// The binning estimators' compute passes, compiled on first use.
     pub(crate) binned_passes: OnceLock<crate::estimate::binned::BinnedPasses>,
-    /// Method `bidir`'s passes (RSM, VPL lighting), compiled on first use.
+    /// Method `bidir`'s passes (RSM, ray bundles, lighting), compiled on first use.
     pub(crate) bidir_passes: OnceLock<crate::raster::vpl::BidirPasses>,
 }
 
