@@ -41,8 +41,10 @@ const NODE_ROW: u32 = 1024;
 /// Threads of the per-photon passes' workgroups.
 const PHOTON_GROUP: u32 = 64;
 /// Leaf clusters and accept lists per tile a photon's rectangle covers, on average, in the
-/// first list estimate of the hierarchy modes ([`Binned::estimate_entries`]).
-const HIERARCHY_ENTRIES_PER_TILE: u64 = 2;
+/// first list estimate of the hierarchy modes ([`Binned::estimate_entries`]). Measured: the
+/// walk writes about a sixth of twice the tiles (cornell, 1280×720, 200k photons), so one
+/// per tile still leaves 3× room.
+const HIERARCHY_ENTRIES_PER_TILE: u64 = 1;
 /// Environment variable scaling the first list estimate (default 1): small values force the
 /// overflow-regrow-redo path, which tests exercise with it.
 pub const LIST_ESTIMATE_ENV: &str = "GI_LIST_ESTIMATE";
@@ -776,16 +778,13 @@ impl Binned {
     ) -> Result<()> {
         let n = photons.len() as u32;
         let rows = n.div_ceil(PHOTON_ROW).max(1);
-        let entries = self.estimate_entries(photons, camera).min(u32::MAX as u64) as u32;
-        // Each job list holds at most a job per photon and node of its level under the
-        // photon's rectangle: the nodes of level 1 cover 16 tiles, so a quarter of the tiles
-        // under the rectangles (the hierarchy's estimate is twice those) is generous.
+        let (entries, jobs) = self.estimate_entries(photons, camera);
+        let entries = entries.min(u32::MAX as u64) as u32;
         let jobs = match self.mode {
             Mode::Tiled => 0,
-            Mode::Cluster | Mode::Directional => {
-                { ((entries / 8) as f64 * estimate_scale(JOB_ESTIMATE_ENV)) as u32 }.max(MIN_JOBS)
-            }
-        };
+            Mode::Cluster | Mode::Directional => jobs.min(u32::MAX as u64) as u32,
+        }
+        .max(MIN_JOBS);
         self.grow(
             ctx,
             gbuf,
@@ -823,12 +822,14 @@ impl Binned {
         Ok(())
     }
 
-    /// List entries the photons will need, estimated on the CPU from the tiles under each
-    /// photon's projected kernel (before the box and cone tests, so usually an
-    /// overestimate): lists sized from it are rarely redone ([`Binned::overflowed`]), which
-    /// matters for one-shot renders, whose first frame is their only one.
-    fn estimate_entries(&self, photons: &[Photon], camera: &Camera) -> u64 {
+    /// List entries and walk jobs (per job list) the photons will need, estimated on the
+    /// CPU from the tiles and the level-1 nodes under each photon's projected kernel (before
+    /// the box and cone tests, so usually an overestimate): lists sized from it are rarely
+    /// redone ([`Binned::overflowed`]), which matters for one-shot renders, whose first
+    /// frame is their only one.
+    fn estimate_entries(&self, photons: &[Photon], camera: &Camera) -> (u64, u64) {
         let all = (self.tiles[0] * self.tiles[1]) as u64;
+        let all_l1 = (self.l1[0] * self.l1[1]) as u64;
         let tile = TILE as f32;
         let per_photon = |p: &Photon| {
             let r = projected_radius(
@@ -838,19 +839,27 @@ impl Binned {
                 p.footprint_radius,
             );
             if !r.is_finite() {
-                return all;
+                return (all, all_l1);
             }
-            // The shader's rectangle spans 2r + 2 texels; its tiles per axis ≤ that / TILE + 2.
-            let side = ((2.0 * r + 2.0) / tile + 2.0).min(1e6) as u64;
-            (side * side).min(all)
+            // The shader's rectangle spans 2r + 2 texels; its tiles per axis ≤ that / TILE + 2,
+            // its level-1 nodes per axis ≤ that / (TILE·FANOUT) + 2 (a job per photon and
+            // level-2 or level-1 node it descends into: the level-1 count bounds both lists).
+            let span = (2.0 * r + 2.0) / tile;
+            let side = (span + 2.0).min(1e6) as u64;
+            let side1 = (span / FANOUT as f32 + 2.0).min(1e6) as u64;
+            ((side * side).min(all), (side1 * side1).min(all_l1))
         };
-        let tiles: u64 = photons.iter().map(per_photon).sum();
+        let (tiles, jobs) = photons
+            .iter()
+            .map(per_photon)
+            .fold((0, 0), |(a, b), (t, j)| (a + t, b + j));
         let entries = match self.mode {
             Mode::Tiled => tiles,
             Mode::Cluster | Mode::Directional => tiles * HIERARCHY_ENTRIES_PER_TILE,
         };
-        let scale = estimate_scale(LIST_ESTIMATE_ENV);
-        (entries as f64 * scale) as u64
+        let lists = (entries as f64 * estimate_scale(LIST_ESTIMATE_ENV)) as u64;
+        let jobs = (jobs as f64 * estimate_scale(JOB_ESTIMATE_ENV)) as u64;
+        (lists, jobs)
     }
 
     /// Records the binning, the shading and the upsampling of the uploaded photons.
