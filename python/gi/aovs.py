@@ -11,6 +11,7 @@ METHOD_EXTRA: dict[str, tuple[str, ...]] = {
     "gather": (),
     "direct": ("direct",),
     "ispm": ("direct", "specular", "indirect", "photons"),
+    "bidir": ("direct", "indirect"),
 }
 
 # Added by ``denoise=True``: the radiance before denoising.

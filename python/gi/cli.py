@@ -155,6 +155,26 @@ def _parser() -> argparse.ArgumentParser:
         help="how ISPM splats photons: raster volumes; tiled, cluster-hierarchy or its "
         "directional approximation in compute; or auto (per adapter)",
     )
+    r.add_argument(
+        "--vpls-per-light", type=int, default=64, help="bidir: virtual point lights per light"
+    )
+    r.add_argument("--bundles", type=int, default=16, help="bidir: ray bundles per frame")
+    r.add_argument(
+        "--bundle-resolution", type=int, default=128, help="bidir: ray-bundle pixels a side"
+    )
+    r.add_argument(
+        "--bundle-memory",
+        type=int,
+        default=64,
+        metavar="MIB",
+        help="bidir: MiB for the ray bundles' fragment lists (overflow is counted, not fatal)",
+    )
+    r.add_argument(
+        "--bidir-strategy",
+        default="mis",
+        choices=["mis", "vpl", "bundle"],
+        help="bidir: one-bounce light by MIS of VPLs and bundles, or one strategy alone",
+    )
     r.add_argument("--adapter", help='GPU adapter: "cpu" (lavapipe), "gpu" or part of a name')
     r.add_argument("--shadow-map-size", type=int, default=1024, help="shadow map texels per side")
     r.add_argument(
@@ -177,7 +197,8 @@ def _parser() -> argparse.ArgumentParser:
         action="append",
         default=[],
         help="also write this AOV (repeatable; 'all' for every one): albedo, normal, position,"
-        " depth, caustics; method direct adds direct, ispm direct, specular, indirect, photons;"
+        " depth, caustics; method direct adds direct, ispm direct, specular, indirect, photons,"
+        " bidir direct, indirect;"
         " --denoise adds noisy. EXR: layers of the output file; other formats: NAME.AOV.EXT",
     )
     r.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
@@ -302,6 +323,11 @@ def _settings(args: argparse.Namespace) -> dict[str, object]:
         estimator=args.estimator,
         adapter=args.adapter,
         shadow_map_size=args.shadow_map_size,
+        vpls_per_light=args.vpls_per_light,
+        bundles=args.bundles,
+        bundle_resolution=args.bundle_resolution,
+        bundle_memory_mb=args.bundle_memory,
+        bidir_strategy=args.bidir_strategy,
     )
 
 

@@ -43,6 +43,12 @@ class RenderStats:
     #: cluster hierarchy's trivial accepts (one photon for a whole node of view samples).
     list_entries: int = 0
     trivial_accepts: int = 0
+    #: Method ``bidir``: virtual point lights and ray bundles of the frame, the fragments the
+    #: bundles stored, and those dropped because ``bundle_memory_mb`` was full.
+    vpls: int = 0
+    bundles: int = 0
+    bundle_fragments: int = 0
+    bundle_overflow: int = 0
 
 
 @dataclass(frozen=True)
@@ -142,6 +148,10 @@ def _result(out: dict[str, Any]) -> RenderResult:
         estimator_memory=[(str(n), int(b)) for n, b in s["estimator_memory"]],
         list_entries=s["list_entries"],
         trivial_accepts=s["trivial_accepts"],
+        vpls=s["vpls"],
+        bundles=s["bundles"],
+        bundle_fragments=s["bundle_fragments"],
+        bundle_overflow=s["bundle_overflow"],
     )
     return RenderResult(
         radiance=out["radiance"],
@@ -406,6 +416,14 @@ def render(
     shadow_map_size: int = 1024,
     caustic_density_bound: bool = True,
     photon_focus: float = 0.25,
+    vpls_per_light: int = 64,
+    rsm_size: int = 64,
+    vpl_shadow_map_size: int = 128,
+    bundles: int = 16,
+    bundle_resolution: int = 128,
+    bundle_memory_mb: int = 64,
+    bidir_strategy: str = "mis",
+    roughness_clamping: bool = True,
     progress: bool | ProgressCallback = False,
     denoise: bool = False,
 ) -> RenderResult:
@@ -439,14 +457,27 @@ def render(
     once; Moreau et al. 2016), all three the same image up to float rounding; "directional"
     (the cluster hierarchy's approximation: per-cluster irradiance from 8 directions,
     faster, blockier) or "auto" (per adapter; ``stats.estimator_reason`` says why).
-    GPU methods (``direct``, ``ispm``) run on ``adapter`` ("cpu" for lavapipe, "gpu", or part of an
-    adapter's name; default: the ``GI_ADAPTER`` environment variable, else a real GPU when
-    present, else lavapipe) with ``shadow_map_size``² texels per shadow-map face.
+    GPU methods (``direct``, ``ispm``, ``bidir``) run on ``adapter`` ("cpu" for lavapipe,
+    "gpu", or part of an adapter's name; default: the ``GI_ADAPTER`` environment variable,
+    else a real GPU when present, else lavapipe) with ``shadow_map_size``² texels per
+    shadow-map face.
     ``caustic_density_bound`` (methods ``ispm`` and ``gather``) keeps each caustic photon's
     kernel radius within 0.75–1.5 times the distance to its 16th nearest caustic photon, so
     caustic kernels are small where caustics focus and wide where they spread.
     ``photon_focus`` (method ``gather``) aims that share of each light's photons at the
     mirrors and glass through a projection map, weighted so that the image is unchanged.
+    Method ``bidir`` (Tokuyoshi & Ogaki 2012, bidirectional path tracing by rasterization)
+    adds to the GPU direct light the indirect light of ``vpls_per_light`` virtual point lights
+    per light (drawn by flux from reflective shadow maps of about ``rsm_size``² texels per
+    view, each with a cube shadow map of ``vpl_shadow_map_size``² texels per face) and of
+    ``bundles`` global ray bundles per frame (the scene rasterized along random directions at
+    ``bundle_resolution``² pixels into fragment lists of ``bundle_memory_mb`` MiB; fragments
+    beyond it are dropped and counted in ``stats.bundle_overflow``), combined by multiple
+    importance sampling (``bidir_strategy`` "mis"; "vpl" or "bundle" for one strategy alone),
+    with a clamped two-bounce term when ``max_depth`` ≥ 3 and, with ``roughness_clamping``,
+    glossy lobes widened where samples are sparse. It lights scenes with an environment
+    light through the bundles (direct light from the sky; 3/4 of the bundle directions
+    drawn from an image sky's luminance).
     ``progress`` is a callable ``(stage, fraction) -> bool | None`` (return ``False`` to
     cancel), or ``True`` for progress bars (tqdm; in a terminal or a notebook, nothing in
     logs). The GIL is released while rendering; Ctrl-C cancels with
@@ -483,6 +514,14 @@ def render(
         shadow_map_size=shadow_map_size,
         caustic_density_bound=caustic_density_bound,
         photon_focus=photon_focus,
+        vpls_per_light=vpls_per_light,
+        rsm_size=rsm_size,
+        vpl_shadow_map_size=vpl_shadow_map_size,
+        bundles=bundles,
+        bundle_resolution=bundle_resolution,
+        bundle_memory_mb=bundle_memory_mb,
+        bidir_strategy=bidir_strategy,
+        roughness_clamping=roughness_clamping,
     )
     result = renderer.render(aovs=True, extras=True, progress=progress)
     if denoise:

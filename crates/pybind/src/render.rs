@@ -122,6 +122,18 @@ pub fn settings_from(
             "photon_focus" => s.photon_focus = float(v, "photon_focus")?,
             "caustic_density_bound" => s.caustic_density_bound = flag(v, "caustic_density_bound")?,
             "progressive_alpha" => s.progressive_alpha = float(v, "progressive_alpha")?,
+            "vpls_per_light" => s.vpls_per_light = int(v, "vpls_per_light")?,
+            "rsm_size" => s.rsm_size = int(v, "rsm_size")?,
+            "vpl_shadow_map_size" => s.vpl_shadow_map_size = int(v, "vpl_shadow_map_size")?,
+            "bundles" => s.bundles = int(v, "bundles")?,
+            "bundle_resolution" => s.bundle_resolution = int(v, "bundle_resolution")?,
+            "bundle_memory_mb" => s.bundle_memory_mb = int(v, "bundle_memory_mb")?,
+            "bidir_strategy" => {
+                s.bidir_strategy = text(v, "bidir_strategy")?
+                    .parse()
+                    .map_err(|e| to_py(py, e))?
+            }
+            "roughness_clamping" => s.roughness_clamping = flag(v, "roughness_clamping")?,
             other => {
                 return Err(setting_error(
                     py,
@@ -174,6 +186,10 @@ fn output_dict<'py>(
     stats.set_item("estimator_memory", s.estimator_memory.clone())?;
     stats.set_item("list_entries", s.list_entries)?;
     stats.set_item("trivial_accepts", s.trivial_accepts)?;
+    stats.set_item("vpls", s.vpls)?;
+    stats.set_item("bundles", s.bundles)?;
+    stats.set_item("bundle_fragments", s.bundle_fragments)?;
+    stats.set_item("bundle_overflow", s.bundle_overflow)?;
     d.set_item("stats", stats)?;
     Ok(d)
 }

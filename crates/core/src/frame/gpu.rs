@@ -196,6 +196,17 @@ impl GpuScene {
         self.shadows_stale = true;
     }
 
+    /// The lights' shadow matrices and maps (for lookups outside the direct pass).
+    pub fn shadow_lookup(&self) -> (&wgpu::Buffer, &wgpu::TextureView) {
+        (&self.shadow_matrices, &self.shadow_array)
+    }
+
+    /// The texture group for shadow passes of scenes with alpha masks (they discard
+    /// cut-outs), `None` otherwise.
+    pub fn shadow_masks(&self) -> Option<&wgpu::BindGroup> {
+        self.masked.then_some(&self.textures.group)
+    }
+
     /// Renders the shadow maps if lights or geometry moved since they were last rendered.
     pub fn record_shadows(
         &mut self,
@@ -418,6 +429,11 @@ impl Targets {
     /// Sub-pixel samples of the direct light.
     pub fn spp(&self) -> u32 {
         self.spp
+    }
+
+    /// The direct pass's G-buffer group (the lighting inputs), shared by `bidir`'s VPL pass.
+    pub fn lighting_group(&self) -> &wgpu::BindGroup {
+        &self.direct_gbuffer_group
     }
 
     pub fn has_composite(&self) -> bool {

@@ -91,6 +91,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         targets,
         timer,
         ispm,
+        ..
     } = g;
     let ctx = ctx.clone();
     let cam = &scene.camera;

@@ -4,9 +4,10 @@
 //! of one size, the estimator's resources and the temporal photon ring. A frame re-uploads
 //! only what changed and reads back only the images asked for ([`FrameDesc`]).
 //!
-//! One file per method runs its passes in order: [`direct`], [`ispm`]; the CPU methods
-//! (`path`, `photon`, `gather`) reuse the renderer's BVH ([`cpu`]).
+//! One file per method runs its passes in order: [`direct`], [`ispm`], [`bidir`]; the CPU
+//! methods (`path`, `photon`, `gather`) reuse the renderer's BVH ([`cpu`]).
 
+mod bidir;
 mod cpu;
 mod direct;
 mod gpu;
@@ -59,6 +60,7 @@ struct GpuState {
     targets: gpu::Targets,
     timer: crate::raster::timer::Timer,
     ispm: Option<ispm::IspmState>,
+    bidir: Option<bidir::BidirState>,
 }
 
 /// A persistent renderer of one scene with one method.
@@ -80,10 +82,14 @@ pub struct Renderer {
     accum: Option<progressive::Accumulation>,
 }
 
-/// Only `path` lights a scene with its environment light so far; the other methods refuse
-/// rather than render the scene without it.
+/// Only `path` and `bidir` light a scene with its environment light so far; the other
+/// methods refuse rather than render the scene without it.
 fn check_environment(scene: &Scene, method: Method) -> Result<()> {
     if scene.environment.is_none() || method == Method::Path {
+        return Ok(());
+    }
+    if method == Method::Bidir {
+        // Seen through the ray bundles (§6); without bundles it would be missing.
         return Ok(());
     }
     let how = match method {
@@ -252,7 +258,9 @@ impl Renderer {
                 let bvh = self.bvh.as_ref().ok_or(Error::Cancelled)?;
                 cpu::frame(&self.scene, bvh, &settings, progress)?
             }
-            Method::Direct | Method::Ispm => self.gpu_frame(&settings, desc.images, progress)?,
+            Method::Direct | Method::Ispm | Method::Bidir => {
+                self.gpu_frame(&settings, desc.images, progress)?
+            }
         };
         stages.append(&mut out.stats.stages);
         out.stats.stages = stages;
@@ -345,6 +353,7 @@ impl Renderer {
                         progress,
                     })
                 }
+                Method::Bidir => bidir::frame(gpu, &self.scene, settings, images, progress),
                 _ => direct::frame(gpu, &self.scene, images, progress),
             }
         })
@@ -367,6 +376,7 @@ impl Renderer {
                 targets,
                 timer: gpu::frame_timer(ctx),
                 ispm: None,
+                bidir: None,
             });
             return Ok(());
         }
@@ -394,6 +404,7 @@ impl Renderer {
             crate::raster::check_limits(ctx, scene, settings, g.scene.layers)?;
             g.targets = gpu::Targets::new(ctx, &g.scene, scene, settings.spp);
             g.ispm = None;
+            g.bidir = None;
         } else {
             if c.camera || c.geometry {
                 // The eye views' depth range follows the scene's bounds.

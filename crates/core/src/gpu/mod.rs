@@ -34,6 +34,8 @@ pub struct GpuContext {
     pub(crate) ispm_passes: OnceLock<crate::raster::ispm::IspmPasses>,
     /// The binning estimators' compute passes, compiled on first use.
     pub(crate) binned_passes: OnceLock<crate::estimate::binned::BinnedPasses>,
+    /// Method `bidir`'s passes (RSM, ray bundles, lighting), compiled on first use.
+    pub(crate) bidir_passes: OnceLock<crate::raster::vpl::BidirPasses>,
 }
 
 /// How the user chose the adapter.
@@ -152,6 +154,7 @@ fn create_context(choice: &Choice) -> Result<GpuContext> {
         passes: OnceLock::new(),
         ispm_passes: OnceLock::new(),
         binned_passes: OnceLock::new(),
+        bidir_passes: OnceLock::new(),
     })
 }
 

@@ -11,6 +11,10 @@ pub const TEXTURE: &str = include_str!("shaders/common/texture.wgsl");
 pub const PHOTON_VOLUME: &str = include_str!("shaders/common/photon_volume.wgsl");
 /// Order-independent (fixed-point) sums of non-negative RGB terms.
 pub const FIXED_SUM: &str = include_str!("shaders/common/fixed_sum.wgsl");
+/// Global ray-bundle views and fragment nodes (`bidir`).
+pub const BUNDLE_TYPES: &str = include_str!("shaders/common/bundle_types.wgsl");
+/// Shadow-map layer choice and PCF lookup.
+pub const SHADOW_LOOKUP: &str = include_str!("shaders/common/shadow_lookup.wgsl");
 
 pub const GBUFFER: &str = include_str!("shaders/gbuffer.wgsl");
 pub const SHADOW: &str = include_str!("shaders/shadow.wgsl");
@@ -22,6 +26,9 @@ pub const TILED: &str = include_str!("shaders/tiled.wgsl");
 pub const CLUSTER: &str = include_str!("shaders/cluster.wgsl");
 pub const UPSAMPLE: &str = include_str!("shaders/upsample.wgsl");
 pub const COMPOSITE: &str = include_str!("shaders/composite.wgsl");
+pub const RSM: &str = include_str!("shaders/rsm.wgsl");
+pub const BIDIR: &str = include_str!("shaders/bidir.wgsl");
+pub const BUNDLES: &str = include_str!("shaders/bundles.wgsl");
 
 /// Creates a shader module from `parts`, concatenated in order (common code first).
 pub fn module(device: &wgpu::Device, label: &str, parts: &[&str]) -> wgpu::ShaderModule {

@@ -65,7 +65,12 @@ impl DirectPass {
         let module = shaders::module(
             device,
             "direct shader",
-            &[shaders::COMMON, shaders::BSDF, shaders::DIRECT],
+            &[
+                shaders::COMMON,
+                shaders::BSDF,
+                shaders::SHADOW_LOOKUP,
+                shaders::DIRECT,
+            ],
         );
         let add = wgpu::BlendComponent {
             src_factor: wgpu::BlendFactor::One,

@@ -1,15 +1,18 @@
 //! GPU rasterization passes and the `direct` frame: shadow maps, then per sub-pixel sample an
 //! eye G-buffer and deferred direct lighting accumulated into one image.
 
+pub mod bundles;
 pub mod composite;
 pub mod direct;
 pub mod gbuffer;
 pub mod ispm;
+pub mod rsm;
 pub mod shadow;
 pub(crate) mod specular;
 pub mod textures;
 pub(crate) mod timer;
 pub mod volume_shape;
+pub mod vpl;
 
 use crate::error::{Error, Result};
 use crate::gpu::raw::{VertexRaw, ViewRaw};

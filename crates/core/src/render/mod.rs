@@ -35,6 +35,10 @@ pub enum Method {
     /// CPU photon tracing of the later bounces, and photon volumes splatted on the GPU
     /// (optionally at 1/`subsample` resolution with joint bilateral upsampling).
     Ispm,
+    /// Real-time bidirectional path tracing by rasterization (Tokuyoshi & Ogaki 2012): GPU
+    /// direct light as `direct`, plus one-bounce indirect light from virtual point lights
+    /// drawn from reflective shadow maps, each with its own cube shadow map.
+    Bidir,
 }
 
 impl Method {
@@ -44,6 +48,7 @@ impl Method {
         Method::Gather,
         Method::Direct,
         Method::Ispm,
+        Method::Bidir,
     ];
 
     pub fn name(self) -> &'static str {
@@ -53,6 +58,7 @@ impl Method {
             Method::Gather => "gather",
             Method::Direct => "direct",
             Method::Ispm => "ispm",
+            Method::Bidir => "bidir",
         }
     }
 }
@@ -69,6 +75,49 @@ impl FromStr for Method {
                 Error::setting(
                     "method",
                     format!("unknown method `{s}` (available: {})", names.join(", ")),
+                )
+            })
+    }
+}
+
+/// Which strategies method `bidir` uses for the one-bounce light (Tokuyoshi & Ogaki 2012
+/// §4.2): both combined by multiple importance sampling, or one alone (Figure 4: VPLs spike
+/// where a VPL lies close to a receiver, bundles are noisy near bright spots).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum BidirStrategy {
+    #[default]
+    Mis,
+    Vpl,
+    Bundle,
+}
+
+impl BidirStrategy {
+    pub const ALL: &'static [BidirStrategy] = &[
+        BidirStrategy::Mis,
+        BidirStrategy::Vpl,
+        BidirStrategy::Bundle,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            BidirStrategy::Mis => "mis",
+            BidirStrategy::Vpl => "vpl",
+            BidirStrategy::Bundle => "bundle",
+        }
+    }
+}
+
+impl FromStr for BidirStrategy {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        BidirStrategy::ALL
+            .iter()
+            .copied()
+            .find(|v| v.name() == s)
+            .ok_or_else(|| {
+                Error::setting(
+                    "bidir_strategy",
+                    format!("unknown strategy `{s}` (available: mis, vpl, bundle)"),
                 )
             })
     }
@@ -162,6 +211,26 @@ pub struct Settings {
     /// frames whose AOVs are not asked for (at one sample per pixel, as in a progressive
     /// pass of `gather`, that ray was about a tenth of the camera pass on `cornell`).
     pub first_hit_aovs: bool,
+    /// Virtual point lights per light and frame (method `bidir`), drawn from the light's
+    /// reflective shadow map with probability proportional to texel flux.
+    pub vpls_per_light: u32,
+    /// Reflective-shadow-map texels a side per view for a light of average power (method
+    /// `bidir`); views of brighter lights get more (the split of the ISPM bounce map).
+    pub rsm_size: u32,
+    /// Cube shadow-map resolution of each VPL, texels per face side (method `bidir`).
+    pub vpl_shadow_map_size: u32,
+    /// Global ray bundles per frame (method `bidir`); 0 = VPLs only.
+    pub bundles: u32,
+    /// Ray-bundle resolution, pixels a side of the parallel projection (method `bidir`).
+    pub bundle_resolution: u32,
+    /// Memory for the ray bundles' fragment lists, MiB (method `bidir`); fragments beyond it
+    /// are dropped and counted in `RenderStats::bundle_overflow`.
+    pub bundle_memory_mb: u32,
+    /// Strategies of `bidir`'s one-bounce light.
+    pub bidir_strategy: BidirStrategy,
+    /// Roughness clamping of glossy BSDFs at `bidir`'s path vertices (Tokuyoshi & Ogaki
+    /// 2012 §5): the GGX α is raised where the samples are too sparse for its peak.
+    pub roughness_clamping: bool,
 }
 
 impl Default for Settings {
@@ -195,6 +264,14 @@ impl Default for Settings {
             caustic_density_bound: true,
             photon_focus: 0.25,
             first_hit_aovs: true,
+            vpls_per_light: 64,
+            rsm_size: 64,
+            vpl_shadow_map_size: 128,
+            bundles: 16,
+            bundle_resolution: 128,
+            bundle_memory_mb: 64,
+            bidir_strategy: BidirStrategy::Mis,
+            roughness_clamping: true,
         }
     }
 }
@@ -206,7 +283,7 @@ impl Settings {
     /// (`docs/bench/defaults.md`).
     pub fn for_method(method: Method) -> Settings {
         let spp = match method {
-            Method::Direct | Method::Ispm => GPU_DEFAULT_SPP,
+            Method::Direct | Method::Ispm | Method::Bidir => GPU_DEFAULT_SPP,
             _ => Settings::default().spp,
         };
         Settings {
@@ -226,6 +303,10 @@ pub const MAX_LIGHT_PATHS: u64 = 1 << 36;
 pub const MAX_PHOTONS: u64 = 1_000_000_000;
 pub const MAX_K: u32 = 1 << 16;
 pub const MAX_TEMPORAL_FRAMES: u32 = 64;
+/// VPLs per light (each takes six shadow-map layers).
+pub const MAX_VPLS_PER_LIGHT: u32 = 1024;
+/// Ray bundles per frame.
+pub const MAX_BUNDLES: u32 = 4096;
 
 impl Settings {
     pub fn validate(&self) -> Result<()> {
@@ -299,6 +380,39 @@ impl Settings {
         if !(0.0..=0.95).contains(&self.photon_focus) {
             return Err(Error::setting("photon_focus", "must be in [0, 0.95]"));
         }
+        if !(1..=MAX_VPLS_PER_LIGHT).contains(&self.vpls_per_light) {
+            return Err(Error::setting(
+                "vpls_per_light",
+                format!("must be in 1..={MAX_VPLS_PER_LIGHT}"),
+            ));
+        }
+        if !(1..=4096).contains(&self.rsm_size) {
+            return Err(Error::setting("rsm_size", "must be in 1..=4096"));
+        }
+        if !(16..=4096).contains(&self.vpl_shadow_map_size) {
+            return Err(Error::setting(
+                "vpl_shadow_map_size",
+                "must be in 16..=4096",
+            ));
+        }
+        if self.bundles > MAX_BUNDLES {
+            return Err(Error::setting(
+                "bundles",
+                format!("must be in 0..={MAX_BUNDLES}"),
+            ));
+        }
+        if !(16..=4096).contains(&self.bundle_resolution) {
+            return Err(Error::setting("bundle_resolution", "must be in 16..=4096"));
+        }
+        if !(1..=4096).contains(&self.bundle_memory_mb) {
+            return Err(Error::setting("bundle_memory_mb", "must be in 1..=4096"));
+        }
+        if self.bundles == 0 && self.bidir_strategy == BidirStrategy::Bundle {
+            return Err(Error::setting(
+                "bidir_strategy",
+                "strategy `bundle` needs bundles > 0",
+            ));
+        }
         if !(self.progressive_alpha > 0.0 && self.progressive_alpha < 1.0) {
             return Err(Error::setting("progressive_alpha", "must be in (0, 1)"));
         }
@@ -363,6 +477,13 @@ pub struct RenderStats {
     /// them the cluster hierarchy's trivial accepts (a photon for a whole node).
     pub list_entries: u64,
     pub trivial_accepts: u64,
+    /// Method `bidir`: virtual point lights of the frame (all lights).
+    pub vpls: u64,
+    /// Method `bidir`: ray bundles of the frame, the fragments they stored in their lists,
+    /// and the fragments dropped because the list memory (`bundle_memory_mb`) was full.
+    pub bundles: u64,
+    pub bundle_fragments: u64,
+    pub bundle_overflow: u64,
 }
 
 /// A rendered frame: radiance and auxiliary images, all `width × height`.
@@ -410,7 +531,7 @@ impl Progress for Silent {
 /// targets and readbacks of the GPU methods (G-buffer, accumulation, copies).
 pub(crate) fn check_image_memory(camera: &crate::scene::Camera, method: Method) -> Result<()> {
     let per_pixel: u64 = match method {
-        Method::Direct | Method::Ispm => 384,
+        Method::Direct | Method::Ispm | Method::Bidir => 400,
         _ => 160,
     };
     let pixels = camera.width as u64 * camera.height as u64;

@@ -295,6 +295,26 @@ impl Environment {
         (x, y)
     }
 
+    /// The radiance table for the GPU: (width, height, texels times the intensity scale), a
+    /// 1×1 table for a constant colour, and (cos, sin) of the rotation about +y. A lookup
+    /// of the texel [`Environment::radiance`] picks reproduces it.
+    pub fn gpu_table(&self) -> (u32, u32, Vec<Vec3>, (f32, f32)) {
+        match &self.source {
+            Source::Constant(c) => (1, 1, vec![*c * self.scale], self.rot),
+            Source::Image { image, .. } => (
+                image.width,
+                image.height,
+                image.texels.iter().map(|t| *t * self.scale).collect(),
+                self.rot,
+            ),
+        }
+    }
+
+    /// (cos, sin) of the rotation about +y.
+    pub fn rotation(&self) -> (f32, f32) {
+        self.rot
+    }
+
     /// Radiance arriving from the unit world direction `d` (pointing away from the scene).
     pub fn radiance(&self, d: Vec3) -> Vec3 {
         match &self.source {

@@ -31,43 +31,10 @@ fn spot_falloff(l: Light, cos_t: f32) -> f32 {
     return t * t * (3.0 - 2.0 * t);
 }
 
-// The shadow layer of `l` that sees direction `d` (from the light): the cube face of the
-// major axis for point lights.
-fn shadow_layer(l: Light, d: vec3<f32>) -> u32 {
-    if l.layers == 1u {
-        return l.first_layer;
-    }
-    let a = abs(d);
-    var face = 0u;
-    if a.x >= a.y && a.x >= a.z {
-        face = select(1u, 0u, d.x >= 0.0);
-    } else if a.y >= a.z {
-        face = select(3u, 2u, d.y >= 0.0);
-    } else {
-        face = select(5u, 4u, d.z >= 0.0);
-    }
-    return l.first_layer + face;
-}
-
-// Percentage-closer filtering: 3×3 bilinear comparison taps one texel apart (a 4×4-texel
-// tent), so the lit fraction varies smoothly across a shadow edge.
+// Shadow-map visibility of `p` from light `l` (common/shadow_lookup.wgsl).
 fn visibility(l: Light, p: vec3<f32>) -> f32 {
-    let layer = shadow_layer(l, p - l.position);
-    let clip = shadow_views[layer] * vec4<f32>(p, 1.0);
-    if clip.w <= 0.0 {
-        return 0.0;
-    }
-    let ndc = clip.xyz / clip.w;
-    let uv = ndc.xy * vec2<f32>(0.5, -0.5) + 0.5;
-    let texel = 1.0 / vec2<f32>(textureDimensions(shadow_maps));
-    var lit = 0.0;
-    for (var y = -1; y <= 1; y++) {
-        for (var x = -1; x <= 1; x++) {
-            let o = vec2<f32>(f32(x), f32(y)) * texel;
-            lit += textureSampleCompareLevel(shadow_maps, shadow_sampler, uv + o, layer, ndc.z);
-        }
-    }
-    return lit / 9.0;
+    let layer = shadow_layer_of(l.first_layer, l.layers, p - l.position);
+    return shadow_pcf(shadow_maps, shadow_sampler, shadow_views[layer], layer, p);
 }
 
 @fragment

@@ -1,0 +1,452 @@
+// Indirect light of method `bidir` (Tokuyoshi & Ogaki 2012 §4) at every G-buffer pixel x3:
+//
+// - one bounce through a VPL x1 (light subpath, §4.1), for every VPL:
+//     Φ1 · f(x1; ω1,3, ω1,0) · f(x3; ω3,4, ω3,1) · |n3·ω3,1| · |ng1·ω1,3| / ‖x1 − x3‖² · V
+//   with V from the VPL's cube shadow map;
+// - one bounce through a ray-bundle hit x2 (camera subpath, §3): per bundle the nearest
+//   fragment along ±ω (the side of n3), lit by the lights with their shadow maps:
+//     f(x3)·|n3·ω|·f(x2)·|n2·ω2,0|·I/‖x2 − x0‖²·V / p_r,   p_r = 1/2π;
+// - both combined by MIS (§4.2, balance heuristic, β = 1) on the area densities of the
+//   middle vertex: VPLs p1 = n1·I(ω0,j)·|ng_j·ω_j,0| / (‖x_j − x0‖²·W) (W: the light's
+//   covered flux, VPLs drawn ∝ flux), bundles p2 = n2·p_r·|ng_j·ω_j,3| / ‖x_j − x3‖²;
+// - two bounces x0 → x1 → x2 → x3 (§4.3): each bundle paired with one VPL of every light,
+//   the VPL's shadow map testing (x1, x2), ‖x1 − x2‖² clamped from below.
+// - roughness clamping (§5): the GGX α of the BSDF at a path vertex is raised so that the
+//   distribution's peak D(0) = 1/(πα²) stays under d̂/m (kernel radius estimation, eq. 9),
+//   with d̂ the density of samples per unit solid angle there (eqs. 13–17, from the area
+//   density A = n1·p1 + n2·p2 of the middle vertex: d = A·dist²/cos towards either end)
+//   and m = 16 (the paper's m').
+// - environment light (§6): a bundle direction with no fragment along it sees the
+//   environment: f3·|n3·ω|·L_env(ω)/D(ω) (its direct light; its indirect light is not
+//   traced). With an image environment (and its `importance`), part of the bundles are
+//   drawn by the sky's luminance (§3.3); D, the density of all the frame's bundle
+//   directions (a multi-sample balance heuristic over the two ways of drawing them),
+//   replaces n2·p_r everywhere.
+// `mode`: 0 MIS, 1 VPLs only, 2 bundles only (for the one-bounce light).
+
+struct Vpl {
+    position: vec3<f32>,
+    first_layer: u32,
+    flux: vec3<f32>,
+    // World size of one shadow texel at unit distance from the VPL.
+    texel_scale: f32,
+    // Unit direction from the VPL towards its light (ω1,0).
+    to_light: vec3<f32>,
+    fresnel: u32,
+    diffuse: vec3<f32>,
+    roughness: f32,
+    specular: vec3<f32>,
+    // Area density of this VPL's point per VPL draw (I(ω)·cos / (d²·W)).
+    pdf: f32,
+    ns: vec3<f32>,
+    // The covered flux W (sum of channels) of the VPL's light.
+    light_flux: f32,
+    ng: vec3<f32>,
+    // Squared distance from the VPL to its light.
+    light_dist2: f32,
+}
+
+struct Params {
+    eye: vec3<f32>,
+    // VPL slots: `vpls_per_light` per light, light by light.
+    vpl_count: u32,
+    vpls_per_light: u32,
+    bundles: u32,
+    mode: u32,
+    two_bounce: u32,
+    // Lower bound of ‖x1 − x2‖² in the two-bounce term.
+    min_dist2: f32,
+    // Longest list walked (a guard: lists longer than this are cut).
+    max_walk: u32,
+    // Random offset in [0, 1) of the bundle-to-VPL pairing of the two-bounce term.
+    pair_offset: f32,
+    // Roughness clamping (§5) on (1) or off (0).
+    clamp_roughness: u32,
+    // Camera clip -> world (for the environment behind pixels the scene does not cover).
+    inv_view_proj: mat4x4<f32>,
+    // Environment light: 1 when the scene has one; (cos, sin) of its rotation about +y.
+    has_env: u32,
+    env_cos: f32,
+    env_sin: f32,
+    // Bundles drawn from the environment (§3.3) and uniformly: D(ω) =
+    // n_uniform/2π + n_env·(p_env(ω) + p_env(−ω)), p_env(ω) ≈ lum(L_env(ω))·env_pdf_scale.
+    bundles_env: f32,
+    bundles_uniform: f32,
+    env_pdf_scale: f32,
+    _pad1: vec2<f32>,
+}
+
+@group(0) @binding(0) var<uniform> params: Params;
+// The VPL records, seven texels a row, a row per VPL (`VplRaw::texels`).
+@group(0) @binding(1) var vpl_tex: texture_2d<f32>;
+@group(0) @binding(2) var<storage, read> vpl_views: array<mat4x4<f32>>;
+@group(0) @binding(3) var vpl_maps: texture_depth_2d_array;
+@group(0) @binding(4) var shadow_sampler: sampler_comparison;
+@group(0) @binding(5) var<storage, read> lights: array<Light>;
+@group(0) @binding(6) var<storage, read> light_views: array<mat4x4<f32>>;
+@group(0) @binding(7) var light_maps: texture_depth_2d_array;
+@group(0) @binding(8) var<storage, read> bundle_views: array<BundleView>;
+@group(0) @binding(9) var<storage, read> heads: array<u32>;
+@group(0) @binding(10) var<storage, read> nodes: array<Node>;
+// Radiance table of the environment (equirectangular; 1×1 for a constant colour).
+@group(0) @binding(11) var env_table: texture_2d<f32>;
+@group(1) @binding(0) var g_position: texture_2d<f32>;
+@group(1) @binding(1) var g_normals: texture_2d<f32>;
+@group(1) @binding(2) var g_diffuse: texture_2d<f32>;
+@group(1) @binding(3) var g_specular: texture_2d<f32>;
+
+const TWO_PI: f32 = 6.28318530718;
+
+@vertex
+fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
+    let uv = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
+    return vec4<f32>(uv * 2.0 - 1.0, 0.0, 1.0);
+}
+
+fn spot(l: Light, cos_t: f32) -> f32 {
+    if l.kind != 1u || cos_t >= l.cos_inner {
+        return 1.0;
+    }
+    if cos_t <= l.cos_outer {
+        return 0.0;
+    }
+    let t = (cos_t - l.cos_outer) / (l.cos_inner - l.cos_outer);
+    return t * t * (3.0 - 2.0 * t);
+}
+
+fn vpl_at(i: u32) -> Vpl {
+    let t0 = textureLoad(vpl_tex, vec2<u32>(0u, i), 0);
+    let t1 = textureLoad(vpl_tex, vec2<u32>(1u, i), 0);
+    let t2 = textureLoad(vpl_tex, vec2<u32>(2u, i), 0);
+    let t3 = textureLoad(vpl_tex, vec2<u32>(3u, i), 0);
+    let t4 = textureLoad(vpl_tex, vec2<u32>(4u, i), 0);
+    let t5 = textureLoad(vpl_tex, vec2<u32>(5u, i), 0);
+    let t6 = textureLoad(vpl_tex, vec2<u32>(6u, i), 0);
+    var v: Vpl;
+    v.position = t0.xyz;
+    v.first_layer = u32(t0.w + 0.5);
+    v.flux = t1.xyz;
+    v.texel_scale = t1.w;
+    v.to_light = t2.xyz;
+    v.fresnel = u32(t2.w + 0.5);
+    v.diffuse = t3.xyz;
+    v.roughness = t3.w;
+    v.specular = t4.xyz;
+    v.pdf = t4.w;
+    v.ns = t5.xyz;
+    v.light_flux = t5.w;
+    v.ng = t6.xyz;
+    v.light_dist2 = t6.w;
+    return v;
+}
+
+fn vpl_material(v: Vpl) -> Material {
+    var m: Material;
+    m.diffuse = v.diffuse;
+    m.roughness = v.roughness;
+    m.specular = v.specular;
+    m.fresnel = v.fresnel;
+    return m;
+}
+
+// Visibility of `p` (geometric normal `ng`, towards the VPL) from VPL `v`.
+fn vpl_visibility(v: Vpl, p: vec3<f32>, ng: vec3<f32>) -> f32 {
+    let d = v.position - p;
+    let dist = length(d);
+    let c = dot(d / dist, ng);
+    let q = p + ng * (v.texel_scale * dist * (1.0 - c) + 1e-4 * dist);
+    let layer = shadow_layer_of(v.first_layer, 6u, q - v.position);
+    return shadow_tap(vpl_maps, shadow_sampler, vpl_views[layer], layer, q);
+}
+
+fn light_visibility(l: Light, p: vec3<f32>, ng: vec3<f32>) -> f32 {
+    let d = l.position - p;
+    let dist = length(d);
+    let c = dot(d / dist, ng);
+    let q = p + ng * (l.texel_scale * dist * (1.0 - c) + 1e-4 * dist);
+    let layer = shadow_layer_of(l.first_layer, l.layers, q - l.position);
+    return shadow_tap(light_maps, shadow_sampler, light_views[layer], layer, q);
+}
+
+// The light VPL `v` sends from x1 to a point `p` (normals `ns`, `ng`; material `m`, seen
+// from `wo`), visibility included: Φ1·f1·f·|ns·ωp,1|·|ng1·ω1,p|/d².
+fn vpl_light(v: Vpl, m1: Material, p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, wo: vec3<f32>, min_d2: f32) -> vec3<f32> {
+    let to_vpl = v.position - p;
+    let d2 = dot(to_vpl, to_vpl);
+    let wi = to_vpl / sqrt(d2);
+    let cos1 = -dot(wi, v.ng);
+    if dot(wi, ng) <= 0.0 || cos1 <= 0.0 || max3(v.flux) <= 0.0 {
+        return vec3<f32>(0.0);
+    }
+    let f1 = bsdf_eval(m1, v.ns, -wi, v.to_light);
+    let f = bsdf_eval(m, ns, wo, wi);
+    let t = v.flux * f1 * f * (abs(dot(ns, wi)) * cos1 / max(d2, min_d2));
+    if max3(t) <= 0.0 {
+        return vec3<f32>(0.0);
+    }
+    return t * vpl_visibility(v, p, ng);
+}
+
+// §5: the material with its GGX α raised to √(m/(π·d̂)) (no change when off), where
+// m = m'·f·cos/D with m' = 16: for the GGX lobe f·cos θi/D = F·G2/(4 cos θo), taken with
+// G2 ≈ 1 and the mean Fresnel reflectance; `cos_o`: the cosine on the side the light leaves.
+fn clamped(m_in: Material, dhat: f32, cos_o: f32) -> Material {
+    var m = m_in;
+    if params.clamp_roughness == 0u || max3(m.specular) <= 0.0 || !(dhat > 0.0) {
+        return m;
+    }
+    let weight = 16.0 * avg3(fresnel_avg(m)) / (4.0 * max(abs(cos_o), 0.05));
+    let alpha_min = sqrt(weight / (PI * dhat));
+    m.roughness = max(m.roughness, sqrt(min(alpha_min, 1.0)));
+    return m;
+}
+
+// d̂ of eq. 13 from the two solid-angle densities.
+fn avg3(v: vec3<f32>) -> f32 {
+    return (v.x + v.y + v.z) / 3.0;
+}
+
+fn combine(d_a: f32, d_b: f32) -> f32 {
+    return 1.0 / (1.0 / d_a + 1.0 / d_b);
+}
+
+// Radiance of the environment from world direction `d` (`Environment::radiance`).
+fn env_radiance(d: vec3<f32>) -> vec3<f32> {
+    let c = params.env_cos;
+    let s = params.env_sin;
+    let l = vec3<f32>(c * d.x - s * d.z, d.y, s * d.x + c * d.z);
+    let sin_t = sqrt(l.x * l.x + l.z * l.z);
+    var u = atan2(l.x, -l.z) / TWO_PI;
+    u = u - floor(u);
+    let v = atan2(sin_t, l.y) / PI;
+    let size = textureDimensions(env_table);
+    let x = min(u32(u * f32(size.x)), size.x - 1u);
+    let y = min(u32(v * f32(size.y)), size.y - 1u);
+    return textureLoad(env_table, vec2<u32>(x, y), 0).xyz;
+}
+
+fn luminance(c: vec3<f32>) -> f32 {
+    return dot(c, vec3<f32>(0.2126, 0.7152, 0.0722));
+}
+
+// The frame's density of bundle directions over a hemisphere at a point, towards `d`
+// (the sum over bundles; n2/2π when all are uniform). Used in the MIS weights and the
+// clamping densities; a bundle's own sample is divided by its exact value (`inv_density`).
+fn bundle_density(d: vec3<f32>) -> f32 {
+    var dens = params.bundles_uniform / TWO_PI;
+    if params.bundles_env > 0.0 {
+        let l = luminance(env_radiance(d)) + luminance(env_radiance(-d));
+        dens += params.bundles_env * l * params.env_pdf_scale;
+    }
+    return dens;
+}
+
+struct Hit {
+    found: bool,
+    t: f32,
+    node: Node,
+}
+
+fn node_position(n: Node) -> vec3<f32> {
+    return vec3<f32>(n.x, n.y, n.z);
+}
+
+// The nearest fragment of bundle `bv` from `p` along `dir` = ±ω: the smallest distance along
+// `dir` beyond `eps`, skipping fragments whose plane passes within `plane_eps` of `p` (p's
+// own surface, and its neighbouring triangles on a finely tessellated curve).
+fn trace_bundle(bv: BundleView, p: vec3<f32>, dir: vec3<f32>, eps: f32, plane_eps: f32) -> Hit {
+    var hit: Hit;
+    hit.found = false;
+    let clip = bv.view_proj * vec4<f32>(p, 1.0);
+    let uv = clip.xy * vec2<f32>(0.5, -0.5) + 0.5;
+    if any(uv < vec2<f32>(0.0)) || any(uv >= vec2<f32>(1.0)) {
+        return hit;
+    }
+    let px = vec2<u32>(uv * f32(bv.res));
+    var best = 3.4e38;
+    var next = heads[bv.index * bv.res * bv.res + px.y * bv.res + px.x];
+    var steps = 0u;
+    while next != 0u && steps < params.max_walk {
+        let n = nodes[next - 1u];
+        let q = node_position(n) - p;
+        let t = dot(q, dir);
+        if t > eps && t < best {
+            let ng = oct_decode(unpack2x16snorm(n.ng));
+            if abs(dot(q, ng)) > plane_eps {
+                best = t;
+                hit.node = n;
+                hit.found = true;
+            }
+        }
+        next = n.next;
+        steps++;
+    }
+    hit.t = best;
+    return hit;
+}
+
+fn node_material(n: Node) -> Material {
+    let a = unpack2x16float(n.m0);
+    let b = unpack2x16float(n.m1);
+    let c = unpack2x16float(n.m2);
+    let d = unpack2x16float(n.m3);
+    var m: Material;
+    m.diffuse = vec3<f32>(a, b.x);
+    m.roughness = b.y;
+    m.specular = vec3<f32>(c, d.x);
+    m.fresnel = u32(d.y > 0.5);
+    return m;
+}
+
+@fragment
+fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
+    let px = vec2<i32>(frag.xy);
+    let pos = textureLoad(g_position, px, 0);
+    if pos.w == 0.0 {
+        if params.has_env == 0u {
+            return vec4<f32>(0.0);
+        }
+        // The environment seen through the pixel centre.
+        let size = vec2<f32>(textureDimensions(g_position));
+        let ndc = vec2<f32>(frag.x / size.x * 2.0 - 1.0, 1.0 - frag.y / size.y * 2.0);
+        let w = params.inv_view_proj * vec4<f32>(ndc, 1.0, 1.0);
+        return vec4<f32>(env_radiance(normalize(w.xyz / w.w - params.eye)), 1.0);
+    }
+    let p = pos.xyz;
+    let nn = textureLoad(g_normals, px, 0);
+    let ns = oct_decode(nn.xy);
+    let ng = oct_decode(nn.zw);
+    let d = textureLoad(g_diffuse, px, 0);
+    let s = textureLoad(g_specular, px, 0);
+    var m: Material;
+    m.diffuse = d.xyz;
+    m.roughness = d.w;
+    m.specular = s.xyz;
+    m.fresnel = u32(s.w > 0.5);
+    let wo = normalize(params.eye - p);
+    let n1 = f32(params.vpls_per_light);
+    let n2 = f32(params.bundles);
+    var sum = vec3<f32>(0.0);
+
+    // One bounce through the VPLs.
+    if params.mode != 2u {
+        for (var i = 0u; i < params.vpl_count; i++) {
+            let v = vpl_at(i);
+            let to_vpl = v.position - p;
+            let d2 = dot(to_vpl, to_vpl);
+            let cos13 = abs(dot(to_vpl, v.ng)) / sqrt(d2);
+            // Area densities of x1: drawn as a VPL, and as a bundle hit from x3.
+            let p1 = n1 * v.pdf;
+            let p2 = bundle_density(to_vpl / sqrt(d2)) * cos13 / d2;
+            let area = p1 + select(p2, 0.0, params.mode == 1u);
+            let d13 = area * d2 / max(cos13, 1e-6);
+            let d10 = area * v.light_dist2 / max(abs(dot(v.ng, v.to_light)), 1e-6);
+            let m1 = clamped(vpl_material(v), combine(d10, d13), cos13);
+            var t = vpl_light(v, m1, p, ns, ng, clamped(m, d13, dot(ns, wo)), wo, 0.0);
+            if max3(t) <= 0.0 {
+                continue;
+            }
+            if params.mode == 0u && params.bundles > 0u {
+                t *= p1 / (p1 + p2);
+            }
+            sum += t;
+        }
+    }
+
+    // Camera subpaths through the ray bundles.
+    let bundle_one = params.mode != 1u;
+    if params.bundles > 0u && (bundle_one || params.two_bounce != 0u || params.has_env != 0u) {
+        for (var b = 0u; b < params.bundles; b++) {
+            let bv = bundle_views[b];
+            let c = dot(ng, bv.dir);
+            if c == 0.0 {
+                continue;
+            }
+            let sgn = select(-1.0, 1.0, c > 0.0);
+            let dir = bv.dir * sgn;
+            if max3(bsdf_eval(m, ns, wo, dir)) <= 0.0 {
+                continue;
+            }
+            let texel = bv.depth_range / f32(bv.res);
+            // Fragments whose plane passes within a quarter texel of x3 are its own surface
+            // (or, on a tessellated curve, a neighbouring triangle of it; the pixel-centre
+            // samples lie up to 0.71 texels off the ray): skipped, at the cost of hits in the
+            // last quarter texel of a corner.
+            let hit = trace_bundle(bv, p, dir, 0.02 * texel, 0.25 * texel);
+            if !hit.found {
+                // §6: nothing along ±ω, the environment is seen (the only strategy for it).
+                if params.has_env != 0u {
+                    let f3 = bsdf_eval(clamped(m, 1.0 / bv.inv_density, dot(ns, wo)), ns, wo, dir);
+                    sum += f3 * env_radiance(dir) * (abs(dot(ns, dir)) * bv.inv_density);
+                }
+                continue;
+            }
+            // The fragment's own point (on its surface, up to 0.71 texels off the ray).
+            let x2 = node_position(hit.node);
+            var ns2 = oct_decode(unpack2x16snorm(hit.node.ns));
+            var ng2 = oct_decode(unpack2x16snorm(hit.node.ng));
+            if dot(ng2, dir) > 0.0 {
+                ng2 = -ng2;
+            }
+            if dot(ns2, ng2) < 0.0 {
+                ns2 = -ns2;
+            }
+            let m2 = node_material(hit.node);
+            // Per bundle sample: |n3·ω|/p_r / n2, times f3 (clamped per path below).
+            let weight = abs(dot(ns, dir)) * bv.inv_density;
+            let cos23 = -dot(ng2, dir);
+            let d23 = x2 - p;
+            let d23_2 = dot(d23, d23);
+            // One bounce: the lights' direct light at x2.
+            if bundle_one {
+                for (var j = 0u; j < arrayLength(&lights); j++) {
+                    let l = lights[j];
+                    let to_l = l.position - x2;
+                    let dl2 = dot(to_l, to_l);
+                    let wl = to_l / sqrt(dl2);
+                    let cos2l = dot(wl, ng2);
+                    if cos2l <= 0.0 {
+                        continue;
+                    }
+                    let falloff = spot(l, dot(-wl, l.direction));
+                    // Area densities of x2: drawn as a VPL of light j, and as this hit.
+                    let w = vpl_at(j * params.vpls_per_light).light_flux;
+                    let i_sum = (l.intensity.x + l.intensity.y + l.intensity.z) * falloff;
+                    var p1 = 0.0;
+                    if w > 0.0 && params.mode != 2u {
+                        p1 = n1 * i_sum * cos2l / (dl2 * w);
+                    }
+                    let p2 = max(cos23, 0.0) / (bv.inv_density * d23_2);
+                    let d23s = (p1 + p2) * d23_2 / max(cos23, 1e-6);
+                    let d20 = (p1 + p2) * dl2 / cos2l;
+                    let f3 = bsdf_eval(clamped(m, d23s, dot(ns, wo)), ns, wo, dir);
+                    let m2c = clamped(m2, combine(d20, d23s), cos23);
+                    let f2 = bsdf_eval(m2c, ns2, -dir, wl);
+                    var t = f3 * weight * f2 * abs(dot(ns2, wl)) * l.intensity * (falloff / dl2);
+                    if max3(t) <= 0.0 {
+                        continue;
+                    }
+                    t *= light_visibility(l, x2, ng2);
+                    if params.mode == 0u {
+                        t *= p2 / (p1 + p2);
+                    }
+                    sum += t;
+                }
+            }
+            // Two bounces: one VPL of every light lights x2, bundle b taking VPL
+            // ⌊(b + u)·n1/n2⌋ (the VPLs are in stratified order over the RSM, so every part
+            // of it is paired; each VPL is picked n2/n1 times in expectation).
+            if params.two_bounce != 0u && params.vpls_per_light > 0u {
+                let k = min(u32((f32(b) + params.pair_offset) * n1 / n2), params.vpls_per_light - 1u);
+                // d̂ at x3 of eq. 14: the bundles' density n2·p_r.
+                let f3 = bsdf_eval(clamped(m, 1.0 / bv.inv_density, dot(ns, wo)), ns, wo, dir);
+                for (var j = 0u; j * params.vpls_per_light < params.vpl_count; j++) {
+                    let v = vpl_at(j * params.vpls_per_light + k);
+                    let t = vpl_light(v, vpl_material(v), x2, ns2, ng2, m2, -dir, params.min_dist2);
+                    sum += f3 * weight * t * n1;
+                }
+            }
+        }
+    }
+    return vec4<f32>(sum, 1.0);
+}

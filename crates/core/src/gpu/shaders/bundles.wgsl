@@ -1,0 +1,100 @@
+// Builds one global ray bundle: every fragment of the scene under the bundle's parallel
+// projection is prepended to its pixel's list (Yang et al. 2010) with one atomic counter and
+// an atomic exchange of the head pointer. Fragments beyond the buffer's capacity are
+// dropped (and counted: the counter keeps running). No depth test, no culling.
+
+@group(0) @binding(0) var<uniform> bundle: BundleView;
+@group(0) @binding(1) var<storage, read> materials: array<Material>;
+@group(0) @binding(2) var<storage, read_write> heads: array<atomic<u32>>;
+@group(0) @binding(3) var<storage, read_write> nodes: array<Node>;
+@group(0) @binding(4) var<storage, read_write> counter: atomic<u32>;
+
+struct VertexIn {
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) geometric_normal: vec3<f32>,
+    @location(3) material: u32,
+    @location(4) uv: vec2<f32>,
+    @location(5) tangent: vec4<f32>,
+}
+
+struct VertexOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) normal: vec3<f32>,
+    @location(1) @interpolate(flat) geometric_normal: vec3<f32>,
+    @location(2) @interpolate(flat) material: u32,
+    @location(3) uv: vec2<f32>,
+    @location(4) @interpolate(flat) tangent: vec4<f32>,
+    @location(5) world: vec3<f32>,
+}
+
+@vertex
+fn vs_main(v: VertexIn) -> VertexOut {
+    var o: VertexOut;
+    o.clip = bundle.view_proj * vec4<f32>(v.position, 1.0);
+    o.world = v.position;
+    o.normal = v.normal;
+    o.geometric_normal = v.geometric_normal;
+    o.material = v.material;
+    o.uv = v.uv;
+    o.tangent = v.tangent;
+    return o;
+}
+
+@fragment
+fn fs_main(in: VertexOut) {
+    insert(in, false);
+}
+
+@fragment
+fn fs_textured(in: VertexOut) {
+    insert(in, true);
+}
+
+@fragment
+fn fs_masked(in: VertexOut) {
+    if alpha_cut(material_maps[in.material], in.uv) {
+        discard;
+    }
+    insert(in, true);
+}
+
+fn insert(in: VertexOut, textured: bool) {
+    let duvdx = dpdx(in.uv);
+    let duvdy = dpdy(in.uv);
+    let ng = in.geometric_normal;
+    var ns = in.normal;
+    let len = length(ns);
+    if !(len > 0.0) {
+        ns = ng;
+    } else {
+        ns = ns / len;
+        if dot(ns, ng) < 0.0 {
+            ns = -ns;
+        }
+    }
+    var m = materials[in.material];
+    if textured {
+        let maps = material_maps[in.material];
+        ns = mapped_normal(maps, ns, in.tangent, in.uv, duvdx, duvdy);
+        m = textured_material(maps, m, in.uv, duvdx, duvdy);
+    }
+    let slot = atomicAdd(&counter, 1u);
+    if slot >= bundle.capacity {
+        return;
+    }
+    let px = vec2<u32>(in.clip.xy);
+    let head = bundle.index * bundle.res * bundle.res + px.y * bundle.res + px.x;
+    var node: Node;
+    node.x = in.world.x;
+    node.y = in.world.y;
+    node.z = in.world.z;
+    node.ns = pack2x16snorm(oct_encode(ns));
+    node.ng = pack2x16snorm(oct_encode(ng));
+    node.m0 = pack2x16float(m.diffuse.xy);
+    node.m1 = pack2x16float(vec2<f32>(m.diffuse.z, m.roughness));
+    node.m2 = pack2x16float(m.specular.xy);
+    node.m3 = pack2x16float(vec2<f32>(m.specular.z, f32(m.fresnel)));
+    node.next = atomicExchange(&heads[head], slot + 1u);
+    nodes[slot] = node;
+}

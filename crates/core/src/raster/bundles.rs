@@ -1,0 +1,367 @@
+//! Global ray bundles (Sbert 1996; Tokuyoshi & Ogaki 2012 §3.2) for method `bidir`: per
+//! bundle a global direction ω, the scene rasterized under a parallel projection along ω
+//! (covering its bounding sphere) into per-pixel linked lists of fragments (`bundles.wgsl`:
+//! one atomic counter, atomic exchange of the head pointers). The lighting pass walks a
+//! pixel's list to find the nearest fragment along ±ω from a visible point.
+//!
+//! Memory: `res`² head pointers per bundle and one node buffer for all bundles of a frame;
+//! fragments beyond its capacity are dropped and counted ([`BundleBuffers::overflow`]).
+
+use super::timer::Timer;
+use super::{buffer_init, gbuffer, Geometry};
+use crate::error::{Error, Result};
+use crate::gpu::{self, shaders, GpuContext};
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec3, Vec4};
+
+/// `BundleView` of `common/bundle_types.wgsl`: 256 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct BundleViewRaw {
+    pub view_proj: [[f32; 4]; 4],
+    pub dir: [f32; 3],
+    pub depth_range: f32,
+    pub index: u32,
+    pub res: u32,
+    pub capacity: u32,
+    /// 1 / (the frame's bundle-direction density at ±`dir` over a hemisphere, all bundles).
+    pub inv_density: f32,
+    pub _pad1: [f32; 40],
+}
+
+/// Bytes of one fragment node (`Node` of `common/bundle_types.wgsl`).
+pub const NODE_BYTES: u64 = 40;
+const VIEW_BYTES: u64 = std::mem::size_of::<BundleViewRaw>() as u64;
+
+/// The orthographic view of a bundle along `dir` over the sphere (`centre`, `radius`).
+pub fn bundle_view(
+    dir: Vec3,
+    centre: Vec3,
+    radius: f32,
+    index: u32,
+    res: u32,
+    capacity: u32,
+) -> BundleViewRaw {
+    let r = radius.max(1e-6) * 1.01;
+    let up = if dir.y.abs() < 0.9 { Vec3::Y } else { Vec3::X };
+    let view = super::look_to(centre - dir * r, dir, up);
+    // Orthographic, view-space x, y in [−r, r] and depth −z in [0, 2r] to clip z in [0, 1].
+    let proj = Mat4::from_cols(
+        Vec4::new(1.0 / r, 0.0, 0.0, 0.0),
+        Vec4::new(0.0, 1.0 / r, 0.0, 0.0),
+        Vec4::new(0.0, 0.0, -0.5 / r, 0.0),
+        Vec4::W,
+    );
+    BundleViewRaw {
+        view_proj: (proj * view).to_cols_array_2d(),
+        dir: dir.into(),
+        depth_range: 2.0 * r,
+        index,
+        res,
+        capacity,
+        inv_density: 0.0,
+        _pad1: [0.0; 40],
+    }
+}
+
+/// The bundle pipelines (one per [`super::textures::Variant`]) and their group-0 layout.
+pub struct BundlePass {
+    pub pipelines: Vec<wgpu::RenderPipeline>,
+    /// Group 0: view (uniform, dynamic offset), materials, heads, nodes, counter.
+    pub layout: wgpu::BindGroupLayout,
+}
+
+fn rw_storage(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only: false },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+impl BundlePass {
+    pub fn new(device: &wgpu::Device, textures: &wgpu::BindGroupLayout) -> Self {
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("bundle bind group layout"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: true,
+                        min_binding_size: wgpu::BufferSize::new(VIEW_BYTES),
+                    },
+                    count: None,
+                },
+                super::storage_entry(1, wgpu::ShaderStages::FRAGMENT),
+                rw_storage(2),
+                rw_storage(3),
+                rw_storage(4),
+            ],
+        });
+        let module = shaders::module(
+            device,
+            "bundle shader",
+            &[
+                shaders::COMMON,
+                shaders::BSDF,
+                shaders::TEXTURE,
+                shaders::BUNDLE_TYPES,
+                shaders::BUNDLES,
+            ],
+        );
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("bundle pipeline layout"),
+            bind_group_layouts: &[Some(&layout), Some(textures)],
+            immediate_size: 0,
+        });
+        let pipeline = |entry: &str| {
+            gpu::create_render_pipeline(
+                device,
+                &wgpu::RenderPipelineDescriptor {
+                    label: Some("bundle pipeline"),
+                    layout: Some(&pipeline_layout),
+                    vertex: wgpu::VertexState {
+                        module: &module,
+                        entry_point: Some("vs_main"),
+                        compilation_options: Default::default(),
+                        buffers: &[Some(gbuffer::vertex_layout())],
+                    },
+                    primitive: wgpu::PrimitiveState::default(),
+                    // Every fragment is kept: no depth test, no writes.
+                    depth_stencil: Some(wgpu::DepthStencilState {
+                        format: gbuffer::DEPTH,
+                        depth_write_enabled: Some(false),
+                        depth_compare: Some(wgpu::CompareFunction::Always),
+                        stencil: Default::default(),
+                        bias: Default::default(),
+                    }),
+                    multisample: Default::default(),
+                    fragment: Some(wgpu::FragmentState {
+                        module: &module,
+                        entry_point: Some(entry),
+                        compilation_options: Default::default(),
+                        targets: &[],
+                    }),
+                    multiview_mask: None,
+                    cache: None,
+                },
+            )
+        };
+        let pipelines = super::textures::Variant::ALL
+            .iter()
+            .map(|v| pipeline(v.entry_point()))
+            .collect();
+        BundlePass { pipelines, layout }
+    }
+}
+
+/// The buffers of a frame's bundles: views, head pointers, fragment nodes, the counter and
+/// its readback.
+pub struct BundleBuffers {
+    pub bundles: u32,
+    pub res: u32,
+    pub capacity: u32,
+    pub views: wgpu::Buffer,
+    pub heads: wgpu::Buffer,
+    pub nodes: wgpu::Buffer,
+    counter: wgpu::Buffer,
+    counter_readback: wgpu::Buffer,
+    depth: wgpu::TextureView,
+    group: wgpu::BindGroup,
+}
+
+impl BundleBuffers {
+    /// Buffers for `bundles` bundles of `res`² pixels and `memory` bytes of nodes.
+    pub fn new(
+        ctx: &GpuContext,
+        pass: &BundlePass,
+        materials: &wgpu::Buffer,
+        bundles: u32,
+        res: u32,
+        memory: u64,
+    ) -> Result<Self> {
+        let device = &ctx.device;
+        let max_dim = device.limits().max_texture_dimension_2d;
+        if res > max_dim {
+            return Err(Error::setting(
+                "bundle_resolution",
+                format!("the GPU allows at most {max_dim}"),
+            ));
+        }
+        let bundles = bundles.max(1);
+        let head_bytes = bundles as u64 * res as u64 * res as u64 * 4;
+        let capacity = (memory / NODE_BYTES).clamp(1, u32::MAX as u64) as u32;
+        let node_bytes = capacity as u64 * NODE_BYTES;
+        ctx.check_buffer("bundle head pointers", head_bytes)?;
+        ctx.check_buffer("bundle fragments", node_bytes)?;
+        crate::memory::check(
+            || "the ray-bundle lists".to_string(),
+            head_bytes + node_bytes,
+        )?;
+        let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
+        let views = buffer_init(
+            ctx,
+            "bundle views",
+            &vec![0u8; (bundles as u64 * VIEW_BYTES) as usize],
+            wgpu::BufferUsages::UNIFORM | storage,
+        );
+        let make = |label, size| {
+            gpu::create_buffer(
+                device,
+                &wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size,
+                    usage: storage | wgpu::BufferUsages::COPY_SRC,
+                    mapped_at_creation: false,
+                },
+            )
+        };
+        let heads = make("bundle heads", head_bytes);
+        let nodes = make("bundle nodes", node_bytes);
+        let counter = make("bundle counter", 4);
+        let counter_readback = gpu::create_buffer(
+            device,
+            &wgpu::BufferDescriptor {
+                label: Some("bundle counter readback"),
+                size: 4,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            },
+        );
+        let depth = gpu::create_texture(
+            device,
+            &wgpu::TextureDescriptor {
+                label: Some("bundle depth"),
+                size: wgpu::Extent3d {
+                    width: res,
+                    height: res,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: gbuffer::DEPTH,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+                view_formats: &[],
+            },
+        )
+        .create_view(&Default::default());
+        let group = gpu::create_bind_group(
+            device,
+            &wgpu::BindGroupDescriptor {
+                label: Some("bundle bind group"),
+                layout: &pass.layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                            buffer: &views,
+                            offset: 0,
+                            size: wgpu::BufferSize::new(VIEW_BYTES),
+                        }),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: materials.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: heads.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 3,
+                        resource: nodes.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 4,
+                        resource: counter.as_entire_binding(),
+                    },
+                ],
+            },
+        );
+        Ok(BundleBuffers {
+            bundles,
+            res,
+            capacity,
+            views,
+            heads,
+            nodes,
+            counter,
+            counter_readback,
+            depth,
+            group,
+        })
+    }
+
+    /// Uploads the views of the frame's bundles.
+    pub fn write_views(&self, ctx: &GpuContext, views: &[BundleViewRaw]) {
+        gpu::write_buffer(
+            &ctx.queue,
+            "bundle views",
+            &self.views,
+            0,
+            bytemuck::cast_slice(views),
+        );
+    }
+
+    /// Records the lists of `count` bundles (heads and counter cleared first) and the copy of
+    /// the counter.
+    pub fn record(
+        &self,
+        pass: &BundlePass,
+        encoder: &mut wgpu::CommandEncoder,
+        count: u32,
+        geometry: &Geometry,
+        textures: (&wgpu::BindGroup, super::textures::Variant),
+        timer: &mut Timer,
+    ) {
+        encoder.clear_buffer(&self.heads, 0, None);
+        encoder.clear_buffer(&self.counter, 0, None);
+        for i in 0..count.min(self.bundles) {
+            let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("bundle pass"),
+                color_attachments: &[],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &self.depth,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Discard,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: timer.pass("ray bundles"),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            rp.set_pipeline(&pass.pipelines[textures.1 as usize]);
+            rp.set_bind_group(0, &self.group, &[(i as u64 * VIEW_BYTES) as u32]);
+            rp.set_bind_group(1, textures.0, &[]);
+            rp.set_vertex_buffer(0, geometry.vertices.slice(..));
+            rp.draw(0..geometry.count, 0..1);
+        }
+        encoder.copy_buffer_to_buffer(&self.counter, 0, &self.counter_readback, 0, 4);
+    }
+
+    /// Fragments written and dropped (beyond the capacity) by the last recorded bundles,
+    /// once submission `after` is done.
+    pub fn fragments(
+        &self,
+        ctx: &GpuContext,
+        after: Option<wgpu::SubmissionIndex>,
+    ) -> Result<(u64, u64)> {
+        let bytes = ctx.read_buffers(&[&self.counter_readback], after)?;
+        let b = bytes
+            .first()
+            .filter(|b| b.len() >= 4)
+            .ok_or_else(|| Error::Gpu("bundle counter readback".into()))?;
+        let n = u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as u64;
+        Ok((n, n.saturating_sub(self.capacity as u64)))
+    }
+}

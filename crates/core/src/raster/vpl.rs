@@ -1,0 +1,271 @@
+//! Virtual point lights for method `bidir`: their GPU record, the cube shadow-map views of a
+//! VPL (six faces, rendered by the ordinary [`super::shadow::ShadowPass`]) and the full-screen
+//! pass that adds the indirect light of VPLs and ray bundles to every G-buffer pixel
+//! (`bidir.wgsl`).
+
+use super::shadow::{corners, perspective, CUBE_FACES};
+use crate::gpu::{self, shaders};
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec3};
+
+/// `Vpl` of `bidir.wgsl`: 112 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct VplRaw {
+    pub position: [f32; 3],
+    pub first_layer: u32,
+    pub flux: [f32; 3],
+    pub texel_scale: f32,
+    pub to_light: [f32; 3],
+    pub fresnel: u32,
+    pub diffuse: [f32; 3],
+    pub roughness: f32,
+    pub specular: [f32; 3],
+    /// Area density of the VPL's point per draw: I(ω)·|ng·ω1,0| / (d²·W).
+    pub pdf: f32,
+    pub ns: [f32; 3],
+    /// Covered flux W of the VPL's light (sum of channels).
+    pub light_flux: f32,
+    pub ng: [f32; 3],
+    /// Squared distance from the VPL to its light.
+    pub light_dist2: f32,
+}
+
+impl VplRaw {
+    /// Texels per VPL in the VPL texture.
+    pub const TEXELS: u32 = 7;
+
+    /// The record as seven RGBA float texels (`vpl_at` of `bidir.wgsl`), the integer fields
+    /// as float values (their bit patterns would be denormals, which a GPU may flush).
+    pub fn texels(&self) -> [[f32; 4]; 7] {
+        let v = |a: [f32; 3], w: f32| [a[0], a[1], a[2], w];
+        [
+            v(self.position, self.first_layer as f32),
+            v(self.flux, self.texel_scale),
+            v(self.to_light, self.fresnel as f32),
+            v(self.diffuse, self.roughness),
+            v(self.specular, self.pdf),
+            v(self.ns, self.light_flux),
+            v(self.ng, self.light_dist2),
+        ]
+    }
+}
+
+/// `Params` of `bidir.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct BidirParamsRaw {
+    pub eye: [f32; 3],
+    pub vpl_count: u32,
+    pub vpls_per_light: u32,
+    pub bundles: u32,
+    /// 0: MIS, 1: VPLs only, 2: bundles only (one-bounce light).
+    pub mode: u32,
+    pub two_bounce: u32,
+    pub min_dist2: f32,
+    pub max_walk: u32,
+    /// Random offset in [0, 1) of the two-bounce term's bundle-to-VPL pairing.
+    pub pair_offset: f32,
+    /// Roughness clamping (§5): 1 on, 0 off.
+    pub clamp_roughness: u32,
+    /// Camera clip -> world.
+    pub inv_view_proj: [[f32; 4]; 4],
+    /// 1 when the scene has an environment light; (cos, sin) of its rotation.
+    pub has_env: u32,
+    pub env_cos: f32,
+    pub env_sin: f32,
+    /// Bundles drawn from the environment and uniformly (their densities' weights).
+    pub bundles_env: f32,
+    pub bundles_uniform: f32,
+    /// 1 / ∫ lum(L_env) dω when bundles are drawn from the environment.
+    pub env_pdf_scale: f32,
+    pub _pad1: [f32; 2],
+}
+
+/// Extra field of view of a VPL's cube faces, in shadow texels on each side (as the lights').
+const MARGIN_TEXELS: f32 = 8.0;
+
+/// World -> clip of the six cube faces of a source at `p` (depth range: the scene bounds
+/// `lo`..`hi`), and the world size of one texel at unit distance.
+pub fn cube_views(p: Vec3, lo: Vec3, hi: Vec3, size: u32) -> ([Mat4; 6], f32) {
+    let far = corners(lo, hi)
+        .map(|c| (c - p).length())
+        .into_iter()
+        .fold(0.0f32, f32::max)
+        * 1.01
+        + 1e-3;
+    let near = (far * 1e-3).max(1e-5);
+    let t = 1.0 + 2.0 * MARGIN_TEXELS / size as f32;
+    let m =
+        CUBE_FACES.map(|(forward, up)| perspective(t, near, far) * super::look_to(p, forward, up));
+    (m, 2.0 * t / size as f32)
+}
+
+/// The VPL lighting pipeline and its layouts.
+pub struct VplPass {
+    pub pipeline: wgpu::RenderPipeline,
+    /// Group 0: params (uniform), VPLs (texture), their shadow matrices and maps, comparison sampler,
+    /// lights, their shadow matrices and maps, bundle views, heads, nodes, the environment's
+    /// radiance table.
+    pub layout: wgpu::BindGroupLayout,
+}
+
+/// The target of the VPL pass.
+pub const TARGET: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+
+impl VplPass {
+    /// `gbuffer_layout`: the direct pass's group 1 (the G-buffer's lighting inputs).
+    pub fn new(device: &wgpu::Device, gbuffer_layout: &wgpu::BindGroupLayout) -> Self {
+        let frag = wgpu::ShaderStages::FRAGMENT;
+        let depth_array = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: frag,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Depth,
+                view_dimension: wgpu::TextureViewDimension::D2Array,
+                multisampled: false,
+            },
+            count: None,
+        };
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("bidir bind group layout"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: frag,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: frag,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                super::storage_entry(2, frag),
+                depth_array(3),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 4,
+                    visibility: frag,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison),
+                    count: None,
+                },
+                super::storage_entry(5, frag),
+                super::storage_entry(6, frag),
+                depth_array(7),
+                super::storage_entry(8, frag),
+                super::storage_entry(9, frag),
+                super::storage_entry(10, frag),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 11,
+                    visibility: frag,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("bidir pipeline layout"),
+            bind_group_layouts: &[Some(&layout), Some(gbuffer_layout)],
+            immediate_size: 0,
+        });
+        let module = shaders::module(
+            device,
+            "bidir shader",
+            &[
+                shaders::COMMON,
+                shaders::BSDF,
+                shaders::SHADOW_LOOKUP,
+                shaders::BUNDLE_TYPES,
+                shaders::BIDIR,
+            ],
+        );
+        let pipeline = gpu::create_render_pipeline(
+            device,
+            &wgpu::RenderPipelineDescriptor {
+                label: Some("bidir pipeline"),
+                layout: Some(&pipeline_layout),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("vs_main"),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                primitive: wgpu::PrimitiveState::default(),
+                depth_stencil: None,
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("fs_main"),
+                    compilation_options: Default::default(),
+                    targets: &[Some(wgpu::ColorTargetState::from(TARGET))],
+                }),
+                multiview_mask: None,
+                cache: None,
+            },
+        );
+        VplPass { pipeline, layout }
+    }
+
+    /// Records the pass into `target` (cleared).
+    pub fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        target: &wgpu::TextureView,
+        [group, gbuffer_group]: [&wgpu::BindGroup; 2],
+        timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
+    ) {
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("bidir lighting pass"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: target,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes: timestamps,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, group, &[]);
+        pass.set_bind_group(1, gbuffer_group, &[]);
+        pass.draw(0..3, 0..1);
+    }
+}
+
+/// Pipelines of method `bidir`, compiled once per device on first use.
+pub struct BidirPasses {
+    pub rsm: super::rsm::RsmPass,
+    pub bundles: super::bundles::BundlePass,
+    pub vpl: VplPass,
+}
+
+impl BidirPasses {
+    pub fn get(ctx: &crate::gpu::GpuContext) -> &BidirPasses {
+        ctx.bidir_passes.get_or_init(|| {
+            let p = super::Passes::get(ctx);
+            BidirPasses {
+                rsm: super::rsm::RsmPass::new(&ctx.device, &p.textures),
+                bundles: super::bundles::BundlePass::new(&ctx.device, &p.textures),
+                vpl: VplPass::new(&ctx.device, &p.direct.gbuffer_layout),
+            }
+        })
+    }
+}
