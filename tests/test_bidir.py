@@ -27,10 +27,11 @@ def test_bidir_renders_with_its_settings_and_stats(cornell):
     s = r.stats
     assert s.method == "bidir" and s.vpls == 8 and s.bundles == 4
     assert s.bundle_fragments > 0 and s.bundle_overflow == 0
-    assert r.aov_names() == [*r.BASE, "direct", "indirect"]
+    assert r.aov_names() == [*r.BASE, "direct", "specular", "indirect"]
     direct, indirect = r.aov("direct"), r.aov("indirect")
     assert np.isfinite(r.radiance).all() and indirect.mean() > 0
     # The radiance is direct + indirect (nothing else in a scene without mirrors).
+    assert (r.aov("specular") == 0).all()
     np.testing.assert_allclose(r.radiance, direct + indirect, rtol=1e-5, atol=1e-6)
     names = [n for n, _ in s.stages]
     for stage in ("rsm", "vpl shadow maps", "ray bundles", "bidir lighting"):

@@ -11,7 +11,7 @@ METHOD_EXTRA: dict[str, tuple[str, ...]] = {
     "gather": (),
     "direct": ("direct",),
     "ispm": ("direct", "specular", "indirect", "photons"),
-    "bidir": ("direct", "indirect"),
+    "bidir": ("direct", "specular", "indirect"),
 }
 
 # Added by ``denoise=True``: the radiance before denoising.

@@ -494,3 +494,45 @@ fn bad_settings_are_setting_errors() {
     }
     assert_eq!("bidir".parse::<Method>().ok(), Some(Method::Bidir));
 }
+
+/// Mirrors and glass seen by the camera are traced on the CPU (next-event estimation where
+/// the paths land) and composited: on `cornell-glass` the glass and mirror spheres are not
+/// black, and the radiance is the sum of the direct, indirect and specular images.
+/// Tolerance 1e-3 of the brightest pixel: the composite adds f32 images on the GPU, the
+/// direct image is read back from its f32 accumulation (one division per pixel).
+#[test]
+fn mirrors_and_glass_seen_by_the_camera_are_traced() {
+    let scene = load("cornell-glass");
+    let out = run(&scene, &bidir_settings(32));
+    let aov = |name: &str| {
+        out.aovs
+            .iter()
+            .find(|(n, _)| n == name)
+            .unwrap_or_else(|| panic!("no {name} image"))
+            .1
+            .clone()
+    };
+    let (direct, indirect, specular) = (aov("direct"), aov("indirect"), aov("specular"));
+    let lit = specular
+        .pixels
+        .iter()
+        .filter(|p| p.max_element() > 0.0)
+        .count();
+    // The two spheres cover a sizeable part of the 32×32 view.
+    assert!(lit > 40, "{lit} specular pixels");
+    let peak = out
+        .radiance
+        .pixels
+        .iter()
+        .map(|p| p.max_element())
+        .fold(0.0, f32::max);
+    for i in 0..out.radiance.pixels.len() {
+        let sum = direct.pixels[i] + indirect.pixels[i] + specular.pixels[i];
+        let d = (out.radiance.pixels[i] - sum).abs().max_element();
+        assert!(
+            d <= 1e-3 * peak,
+            "pixel {i}: {} vs {sum}",
+            out.radiance.pixels[i]
+        );
+    }
+}

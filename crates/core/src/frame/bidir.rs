@@ -21,11 +21,14 @@ use crate::gpu::{self, raw::ViewRaw, GpuContext};
 use crate::raster::bundles::{bundle_view, BundleBuffers, BundleViewRaw};
 use crate::raster::ispm::{bounce_layers, BounceLayer};
 use crate::raster::rsm::{RsmTargets, RsmTexel};
+use crate::raster::specular::specular_paths_direct;
 use crate::raster::vpl::{cube_views, BidirParamsRaw, BidirPasses, VplRaw};
 use crate::raster::{buffer_init, shadow, Passes, VIEW_SIZE};
+use crate::render::camera_pass::has_delta_lobe;
 use crate::render::{BidirStrategy, Progress, RenderOutput, RenderStats, Settings};
 use crate::sampling::Rng;
 use crate::scene::{Environment, Scene};
+use crate::trace::SceneBvh;
 use bytemuck::Zeroable;
 use glam::{Mat4, Vec3};
 use std::time::Instant;
@@ -52,6 +55,9 @@ pub(super) struct BidirState {
     env_pdf_scale: f32,
     /// (bundles, resolution, memory MiB) the bundle buffers were made for.
     bundle_key: (u32, u32, u32),
+    /// Whether the specular target holds an image of mirrors and glass (to be cleared when
+    /// the materials no longer have delta lobes).
+    specular_written: bool,
 }
 
 /// A VPL drawn from the RSM, before upload.
@@ -323,6 +329,7 @@ impl BidirState {
             bundles,
             env_pdf_scale,
             bundle_key,
+            specular_written: false,
         })
     }
 
@@ -565,6 +572,7 @@ const TWO_BOUNCE_MIN_DIST: f32 = 0.1;
 pub(super) fn frame(
     g: &mut GpuState,
     scene: &Scene,
+    bvh: &SceneBvh,
     settings: &Settings,
     images: Images,
     progress: &dyn Progress,
@@ -778,6 +786,24 @@ pub(super) fn frame(
         ts,
     );
     g.targets.record_composite(&ctx, &mut encoder, &mut g.timer);
+    // 5. Mirrors and glass seen by the camera, traced on the CPU while the GPU works on the
+    // lights (uploaded before the composite runs: queue writes precede the submission).
+    let t = Instant::now();
+    let specular = if scene.materials.iter().any(has_delta_lobe) {
+        let img = specular_paths_direct(scene, bvh, settings, progress)?;
+        g.targets.write_specular(&ctx, &img);
+        state.specular_written = true;
+        Some(img)
+    } else {
+        if state.specular_written {
+            let (w, h) = (g.targets.width, g.targets.height);
+            g.targets
+                .write_specular(&ctx, &crate::image::Image::new(w, h));
+            state.specular_written = false;
+        }
+        None
+    };
+    let specular_seconds = t.elapsed().as_secs_f64();
     let names = readback_names(images, true);
     g.targets
         .record_readback(&ctx, &mut encoder, &names, Some(&state.indirect));
@@ -805,6 +831,11 @@ pub(super) fn frame(
     stats.stages.push(("upload".into(), upload));
     stats.stages.push(("rsm readback".into(), rsm_readback));
     stats.stages.push(("vpl sampling".into(), vpl_seconds));
+    if specular.is_some() {
+        stats
+            .stages
+            .push(("specular paths".into(), specular_seconds));
+    }
     stats.stages.append(&mut g.timer.totals);
     stats.stages.push(("readback".into(), readback));
     let mut out = assemble(scene, &g.targets, &data, stats);
@@ -812,6 +843,11 @@ pub(super) fn frame(
         if let Some(a) = data.get("accum") {
             out.aovs.push(("direct".into(), normalized(&g.targets, a)));
         }
+        let (w, h) = (g.targets.width, g.targets.height);
+        out.aovs.push((
+            "specular".into(),
+            specular.unwrap_or_else(|| crate::image::Image::new(w, h)),
+        ));
         if let Some(i) = data.get("indirect") {
             out.aovs.push((
                 "indirect".into(),

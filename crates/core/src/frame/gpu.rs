@@ -409,6 +409,24 @@ impl Targets {
     }
 
     /// Points the composite pass at `indirect` (the estimator's output, or black).
+    /// Uploads the CPU-traced image of mirrors and glass seen by the camera (`image` at the
+    /// targets' size), which the composite adds.
+    pub fn write_specular(&self, ctx: &GpuContext, image: &Image) {
+        let texels: Vec<[f32; 4]> = image.pixels.iter().map(|p| [p.x, p.y, p.z, 0.0]).collect();
+        let bytes: &[u8] = bytemuck::cast_slice(&texels);
+        crate::gpu::alloc::note_upload("specular paths", bytes.len() as u64);
+        ctx.queue.write_texture(
+            self.specular.as_image_copy(),
+            bytes,
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(self.width * 16),
+                rows_per_image: Some(self.height),
+            },
+            self.specular.size(),
+        );
+    }
+
     pub fn bind_composite(&mut self, ctx: &GpuContext, indirect: Option<&wgpu::TextureView>) {
         let passes = Passes::get(ctx);
         let indirect = indirect.unwrap_or(&self.black_view);

@@ -16,7 +16,6 @@ use super::gpu::rgb_image;
 use super::{GpuState, Images};
 use crate::error::{Error, Result};
 use crate::estimate::{Binned, Estimator, IndirectEstimate, Mode, Volumes};
-use crate::gpu;
 use crate::image::Image;
 use crate::photon::lbvh::Aabb;
 use crate::photon::ring::PhotonRing;
@@ -319,19 +318,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         state.specular_image.clone()
     } else if state.specular {
         let img = specular_paths(scene, bvh, settings, &photons.traced, progress)?;
-        let texels: Vec<[f32; 4]> = img.pixels.iter().map(|p| [p.x, p.y, p.z, 0.0]).collect();
-        let bytes: &[u8] = bytemuck::cast_slice(&texels);
-        gpu::alloc::note_upload("specular paths", bytes.len() as u64);
-        ctx.queue.write_texture(
-            targets.specular.as_image_copy(),
-            bytes,
-            wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(w * 16),
-                rows_per_image: Some(h),
-            },
-            targets.specular.size(),
-        );
+        targets.write_specular(&ctx, &img);
         Some(img)
     } else {
         None

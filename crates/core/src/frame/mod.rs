@@ -353,7 +353,7 @@ impl Renderer {
                         progress,
                     })
                 }
-                Method::Bidir => bidir::frame(gpu, &self.scene, settings, images, progress),
+                Method::Bidir => bidir::frame(gpu, &self.scene, bvh, settings, images, progress),
                 _ => direct::frame(gpu, &self.scene, images, progress),
             }
         })

@@ -40,3 +40,17 @@ pub fn specular_paths(
         },
     )
 }
+
+/// Radiance reaching the camera through the delta lobes of the first surface seen, with
+/// next-event estimation of the scene's lights only where the path lands (method `bidir`,
+/// which keeps no photon map): the indirect light behind mirrors and glass is missing.
+pub fn specular_paths_direct(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    settings: &Settings,
+    progress: &dyn Progress,
+) -> Result<Image> {
+    delta_image(scene, bvh, settings, progress, |it, wo, _: &mut ()| {
+        direct_light(scene, bvh, it, wo)
+    })
+}
