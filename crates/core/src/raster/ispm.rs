@@ -25,6 +25,7 @@
 //! The final radiance is direct + specular + indirect (AOVs `direct`, `specular`,
 //! `indirect`); `caustics` stays zero.
 
+use super::layers::{LayerKind, LayerTargets};
 use super::timer::Timer;
 use super::{buffer_init, gbuffer, Geometry};
 use crate::error::{Error, Result};
@@ -34,15 +35,13 @@ use crate::photon::{Photon, PhotonRay};
 use crate::render::Settings;
 use crate::scene::{Light, Scene};
 use bytemuck::{Pod, Zeroable};
-use glam::{DVec3, Vec3, Vec4};
+use glam::{DVec3, Vec3};
 use std::time::Instant;
 
 /// r_z / r_xy of the photon volumes.
 pub(crate) const Z_RATIO: f32 = 0.5;
 /// Largest bounce-map side (texels).
 const MAX_BOUNCE_RES: u32 = 4096;
-/// Most GPU memory the bounce-map targets may take.
-const MAX_BOUNCE_BYTES: u64 = 2 << 30;
 /// Widest spot cone the bounce map covers (tan of the half angle, about 84°).
 const MAX_SPOT_TAN: f32 = 10.0;
 
@@ -592,16 +591,23 @@ pub fn render_bounce_map(scene: &Scene, settings: &Settings) -> Result<BounceMap
 /// submitted (section 4.3's asynchronous readback): [`BounceTargets::finish`] waits only for
 /// the bounce submission.
 pub struct BounceTargets {
-    max_res: u32,
-    n_layers: u32,
-    row: u32,
-    targets: Vec<wgpu::Texture>,
-    /// Per layer: the five target views and the depth view.
-    layer_views: Vec<(Vec<wgpu::TextureView>, wgpu::TextureView)>,
-    staging: Vec<wgpu::Buffer>,
+    layers: LayerTargets,
     views: wgpu::Buffer,
     group: wgpu::BindGroup,
 }
+
+/// The bounce maps' five targets.
+const BOUNCE_MAPS: LayerKind = LayerKind {
+    name: "bounce map",
+    setting: "photons",
+    targets: &[
+        "bounce origin",
+        "bounce direction",
+        "bounce power",
+        "bounce incident",
+        "bounce expected",
+    ],
+};
 
 impl BounceTargets {
     /// Resources for `layers` (`None` when there are none: no light emits).
@@ -614,45 +620,15 @@ impl BounceTargets {
             return Ok(None);
         }
         let passes = IspmPasses::get(ctx);
-        let device = &ctx.device;
-        let max_res = layers.iter().map(|l| l.res).max().unwrap_or(1);
-        let limits = device.limits();
-        if max_res > limits.max_texture_dimension_2d {
-            return Err(Error::setting(
-                "photons",
-                format!(
-                    "the bounce map needs {max_res} texels a side; the GPU allows {}",
-                    limits.max_texture_dimension_2d
-                ),
-            ));
-        }
-        let n_layers = layers.len() as u32;
-        // Five Rgba32Float targets plus the readback copy: keep them within 2 GiB.
-        let bytes = max_res as u64 * max_res as u64 * n_layers as u64 * 16 * 5;
-        if bytes > MAX_BOUNCE_BYTES {
-            return Err(Error::setting(
-                "photons",
-                format!(
-                    "the bounce maps would take {} MiB of GPU memory (at most {} MiB); use fewer photons",
-                    bytes >> 20,
-                    MAX_BOUNCE_BYTES >> 20
-                ),
-            ));
-        }
-        if n_layers > limits.max_texture_array_layers {
-            return Err(Error::Gpu(format!(
-                "{n_layers} bounce-map layers exceed the GPU's {}",
-                limits.max_texture_array_layers
-            )));
-        }
+        let targets = LayerTargets::new(ctx, layers, &BOUNCE_MAPS)?;
         let views = buffer_init(
             ctx,
             "bounce views",
-            &vec![0u8; n_layers as usize * BOUNCE_VIEW_SIZE as usize],
+            &vec![0u8; layers.len() * BOUNCE_VIEW_SIZE as usize],
             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         );
         let group = crate::gpu::create_bind_group(
-            device,
+            &ctx.device,
             &wgpu::BindGroupDescriptor {
                 label: Some("bounce bind group"),
                 layout: &passes.bounce_layout,
@@ -672,77 +648,8 @@ impl BounceTargets {
                 ],
             },
         );
-        let size = wgpu::Extent3d {
-            width: max_res,
-            height: max_res,
-            depth_or_array_layers: n_layers,
-        };
-        let make = |label, format, usage| {
-            crate::gpu::create_texture(
-                device,
-                &wgpu::TextureDescriptor {
-                    label: Some(label),
-                    size,
-                    mip_level_count: 1,
-                    sample_count: 1,
-                    dimension: wgpu::TextureDimension::D2,
-                    format,
-                    usage,
-                    view_formats: &[],
-                },
-            )
-        };
-        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
-        let targets = vec![
-            make("bounce origin", TARGET, usage),
-            make("bounce direction", TARGET, usage),
-            make("bounce power", TARGET, usage),
-            make("bounce incident", TARGET, usage),
-            make("bounce expected", TARGET, usage),
-        ];
-        let depth = make(
-            "bounce depth",
-            gbuffer::DEPTH,
-            wgpu::TextureUsages::RENDER_ATTACHMENT,
-        );
-        let layer_view = |t: &wgpu::Texture, i: u32| {
-            t.create_view(&wgpu::TextureViewDescriptor {
-                label: Some("bounce layer"),
-                dimension: Some(wgpu::TextureViewDimension::D2),
-                base_array_layer: i,
-                array_layer_count: Some(1),
-                ..Default::default()
-            })
-        };
-        let layer_views = (0..n_layers)
-            .map(|i| {
-                (
-                    targets.iter().map(|t| layer_view(t, i)).collect(),
-                    layer_view(&depth, i),
-                )
-            })
-            .collect();
-        let row = (max_res * 16).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
-        let staging = (0..targets.len())
-            .map(|_| {
-                crate::gpu::create_buffer(
-                    device,
-                    &wgpu::BufferDescriptor {
-                        label: Some("bounce readback"),
-                        size: row as u64 * max_res as u64 * n_layers as u64,
-                        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                        mapped_at_creation: false,
-                    },
-                )
-            })
-            .collect();
         Ok(Some(BounceTargets {
-            max_res,
-            n_layers,
-            row,
-            targets,
-            layer_views,
-            staging,
+            layers: targets,
             views,
             group,
         }))
@@ -750,8 +657,7 @@ impl BounceTargets {
 
     /// Whether these resources serve `layers`.
     pub fn fits(&self, layers: &[BounceLayer]) -> bool {
-        self.n_layers as usize == layers.len()
-            && self.max_res == layers.iter().map(|l| l.res).max().unwrap_or(1)
+        self.layers.fits(layers)
     }
 
     /// Uploads the layers' views with the frame's random seed.
@@ -783,65 +689,16 @@ impl BounceTargets {
         textures: (&wgpu::BindGroup, super::textures::Variant),
         timer: &mut Timer,
     ) {
-        for (i, layer) in layers.iter().enumerate() {
-            let (views, depth_view) = &self.layer_views[i];
-            let attachments: Vec<_> = views
-                .iter()
-                .map(|view| {
-                    Some(wgpu::RenderPassColorAttachment {
-                        view,
-                        depth_slice: None,
-                        resolve_target: None,
-                        ops: wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                            store: wgpu::StoreOp::Store,
-                        },
-                    })
-                })
-                .collect();
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("bounce pass"),
-                color_attachments: &attachments,
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: depth_view,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Discard,
-                    }),
-                    stencil_ops: None,
-                }),
-                timestamp_writes: timer.pass("bounce maps"),
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            pass.set_pipeline(&passes.bounce[textures.1 as usize]);
-            pass.set_viewport(0.0, 0.0, layer.res as f32, layer.res as f32, 0.0, 1.0);
-            pass.set_scissor_rect(0, 0, layer.res, layer.res);
-            pass.set_bind_group(0, &self.group, &[(i as u64 * BOUNCE_VIEW_SIZE) as u32]);
-            pass.set_bind_group(1, textures.0, &[]);
-            pass.set_vertex_buffer(0, geometry.vertices.slice(..));
-            pass.draw(0..geometry.count, 0..1);
-        }
-        // Every target, all layers, into one mappable buffer each, in the same submission.
-        let size = wgpu::Extent3d {
-            width: self.max_res,
-            height: self.max_res,
-            depth_or_array_layers: self.n_layers,
-        };
-        for (texture, buffer) in self.targets.iter().zip(&self.staging) {
-            encoder.copy_texture_to_buffer(
-                texture.as_image_copy(),
-                wgpu::TexelCopyBufferInfo {
-                    buffer,
-                    layout: wgpu::TexelCopyBufferLayout {
-                        offset: 0,
-                        bytes_per_row: Some(self.row),
-                        rows_per_image: Some(self.max_res),
-                    },
-                },
-                size,
-            );
-        }
+        self.layers.record(
+            encoder,
+            "bounce maps",
+            &passes.bounce[textures.1 as usize],
+            (&self.group, BOUNCE_VIEW_SIZE),
+            textures.0,
+            geometry,
+            layers,
+            timer,
+        );
     }
 
     /// Maps the copies once submission `after` is done and turns the surviving texels into
@@ -853,20 +710,9 @@ impl BounceTargets {
         after: Option<wgpu::SubmissionIndex>,
     ) -> Result<BounceMap> {
         let mut out = BounceMap::default();
-        let (max_res, row) = (self.max_res, self.row as usize);
+        let max_res = self.layers.max_res;
         let t = Instant::now();
-        let buffers: Vec<&wgpu::Buffer> = self.staging.iter().collect();
-        let read: Vec<Vec<Vec4>> = ctx
-            .read_buffers(&buffers, after)?
-            .into_iter()
-            .map(|bytes| {
-                let width = max_res as usize * 16;
-                bytes
-                    .chunks_exact(row)
-                    .flat_map(|r| bytemuck::cast_slice::<u8, Vec4>(&r[..width]).to_vec())
-                    .collect()
-            })
-            .collect();
+        let read = self.layers.read(ctx, after)?;
         let [origin, direction, power, incident, expected] = &read[..] else {
             return Err(Error::Gpu("bounce map readback".into()));
         };

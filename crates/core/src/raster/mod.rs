@@ -6,6 +6,7 @@ pub mod composite;
 pub mod direct;
 pub mod gbuffer;
 pub mod ispm;
+pub mod layers;
 pub mod rsm;
 pub mod shadow;
 pub(crate) mod specular;

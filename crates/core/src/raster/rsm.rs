@@ -6,13 +6,13 @@
 //! read back as [`RsmTexel`]s, from which the frame draws its VPLs.
 
 use super::ispm::{BounceLayer, BounceViewRaw};
+use super::layers::{LayerKind, LayerTargets, TARGET};
 use super::timer::Timer;
 use super::{buffer_init, gbuffer, Geometry};
 use crate::error::{Error, Result};
 use crate::gpu::{self, shaders, GpuContext};
-use glam::{Vec2, Vec3, Vec4};
+use glam::{Vec2, Vec3};
 
-const TARGET: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 const VIEW_SIZE: u64 = std::mem::size_of::<BounceViewRaw>() as u64;
 /// position, normals, diffuse, specular, flux.
 const TARGETS: usize = 5;
@@ -118,15 +118,23 @@ impl RsmPass {
 
 /// The RSM targets of a set of layers, their views and mappable copies.
 pub struct RsmTargets {
-    max_res: u32,
-    n_layers: u32,
-    row: u32,
-    targets: Vec<wgpu::Texture>,
-    layer_views: Vec<(Vec<wgpu::TextureView>, wgpu::TextureView)>,
-    staging: Vec<wgpu::Buffer>,
+    layers: LayerTargets,
     views: wgpu::Buffer,
     group: wgpu::BindGroup,
 }
+
+/// The reflective shadow maps' five targets.
+const RSMS: LayerKind = LayerKind {
+    name: "reflective shadow map",
+    setting: "rsm_size",
+    targets: &[
+        "rsm position",
+        "rsm normals",
+        "rsm diffuse",
+        "rsm specular",
+        "rsm flux",
+    ],
+};
 
 impl RsmTargets {
     /// Resources for `layers` (`None` when no light emits).
@@ -139,33 +147,15 @@ impl RsmTargets {
         if layers.is_empty() {
             return Ok(None);
         }
-        let device = &ctx.device;
-        let max_res = layers.iter().map(|l| l.res).max().unwrap_or(1);
-        let limits = device.limits();
-        if max_res > limits.max_texture_dimension_2d {
-            return Err(Error::setting(
-                "rsm_size",
-                format!(
-                    "the reflective shadow map needs {max_res} texels a side; the GPU allows {}",
-                    limits.max_texture_dimension_2d
-                ),
-            ));
-        }
-        let n_layers = layers.len() as u32;
-        if n_layers > limits.max_texture_array_layers {
-            return Err(Error::Gpu(format!(
-                "{n_layers} reflective-shadow-map layers exceed the GPU's {}",
-                limits.max_texture_array_layers
-            )));
-        }
+        let targets = LayerTargets::new(ctx, layers, &RSMS)?;
         let views = buffer_init(
             ctx,
             "rsm views",
-            &vec![0u8; n_layers as usize * VIEW_SIZE as usize],
+            &vec![0u8; layers.len() * VIEW_SIZE as usize],
             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         );
         let group = gpu::create_bind_group(
-            device,
+            &ctx.device,
             &wgpu::BindGroupDescriptor {
                 label: Some("rsm bind group"),
                 layout: &pass.layout,
@@ -185,80 +175,8 @@ impl RsmTargets {
                 ],
             },
         );
-        let size = wgpu::Extent3d {
-            width: max_res,
-            height: max_res,
-            depth_or_array_layers: n_layers,
-        };
-        let make = |label, format, usage| {
-            gpu::create_texture(
-                device,
-                &wgpu::TextureDescriptor {
-                    label: Some(label),
-                    size,
-                    mip_level_count: 1,
-                    sample_count: 1,
-                    dimension: wgpu::TextureDimension::D2,
-                    format,
-                    usage,
-                    view_formats: &[],
-                },
-            )
-        };
-        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
-        let targets: Vec<_> = [
-            "rsm position",
-            "rsm normals",
-            "rsm diffuse",
-            "rsm specular",
-            "rsm flux",
-        ]
-        .into_iter()
-        .map(|label| make(label, TARGET, usage))
-        .collect();
-        let depth = make(
-            "rsm depth",
-            gbuffer::DEPTH,
-            wgpu::TextureUsages::RENDER_ATTACHMENT,
-        );
-        let layer_view = |t: &wgpu::Texture, i: u32| {
-            t.create_view(&wgpu::TextureViewDescriptor {
-                label: Some("rsm layer"),
-                dimension: Some(wgpu::TextureViewDimension::D2),
-                base_array_layer: i,
-                array_layer_count: Some(1),
-                ..Default::default()
-            })
-        };
-        let layer_views = (0..n_layers)
-            .map(|i| {
-                (
-                    targets.iter().map(|t| layer_view(t, i)).collect(),
-                    layer_view(&depth, i),
-                )
-            })
-            .collect();
-        let row = (max_res * 16).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
-        let staging = (0..TARGETS)
-            .map(|_| {
-                gpu::create_buffer(
-                    device,
-                    &wgpu::BufferDescriptor {
-                        label: Some("rsm readback"),
-                        size: row as u64 * max_res as u64 * n_layers as u64,
-                        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                        mapped_at_creation: false,
-                    },
-                )
-            })
-            .collect();
         let rsm = RsmTargets {
-            max_res,
-            n_layers,
-            row,
-            targets,
-            layer_views,
-            staging,
+            layers: targets,
             views,
             group,
         };
@@ -268,8 +186,7 @@ impl RsmTargets {
 
     /// Whether these resources serve `layers`.
     pub fn fits(&self, layers: &[BounceLayer]) -> bool {
-        self.n_layers as usize == layers.len()
-            && self.max_res == layers.iter().map(|l| l.res).max().unwrap_or(1)
+        self.layers.fits(layers)
     }
 
     /// Uploads the layers' views (after lights or geometry moved).
@@ -294,64 +211,16 @@ impl RsmTargets {
         textures: (&wgpu::BindGroup, super::textures::Variant),
         timer: &mut Timer,
     ) {
-        for (i, layer) in layers.iter().enumerate() {
-            let (views, depth_view) = &self.layer_views[i];
-            let attachments: Vec<_> = views
-                .iter()
-                .map(|view| {
-                    Some(wgpu::RenderPassColorAttachment {
-                        view,
-                        depth_slice: None,
-                        resolve_target: None,
-                        ops: wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                            store: wgpu::StoreOp::Store,
-                        },
-                    })
-                })
-                .collect();
-            let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("rsm pass"),
-                color_attachments: &attachments,
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: depth_view,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Discard,
-                    }),
-                    stencil_ops: None,
-                }),
-                timestamp_writes: timer.pass("rsm"),
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            rp.set_pipeline(&pass.pipelines[textures.1 as usize]);
-            rp.set_viewport(0.0, 0.0, layer.res as f32, layer.res as f32, 0.0, 1.0);
-            rp.set_scissor_rect(0, 0, layer.res, layer.res);
-            rp.set_bind_group(0, &self.group, &[(i as u64 * VIEW_SIZE) as u32]);
-            rp.set_bind_group(1, textures.0, &[]);
-            rp.set_vertex_buffer(0, geometry.vertices.slice(..));
-            rp.draw(0..geometry.count, 0..1);
-        }
-        let size = wgpu::Extent3d {
-            width: self.max_res,
-            height: self.max_res,
-            depth_or_array_layers: self.n_layers,
-        };
-        for (texture, buffer) in self.targets.iter().zip(&self.staging) {
-            encoder.copy_texture_to_buffer(
-                texture.as_image_copy(),
-                wgpu::TexelCopyBufferInfo {
-                    buffer,
-                    layout: wgpu::TexelCopyBufferLayout {
-                        offset: 0,
-                        bytes_per_row: Some(self.row),
-                        rows_per_image: Some(self.max_res),
-                    },
-                },
-                size,
-            );
-        }
+        self.layers.record(
+            encoder,
+            "rsm",
+            &pass.pipelines[textures.1 as usize],
+            (&self.group, VIEW_SIZE),
+            textures.0,
+            geometry,
+            layers,
+            timer,
+        );
     }
 
     /// Maps the copies once submission `after` is done: the covered texels with flux.
@@ -361,18 +230,8 @@ impl RsmTargets {
         layers: &[BounceLayer],
         after: Option<wgpu::SubmissionIndex>,
     ) -> Result<Vec<RsmTexel>> {
-        let (max_res, row) = (self.max_res as usize, self.row as usize);
-        let buffers: Vec<&wgpu::Buffer> = self.staging.iter().collect();
-        let read: Vec<Vec<Vec4>> = ctx
-            .read_buffers(&buffers, after)?
-            .into_iter()
-            .map(|bytes| {
-                bytes
-                    .chunks_exact(row)
-                    .flat_map(|r| bytemuck::cast_slice::<u8, Vec4>(&r[..max_res * 16]).to_vec())
-                    .collect()
-            })
-            .collect();
+        let max_res = self.layers.max_res as usize;
+        let read = self.layers.read(ctx, after)?;
         let [position, normals, diffuse, specular, flux] = &read[..] else {
             return Err(Error::Gpu("reflective shadow map readback".into()));
         };
