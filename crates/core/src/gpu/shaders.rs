@@ -11,6 +11,8 @@ pub const TEXTURE: &str = include_str!("shaders/common/texture.wgsl");
 pub const PHOTON_VOLUME: &str = include_str!("shaders/common/photon_volume.wgsl");
 /// Order-independent (fixed-point) sums of non-negative RGB terms.
 pub const FIXED_SUM: &str = include_str!("shaders/common/fixed_sum.wgsl");
+/// Light views of the bounce maps and reflective shadow maps: view, vertices, spot falloff.
+pub const LIGHT_VIEW: &str = include_str!("shaders/common/light_view.wgsl");
 /// Global ray-bundle views and fragment nodes (`bidir`).
 pub const BUNDLE_TYPES: &str = include_str!("shaders/common/bundle_types.wgsl");
 /// Shadow-map layer choice and PCF lookup.

@@ -308,6 +308,7 @@ impl IspmPasses {
                 shaders::COMMON,
                 shaders::BSDF,
                 shaders::TEXTURE,
+                shaders::LIGHT_VIEW,
                 shaders::BOUNCE,
             ],
         );

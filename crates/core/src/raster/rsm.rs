@@ -66,6 +66,7 @@ impl RsmPass {
                 shaders::COMMON,
                 shaders::BSDF,
                 shaders::TEXTURE,
+                shaders::LIGHT_VIEW,
                 shaders::RSM,
             ],
         );

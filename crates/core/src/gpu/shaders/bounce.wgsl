@@ -8,57 +8,6 @@
 // frame seed, layer and texel), then Russian roulette as in `photon::trace` (survival
 // q = min(1, max(Φ·w)/max(Φ)), survivors carry Φ·w/q), and the path density factor.
 
-struct BounceView {
-    view_proj: mat4x4<f32>,
-    light_position: vec3<f32>,
-    // Texel area on the unit-distance image plane times the round-off correction.
-    texel_area: f32,
-    // The view's optical axis (cos θ is measured from it).
-    forward: vec3<f32>,
-    // 0 = point, 1 = spot.
-    kind: u32,
-    intensity: vec3<f32>,
-    cos_inner: f32,
-    spot_direction: vec3<f32>,
-    cos_outer: f32,
-    seed: u32,
-    layer: u32,
-}
-
-@group(0) @binding(0) var<uniform> view: BounceView;
-
-struct VertexIn {
-    @location(0) position: vec3<f32>,
-    @location(1) normal: vec3<f32>,
-    @location(2) geometric_normal: vec3<f32>,
-    @location(3) material: u32,
-    @location(4) uv: vec2<f32>,
-    @location(5) tangent: vec4<f32>,
-}
-
-struct VertexOut {
-    @builtin(position) clip: vec4<f32>,
-    @location(0) world: vec3<f32>,
-    @location(1) normal: vec3<f32>,
-    @location(2) @interpolate(flat) geometric_normal: vec3<f32>,
-    @location(3) @interpolate(flat) material: u32,
-    @location(4) uv: vec2<f32>,
-    @location(5) @interpolate(flat) tangent: vec4<f32>,
-}
-
-@vertex
-fn vs_main(v: VertexIn) -> VertexOut {
-    var o: VertexOut;
-    o.clip = view.view_proj * vec4<f32>(v.position, 1.0);
-    o.world = v.position;
-    o.normal = v.normal;
-    o.geometric_normal = v.geometric_normal;
-    o.material = v.material;
-    o.uv = v.uv;
-    o.tangent = v.tangent;
-    return o;
-}
-
 struct BounceOut {
     // Origin of the scattered photon (offset off the surface), path density (0: absorbed).
     @location(0) origin: vec4<f32>,
@@ -70,17 +19,6 @@ struct BounceOut {
     @location(3) incident: vec4<f32>,
     // Arriving power times the scatter probability (the expected scattered power).
     @location(4) expected: vec4<f32>,
-}
-
-fn falloff(cos_t: f32) -> f32 {
-    if cos_t >= view.cos_inner {
-        return 1.0;
-    }
-    if cos_t <= view.cos_outer {
-        return 0.0;
-    }
-    let t = (cos_t - view.cos_outer) / (view.cos_inner - view.cos_outer);
-    return t * t * (3.0 - 2.0 * t);
 }
 
 // Three entry points, one per kind of scene (see gbuffer.wgsl): only `fs_masked` discards.

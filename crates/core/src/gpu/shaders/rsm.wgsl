@@ -5,54 +5,7 @@
 // material, and the flux Φ = I(ω)·A_texel·cos³θ (A_texel carries the per-light round-off
 // correction, so a light's texels sum to its power). VPLs are drawn from these texels.
 
-struct BounceView {
-    view_proj: mat4x4<f32>,
-    light_position: vec3<f32>,
-    texel_area: f32,
-    forward: vec3<f32>,
-    kind: u32,
-    intensity: vec3<f32>,
-    cos_inner: f32,
-    spot_direction: vec3<f32>,
-    cos_outer: f32,
-    seed: u32,
-    layer: u32,
-}
-
-@group(0) @binding(0) var<uniform> view: BounceView;
 @group(0) @binding(1) var<storage, read> materials: array<Material>;
-
-struct VertexIn {
-    @location(0) position: vec3<f32>,
-    @location(1) normal: vec3<f32>,
-    @location(2) geometric_normal: vec3<f32>,
-    @location(3) material: u32,
-    @location(4) uv: vec2<f32>,
-    @location(5) tangent: vec4<f32>,
-}
-
-struct VertexOut {
-    @builtin(position) clip: vec4<f32>,
-    @location(0) world: vec3<f32>,
-    @location(1) normal: vec3<f32>,
-    @location(2) @interpolate(flat) geometric_normal: vec3<f32>,
-    @location(3) @interpolate(flat) material: u32,
-    @location(4) uv: vec2<f32>,
-    @location(5) @interpolate(flat) tangent: vec4<f32>,
-}
-
-@vertex
-fn vs_main(v: VertexIn) -> VertexOut {
-    var o: VertexOut;
-    o.clip = view.view_proj * vec4<f32>(v.position, 1.0);
-    o.world = v.position;
-    o.normal = v.normal;
-    o.geometric_normal = v.geometric_normal;
-    o.material = v.material;
-    o.uv = v.uv;
-    o.tangent = v.tangent;
-    return o;
-}
 
 struct RsmOut {
     // World position; w = 1 marks a covered texel.
@@ -65,17 +18,6 @@ struct RsmOut {
     @location(3) specular: vec4<f32>,
     // Flux (W) through the texel.
     @location(4) flux: vec4<f32>,
-}
-
-fn rsm_falloff(cos_t: f32) -> f32 {
-    if cos_t >= view.cos_inner {
-        return 1.0;
-    }
-    if cos_t <= view.cos_outer {
-        return 0.0;
-    }
-    let t = (cos_t - view.cos_outer) / (view.cos_inner - view.cos_outer);
-    return t * t * (3.0 - 2.0 * t);
 }
 
 @fragment
@@ -128,7 +70,7 @@ fn rsm(in: VertexOut, textured: bool) -> RsmOut {
     let c = max(dot(d, view.forward), 0.0);
     var intensity = view.intensity;
     if view.kind == 1u {
-        intensity *= rsm_falloff(dot(d, view.spot_direction));
+        intensity *= falloff(dot(d, view.spot_direction));
     }
     var o: RsmOut;
     o.position = vec4<f32>(in.world, 1.0);
