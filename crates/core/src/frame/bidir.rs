@@ -200,40 +200,8 @@ impl BidirState {
                 }],
             },
         );
-        let maps = gpu::create_texture(
-            device,
-            &wgpu::TextureDescriptor {
-                label: Some("vpl shadow maps"),
-                size: wgpu::Extent3d {
-                    width: vpl_size,
-                    height: vpl_size,
-                    depth_or_array_layers: n_layers,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: shadow::FORMAT,
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT
-                    | wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[],
-            },
-        );
-        let layer_views = (0..n_layers)
-            .map(|i| {
-                maps.create_view(&wgpu::TextureViewDescriptor {
-                    label: Some("vpl shadow layer"),
-                    dimension: Some(wgpu::TextureViewDimension::D2),
-                    base_array_layer: i,
-                    array_layer_count: Some(1),
-                    ..Default::default()
-                })
-            })
-            .collect();
-        let array = maps.create_view(&wgpu::TextureViewDescriptor {
-            label: Some("vpl shadow array"),
-            dimension: Some(wgpu::TextureViewDimension::D2Array),
-            ..Default::default()
-        });
+        let (layer_views, array) =
+            shadow::layered_maps(device, "vpl shadow maps", vpl_size, n_layers);
         let group = gpu::create_bind_group(
             device,
             &wgpu::BindGroupDescriptor {

@@ -60,40 +60,8 @@ impl GpuScene {
             bytemuck::cast_slice(&shadow::ShadowPass::views(&shadows)),
             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         );
-        let shadow_maps = gpu::create_texture(
-            &ctx.device,
-            &wgpu::TextureDescriptor {
-                label: Some("shadow maps"),
-                size: wgpu::Extent3d {
-                    width: shadow_map_size,
-                    height: shadow_map_size,
-                    depth_or_array_layers: layers,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: shadow::FORMAT,
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT
-                    | wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[],
-            },
-        );
-        let shadow_layers = (0..layers)
-            .map(|i| {
-                shadow_maps.create_view(&wgpu::TextureViewDescriptor {
-                    label: Some("shadow map layer"),
-                    dimension: Some(wgpu::TextureViewDimension::D2),
-                    base_array_layer: i,
-                    array_layer_count: Some(1),
-                    ..Default::default()
-                })
-            })
-            .collect();
-        let shadow_array = shadow_maps.create_view(&wgpu::TextureViewDescriptor {
-            label: Some("shadow map array"),
-            dimension: Some(wgpu::TextureViewDimension::D2Array),
-            ..Default::default()
-        });
+        let (shadow_layers, shadow_array) =
+            shadow::layered_maps(&ctx.device, "shadow maps", shadow_map_size, layers);
         let shadow_group = gpu::create_bind_group(
             &ctx.device,
             &wgpu::BindGroupDescriptor {

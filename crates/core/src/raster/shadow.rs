@@ -92,6 +92,50 @@ pub(crate) fn perspective(tan_half: f32, near: f32, far: f32) -> Mat4 {
     super::perspective(2.0 * tan_half.atan(), 1.0, near, far)
 }
 
+/// A `layers`-deep array of `size`² shadow maps: the texture's views per layer (render
+/// targets) and over the whole array (for lookups).
+pub fn layered_maps(
+    device: &wgpu::Device,
+    label: &str,
+    size: u32,
+    layers: u32,
+) -> (Vec<wgpu::TextureView>, wgpu::TextureView) {
+    let maps = crate::gpu::create_texture(
+        device,
+        &wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d {
+                width: size,
+                height: size,
+                depth_or_array_layers: layers,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: FORMAT,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        },
+    );
+    let layer_views = (0..layers)
+        .map(|i| {
+            maps.create_view(&wgpu::TextureViewDescriptor {
+                label: Some(label),
+                dimension: Some(wgpu::TextureViewDimension::D2),
+                base_array_layer: i,
+                array_layer_count: Some(1),
+                ..Default::default()
+            })
+        })
+        .collect();
+    let array = maps.create_view(&wgpu::TextureViewDescriptor {
+        label: Some(label),
+        dimension: Some(wgpu::TextureViewDimension::D2Array),
+        ..Default::default()
+    });
+    (layer_views, array)
+}
+
 /// Axis-aligned bounds of the scene's vertices.
 pub fn bounds(scene: &Scene) -> (Vec3, Vec3) {
     scene.positions.iter().fold(
