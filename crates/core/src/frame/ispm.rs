@@ -223,6 +223,9 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
             max: b.max + Vec3::splat(grow),
         });
     }
+    // Progressive mode normalises the kernels' boundary loss per pixel (query side) instead
+    // of per photon, which leaves the crease pixels dark (`progressive::query_coverage`).
+    let query_side = settings.progressive && settings.boundary_compensation;
     let t = Instant::now();
     let mut traced = 0u64;
     let mut compensation_seconds = 0.0;
@@ -276,7 +279,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
                 );
             }
             let mut compensated = photons.clone();
-            if settings.boundary_compensation {
+            if settings.boundary_compensation && !query_side {
                 let tc = Instant::now();
                 progress.update("boundary compensation", 0.0);
                 boundary::compensate_until(
@@ -302,11 +305,21 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         "cpu trace".into(),
         t.elapsed().as_secs_f64() - compensation_seconds,
     ));
-    if settings.boundary_compensation {
+    if settings.boundary_compensation && !query_side {
         stats
             .stages
             .push(("boundary compensation".into(), compensation_seconds));
     }
+    // Progressive mode: the direct light ray traced on the CPU (while the GPU still renders
+    // the rasterized one), which replaces it below; shadow maps are a bias no pass removes.
+    let traced_direct = if settings.progressive {
+        let t = Instant::now();
+        let d = super::progressive::direct_image(scene, bvh, settings, progress)?;
+        stage(&mut stats, "direct light (ray traced)", t);
+        Some(d)
+    } else {
+        None
+    };
     let photons = ring.collect();
     stats.photons_stored = photons.splat.len() as u64;
     let _ = traced;
@@ -361,7 +374,19 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     stats.estimator_memory = state.estimate.memory();
     // A still frame (same photons, nothing moved) keeps last frame's estimate.
     let splat = photons_changed || changes.any() || !splat_current;
-    let names = readback_names(images, true);
+    let mut names = readback_names(images, true);
+    let mut need = Vec::new();
+    if traced_direct.is_some() {
+        need.push("accum");
+    }
+    if query_side {
+        need.extend(["position", "normals", "indirect"]);
+    }
+    for n in need {
+        if !names.contains(&n) {
+            names.push(n);
+        }
+    }
     let data = loop {
         let mut encoder = ctx
             .device
@@ -399,16 +424,48 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     stats.stages.append(&mut timer.totals);
 
     let mut out = assemble(scene, targets, &data, stats);
+    let mut indirect = data.get("indirect").map(|a| rgb_image(w, h, a));
+    if let (true, Some(ind), Some(pos), Some(nrm)) = (
+        query_side,
+        indirect.as_mut(),
+        data.get("position"),
+        data.get("normals"),
+    ) {
+        let t = Instant::now();
+        let r = radius.diffuse();
+        let coverage = super::progressive::query_coverage(scene, bvh, pos, nrm, r, settings.seed);
+        for ((o, i), c) in out
+            .radiance
+            .pixels
+            .iter_mut()
+            .zip(&mut ind.pixels)
+            .zip(coverage)
+        {
+            let corrected = *i / c;
+            *o += corrected - *i;
+            *i = corrected;
+        }
+        out.stats
+            .stages
+            .push(("boundary compensation".into(), t.elapsed().as_secs_f64()));
+    }
+    let raster_direct = data.get("accum").map(|a| normalized(targets, a));
+    if let (Some(traced), Some(raster)) = (&traced_direct, &raster_direct) {
+        // The composite's rasterized direct light swapped for the ray-traced one.
+        for ((o, t), r) in out
+            .radiance
+            .pixels
+            .iter_mut()
+            .zip(&traced.pixels)
+            .zip(&raster.pixels)
+        {
+            *o += *t - *r;
+        }
+    }
     if images.extras {
         let empty = || Image::new(w, h);
-        let direct = data
-            .get("accum")
-            .map(|a| normalized(targets, a))
-            .unwrap_or_else(empty);
-        let indirect = data
-            .get("indirect")
-            .map(|a| rgb_image(w, h, a))
-            .unwrap_or_else(empty);
+        let direct = traced_direct.or(raster_direct).unwrap_or_else(empty);
+        let indirect = indirect.unwrap_or_else(empty);
         let hits = photon_hits(scene, &out.position, &photons.traced);
         out.aovs.push(("direct".into(), direct));
         out.aovs

@@ -29,7 +29,7 @@ const RING_PROBES: u32 = 4;
 const RING_RADIUS: f32 = 0.8;
 /// Smallest coverage divided out: a photon is at most 4× brightened (a photon in a corner
 /// of three walls keeps f ≈ 1/4; lower estimates are mostly probe noise on small objects).
-const MIN_COVERAGE: f32 = 0.25;
+pub const MIN_COVERAGE: f32 = 0.25;
 
 /// Whether the surface the splat would shade is under the point at offset (`d`, angle `a`)
 /// in the photon's tangent plane.

@@ -102,6 +102,12 @@ impl VolumeRadius {
         }
     }
 
+    /// The radius of a photon after a Lambertian bounce without footprint (the widest,
+    /// r_base·G capped at r_max): that of most of the indirect light's kernels.
+    pub fn diffuse(&self) -> f32 {
+        (self.r_base * MAX_WIDENING).min(self.r_max)
+    }
+
     /// The ellipsoid's radius in the surface plane (m), also the radius of a sphere around it
     /// (the normal axis is shorter): the footprint when traced with differentials, else
     /// from the path density (section 5.1), r_base·clamp(ρp^(−α), 1, G). Dense (caustic)
