@@ -8,12 +8,13 @@ mean's squared error against a `path` reference into
 - *rest*: the mean radiance minus that, against the full reference minus the direct one
   (indirect light, mirrors and glass),
 each as relMSE with the full reference's denominator (ref² + 0.01), so the two parts and
-their cross term add up to the total. *w/o mirror pixels*: the total's squared error summed
-over the pixels whose `specular` image stayed black (nothing seen through a mirror or
-glass; `path` references miss light reaching a point light's caustic through a mirror). Also: the share of the total squared error in the
-pixels next to a depth or normal discontinuity, and the mean signed relative
-error of the direct part there and elsewhere. The full reference is the cached one of
-scripts/bench_progressive.py (same arguments), the direct one is made here and cached.
+their cross term add up to the total. Also: the share of the total squared error in the
+pixels next to a crease or depth step (*edge*), the mean signed relative error of the
+direct part and of the rest there and elsewhere, the rest's relMSE off the edges, and
+*w/o mirror pixels*: the total's squared error summed over the pixels whose `specular`
+image stayed black (nothing seen through a mirror or glass: `path` misses a point light's
+caustic seen in a mirror, which photon mapping renders). The full reference is the cached
+one of scripts/bench_progressive.py (same arguments), the direct one is made here.
 
     .venv/bin/python scripts/ispm_progressive_split.py --scene cornell --size 128x128 \\
         --ref-spp 32768 --passes 256
@@ -81,9 +82,7 @@ def main() -> None:
     ap.add_argument("--save", type=Path, help="write the last means and references (.npz)")
     args = ap.parse_args()
     size = tuple(int(v) for v in args.size.split("x"))
-    ref, _ = reference(
-        args.scene, size, args.ref_spp, 1234, args.ref_light_paths, args.ref_parts
-    )
+    ref, _ = reference(args.scene, size, args.ref_spp, 1234, args.ref_light_paths, args.ref_parts)
     dref = direct_reference(args.scene, size, args.direct_spp)
     rest_ref = ref - dref
     den = ref**2 + 1e-2
