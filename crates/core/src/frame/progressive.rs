@@ -137,7 +137,7 @@ pub(super) fn query_coverage(
         .zip(normals)
         .enumerate()
         .map(|(i, (p, n))| {
-            if p.w <= 0.0 || !(r > 0.0) {
+            if p.w <= 0.0 || r.is_nan() || r <= 0.0 {
                 return 1.0;
             }
             let at = p.truncate();
