@@ -236,12 +236,14 @@ def main() -> None:
             t = time.perf_counter()
             img = gi.render(scene, "path", spp=spp, size=size, seed=7).radiance
             s = time.perf_counter() - t
-            rows.append(dict(method="path", step=f"{spp} spp", seconds=s, image=img))
+            rows.append(dict(method="path", step=f"{spp} spp", seconds=s, per=s / spp, image=img))
             spp *= 4
         for method in PROGRESSIVE:
             gi.render(scene, method, size=(8, 8), photons=1000, spp=1)  # warm-up (pipelines)
             for n, s, img in progressive_run(scene, method, size, args.seconds):
-                rows.append(dict(method=method, step=f"{n} passes", seconds=s, image=img))
+                rows.append(
+                    dict(method=method, step=f"{n} passes", seconds=s, per=s / n, image=img)
+                )
         for r in rows:
             r["relmse"] = relmse(r["image"], ref)
             r["flip"] = flip(ref, r["image"])
@@ -251,12 +253,13 @@ def main() -> None:
             f"Reference: {ref_s:.1f} s; reference noise: relMSE {noise['relmse']:.2e},"
             f" FLIP {noise['flip']:.4f}.",
             "",
-            "| method | step | seconds | relMSE | FLIP |",
-            "|---|---|---:|---:|---:|",
+            "| method | step | seconds | ms per pass or spp | relMSE | FLIP |",
+            "|---|---|---:|---:|---:|---:|",
         ]
         for r in rows:
             lines.append(
-                f"| {r['method']} | {r['step']} | {r['seconds']:.3f} | {r['relmse']:.2e}"
+                f"| {r['method']} | {r['step']} | {r['seconds']:.3f} | {1e3 * r['per']:.1f}"
+                f" | {r['relmse']:.2e}"
                 f" | {r['flip']:.4f} |"
             )
         path_1024 = next(
