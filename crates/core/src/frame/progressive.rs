@@ -120,8 +120,8 @@ pub(super) fn sample_offset(settings: &Settings, pass: u64) -> Vec2 {
 /// photons from its side, each brightened by less than the 2× its missing half needs, and
 /// the pixels beside it get the surplus. Measured on cornell 64x64 (128 passes): the
 /// indirect light 8% too dark on the crease pixels, 18% of the image holding 69% of the
-/// squared error, and a kernel 4× smaller only halved it (the error band narrows with the
-/// radius, the error in it does not). Dividing the uncompensated splat at the pixel by the
+/// squared error; at 64 passes kernels 4× smaller only took it from 9.5% to 6.1% (the
+/// error band narrows with the radius, the error in it does not). Dividing the uncompensated splat at the pixel by the
 /// kernel's coverage there is exact for a density that is constant across the disc.
 pub(super) fn query_coverage(
     scene: &Scene,
