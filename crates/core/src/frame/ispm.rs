@@ -308,7 +308,6 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
             let radius =
                 VolumeRadius::of_scene(scene, settings.photons * frames, settings.kernel_scale)
                     .scaled(settings.radius_scale);
-            let mut photons = photons;
             for p in &mut photons {
                 p.footprint_radius = radius.of(p);
             }

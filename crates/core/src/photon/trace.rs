@@ -170,7 +170,7 @@ pub fn emit_aimed_caustics(
         let mut rng = Rng::new(seed, STREAM_AIMED, i);
         let (direction, q) = focus.sample(light, li, &mut rng);
         let power = light.intensity_towards(direction) / (q * n as f32);
-        if !(q > 0.0) || power.max_element() <= 0.0 {
+        if q.is_nan() || q <= 0.0 || power.max_element() <= 0.0 {
             out.absorbed += 1;
             return;
         }
