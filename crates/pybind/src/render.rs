@@ -105,6 +105,7 @@ pub fn settings_from(
             "subsample" => s.subsample = int(v, "subsample")?,
             "footprint_volumes" => s.footprint_volumes = flag(v, "footprint_volumes")?,
             "boundary_compensation" => s.boundary_compensation = flag(v, "boundary_compensation")?,
+            "edge_supersampling" => s.edge_supersampling = flag(v, "edge_supersampling")?,
             "volume_shape" => {
                 s.volume_shape = text(v, "volume_shape")?.parse().map_err(|e| to_py(py, e))?
             }
@@ -179,6 +180,7 @@ fn output_dict<'py>(
     stats.set_item("photons_emitted", s.photons_emitted)?;
     stats.set_item("photons_first_bounce", s.photons_first_bounce)?;
     stats.set_item("photons_stored", s.photons_stored)?;
+    stats.set_item("caustic_photons", s.caustic_photons)?;
     stats.set_item("volume_quads", s.volume_quads)?;
     stats.set_item("passes", s.passes)?;
     stats.set_item("estimator", s.estimator.clone())?;

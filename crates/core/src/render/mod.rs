@@ -174,6 +174,13 @@ pub struct Settings {
     /// `gather` (on `cornell`, progressive gather's error near edges fell from −4.7% to
     /// −0.8% on average, docs/bench/progressive.md).
     pub boundary_compensation: bool,
+    /// GPU methods: supersample the direct light only at pixels whose neighbourhood of
+    /// pixel-centre G-buffer samples crosses a silhouette, crease or material boundary
+    /// (`raster::edges`), shading the others once at their centre; false supersamples
+    /// every pixel `spp` times (a full-screen pass per sample). Measured on lavapipe
+    /// (docs/bench/frame.md): the same image to within 0.3% RMSE on `cornell`, 10–20× less
+    /// direct-light time.
+    pub edge_supersampling: bool,
     /// Bounding shape of the ISPM photon volumes: icosahedra, screen-aligned quads, or per
     /// photon by projected size (`Auto`). Changes the cost only, not the image.
     pub volume_shape: VolumeShape,
@@ -201,8 +208,11 @@ pub struct Settings {
     /// focus, wide where they spread.
     pub caustic_density_bound: bool,
     /// Share of each light's photons aimed at the mirrors and glass through its projection
-    /// map (method `gather`; `photon::focus`), weighted so that the estimate is unchanged.
-    /// 0 = none. Default 0.25: on gather at 200k photons (docs/bench/caustics.md) it keeps
+    /// map (`photon::focus`), weighted so that the estimate is unchanged. 0 = none. Method
+    /// `gather`: that share of its photons is aimed. Method `ispm`: each light whose map holds
+    /// every specular object also emits this share of its bounce-map photons from the CPU
+    /// into the map, and those carry all its first hits on mirrors and glass (the bounce
+    /// map's are dropped). Default 0.25: on gather at 200k photons (docs/bench/caustics.md) it keeps
     /// most of 0.5's gain where caustics dominate (mirror-shadow FLIP 0.290 → 0.156, 0.147
     /// at 0.5) and little of its cost elsewhere (cornell-glass 0.078 → 0.080, 0.085 at 0.5).
     pub photon_focus: f32,
@@ -255,6 +265,7 @@ impl Default for Settings {
             subsample: 2,
             footprint_volumes: false,
             boundary_compensation: true,
+            edge_supersampling: true,
             volume_shape: VolumeShape::Auto,
             estimator: Estimator::Auto,
             temporal_frames: 1,
@@ -456,12 +467,16 @@ pub struct RenderStats {
     pub camera_paths: u64,
     pub light_paths: u64,
     pub triangles: u64,
-    /// Method `ispm`: bounce-map texels that hit the scene (photons emitted from the lights).
+    /// Method `ispm`: bounce-map texels that hit the scene and photons aimed at mirrors and
+    /// glass (`Settings::photon_focus`): the photons emitted from the lights.
     pub photons_emitted: u64,
     /// Method `ispm`: photons that survived the first (bounce-map) scatter.
     pub photons_first_bounce: u64,
     /// Method `ispm`: photons stored (and splatted as volumes), bounce 1 and later.
     pub photons_stored: u64,
+    /// Method `ispm`: stored photons of caustic paths (light → mirrors/glass → here), traced
+    /// this frame.
+    pub caustic_photons: u64,
     /// Method `ispm`: stored photons whose volumes were drawn as quads (the rest as
     /// icosahedra; see `Settings::volume_shape`).
     pub volume_quads: u64,
