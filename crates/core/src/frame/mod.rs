@@ -334,9 +334,15 @@ impl Renderer {
             let mut out = self.gpu_method_frame(settings, images, progress)?;
             let g = self.gpu.as_mut().ok_or(Error::Cancelled)?;
             if g.targets.grow_edges(&ctx)? {
-                // More edge pixels than their buffers held: grown, and the direct light and
-                // the composite redone over the frame's indirect and specular light.
-                direct::redo(g, images, progress, &mut out)?;
+                if settings.progressive && settings.method == Method::Ispm {
+                    // Progressive `ispm` corrects the composite on the CPU (ray-traced
+                    // direct light, per-pixel kernel coverage): the whole pass again.
+                    out = self.gpu_method_frame(settings, images, progress)?;
+                } else {
+                    // More edge pixels than their buffers held: grown, and the direct light
+                    // and the composite redone over the frame's indirect and specular light.
+                    direct::redo(g, images, progress, &mut out)?;
+                }
             }
             Ok(out)
         })
