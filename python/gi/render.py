@@ -467,7 +467,7 @@ def render(
     shadow-map face. Their direct light is supersampled ``spp`` times only at pixels on
     silhouettes, creases and material boundaries and shaded once at the centre elsewhere
     (shadow edges averaged over the pixel); ``edge_supersampling=False`` supersamples
-    every pixel (a full-screen pass per sample, the same image to ~1e-4 and many times
+    every pixel (a full-screen pass per sample, the same image to ~1e-4 and 6–9× slower
     slower).
     ``caustic_density_bound`` (methods ``ispm`` and ``gather``) keeps each caustic photon's
     kernel radius within 0.75–1.5 times the distance to its 16th nearest caustic photon, so
