@@ -127,6 +127,11 @@ def _parser() -> argparse.ArgumentParser:
         help="don't correct ISPM/gather photon power for kernels that fall off surfaces",
     )
     r.add_argument(
+        "--no-edge-supersampling",
+        action="store_true",
+        help="supersample the GPU direct light at every pixel, not only at edges",
+    )
+    r.add_argument(
         "--volume-shape",
         default="auto",
         choices=["auto", "icosahedron", "quad"],
@@ -319,6 +324,7 @@ def _settings(args: argparse.Namespace) -> dict[str, object]:
         subsample=args.subsample,
         footprint_volumes=args.footprint_volumes,
         boundary_compensation=not args.no_boundary_compensation,
+        edge_supersampling=not args.no_edge_supersampling,
         volume_shape=args.volume_shape,
         estimator=args.estimator,
         adapter=args.adapter,

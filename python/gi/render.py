@@ -410,6 +410,7 @@ def render(
     subsample: int = 2,
     footprint_volumes: bool = False,
     boundary_compensation: bool = True,
+    edge_supersampling: bool = True,
     volume_shape: str = "auto",
     estimator: str = "auto",
     adapter: str | None = None,
@@ -460,7 +461,11 @@ def render(
     GPU methods (``direct``, ``ispm``, ``bidir``) run on ``adapter`` ("cpu" for lavapipe,
     "gpu", or part of an adapter's name; default: the ``GI_ADAPTER`` environment variable,
     else a real GPU when present, else lavapipe) with ``shadow_map_size``² texels per
-    shadow-map face.
+    shadow-map face. Their direct light is supersampled ``spp`` times only at pixels on
+    silhouettes, creases and material boundaries and shaded once at the centre elsewhere
+    (shadow edges averaged over the pixel); ``edge_supersampling=False`` supersamples
+    every pixel (a full-screen pass per sample, the same image to ~1e-4 and many times
+    slower).
     ``caustic_density_bound`` (methods ``ispm`` and ``gather``) keeps each caustic photon's
     kernel radius within 0.75–1.5 times the distance to its 16th nearest caustic photon, so
     caustic kernels are small where caustics focus and wide where they spread.
@@ -508,6 +513,7 @@ def render(
         subsample=subsample,
         footprint_volumes=footprint_volumes,
         boundary_compensation=boundary_compensation,
+        edge_supersampling=edge_supersampling,
         volume_shape=volume_shape,
         estimator=estimator,
         adapter=adapter,

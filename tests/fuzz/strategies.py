@@ -325,6 +325,7 @@ def render_settings(draw: st.DrawFn) -> dict[str, Any]:
                 "subsample": pick(st.integers(1, 8)),
                 "footprint_volumes": pick(st.booleans()),
                 "boundary_compensation": pick(st.booleans()),
+                "edge_supersampling": pick(st.booleans()),
                 "volume_shape": pick(st.sampled_from(["auto", "quad", "icosahedron"])),
             },
         )

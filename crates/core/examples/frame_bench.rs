@@ -9,7 +9,9 @@
 //! Scenes `cornell`, `cornell-glass` and the ~246k-triangle `dense-cornell`, at 640×480 and
 //! 1280×720, 20k / 50k / 200k photons, 16 direct samples per pixel, subsample 2 (defaults
 //! otherwise). Median of N frames after a warm-up frame. `--quick` runs 640×480 and 20k only.
-//! Also: CPU BVH rebuild against a refit of the same tree after moving one object.
+//! Also: the direct light alone with every pixel supersampled against edge-adaptive
+//! supersampling (method `direct`), and CPU BVH rebuild against a refit of the same tree
+//! after moving one object.
 
 use gi_core::frame::{FrameDesc, Renderer};
 use gi_core::render::Silent;
@@ -73,7 +75,7 @@ fn row(frames: &[RenderOutput], wall: Vec<f64>) -> Row {
         frame: median(wall),
         splat: m(&|o| stage(o, &["photon volumes", "tiled binning", "tiled shading"])),
         trace: m(&|o| stage(o, &["cpu trace", "boundary compensation"])),
-        direct: m(&|o| stage(o, &["shadow maps", "gbuffer", "direct light"])),
+        direct: m(&|o| stage(o, &["shadow maps", "gbuffer", "edges", "direct light"])),
     }
 }
 
@@ -110,9 +112,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!(
         "| scene | size | photons | one-shot frame (ms) | engine frame (ms) | speed-up | \
          splat (ms) | CPU trace (ms) | direct light (ms) | other (ms) | other share | \
-         still frame (ms) |"
+         all but splat and trace | still frame (ms) |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     for (name, scene) in &scenes {
         for &(w, h) in sizes {
             for &photons in budgets {
@@ -151,8 +153,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 r.render(&FrameDesc::default(), &Silent)?;
                 let still = t.elapsed().as_secs_f64();
                 let other = (new.frame - new.splat - new.trace - new.direct).max(0.0);
+                let outside = (new.frame - new.splat - new.trace).max(0.0);
                 println!(
-                    "| {name} | {w}×{h} | {photons} | {:.0} | {:.0} | {:.2}× | {:.0} | {:.0} | {:.0} | {:.0} | {:.1}% | {:.1} |",
+                    "| {name} | {w}×{h} | {photons} | {:.0} | {:.0} | {:.2}× | {:.0} | {:.0} | {:.0} | {:.0} | {:.1}% | {:.1}% | {:.1} |",
                     old.frame * 1e3,
                     new.frame * 1e3,
                     old.frame / new.frame,
@@ -161,9 +164,74 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     new.direct * 1e3,
                     other * 1e3,
                     100.0 * other / new.frame,
+                    100.0 * outside / new.frame,
                     still * 1e3,
                 );
             }
+        }
+    }
+
+    // The direct light alone (method `direct`, the light moving every frame): every pixel
+    // supersampled against edge-adaptive supersampling, in the same run.
+    println!(
+        "\n| scene | size | full supersampling (ms) | edge-adaptive (ms) | speed-up | \
+         camera moved, edge-adaptive (ms) | relative RMSE between them |"
+    );
+    println!("|---|---|---|---|---|---|---|");
+    for (name, scene) in &scenes {
+        for &(w, h) in sizes {
+            let mut times = Vec::new();
+            let mut images = Vec::new();
+            for edges in [false, true] {
+                let settings = Settings {
+                    method: Method::Direct,
+                    width: Some(w),
+                    height: Some(h),
+                    spp: 16,
+                    edge_supersampling: edges,
+                    ..Default::default()
+                };
+                let mut r = Renderer::new(scene, &settings)?;
+                r.render(&FrameDesc::default(), &Silent)?;
+                let mut frames = Vec::new();
+                for i in 0..runs {
+                    r.update(&nudge(scene, 0.01 * (i + 1) as f32))?;
+                    frames.push(r.render(&FrameDesc::default(), &Silent)?);
+                }
+                times.push(median(
+                    frames.iter().map(|o| o.stats.total_seconds).collect(),
+                ));
+                images.push(frames.pop().expect("a frame").radiance);
+                if edges {
+                    // A camera move re-rasterizes the centre and sub-pixel G-buffers.
+                    let mut moved = Vec::new();
+                    for i in 0..runs {
+                        let mut camera = r.scene().camera_desc();
+                        camera.position[0] += 0.001 * (i + 1) as f32;
+                        r.update(&SceneUpdate::Camera(camera))?;
+                        moved.push(
+                            r.render(&FrameDesc::default(), &Silent)?
+                                .stats
+                                .total_seconds,
+                        );
+                    }
+                    times.push(median(moved));
+                }
+            }
+            let (full, adaptive) = (&images[0], &images[1]);
+            let (mut se, mut sr) = (0.0f64, 0.0f64);
+            for (a, f) in adaptive.pixels.iter().zip(&full.pixels) {
+                se += (*a - *f).length_squared() as f64;
+                sr += f.length_squared() as f64;
+            }
+            println!(
+                "| {name} | {w}×{h} | {:.0} | {:.0} | {:.1}× | {:.0} | {:.1e} |",
+                times[0] * 1e3,
+                times[1] * 1e3,
+                times[0] / times[1],
+                times[2] * 1e3,
+                (se / sr).sqrt(),
+            );
         }
     }
 

@@ -105,6 +105,7 @@ pub fn settings_from(
             "subsample" => s.subsample = int(v, "subsample")?,
             "footprint_volumes" => s.footprint_volumes = flag(v, "footprint_volumes")?,
             "boundary_compensation" => s.boundary_compensation = flag(v, "boundary_compensation")?,
+            "edge_supersampling" => s.edge_supersampling = flag(v, "edge_supersampling")?,
             "volume_shape" => {
                 s.volume_shape = text(v, "volume_shape")?.parse().map_err(|e| to_py(py, e))?
             }

@@ -69,6 +69,53 @@ pub(super) fn frame(
     Ok(out)
 }
 
+/// Renders the direct light and the composite of the frame `out` again (after the edge
+/// buffers grew, [`super::gpu::Targets::grow_edges`]), over the indirect and specular light
+/// the frame left in its targets, and replaces its radiance and `direct` AOV.
+pub(super) fn redo(
+    g: &mut GpuState,
+    images: Images,
+    progress: &dyn Progress,
+    out: &mut RenderOutput,
+) -> Result<()> {
+    let ctx = g.ctx.clone();
+    let t = Instant::now();
+    g.timer.reset();
+    let encoder = ctx
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("direct light again"),
+        });
+    let mut encoder = g
+        .targets
+        .record_direct(&ctx, &g.scene, encoder, &mut g.timer, progress)?;
+    g.targets.record_composite(&ctx, &mut encoder, &mut g.timer);
+    let mut names = vec!["radiance"];
+    if images.extras {
+        names.push("accum");
+    }
+    g.targets.record_readback(&ctx, &mut encoder, &names, None);
+    g.timer.resolve(&mut encoder);
+    ctx.queue.submit([encoder.finish()]);
+    let data = g.targets.read(&ctx, &names)?;
+    g.timer.collect(&ctx)?;
+    let (w, h) = (g.targets.width, g.targets.height);
+    out.radiance = rgb_image(w, h, &data["radiance"]);
+    if let Some(a) = data.get("accum") {
+        let direct = normalized(&g.targets, a);
+        for (name, img) in &mut out.aovs {
+            if name == "direct" {
+                *img = direct.clone();
+            }
+        }
+    }
+    out.stats.stages.append(&mut g.timer.totals);
+    out.stats
+        .stages
+        .push(("edge buffers regrown".into(), t.elapsed().as_secs_f64()));
+    Ok(())
+}
+
 /// The textures to read back for `images` (`accum` for the ISPM direct AOV; `indirect`
 /// when the method has one).
 pub(super) fn readback_names(images: Images, indirect: bool) -> Vec<&'static str> {

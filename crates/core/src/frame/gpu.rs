@@ -9,8 +9,8 @@ use crate::gpu::{self, GpuContext};
 use crate::image::Image;
 use crate::raster::timer::Timer;
 use crate::raster::{
-    self, buffer_init, camera_view, gbuffer, sample_positions, shadow, view_binding, Geometry,
-    Passes, SAMPLES_PER_SUBMIT, VIEW_SIZE,
+    self, buffer_init, camera_view, edges, gbuffer, sample_positions, shadow, view_binding,
+    Geometry, Passes, SAMPLES_PER_SUBMIT, VIEW_SIZE,
 };
 use crate::scene::Scene;
 use glam::{Vec2, Vec4};
@@ -216,10 +216,24 @@ pub(crate) struct Targets {
     sample_offset: Vec2,
     /// Whether `eye` holds the current camera's views (false after a camera change).
     pub eye_current: bool,
-    /// Whether the accumulated direct light and the centre G-buffer are those of the
-    /// current scene and camera (a still frame re-renders neither).
+    /// Whether the accumulated direct light is that of the current scene and camera (a
+    /// still frame re-renders nothing).
     pub direct_current: bool,
+    /// Whether the centre G-buffer and the edge pixels' kept sub-pixel samples are those of
+    /// the current camera, geometry and materials (a frame whose lights alone changed
+    /// re-shades them without rasterizing them).
+    pub samples_current: bool,
+    /// The G-buffer at the pixel centres (AOVs, photon estimates, the direct light of
+    /// pixels off edges).
     pub gbuf: gbuffer::GBuffer,
+    /// The G-buffer of one jittered sub-pixel sample at a time.
+    sub: gbuffer::GBuffer,
+    sub_gbuffer_group: wgpu::BindGroup,
+    /// Edge-adaptive supersampling's buffers (`None`: one sample, or every pixel
+    /// supersampled).
+    edges: Option<edges::EdgeBuffers>,
+    /// The last frame listed its edge pixels; their count is to be checked.
+    edges_found: bool,
     accum: wgpu::Texture,
     accum_view: wgpu::TextureView,
     pub specular: wgpu::Texture,
@@ -268,7 +282,15 @@ fn tex_entry(binding: u32, view: &wgpu::TextureView) -> wgpu::BindGroupEntry<'_>
 }
 
 impl Targets {
-    pub fn new(ctx: &GpuContext, gs: &GpuScene, scene: &Scene, spp: u32) -> Self {
+    /// Targets for `scene`'s camera with `spp` direct-light samples, supersampled at edges
+    /// only when `edge_supersampling`.
+    pub fn new(
+        ctx: &GpuContext,
+        gs: &GpuScene,
+        scene: &Scene,
+        spp: u32,
+        edge_supersampling: bool,
+    ) -> Result<Self> {
         let passes = Passes::get(ctx);
         let device = &ctx.device;
         let (w, h) = (scene.camera.width, scene.camera.height);
@@ -279,10 +301,17 @@ impl Targets {
             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         );
         let gbuf = gbuffer::GBuffer::new(device, w, h);
+        let sub = gbuffer::GBuffer::new(device, w, h);
         let rw = wgpu::TextureUsages::RENDER_ATTACHMENT
             | wgpu::TextureUsages::TEXTURE_BINDING
             | wgpu::TextureUsages::COPY_SRC;
-        let accum = target(ctx, "direct accumulation", w, h, rw);
+        let accum = target(
+            ctx,
+            "direct accumulation",
+            w,
+            h,
+            rw | wgpu::TextureUsages::STORAGE_BINDING,
+        );
         let specular = target(
             ctx,
             "specular paths",
@@ -312,6 +341,17 @@ impl Targets {
                 ],
             },
         );
+        let taps = if edge_supersampling {
+            raster::direct::penumbra_taps(spp)
+        } else {
+            1
+        };
+        let penumbra = buffer_init(
+            ctx,
+            "penumbra taps",
+            bytemuck::cast_slice(&[taps, 0, 0, 0]),
+            wgpu::BufferUsages::UNIFORM,
+        );
         let direct_scene_group = gpu::create_bind_group(
             device,
             &wgpu::BindGroupDescriptor {
@@ -335,23 +375,42 @@ impl Targets {
                         binding: 4,
                         resource: wgpu::BindingResource::Sampler(&passes.direct.shadow_sampler),
                     },
+                    wgpu::BindGroupEntry {
+                        binding: 5,
+                        resource: penumbra.as_entire_binding(),
+                    },
                 ],
             },
         );
-        let direct_gbuffer_group = gpu::create_bind_group(
-            device,
-            &wgpu::BindGroupDescriptor {
-                label: Some("direct gbuffer bind group"),
-                layout: &passes.direct.gbuffer_layout,
-                entries: &gbuf
-                    .lighting_inputs()
-                    .iter()
-                    .enumerate()
-                    .map(|(i, v)| tex_entry(i as u32, v))
-                    .collect::<Vec<_>>(),
-            },
-        );
-        Targets {
+        let lighting_group = |g: &gbuffer::GBuffer| {
+            gpu::create_bind_group(
+                device,
+                &wgpu::BindGroupDescriptor {
+                    label: Some("direct gbuffer bind group"),
+                    layout: &passes.direct.gbuffer_layout,
+                    entries: &g
+                        .lighting_inputs()
+                        .iter()
+                        .enumerate()
+                        .map(|(i, v)| tex_entry(i as u32, v))
+                        .collect::<Vec<_>>(),
+                },
+            )
+        };
+        let direct_gbuffer_group = lighting_group(&gbuf);
+        let sub_gbuffer_group = lighting_group(&sub);
+        let edges = if spp > 1 && edge_supersampling {
+            Some(edges::EdgeBuffers::new(
+                ctx,
+                &passes.edges.layout,
+                (w, h, spp),
+                edges::initial_capacity(w * h),
+                &accum_view,
+            )?)
+        } else {
+            None
+        };
+        Ok(Targets {
             width: w,
             height: h,
             spp,
@@ -360,7 +419,12 @@ impl Targets {
             sample_offset: Vec2::ZERO,
             eye_current: false,
             direct_current: false,
+            samples_current: false,
             gbuf,
+            sub,
+            sub_gbuffer_group,
+            edges,
+            edges_found: false,
             accum,
             accum_view,
             specular,
@@ -373,7 +437,7 @@ impl Targets {
             direct_gbuffer_group,
             composite_group: None,
             readback: HashMap::new(),
-        }
+        })
     }
 
     /// Points the composite pass at `indirect` (the estimator's output, or black).
@@ -438,6 +502,7 @@ impl Targets {
             self.sample_offset = offset;
             self.eye_current = false;
             self.direct_current = false;
+            self.samples_current = false;
         }
     }
 
@@ -466,9 +531,12 @@ impl Targets {
         self.eye_current = true;
     }
 
-    /// Direct light: per sub-pixel sample an eye G-buffer and the deferred lighting added
-    /// into the accumulation target, then the G-buffer at the pixel centres (AOVs and the
-    /// photon estimate read it). Batches beyond the first rewrite the sample views.
+    /// Direct light. With one sample, or with edge-adaptive supersampling
+    /// ([`raster::edges`]): the centre G-buffer shaded once per pixel, and the mean over the
+    /// jittered sub-pixel samples written over the edge pixels (the samples rasterized and
+    /// kept only when the camera, geometry or materials changed). With full supersampling:
+    /// per sub-pixel sample an eye G-buffer and its lighting added into the accumulation
+    /// target. Either way the centre G-buffer (AOVs, photon estimates) is current after.
     pub fn record_direct(
         &mut self,
         ctx: &GpuContext,
@@ -481,13 +549,113 @@ impl Targets {
             return Ok(encoder);
         }
         let passes = Passes::get(ctx);
+        let gbuffer_pass = |encoder: &mut wgpu::CommandEncoder,
+                            timer: &mut Timer,
+                            target: &gbuffer::GBuffer,
+                            offset: u32| {
+            let ts = timer.pass("gbuffer");
+            passes.gbuffer.record(
+                encoder,
+                target,
+                &self.gbuffer_group,
+                offset,
+                &gs.geometry,
+                (&gs.textures.group, gs.variant),
+                ts,
+            );
+        };
+        let scene_group = &self.direct_scene_group;
+        if self.spp > 1 && self.edges.is_none() {
+            encoder = self.for_each_sample(ctx, encoder, progress, |encoder, s, offset| {
+                gbuffer_pass(encoder, timer, &self.sub, offset);
+                let ts = timer.pass("direct light");
+                passes.direct.record(
+                    encoder,
+                    &self.accum_view,
+                    s == 0,
+                    false,
+                    [scene_group, &self.sub_gbuffer_group],
+                    offset,
+                    ts,
+                );
+            })?;
+        }
+        if !self.samples_current {
+            gbuffer_pass(&mut encoder, timer, &self.gbuf, 0);
+            if let Some(edges) = &self.edges {
+                let find = edges::EdgeGroups {
+                    scene: scene_group,
+                    gbuffer: &self.direct_gbuffer_group,
+                    edges,
+                };
+                let ts = timer.compute_pass("edges");
+                passes.edges.record_find(&mut encoder, &find, ts);
+                let store = edges::EdgeGroups {
+                    gbuffer: &self.sub_gbuffer_group,
+                    ..find
+                };
+                encoder = self.for_each_sample(ctx, encoder, progress, |encoder, s, offset| {
+                    gbuffer_pass(encoder, timer, &self.sub, offset);
+                    let ts = timer.compute_pass("edges");
+                    passes.edges.record_store(encoder, &store, s, ts);
+                })?;
+            }
+        }
+        if self.spp == 1 || self.edges.is_some() {
+            let ts = timer.pass("direct light");
+            passes.direct.record(
+                &mut encoder,
+                &self.accum_view,
+                true,
+                true,
+                [scene_group, &self.direct_gbuffer_group],
+                0,
+                ts,
+            );
+            if let Some(edges) = &self.edges {
+                let groups = edges::EdgeGroups {
+                    scene: scene_group,
+                    gbuffer: &self.direct_gbuffer_group,
+                    edges,
+                };
+                let ts = timer.compute_pass("direct light");
+                passes.edges.record_shade(&mut encoder, &groups, ts);
+            }
+        }
+        // Current once recorded in full (a cancelled frame leaves it to the next).
+        self.edges_found |= !self.samples_current && self.edges.is_some();
+        self.samples_current = true;
+        self.direct_current = true;
+        Ok(encoder)
+    }
+
+    /// Records `record(encoder, sample, view offset)` for every sub-pixel sample, writing
+    /// their eye views in batches (submitting the encoder between batches, whose views are
+    /// then in use); reports progress.
+    fn for_each_sample(
+        &self,
+        ctx: &GpuContext,
+        mut encoder: wgpu::CommandEncoder,
+        progress: &dyn crate::render::Progress,
+        mut record: impl FnMut(&mut wgpu::CommandEncoder, u32, u32),
+    ) -> Result<wgpu::CommandEncoder> {
         let spp = self.spp;
         let mut done = 0;
         let per_submit = crate::raster::samples_per_submit(self.width, self.height);
+        if spp > per_submit {
+            // An earlier frame left its last batch's views; no pass recorded so far reads them.
+            let views = &self.sample_views[..per_submit as usize];
+            gpu::write_buffer(
+                &ctx.queue,
+                "eye views",
+                &self.eye,
+                VIEW_SIZE,
+                bytemuck::cast_slice(views),
+            );
+        }
         while done < spp {
             let batch = per_submit.min(spp - done);
             if done > 0 {
-                // The previous batch's views are in use: submit it, then write the next.
                 ctx.queue.submit([encoder.finish()]);
                 let views = &self.sample_views[done as usize..(done + batch) as usize];
                 gpu::write_buffer(
@@ -505,48 +673,42 @@ impl Targets {
             }
             for s in 0..batch {
                 let offset = ((s + 1) as u64 * VIEW_SIZE) as u32;
-                let ts = timer.pass("gbuffer");
-                passes.gbuffer.record(
-                    &mut encoder,
-                    &self.gbuf,
-                    &self.gbuffer_group,
-                    offset,
-                    &gs.geometry,
-                    (&gs.textures.group, gs.variant),
-                    ts,
-                );
-                let ts = timer.pass("direct light");
-                passes.direct.record(
-                    &mut encoder,
-                    &self.accum_view,
-                    done + s == 0,
-                    [&self.direct_scene_group, &self.direct_gbuffer_group],
-                    offset,
-                    ts,
-                );
+                record(&mut encoder, done + s, offset);
             }
             done += batch;
             if !progress.update("direct", done as f64 / spp as f64) {
                 return Err(Error::Cancelled);
             }
         }
-        // The AOVs and the photon estimate use a G-buffer at the pixel centres: the single
-        // sample's when spp = 1.
-        if spp > 1 {
-            let ts = timer.pass("gbuffer");
-            passes.gbuffer.record(
-                &mut encoder,
-                &self.gbuf,
-                &self.gbuffer_group,
-                0,
-                &gs.geometry,
-                (&gs.textures.group, gs.variant),
-                ts,
-            );
-        }
-        // Current once recorded in full (a cancelled frame leaves it to the next).
-        self.direct_current = true;
         Ok(encoder)
+    }
+
+    /// After a frame that listed the edge pixels (its work done): when more were found than
+    /// the buffers hold, grows them and marks the direct light stale, so that the caller
+    /// renders the frame again. True when it did.
+    pub fn grow_edges(&mut self, ctx: &GpuContext) -> Result<bool> {
+        if !std::mem::take(&mut self.edges_found) {
+            return Ok(false);
+        }
+        let Some(edges) = &self.edges else {
+            return Ok(false);
+        };
+        let found = edges.found(ctx)?;
+        let most = edges::max_capacity(ctx, self.spp);
+        if found <= edges.capacity || edges.capacity >= most {
+            return Ok(false);
+        }
+        let capacity = (found + found / 4).min(most);
+        self.edges = Some(edges::EdgeBuffers::new(
+            ctx,
+            &Passes::get(ctx).edges.layout,
+            (self.width, self.height, self.spp),
+            capacity,
+            &self.accum_view,
+        )?);
+        self.samples_current = false;
+        self.direct_current = false;
+        Ok(true)
     }
 
     /// Records the composite pass.

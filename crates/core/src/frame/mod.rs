@@ -331,6 +331,25 @@ impl Renderer {
         };
         ctx.scoped("frame", || {
             self.sync_gpu(&ctx, settings)?;
+            let mut out = self.gpu_method_frame(settings, images, progress)?;
+            let g = self.gpu.as_mut().ok_or(Error::Cancelled)?;
+            if g.targets.grow_edges(&ctx)? {
+                // More edge pixels than their buffers held: grown, and the direct light and
+                // the composite redone over the frame's indirect and specular light.
+                direct::redo(g, images, progress, &mut out)?;
+            }
+            Ok(out)
+        })
+    }
+
+    /// One frame of a GPU method on the synchronized GPU state.
+    fn gpu_method_frame(
+        &mut self,
+        settings: &Settings,
+        images: Images,
+        progress: &dyn Progress,
+    ) -> Result<RenderOutput> {
+        {
             let gpu = self.gpu.as_mut().ok_or(Error::Cancelled)?;
             let bvh = self.bvh.as_ref().ok_or(Error::Cancelled)?;
             match settings.method {
@@ -356,7 +375,7 @@ impl Renderer {
                 Method::Bidir => bidir::frame(gpu, &self.scene, bvh, settings, images, progress),
                 _ => direct::frame(gpu, &self.scene, images, progress),
             }
-        })
+        }
     }
 
     /// Creates the GPU state on the first frame, else uploads what changed and rebuilds
@@ -369,7 +388,8 @@ impl Renderer {
             crate::raster::check_scene_buffers(ctx, scene)?;
             let gs = gpu::GpuScene::new(ctx, scene, settings.shadow_map_size)?;
             crate::raster::check_limits(ctx, scene, settings, gs.layers)?;
-            let targets = gpu::Targets::new(ctx, &gs, scene, settings.spp);
+            let targets =
+                gpu::Targets::new(ctx, &gs, scene, settings.spp, settings.edge_supersampling)?;
             self.gpu = Some(GpuState {
                 ctx: ctx.clone(),
                 scene: gs,
@@ -402,13 +422,22 @@ impl Renderer {
         }
         if self.resized {
             crate::raster::check_limits(ctx, scene, settings, g.scene.layers)?;
-            g.targets = gpu::Targets::new(ctx, &g.scene, scene, settings.spp);
+            g.targets = gpu::Targets::new(
+                ctx,
+                &g.scene,
+                scene,
+                settings.spp,
+                settings.edge_supersampling,
+            )?;
             g.ispm = None;
             g.bidir = None;
         } else {
             if c.camera || c.geometry {
                 // The eye views' depth range follows the scene's bounds.
                 g.targets.eye_current = false;
+            }
+            if c.camera || c.geometry || c.materials {
+                g.targets.samples_current = false;
             }
             if c.any() {
                 g.targets.direct_current = false;

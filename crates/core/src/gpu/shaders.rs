@@ -17,11 +17,14 @@ pub const LIGHT_VIEW: &str = include_str!("shaders/common/light_view.wgsl");
 pub const BUNDLE_TYPES: &str = include_str!("shaders/common/bundle_types.wgsl");
 /// Shadow-map layer choice and PCF lookup.
 pub const SHADOW_LOOKUP: &str = include_str!("shaders/common/shadow_lookup.wgsl");
+/// Deferred direct lighting of one G-buffer sample (groups 0 and 1 of the direct passes).
+pub const DIRECT_SHADE: &str = include_str!("shaders/common/direct_shade.wgsl");
 
 pub const GBUFFER: &str = include_str!("shaders/gbuffer.wgsl");
 pub const SHADOW: &str = include_str!("shaders/shadow.wgsl");
 pub const SHADOW_MASKED: &str = include_str!("shaders/shadow_masked.wgsl");
 pub const DIRECT: &str = include_str!("shaders/direct.wgsl");
+pub const DIRECT_EDGES: &str = include_str!("shaders/direct_edges.wgsl");
 pub const BOUNCE: &str = include_str!("shaders/bounce.wgsl");
 pub const VOLUME: &str = include_str!("shaders/volume.wgsl");
 pub const TILED: &str = include_str!("shaders/tiled.wgsl");

@@ -1,6 +1,8 @@
 //! Deferred direct lighting: a full-screen pass over the G-buffer that evaluates the uber
-//! BSDF for every light with PCF shadow-map visibility and adds the weighted sample into an
-//! `Rgba32Float` accumulation target (additive blending; needs `FLOAT32_BLENDABLE`).
+//! BSDF for every light with PCF shadow-map visibility, either adding one weighted sub-pixel
+//! sample into an `Rgba32Float` accumulation target (additive blending; needs
+//! `FLOAT32_BLENDABLE`) or writing the pixel-centre sample (edge-adaptive supersampling,
+//! [`super::edges`]). The layouts are visible to compute too: the edge passes share them.
 
 use crate::gpu::shaders;
 
@@ -8,21 +10,33 @@ use crate::gpu::shaders;
 pub const ACCUM: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
 pub struct DirectPass {
+    /// Adds one weighted sub-pixel sample.
     pub pipeline: wgpu::RenderPipeline,
-    /// Group 0: view, lights, shadow matrices, shadow maps, comparison sampler.
+    /// Writes the pixel-centre sample with weight 1.
+    pub centre: wgpu::RenderPipeline,
+    /// Group 0: view, lights, shadow matrices, shadow maps, comparison sampler, and the
+    /// penumbra taps per axis of the pixel-centre pass ([`penumbra_taps`]).
     pub scene_layout: wgpu::BindGroupLayout,
     /// Group 1: the G-buffer's position, normals, diffuse and specular textures.
     pub gbuffer_layout: wgpu::BindGroupLayout,
     pub shadow_sampler: wgpu::Sampler,
 }
 
+/// Visibility taps per axis of the pixel-centre pass in shadow penumbrae: the grid of `spp`
+/// sub-pixel samples (its side rounded), 1 for a single sample.
+pub fn penumbra_taps(spp: u32) -> u32 {
+    ((spp as f64).sqrt().round() as u32).max(1)
+}
+
 impl DirectPass {
     pub fn new(device: &wgpu::Device) -> Self {
-        let frag = wgpu::ShaderStages::FRAGMENT;
+        let frag = wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE;
+        let mut view = super::view_entry(0);
+        view.visibility |= wgpu::ShaderStages::COMPUTE;
         let scene_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("direct scene bind group layout"),
             entries: &[
-                super::view_entry(0),
+                view,
                 super::storage_entry(1, frag),
                 super::storage_entry(2, frag),
                 wgpu::BindGroupLayoutEntry {
@@ -39,6 +53,16 @@ impl DirectPass {
                     binding: 4,
                     visibility: frag,
                     ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison),
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 5,
+                    visibility: frag,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: wgpu::BufferSize::new(16),
+                    },
                     count: None,
                 },
             ],
@@ -69,6 +93,7 @@ impl DirectPass {
                 shaders::COMMON,
                 shaders::BSDF,
                 shaders::SHADOW_LOOKUP,
+                shaders::DIRECT_SHADE,
                 shaders::DIRECT,
             ],
         );
@@ -77,36 +102,43 @@ impl DirectPass {
             dst_factor: wgpu::BlendFactor::One,
             operation: wgpu::BlendOperation::Add,
         };
-        let pipeline = crate::gpu::create_render_pipeline(
-            device,
-            &wgpu::RenderPipelineDescriptor {
-                label: Some("direct pipeline"),
-                layout: Some(&pipeline_layout),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("vs_main"),
-                    compilation_options: Default::default(),
-                    buffers: &[],
+        let blend = wgpu::BlendState {
+            color: add,
+            alpha: add,
+        };
+        let pipeline = |entry: &str, blend: Option<wgpu::BlendState>| {
+            crate::gpu::create_render_pipeline(
+                device,
+                &wgpu::RenderPipelineDescriptor {
+                    label: Some(entry),
+                    layout: Some(&pipeline_layout),
+                    vertex: wgpu::VertexState {
+                        module: &module,
+                        entry_point: Some("vs_main"),
+                        compilation_options: Default::default(),
+                        buffers: &[],
+                    },
+                    primitive: wgpu::PrimitiveState::default(),
+                    depth_stencil: None,
+                    multisample: Default::default(),
+                    fragment: Some(wgpu::FragmentState {
+                        module: &module,
+                        entry_point: Some(entry),
+                        compilation_options: Default::default(),
+                        targets: &[Some(wgpu::ColorTargetState {
+                            format: ACCUM,
+                            blend,
+                            write_mask: wgpu::ColorWrites::ALL,
+                        })],
+                    }),
+                    multiview_mask: None,
+                    cache: None,
                 },
-                primitive: wgpu::PrimitiveState::default(),
-                depth_stencil: None,
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("fs_main"),
-                    compilation_options: Default::default(),
-                    targets: &[Some(wgpu::ColorTargetState {
-                        format: ACCUM,
-                        blend: Some(wgpu::BlendState {
-                            color: add,
-                            alpha: add,
-                        }),
-                        write_mask: wgpu::ColorWrites::ALL,
-                    })],
-                }),
-                multiview_mask: None,
-                cache: None,
-            },
+            )
+        };
+        let (centre, pipeline) = (
+            pipeline("fs_centre", None),
+            pipeline("fs_main", Some(blend)),
         );
         let shadow_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("shadow comparison sampler"),
@@ -117,19 +149,23 @@ impl DirectPass {
         });
         DirectPass {
             pipeline,
+            centre,
             scene_layout,
             gbuffer_layout,
             shadow_sampler,
         }
     }
 
-    /// Records the pass, adding into `accum` (cleared first when `clear`). The bind groups
-    /// are those of `scene_layout` and `gbuffer_layout`.
+    /// Records the pass, adding into `accum` (cleared first when `clear`), or writing the
+    /// pixel-centre sample when `centre`. The bind groups are those of `scene_layout` and
+    /// `gbuffer_layout`.
+    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         accum: &wgpu::TextureView,
         clear: bool,
+        centre: bool,
         [scene_group, gbuffer_group]: [&wgpu::BindGroup; 2],
         view_offset: u32,
         timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
@@ -155,7 +191,7 @@ impl DirectPass {
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_pipeline(&self.pipeline);
+        pass.set_pipeline(if centre { &self.centre } else { &self.pipeline });
         pass.set_bind_group(0, scene_group, &[view_offset]);
         pass.set_bind_group(1, gbuffer_group, &[]);
         pass.draw(0..3, 0..1);

@@ -4,6 +4,7 @@
 pub mod bundles;
 pub mod composite;
 pub mod direct;
+pub mod edges;
 pub mod gbuffer;
 pub mod ispm;
 pub mod layers;
@@ -27,6 +28,7 @@ pub struct Passes {
     pub gbuffer: gbuffer::GBufferPass,
     pub shadow: shadow::ShadowPass,
     pub direct: direct::DirectPass,
+    pub edges: edges::EdgePass,
     pub composite: composite::CompositePass,
     /// Group 1 of the passes that rasterize the scene ([`textures::layout`]).
     pub textures: wgpu::BindGroupLayout,
@@ -36,10 +38,16 @@ impl Passes {
     pub fn get(ctx: &GpuContext) -> &Passes {
         ctx.passes.get_or_init(|| {
             let textures = textures::layout(&ctx.device);
+            let direct = direct::DirectPass::new(&ctx.device);
             Passes {
                 gbuffer: gbuffer::GBufferPass::new(&ctx.device, &textures),
                 shadow: shadow::ShadowPass::new(&ctx.device, &textures),
-                direct: direct::DirectPass::new(&ctx.device),
+                edges: edges::EdgePass::new(
+                    &ctx.device,
+                    &direct.scene_layout,
+                    &direct.gbuffer_layout,
+                ),
+                direct,
                 composite: composite::CompositePass::new(&ctx.device),
                 textures,
             }
