@@ -32,6 +32,8 @@ class RenderStats:
     photons_emitted: int = 0
     photons_first_bounce: int = 0
     photons_stored: int = 0
+    #: Method ``ispm``: stored photons of caustic paths (light → mirrors/glass → surface).
+    caustic_photons: int = 0
     volume_quads: int = 0
     passes: int = 1
     #: Method ``ispm``: the indirect estimator that ran ("volumes", "tiled", ...), why it was
@@ -141,6 +143,7 @@ def _result(out: dict[str, Any]) -> RenderResult:
         photons_emitted=s["photons_emitted"],
         photons_first_bounce=s["photons_first_bounce"],
         photons_stored=s["photons_stored"],
+        caustic_photons=s["caustic_photons"],
         volume_quads=s["volume_quads"],
         passes=s["passes"],
         estimator=s["estimator"],
@@ -469,8 +472,9 @@ def render(
     ``caustic_density_bound`` (methods ``ispm`` and ``gather``) keeps each caustic photon's
     kernel radius within 0.75–1.5 times the distance to its 16th nearest caustic photon, so
     caustic kernels are small where caustics focus and wide where they spread.
-    ``photon_focus`` (method ``gather``) aims that share of each light's photons at the
-    mirrors and glass through a projection map, weighted so that the image is unchanged.
+    ``photon_focus`` aims that share of each light's photons at the mirrors and glass
+    through a projection map, weighted so that the image is unchanged (method ``ispm``:
+    those aimed photons, traced on the CPU, carry every first hit on a mirror or glass).
     Method ``bidir`` (Tokuyoshi & Ogaki 2012, bidirectional path tracing by rasterization)
     adds to the GPU direct light the indirect light of ``vpls_per_light`` virtual point lights
     per light (drawn by flux from reflective shadow maps of about ``rsm_size``² texels per

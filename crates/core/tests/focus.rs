@@ -88,3 +88,70 @@ fn no_specular_objects_no_focusing() {
     assert!(Focus::of_scene(&glass, 0.5).active(0));
     assert!(!Focus::of_scene(&glass, 0.0).active(0));
 }
+
+/// ISPM (per frame, `render` with a new seed): the aimed CPU photons carry every first hit
+/// on the spheres, the bounce map the rest.
+fn ispm_frames(focus: f32, seeds: std::ops::Range<u64>) -> (u64, u64, Vec<f64>) {
+    let scene = builtin::load("cornell-glass").unwrap();
+    let (mut caustic, mut emitted, mut means) = (0, 0, Vec::new());
+    for seed in seeds {
+        let settings = Settings {
+            method: Method::Ispm,
+            width: Some(48),
+            height: Some(48),
+            photons: 50_000,
+            photon_focus: focus,
+            seed,
+            ..Settings::for_method(Method::Ispm)
+        };
+        let out = gi_core::render(&scene, &settings, &Silent).unwrap();
+        caustic += out.stats.caustic_photons;
+        emitted += out.stats.photons_emitted;
+        means.push(out.radiance.mean().as_dvec3().element_sum());
+    }
+    (caustic, emitted, means)
+}
+
+#[test]
+fn ispm_focusing_multiplies_caustic_photons_and_keeps_the_image_mean() {
+    let (c0, e0, plain) = ispm_frames(0.0, 0..8);
+    let (c1, e1, focused) = ispm_frames(0.5, 100..108);
+    let before = c0 as f64 / e0 as f64;
+    let after = c1 as f64 / e1 as f64;
+    println!(
+        "ispm caustic photons per emitted photon: {before:.4} -> {after:.4} ({:.1}x)",
+        after / before
+    );
+    // At least 5x, as the issue asks (measured 8.6x: the spheres subtend ~2.5% of the
+    // light's directions; half as many photons again are aimed into their cones).
+    assert!(after >= 5.0 * before, "{before} {after}");
+    // The image mean against a path-traced reference (with light tracing for the caustics).
+    let scene = builtin::load("cornell-glass").unwrap();
+    let reference: f64 = (0..2)
+        .map(|seed| {
+            let s = Settings {
+                method: Method::Path,
+                width: Some(48),
+                height: Some(48),
+                spp: 64,
+                seed,
+                ..Settings::for_method(Method::Path)
+            };
+            let out = gi_core::render(&scene, &s, &Silent).unwrap();
+            out.radiance.mean().as_dvec3().element_sum() / 2.0
+        })
+        .sum();
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+    let (m0, m1) = (mean(&plain), mean(&focused));
+    println!(
+        "image mean: path {reference:.4}; ispm {m0:.4} ({:+.1}%) -> focused {m1:.4} ({:+.1}%)",
+        100.0 * (m0 / reference - 1.0),
+        100.0 * (m1 / reference - 1.0)
+    );
+    // Focused: within 1.5% of the reference (measured +0.8%, the photon-volume splat's own
+    // bias; the Monte Carlo error of this comparison is about 0.3%). Unfocused, the few
+    // bounce-map caustic photons get wide density-bounded kernels and the mean is ~19%
+    // high at this size: focusing must not be worse.
+    assert!((m1 / reference - 1.0).abs() < 0.015, "{m1} vs {reference}");
+    assert!((m1 - reference).abs() <= (m0 - reference).abs());
+}

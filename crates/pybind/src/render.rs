@@ -180,6 +180,7 @@ fn output_dict<'py>(
     stats.set_item("photons_emitted", s.photons_emitted)?;
     stats.set_item("photons_first_bounce", s.photons_first_bounce)?;
     stats.set_item("photons_stored", s.photons_stored)?;
+    stats.set_item("caustic_photons", s.caustic_photons)?;
     stats.set_item("volume_quads", s.volume_quads)?;
     stats.set_item("passes", s.passes)?;
     stats.set_item("estimator", s.estimator.clone())?;

@@ -17,10 +17,12 @@ use super::{GpuState, Images};
 use crate::error::{Error, Result};
 use crate::estimate::{Binned, Estimator, IndirectEstimate, Mode, Volumes};
 use crate::image::Image;
+use crate::photon::focus::Focus;
 use crate::photon::lbvh::Aabb;
 use crate::photon::ring::PhotonRing;
 use crate::photon::trace::Checked;
-use crate::photon::trace::{continue_paths_from, FirstSegment};
+use crate::photon::trace::{continue_paths_from, emit_aimed_caustics, FirstSegment};
+use crate::photon::PhotonRay;
 use crate::photon::{boundary, PhotonTraceSettings};
 use crate::raster::ispm::{bounce_layers, photon_hits, BounceTargets, IspmPasses, Z_RATIO};
 use crate::raster::specular::specular_paths;
@@ -239,6 +241,16 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
                 differentials: None,
             }
         };
+        // Photon focusing: lights whose projection maps hold every specular object get their
+        // mirror and glass first hits from aimed CPU photons instead of the bounce map.
+        let focus = Focus::of_scene(
+            scene,
+            if settings.photon_focus > 0.0 {
+                1.0
+            } else {
+                0.0
+            },
+        );
         let mut start = 0;
         while start < bm.rays.len() {
             let light = bm.ray_lights[start];
@@ -249,22 +261,53 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
                     .count();
             let seed = settings.seed ^ (light as u64).wrapping_mul(0xA24B_AED4_963E_E407);
             let control = Checked::new(progress, "cpu trace");
-            let rays = &bm.rays[start..end];
+            let aimed = focus.covers_all(light as usize);
+            let rays: Vec<PhotonRay> = if aimed {
+                (start..end)
+                    .filter(|&i| !bm.first_delta[i])
+                    .map(|i| bm.rays[i])
+                    .collect()
+            } else {
+                bm.rays[start..end].to_vec()
+            };
             // With footprints, photons that met a mirror or glass first carry the footprint
             // of their first segment from the light (re-cast on the CPU).
             let first = settings
                 .footprint_volumes
                 .then(|| first_segment(scene, &layers, light as usize));
-            let photons =
-                continue_paths_from(scene, bvh, rays, &pts, seed, &control, first)?.photons;
+            let mut photons =
+                continue_paths_from(scene, bvh, &rays, &pts, seed, &control, first)?.photons;
+            if aimed {
+                let texels: u64 = layers
+                    .iter()
+                    .filter(|l| l.light == light as usize)
+                    .map(|l| l.res as u64 * l.res as u64)
+                    .sum();
+                let n = ((texels as f64 * settings.photon_focus as f64).round() as u64).max(1);
+                let set = emit_aimed_caustics(
+                    scene,
+                    bvh,
+                    light as usize,
+                    n,
+                    &pts,
+                    seed,
+                    &control,
+                    &focus,
+                )?;
+                stats.photons_emitted += n;
+                photons.extend(set.photons);
+            }
             traced += photons.len() as u64;
+            stats.caustic_photons += photons
+                .iter()
+                .filter(|p| crate::photon::density::is_caustic(p))
+                .count() as u64;
             // Volume radii are decided here, once, for the photon count the ring will hold
             // (the splat reads `footprint_radius`).
             let frames = (ring.held(light as usize) + 1).min(ring.frames()) as u64;
             let radius =
                 VolumeRadius::of_scene(scene, settings.photons * frames, settings.kernel_scale)
                     .scaled(settings.radius_scale);
-            let mut photons = photons;
             for p in &mut photons {
                 p.footprint_radius = radius.of(p);
             }

@@ -39,6 +39,8 @@ pub struct ProjectionMap {
 pub struct Focus {
     pub fraction: f32,
     pub maps: Vec<ProjectionMap>,
+    /// Specular objects of the scene (each light's map has a cone per object it can aim at).
+    pub objects: usize,
 }
 
 /// Bounding spheres (centre, radius) of the scene's objects with a delta lobe.
@@ -106,7 +108,14 @@ impl Focus {
         Focus {
             fraction: fraction.clamp(0.0, 1.0),
             maps,
+            objects: spheres.len(),
         }
+    }
+
+    /// Whether light `li`'s map has a cone around every specular object: then every
+    /// direction in which the light first meets a mirror or glass lies in its cones.
+    pub fn covers_all(&self, li: usize) -> bool {
+        self.active(li) && self.maps[li].cones.len() == self.objects
     }
 
     /// Whether light `li` aims any photons.
@@ -187,6 +196,7 @@ mod tests {
                     },
                 ],
             }],
+            objects: 2,
         };
         let n = 400_000;
         let mut sum = 0.0f64;

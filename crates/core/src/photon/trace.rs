@@ -15,6 +15,7 @@ use super::{path_density_factor, FootprintAxes, PathKind, Photon, PhotonRay, Pho
 use crate::bsdf::Lobe;
 use crate::error::{Error, Result};
 use crate::memory;
+use crate::render::camera_pass::has_delta_lobe;
 use crate::render::Progress;
 use crate::sampling::Rng;
 use crate::scene::Scene;
@@ -29,6 +30,8 @@ const CHUNK: u64 = 4096;
 const STREAM_EMIT: u64 = 0x9407_0000;
 /// Random stream of continued photon paths.
 const STREAM_CONTINUE: u64 = 0x9407_0001;
+/// Random stream of photon paths aimed at the specular objects for ISPM.
+const STREAM_AIMED: u64 = 0x9407_0002;
 
 /// Photon tracer settings.
 #[derive(Clone, Copy, Debug)]
@@ -139,6 +142,56 @@ pub fn emit_and_trace_focused(
         follow(scene, bvh, &ray, diff, None, s, &mut rng, out);
     })?;
     set.emitted = n_photons;
+    finish_footprints(&mut set, s);
+    Ok(set)
+}
+
+/// Photon focusing for ISPM: `n` photons of light `li` aimed into its projection map
+/// (`focus` with an aimed share of 1, its cones around every specular object), each with
+/// power I(ω)/(n·q(ω)) for the cones' mixture density q; only the paths whose first hit
+/// has a delta lobe are traced on (from bounce 0, not stored there), since the bounce map
+/// keeps every other first hit and drops these (`BounceMap::first_delta`). The two parts
+/// partition the light's first hits, so the estimate is unchanged while the caustic paths
+/// get many more photons.
+#[allow(clippy::too_many_arguments)]
+pub fn emit_aimed_caustics(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    li: usize,
+    n: u64,
+    s: &PhotonTraceSettings,
+    seed: u64,
+    control: &dyn TraceControl,
+    focus: &Focus,
+) -> Result<PhotonSet> {
+    let light = &scene.lights[li];
+    let origin = light.position();
+    let mut set = trace_chunks(n, control, |i, out| {
+        let mut rng = Rng::new(seed, STREAM_AIMED, i);
+        let (direction, q) = focus.sample(light, li, &mut rng);
+        let power = light.intensity_towards(direction) / (q * n as f32);
+        if q.is_nan() || q <= 0.0 || power.max_element() <= 0.0 {
+            out.absorbed += 1;
+            return;
+        }
+        let Some(hit) = bvh.intersect(origin, direction, f32::INFINITY) else {
+            out.escaped += 1;
+            return;
+        };
+        if !has_delta_lobe(&Interaction::new(scene, &hit, direction).material) {
+            out.absorbed += 1;
+            return;
+        }
+        let ray = PhotonRay::new(origin, direction, power, 1.0, 0);
+        let diff = s
+            .differentials
+            .map_or(Differentials::emitted(direction), |ds| {
+                let spacing = (1.0 / (n as f32 * q)).sqrt();
+                Differentials::emitted(direction).scaled(spacing / ds.spacing)
+            });
+        follow(scene, bvh, &ray, diff, None, s, &mut rng, out);
+    })?;
+    set.emitted = n;
     finish_footprints(&mut set, s);
     Ok(set)
 }

@@ -540,6 +540,8 @@ pub struct BounceMap {
     pub scatter_seconds: f64,
     /// The light of each ray (index into `Scene::lights`).
     pub ray_lights: Vec<u32>,
+    /// Whether each ray's first hit was on a material with a delta lobe (mirror, glass).
+    pub first_delta: Vec<bool>,
 }
 
 /// [`BounceTargets`] on the context of `settings.adapter`, for inspection and tests: the
@@ -745,6 +747,7 @@ impl BounceTargets {
                         1,
                     ));
                     out.ray_lights.push(layer.light as u32);
+                    out.first_delta.push(power[i].w > 0.5);
                 }
             }
         }

@@ -210,8 +210,11 @@ pub struct Settings {
     /// focus, wide where they spread.
     pub caustic_density_bound: bool,
     /// Share of each light's photons aimed at the mirrors and glass through its projection
-    /// map (method `gather`; `photon::focus`), weighted so that the estimate is unchanged.
-    /// 0 = none. Default 0.25: on gather at 200k photons (docs/bench/caustics.md) it keeps
+    /// map (`photon::focus`), weighted so that the estimate is unchanged. 0 = none. Method
+    /// `gather`: that share of its photons is aimed. Method `ispm`: each light whose map holds
+    /// every specular object also emits this share of its bounce-map photons from the CPU
+    /// into the map, and those carry all its first hits on mirrors and glass (the bounce
+    /// map's are dropped). Default 0.25: on gather at 200k photons (docs/bench/caustics.md) it keeps
     /// most of 0.5's gain where caustics dominate (mirror-shadow FLIP 0.290 → 0.156, 0.147
     /// at 0.5) and little of its cost elsewhere (cornell-glass 0.078 → 0.080, 0.085 at 0.5).
     pub photon_focus: f32,
@@ -471,12 +474,16 @@ pub struct RenderStats {
     pub camera_paths: u64,
     pub light_paths: u64,
     pub triangles: u64,
-    /// Method `ispm`: bounce-map texels that hit the scene (photons emitted from the lights).
+    /// Method `ispm`: bounce-map texels that hit the scene and photons aimed at mirrors and
+    /// glass (`Settings::photon_focus`): the photons emitted from the lights.
     pub photons_emitted: u64,
     /// Method `ispm`: photons that survived the first (bounce-map) scatter.
     pub photons_first_bounce: u64,
     /// Method `ispm`: photons stored (and splatted as volumes), bounce 1 and later.
     pub photons_stored: u64,
+    /// Method `ispm`: stored photons of caustic paths (light → mirrors/glass → here), traced
+    /// this frame.
+    pub caustic_photons: u64,
     /// Method `ispm`: stored photons whose volumes were drawn as quads (the rest as
     /// icosahedra; see `Settings::volume_shape`).
     pub volume_quads: u64,

@@ -144,7 +144,10 @@ fn bounce(in: VertexOut, textured: bool) -> BounceOut {
     let origin = world + ng * eps * sign(dot(wi, ng));
     o.origin = vec4<f32>(origin, path_density_factor(m, bs.lobe));
     o.direction = vec4<f32>(wi, 1.0);
-    o.power = vec4<f32>(scattered / q, 0.0);
+    // w: the material has a delta lobe (a mirror or glass first hit: with photon focusing
+    // such photons come from the CPU's aimed emission instead, `photon::trace`).
+    let delta = (max3(m.specular) > 0.0 && m.roughness < MIRROR_ROUGHNESS) || max3(m.transmission) > 0.0;
+    o.power = vec4<f32>(scattered / q, select(0.0, 1.0, delta));
     return o;
 }
 
