@@ -466,9 +466,8 @@ def render(
     else a real GPU when present, else lavapipe) with ``shadow_map_size``² texels per
     shadow-map face. Their direct light is supersampled ``spp`` times only at pixels on
     silhouettes, creases and material boundaries and shaded once at the centre elsewhere
-    (shadow edges averaged over the pixel); ``edge_supersampling=False`` supersamples
-    every pixel (a full-screen pass per sample, the same image to ~1e-4 and many times
-    slower).
+    (box-filtered over the pixel's footprint); ``edge_supersampling=False`` supersamples
+    every pixel (a full-screen pass per sample: the same image to ~1e-4, 6–9× slower).
     ``caustic_density_bound`` (methods ``ispm`` and ``gather``) keeps each caustic photon's
     kernel radius within 0.75–1.5 times the distance to its 16th nearest caustic photon, so
     caustic kernels are small where caustics focus and wide where they spread.

@@ -4,7 +4,7 @@
 //! so that every frame re-traces and re-splats its photons, radiance read back only), in the
 //! same run, as a markdown table.
 //!
-//! `cargo run -p gi-core --profile test --example frame_bench [-- --runs N --quick]`
+//! `cargo run -p gi-core --profile test --example frame_bench [-- --runs N --quick --scene NAME]`
 //!
 //! Scenes `cornell`, `cornell-glass` and the ~246k-triangle `dense-cornell`, at 640×480 and
 //! 1280×720, 20k / 50k / 200k photons, 16 direct samples per pixel, subsample 2 (defaults
@@ -113,11 +113,22 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .collect::<Vec<_>>()
             .join("; ")
     );
-    let scenes: Vec<(&str, Scene)> = vec![
-        ("cornell", builtin::load("cornell")?),
-        ("cornell-glass", builtin::load("cornell-glass")?),
-        ("dense-cornell", dense_cornell()),
-    ];
+    let only = args
+        .iter()
+        .position(|a| a == "--scene")
+        .and_then(|i| args.get(i + 1));
+    let scenes: Vec<(&str, Scene)> = ["cornell", "cornell-glass", "dense-cornell"]
+        .into_iter()
+        .filter(|n| only.is_none_or(|o| o == n))
+        .map(|n| {
+            let scene = if n == "dense-cornell" {
+                Ok(dense_cornell())
+            } else {
+                builtin::load(n)
+            };
+            scene.map(|s| (n, s))
+        })
+        .collect::<Result<_, _>>()?;
     let sizes: &[(u32, u32)] = if quick {
         &[(640, 480)]
     } else {
