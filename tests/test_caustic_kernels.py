@@ -32,38 +32,37 @@ def fireflies(x, ref, window=9, factor=4.0):
     return float(np.mean((e > factor * median) & (e > 0.01 * ref.mean())))
 
 
-def test_density_bound_lowers_the_firefly_share_against_path():
+def test_caustic_kernels_and_focusing_lower_the_firefly_share_against_path():
     # cornell-glass: light the glass and mirror spheres scatter around the room lands as
     # isolated caustic photons; with the base kernel each is a dot. Reference: path with
-    # 256 spp and 16M light paths (~9 s here; its caustics are light-traced). Measured at
-    # 48x48, seeds 0-2: firefly share 0.053, 0.060, 0.046 without the bound, 0.037, 0.036,
-    # 0.032 with it (a second reference of another seed scores 0.008). The bench table
-    # (docs/bench/caustics.md, a 4-part reference) has 0.076 -> 0.050. Bound: the mean with
-    # the bound under 0.045 and under 0.8x the mean without (measured 0.035 and 0.66x).
+    # 256 spp and 16M light paths (~9 s here; its caustics are light-traced). "Before" is
+    # ISPM without the density bound and without photon focusing; "after" its defaults (the
+    # bound, and 0.25 of each light's photons aimed at the spheres). Measured at 48x48,
+    # seeds 0-2, before photon focusing for ispm existed: firefly share 0.053 without the
+    # bound, 0.035 with it (a second reference of another seed scores 0.008).
+    # With focusing: 0.054 before, 0.036 after. Bound: the mean after under 0.045 and
+    # under 0.8x the mean before (measured 0.67x).
     scene = gi.load_scene("cornell-glass")
     ref = gi.render(scene, "path", size=(48, 48), spp=256, light_paths=16_000_000, seed=99).radiance
+    variants = {
+        "before": dict(caustic_density_bound=False, photon_focus=0.0),
+        "after": {},
+    }
     shares = {
-        bound: np.mean(
+        name: np.mean(
             [
                 fireflies(
-                    gi.render(
-                        scene,
-                        "ispm",
-                        size=(48, 48),
-                        photons=200_000,
-                        seed=s,
-                        caustic_density_bound=bound,
-                    ).radiance,
+                    gi.render(scene, "ispm", size=(48, 48), photons=200_000, seed=s, **kw).radiance,
                     ref,
                 )
                 for s in (0, 1, 2)
             ]
         )
-        for bound in (False, True)
+        for name, kw in variants.items()
     }
     print(shares)
-    assert shares[True] < 0.045
-    assert shares[True] < 0.8 * shares[False]
+    assert shares["after"] < 0.045
+    assert shares["after"] < 0.8 * shares["before"]
 
 
 def test_density_bound_removes_isolated_caustic_dots():

@@ -249,6 +249,53 @@ impl Material {
         }
     }
 
+    /// Every delta lobe `sample` can pick for `wo` (local frame), each with its expected
+    /// weight: `pdf` is the probability that `sample` picks it and `weight` the mean of the
+    /// sample weights it returns for it times that probability, so following every lobe
+    /// with its `weight` (splitting) has the expectation of one `sample` call restricted
+    /// to the delta lobes. Lobes of zero weight are left out.
+    pub fn delta_lobes(&self, wo: Vec3) -> impl Iterator<Item = BsdfSample> {
+        let flip = wo.z < 0.0;
+        let sign = if flip { -1.0 } else { 1.0 };
+        let wo_up = wo * sign;
+        let [ps, _, pg] = self.lobe_probabilities(wo_up.z);
+        let mirror_dir = Vec3::new(-wo.x, -wo.y, wo.z);
+        let f = self.fresnel_spec(wo_up.z);
+        let mirror = (ps > 0.0 && self.is_mirror()).then_some(BsdfSample {
+            wi: mirror_dir,
+            weight: f,
+            pdf: ps,
+            lobe: Lobe::Mirror,
+        });
+        let (mut reflect, mut refract) = (None, None);
+        if pg > 0.0 {
+            let tint = self.transmission * (Vec3::ONE - f);
+            let eta = if flip { 1.0 / self.ior } else { self.ior };
+            let (fr, cos_t) = fresnel::dielectric(wo_up.z, eta);
+            if fr > 0.0 {
+                reflect = Some(BsdfSample {
+                    wi: mirror_dir,
+                    weight: tint * fr,
+                    pdf: pg * fr,
+                    lobe: Lobe::GlassReflect,
+                });
+            }
+            if fr < 1.0 {
+                let wt_up = -wo_up / eta + (wo_up.z / eta - cos_t) * Vec3::Z;
+                refract = Some(BsdfSample {
+                    wi: (wt_up * sign).normalize(),
+                    weight: tint * (1.0 - fr),
+                    pdf: pg * (1.0 - fr),
+                    lobe: Lobe::GlassRefract,
+                });
+            }
+        }
+        [mirror, reflect, refract]
+            .into_iter()
+            .flatten()
+            .filter(|s| s.weight.max_element() > 0.0)
+    }
+
     /// The scatter probability ρs = ∫ f cos dωi for viewing direction `wo` (exact for the
     /// diffuse, mirror and glass lobes; the GGX lobe's is bounded by its Fresnel term).
     pub fn scatter_probability(&self, wo: Vec3) -> Vec3 {

@@ -297,3 +297,50 @@ fn chi_square_detects_a_wrong_pdf() {
     };
     assert!(chi_square(&m, &wrong, dir(0.7, 0.0), 3) < 1e-6);
 }
+
+/// `delta_lobes` (the splitting of the specular paths) has the expectation of `sample`
+/// restricted to the delta lobes: per lobe, the summed sample weights over n draws, divided
+/// by n, equal the lobe's expected weight, and the directions agree. Over the material grid
+/// (mirrors, glass, mixtures) from both sides and at grazing angles (total internal
+/// reflection from inside). Tolerance: 5 standard errors of the per-lobe mean (each sample
+/// weight is bounded by 1/p of its lobe, so the mean is well behaved) plus 1e-4.
+#[test]
+fn delta_lobes_match_sampling_in_expectation() {
+    let n = 20_000usize;
+    for (mi, m) in material_grid().iter().enumerate() {
+        for (ci, &cos) in [0.95f32, 0.5, 0.1, -0.3, -0.9].iter().enumerate() {
+            let wo = dir(cos, 0.7);
+            let mut rng = Rng::new(7, mi as u64, ci as u64);
+            let lobes = [Lobe::Mirror, Lobe::GlassReflect, Lobe::GlassRefract];
+            let mut sum = [glam::DVec3::ZERO; 3];
+            let mut sum2 = [glam::DVec3::ZERO; 3];
+            for _ in 0..n {
+                let Some(s) = m.sample(wo, &mut rng) else {
+                    continue;
+                };
+                if let Some(i) = lobes.iter().position(|l| *l == s.lobe) {
+                    let w = s.weight.as_dvec3();
+                    sum[i] += w;
+                    sum2[i] += w * w;
+                    let split = m.delta_lobes(wo).find(|d| d.lobe == s.lobe);
+                    let split = split.expect("a sampled delta lobe is among the split ones");
+                    assert!((split.wi - s.wi).length() < 1e-5, "{:?}", s.lobe);
+                }
+            }
+            for (i, lobe) in lobes.iter().enumerate() {
+                let mean = sum[i] / n as f64;
+                let se =
+                    ((sum2[i] / n as f64 - mean * mean).max(glam::DVec3::ZERO) / n as f64).sqrt();
+                let split = m
+                    .delta_lobes(wo)
+                    .find(|d| d.lobe == *lobe)
+                    .map_or(glam::DVec3::ZERO, |d| d.weight.as_dvec3());
+                let err = (split - mean).abs();
+                assert!(
+                    err.cmple(se * 5.0 + 1e-4).all(),
+                    "material {mi} cos {cos} {lobe:?}: split {split} sampled {mean} ± {se}"
+                );
+            }
+        }
+    }
+}

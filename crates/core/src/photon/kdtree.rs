@@ -114,6 +114,35 @@ impl KdTree {
         out.extend(q.heap.into_sorted_vec());
     }
 
+    /// Every point within squared distance `r2` of `p` (inclusive), as (point, original
+    /// index), appended to `out` in no particular order.
+    pub fn within(&self, p: Vec3, r2: f32, out: &mut Vec<(Vec3, u32)>) {
+        self.range(0, self.points.len(), p, r2, out);
+    }
+
+    fn range(&self, lo: usize, hi: usize, p: Vec3, r2: f32, out: &mut Vec<(Vec3, u32)>) {
+        if hi - lo <= LEAF {
+            for i in lo..hi {
+                if self.points[i].distance_squared(p) <= r2 {
+                    out.push((self.points[i], self.indices[i]));
+                }
+            }
+            return;
+        }
+        let mid = (lo + hi) / 2;
+        let axis = self.axes[mid] as usize;
+        let delta = p[axis] - self.points[mid][axis];
+        if self.points[mid].distance_squared(p) <= r2 {
+            out.push((self.points[mid], self.indices[mid]));
+        }
+        if delta <= 0.0 || delta * delta <= r2 {
+            self.range(lo, mid, p, r2, out);
+        }
+        if delta >= 0.0 || delta * delta <= r2 {
+            self.range(mid + 1, hi, p, r2, out);
+        }
+    }
+
     fn search<F: Fn(u32) -> bool>(&self, lo: usize, hi: usize, q: &mut Query<F>) {
         if hi - lo <= LEAF {
             for i in lo..hi {
@@ -263,6 +292,37 @@ mod tests {
                 tree.nearest(p, k, r2, accept, &mut out);
                 let expected = brute(&points, p, k, r2, accept);
                 assert_eq!(out, expected, "query {qi}, k {k}, r² {r2}");
+            }
+        }
+    }
+
+    /// The range query finds exactly the points within the radius (boundary included) on
+    /// random and clustered points with duplicates.
+    #[test]
+    fn within_matches_brute_force() {
+        let mut rng = Rng::new(5, 0, 0);
+        let mut points: Vec<Vec3> = (0..4000)
+            .map(|_| Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()))
+            .collect();
+        points.extend((0..2000).map(|_| Vec3::new(rng.next_f32(), 0.5, rng.next_f32() * 0.1)));
+        points.extend_from_within(..50);
+        let tree = KdTree::build(&points);
+        let mut out = Vec::new();
+        for qi in 0..200 {
+            let p = if qi % 4 == 0 {
+                points[qi]
+            } else {
+                Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32())
+            };
+            for r2 in [0.0, 1e-3, 0.02, 0.3] {
+                out.clear();
+                tree.within(p, r2, &mut out);
+                let mut got: Vec<u32> = out.iter().map(|&(_, i)| i).collect();
+                got.sort_unstable();
+                let expected: Vec<u32> = (0..points.len() as u32)
+                    .filter(|&i| points[i as usize].distance_squared(p) <= r2)
+                    .collect();
+                assert_eq!(got, expected, "query {qi}, r² {r2}");
             }
         }
     }

@@ -8,13 +8,16 @@
 
 use crate::error::Result;
 use crate::image::Image;
-use crate::photon::estimate::PhotonMap;
+use crate::photon::estimate::{GatherCache, PhotonMap};
 use crate::photon::{Neighbour, Photon};
 use crate::render::camera_pass::{delta_image, has_delta_lobe};
-use crate::render::{Progress, Settings};
+use crate::render::delta_paths::adaptive_delta_image;
+use crate::render::{Progress, Settings, SpecularSampling};
 use crate::scene::Scene;
 use crate::trace::path::direct_light;
+use crate::trace::Interaction;
 use crate::trace::SceneBvh;
+use glam::Vec3;
 
 /// Radiance reaching the camera through the delta lobes of the first surface seen.
 pub fn specular_paths(
@@ -30,15 +33,30 @@ pub fn specular_paths(
     }
     let map = PhotonMap::try_build(photons.to_vec(), progress)?;
     let gather = crate::render::photon_map_gather(scene, settings);
-    delta_image(
-        scene,
-        bvh,
-        settings,
-        progress,
-        |it, wo, scratch: &mut Vec<Neighbour>| {
-            direct_light(scene, bvh, it, wo) + map.radiance(it, wo, &gather, scratch)
-        },
-    )
+    match settings.specular_sampling {
+        SpecularSampling::Adaptive => {
+            let gather = |it: &Interaction, wo: Vec3, cache: &mut GatherCache| {
+                map.radiance_cached(it, wo, &gather, cache)
+            };
+            adaptive_delta_image(
+                scene,
+                bvh,
+                settings,
+                progress,
+                |it, wo| direct_light(scene, bvh, it, wo),
+                Some(&gather),
+            )
+        }
+        SpecularSampling::Full => delta_image(
+            scene,
+            bvh,
+            settings,
+            progress,
+            |it, wo, scratch: &mut Vec<Neighbour>| {
+                direct_light(scene, bvh, it, wo) + map.radiance(it, wo, &gather, scratch)
+            },
+        ),
+    }
 }
 
 /// Radiance reaching the camera through the delta lobes of the first surface seen, with
@@ -50,7 +68,19 @@ pub fn specular_paths_direct(
     settings: &Settings,
     progress: &dyn Progress,
 ) -> Result<Image> {
-    delta_image(scene, bvh, settings, progress, |it, wo, _: &mut ()| {
-        direct_light(scene, bvh, it, wo)
-    })
+    match settings.specular_sampling {
+        SpecularSampling::Adaptive => adaptive_delta_image::<()>(
+            scene,
+            bvh,
+            settings,
+            progress,
+            |it, wo| direct_light(scene, bvh, it, wo),
+            None,
+        ),
+        SpecularSampling::Full => {
+            delta_image(scene, bvh, settings, progress, |it, wo, _: &mut ()| {
+                direct_light(scene, bvh, it, wo)
+            })
+        }
+    }
 }

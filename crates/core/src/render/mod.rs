@@ -1,6 +1,7 @@
 //! Rendering a frame: settings, the method dispatch, outputs and statistics.
 
 pub(crate) mod camera_pass;
+pub mod delta_paths;
 pub(crate) mod gather;
 pub(crate) mod photon_map;
 pub(crate) mod reference;
@@ -11,6 +12,7 @@ use crate::image::Image;
 pub use crate::photon::Kernel;
 pub use crate::raster::volume_shape::VolumeShape;
 use crate::scene::Scene;
+pub use delta_paths::SpecularSampling;
 pub use gather::trace_settings as gather_trace_settings;
 pub use photon_map::gather_settings as photon_map_gather;
 use std::str::FromStr;
@@ -241,6 +243,10 @@ pub struct Settings {
     /// Roughness clamping of glossy BSDFs at `bidir`'s path vertices (Tokuyoshi & Ogaki
     /// 2012 §5): the GGX α is raised where the samples are too sparse for its peak.
     pub roughness_clamping: bool,
+    /// How the CPU specular paths of `ispm` and `bidir` (mirrors and glass seen by the
+    /// camera) are sampled: adaptively (`render::delta_paths`) or `spp` paths through every
+    /// pixel. Changes the cost and the noise, not the expectation.
+    pub specular_sampling: SpecularSampling,
 }
 
 impl Default for Settings {
@@ -283,6 +289,7 @@ impl Default for Settings {
             bundle_memory_mb: 64,
             bidir_strategy: BidirStrategy::Mis,
             roughness_clamping: true,
+            specular_sampling: SpecularSampling::Adaptive,
         }
     }
 }
