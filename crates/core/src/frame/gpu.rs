@@ -565,6 +565,12 @@ impl Targets {
             );
         };
         let scene_group = &self.direct_scene_group;
+        // The edge passes over the centre G-buffer (finding edges, shading them).
+        let centre_edges = self.edges.as_ref().map(|edges| edges::EdgeGroups {
+            scene: scene_group,
+            gbuffer: &self.direct_gbuffer_group,
+            edges,
+        });
         if self.spp > 1 && self.edges.is_none() {
             encoder = self.for_each_sample(ctx, encoder, progress, |encoder, s, offset| {
                 gbuffer_pass(encoder, timer, &self.sub, offset);
@@ -582,17 +588,12 @@ impl Targets {
         }
         if !self.samples_current {
             gbuffer_pass(&mut encoder, timer, &self.gbuf, 0);
-            if let Some(edges) = &self.edges {
-                let find = edges::EdgeGroups {
-                    scene: scene_group,
-                    gbuffer: &self.direct_gbuffer_group,
-                    edges,
-                };
+            if let Some(find) = &centre_edges {
                 let ts = timer.compute_pass("edges");
-                passes.edges.record_find(&mut encoder, &find, ts);
+                passes.edges.record_find(&mut encoder, find, ts);
                 let store = edges::EdgeGroups {
                     gbuffer: &self.sub_gbuffer_group,
-                    ..find
+                    ..*find
                 };
                 encoder = self.for_each_sample(ctx, encoder, progress, |encoder, s, offset| {
                     gbuffer_pass(encoder, timer, &self.sub, offset);
@@ -601,7 +602,7 @@ impl Targets {
                 })?;
             }
         }
-        if self.spp == 1 || self.edges.is_some() {
+        if self.spp == 1 || centre_edges.is_some() {
             let ts = timer.pass("direct light");
             passes.direct.record(
                 &mut encoder,
@@ -612,14 +613,9 @@ impl Targets {
                 0,
                 ts,
             );
-            if let Some(edges) = &self.edges {
-                let groups = edges::EdgeGroups {
-                    scene: scene_group,
-                    gbuffer: &self.direct_gbuffer_group,
-                    edges,
-                };
+            if let Some(groups) = &centre_edges {
                 let ts = timer.compute_pass("direct light");
-                passes.edges.record_shade(&mut encoder, &groups, ts);
+                passes.edges.record_shade(&mut encoder, groups, ts);
             }
         }
         // Current once recorded in full (a cancelled frame leaves it to the next).

@@ -32,6 +32,7 @@ use crate::render::{Progress, RenderOutput, RenderStats, Settings};
 use crate::scene::Scene;
 use crate::trace::SceneBvh;
 use glam::Vec3;
+use std::borrow::Cow;
 use std::time::Instant;
 
 /// The ISPM resources beyond the direct light's: bounce maps and the estimator.
@@ -269,13 +270,14 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
             let seed = settings.seed ^ (light as u64).wrapping_mul(0xA24B_AED4_963E_E407);
             let control = Checked::new(progress, "cpu trace");
             let aimed = focus.covers_all(light as usize);
-            let rays: Vec<PhotonRay> = if aimed {
+            // Aimed: the bounce map's own mirror and glass first hits are dropped.
+            let rays: Cow<[PhotonRay]> = if aimed {
                 (start..end)
                     .filter(|&i| !bm.first_delta[i])
                     .map(|i| bm.rays[i])
                     .collect()
             } else {
-                bm.rays[start..end].to_vec()
+                Cow::Borrowed(&bm.rays[start..end])
             };
             // With footprints, photons that met a mirror or glass first carry the footprint
             // of their first segment from the light (re-cast on the CPU).

@@ -37,6 +37,7 @@ pub struct EdgePass {
 
 /// The bind groups of one frame's edge passes: the direct pass's scene and G-buffer groups
 /// (the centre G-buffer to find edges, a sub-sample's to store it) and the edge buffers'.
+#[derive(Clone, Copy)]
 pub struct EdgeGroups<'a> {
     pub scene: &'a wgpu::BindGroup,
     pub gbuffer: &'a wgpu::BindGroup,

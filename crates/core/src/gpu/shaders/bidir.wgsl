@@ -104,14 +104,10 @@ fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
 }
 
 fn spot(l: Light, cos_t: f32) -> f32 {
-    if l.kind != 1u || cos_t >= l.cos_inner {
+    if l.kind != 1u {
         return 1.0;
     }
-    if cos_t <= l.cos_outer {
-        return 0.0;
-    }
-    let t = (cos_t - l.cos_outer) / (l.cos_inner - l.cos_outer);
-    return t * t * (3.0 - 2.0 * t);
+    return cone_falloff(cos_t, l.cos_inner, l.cos_outer);
 }
 
 fn vpl_at(i: u32) -> Vpl {

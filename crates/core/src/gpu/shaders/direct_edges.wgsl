@@ -26,21 +26,21 @@ struct EdgeParams {
 @group(2) @binding(4) var<storage, read_write> args: array<u32>;
 @group(2) @binding(5) var<uniform> params: EdgeParams;
 
-// Whether the centre samples `c` and `n` of two neighbouring pixels lie on different
-// surfaces or on either side of a crease or material boundary.
-fn differs(c: GSample, n: GSample) -> bool {
+// Whether the centre samples `c` (geometric and shading normals `ng`, `ns`) and `n` of two
+// neighbouring pixels lie on different surfaces or on either side of a crease or material
+// boundary.
+fn differs(c: GSample, ng: vec3<f32>, ns: vec3<f32>, n: GSample) -> bool {
     if (c.position.w > 0.0) != (n.position.w > 0.0) {
         return true;
     }
     if c.position.w == 0.0 {
         return false;
     }
-    let ng = oct_decode(c.normals.zw);
     // Off the tangent plane: another surface (or a step).
     if !on_plane(c.position.xyz, ng, n.position) {
         return true;
     }
-    if dot(ng, oct_decode(n.normals.zw)) < 0.95 || dot(oct_decode(c.normals.xy), oct_decode(n.normals.xy)) < 0.95 {
+    if dot(ng, oct_decode(n.normals.zw)) < 0.95 || dot(ns, oct_decode(n.normals.xy)) < 0.95 {
         return true;
     }
     let dm = max(abs(c.diffuse - n.diffuse), abs(c.specular - n.specular));
@@ -54,6 +54,8 @@ fn find_edges(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let px = vec2<i32>(id.xy);
     let c = load_sample(px);
+    let ng = oct_decode(c.normals.zw);
+    let ns = oct_decode(c.normals.xy);
     let size = vec2<i32>(i32(params.width), i32(params.height));
     var edge = false;
     for (var dy = -1; dy <= 1 && !edge; dy++) {
@@ -62,7 +64,7 @@ fn find_edges(@builtin(global_invocation_id) id: vec3<u32>) {
             if (dx == 0 && dy == 0) || any(q < vec2<i32>(0)) || any(q >= size) {
                 continue;
             }
-            if differs(c, load_sample(q)) {
+            if differs(c, ng, ns, load_sample(q)) {
                 edge = true;
                 break;
             }

@@ -33,18 +33,6 @@ fn load_sample(px: vec2<i32>) -> GSample {
     return g;
 }
 
-// Spot falloff: smoothstep in cos θ from the outer to the inner cone (Light::intensity_towards).
-fn spot_falloff(l: Light, cos_t: f32) -> f32 {
-    if cos_t >= l.cos_inner {
-        return 1.0;
-    }
-    if cos_t <= l.cos_outer {
-        return 0.0;
-    }
-    let t = (cos_t - l.cos_outer) / (l.cos_inner - l.cos_outer);
-    return t * t * (3.0 - 2.0 * t);
-}
-
 // Shadow-map visibility of `p` from light `l` (common/shadow_lookup.wgsl).
 fn visibility(l: Light, p: vec3<f32>) -> f32 {
     let layer = shadow_layer_of(l.first_layer, l.layers, p - l.position);
@@ -105,7 +93,7 @@ fn light_term(l: Light, m: Material, p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>)
     }
     var li = l.intensity / dist2;
     if l.kind == 1u {
-        li *= spot_falloff(l, dot(-wi, l.direction));
+        li *= cone_falloff(dot(-wi, l.direction), l.cos_inner, l.cos_outer);
     }
     let wo = normalize(view.eye - p);
     return bsdf_eval(m, ns, wo, wi) * abs(dot(ns, wi)) * li;

@@ -54,12 +54,5 @@ fn vs_main(v: VertexIn) -> VertexOut {
 }
 
 fn falloff(cos_t: f32) -> f32 {
-    if cos_t >= view.cos_inner {
-        return 1.0;
-    }
-    if cos_t <= view.cos_outer {
-        return 0.0;
-    }
-    let t = (cos_t - view.cos_outer) / (view.cos_inner - view.cos_outer);
-    return t * t * (3.0 - 2.0 * t);
+    return cone_falloff(cos_t, view.cos_inner, view.cos_outer);
 }

@@ -32,6 +32,19 @@ struct View {
     weight: f32,
 }
 
+// Spot falloff: smoothstep in cos θ from the outer to the inner cone
+// (`Light::intensity_towards`).
+fn cone_falloff(cos_t: f32, cos_inner: f32, cos_outer: f32) -> f32 {
+    if cos_t >= cos_inner {
+        return 1.0;
+    }
+    if cos_t <= cos_outer {
+        return 0.0;
+    }
+    let t = (cos_t - cos_outer) / (cos_inner - cos_outer);
+    return t * t * (3.0 - 2.0 * t);
+}
+
 // Octahedral mapping of a unit vector to [-1, 1]^2 (and back).
 fn oct_encode(n: vec3<f32>) -> vec2<f32> {
     let p = n.xy / (abs(n.x) + abs(n.y) + abs(n.z));
