@@ -607,6 +607,7 @@ pub(super) fn frame(
             &mut encoder,
             &state.layers,
             &g.scene.geometry,
+            scene,
             textures,
             &mut g.timer,
         );

@@ -184,6 +184,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
             &mut encoder,
             &layers,
             &gs.geometry,
+            scene,
             (&gs.textures.group, gs.variant),
             timer,
         );

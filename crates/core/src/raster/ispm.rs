@@ -576,6 +576,7 @@ pub fn render_bounce_map(scene: &Scene, settings: &Settings) -> Result<BounceMap
             &mut encoder,
             &layers,
             &geometry,
+            scene,
             (&textures.group, super::textures::Variant::of(scene)),
             &mut timer,
         );
@@ -683,12 +684,14 @@ impl BounceTargets {
     }
 
     /// Records the bounce passes of all layers and the copies of their targets.
+    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
         passes: &IspmPasses,
         encoder: &mut wgpu::CommandEncoder,
         layers: &[BounceLayer],
         geometry: &Geometry,
+        scene: &Scene,
         textures: (&wgpu::BindGroup, super::textures::Variant),
         timer: &mut Timer,
     ) {
@@ -700,6 +703,7 @@ impl BounceTargets {
             textures.0,
             geometry,
             layers,
+            scene,
             timer,
         );
     }

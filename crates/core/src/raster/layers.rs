@@ -8,7 +8,8 @@ use super::timer::Timer;
 use super::{gbuffer, Geometry};
 use crate::error::{Error, Result};
 use crate::gpu::{self, GpuContext};
-use glam::Vec4;
+use crate::scene::Scene;
+use glam::{Mat4, Vec4};
 
 /// Format of every layer target.
 pub const TARGET: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
@@ -159,8 +160,15 @@ impl LayerTargets {
         textures: &wgpu::BindGroup,
         geometry: &Geometry,
         layers: &[BounceLayer],
+        scene: &Scene,
         timer: &mut Timer,
     ) {
+        // Each layer draws only the triangles that reach into its view.
+        let matrices: Vec<Mat4> = layers
+            .iter()
+            .map(|l| Mat4::from_cols_array_2d(&l.view.view_proj))
+            .collect();
+        let draws = super::shadow::layer_draws(scene, &matrices);
         for (i, layer) in layers.iter().enumerate() {
             let (views, depth_view) = &self.layer_views[i];
             let attachments: Vec<_> = views
@@ -198,7 +206,9 @@ impl LayerTargets {
             pass.set_bind_group(0, group, &[(i as u64 * view_size) as u32]);
             pass.set_bind_group(1, textures, &[]);
             pass.set_vertex_buffer(0, geometry.vertices.slice(..));
-            pass.draw(0..geometry.count, 0..1);
+            for r in &draws[i] {
+                pass.draw(r.clone(), 0..1);
+            }
         }
         let size = wgpu::Extent3d {
             width: self.max_res,

@@ -11,6 +11,7 @@ use super::timer::Timer;
 use super::{buffer_init, gbuffer, Geometry};
 use crate::error::{Error, Result};
 use crate::gpu::{self, shaders, GpuContext};
+use crate::scene::Scene;
 use glam::{Vec2, Vec3};
 
 const VIEW_SIZE: u64 = std::mem::size_of::<BounceViewRaw>() as u64;
@@ -203,12 +204,14 @@ impl RsmTargets {
     }
 
     /// Records the RSM passes of all layers and the copies of their targets.
+    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
         pass: &RsmPass,
         encoder: &mut wgpu::CommandEncoder,
         layers: &[BounceLayer],
         geometry: &Geometry,
+        scene: &Scene,
         textures: (&wgpu::BindGroup, super::textures::Variant),
         timer: &mut Timer,
     ) {
@@ -220,6 +223,7 @@ impl RsmTargets {
             textures.0,
             geometry,
             layers,
+            scene,
             timer,
         );
     }
