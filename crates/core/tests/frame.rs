@@ -378,3 +378,40 @@ fn cancelled_frame_leaves_the_renderer_consistent() {
         assert_eq!(d, 0.0, "{}", method.name());
     }
 }
+
+/// `ispm` on `cornell-glass` with only the light moving: the frame reuses the camera side
+/// of the specular paths (their landings: no camera path is traced) and still equals a new
+/// renderer's frame of the moved light bitwise (the landings depend on the camera, the
+/// geometry, the materials and the seed, which did not change; the gathers find the same
+/// photons in the same order). A camera move traces them again.
+#[test]
+fn light_only_frames_reuse_the_specular_landings() {
+    let scene = builtin::load("cornell-glass").expect("scene");
+    let s = Settings {
+        spp: 16,
+        ..settings(Method::Ispm)
+    };
+    let mut r = Renderer::new(&scene, &s).expect("renderer");
+    let first = r.render(&all(), &Silent).expect("frame 0");
+    assert!(first.stats.camera_paths > 0, "frame 0 traced no specular paths");
+    let moved = pose(&scene, 1.0)[1].clone();
+    r.update(&moved).expect("update");
+    let frame = r.render(&all(), &Silent).expect("frame 1");
+    assert_eq!(frame.stats.camera_paths, 0, "light-only frame re-traced");
+    let mut posed = scene.clone();
+    posed.apply(&moved).expect("valid update");
+    let one_shot = render(&posed, &s, &Silent).expect("one-shot");
+    let d = max_difference(&frame.radiance, &one_shot.radiance);
+    assert_eq!(d, 0.0, "frames differ by {d}");
+    // The specular image is not empty: the spheres show the room.
+    let specular = one_shot
+        .aovs
+        .iter()
+        .find(|(n, _)| n == "specular")
+        .map(|(_, i)| mean(i))
+        .expect("specular AOV");
+    assert!(specular > 0.0, "{specular}");
+    r.update(&pose(&scene, 1.0)[0]).expect("camera");
+    let turned = r.render(&all(), &Silent).expect("frame 2");
+    assert!(turned.stats.camera_paths > 0, "a camera move did not re-trace");
+}

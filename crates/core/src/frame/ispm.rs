@@ -28,6 +28,7 @@ use crate::raster::ispm::{bounce_layers, photon_hits, BounceTargets, IspmPasses,
 use crate::raster::specular::specular_paths;
 use crate::raster::volume_shape::{partition, VolumeRadius};
 use crate::raster::Passes;
+use crate::render::delta_paths::Landings;
 use crate::render::{Progress, RenderOutput, RenderStats, Settings};
 use crate::scene::Scene;
 use crate::trace::SceneBvh;
@@ -48,6 +49,8 @@ pub(super) struct IspmState {
     traced_seed: Option<u64>,
     /// The specular image of the last frame (reused while the camera and scene stand still).
     specular_image: Option<Image>,
+    /// The camera side of the specular paths (kept while only the lights change).
+    specular_landings: Option<Landings>,
     /// Whether the estimator's output is this scene's and camera's.
     splat_current: bool,
 }
@@ -137,6 +140,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
                 .any(crate::render::camera_pass::has_delta_lobe),
             traced_seed: None,
             specular_image: None,
+            specular_landings: None,
             splat_current: false,
         });
     }
@@ -147,11 +151,13 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     // leaves the next one to redo its work.
     let traced_seed = state.traced_seed.take();
     let splat_current = std::mem::replace(&mut state.splat_current, false);
-    if changes.lighting() {
-        state.specular_image = None;
-    }
     if changes.any() {
         state.specular_image = None;
+    }
+    // The specular paths' landings depend on the view, the geometry and the materials, not
+    // on the lights.
+    if changes.camera || changes.geometry || changes.materials {
+        state.specular_landings = None;
     }
     // A still scene with frame-coherent random numbers has this frame's photons already.
     let reuse = ring.frames() == 1 && !changes.lighting() && traced_seed == Some(settings.seed);
@@ -379,7 +385,15 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     let specular = if state.specular && state.specular_image.is_some() && !photons_changed {
         state.specular_image.clone()
     } else if state.specular {
-        let img = specular_paths(scene, bvh, settings, &photons.traced, progress)?;
+        let (img, camera_paths) = specular_paths(
+            scene,
+            bvh,
+            settings,
+            &photons.traced,
+            &mut state.specular_landings,
+            progress,
+        )?;
+        stats.camera_paths = camera_paths;
         targets.write_specular(&ctx, &img);
         Some(img)
     } else {

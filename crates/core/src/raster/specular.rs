@@ -11,7 +11,7 @@ use crate::image::Image;
 use crate::photon::estimate::{GatherCache, PhotonMap};
 use crate::photon::{Neighbour, Photon};
 use crate::render::camera_pass::{delta_image, has_delta_lobe};
-use crate::render::delta_paths::adaptive_delta_image;
+use crate::render::delta_paths::{adaptive_delta_image, shade_landings, trace_landings, Landings};
 use crate::render::{Progress, Settings, SpecularSampling};
 use crate::scene::Scene;
 use crate::trace::path::direct_light;
@@ -19,17 +19,25 @@ use crate::trace::Interaction;
 use crate::trace::SceneBvh;
 use glam::Vec3;
 
-/// Radiance reaching the camera through the delta lobes of the first surface seen.
+/// Radiance reaching the camera through the delta lobes of the first surface seen,
+/// keeping the camera side of the adaptive sampling (its landings:
+/// `render::delta_paths::Landings`) in `landings` for the next frame. They are traced
+/// only when `landings` holds none, or holds those of another seed, `spp` or image size;
+/// the caller drops them when the camera, the geometry or the materials change, so a
+/// frame whose lights alone changed only shades them (next-event estimation and the
+/// photon gathers). Also returns the camera samples traced (0 when the landings were
+/// reused).
 pub fn specular_paths(
     scene: &Scene,
     bvh: &SceneBvh,
     settings: &Settings,
     photons: &[Photon],
+    landings: &mut Option<Landings>,
     progress: &dyn Progress,
-) -> Result<Image> {
+) -> Result<(Image, u64)> {
     if !scene.materials.iter().any(has_delta_lobe) {
         let cam = &scene.camera;
-        return Ok(Image::new(cam.width, cam.height));
+        return Ok((Image::new(cam.width, cam.height), 0));
     }
     let map = PhotonMap::try_build(photons.to_vec(), progress)?;
     let gather = crate::render::photon_map_gather(scene, settings);
@@ -38,24 +46,40 @@ pub fn specular_paths(
             let gather = |it: &Interaction, wo: Vec3, cache: &mut GatherCache| {
                 map.radiance_cached(it, wo, &gather, cache)
             };
-            adaptive_delta_image(
+            let cam = &scene.camera;
+            let current = landings.as_ref().is_some_and(|l| {
+                (l.seed, l.spp, l.size()) == (settings.seed, settings.spp, (cam.width, cam.height))
+            });
+            let (landings, traced) = match landings.take() {
+                Some(l) if current => (landings.insert(l), 0),
+                _ => {
+                    let l = landings.insert(trace_landings(scene, bvh, settings, progress)?);
+                    let n = l.samples();
+                    (l, n)
+                }
+            };
+            let image = shade_landings(
+                scene,
+                landings,
+                progress,
+                |it, wo| direct_light(scene, bvh, it, wo),
+                Some(&gather),
+            )?;
+            Ok((image, traced))
+        }
+        SpecularSampling::Full => {
+            let image = delta_image(
                 scene,
                 bvh,
                 settings,
                 progress,
-                |it, wo| direct_light(scene, bvh, it, wo),
-                Some(&gather),
-            )
+                |it, wo, scratch: &mut Vec<Neighbour>| {
+                    direct_light(scene, bvh, it, wo) + map.radiance(it, wo, &gather, scratch)
+                },
+            )?;
+            let cam = &scene.camera;
+            Ok((image, (cam.width * cam.height * settings.spp.max(1)) as u64))
         }
-        SpecularSampling::Full => delta_image(
-            scene,
-            bvh,
-            settings,
-            progress,
-            |it, wo, scratch: &mut Vec<Neighbour>| {
-                direct_light(scene, bvh, it, wo) + map.radiance(it, wo, &gather, scratch)
-            },
-        ),
     }
 }
 

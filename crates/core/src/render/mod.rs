@@ -471,6 +471,8 @@ pub struct RenderStats {
     pub stages: Vec<(String, f64)>,
     pub total_seconds: f64,
     pub samples_per_pixel: u32,
+    /// Camera paths traced: `path`'s; `ispm`'s through mirrors and glass (0 in a frame that
+    /// reused the last frame's, see `raster::specular::specular_paths`).
     pub camera_paths: u64,
     pub light_paths: u64,
     pub triangles: u64,
