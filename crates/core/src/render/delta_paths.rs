@@ -26,6 +26,10 @@
 //!    fixed subset has the same expectation. The gathers of a thread share a
 //!    `photon::estimate::GatherCache` (the same k nearest photons, found among the
 //!    photons around a recent query point instead of in the kd-tree).
+//! 5. **Tracing apart from shading.** Steps 1–3 record where every sample's delta paths
+//!    land ([`Landings`]); step 4 shades them. The landings depend on the camera, the
+//!    geometry, the materials and the seed only, so the frame engine keeps them while the
+//!    lights alone change and only shades them again.
 
 use super::camera_pass::has_delta_lobe;
 use super::{Progress, Settings};
