@@ -393,7 +393,10 @@ fn light_only_frames_reuse_the_specular_landings() {
     };
     let mut r = Renderer::new(&scene, &s).expect("renderer");
     let first = r.render(&all(), &Silent).expect("frame 0");
-    assert!(first.stats.camera_paths > 0, "frame 0 traced no specular paths");
+    assert!(
+        first.stats.camera_paths > 0,
+        "frame 0 traced no specular paths"
+    );
     let moved = pose(&scene, 1.0)[1].clone();
     r.update(&moved).expect("update");
     let frame = r.render(&all(), &Silent).expect("frame 1");
@@ -413,5 +416,8 @@ fn light_only_frames_reuse_the_specular_landings() {
     assert!(specular > 0.0, "{specular}");
     r.update(&pose(&scene, 1.0)[0]).expect("camera");
     let turned = r.render(&all(), &Silent).expect("frame 2");
-    assert!(turned.stats.camera_paths > 0, "a camera move did not re-trace");
+    assert!(
+        turned.stats.camera_paths > 0,
+        "a camera move did not re-trace"
+    );
 }
