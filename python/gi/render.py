@@ -26,6 +26,8 @@ class RenderStats:
     total_seconds: float
     stages: list[tuple[str, float]] = field(default_factory=list)
     samples_per_pixel: int = 0
+    #: Camera paths traced: method ``path``'s; method ``ispm``'s through mirrors and glass,
+    #: 0 in a frame whose lights alone changed (it reuses where they landed).
     camera_paths: int = 0
     light_paths: int = 0
     triangles: int = 0

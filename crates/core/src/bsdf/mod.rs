@@ -96,6 +96,12 @@ impl Material {
     pub fn is_mirror(&self) -> bool {
         self.roughness < MIRROR_ROUGHNESS
     }
+    /// ρL/π when [`Material::eval`] is that constant for every pair of directions on one
+    /// side of the surface (and 0 across it): no specular lobe and no Fresnel coupling of
+    /// the diffuse lobe.
+    pub fn lambertian(&self) -> Option<Vec3> {
+        (!self.has_specular() && !self.fresnel).then(|| self.diffuse * FRAC_1_PI)
+    }
     pub fn has_specular(&self) -> bool {
         self.specular.max_element() > 0.0
     }

@@ -344,3 +344,38 @@ fn delta_lobes_match_sampling_in_expectation() {
         }
     }
 }
+
+/// `Material::lambertian` claims a constant BSDF only where `eval` is one: over the grid,
+/// every material it accepts evaluates to ρ/π for directions on one side and 0 across,
+/// and every material it rejects differs from that somewhere (so the fast path of the
+/// photon gathers, `photon::estimate`, cannot change an estimate).
+#[test]
+fn lambertian_shortcut_equals_eval() {
+    let dirs: Vec<Vec3> = (0..12)
+        .flat_map(|i| (0..6).map(move |j| dir(0.05 + 0.08 * i as f32, 1.1 * j as f32)))
+        .collect();
+    let (mut accepted, mut rejected) = (0, 0);
+    for m in material_grid() {
+        let constant = m.diffuse * std::f32::consts::FRAC_1_PI;
+        let matches = dirs.iter().all(|&wo| {
+            dirs.iter().all(|&wi| {
+                let same = (m.eval(wo, wi) - constant).abs().max_element()
+                    <= 1e-6 * (1.0 + constant.max_element());
+                let across = m.eval(wo, -wi) == Vec3::ZERO && m.eval(-wo, wi) == Vec3::ZERO;
+                same && across
+            })
+        });
+        match m.lambertian() {
+            Some(f) => {
+                assert_eq!(f, constant);
+                assert!(matches, "{m:?} is not Lambertian");
+                accepted += 1;
+            }
+            None => {
+                assert!(!matches || m.diffuse == Vec3::ZERO, "{m:?} is Lambertian");
+                rejected += 1;
+            }
+        }
+    }
+    assert!(accepted > 0 && rejected > 0, "{accepted} / {rejected}");
+}

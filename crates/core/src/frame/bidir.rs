@@ -599,7 +599,7 @@ pub(super) fn frame(
             label: Some("bidir lights"),
         });
     g.scene
-        .record_shadows(passes, &mut encoder, &mut g.timer, scene.lights.len());
+        .record_shadows(passes, &mut encoder, &mut g.timer, scene);
     let textures = (&g.scene.textures.group, g.scene.variant);
     if let Some(rsm) = &state.rsm {
         rsm.record(
@@ -725,6 +725,7 @@ pub(super) fn frame(
                 &state.view_group,
                 offset,
                 &g.scene.geometry,
+                None,
                 g.scene.shadow_masks(),
                 ts,
             );

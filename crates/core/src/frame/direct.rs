@@ -33,12 +33,8 @@ pub(super) fn frame(
         .create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("direct frame"),
         });
-    g.scene.record_shadows(
-        Passes::get(&ctx),
-        &mut encoder,
-        &mut g.timer,
-        scene.lights.len(),
-    );
+    g.scene
+        .record_shadows(Passes::get(&ctx), &mut encoder, &mut g.timer, scene);
     let mut encoder = g
         .targets
         .record_direct(&ctx, &g.scene, encoder, &mut g.timer, progress)?;

@@ -39,6 +39,8 @@ pub(crate) struct GpuScene {
     pub layers: u32,
     /// The shadow maps must be rendered again (lights or geometry moved).
     pub shadows_stale: bool,
+    /// World -> clip per shadow layer (CPU copies, for culling the shadow passes).
+    shadow_clip: Vec<glam::Mat4>,
 }
 
 fn storage_init(ctx: &GpuContext, label: &str, bytes: &[u8]) -> wgpu::Buffer {
@@ -87,6 +89,7 @@ impl GpuScene {
             shadow_group,
             layers,
             shadows_stale: true,
+            shadow_clip: shadows.matrices,
         })
     }
 
@@ -161,6 +164,7 @@ impl GpuScene {
             0,
             bytemuck::cast_slice(&shadow::ShadowPass::views(&shadows)),
         );
+        self.shadow_clip = shadows.matrices;
         self.shadows_stale = true;
     }
 
@@ -181,11 +185,13 @@ impl GpuScene {
         passes: &Passes,
         encoder: &mut wgpu::CommandEncoder,
         timer: &mut Timer,
-        lights: usize,
+        scene: &Scene,
     ) {
-        if !self.shadows_stale || lights == 0 {
+        if !self.shadows_stale || scene.lights.is_empty() {
             return;
         }
+        // Each layer draws only the objects that reach into its view.
+        let draws = shadow::layer_draws(scene, &self.shadow_clip);
         for (layer, view) in self.shadow_layers.iter().enumerate() {
             let offset = (layer as u64 * VIEW_SIZE) as u32;
             let ts = timer.pass("shadow maps");
@@ -195,6 +201,7 @@ impl GpuScene {
                 &self.shadow_group,
                 offset,
                 &self.geometry,
+                draws.get(layer).map(|d| d.as_slice()),
                 self.masked.then_some(&self.textures.group),
                 ts,
             );

@@ -196,7 +196,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         .create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("direct frame"),
         });
-    gs.record_shadows(Passes::get(&ctx), &mut encoder, timer, scene.lights.len());
+    gs.record_shadows(Passes::get(&ctx), &mut encoder, timer, scene);
     let encoder = targets.record_direct(&ctx, &*gs, encoder, timer, progress)?;
     ctx.queue.submit([encoder.finish()]);
 
