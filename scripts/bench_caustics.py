@@ -1,12 +1,19 @@
-"""Caustic kernels before and after the local-density bound (issue 11), against `path`.
+"""Caustic kernels and photon focusing (issue 11), before and after, against `path`.
 
 Per scene (cornell-glass, caustic-ring, mirror-shadow) and method (ispm, gather): renders
-with `caustic_density_bound` off (before) and on (after), each over --seeds seeds, scored
-against a `path` reference (cached in target/; a second reference of another seed gives its
-own noise): the firefly share (pixels whose error is over 4x the local median error, see
-`fireflies`), HDR-FLIP and relMSE, and the image mean relative to the reference's.
+before (no `caustic_density_bound`, no `photon_focus`), with the bound alone, with the
+defaults (the bound and photon_focus 0.25), with the bound and photon_focus 0.5 (and
+`ispm`'s defaults at subsample 1), each over --seeds seeds, scored against a `path`
+reference (cached in --ref-cache, else $GI_REF_CACHE, else target/; a second reference of
+another seed gives its own noise): the firefly share (pixels whose error is over 4x the
+local median error, see `fireflies`), HDR-FLIP and relMSE, and the image mean relative to
+the reference's. `path` cannot render a point light's caustic seen in a mirror or through
+glass (light, specular, diffuse, specular, camera), which photon mapping renders, so FLIP,
+relMSE and the mean are also given "off mirrors": with the pixels that show something in a
+mirror or glass (where `ispm`'s `specular` image is not black) set to the reference's.
 
-    .venv/bin/python scripts/bench_caustics.py --out docs/bench/caustics.md
+    GI_REF_CACHE=/work/cache/refs .venv/bin/python scripts/bench_caustics.py \\
+        --out docs/bench/caustics.md
 """
 
 from __future__ import annotations
@@ -27,15 +34,19 @@ SETTINGS = {
     "ispm": dict(photons=200_000, adapter="cpu"),
     "gather": dict(photons=200_000, spp=4),
 }
-# (label, settings): before (no bound, no focusing), the density bound, and for gather the
-# bound with half the photons focused (the default share, 0.25, is chosen in bench_focus.py).
+# (label, settings): before (no bound, no focusing), the density bound alone, the defaults
+# (the bound and photon_focus 0.25) and the bound with photon_focus 0.5; the same for both.
+VARIANT_LIST = [
+    ("before", dict(caustic_density_bound=False, photon_focus=0.0)),
+    ("bound", dict(photon_focus=0.0)),
+    ("bound + focus 0.25 (defaults)", {}),
+    ("bound + focus 0.5", dict(photon_focus=0.5)),
+]
+# ispm also at full resolution (subsample 1): its default half-resolution splat is upsampled
+# by a joint bilateral filter, which the bound and focusing do not touch.
 VARIANTS = {
-    "ispm": [("before", dict(caustic_density_bound=False)), ("bound", {})],
-    "gather": [
-        ("before", dict(caustic_density_bound=False, photon_focus=0.0)),
-        ("bound", dict(photon_focus=0.0)),
-        ("bound + focus 0.5", dict(photon_focus=0.5)),
-    ],
+    "ispm": [*VARIANT_LIST, ("defaults, subsample 1", dict(subsample=1))],
+    "gather": VARIANT_LIST,
 }
 
 
@@ -66,6 +77,42 @@ def dots(x: np.ndarray, window: int = 9, factor: float = 4.0) -> float:
     return float(np.mean((y > factor * median) & (y > floor)))
 
 
+def specular_mask(scene, size: tuple[int, int]) -> np.ndarray:
+    """Pixels whose camera ray meets a mirror or glass first: where `ispm`'s `specular`
+    image (the CPU paths through mirrors and glass) is not black."""
+    r = gi.render(scene, "ispm", size=size, seed=0, adapter="cpu", photons=20_000)
+    return r.extra["specular"].max(axis=-1) > 0
+
+
+def off_mirrors(x: np.ndarray, ref: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """`x` with the pixels of `mask` replaced by the reference's."""
+    y = x.copy()
+    y[mask] = ref[mask]
+    return y
+
+
+def scores(img: np.ndarray, ref: np.ndarray, mask: np.ndarray) -> tuple:
+    off = off_mirrors(img, ref, mask)
+    return (
+        fireflies(img, ref),
+        dots(img),
+        flip(ref, img),
+        relmse(img, ref),
+        img.mean() / ref.mean(),
+        flip(ref, off),
+        relmse(off, ref),
+        off.mean() / ref.mean(),
+    )
+
+
+def row(name: str, method: str, label: str, s) -> str:
+    f, d, fl, rm, mean, fl_off, rm_off, mean_off = s
+    return (
+        f"| {name} | {method} | {label} | {f:.4f} | {d:.4f} | {fl:.4f} | {rm:.2e} | {mean:.3f}"
+        f" | {fl_off:.4f} | {rm_off:.2e} | {mean_off:.3f} |"
+    )
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--scenes", default="cornell-glass,caustic-ring,mirror-shadow")
@@ -79,28 +126,45 @@ def main() -> None:
         default="cornell-glass=8,caustic-ring=4,mirror-shadow=24",
         help="parts per reference, per scene (its light-traced caustics set its noise)",
     )
+    ap.add_argument(
+        "--ref-cache",
+        type=Path,
+        help="directory of the cached references (default: $GI_REF_CACHE, else target/)",
+    )
     ap.add_argument("--seeds", type=int, default=2)
-    ap.add_argument("--out", type=Path)
+    ap.add_argument(
+        "--out",
+        type=Path,
+        help="Markdown file to write; its sections after this table (## headings) are kept",
+    )
     args = ap.parse_args()
+    if args.ref_cache:
+        os.environ["GI_REF_CACHE"] = str(args.ref_cache)
     w, h = (int(v) for v in args.size.split("x"))
     size = (w, h)
     lines = [
-        "# Caustic kernels: the local-density bound, before and after",
+        "# Caustic kernels and photon focusing, before and after",
         "",
-        "Made by `.venv/bin/python scripts/bench_caustics.py --out docs/bench/caustics.md`"
+        "Made by `GI_REF_CACHE=/work/cache/refs .venv/bin/python scripts/bench_caustics.py"
+        " --out docs/bench/caustics.md`"
         f" ({args.size}; reference: `path`, the mean of parts of {args.ref_spp} spp and"
         f" {args.ref_light_paths:.3g} light paths each, parts per scene {args.ref_parts};"
         f" means over {args.seeds} seeds)"
         f" on {cpu_name()}, {os.cpu_count()} logical CPUs, lavapipe for `ispm`."
-        f" Settings: {SETTINGS}."
+        f" Settings: {SETTINGS}; kernels: *before* = no density bound and photon_focus 0,"
+        " *bound* = the density bound and photon_focus 0, *defaults* = the bound and"
+        " photon_focus 0.25."
         " *fireflies*: share of pixels whose error is over 4x the median error of the 9x9"
         " pixels around them (the reference's own noise sets its floor); *dots*: the same"
         " without the reference, pixels over 4x the median of their 9x9 neighbourhood;"
-        " *mean*: image mean / reference mean. The reference row is a"
+        " *mean*: image mean / reference mean; *off mirrors*: FLIP, relMSE and mean with the pixels"
+        " that show something in a mirror or glass set to the reference's (`path`"
+        " misses the caustics seen there). The reference row is a"
         " second `path` reference of another seed against the first (its own noise).",
         "",
-        "| scene | method | kernels | fireflies | dots | FLIP | relMSE | mean |",
-        "|---|---|---|---:|---:|---:|---:|---:|",
+        "| scene | method | kernels | fireflies | dots | FLIP | relMSE | mean"
+        " | FLIP off mirrors | relMSE off mirrors | mean off mirrors |",
+        "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for name in args.scenes.split(","):
         scene = gi.load_scene(name)
@@ -108,41 +172,31 @@ def main() -> None:
         recipe = (args.ref_spp, args.ref_light_paths, int(parts.get(name, 8)))
         ref, _ = reference(name, size, recipe[0], 1234, recipe[1], recipe[2])
         ref2, _ = reference(name, size, recipe[0], 4321, recipe[1], recipe[2])
-        lines.append(
-            f"| {name} | path (2nd reference) | | {fireflies(ref2, ref):.4f} | {dots(ref2):.4f}"
-            f" | {flip(ref, ref2):.4f}"
-            f" | {relmse(ref2, ref):.2e} | {ref2.mean() / ref.mean():.3f} |"
-        )
+        mask = specular_mask(scene, size)
+        lines.append(row(name, "path (2nd reference)", "", scores(ref2, ref, mask)))
+        print(lines[-1], f"(mirror and glass pixels: {mask.mean():.1%})", flush=True)
         for method, settings in SETTINGS.items():
             for label, variant in VARIANTS[method]:
-                scores = []
-                for seed in range(args.seeds):
-                    img = gi.render(
-                        scene,
-                        method,
-                        size=size,
-                        seed=seed,
-                        **settings,
-                        **variant,
-                    ).radiance
-                    scores.append(
-                        (
-                            fireflies(img, ref),
-                            dots(img),
-                            flip(ref, img),
-                            relmse(img, ref),
-                            img.mean() / ref.mean(),
-                        )
+                runs = [
+                    scores(
+                        gi.render(
+                            scene, method, size=size, seed=seed, **settings, **variant
+                        ).radiance,
+                        ref,
+                        mask,
                     )
-                f, d, fl, rm, mean = np.mean(scores, axis=0)
-                lines.append(
-                    f"| {name} | {method} | {label} | {f:.4f} | {d:.4f} | {fl:.4f}"
-                    f" | {rm:.2e} | {mean:.3f} |"
-                )
+                    for seed in range(args.seeds)
+                ]
+                lines.append(row(name, method, label, np.mean(runs, axis=0)))
                 print(lines[-1], flush=True)
     text = "\n".join(lines) + "\n"
     if args.out:
-        args.out.write_text(text)
+        kept = ""
+        if args.out.exists():
+            old = args.out.read_text()
+            at = old.find("\n## ")
+            kept = old[at:] if at >= 0 else ""
+        args.out.write_text(text + kept)
     print(text)
 
 

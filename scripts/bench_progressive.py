@@ -63,6 +63,12 @@ def flip(ref: np.ndarray, x: np.ndarray) -> float:
     return float(mean)
 
 
+def ref_cache_dir() -> Path:
+    """Where the references are cached: $GI_REF_CACHE if set (a directory outside any
+    worktree survives it), else target/ of the current directory."""
+    return Path(os.environ.get("GI_REF_CACHE") or "target")
+
+
 def reference(
     scene_name: str,
     size: tuple[int, int],
@@ -86,10 +92,11 @@ def reference(
 def reference_part(
     scene_name: str, size: tuple[int, int], spp: int, seed: int, light_paths: int | None
 ) -> tuple:
-    # Minutes at large spp: kept in target/ (a build directory) for the next run.
+    # Minutes at large spp: kept for the next run in ref_cache_dir() (target/, a build
+    # directory, unless GI_REF_CACHE names another).
     lp = "" if light_paths is None else f"-lp{light_paths}"
     cache = (
-        Path("target")
+        ref_cache_dir()
         / f"bench-progressive-ref-{scene_name}-{size[0]}x{size[1]}-{spp}{lp}-{seed}.npz"
     )
     if cache.exists():
@@ -100,8 +107,11 @@ def reference_part(
     scene = gi.load_scene(scene_name)
     img = gi.render(scene, "path", spp=spp, size=size, seed=seed, **extra).radiance
     seconds = time.perf_counter() - t
-    cache.parent.mkdir(exist_ok=True)
-    np.savez(cache, radiance=img, seconds=seconds)
+    cache.parent.mkdir(parents=True, exist_ok=True)
+    tmp = cache.with_suffix(".tmp")
+    with open(tmp, "wb") as f:  # whole or not at all: an interrupted run leaves no half file
+        np.savez(f, radiance=img, seconds=seconds)
+    os.replace(tmp, cache)
     return img, seconds
 
 

@@ -14,7 +14,8 @@ direct part and of the rest there and elsewhere, the rest's relMSE off the edges
 *w/o mirror pixels*: the total's squared error summed over the pixels whose `specular`
 image stayed black (nothing seen through a mirror or glass: `path` misses a point light's
 caustic seen in a mirror, which photon mapping renders). The full reference is the cached
-one of scripts/bench_progressive.py (same arguments), the direct one is made here.
+one of scripts/bench_progressive.py (same arguments; with GI_REF_CACHE the same files as
+scripts/bench_caustics.py's), the direct one is made here and cached beside it.
 
     .venv/bin/python scripts/ispm_progressive_split.py --scene cornell --size 128x128 \\
         --ref-spp 32768 --passes 256
@@ -23,6 +24,7 @@ one of scripts/bench_progressive.py (same arguments), the direct one is made her
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
 from pathlib import Path
@@ -32,17 +34,20 @@ import numpy as np
 import gi
 
 sys.path.insert(0, str(Path(__file__).parent))
-from bench_progressive import PROGRESSIVE, reference  # noqa: E402
+from bench_progressive import PROGRESSIVE, ref_cache_dir, reference  # noqa: E402
 
 
 def direct_reference(scene_name: str, size: tuple[int, int], spp: int) -> np.ndarray:
-    cache = Path("target") / f"ispm-split-direct-{scene_name}-{size[0]}x{size[1]}-{spp}.npz"
+    cache = ref_cache_dir() / f"ispm-split-direct-{scene_name}-{size[0]}x{size[1]}-{spp}.npz"
     if cache.exists():
         return np.load(cache)["radiance"]
     scene = gi.load_scene(scene_name)
     img = gi.render(scene, "path", spp=spp, size=size, seed=99, max_depth=1).radiance
-    cache.parent.mkdir(exist_ok=True)
-    np.savez(cache, radiance=img)
+    cache.parent.mkdir(parents=True, exist_ok=True)
+    tmp = cache.with_suffix(".tmp")
+    with open(tmp, "wb") as f:
+        np.savez(f, radiance=img)
+    os.replace(tmp, cache)
     return img
 
 
