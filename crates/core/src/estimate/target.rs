@@ -80,6 +80,8 @@ impl IndirectTarget {
                         tex(1, &inputs[0]),
                         tex(2, &inputs[1]),
                         tex(3, &low_view),
+                        tex(4, &inputs[2]),
+                        tex(5, &inputs[3]),
                     ],
                 },
             );

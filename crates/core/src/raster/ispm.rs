@@ -461,12 +461,14 @@ impl IspmPasses {
                 texture_entry(1),
                 texture_entry(2),
                 texture_entry(3),
+                texture_entry(4),
+                texture_entry(5),
             ],
         );
         let module = shaders::module(
             device,
             "upsample shader",
-            &[shaders::COMMON, shaders::UPSAMPLE],
+            &[shaders::COMMON, shaders::BSDF, shaders::UPSAMPLE],
         );
         let upsample = crate::gpu::create_render_pipeline(
             device,

@@ -1,7 +1,8 @@
 // ISPM joint bilateral upsampling (section 5.2): the indirect light splatted at 1/k
 // resolution is brought to full resolution by weighting the 2×2 nearest low-resolution
 // texels with bilinear weights times a normal term (cos^32) and a plane-distance term, both
-// measured between this pixel's G-buffer sample and the one each low-res texel shaded.
+// measured between this pixel's G-buffer sample and the one each low-res texel shaded;
+// 0 on surfaces whose BSDF has no non-delta lobe.
 
 struct UpsampleParams {
     eye: vec3<f32>,
@@ -12,6 +13,8 @@ struct UpsampleParams {
 @group(0) @binding(1) var g_position: texture_2d<f32>;
 @group(0) @binding(2) var g_normals: texture_2d<f32>;
 @group(0) @binding(3) var low: texture_2d<f32>;
+@group(0) @binding(4) var g_diffuse: texture_2d<f32>;
+@group(0) @binding(5) var g_specular: texture_2d<f32>;
 
 @vertex
 fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
@@ -24,6 +27,15 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
     let px = vec2<i32>(frag.xy);
     let pos = textureLoad(g_position, px, 0);
     if pos.w == 0.0 {
+        return vec4<f32>(0.0);
+    }
+    // A surface without a non-delta lobe (a mirror, clear glass) scatters no photon light
+    // towards the eye (the estimate term has its f = 0): its indirect light is 0, whatever
+    // the low-resolution samples around it, on other surfaces, carry (a mirror's rim next
+    // to a lit floor took the floor's light before).
+    let diffuse = textureLoad(g_diffuse, px, 0);
+    let specular = textureLoad(g_specular, px, 0).xyz;
+    if max3(diffuse.xyz) == 0.0 && (max3(specular) == 0.0 || diffuse.w < MIRROR_ROUGHNESS) {
         return vec4<f32>(0.0);
     }
     let n = oct_decode(textureLoad(g_normals, px, 0).xy);
