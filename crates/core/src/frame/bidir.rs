@@ -713,6 +713,8 @@ pub(super) fn frame(
             label: Some("bidir frame"),
         });
     let lit = vpls.len();
+    // Each VPL cube face draws only the triangle runs that reach into its view.
+    let draws = shadow::layer_draws(scene, &matrices);
     for (slot, chunk) in state.layer_views.chunks(6).take(raws.len()).enumerate() {
         if raws[slot].flux == [0.0; 3] && lit < raws.len() {
             continue;
@@ -726,7 +728,7 @@ pub(super) fn frame(
                 &state.view_group,
                 offset,
                 &g.scene.geometry,
-                None,
+                draws.get(slot * 6 + face).map(|d| d.as_slice()),
                 g.scene.shadow_masks(),
                 ts,
             );
