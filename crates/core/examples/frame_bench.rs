@@ -15,7 +15,8 @@
 //! 0.02 ms while a 2 s gap opened before it), so GPU timestamps cannot split a frame there.
 //! The CPU stages come from the frame's own stats; the direct light is the wall-clock frame
 //! of method `direct` with the same settings and light moves (a `Renderer` of its own, the
-//! same GPU work as ispm's direct light); the splat is what remains of the ispm frame.
+//! same GPU work as ispm's direct light, rendered after each ispm frame so that both see
+//! the same load); the splat is what remains of the ispm frame.
 //! Also: the direct light alone with every pixel supersampled against edge-adaptive
 //! supersampling (method `direct`), and CPU BVH rebuild against a refit of the same tree
 //! after moving one object.
@@ -87,6 +88,35 @@ fn moving_light(
     Ok((median(wall), frames))
 }
 
+/// As [`moving_light`] for `settings`, with a frame of `other` (its own renderer, the same
+/// light moves) after each frame: the two medians, taken under the same load, and the
+/// frames of `settings`.
+fn moving_light_pair(
+    scene: &Scene,
+    settings: &Settings,
+    other: &Settings,
+    runs: usize,
+) -> Result<(f64, f64, Vec<RenderOutput>), Box<dyn std::error::Error>> {
+    let mut r = Renderer::new(scene, settings)?;
+    let mut o = Renderer::new(scene, other)?;
+    r.render(&FrameDesc::default(), &Silent)?;
+    o.render(&FrameDesc::default(), &Silent)?;
+    let mut frames = Vec::new();
+    let (mut wall, mut other_wall) = (Vec::new(), Vec::new());
+    for i in 0..runs {
+        let u = nudge(scene, 0.01 * (i + 1) as f32);
+        r.update(&u)?;
+        o.update(&u)?;
+        let t = Instant::now();
+        frames.push(r.render(&FrameDesc::default(), &Silent)?);
+        wall.push(t.elapsed().as_secs_f64());
+        let t = Instant::now();
+        o.render(&FrameDesc::default(), &Silent)?;
+        other_wall.push(t.elapsed().as_secs_f64());
+    }
+    Ok((median(wall), median(other_wall), frames))
+}
+
 fn direct_settings(w: u32, h: u32, edges: bool) -> Settings {
     Settings {
         method: Method::Direct,
@@ -147,7 +177,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
     for (name, scene) in &scenes {
         for &(w, h) in sizes {
-            let (direct, _) = moving_light(scene, &direct_settings(w, h, true), runs)?;
             for &photons in budgets {
                 let settings = Settings {
                     method: Method::Ispm,
@@ -166,8 +195,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     wall.push(t.elapsed().as_secs_f64());
                 }
                 let old = median(wall);
-                // Engine: one renderer, the light moving, radiance only.
-                let (frame, frames) = moving_light(scene, &settings, runs)?;
+                // Engine: one renderer, the light moving, radiance only; the direct light
+                // (method `direct`) timed between its frames, under the same load.
+                let (frame, direct, frames) =
+                    moving_light_pair(scene, &settings, &direct_settings(w, h, true), runs)?;
                 let m = |names: &[&str]| median(frames.iter().map(|o| stage(o, names)).collect());
                 let trace = m(&["cpu trace", "boundary compensation"]);
                 let specular = m(&["specular paths"]);
