@@ -2,7 +2,8 @@
 // resolution is brought to full resolution by weighting the 2×2 nearest low-resolution
 // texels with bilinear weights times a normal term (cos^32) and a plane-distance term, both
 // measured between this pixel's G-buffer sample and the one each low-res texel shaded;
-// 0 on surfaces whose BSDF has no non-delta lobe.
+// 0 on surfaces whose BSDF has no non-delta lobe; on Lambertian surfaces the samples' light is
+// rescaled by the ratio of this pixel's albedo to theirs (texture detail at full resolution).
 
 struct UpsampleParams {
     eye: vec3<f32>,
@@ -38,6 +39,11 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
     if max3(diffuse.xyz) == 0.0 && (max3(specular) == 0.0 || diffuse.w < MIRROR_ROUGHNESS) {
         return vec4<f32>(0.0);
     }
+    // Lambertian pixels take their neighbours' light demodulated by the neighbours' albedo
+    // and modulated by their own (the irradiance is what varies smoothly; a texture's
+    // detail is the pixel's): a sample contributes v·ρ_pixel/ρ_sample where both surfaces are
+    // Lambertian (no specular lobe, no Fresnel coupling) and the sample's albedo is not ~0.
+    let lambertian = max3(specular) == 0.0 && textureLoad(g_specular, px, 0).w <= 0.5;
     let n = oct_decode(textureLoad(g_normals, px, 0).xy);
     let k = i32(params.subsample);
     let dims = vec2<i32>(textureDimensions(g_position));
@@ -66,7 +72,12 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
             let dz = abs(dot(qp.xyz - pos.xyz, n)) / tol;
             let wn = pow(max(dot(n, qn), 0.0), 32.0);
             let w = max(bx * by, 1e-3) * wn / (1.0 + dz * dz);
-            let v = textureLoad(low, l, 0).xyz;
+            var v = textureLoad(low, l, 0).xyz;
+            let qs = textureLoad(g_specular, q, 0);
+            let qd = textureLoad(g_diffuse, q, 0).xyz;
+            if lambertian && max3(qs.xyz) == 0.0 && qs.w <= 0.5 && min(min(qd.x, qd.y), qd.z) > 1e-3 {
+                v *= diffuse.xyz / qd;
+            }
             sum += w * v;
             wsum += w;
             if w > best {
