@@ -394,8 +394,19 @@ pub fn trace_landings(
         false
     };
 
-    // 2. The other samples of the edge pixels.
+    // 2. The other samples of the edge pixels. Their landings are held until shaded (and
+    // kept for the next frames): fail with a typed error rather than abort where they would
+    // not fit (the first samples' landings per sample times the samples to come, twice for
+    // the copy into the new chunks).
     let spp = settings.spp.max(1);
+    let first_landings: u64 = first.iter().map(|(c, _)| c.landings.len() as u64).sum();
+    let edges = marked.iter().filter(|&&i| is_edge(i as usize)).count() as u64;
+    let per_sample = first_landings as f64 / marked.len().max(1) as f64;
+    let expected = first_landings + (per_sample * (edges * (spp as u64 - 1)) as f64) as u64;
+    crate::memory::check(
+        || format!("specular paths: about {expected} landings"),
+        crate::memory::bytes_of::<Landing>(expected).saturating_mul(2),
+    )?;
     result.chunks = first
         .into_par_iter()
         .map(|(chunk, _)| {
