@@ -35,15 +35,15 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
     // the low-resolution samples around it, on other surfaces, carry (a mirror's rim next
     // to a lit floor took the floor's light before).
     let diffuse = textureLoad(g_diffuse, px, 0);
-    let specular = textureLoad(g_specular, px, 0).xyz;
-    if max3(diffuse.xyz) == 0.0 && (max3(specular) == 0.0 || diffuse.w < MIRROR_ROUGHNESS) {
+    let specular = textureLoad(g_specular, px, 0);
+    if max3(diffuse.xyz) == 0.0 && (max3(specular.xyz) == 0.0 || diffuse.w < MIRROR_ROUGHNESS) {
         return vec4<f32>(0.0);
     }
     // Lambertian pixels take their neighbours' light demodulated by the neighbours' albedo
     // and modulated by their own (the irradiance is what varies smoothly; a texture's
     // detail is the pixel's): a sample contributes v·ρ_pixel/ρ_sample where both surfaces are
     // Lambertian (no specular lobe, no Fresnel coupling) and the sample's albedo is not ~0.
-    let lambertian = max3(specular) == 0.0 && textureLoad(g_specular, px, 0).w <= 0.5;
+    let lambertian = max3(specular.xyz) == 0.0 && specular.w <= 0.5;
     let n = oct_decode(textureLoad(g_normals, px, 0).xy);
     let k = i32(params.subsample);
     let dims = vec2<i32>(textureDimensions(g_position));

@@ -114,9 +114,8 @@ fn tap_offset(j: u32, taps: u32) -> vec2<f32> {
 
 // Whether light `l`'s unshadowed term is flat enough across footprint `fp` at `p` that the
 // centre's value is its box filter: a Lambertian surface (no specular lobe, no Fresnel
-// coupling), a footprint under
-// 3% of the distance to the light and a shading normal turning under 0.03 rad across it,
-// and for a spot light a point well inside the inner cone. The term is then cos θ·I/d²
+// coupling), a footprint under 3% of the distance to the light and a shading normal turning
+// under 0.03 rad across it, and for a spot light a point well inside the inner cone. The term is then cos θ·I/d²
 // times a constant, whose box-filter error relative to the centre value is about
 // (s/d)²/4 ≈ 2·10⁻⁴ (s: the footprint's size), below what the corners' rule resolves.
 fn flat_across(l: Light, m: Material, p: vec3<f32>, fp: Footprint) -> bool {
