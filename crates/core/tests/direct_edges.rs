@@ -11,14 +11,14 @@
 //! sensitivity check: without supersampling (one sample) the same scenes differ from full
 //! supersampling several times more, so the bounds do test the edges.
 
+mod common;
+
 use gi_core::frame::{FrameDesc, Renderer};
 use gi_core::render::Silent;
 use gi_core::scene::desc::LightDesc;
-use gi_core::scene::{builtin, SceneUpdate, TextureMap};
-use gi_core::texture::Texture;
+use gi_core::scene::{builtin, SceneUpdate};
 use gi_core::{render, Image, Method, Scene, Settings};
 use std::collections::HashMap;
-use std::sync::Arc;
 
 const W: u32 = 96;
 const H: u32 = 72;
@@ -37,14 +37,6 @@ fn settings(spp: u32, edges: bool) -> Settings {
 /// A spot-lit floor with a checker of 8-pixel cells (texture edges inside pixels) and a
 /// glossy sphere (smooth silhouette, highlight).
 fn checker_scene() -> Scene {
-    const SIZE: u32 = 64;
-    let texels: Vec<f32> = (0..SIZE * SIZE)
-        .flat_map(|i| {
-            let (x, y) = (i % SIZE / 4, i / SIZE / 4);
-            let a = if (x + y) % 2 == 0 { 0.1 } else { 0.8 };
-            [a, a, a, 1.0]
-        })
-        .collect();
     let json = serde_json::json!({
         "camera": {"position": [0, 1.5, 3], "look_at": [0, 0.3, 0], "fov": 45, "width": W, "height": H},
         "lights": [{"type": "spot", "position": [0.5, 2.5, 1], "direction": [-0.2, -1, -0.4],
@@ -59,12 +51,7 @@ fn checker_scene() -> Scene {
              "transform": {"translate": [0, 0.4, 0]}, "material": "ball"}
         ],
     });
-    let textures: TextureMap = [(
-        "checker".to_string(),
-        Arc::new(Texture::new(SIZE, SIZE, &texels).unwrap()),
-    )]
-    .into_iter()
-    .collect();
+    let textures = common::checker_textures();
     Scene::from_json_textured(&json.to_string(), "checker", &HashMap::new(), &textures).unwrap()
 }
 

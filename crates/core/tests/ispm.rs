@@ -715,29 +715,13 @@ fn upsampling_gives_mirrors_no_indirect_light() {
 /// instead of their neighbours' (bound and measurements below).
 #[test]
 fn upsampling_keeps_texture_detail_in_indirect_light() {
-    use gi_core::scene::TextureMap;
-    use gi_core::texture::Texture;
     use std::collections::HashMap;
-    use std::sync::Arc;
-    const SIZE: u32 = 64;
-    let texels: Vec<f32> = (0..SIZE * SIZE)
-        .flat_map(|i| {
-            let (x, y) = (i % SIZE / 4, i / SIZE / 4);
-            let a = if (x + y) % 2 == 0 { 0.1 } else { 0.8 };
-            [a, a, a, 1.0]
-        })
-        .collect();
     let mut json: serde_json::Value =
         serde_json::from_str(builtin::json("cornell").expect("cornell")).expect("json");
     json["materials"]["checker"] =
         serde_json::json!({"diffuse": [1, 1, 1], "diffuse_texture": "checker"});
     json["objects"][0]["material"] = serde_json::json!("checker");
-    let textures: TextureMap = [(
-        "checker".to_string(),
-        Arc::new(Texture::new(SIZE, SIZE, &texels).expect("texture")),
-    )]
-    .into_iter()
-    .collect();
+    let textures = common::checker_textures();
     let scene = Scene::from_json_textured(
         &json.to_string(),
         "checker-cornell",

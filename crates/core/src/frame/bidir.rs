@@ -607,7 +607,7 @@ pub(super) fn frame(
             &mut encoder,
             &state.layers,
             &g.scene.geometry,
-            scene,
+            &g.scene.cull,
             textures,
             &mut g.timer,
         );
@@ -714,7 +714,7 @@ pub(super) fn frame(
         });
     let lit = vpls.len();
     // Each VPL cube face draws only the triangle runs that reach into its view.
-    let draws = shadow::layer_draws(scene, &matrices);
+    let draws = g.scene.cull.draws(&matrices);
     for (slot, chunk) in state.layer_views.chunks(6).take(raws.len()).enumerate() {
         if raws[slot].flux == [0.0; 3] && lit < raws.len() {
             continue;

@@ -41,6 +41,9 @@ pub(crate) struct GpuScene {
     pub shadows_stale: bool,
     /// World -> clip per shadow layer (CPU copies, for culling the shadow passes).
     shadow_clip: Vec<glam::Mat4>,
+    /// The geometry's culling units for the light-view passes (shadow, bounce, RSM, VPL
+    /// maps), rebuilt when geometry moves.
+    pub cull: shadow::CullUnits,
 }
 
 fn storage_init(ctx: &GpuContext, label: &str, bytes: &[u8]) -> wgpu::Buffer {
@@ -90,6 +93,7 @@ impl GpuScene {
             layers,
             shadows_stale: true,
             shadow_clip: shadows.matrices,
+            cull: shadow::CullUnits::of(scene),
         })
     }
 
@@ -190,8 +194,8 @@ impl GpuScene {
         if !self.shadows_stale || scene.lights.is_empty() {
             return;
         }
-        // Each layer draws only the objects that reach into its view.
-        let draws = shadow::layer_draws(scene, &self.shadow_clip);
+        // Each layer draws only the triangle runs that reach into its view.
+        let draws = self.cull.draws(&self.shadow_clip);
         for (layer, view) in self.shadow_layers.iter().enumerate() {
             let offset = (layer as u64 * VIEW_SIZE) as u32;
             let ts = timer.pass("shadow maps");

@@ -184,7 +184,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
             &mut encoder,
             &layers,
             &gs.geometry,
-            scene,
+            &gs.cull,
             (&gs.textures.group, gs.variant),
             timer,
         );

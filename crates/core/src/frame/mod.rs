@@ -419,6 +419,7 @@ impl Renderer {
                     o.triangles.start as usize..o.triangles.end as usize,
                 );
             }
+            g.scene.cull = crate::raster::shadow::CullUnits::of(scene);
         }
         if c.materials {
             g.scene.write_materials(ctx, scene);

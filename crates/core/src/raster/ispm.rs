@@ -578,7 +578,7 @@ pub fn render_bounce_map(scene: &Scene, settings: &Settings) -> Result<BounceMap
             &mut encoder,
             &layers,
             &geometry,
-            scene,
+            &super::shadow::CullUnits::of(scene),
             (&textures.group, super::textures::Variant::of(scene)),
             &mut timer,
         );
@@ -693,7 +693,7 @@ impl BounceTargets {
         encoder: &mut wgpu::CommandEncoder,
         layers: &[BounceLayer],
         geometry: &Geometry,
-        scene: &Scene,
+        cull: &super::shadow::CullUnits,
         textures: (&wgpu::BindGroup, super::textures::Variant),
         timer: &mut Timer,
     ) {
@@ -705,7 +705,7 @@ impl BounceTargets {
             textures.0,
             geometry,
             layers,
-            scene,
+            cull,
             timer,
         );
     }

@@ -4,11 +4,11 @@
 //! layers into mappable buffers in the same submission, read back after it.
 
 use super::ispm::BounceLayer;
+use super::shadow::CullUnits;
 use super::timer::Timer;
 use super::{gbuffer, Geometry};
 use crate::error::{Error, Result};
 use crate::gpu::{self, GpuContext};
-use crate::scene::Scene;
 use glam::{Mat4, Vec4};
 
 /// Format of every layer target.
@@ -160,7 +160,7 @@ impl LayerTargets {
         textures: &wgpu::BindGroup,
         geometry: &Geometry,
         layers: &[BounceLayer],
-        scene: &Scene,
+        cull: &CullUnits,
         timer: &mut Timer,
     ) {
         // Each layer draws only the triangles that reach into its view.
@@ -168,7 +168,7 @@ impl LayerTargets {
             .iter()
             .map(|l| Mat4::from_cols_array_2d(&l.view.view_proj))
             .collect();
-        let draws = super::shadow::layer_draws(scene, &matrices);
+        let draws = cull.draws(&matrices);
         for (i, layer) in layers.iter().enumerate() {
             let (views, depth_view) = &self.layer_views[i];
             let attachments: Vec<_> = views

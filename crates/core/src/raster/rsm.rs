@@ -11,7 +11,6 @@ use super::timer::Timer;
 use super::{buffer_init, gbuffer, Geometry};
 use crate::error::{Error, Result};
 use crate::gpu::{self, shaders, GpuContext};
-use crate::scene::Scene;
 use glam::{Vec2, Vec3};
 
 const VIEW_SIZE: u64 = std::mem::size_of::<BounceViewRaw>() as u64;
@@ -211,7 +210,7 @@ impl RsmTargets {
         encoder: &mut wgpu::CommandEncoder,
         layers: &[BounceLayer],
         geometry: &Geometry,
-        scene: &Scene,
+        cull: &super::shadow::CullUnits,
         textures: (&wgpu::BindGroup, super::textures::Variant),
         timer: &mut Timer,
     ) {
@@ -223,7 +222,7 @@ impl RsmTargets {
             textures.0,
             geometry,
             layers,
-            scene,
+            cull,
             timer,
         );
     }

@@ -339,44 +339,56 @@ pub fn box_in_view(m: &Mat4, lo: Vec3, hi: Vec3) -> bool {
 /// mesh usually lies in one cube face, large enough that a scene has few units.
 const CULL_TRIANGLES: u32 = 1024;
 
-/// Per shadow layer (clip matrices `layers`), the vertex ranges of the scene's geometry to
-/// draw (three vertices per triangle, in scene order): the runs of [`CULL_TRIANGLES`]
-/// triangles whose bounds reach into the layer's view, adjacent ranges merged. A point
-/// light's six cube faces each see a part of the scene: on `dense-cornell` (three
-/// 82k-triangle spheres below the light) a triangle is drawn into about 1.75 faces instead
-/// of six.
-pub fn layer_draws(scene: &Scene, layers: &[Mat4]) -> Vec<Vec<Range<u32>>> {
-    let n = scene.triangles.len() as u32;
-    let units: Vec<(Range<u32>, Vec3, Vec3)> = (0..n.div_ceil(CULL_TRIANGLES))
-        .map(|u| {
-            let t = u * CULL_TRIANGLES..((u + 1) * CULL_TRIANGLES).min(n);
-            let (lo, hi) = scene.triangles[t.start as usize..t.end as usize]
-                .iter()
-                .flatten()
-                .map(|&v| scene.positions[v as usize])
-                .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
-                    (lo.min(p), hi.max(p))
-                });
-            (t, lo, hi)
-        })
-        .collect();
-    layers
-        .iter()
-        .map(|m| {
-            let mut draws: Vec<Range<u32>> = Vec::new();
-            for (t, lo, hi) in &units {
-                if !box_in_view(m, *lo, *hi) {
-                    continue;
+/// The culling units of a scene's geometry for the light-view passes: runs of
+/// [`CULL_TRIANGLES`] triangles with their bounds. They depend on the vertex positions only:
+/// the frame engine keeps them in its GPU scene and rebuilds them when geometry moves.
+pub struct CullUnits {
+    units: Vec<(Range<u32>, Vec3, Vec3)>,
+}
+
+impl CullUnits {
+    pub fn of(scene: &Scene) -> Self {
+        let n = scene.triangles.len() as u32;
+        let units = (0..n.div_ceil(CULL_TRIANGLES))
+            .map(|u| {
+                let t = u * CULL_TRIANGLES..((u + 1) * CULL_TRIANGLES).min(n);
+                let (lo, hi) = scene.triangles[t.start as usize..t.end as usize]
+                    .iter()
+                    .flatten()
+                    .map(|&v| scene.positions[v as usize])
+                    .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
+                        (lo.min(p), hi.max(p))
+                    });
+                (t, lo, hi)
+            })
+            .collect();
+        CullUnits { units }
+    }
+
+    /// Per layer (clip matrices `layers`), the vertex ranges to draw (three vertices per
+    /// triangle, in scene order): the units whose bounds reach into the layer's view,
+    /// adjacent ranges merged. A point light's six cube faces each see a part of the
+    /// scene: on `dense-cornell` (three 82k-triangle spheres below the light) a triangle is
+    /// drawn into about 1.75 faces instead of six.
+    pub fn draws(&self, layers: &[Mat4]) -> Vec<Vec<Range<u32>>> {
+        layers
+            .iter()
+            .map(|m| {
+                let mut draws: Vec<Range<u32>> = Vec::new();
+                for (t, lo, hi) in &self.units {
+                    if !box_in_view(m, *lo, *hi) {
+                        continue;
+                    }
+                    let v = 3 * t.start..3 * t.end;
+                    match draws.last_mut() {
+                        Some(last) if last.end == v.start => last.end = v.end,
+                        _ => draws.push(v),
+                    }
                 }
-                let v = 3 * t.start..3 * t.end;
-                match draws.last_mut() {
-                    Some(last) if last.end == v.start => last.end = v.end,
-                    _ => draws.push(v),
-                }
-            }
-            draws
-        })
-        .collect()
+                draws
+            })
+            .collect()
+    }
 }
 
 #[cfg(test)]
@@ -421,7 +433,7 @@ mod tests {
     fn cube_faces_draw_only_what_they_see() {
         let scene = crate::scene::bench::dense_cornell();
         let views = ShadowViews::new(&scene, 1024);
-        let draws = layer_draws(&scene, &views.matrices);
+        let draws = CullUnits::of(&scene).draws(&views.matrices);
         assert_eq!(draws.len(), 6);
         let drawn: u64 = draws
             .iter()

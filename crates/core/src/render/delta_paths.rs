@@ -400,7 +400,11 @@ pub fn trace_landings(
     // the copy into the new chunks).
     let spp = settings.spp.max(1);
     let first_landings: u64 = first.iter().map(|(c, _)| c.landings.len() as u64).sum();
-    let edges = marked.iter().filter(|&&i| is_edge(i as usize)).count() as u64;
+    let mut edge = vec![false; w * h];
+    for &i in &marked {
+        edge[i as usize] = is_edge(i as usize);
+    }
+    let edges = edge.iter().filter(|&&e| e).count() as u64;
     let per_sample = first_landings as f64 / marked.len().max(1) as f64;
     let expected = first_landings + (per_sample * (edges * (spp as u64 - 1)) as f64) as u64;
     crate::memory::check(
@@ -421,7 +425,7 @@ pub fn trace_landings(
             for (k, &i) in chunk.pixels.iter().enumerate() {
                 let own = &chunk.landings[chunk.offsets[k] as usize..chunk.offsets[k + 1] as usize];
                 out.landings.extend_from_slice(own);
-                let n = if is_edge(i as usize) { spp } else { 1 };
+                let n = if edge[i as usize] { spp } else { 1 };
                 for s in 1..n {
                     sample(scene, bvh, settings, (i, s), &mut out.landings);
                 }

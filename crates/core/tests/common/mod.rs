@@ -124,3 +124,20 @@ pub fn write_pfm(path: &std::path::Path, img: &Image) -> std::io::Result<()> {
     }
     std::fs::write(path, bytes)
 }
+
+/// A texture map holding "checker": 64×64 texels in 4×4-texel squares of albedo 0.1 and 0.8
+/// (texture edges for the direct light's edge test and the upsampling's albedo ratio).
+pub fn checker_textures() -> gi_core::scene::TextureMap {
+    const SIZE: u32 = 64;
+    let texels: Vec<f32> = (0..SIZE * SIZE)
+        .flat_map(|i| {
+            let (x, y) = (i % SIZE / 4, i / SIZE / 4);
+            let a = if (x + y) % 2 == 0 { 0.1 } else { 0.8 };
+            [a, a, a, 1.0]
+        })
+        .collect();
+    let texture = gi_core::texture::Texture::new(SIZE, SIZE, &texels).expect("checker texture");
+    [("checker".to_string(), std::sync::Arc::new(texture))]
+        .into_iter()
+        .collect()
+}
