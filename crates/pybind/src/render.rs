@@ -122,7 +122,6 @@ pub fn settings_from(
             "progressive" => s.progressive = flag(v, "progressive")?,
             "photon_focus" => s.photon_focus = float(v, "photon_focus")?,
             "caustic_density_bound" => s.caustic_density_bound = flag(v, "caustic_density_bound")?,
-            "crease_correction" => s.crease_correction = flag(v, "crease_correction")?,
             "progressive_alpha" => s.progressive_alpha = float(v, "progressive_alpha")?,
             "vpls_per_light" => s.vpls_per_light = int(v, "vpls_per_light")?,
             "rsm_size" => s.rsm_size = int(v, "rsm_size")?,

@@ -497,53 +497,15 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     ) {
         let t = Instant::now();
         let r = radius.diffuse();
-        // Per pixel: the splat is divided by the kernel's coverage or, with
-        // `crease_correction`, near creases and edges replaced by the CPU's narrower-kernel
-        // estimate (`progressive::crease_estimate`).
-        let factors: Vec<(f32, Vec3)> = if settings.crease_correction {
-            use super::progressive::{crease_estimate, query_moments, CreaseFit};
-            let fit = CreaseFit {
-                bandwidth: std::env::var("GI_CREASE_BW")
-                    .ok()
-                    .and_then(|v| v.parse().ok())
-                    .unwrap_or(0.5),
-                linear: std::env::var("GI_CREASE_LINEAR").is_ok(),
-            };
-            let wide = query_moments(scene, bvh, pos, nrm, r, settings.seed);
-            let near: Vec<bool> = wide.iter().map(|m| m.m0 < 1.0).collect();
-            let narrow = if fit.bandwidth == 1.0 {
-                wide.clone()
-            } else {
-                query_moments(scene, bvh, pos, nrm, r * fit.bandwidth, settings.seed ^ 1)
-            };
-            let est = crease_estimate(
-                scene,
-                pos,
-                nrm,
-                &near,
-                &narrow,
-                &photons.splat,
-                radius.r_max,
-                fit,
-            );
-            near.iter()
-                .zip(est)
-                .map(|(&n, e)| if n { (1.0, e) } else { (1.0, Vec3::ONE) })
-                .collect()
-        } else {
-            super::progressive::query_coverage(scene, bvh, pos, nrm, r, settings.seed)
-                .into_iter()
-                .map(|c| (c, Vec3::ONE))
-                .collect()
-        };
-        for ((o, i), (c, l)) in out
+        let coverage = super::progressive::query_coverage(scene, bvh, pos, nrm, r, settings.seed);
+        for ((o, i), c) in out
             .radiance
             .pixels
             .iter_mut()
             .zip(&mut ind.pixels)
-            .zip(factors)
+            .zip(coverage)
         {
-            let corrected = *i / c * l;
+            let corrected = *i / c;
             *o += corrected - *i;
             *i = corrected;
         }

@@ -200,11 +200,6 @@ pub struct Settings {
     /// the frame's radiance is the running mean of the passes since the last scene, camera
     /// or size change (probabilistic progressive photon mapping, Knaus & Zwicker 2011).
     pub progressive: bool,
-    /// Progressive `ispm` at subsample 1: at pixels whose kernel a crease or an edge cuts
-    /// off, the indirect light is the intercept of a kernel-weighted local-linear fit of the
-    /// photons (`frame::progressive::local_linear`) instead of the splat divided by the
-    /// kernel's coverage, which leaves a first-order bias (lines along creases).
-    pub crease_correction: bool,
     /// α of the progressive radius sequence r²ᵢ₊₁ = r²ᵢ (i + α)/(i + 1), in (0, 1).
     pub progressive_alpha: f32,
     /// Scale of every photon kernel radius (ISPM volumes, gather footprints and their
@@ -281,7 +276,6 @@ impl Default for Settings {
             estimator: Estimator::Auto,
             temporal_frames: 1,
             progressive: false,
-            crease_correction: true,
             progressive_alpha: 0.7,
             radius_scale: 1.0,
             caustic_density_bound: true,
