@@ -124,15 +124,16 @@ pub(super) fn sample_offset(settings: &Settings, pass: u64) -> Vec2 {
 /// error band narrows with the radius, the error in it does not). Dividing the uncompensated splat at the pixel by the
 /// kernel's coverage there is exact for a density that is constant across the disc.
 ///
-/// The coverage is traced ([`boundary::coverage_moments`]: where the surface ends along 16
+/// The coverage is traced ([`boundary::coverage_moments`]: where the surface ends along 8
 /// directions and where the cover leaves the rim, integrated in closed form), not counted
 /// from 8 random probes ([`boundary::coverage`]): the splat is divided by it, and the mean of
 /// 1/ĉ over noisy estimates ĉ is biased high (Jensen): +6% and +8% 0.05 r and 0.3 r from a
 /// crease, and the quick ring test's misses made it −6% at 0.6 r (test
 /// `traced_coverage_is_unbiased_at_a_crease`). On cornell 64x64 (64 passes) the
-/// indirect light along the creases was 8–10% too bright within 0.06 of them and
-/// 3–4% too dark just beyond; with the traced coverage ±2%, relMSE 7.8e-4 → 6.5e-4 and FLIP
-/// 0.0452 → 0.0433 (docs/bench/progressive.md).
+/// indirect light on the ceiling was 8–10% too bright within 0.06 of the side walls and
+/// 3–4% too dark just beyond; with the traced coverage within ±2.5%, relMSE 7.8e-4 → 6.3e-4
+/// and FLIP 0.0452 → 0.0429. It costs 5–30 ms per pass at 64x64–128x128 (3–10 ms before),
+/// docs/bench/progressive.md.
 pub(super) fn query_coverage(
     scene: &Scene,
     bvh: &SceneBvh,

@@ -126,8 +126,8 @@ impl CoveredMoments {
 /// Directions of [`coverage_moments`], the bisection steps along each (and along the rim
 /// where the cover starts or stops reaching it), and the sub-angles each gap between two
 /// boundary points is integrated with.
-pub const MOMENT_DIRECTIONS: u32 = 16;
-pub const MOMENT_BISECTIONS: u32 = 5;
+pub const MOMENT_DIRECTIONS: u32 = 8;
+pub const MOMENT_BISECTIONS: u32 = 4;
 const MOMENT_SUBANGLES: u32 = 8;
 
 /// [`coverage`] with the first and second moments of the covered part of the kernel
