@@ -42,6 +42,7 @@ fn warm_frame(scene: &Scene, s: &Settings, seed: u64) -> (f64, Image, Vec<(Strin
             &FrameDesc {
                 seed: Some(seed),
                 images: Images::default(),
+                serial: false,
             },
             &Silent,
         )
@@ -110,6 +111,7 @@ fn stage_table(scene: &Scene, frames: u32) {
                     &FrameDesc {
                         seed: Some(100 + f as u64),
                         images: Images::default(),
+                        serial: false,
                     },
                     &Silent,
                 )

@@ -13,10 +13,13 @@
 //! Stages are wall-clock: lavapipe takes a compute pass's timestamps when it flushes its
 //! queued work, not around the pass (measured: the tiled estimator's shading pass "took"
 //! 0.02 ms while a 2 s gap opened before it), so GPU timestamps cannot split a frame there.
-//! The CPU stages come from the frame's own stats; the direct light is the wall-clock frame
-//! of method `direct` with the same settings and light moves (a `Renderer` of its own, the
-//! same GPU work as ispm's direct light, rendered after each ispm frame so that both see
-//! the same load); the splat is what remains of the ispm frame.
+//! A second renderer renders the same frames serially (`FrameDesc::serial`: the GPU waited
+//! on after each stage, each ispm frame followed by the serial one so that both see the same
+//! load), and its stages split the frame: the splat (the photons' upload and the estimate
+//! at the estimate's resolution), the CPU photon trace (with boundary compensation), the
+//! CPU specular paths, and everything else: the direct light (shadow maps, lighting, edge
+//! supersampling), the bounce maps, the upsampling, the composite and the readback, the
+//! uploads. The shares are of the serial frame.
 //! Also: the direct light alone with every pixel supersampled against edge-adaptive
 //! supersampling (method `direct`), and CPU BVH rebuild against a refit of the same tree
 //! after moving one object.
@@ -88,33 +91,36 @@ fn moving_light(
     Ok((median(wall), frames))
 }
 
-/// As [`moving_light`] for `settings`, with a frame of `other` (its own renderer, the same
-/// light moves) after each frame: the two medians, taken under the same load, and the
-/// frames of `settings`.
-fn moving_light_pair(
+/// As [`moving_light`], with the same frame rendered serially after each frame (a second
+/// renderer, [`FrameDesc::serial`]): the two medians, taken under the same load, and the
+/// serial frames.
+fn moving_light_serial(
     scene: &Scene,
     settings: &Settings,
-    other: &Settings,
     runs: usize,
 ) -> Result<(f64, f64, Vec<RenderOutput>), Box<dyn std::error::Error>> {
+    let serial = FrameDesc {
+        serial: true,
+        ..Default::default()
+    };
     let mut r = Renderer::new(scene, settings)?;
-    let mut o = Renderer::new(scene, other)?;
+    let mut o = Renderer::new(scene, settings)?;
     r.render(&FrameDesc::default(), &Silent)?;
-    o.render(&FrameDesc::default(), &Silent)?;
+    o.render(&serial, &Silent)?;
     let mut frames = Vec::new();
-    let (mut wall, mut other_wall) = (Vec::new(), Vec::new());
+    let (mut wall, mut serial_wall) = (Vec::new(), Vec::new());
     for i in 0..runs {
         let u = nudge(scene, 0.01 * (i + 1) as f32);
         r.update(&u)?;
         o.update(&u)?;
         let t = Instant::now();
-        frames.push(r.render(&FrameDesc::default(), &Silent)?);
+        r.render(&FrameDesc::default(), &Silent)?;
         wall.push(t.elapsed().as_secs_f64());
         let t = Instant::now();
-        o.render(&FrameDesc::default(), &Silent)?;
-        other_wall.push(t.elapsed().as_secs_f64());
+        frames.push(o.render(&serial, &Silent)?);
+        serial_wall.push(t.elapsed().as_secs_f64());
     }
-    Ok((median(wall), median(other_wall), frames))
+    Ok((median(wall), median(serial_wall), frames))
 }
 
 fn direct_settings(w: u32, h: u32, edges: bool) -> Settings {
@@ -171,10 +177,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     println!(
         "| scene | size | photons | one-shot frame (ms) | engine frame (ms) | speed-up | \
-         CPU trace (ms) | splat (ms) | direct light (ms) | specular paths (ms) | \
-         share of all but splat and trace | still frame (ms) |"
+         serial frame (ms) | CPU photon trace (ms) | CPU specular paths (ms) | splat (ms) | \
+         direct light (ms) | bounce maps (ms) | upsampling (ms) | rest (ms) | \
+         share of all but splat and photon trace | share of all but splat and CPU traces | \
+         still frame (ms) |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     for (name, scene) in &scenes {
         for &(w, h) in sizes {
             for &photons in budgets {
@@ -195,30 +203,39 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     wall.push(t.elapsed().as_secs_f64());
                 }
                 let old = median(wall);
-                // Engine: one renderer, the light moving, radiance only; the direct light
-                // (method `direct`) timed between its frames, under the same load.
-                let (frame, direct, frames) =
-                    moving_light_pair(scene, &settings, &direct_settings(w, h, true), runs)?;
+                // Engine: one renderer, the light moving, radiance only; the same frames
+                // rendered serially in between split it into stages.
+                let (frame, serial, frames) = moving_light_serial(scene, &settings, runs)?;
                 let m = |names: &[&str]| median(frames.iter().map(|o| stage(o, names)).collect());
                 let trace = m(&["cpu trace", "boundary compensation"]);
                 let specular = m(&["specular paths"]);
-                let splat = (frame - trace - direct - specular).max(0.0);
+                let splat = m(&["splat (wall)"]);
+                let direct = m(&["direct light (wall)"]);
+                let bounce = m(&["bounce maps (wall)", "bounce readback"]);
+                let upsample = m(&["upsample (wall)"]);
+                let rest = serial - trace - specular - splat - direct - bounce - upsample;
                 // A still frame: nothing changed since the last one.
                 let mut r = Renderer::new(scene, &settings)?;
                 r.render(&FrameDesc::default(), &Silent)?;
                 let t = Instant::now();
                 r.render(&FrameDesc::default(), &Silent)?;
                 let still = t.elapsed().as_secs_f64();
+                let ms = |x: f64| format!("{:.0}", x * 1e3);
                 println!(
-                    "| {name} | {w}×{h} | {photons} | {:.0} | {:.0} | {:.2}× | {:.0} | {:.0} | {:.0} | {:.0} | {:.1}% | {:.1} |",
-                    old * 1e3,
-                    frame * 1e3,
+                    "| {name} | {w}×{h} | {photons} | {} | {} | {:.2}× | {} | {} | {} | {} | {} | {} | {} | {} | {:.1}% | {:.1}% | {:.1} |",
+                    ms(old),
+                    ms(frame),
                     old / frame,
-                    trace * 1e3,
-                    splat * 1e3,
-                    direct * 1e3,
-                    specular * 1e3,
-                    100.0 * (direct + specular) / frame,
+                    ms(serial),
+                    ms(trace),
+                    ms(specular),
+                    ms(splat),
+                    ms(direct),
+                    ms(bounce),
+                    ms(upsample),
+                    ms(rest),
+                    100.0 * (serial - splat - trace) / serial,
+                    100.0 * (serial - splat - trace - specular) / serial,
                     still * 1e3,
                 );
             }

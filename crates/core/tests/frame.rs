@@ -62,6 +62,7 @@ fn all() -> FrameDesc {
     FrameDesc {
         seed: None,
         images: Images::ALL,
+        serial: false,
     }
 }
 
@@ -420,4 +421,36 @@ fn light_only_frames_reuse_the_specular_landings() {
         turned.stats.camera_paths > 0,
         "a camera move did not re-trace"
     );
+}
+
+/// A serial frame (`FrameDesc::serial`: the GPU waited on after each stage, for
+/// benchmarks) is the same frame: bitwise equal radiance, with the wall-clock stages of the
+/// splat, the upsampling, the direct light and the bounce maps in its stats.
+#[test]
+fn serial_frames_equal_overlapped_frames() {
+    let scene = builtin::load("cornell-glass").expect("scene");
+    let s = Settings {
+        subsample: 2,
+        ..settings(Method::Ispm)
+    };
+    let frame = |serial: bool| {
+        let mut r = Renderer::new(&scene, &s).expect("renderer");
+        let desc = FrameDesc { serial, ..all() };
+        r.render(&desc, &Silent).expect("frame 0");
+        r.update(&pose(&scene, 1.0)[1]).expect("light");
+        r.render(&desc, &Silent).expect("frame 1")
+    };
+    let (overlapped, serial) = (frame(false), frame(true));
+    let d = max_difference(&overlapped.radiance, &serial.radiance);
+    assert_eq!(d, 0.0, "frames differ by {d}");
+    for name in [
+        "bounce maps (wall)",
+        "direct light (wall)",
+        "splat (wall)",
+        "upsample (wall)",
+    ] {
+        let has = |o: &RenderOutput| o.stats.stages.iter().any(|(n, _)| n == name);
+        assert!(has(&serial), "no {name} in {:?}", serial.stats.stages);
+        assert!(!has(&overlapped), "{name} in an overlapped frame");
+    }
 }

@@ -234,6 +234,7 @@ impl PyRenderer {
         let desc = FrameDesc {
             seed,
             images: Images { aovs, extras },
+            serial: false,
         };
         let inner = &mut self.inner;
         let out = crate::guard::run(py, "Renderer.render", progress.as_ref(), |reporter| {

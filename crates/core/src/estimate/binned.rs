@@ -862,7 +862,8 @@ impl Binned {
         (lists, jobs)
     }
 
-    /// Records the binning, the shading and the upsampling of the uploaded photons.
+    /// Records the binning and the shading of the uploaded photons (the upsampling:
+    /// [`super::target::IndirectTarget::record_upsample`]).
     pub fn record(&self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder, timer: &mut Timer) {
         let passes = BinnedPasses::get(ctx);
         let [tx, ty] = self.tiles;
@@ -1009,7 +1010,6 @@ impl Binned {
                 8,
             );
         }
-        self.target.record_upsample(ctx, encoder, timer);
     }
 
     /// A compute pass with the estimator's bind group set, timed under stage `stage`.

@@ -140,10 +140,35 @@ impl IndirectEstimate {
         encoder: &mut wgpu::CommandEncoder,
         timer: &mut crate::raster::timer::Timer,
     ) {
+        self.record_splat(ctx, encoder, timer);
+        self.record_upsample(ctx, encoder, timer);
+    }
+
+    /// Records the estimate of the uploaded photons at the estimate's resolution.
+    pub fn record_splat(
+        &self,
+        ctx: &crate::gpu::GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        timer: &mut crate::raster::timer::Timer,
+    ) {
         match self {
             IndirectEstimate::Volumes(v) => v.record(ctx, encoder, timer),
             IndirectEstimate::Binned(t) => t.record(ctx, encoder, timer),
         }
+    }
+
+    /// Records the upsampling of the estimate to full resolution (nothing at subsample 1).
+    pub fn record_upsample(
+        &self,
+        ctx: &crate::gpu::GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        timer: &mut crate::raster::timer::Timer,
+    ) {
+        let target = match self {
+            IndirectEstimate::Volumes(v) => &v.target,
+            IndirectEstimate::Binned(b) => &b.target,
+        };
+        target.record_upsample(ctx, encoder, timer);
     }
 
     /// Photon-list entries of the last estimate: all, and trivial accepts (binned only).

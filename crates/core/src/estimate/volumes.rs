@@ -156,7 +156,8 @@ impl Volumes {
         ]
     }
 
-    /// Records the splat of the uploaded photons and the upsampling.
+    /// Records the splat of the uploaded photons (the upsampling:
+    /// [`super::target::IndirectTarget::record_upsample`]).
     pub fn record(&self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder, timer: &mut Timer) {
         let (count, quads) = (self.count, self.quads);
         let passes = IspmPasses::get(ctx);
@@ -191,6 +192,5 @@ impl Volumes {
                 pass.draw(0..self.ico_vertices, quads..count);
             }
         }
-        self.target.record_upsample(ctx, encoder, timer);
     }
 }

@@ -96,6 +96,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         targets,
         timer,
         ispm,
+        serial: g_serial,
         ..
     } = g;
     let ctx = ctx.clone();
@@ -173,6 +174,8 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     stage(&mut stats, "upload", t);
 
     // 1. Bounce maps, submitted first with their readback copies.
+    let serial = *g_serial;
+    let t = Instant::now();
     let mut encoder = ctx
         .device
         .create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -190,8 +193,13 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         );
     }
     let bounce_submission = ctx.queue.submit([encoder.finish()]);
+    if serial {
+        ctx.wait()?;
+        stage(&mut stats, "bounce maps (wall)", t);
+    }
 
     // 2. Direct light and the eye G-buffer, not waited on.
+    let t = Instant::now();
     let mut encoder = ctx
         .device
         .create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -200,6 +208,10 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     gs.record_shadows(Passes::get(&ctx), &mut encoder, timer, scene);
     let encoder = targets.record_direct(&ctx, &*gs, encoder, timer, progress)?;
     ctx.queue.submit([encoder.finish()]);
+    if serial {
+        ctx.wait()?;
+        stage(&mut stats, "direct light (wall)", t);
+    }
 
     // 3. The bounce-map readback, then the CPU trace while the GPU lights the frame.
     let t = Instant::now();
@@ -404,7 +416,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     stage(&mut stats, "specular paths", t);
 
     // 6. The indirect estimate, upsampling, composite, readback.
-    let t = Instant::now();
+    let mut t = Instant::now();
     let radius = VolumeRadius::of_scene(scene, settings.photons, settings.kernel_scale)
         .scaled(settings.radius_scale);
     state.estimate.set_sample_centre(targets.sample_centre());
@@ -457,7 +469,30 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("indirect estimate"),
             });
-        if splat {
+        if splat && serial {
+            // The splat (after the photons' upload above) and the upsampling, each waited
+            // on; the composite and readback below.
+            state.estimate.record_splat(&ctx, &mut encoder, timer);
+            ctx.queue.submit([encoder.finish()]);
+            ctx.wait()?;
+            stage(&mut stats, "splat (wall)", t);
+            t = Instant::now();
+            let mut upsample = ctx
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                    label: Some("upsampling"),
+                });
+            state.estimate.record_upsample(&ctx, &mut upsample, timer);
+            ctx.queue.submit([upsample.finish()]);
+            ctx.wait()?;
+            stage(&mut stats, "upsample (wall)", t);
+            t = Instant::now();
+            encoder = ctx
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                    label: Some("composite"),
+                });
+        } else if splat {
             state.estimate.record(&ctx, &mut encoder, timer);
         }
         targets.record_composite(&ctx, &mut encoder, timer);

@@ -51,6 +51,11 @@ pub struct FrameDesc {
     /// random numbers, ISPM section 4.1: a still scene does not flicker).
     pub seed: Option<u64>,
     pub images: Images,
+    /// Wait for the GPU after each stage, so that the stages' wall-clock times
+    /// (`RenderStats::stages`, named "… (wall)") add up to the frame: for benchmarks on
+    /// devices whose timestamps cannot place compute passes (lavapipe). Slower: the CPU
+    /// trace no longer overlaps the GPU's direct light. Method `ispm` only.
+    pub serial: bool,
 }
 
 /// The GPU side of a renderer (methods `direct` and `ispm`).
@@ -61,6 +66,8 @@ struct GpuState {
     timer: crate::raster::timer::Timer,
     ispm: Option<ispm::IspmState>,
     bidir: Option<bidir::BidirState>,
+    /// This frame waits after each stage ([`FrameDesc::serial`]).
+    serial: bool,
 }
 
 /// A persistent renderer of one scene with one method.
@@ -252,6 +259,7 @@ impl Renderer {
         if let Some(g) = self.gpu.as_mut() {
             g.targets
                 .set_sample_offset(progressive::sample_offset(&self.settings, pass));
+            g.serial = desc.serial;
         }
         let mut out = match settings.method {
             Method::Path | Method::Photon | Method::Gather => {
@@ -403,6 +411,7 @@ impl Renderer {
                 timer: gpu::frame_timer(ctx),
                 ispm: None,
                 bidir: None,
+                serial: false,
             });
             return Ok(());
         }

@@ -182,6 +182,47 @@ impl PhotonMap {
     }
 }
 
+impl PhotonMap {
+    /// The kernel-weighted power Σ Φ·κ(d², r²) of the k nearest photons to `at` whose
+    /// normals agree with the oriented normal `n` and which arrived on its side, and the
+    /// squared estimate radius r² (`None`: no photon found): what [`PhotonMap::radiance`]
+    /// multiplies by ρ/π on a Lambertian surface, here for a normal of the caller's choice.
+    /// Only the photons `eligible` accepts count.
+    pub fn side_power(
+        &self,
+        at: Vec3,
+        n: Vec3,
+        eligible: impl Fn(u32) -> bool,
+        g: &Gather,
+        scratch: &mut Vec<Neighbour>,
+    ) -> Option<(Vec3, f32)> {
+        let max_r2 = g.max_radius * g.max_radius;
+        let accept =
+            |i: u32| eligible(i) && self.photons[i as usize].normal().dot(n) > NORMAL_AGREEMENT;
+        self.tree.nearest(at, g.k, max_r2, accept, scratch);
+        let r2 = if scratch.len() == g.k {
+            scratch.last().map_or(max_r2, |nb| nb.dist2)
+        } else {
+            max_r2
+        };
+        if scratch.is_empty() || r2 <= 0.0 {
+            return None;
+        }
+        let power = scratch
+            .iter()
+            .map(|nb| {
+                let p = &self.photons[nb.index as usize];
+                if n.dot(p.incident()) > 0.0 {
+                    p.power() * g.kernel.weight(nb.dist2, r2)
+                } else {
+                    Vec3::ZERO
+                }
+            })
+            .sum();
+        Some((power, r2))
+    }
+}
+
 /// Anchors a [`GatherCache`] keeps (a camera path's landing points alternate between a few
 /// regions, e.g. the reflected and the refracted path of a glass sample).
 const ANCHORS: usize = 8;

@@ -13,6 +13,7 @@ pub mod estimate;
 pub mod focus;
 pub mod footprint;
 pub mod gather;
+pub mod irradiance;
 pub mod kdtree;
 pub mod lbvh;
 pub mod ring;

@@ -4,11 +4,13 @@
 //! "backwards recursive ray tracing on the CPU, with recursive global illumination
 //! approximated by ... a traditional photon map gather"): next-event estimation for direct
 //! light and a k-nearest-neighbour gather over the frame's stored photons (which exclude
-//! the bounce-map hits, i.e. direct light) wherever the specular path lands.
+//! the bounce-map hits, i.e. direct light) wherever the specular path lands; on Lambertian
+//! surfaces, the estimate precomputed at a nearby photon (`photon::irradiance`).
 
 use crate::error::Result;
 use crate::image::Image;
-use crate::photon::estimate::{GatherCache, PhotonMap};
+use crate::photon::estimate::{Gather, GatherCache, PhotonMap};
+use crate::photon::irradiance::IrradianceCache;
 use crate::photon::{Neighbour, Photon};
 use crate::render::camera_pass::{delta_image, has_delta_lobe};
 use crate::render::delta_paths::{adaptive_delta_image, shade_landings, trace_landings, Landings};
@@ -43,9 +45,6 @@ pub fn specular_paths(
     let gather = crate::render::photon_map_gather(scene, settings);
     match settings.specular_sampling {
         SpecularSampling::Adaptive => {
-            let gather = |it: &Interaction, wo: Vec3, cache: &mut GatherCache| {
-                map.radiance_cached(it, wo, &gather, cache)
-            };
             let cam = &scene.camera;
             let current = landings.as_ref().is_some_and(|l| {
                 (l.seed, l.spp, l.size()) == (settings.seed, settings.spp, (cam.width, cam.height))
@@ -58,12 +57,17 @@ pub fn specular_paths(
                     (l, n)
                 }
             };
-            let image = shade_landings(
+            // Lambertian landings read precomputed estimates, except in progressive mode,
+            // whose estimates must converge as its gathers shrink (the reuse distance, tied
+            // to the photons' spacing, does not).
+            let image = shade(
                 scene,
+                bvh,
+                &map,
+                &gather,
                 landings,
+                !settings.progressive,
                 progress,
-                |it, wo| direct_light(scene, bvh, it, wo),
-                Some(&gather),
             )?;
             Ok((image, traced))
         }
@@ -81,6 +85,36 @@ pub fn specular_paths(
             Ok((image, (cam.width * cam.height * settings.spp.max(1)) as u64))
         }
     }
+}
+
+/// The specular image of `landings`: next-event estimation and the photon gather of `map`
+/// at each landing, the gather read from precomputed estimates on Lambertian surfaces
+/// where `precompute` (`photon::irradiance`) and from the landing's own k neighbours
+/// elsewhere.
+fn shade(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    map: &PhotonMap,
+    gather: &Gather,
+    landings: &Landings,
+    precompute: bool,
+    progress: &dyn Progress,
+) -> Result<Image> {
+    let precomputed = precompute.then(|| IrradianceCache::new(map, *gather));
+    let gather =
+        |it: &Interaction, wo: Vec3, (cache, scratch): &mut (GatherCache, Vec<Neighbour>)| {
+            precomputed
+                .as_ref()
+                .and_then(|p| p.radiance(it, wo, scratch))
+                .unwrap_or_else(|| map.radiance_cached(it, wo, gather, cache))
+        };
+    shade_landings(
+        scene,
+        landings,
+        progress,
+        |it, wo| direct_light(scene, bvh, it, wo),
+        Some(&gather),
+    )
 }
 
 /// Radiance reaching the camera through the delta lobes of the first surface seen, with
@@ -106,5 +140,66 @@ pub fn specular_paths_direct(
                 direct_light(scene, bvh, it, wo)
             })
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::photon::{emit_and_trace, PhotonTraceSettings};
+    use crate::render::Silent;
+
+    /// Precomputed estimates leave the specular image's mean where the gathers put it and
+    /// add less difference than another photon seed does. On `cornell-glass` (its two
+    /// spheres show walls, floor and ceiling through glass and in the mirror), over 6
+    /// photon seeds, the relative shift of the image mean is within 3 standard errors of 0
+    /// (estimates made from all photons, the subset's own included, shifted it by −1.2% ±
+    /// 0.05% and failed this), and the RMS difference from the gathered image is under 3/4
+    /// of the RMS difference between two seeds' gathered images (measured 0.56: the
+    /// estimates use 3/4 of the photons, so their noise is partly their own).
+    #[test]
+    fn precomputed_estimates_are_unbiased_and_within_photon_noise() {
+        let mut scene = crate::scene::builtin::load("cornell-glass").unwrap();
+        scene.camera = scene.camera.with_size(96, 72);
+        let bvh = SceneBvh::build(&scene);
+        let settings = Settings {
+            spp: 4,
+            ..Default::default()
+        };
+        let pts = PhotonTraceSettings {
+            max_bounces: 4,
+            store_direct: false,
+            differentials: None,
+        };
+        let gather = crate::render::photon_map_gather(&scene, &settings);
+        let landings = trace_landings(&scene, &bvh, &settings, &Silent).unwrap();
+        let image = |seed: u64, precompute: bool| {
+            let map = PhotonMap::build(emit_and_trace(&scene, &bvh, 20_000, &pts, seed).photons);
+            shade(&scene, &bvh, &map, &gather, &landings, precompute, &Silent).unwrap()
+        };
+        let sum = |a: &Image| a.pixels.iter().map(|p| p.element_sum() as f64).sum::<f64>();
+        let shifts: Vec<f64> = (1..=6)
+            .map(|seed| sum(&image(seed, true)) / sum(&image(seed, false)) - 1.0)
+            .collect();
+        let n = shifts.len() as f64;
+        let mean = shifts.iter().sum::<f64>() / n;
+        let var = shifts.iter().map(|s| (s - mean).powi(2)).sum::<f64>() / (n - 1.0);
+        let se = (var / n).sqrt();
+        assert!(
+            mean.abs() < 3.0 * se,
+            "mean shift {mean} ± {se}: {shifts:?}"
+        );
+        let rms = |a: &Image, b: &Image| {
+            let se: f64 = a
+                .pixels
+                .iter()
+                .zip(&b.pixels)
+                .map(|(x, y)| (*x - *y).length_squared() as f64)
+                .sum();
+            (se / a.pixels.len() as f64).sqrt()
+        };
+        let exact = image(1, false);
+        let (change, noise) = (rms(&image(1, true), &exact), rms(&image(2, false), &exact));
+        assert!(change < 0.75 * noise, "{change} vs {noise}");
     }
 }

@@ -573,6 +573,7 @@ pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Re
         &crate::frame::FrameDesc {
             seed: None,
             images: crate::frame::Images::ALL,
+            serial: false,
         },
         progress,
     )
