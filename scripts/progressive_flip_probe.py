@@ -1,6 +1,8 @@
 """FLIP and relMSE of progressive runs against a `path` reference on a small `cornell`, with
 `path` at 256 and 1024 spp for comparison, all in one run (issue 11: where progressive
-`ispm`'s FLIP stays above `path`'s). Saves the last FLIP maps and images to /tmp.
+`ispm`'s FLIP stays above `path`'s). Saves the last FLIP maps and images to /tmp. Each FLIP
+is also split into its share on the *crease band* (pixels within one pixel of a crease or a
+depth step, from the G-buffer of a `path` frame) and on the rest: mean = band + rest.
 
     .venv/bin/python scripts/progressive_flip_probe.py WIDTH HEIGHT REF_SPP SECONDS CONFIGS
 
@@ -23,6 +25,19 @@ import gi
 
 sys.path.insert(0, str(Path(__file__).parent))
 from bench_progressive import reference, relmse  # noqa: E402
+from ispm_progressive_split import edge_mask  # noqa: E402
+
+
+def crease_band(scene, size: tuple[int, int]) -> np.ndarray:
+    """Pixels next to a crease or a depth step, widened by one pixel."""
+    frame = gi.Renderer(scene, "path", size=size, spp=4).render(aovs=True)
+    e = edge_mask(frame.position, frame.normal)
+    band = e.copy()
+    band[1:] |= e[:-1]
+    band[:-1] |= e[1:]
+    band[:, 1:] |= e[:, :-1]
+    band[:, :-1] |= e[:, 1:]
+    return band
 
 
 def main() -> None:
@@ -32,6 +47,12 @@ def main() -> None:
     configs = json.loads(sys.argv[5])
     ref, _ = reference("cornell", size, ref_spp, 1234)
     scene = gi.load_scene("cornell")
+    band = crease_band(scene, size)
+    print(f"crease band: {band.mean():.1%} of the pixels", flush=True)
+
+    def split(m: np.ndarray) -> str:
+        m = m.reshape(band.shape)
+        return f"(band {m[band].sum() / m.size:.4f} + rest {m[~band].sum() / m.size:.4f})"
 
     def flipmap(x: np.ndarray) -> tuple[np.ndarray, float]:
         m, mean, _ = flip_evaluator.evaluate(
@@ -47,7 +68,8 @@ def main() -> None:
         img = gi.render(scene, "path", spp=spp, size=size, seed=7).radiance
         s = time.perf_counter() - t
         m, f = flipmap(img)
-        print(f"path {spp} spp {s:.2f}s relMSE {relmse(img, ref):.2e} FLIP {f:.4f}", flush=True)
+        err = relmse(img, ref)
+        print(f"path {spp} spp {s:.2f}s relMSE {err:.2e} FLIP {f:.4f} {split(m)}", flush=True)
         np.save(f"/tmp/flip_path{spp}.npy", m)
     for k, (method, settings) in enumerate(configs):
         r = gi.Renderer(scene, method, size=size, progressive=True, **settings)
@@ -62,7 +84,8 @@ def main() -> None:
                 m, f = flipmap(frame.radiance)
                 err = relmse(frame.radiance, ref)
                 print(
-                    f"{method} {settings} pass {n} {elapsed:.2f}s relMSE {err:.2e} FLIP {f:.4f}",
+                    f"{method} {settings} pass {n} {elapsed:.2f}s relMSE {err:.2e} FLIP {f:.4f}"
+                    f" {split(m)}",
                     flush=True,
                 )
         np.save(f"/tmp/flip_{k}.npy", m)
