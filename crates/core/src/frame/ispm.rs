@@ -16,6 +16,7 @@ use super::gpu::rgb_image;
 use super::{GpuState, Images};
 use crate::error::{Error, Result};
 use crate::estimate::{Binned, Estimator, IndirectEstimate, Mode, Volumes};
+use crate::gpu::GpuContext;
 use crate::image::Image;
 use crate::photon::focus::Focus;
 use crate::photon::lbvh::Aabb;
@@ -26,6 +27,7 @@ use crate::photon::PhotonRay;
 use crate::photon::{boundary, PhotonTraceSettings};
 use crate::raster::ispm::{bounce_layers, photon_hits, BounceTargets, IspmPasses, Z_RATIO};
 use crate::raster::specular::specular_paths;
+use crate::raster::timer::Timer;
 use crate::raster::volume_shape::{partition, VolumeRadius};
 use crate::raster::Passes;
 use crate::render::delta_paths::Landings;
@@ -470,28 +472,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
                 label: Some("indirect estimate"),
             });
         if splat && serial {
-            // The splat (after the photons' upload above) and the upsampling, each waited
-            // on; the composite and readback below.
-            state.estimate.record_splat(&ctx, &mut encoder, timer);
-            ctx.queue.submit([encoder.finish()]);
-            ctx.wait()?;
-            stage(&mut stats, "splat (wall)", t);
-            t = Instant::now();
-            let mut upsample = ctx
-                .device
-                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                    label: Some("upsampling"),
-                });
-            state.estimate.record_upsample(&ctx, &mut upsample, timer);
-            ctx.queue.submit([upsample.finish()]);
-            ctx.wait()?;
-            stage(&mut stats, "upsample (wall)", t);
-            t = Instant::now();
-            encoder = ctx
-                .device
-                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                    label: Some("composite"),
-                });
+            (encoder, t) = splat_serially(&ctx, &state.estimate, encoder, timer, &mut stats, t)?;
         } else if splat {
             state.estimate.record(&ctx, &mut encoder, timer);
         }
@@ -575,6 +556,37 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     state.traced_seed = Some(settings.seed);
     state.splat_current = true;
     Ok(out)
+}
+
+/// The splat recorded into `encoder` (the photons' upload began at `t`) and the upsampling,
+/// each submitted and waited on and timed as "splat (wall)" and "upsample (wall)"
+/// (`FrameDesc::serial`); returns the encoder for the rest of the frame and its start.
+fn splat_serially(
+    ctx: &GpuContext,
+    estimate: &IndirectEstimate,
+    mut encoder: wgpu::CommandEncoder,
+    timer: &mut Timer,
+    stats: &mut RenderStats,
+    t: Instant,
+) -> Result<(wgpu::CommandEncoder, Instant)> {
+    let mut timed = |name: &str, t: Instant, encoder: wgpu::CommandEncoder| {
+        ctx.queue.submit([encoder.finish()]);
+        ctx.wait()?;
+        stats
+            .stages
+            .push((name.to_string(), t.elapsed().as_secs_f64()));
+        Ok::<_, Error>(Instant::now())
+    };
+    let new_encoder = |label| {
+        ctx.device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(label) })
+    };
+    estimate.record_splat(ctx, &mut encoder, timer);
+    let t = timed("splat (wall)", t, encoder)?;
+    let mut upsample = new_encoder("upsampling");
+    estimate.record_upsample(ctx, &mut upsample, timer);
+    let t = timed("upsample (wall)", t, upsample)?;
+    Ok((new_encoder("composite"), t))
 }
 
 /// The light of bounce-map photons of `light` and their angular spacing: the light's solid

@@ -177,7 +177,7 @@ mod tests {
             let map = PhotonMap::build(emit_and_trace(&scene, &bvh, 20_000, &pts, seed).photons);
             shade(&scene, &bvh, &map, &gather, &landings, precompute, &Silent).unwrap()
         };
-        let sum = |a: &Image| a.pixels.iter().map(|p| p.element_sum() as f64).sum::<f64>();
+        let sum = |a: &Image| a.mean().element_sum() as f64;
         let shifts: Vec<f64> = (1..=6)
             .map(|seed| sum(&image(seed, true)) / sum(&image(seed, false)) - 1.0)
             .collect();
@@ -189,17 +189,8 @@ mod tests {
             mean.abs() < 3.0 * se,
             "mean shift {mean} ± {se}: {shifts:?}"
         );
-        let rms = |a: &Image, b: &Image| {
-            let se: f64 = a
-                .pixels
-                .iter()
-                .zip(&b.pixels)
-                .map(|(x, y)| (*x - *y).length_squared() as f64)
-                .sum();
-            (se / a.pixels.len() as f64).sqrt()
-        };
         let exact = image(1, false);
-        let (change, noise) = (rms(&image(1, true), &exact), rms(&image(2, false), &exact));
+        let (change, noise) = (image(1, true).rmse(&exact), image(2, false).rmse(&exact));
         assert!(change < 0.75 * noise, "{change} vs {noise}");
     }
 }
