@@ -167,7 +167,7 @@ pub fn coverage_moments(
         })
         .collect();
     // All directions reach the rim: whole (a cut missed between two of them leaves out less
-    // than 0.02% of the kernel). The 4 probes at 0.8 r of [`coverage`] are no test here:
+    // than 0.2% of the kernel). The 4 probes at 0.8 r of [`coverage`] are no test here:
     // they miss a cut 0.6 r away one time in ten (−0.7% at such a pixel, measured).
     if rim.iter().all(|&(_, full)| full) {
         return CoveredMoments::FULL;
