@@ -10,6 +10,8 @@
 //! Cornell box, 640×480 and 1280×720 (subsample 2), 10k / 50k / 200k / 1M photons at
 //! kernel scale 1, and kernel scales 0.5 and 2 at 200k and 640×480.
 
+mod common;
+
 use gi_core::estimate::Estimator;
 use gi_core::frame::{FrameDesc, Renderer};
 use gi_core::render::Silent;
@@ -103,20 +105,10 @@ fn measure(
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let args: Vec<String> = std::env::args().collect();
-    let runs: usize = match args.iter().position(|a| a == "--runs") {
-        Some(i) => args.get(i + 1).ok_or("--runs needs a value")?.parse()?,
-        None => 3,
-    };
-    let quick = args.iter().any(|a| a == "--quick");
-    println!(
-        "{}\n",
-        gi_core::gpu::adapter_report(None)?
-            .lines()
-            .take(4)
-            .collect::<Vec<_>>()
-            .join("; ")
-    );
+    let args = common::Args::get();
+    let runs = args.runs(3)?;
+    let quick = args.quick();
+    common::print_adapter()?;
     let scene = builtin::load("cornell")?;
     let sizes: &[(u32, u32)] = if quick {
         &[(640, 480)]

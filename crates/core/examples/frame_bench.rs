@@ -23,6 +23,8 @@
 //! Also: the direct light alone with every pixel supersampled against edge-adaptive
 //! supersampling (method `direct`), and CPU BVH rebuild against a refit of the same tree
 //! after moving one object.
+mod common;
+
 use gi_core::frame::{FrameDesc, Renderer};
 use gi_core::render::Silent;
 use gi_core::scene::desc::LightDesc;
@@ -135,27 +137,14 @@ fn direct_settings(w: u32, h: u32, edges: bool) -> Settings {
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let args: Vec<String> = std::env::args().collect();
-    let runs: usize = match args.iter().position(|a| a == "--runs") {
-        Some(i) => args.get(i + 1).ok_or("--runs needs a value")?.parse()?,
-        None => 3,
-    };
-    let quick = args.iter().any(|a| a == "--quick");
-    println!(
-        "{}\n",
-        gi_core::gpu::adapter_report(None)?
-            .lines()
-            .take(4)
-            .collect::<Vec<_>>()
-            .join("; ")
-    );
-    let only = args
-        .iter()
-        .position(|a| a == "--scene")
-        .and_then(|i| args.get(i + 1));
+    let args = common::Args::get();
+    let runs = args.runs(3)?;
+    let quick = args.quick();
+    common::print_adapter()?;
+    let only = args.value("--scene");
     let scenes: Vec<(&str, Scene)> = ["cornell", "cornell-glass", "dense-cornell"]
         .into_iter()
-        .filter(|n| only.is_none_or(|o| o == n))
+        .filter(|n| only.is_none_or(|o| o == *n))
         .map(|n| {
             let scene = if n == "dense-cornell" {
                 Ok(dense_cornell())

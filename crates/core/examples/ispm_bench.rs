@@ -7,23 +7,15 @@
 //! maps 1024², several photon budgets and subsample 1 and 2; median of N frames after one
 //! warm-up frame (pipelines compiled).
 
+mod common;
+
 use gi_core::render::Silent;
 use gi_core::{render, scene::builtin, Method, Settings};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let args: Vec<String> = std::env::args().collect();
-    let runs: usize = match args.iter().position(|a| a == "--runs") {
-        Some(i) => args.get(i + 1).ok_or("--runs needs a value")?.parse()?,
-        None => 3,
-    };
-    println!(
-        "{}\n",
-        gi_core::gpu::adapter_report(None)?
-            .lines()
-            .take(4)
-            .collect::<Vec<_>>()
-            .join("; ")
-    );
+    let args = common::Args::get();
+    let runs = args.runs(3)?;
+    common::print_adapter()?;
     // Stage groups: (column, stage names summed). GPU passes are timestamp times; the
     // readbacks are the CPU's waits, which include GPU work still running.
     let groups: [(&str, &[&str]); 9] = [
@@ -50,11 +42,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("|---|---|---|---|{}---|", "---|".repeat(groups.len()));
     // `--scene NAME` (repeatable) picks scenes; "dense-cornell" is the ~246k-triangle
     // Cornell box of `scene::bench`.
-    let mut names: Vec<&str> = args
-        .windows(2)
-        .filter(|w| w[0] == "--scene")
-        .map(|w| w[1].as_str())
-        .collect();
+    let mut names = args.values("--scene");
     if names.is_empty() {
         names = vec!["cornell", "cornell-glass"];
     }

@@ -5,24 +5,16 @@
 //! Built-in Cornell box (one point light: six cube shadow faces of 1024²), one sample per
 //! pixel, median of N frames after one warm-up frame (pipelines compiled).
 
+mod common;
+
 use gi_core::render::Silent;
 use gi_core::{render, scene::builtin, Method, Settings};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let args: Vec<String> = std::env::args().collect();
-    let runs: usize = match args.iter().position(|a| a == "--runs") {
-        Some(i) => args.get(i + 1).ok_or("--runs needs a value")?.parse()?,
-        None => 5,
-    };
+    let args = common::Args::get();
+    let runs = args.runs(5)?;
     let scene = builtin::load("cornell")?;
-    println!(
-        "{}\n",
-        gi_core::gpu::adapter_report(None)?
-            .lines()
-            .take(4)
-            .collect::<Vec<_>>()
-            .join("; ")
-    );
+    common::print_adapter()?;
     let stages = ["shadow maps", "gbuffer", "direct light", "readback"];
     println!(
         "| resolution | {} | frame (wall) |",

@@ -14,6 +14,8 @@
 //!
 //! `--quick`: 640×480 and 20k photons only, no noise table.
 
+mod common;
+
 use gi_core::frame::{FrameDesc, Renderer};
 use gi_core::render::{Silent, SpecularSampling};
 use gi_core::scene::desc::LightDesc;
@@ -105,20 +107,10 @@ fn mean(a: &Image) -> f64 {
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let args: Vec<String> = std::env::args().collect();
-    let runs: usize = match args.iter().position(|a| a == "--runs") {
-        Some(i) => args.get(i + 1).ok_or("--runs needs a value")?.parse()?,
-        None => 2,
-    };
-    let quick = args.iter().any(|a| a == "--quick");
-    println!(
-        "{}\n",
-        gi_core::gpu::adapter_report(None)?
-            .lines()
-            .take(4)
-            .collect::<Vec<_>>()
-            .join("; ")
-    );
+    let args = common::Args::get();
+    let runs = args.runs(2)?;
+    let quick = args.quick();
+    common::print_adapter()?;
     let scene = builtin::load("cornell-glass")?;
     let sizes: &[(u32, u32)] = if quick {
         &[(640, 480)]

@@ -12,6 +12,8 @@
 //! pass; only the pass differs between shapes) is reported as the median, with the ratios
 //! to the icosahedron measured in the same interleaved runs.
 
+mod common;
+
 use gi_core::photon::{continue_paths, PhotonTraceSettings};
 use gi_core::raster::ispm::render_bounce_map;
 use gi_core::raster::volume_shape::{projected_radius, VolumeRadius};
@@ -51,19 +53,9 @@ fn median(v: &mut [f64]) -> f64 {
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let args: Vec<String> = std::env::args().collect();
-    let runs: usize = match args.iter().position(|a| a == "--runs") {
-        Some(i) => args.get(i + 1).ok_or("--runs needs a value")?.parse()?,
-        None => 3,
-    };
-    println!(
-        "{}\n",
-        gi_core::gpu::adapter_report(None)?
-            .lines()
-            .take(4)
-            .collect::<Vec<_>>()
-            .join("; ")
-    );
+    let args = common::Args::get();
+    let runs = args.runs(3)?;
+    common::print_adapter()?;
     let scene = builtin::load("cornell")?;
     let base = Settings {
         method: Method::Ispm,
@@ -89,9 +81,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("|---|---|---|---|---|---|---|---|---|---|");
     // `--px R` (repeatable) keeps only the rows of those target radii.
     let only: Vec<f32> = args
-        .windows(2)
-        .filter(|w| w[0] == "--px")
-        .map(|w| w[1].parse())
+        .values("--px")
+        .into_iter()
+        .map(str::parse)
         .collect::<Result<_, _>>()?;
     for (target, photons) in rows {
         if !only.is_empty() && !target.is_some_and(|t| only.contains(&t)) {

@@ -336,6 +336,43 @@ pub fn create_render_pipeline(
     device.create_render_pipeline(desc)
 }
 
+/// A full-screen pass's pipeline, counted: vertex entry `vs_main` without vertex buffers
+/// (one triangle covering the target), fragment entry `entry` of the same `module` writing
+/// one colour target, no depth.
+pub fn create_fullscreen_pipeline(
+    device: &wgpu::Device,
+    label: &str,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    entry: &str,
+    target: wgpu::ColorTargetState,
+) -> wgpu::RenderPipeline {
+    create_render_pipeline(
+        device,
+        &wgpu::RenderPipelineDescriptor {
+            label: Some(label),
+            layout: Some(layout),
+            vertex: wgpu::VertexState {
+                module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: None,
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                targets: &[Some(target)],
+            }),
+            multiview_mask: None,
+            cache: None,
+        },
+    )
+}
+
 /// `Device::create_compute_pipeline`, counted.
 pub fn create_compute_pipeline(
     device: &wgpu::Device,

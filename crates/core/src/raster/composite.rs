@@ -34,29 +34,13 @@ impl CompositePass {
             immediate_size: 0,
         });
         let module = shaders::module(device, "composite shader", &[shaders::COMPOSITE]);
-        let pipeline = crate::gpu::create_render_pipeline(
+        let pipeline = crate::gpu::create_fullscreen_pipeline(
             device,
-            &wgpu::RenderPipelineDescriptor {
-                label: Some("composite pipeline"),
-                layout: Some(&pipeline_layout),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("vs_main"),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                primitive: wgpu::PrimitiveState::default(),
-                depth_stencil: None,
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("fs_main"),
-                    compilation_options: Default::default(),
-                    targets: &[Some(wgpu::ColorTargetState::from(RADIANCE))],
-                }),
-                multiview_mask: None,
-                cache: None,
-            },
+            "composite pipeline",
+            &pipeline_layout,
+            &module,
+            "fs_main",
+            RADIANCE.into(),
         );
         CompositePass { pipeline, layout }
     }

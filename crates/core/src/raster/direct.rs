@@ -107,33 +107,18 @@ impl DirectPass {
             alpha: add,
         };
         let pipeline = |entry: &str, blend: Option<wgpu::BlendState>| {
-            crate::gpu::create_render_pipeline(
+            let target = wgpu::ColorTargetState {
+                format: ACCUM,
+                blend,
+                write_mask: wgpu::ColorWrites::ALL,
+            };
+            crate::gpu::create_fullscreen_pipeline(
                 device,
-                &wgpu::RenderPipelineDescriptor {
-                    label: Some(entry),
-                    layout: Some(&pipeline_layout),
-                    vertex: wgpu::VertexState {
-                        module: &module,
-                        entry_point: Some("vs_main"),
-                        compilation_options: Default::default(),
-                        buffers: &[],
-                    },
-                    primitive: wgpu::PrimitiveState::default(),
-                    depth_stencil: None,
-                    multisample: Default::default(),
-                    fragment: Some(wgpu::FragmentState {
-                        module: &module,
-                        entry_point: Some(entry),
-                        compilation_options: Default::default(),
-                        targets: &[Some(wgpu::ColorTargetState {
-                            format: ACCUM,
-                            blend,
-                            write_mask: wgpu::ColorWrites::ALL,
-                        })],
-                    }),
-                    multiview_mask: None,
-                    cache: None,
-                },
+                entry,
+                &pipeline_layout,
+                &module,
+                entry,
+                target,
             )
         };
         let (centre, pipeline) = (

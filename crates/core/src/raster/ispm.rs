@@ -470,29 +470,13 @@ impl IspmPasses {
             "upsample shader",
             &[shaders::COMMON, shaders::BSDF, shaders::UPSAMPLE],
         );
-        let upsample = crate::gpu::create_render_pipeline(
+        let upsample = crate::gpu::create_fullscreen_pipeline(
             device,
-            &wgpu::RenderPipelineDescriptor {
-                label: Some("upsample pipeline"),
-                layout: Some(&pipeline_layout(&upsample_layout)),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("vs_main"),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                primitive: wgpu::PrimitiveState::default(),
-                depth_stencil: None,
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("fs_main"),
-                    compilation_options: Default::default(),
-                    targets: &[Some(wgpu::ColorTargetState::from(TARGET))],
-                }),
-                multiview_mask: None,
-                cache: None,
-            },
+            "upsample pipeline",
+            &pipeline_layout(&upsample_layout),
+            &module,
+            "fs_main",
+            TARGET.into(),
         );
         IspmPasses {
             bounce,

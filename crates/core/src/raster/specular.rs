@@ -57,18 +57,14 @@ pub fn specular_paths(
                     (l, n)
                 }
             };
-            // Lambertian landings read precomputed estimates, except in progressive mode,
-            // whose estimates must converge as its gathers shrink (the reuse distance, tied
-            // to the photons' spacing, does not).
-            let image = shade(
-                scene,
-                bvh,
-                &map,
-                &gather,
-                landings,
-                !settings.progressive,
-                progress,
-            )?;
+            // Lambertian landings read precomputed estimates where they are fewer than half
+            // the gathers (else most estimates would serve one landing, without the
+            // coherent gathers' cache), and not in progressive mode, whose estimates must
+            // converge as its gathers shrink (the reuse distance, tied to the photons'
+            // spacing, does not).
+            let subset = photons.len() as u64 / crate::photon::irradiance::STRIDE as u64;
+            let precompute = !settings.progressive && 2 * subset < landings.gathers();
+            let image = shade(scene, bvh, &map, &gather, landings, precompute, progress)?;
             Ok((image, traced))
         }
         SpecularSampling::Full => {

@@ -192,29 +192,13 @@ impl VplPass {
                 shaders::BIDIR,
             ],
         );
-        let pipeline = gpu::create_render_pipeline(
+        let pipeline = gpu::create_fullscreen_pipeline(
             device,
-            &wgpu::RenderPipelineDescriptor {
-                label: Some("bidir pipeline"),
-                layout: Some(&pipeline_layout),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("vs_main"),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                primitive: wgpu::PrimitiveState::default(),
-                depth_stencil: None,
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("fs_main"),
-                    compilation_options: Default::default(),
-                    targets: &[Some(wgpu::ColorTargetState::from(TARGET))],
-                }),
-                multiview_mask: None,
-                cache: None,
-            },
+            "bidir pipeline",
+            &pipeline_layout,
+            &module,
+            "fs_main",
+            TARGET.into(),
         );
         VplPass { pipeline, layout }
     }

@@ -273,6 +273,16 @@ struct Chunk {
     landings: Vec<Landing>,
 }
 
+impl Chunk {
+    /// The sample count of each landing's pixel, landing by landing.
+    fn landing_samples(&self) -> impl Iterator<Item = u32> + '_ {
+        (0..self.pixels.len()).flat_map(move |k| {
+            let n = (self.offsets[k + 1] - self.offsets[k]) as usize;
+            std::iter::repeat_n(self.samples[k], n)
+        })
+    }
+}
+
 /// The camera side of the specular image: every landing of every sample, sampled as the
 /// module documentation describes. It depends on the camera, the geometry, the materials,
 /// the seed and `spp`, not on the lights or the photons, so a frame in which only the
@@ -311,6 +321,16 @@ impl Landings {
             .flat_map(|c| &c.samples)
             .map(|&n| n as u64)
             .sum()
+    }
+
+    /// Landings at which [`shade_landings`] gathers photons (those of each pixel's first
+    /// [`EDGE_GATHERS`] samples).
+    pub fn gathers(&self) -> u64 {
+        self.chunks
+            .iter()
+            .flat_map(|c| c.landings.iter().zip(c.landing_samples()))
+            .filter(|(l, n)| l.sample < (*n).min(EDGE_GATHERS))
+            .count() as u64
     }
 
     /// Landings held.

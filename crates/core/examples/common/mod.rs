@@ -1,0 +1,55 @@
+//! What the benchmark examples share: their command-line flags and the adapter header.
+// Each example uses a part of it.
+#![allow(dead_code)]
+
+use std::error::Error;
+
+/// The command line: `--runs N`, `--quick`, `--FLAG VALUE`.
+pub struct Args(Vec<String>);
+
+impl Args {
+    pub fn get() -> Self {
+        Args(std::env::args().collect())
+    }
+
+    /// The value after `flag`, if given.
+    pub fn value(&self, flag: &str) -> Option<&str> {
+        let i = self.0.iter().position(|a| a == flag)?;
+        self.0.get(i + 1).map(String::as_str)
+    }
+
+    /// The values after every `flag` (a repeatable flag).
+    pub fn values(&self, flag: &str) -> Vec<&str> {
+        self.0
+            .windows(2)
+            .filter(|w| w[0] == flag)
+            .map(|w| w[1].as_str())
+            .collect()
+    }
+
+    /// Timed runs per measurement: `--runs N`, else `default`.
+    pub fn runs(&self, default: usize) -> Result<usize, Box<dyn Error>> {
+        match self.0.iter().position(|a| a == "--runs") {
+            Some(_) => Ok(self
+                .value("--runs")
+                .ok_or("--runs needs a value")?
+                .parse()?),
+            None => Ok(default),
+        }
+    }
+
+    /// `--quick`: the smallest configurations only.
+    pub fn quick(&self) -> bool {
+        self.0.iter().any(|a| a == "--quick")
+    }
+}
+
+/// Prints the adapter (the first four lines of its report, on one line) and a blank line.
+pub fn print_adapter() -> Result<(), Box<dyn Error>> {
+    let report = gi_core::gpu::adapter_report(None)?;
+    println!(
+        "{}\n",
+        report.lines().take(4).collect::<Vec<_>>().join("; ")
+    );
+    Ok(())
+}
