@@ -128,18 +128,34 @@ impl PhotonMap {
             return Vec3::ZERO;
         }
         let n = it.frame.n * it.ng.dot(wo).signum();
+        match self.neighbours(it.position, n, |_| true, g, scratch) {
+            Some(r2) => self.kernel_sum(it, wo, g, scratch, r2),
+            None => Vec3::ZERO,
+        }
+    }
+
+    /// The k nearest photons to `at` within the maximum radius whose normals agree with the
+    /// oriented normal `n` and which `eligible` accepts, into `scratch`, and the squared
+    /// estimate radius: the k-th distance, or the maximum radius when fewer are found
+    /// (`None`: none found).
+    fn neighbours(
+        &self,
+        at: Vec3,
+        n: Vec3,
+        eligible: impl Fn(u32) -> bool,
+        g: &Gather,
+        scratch: &mut Vec<Neighbour>,
+    ) -> Option<f32> {
         let max_r2 = g.max_radius * g.max_radius;
-        let accept = |i: u32| self.photons[i as usize].normal().dot(n) > NORMAL_AGREEMENT;
-        self.tree.nearest(it.position, g.k, max_r2, accept, scratch);
+        let accept =
+            |i: u32| eligible(i) && self.photons[i as usize].normal().dot(n) > NORMAL_AGREEMENT;
+        self.tree.nearest(at, g.k, max_r2, accept, scratch);
         let r2 = if scratch.len() == g.k {
             scratch.last().map_or(max_r2, |nb| nb.dist2)
         } else {
             max_r2
         };
-        if scratch.is_empty() || r2 <= 0.0 {
-            return Vec3::ZERO;
-        }
-        self.kernel_sum(it, wo, g, scratch, r2)
+        (!scratch.is_empty() && r2 > 0.0).then_some(r2)
     }
 
     /// Σ f(wo, wᵢ)·Φ·κ(d², r²) over the `picked` neighbours. Where the material is
@@ -196,18 +212,7 @@ impl PhotonMap {
         g: &Gather,
         scratch: &mut Vec<Neighbour>,
     ) -> Option<(Vec3, f32)> {
-        let max_r2 = g.max_radius * g.max_radius;
-        let accept =
-            |i: u32| eligible(i) && self.photons[i as usize].normal().dot(n) > NORMAL_AGREEMENT;
-        self.tree.nearest(at, g.k, max_r2, accept, scratch);
-        let r2 = if scratch.len() == g.k {
-            scratch.last().map_or(max_r2, |nb| nb.dist2)
-        } else {
-            max_r2
-        };
-        if scratch.is_empty() || r2 <= 0.0 {
-            return None;
-        }
+        let r2 = self.neighbours(at, n, eligible, g, scratch)?;
         let power = scratch
             .iter()
             .map(|nb| {

@@ -68,12 +68,6 @@ impl<'a> IrradianceCache<'a> {
         }
     }
 
-    /// Subset photons, and the estimates computed so far.
-    pub fn counts(&self) -> (usize, usize) {
-        let computed = self.estimates.iter().filter(|e| e.get().is_some()).count();
-        (self.sources.len(), computed)
-    }
-
     /// Radiance towards `wo` at `it` when its material is Lambertian and a subset photon
     /// is close enough: ρ/π × that photon's estimate; `None` otherwise. `scratch` holds
     /// one neighbour list.

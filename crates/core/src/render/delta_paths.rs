@@ -273,14 +273,10 @@ struct Chunk {
     landings: Vec<Landing>,
 }
 
-impl Chunk {
-    /// The sample count of each landing's pixel, landing by landing.
-    fn landing_samples(&self) -> impl Iterator<Item = u32> + '_ {
-        (0..self.pixels.len()).flat_map(move |k| {
-            let n = (self.offsets[k + 1] - self.offsets[k]) as usize;
-            std::iter::repeat_n(self.samples[k], n)
-        })
-    }
+/// Whether sample `s` of a pixel with `n` samples gathers photons: its first
+/// [`EDGE_GATHERS`] do.
+fn gathers_at(s: u32, n: u32) -> bool {
+    s < n.min(EDGE_GATHERS)
 }
 
 /// The camera side of the specular image: every landing of every sample, sampled as the
@@ -295,6 +291,8 @@ pub struct Landings {
     /// The seed and samples per pixel the landings were traced with.
     pub seed: u64,
     pub spp: u32,
+    /// Landings at which photons are gathered.
+    gathers: u64,
 }
 
 impl Landings {
@@ -323,14 +321,9 @@ impl Landings {
             .sum()
     }
 
-    /// Landings at which [`shade_landings`] gathers photons (those of each pixel's first
-    /// [`EDGE_GATHERS`] samples).
+    /// Landings at which [`shade_landings`] gathers photons (counted when traced).
     pub fn gathers(&self) -> u64 {
-        self.chunks
-            .iter()
-            .flat_map(|c| c.landings.iter().zip(c.landing_samples()))
-            .filter(|(l, n)| l.sample < (*n).min(EDGE_GATHERS))
-            .count() as u64
+        self.gathers
     }
 
     /// Landings held.
@@ -458,6 +451,17 @@ pub fn trace_landings(
         })
         .collect();
     stage.finish()?;
+    result.gathers = result
+        .chunks
+        .iter()
+        .flat_map(|c| (0..c.pixels.len()).map(move |k| (c, k)))
+        .map(|(c, k)| {
+            let own = &c.landings[c.offsets[k] as usize..c.offsets[k + 1] as usize];
+            own.iter()
+                .filter(|l| gathers_at(l.sample, c.samples[k]))
+                .count() as u64
+        })
+        .sum();
     Ok(result)
 }
 
@@ -491,7 +495,7 @@ pub fn shade_landings<S: Default + Send>(
                         let it = Interaction::new(scene, &l.hit, l.dir);
                         let wo = -l.dir;
                         l_direct += l.beta * direct(&it, wo);
-                        if let Some(gather) = gather.filter(|_| l.sample < gathers) {
+                        if let Some(gather) = gather.filter(|_| gathers_at(l.sample, n)) {
                             l_gather += l.beta * gather(&it, wo, scratch);
                         }
                     }
