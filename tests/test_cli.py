@@ -174,6 +174,17 @@ def test_estimator_option(tmp_path):
     assert p.returncode == 2 and "--estimator" in p.stderr
 
 
+def test_first_bounce_option(tmp_path):
+    out = tmp_path / "t.exr"
+    args = ["render", "cornell", "-o", str(out), "--spp", "1", "--size", "16x16"]
+    p = run(*args, "--photons", "5000", "--first-bounce", "raster")
+    assert p.returncode == 0, p.stderr
+    assert "first bounce raster: chosen in the settings" in p.stderr
+    assert gi.read_image(out).mean() > 0
+    p = run(*args, "-q", "--first-bounce", "rays")
+    assert p.returncode == 2 and "--first-bounce" in p.stderr
+
+
 def test_footprints_of_all_three_path_kinds():
     # ring-room: the mirror ring's caustic amid diffusely reflected light (the paper's Table 3).
     p = run("footprints", "ring-room", "--photons", "20000")

@@ -161,6 +161,13 @@ def _parser() -> argparse.ArgumentParser:
         "directional approximation in compute; or auto (per adapter)",
     )
     r.add_argument(
+        "--first-bounce",
+        default="auto",
+        choices=["auto", "raster", "traced"],
+        help="where ISPM finds the photons' first hits: rasterized bounce maps, cast in the "
+        "CPU BVH, or auto (traced on CPU devices)",
+    )
+    r.add_argument(
         "--vpls-per-light", type=int, default=64, help="bidir: virtual point lights per light"
     )
     r.add_argument("--bundles", type=int, default=16, help="bidir: ray bundles per frame")
@@ -327,6 +334,7 @@ def _settings(args: argparse.Namespace) -> dict[str, object]:
         edge_supersampling=not args.no_edge_supersampling,
         volume_shape=args.volume_shape,
         estimator=args.estimator,
+        first_bounce=args.first_bounce,
         adapter=args.adapter,
         shadow_map_size=args.shadow_map_size,
         vpls_per_light=args.vpls_per_light,
@@ -362,6 +370,8 @@ def _render(args: argparse.Namespace) -> int:
         print(f"wrote {files} ({s.method}, {s.total_seconds:.2f}s: {stages})", file=sys.stderr)
         if s.estimator:
             print(f"estimator {s.estimator}: {s.estimator_reason}", file=sys.stderr)
+        if s.first_bounce:
+            print(f"first bounce {s.first_bounce}: {s.first_bounce_reason}", file=sys.stderr)
     return 0
 
 

@@ -43,6 +43,10 @@ class RenderStats:
     estimator: str = ""
     estimator_reason: str = ""
     estimator_memory: list[tuple[str, int]] = field(default_factory=list)
+    #: Method ``ispm``: where the photons' first hits were found ("raster" bounce maps or
+    #: "traced" in the CPU BVH) and why.
+    first_bounce: str = ""
+    first_bounce_reason: str = ""
     #: Estimators "tiled" and "cluster": photon-list entries written, and of them the
     #: cluster hierarchy's trivial accepts (one photon for a whole node of view samples).
     list_entries: int = 0
@@ -151,6 +155,8 @@ def _result(out: dict[str, Any]) -> RenderResult:
         estimator=s["estimator"],
         estimator_reason=s["estimator_reason"],
         estimator_memory=[(str(n), int(b)) for n, b in s["estimator_memory"]],
+        first_bounce=s["first_bounce"],
+        first_bounce_reason=s["first_bounce_reason"],
         list_entries=s["list_entries"],
         trivial_accepts=s["trivial_accepts"],
         vpls=s["vpls"],
@@ -418,6 +424,7 @@ def render(
     edge_supersampling: bool = True,
     volume_shape: str = "auto",
     estimator: str = "auto",
+    first_bounce: str = "auto",
     adapter: str | None = None,
     shadow_map_size: int = 1024,
     caustic_density_bound: bool = True,
@@ -463,6 +470,10 @@ def render(
     once; Moreau et al. 2016), all three the same image up to float rounding; "directional"
     (the cluster hierarchy's approximation: per-cluster irradiance from 8 directions,
     faster, blockier) or "auto" (per adapter; ``stats.estimator_reason`` says why).
+    ``first_bounce`` picks where ``ispm`` finds its photons' first hits: "raster" (the bounce
+    maps), "traced" (the same photons cast from the lights in the CPU BVH, cheaper on a CPU
+    rasterizer) or "auto" ("traced" on CPU devices such as lavapipe, else "raster"); the
+    photons have the same distribution either way.
     GPU methods (``direct``, ``ispm``, ``bidir``) run on ``adapter`` ("cpu" for lavapipe,
     "gpu", or part of an adapter's name; default: the ``GI_ADAPTER`` environment variable,
     else a real GPU when present, else lavapipe) with ``shadow_map_size``² texels per
@@ -521,6 +532,7 @@ def render(
         edge_supersampling=edge_supersampling,
         volume_shape=volume_shape,
         estimator=estimator,
+        first_bounce=first_bounce,
         adapter=adapter,
         shadow_map_size=shadow_map_size,
         caustic_density_bound=caustic_density_bound,

@@ -4,11 +4,13 @@
 //! so that every frame re-traces and re-splats its photons, radiance read back only), in the
 //! same run, as a markdown table.
 //!
-//! `cargo run -p gi-core --profile test --example frame_bench [-- --runs N --quick --scene NAME]`
+//! `cargo run -p gi-core --profile test --example frame_bench [-- --runs N --quick --scene NAME
+//! --size WxH --ispm-only]`
 //!
 //! Scenes `cornell`, `cornell-glass` and the ~246k-triangle `dense-cornell`, at 640×480 and
 //! 1280×720, 20k / 50k / 200k photons, 16 direct samples per pixel, subsample 2 (defaults
-//! otherwise). Median of N frames after a warm-up frame. `--quick` runs 640×480 and 20k only.
+//! otherwise). Median of N frames after a warm-up frame. `--quick` runs 640×480 and 20k only;
+//! `--size` one size; `--ispm-only` leaves out the direct-light and BVH sections.
 //!
 //! Stages are wall-clock: lavapipe takes a compute pass's timestamps when it flushes its
 //! queued work, not around the pass (measured: the tiled estimator's shading pass "took"
@@ -16,16 +18,19 @@
 //! A second renderer renders the same frames serially (`FrameDesc::serial`: the GPU waited
 //! on after each stage, each ispm frame followed by the serial one so that both see the same
 //! load), and its stages split the frame: the splat (the photons' upload and the estimate
-//! at the estimate's resolution), the CPU photon trace (with boundary compensation), the
+//! at the estimate's resolution), the CPU photon trace (with the first hits where they are
+//! traced, `FirstBounce::Traced`, and the boundary compensation), the
 //! CPU specular paths, and everything else: the direct light (shadow maps, lighting, edge
 //! supersampling), the bounce maps, the upsampling, the composite and the readback, the
-//! uploads. The shares are of the serial frame.
+//! uploads. The shares are of the serial frame. A second table times the first bounce
+//! rasterized (bounce maps) and traced in the CPU BVH, in serial frames of the same run.
 //! Also: the direct light alone with every pixel supersampled against edge-adaptive
 //! supersampling (method `direct`), and CPU BVH rebuild against a refit of the same tree
 //! after moving one object.
 mod common;
 
 use gi_core::frame::{FrameDesc, Renderer};
+use gi_core::render::FirstBounce;
 use gi_core::render::Silent;
 use gi_core::scene::desc::LightDesc;
 use gi_core::scene::{bench::dense_cornell, builtin, SceneUpdate};
@@ -140,6 +145,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args = common::Args::get();
     let runs = args.runs(3)?;
     let quick = args.quick();
+    let ispm_only = std::env::args().any(|a| a == "--ispm-only");
     common::print_adapter()?;
     let only = args.value("--scene");
     let scenes: Vec<(&str, Scene)> = ["cornell", "cornell-glass", "dense-cornell"]
@@ -154,10 +160,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             scene.map(|s| (n, s))
         })
         .collect::<Result<_, _>>()?;
-    let sizes: &[(u32, u32)] = if quick {
-        &[(640, 480)]
-    } else {
-        &[(640, 480), (1280, 720)]
+    let size = args
+        .value("--size")
+        .map(|v| -> Result<(u32, u32), Box<dyn std::error::Error>> {
+            let (w, h) = v.split_once('x').ok_or("--size WxH")?;
+            Ok((w.parse()?, h.parse()?))
+        })
+        .transpose()?;
+    let sizes: Vec<(u32, u32)> = match size {
+        Some(s) => vec![s],
+        None if quick => vec![(640, 480)],
+        None => vec![(640, 480), (1280, 720)],
     };
     let budgets: &[u64] = if quick {
         &[20_000]
@@ -173,7 +186,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     for (name, scene) in &scenes {
-        for &(w, h) in sizes {
+        for &(w, h) in &sizes {
             for &photons in budgets {
                 let settings = Settings {
                     method: Method::Ispm,
@@ -196,7 +209,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 // rendered serially in between split it into stages.
                 let (frame, serial, frames) = moving_light_serial(scene, &settings, runs)?;
                 let m = |names: &[&str]| median(frames.iter().map(|o| stage(o, names)).collect());
-                let trace = m(&["cpu trace", "boundary compensation"]);
+                let trace = m(&["bounce trace", "cpu trace", "boundary compensation"]);
                 let specular = m(&["specular paths"]);
                 let splat = m(&["splat (wall)"]);
                 let direct = m(&["direct light (wall)"]);
@@ -231,6 +244,55 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
     }
 
+    // The first bounce rasterized and traced, in serial frames of the same run (the cost
+    // depends on the photons and the scene, not on the image size: the first size only).
+    println!(
+        "\n| scene | size | photons | raster: bounce maps (ms) | raster: serial frame (ms) | \
+         traced: first hits (ms) | traced: serial frame (ms) | first bounce speed-up |"
+    );
+    println!("|---|---|---|---|---|---|---|---|");
+    let (w, h) = sizes[0];
+    for (name, scene) in &scenes {
+        for &photons in budgets {
+            let mut row = Vec::new();
+            for first_bounce in [FirstBounce::Raster, FirstBounce::Traced] {
+                let settings = Settings {
+                    method: Method::Ispm,
+                    width: Some(w),
+                    height: Some(h),
+                    spp: 16,
+                    photons,
+                    first_bounce,
+                    ..Default::default()
+                };
+                let (_, serial, frames) = moving_light_serial(scene, &settings, runs)?;
+                let bounce = median(
+                    frames
+                        .iter()
+                        .map(|o| {
+                            stage(
+                                o,
+                                &["bounce maps (wall)", "bounce readback", "bounce trace"],
+                            )
+                        })
+                        .collect(),
+                );
+                row.push((bounce, serial));
+            }
+            println!(
+                "| {name} | {w}×{h} | {photons} | {:.0} | {:.0} | {:.1} | {:.0} | {:.1}× |",
+                row[0].0 * 1e3,
+                row[0].1 * 1e3,
+                row[1].0 * 1e3,
+                row[1].1 * 1e3,
+                row[0].0 / row[1].0,
+            );
+        }
+    }
+    if ispm_only {
+        return Ok(());
+    }
+
     // The direct light alone (method `direct`, the light moving every frame): every pixel
     // supersampled against edge-adaptive supersampling, in the same run.
     println!(
@@ -239,7 +301,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
     println!("|---|---|---|---|---|---|---|");
     for (name, scene) in &scenes {
-        for &(w, h) in sizes {
+        for &(w, h) in &sizes {
             let (full_time, full) = moving_light(scene, &direct_settings(w, h, false), runs)?;
             let adaptive_settings = direct_settings(w, h, true);
             let (adaptive_time, adaptive) = moving_light(scene, &adaptive_settings, runs)?;

@@ -110,6 +110,9 @@ pub fn settings_from(
                 s.volume_shape = text(v, "volume_shape")?.parse().map_err(|e| to_py(py, e))?
             }
             "estimator" => s.estimator = text(v, "estimator")?.parse().map_err(|e| to_py(py, e))?,
+            "first_bounce" => {
+                s.first_bounce = text(v, "first_bounce")?.parse().map_err(|e| to_py(py, e))?
+            }
             "adapter" => {
                 s.adapter = if v.is_none() {
                     None
@@ -186,6 +189,8 @@ fn output_dict<'py>(
     stats.set_item("estimator", s.estimator.clone())?;
     stats.set_item("estimator_reason", s.estimator_reason.clone())?;
     stats.set_item("estimator_memory", s.estimator_memory.clone())?;
+    stats.set_item("first_bounce", s.first_bounce.clone())?;
+    stats.set_item("first_bounce_reason", s.first_bounce_reason.clone())?;
     stats.set_item("list_entries", s.list_entries)?;
     stats.set_item("trivial_accepts", s.trivial_accepts)?;
     stats.set_item("vpls", s.vpls)?;

@@ -4,7 +4,9 @@
 //! 2. shadow maps, direct light and the eye G-buffer, submitted without waiting;
 //! 3. the bounce-map readback, waiting for the bounce submission only (section 4.3), then
 //!    the CPU photon trace of the later bounces and the boundary compensation while the GPU
-//!    renders the direct light;
+//!    renders the direct light. With `FirstBounce::Traced` (CPU devices) step 1 is skipped
+//!    and the same photons' first hits are cast here, in the CPU BVH
+//!    ([`crate::photon::bounce`]);
 //! 4. temporal reuse (Jozwowski 2002): the photons of the last frames, invalidated where
 //!    lights or objects moved;
 //! 5. mirrors and glass seen by the camera traced on the CPU (section 4);
@@ -18,6 +20,7 @@ use crate::error::{Error, Result};
 use crate::estimate::{Binned, Estimator, IndirectEstimate, Mode, Volumes};
 use crate::gpu::GpuContext;
 use crate::image::Image;
+use crate::photon::bounce::{trace_bounce_maps, FirstBounce};
 use crate::photon::focus::Focus;
 use crate::photon::lbvh::Aabb;
 use crate::photon::ring::PhotonRing;
@@ -40,6 +43,9 @@ use std::time::Instant;
 
 /// The ISPM resources beyond the direct light's: bounce maps and the estimator.
 pub(super) struct IspmState {
+    /// Where the first hits are found, and why (`FirstBounce::resolve`).
+    first_bounce: (FirstBounce, String),
+    /// The rasterized bounce maps' resources (`FirstBounce::Raster` only).
     bounce: Option<BounceTargets>,
     estimate: IndirectEstimate,
     /// Why the estimator was chosen (`Estimator::resolve`).
@@ -134,6 +140,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         };
         targets.bind_composite(&ctx, Some(estimate.output().1));
         *ispm = Some(IspmState {
+            first_bounce: settings.first_bounce.resolve(&ctx.info),
             bounce: None,
             estimate,
             estimate_reason,
@@ -164,7 +171,8 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     }
     // A still scene with frame-coherent random numbers has this frame's photons already.
     let reuse = ring.frames() == 1 && !changes.lighting() && traced_seed == Some(settings.seed);
-    if !reuse {
+    let raster_bounce = state.first_bounce.0 == FirstBounce::Raster;
+    if !reuse && raster_bounce {
         if !state.bounce.as_ref().is_some_and(|b| b.fits(&layers)) {
             state.bounce = BounceTargets::new(&ctx, &layers, &gs.materials)?;
         }
@@ -218,10 +226,20 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     // 3. The bounce-map readback, then the CPU trace while the GPU lights the frame.
     let t = Instant::now();
     let bm = match (reuse, &state.bounce) {
-        (false, Some(b)) => b.finish(&ctx, &layers, Some(bounce_submission))?,
-        _ => Default::default(),
+        (true, _) => Default::default(),
+        (false, Some(b)) if raster_bounce => b.finish(&ctx, &layers, Some(bounce_submission))?,
+        (false, _) if raster_bounce => Default::default(),
+        (false, _) => {
+            let control = Checked::new(progress, "bounce maps");
+            trace_bounce_maps(scene, bvh, &layers, settings.seed, &control)?
+        }
     };
-    stage(&mut stats, "bounce readback", t);
+    let bounce_stage = if raster_bounce {
+        "bounce readback"
+    } else {
+        "bounce trace"
+    };
+    stage(&mut stats, bounce_stage, t);
     stats.photons_emitted = bm.covered;
     stats.photons_first_bounce = bm.rays.len() as u64;
     if !progress.update("bounce maps", 1.0) {
@@ -424,6 +442,8 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     state.estimate.set_sample_centre(targets.sample_centre());
     stats.estimator = state.estimate.kind().name().into();
     stats.estimator_reason = state.estimate_reason.clone();
+    stats.first_bounce = state.first_bounce.0.name().into();
+    stats.first_bounce_reason = state.first_bounce.1.clone();
     crate::cancel::check(progress)?;
     match &mut state.estimate {
         IndirectEstimate::Volumes(v) => {

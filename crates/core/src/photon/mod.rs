@@ -6,6 +6,7 @@
 //! powers of all photons stored for one bounce index add up to the power that reaches that
 //! bounce (in expectation).
 
+pub mod bounce;
 pub mod boundary;
 pub mod density;
 pub mod differential;

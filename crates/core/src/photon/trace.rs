@@ -519,39 +519,63 @@ fn follow(
             return;
         }
 
-        // Scatter: sample the BSDF; reflections must stay on the arrival side, refractions cross.
-        let Some(bs) = it.material.sample(it.frame.to_local(wo), rng) else {
+        let Some(sc) = scatter(&it, wo, power, rng) else {
             out.absorbed += 1;
             return;
         };
-        let wi = it.frame.to_world(bs.wi);
-        let same_side = wi.dot(it.ng) * wo.dot(it.ng) > 0.0;
-        if same_side == matches!(bs.lobe, Lobe::GlassRefract) {
-            out.absorbed += 1;
-            return;
-        }
-
-        // Possibly terminate the photon path with Russian roulette.
-        let scattered = power * bs.weight;
-        let q = (scattered.max_element() / power.max_element()).min(1.0);
-        if q.is_nan() || q <= 0.0 || rng.next_f32() >= q {
-            out.absorbed += 1;
-            return;
-        }
-        power = scattered / q;
+        power = sc.power;
         if s.differentials.is_some() {
-            scatter_differentials(scene, &it, &hit, d, wi, bs.lobe, &mut diff);
-            diff.survive(q);
-            kind = match (kind, bs.lobe.is_delta()) {
+            scatter_differentials(scene, &it, &hit, d, sc.wi, sc.lobe, &mut diff);
+            diff.survive(sc.q);
+            kind = match (kind, sc.lobe.is_delta()) {
                 (PathKind::Direct | PathKind::Caustic, true) => PathKind::Caustic,
                 _ => PathKind::Diffuse,
             };
         }
-        density *= path_density_factor(&it.material, bs.lobe);
+        density *= path_density_factor(&it.material, sc.lobe);
         bounce += 1;
-        o = it.spawn(wi);
-        d = wi;
+        o = it.spawn(sc.wi);
+        d = sc.wi;
     }
+}
+
+/// A photon's scattering that survived Russian roulette.
+pub(crate) struct Scattered {
+    /// Unit direction of the scattered photon.
+    pub wi: glam::Vec3,
+    /// Its power after the roulette (Φ·w/q).
+    pub power: glam::Vec3,
+    /// The survival probability.
+    pub q: f32,
+    pub lobe: Lobe,
+}
+
+/// Scatters a photon of `power` arriving at `it` from direction `wo` (pointing away from the
+/// surface): samples the BSDF (reflections must stay on the arrival side, refractions
+/// cross), then Russian roulette with q = min(1, max(Φ·w)/max(Φ)). `None`: absorbed.
+pub(crate) fn scatter(
+    it: &Interaction,
+    wo: glam::Vec3,
+    power: glam::Vec3,
+    rng: &mut Rng,
+) -> Option<Scattered> {
+    let bs = it.material.sample(it.frame.to_local(wo), rng)?;
+    let wi = it.frame.to_world(bs.wi);
+    let same_side = wi.dot(it.ng) * wo.dot(it.ng) > 0.0;
+    if same_side == matches!(bs.lobe, Lobe::GlassRefract) {
+        return None;
+    }
+    let scattered = power * bs.weight;
+    let q = (scattered.max_element() / power.max_element()).min(1.0);
+    if q.is_nan() || q <= 0.0 || rng.next_f32() >= q {
+        return None;
+    }
+    Some(Scattered {
+        wi,
+        power: scattered / q,
+        q,
+        lobe: bs.lobe,
+    })
 }
 
 /// Updates differentials for a scattering from `d` to `wi` through `lobe` (Igehy 1999 for

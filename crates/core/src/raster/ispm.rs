@@ -599,6 +599,13 @@ const BOUNCE_MAPS: LayerKind = LayerKind {
     ],
 };
 
+/// A setting error when bounce maps of `layers` would outgrow their memory bound. Traced
+/// maps ([`crate::photon::bounce`]) keep the same bound, so that `photons` means the same
+/// on every device.
+pub(crate) fn check_bounce_size(layers: &[BounceLayer]) -> Result<()> {
+    super::layers::check_size(layers, &BOUNCE_MAPS)
+}
+
 impl BounceTargets {
     /// Resources for `layers` (`None` when there are none: no light emits).
     pub fn new(

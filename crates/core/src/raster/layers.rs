@@ -26,6 +26,25 @@ pub struct LayerKind {
     pub targets: &'static [&'static str],
 }
 
+/// A setting error when the targets of `layers` would outgrow [`MAX_BYTES`].
+pub(crate) fn check_size(layers: &[BounceLayer], kind: &LayerKind) -> Result<()> {
+    let max_res = layers.iter().map(|l| l.res).max().unwrap_or(1) as u64;
+    let bytes = max_res * max_res * layers.len() as u64 * 16 * kind.targets.len() as u64;
+    if bytes > MAX_BYTES {
+        return Err(Error::setting(
+            kind.setting,
+            format!(
+                "the {}s would take {} MiB of memory (at most {} MiB); lower `{}`",
+                kind.name,
+                bytes >> 20,
+                MAX_BYTES >> 20,
+                kind.setting
+            ),
+        ));
+    }
+    Ok(())
+}
+
 pub struct LayerTargets {
     pub max_res: u32,
     pub n_layers: u32,
@@ -54,19 +73,7 @@ impl LayerTargets {
             ));
         }
         let n_layers = layers.len() as u32;
-        let bytes =
-            max_res as u64 * max_res as u64 * n_layers as u64 * 16 * kind.targets.len() as u64;
-        if bytes > MAX_BYTES {
-            return Err(Error::setting(
-                kind.setting,
-                format!(
-                    "the {name}s would take {} MiB of GPU memory (at most {} MiB); lower `{}`",
-                    bytes >> 20,
-                    MAX_BYTES >> 20,
-                    kind.setting
-                ),
-            ));
-        }
+        check_size(layers, kind)?;
         if n_layers > limits.max_texture_array_layers {
             return Err(Error::Gpu(format!(
                 "{n_layers} {name} layers exceed the GPU's {}",

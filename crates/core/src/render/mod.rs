@@ -9,6 +9,7 @@ pub(crate) mod reference;
 use crate::error::{Error, Result};
 pub use crate::estimate::Estimator;
 use crate::image::Image;
+pub use crate::photon::bounce::FirstBounce;
 pub use crate::photon::Kernel;
 pub use crate::raster::volume_shape::VolumeShape;
 use crate::scene::Scene;
@@ -190,6 +191,10 @@ pub struct Settings {
     /// tiled compute splatting, or per adapter (`Auto`). Changes the cost, not the image
     /// (up to float summation order).
     pub estimator: Estimator,
+    /// Where method `ispm` finds the photons' first hits (`photon::bounce::FirstBounce`):
+    /// rasterized bounce maps, the same photons cast in the CPU BVH, or per adapter
+    /// (`Auto`). The photons have the same distribution either way.
+    pub first_bounce: FirstBounce,
     /// Temporal photon reuse (method `ispm`, Jozwowski 2002): a frame splats the photons
     /// of the last `temporal_frames` frames of a `Renderer`, each frame tracing `photons`
     /// new ones; 1 = no reuse (and frame-coherent random numbers).
@@ -274,6 +279,7 @@ impl Default for Settings {
             edge_supersampling: true,
             volume_shape: VolumeShape::Auto,
             estimator: Estimator::Auto,
+            first_bounce: FirstBounce::Auto,
             temporal_frames: 1,
             progressive: false,
             progressive_alpha: 0.7,
@@ -495,6 +501,9 @@ pub struct RenderStats {
     /// Method `ispm`: the indirect estimator that ran, and why it was chosen.
     pub estimator: String,
     pub estimator_reason: String,
+    /// Method `ispm`: where the first hits were found ("raster", "traced"), and why.
+    pub first_bounce: String,
+    pub first_bounce_reason: String,
     /// Method `ispm`: GPU memory of the estimator beyond its targets (bytes by part).
     pub estimator_memory: Vec<(String, u64)>,
     /// Method `ispm`, estimators `tiled` and `cluster`: photon-list entries written, and of
