@@ -52,9 +52,12 @@ def test_steady_state_creates_no_gpu_objects(cornell: gi.Scene) -> None:
         assert after[kind] == before[kind], kind
     labels = {label for label, _ in after["uploads"][len(before["uploads"]) :]}
     # A camera move re-sorts the raster volumes' photons (small ones as quads); the compute
-    # estimators keep theirs and update their parameters.
+    # estimators keep theirs and update their parameters; the CPU estimate (CPU devices)
+    # uploads the new estimate.
     if estimator == "volumes":
         assert labels == {"eye views", "photons", "volume params", "upsample params"}
+    elif estimator == "cpu":
+        assert labels == {"eye views", "cpu estimate", "upsample params"}
     else:
         assert labels == {"eye views", "tiled params", "upsample params"}
 

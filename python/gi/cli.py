@@ -156,9 +156,9 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument(
         "--estimator",
         default="auto",
-        choices=["auto", "volumes", "tiled", "cluster", "directional"],
+        choices=["auto", "volumes", "tiled", "cluster", "directional", "cpu"],
         help="how ISPM splats photons: raster volumes; tiled, cluster-hierarchy or its "
-        "directional approximation in compute; or auto (per adapter)",
+        "directional approximation in compute; on the CPU; or auto (per adapter)",
     )
     r.add_argument(
         "--first-bounce",

@@ -469,7 +469,8 @@ def render(
     screen tiles), "cluster" (a hierarchy over the view samples with whole nodes accepted at
     once; Moreau et al. 2016), all three the same image up to float rounding; "directional"
     (the cluster hierarchy's approximation: per-cluster irradiance from 8 directions,
-    faster, blockier) or "auto" (per adapter; ``stats.estimator_reason`` says why).
+    faster, blockier), "cpu" (the tiled estimate computed on the CPU, the same image; fastest
+    on CPU devices) or "auto" (per adapter; ``stats.estimator_reason`` says why).
     ``first_bounce`` picks where ``ispm`` finds its photons' first hits: "raster" (the bounce
     maps), "traced" (the same photons cast from the lights in the CPU BVH, cheaper on a CPU
     rasterizer) or "auto" ("traced" on CPU devices such as lavapipe, else "raster"); the

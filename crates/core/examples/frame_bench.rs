@@ -5,7 +5,7 @@
 //! same run, as a markdown table.
 //!
 //! `cargo run -p gi-core --profile test --example frame_bench [-- --runs N --quick --scene NAME
-//! --size WxH --ispm-only]`
+//! --size WxH --ispm-only --estimator NAME]`
 //!
 //! Scenes `cornell`, `cornell-glass` and the ~246k-triangle `dense-cornell`, at 640×480 and
 //! 1280×720, 20k / 50k / 200k photons, 16 direct samples per pixel, subsample 2 (defaults
@@ -146,6 +146,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let runs = args.runs(3)?;
     let quick = args.quick();
     let ispm_only = std::env::args().any(|a| a == "--ispm-only");
+    let estimator: gi_core::estimate::Estimator =
+        args.value("--estimator").unwrap_or("auto").parse()?;
     common::print_adapter()?;
     let only = args.value("--scene");
     let scenes: Vec<(&str, Scene)> = ["cornell", "cornell-glass", "dense-cornell"]
@@ -194,6 +196,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     height: Some(h),
                     spp: 16,
                     photons,
+                    estimator,
                     ..Default::default()
                 };
                 // One-shot: a new renderer per frame, every image read back.
@@ -263,6 +266,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     spp: 16,
                     photons,
                     first_bounce,
+                    estimator,
                     ..Default::default()
                 };
                 let (_, serial, frames) = moving_light_serial(scene, &settings, runs)?;

@@ -86,13 +86,14 @@ fn lit_pixels(img: &gi_core::Image) -> usize {
     img.pixels.iter().filter(|p| p.max_element() > 0.0).count()
 }
 
-/// `tiled` and `cluster` equal `volumes` on: the Cornell box at subsample 1 and 2 (the half-texel shift
+/// `tiled`, `cluster` and `cpu` (the same estimate computed on the CPU) equal `volumes` on: the Cornell box at subsample 1 and 2 (the half-texel shift
 /// of the low-resolution view); the furnace, whose camera sits inside the sphere among the
 /// photons (volumes reaching behind the eye plane: full-screen tile ranges); a spot light on
 /// glossy and metallic surfaces; the Cornell box with glass and a mirror (caustic photons
 /// with small kernels); and 4× larger kernels at 128² (long lists).
 /// Tolerance: 1e-4 of the image's largest pixel. Both sum the same terms (the same WGSL
-/// function) in another order: raster blending in draw order, tiled in list order (atomics);
+/// function, ported to Rust for `cpu`) in another order: raster blending in draw order,
+/// tiled in list order (atomics), cpu in photon order;
 /// an f32 sum of a few hundred terms of like sign is off by ~1e-5 relative. Equal lit-pixel
 /// counts check that no photon is dropped or added at a tile edge. The tolerance is checked
 /// to be tight: 3% smaller kernels differ by more than 100× it.
@@ -122,7 +123,7 @@ fn binned_estimators_give_the_same_image_as_volumes() {
             .iter()
             .map(|p| p.max_element())
             .fold(0.0, f32::max);
-        for estimator in [Estimator::Tiled, Estimator::Cluster] {
+        for estimator in [Estimator::Tiled, Estimator::Cluster, Estimator::Cpu] {
             let out = run(&sc, &s, estimator);
             let e = estimator.name();
             assert_eq!(out.stats.estimator, e);
@@ -227,7 +228,12 @@ fn lists_regrow_when_the_estimate_is_short() {
 fn binned_estimators_are_reproducible() {
     let sc = scene("cornell");
     let s = settings(96, 2, 2.0);
-    for estimator in [Estimator::Tiled, Estimator::Cluster, Estimator::Directional] {
+    for estimator in [
+        Estimator::Tiled,
+        Estimator::Cluster,
+        Estimator::Directional,
+        Estimator::Cpu,
+    ] {
         let a = run(&sc, &s, estimator);
         let b = run(&sc, &s, estimator);
         assert!(a.stats.list_entries > 0);
@@ -247,7 +253,7 @@ fn estimator_setting_parses_and_auto_reports_its_choice() {
     let sc = scene("cornell");
     let out = run(&sc, &settings(32, 2, 1.0), Estimator::Auto);
     assert!(
-        ["volumes", "tiled", "cluster"].contains(&out.stats.estimator.as_str()),
+        ["volumes", "tiled", "cluster", "cpu"].contains(&out.stats.estimator.as_str()),
         "{}",
         out.stats.estimator
     );

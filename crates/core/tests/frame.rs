@@ -118,8 +118,11 @@ fn updated_renderer_equals_one_shot() {
 #[test]
 fn steady_state_creates_nothing_and_uploads_what_changed() {
     let scene = builtin::load("cornell").expect("scene");
+    // Auto on lavapipe: the first bounce traced and the estimate on the CPU; then the
+    // rasterized bounce maps and the tiled estimator.
     let raster = Settings {
         first_bounce: gi_core::render::FirstBounce::Raster,
+        estimator: gi_core::estimate::Estimator::Tiled,
         ..settings(Method::Ispm)
     };
     for s in [settings(Method::Direct), settings(Method::Ispm), raster] {
@@ -168,11 +171,12 @@ fn steady_state_creates_nothing_and_uploads_what_changed() {
         let c2 = counters();
         assert_eq!(c2.created_since(&c1), 0, "{}: camera", method.name());
         // The raster volumes re-sort their photons for the new view (small ones as quads);
-        // the tiled estimator keeps them.
-        let tiled = first.stats.estimator == "tiled";
-        let expected: &[&str] = match method {
-            Method::Direct => &["eye views"],
-            _ if tiled => &["eye views", "tiled params", "upsample params"],
+        // the tiled estimator keeps them; the CPU estimate is uploaded whole.
+        let estimator = first.stats.estimator.as_str();
+        let expected: &[&str] = match (method, estimator) {
+            (Method::Direct, _) => &["eye views"],
+            (_, "tiled") => &["eye views", "tiled params", "upsample params"],
+            (_, "cpu") => &["cpu estimate", "eye views", "upsample params"],
             _ => &["eye views", "photons", "upsample params", "volume params"],
         };
         assert_eq!(
@@ -194,9 +198,10 @@ fn steady_state_creates_nothing_and_uploads_what_changed() {
         r.render(&frame, &Silent).expect("light frame");
         let c3 = counters();
         assert_eq!(c3.created_since(&c2), 0, "{}: light", method.name());
-        let expected: &[&str] = match method {
-            Method::Direct => &["lights", "shadow matrices", "shadow views"],
-            _ if tiled => &[
+        let expected: &[&str] = match (method, estimator) {
+            (Method::Direct, _) => &["lights", "shadow matrices", "shadow views"],
+            (_, "cpu") => &["cpu estimate", "lights", "shadow matrices", "shadow views"],
+            (_, "tiled") => &[
                 "lights",
                 "shadow matrices",
                 "shadow views",

@@ -636,6 +636,51 @@ impl Targets {
         Ok(encoder)
     }
 
+    /// The G-buffer at the pixel centres alone, and the direct light's accumulation cleared
+    /// (the composite then adds none): for frames whose direct light is found elsewhere
+    /// (progressive `ispm` traces it on the CPU, `frame::progressive::direct_image`).
+    /// Nothing when the direct light is current.
+    pub fn record_gbuffer(
+        &mut self,
+        ctx: &GpuContext,
+        gs: &GpuScene,
+        encoder: &mut wgpu::CommandEncoder,
+        timer: &mut Timer,
+    ) {
+        if self.direct_current {
+            return;
+        }
+        let ts = timer.pass("gbuffer");
+        Passes::get(ctx).gbuffer.record(
+            encoder,
+            &self.gbuf,
+            &self.gbuffer_group,
+            0,
+            &gs.geometry,
+            (&gs.textures.group, gs.variant),
+            ts,
+        );
+        encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("direct light cleared"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &self.accum_view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        // The edge pixels' sub-pixel samples were not rendered: a lit frame renders them.
+        self.samples_current = false;
+        self.direct_current = true;
+    }
+
     /// Records `record(encoder, sample, view offset)` for every sub-pixel sample, writing
     /// their eye views in batches (submitting the encoder between batches, whose views are
     /// then in use); reports progress.

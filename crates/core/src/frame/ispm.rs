@@ -17,7 +17,7 @@ use super::direct::{assemble, normalized, readback_names};
 use super::gpu::rgb_image;
 use super::{GpuState, Images};
 use crate::error::{Error, Result};
-use crate::estimate::{Binned, Estimator, IndirectEstimate, Mode, Volumes};
+use crate::estimate::{Binned, CpuEstimate, Estimator, IndirectEstimate, Mode, Volumes};
 use crate::gpu::GpuContext;
 use crate::image::Image;
 use crate::photon::bounce::{trace_bounce_maps, FirstBounce};
@@ -134,6 +134,9 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
             Estimator::Tiled => binned(Mode::Tiled),
             Estimator::Cluster => binned(Mode::Cluster),
             Estimator::Directional => binned(Mode::Directional),
+            Estimator::Cpu => {
+                IndirectEstimate::Cpu(Box::new(CpuEstimate::new(&ctx, gbuf, w, h, k)))
+            }
             Estimator::Volumes | Estimator::Auto => {
                 IndirectEstimate::Volumes(Box::new(Volumes::new(&ctx, gbuf, w, h, k)))
             }
@@ -215,8 +218,14 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         .create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("direct frame"),
         });
-    gs.record_shadows(Passes::get(&ctx), &mut encoder, timer, scene);
-    let encoder = targets.record_direct(&ctx, &*gs, encoder, timer, progress)?;
+    // Progressive mode traces the direct light on the CPU (step 4): the eye G-buffer alone.
+    let encoder = if settings.progressive {
+        targets.record_gbuffer(&ctx, &*gs, &mut encoder, timer);
+        encoder
+    } else {
+        gs.record_shadows(Passes::get(&ctx), &mut encoder, timer, scene);
+        targets.record_direct(&ctx, &*gs, encoder, timer, progress)?
+    };
     ctx.queue.submit([encoder.finish()]);
     if serial {
         ctx.wait()?;
@@ -398,8 +407,8 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
             .stages
             .push(("boundary compensation".into(), compensation_seconds));
     }
-    // Progressive mode: the direct light ray traced on the CPU (while the GPU still renders
-    // the rasterized one), which replaces it below; shadow maps are a bias no pass removes.
+    // Progressive mode: the direct light ray traced on the CPU (the GPU rendered the eye
+    // G-buffer alone), added to the composite below; shadow maps are a bias no pass removes.
     let traced_direct = if settings.progressive {
         let t = Instant::now();
         let d = super::progressive::direct_image(scene, bvh, settings, progress)?;
@@ -468,21 +477,36 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
             }
             tl.write_params(&ctx, scene, radius);
         }
+        IndirectEstimate::Cpu(c) => {
+            if photons_changed {
+                c.set_photons(&photons.splat);
+            }
+            c.write_params(&ctx, scene, radius);
+        }
     }
     stats.estimator_memory = state.estimate.memory();
     // A still frame (same photons, nothing moved) keeps last frame's estimate.
     let splat = photons_changed || changes.any() || !splat_current;
     let mut names = readback_names(images, true);
     let mut need = Vec::new();
-    if traced_direct.is_some() {
-        need.push("accum");
-    }
     if query_side {
         need.extend(["position", "normals", "indirect"]);
     }
     for n in need {
         if !names.contains(&n) {
             names.push(n);
+        }
+    }
+    if let (true, IndirectEstimate::Cpu(c)) = (splat, &mut state.estimate) {
+        // Waits for the eye G-buffer (and the direct light submitted before it); in serial
+        // frames, whose direct light was waited on, this is part of "splat (wall)".
+        let waited = c.compute(&ctx, &targets.gbuf)?;
+        if !serial {
+            stats.stages.push(("gbuffer readback".into(), waited));
+            stats
+                .stages
+                .push(("cpu estimate".into(), t.elapsed().as_secs_f64() - waited));
+            t = Instant::now();
         }
     }
     let data = loop {
@@ -550,16 +574,10 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
             .push(("boundary compensation".into(), t.elapsed().as_secs_f64()));
     }
     let raster_direct = data.get("accum").map(|a| normalized(targets, a));
-    if let (Some(traced), Some(raster)) = (&traced_direct, &raster_direct) {
-        // The composite's rasterized direct light swapped for the ray-traced one.
-        for ((o, t), r) in out
-            .radiance
-            .pixels
-            .iter_mut()
-            .zip(&traced.pixels)
-            .zip(&raster.pixels)
-        {
-            *o += *t - *r;
+    if let Some(traced) = &traced_direct {
+        // The composite holds no direct light (`record_gbuffer`): the ray-traced one added.
+        for (o, t) in out.radiance.pixels.iter_mut().zip(&traced.pixels) {
+            *o += *t;
         }
     }
     if images.extras {

@@ -1,0 +1,395 @@
+//! The photon-volume estimate computed on the CPU (estimator `cpu`), for CPU devices: there
+//! the "GPU" runs on the same cores, and its loops over photon lists run 10–35× slower than
+//! native code (lavapipe reads storage buffers and workgroup memory slowly in loops).
+//!
+//! The same estimate as the GPU estimators: the term of `common/photon_volume.wgsl` (the
+//! ellipsoid test, the 2D Epanechnikov kernel, the normal agreement, the BSDF of the view
+//! sample) summed over the photons whose ellipsoid holds each view sample, one sample per
+//! `subsample` × `subsample` block of the eye G-buffer (read back once per estimate). The
+//! photons are binned like `tiled.wgsl`'s: each into the 8×8-texel tiles under the screen
+//! rectangle of its bounding sphere whose samples' world box it meets; each tile's samples
+//! then sum the photons of its list in parallel. Every step is conservative, so a sample
+//! gets exactly the photons whose ellipsoid holds it: the image equals the tiled estimate's
+//! up to float summation order (test `cpu_estimate_equals_tiled` in tests/estimators.rs).
+//! The upsampling and the composite stay on the GPU.
+
+use super::target::IndirectTarget;
+use crate::bsdf::Material;
+use crate::error::{Error, Result};
+use crate::gpu::{self, GpuContext};
+use crate::photon::Photon;
+use crate::raster::gbuffer::GBuffer;
+use crate::raster::ispm::Z_RATIO;
+use crate::raster::oct_decode;
+use crate::raster::volume_shape::VolumeRadius;
+use crate::sampling::Frame;
+use crate::scene::Scene;
+use glam::{Mat4, Vec2, Vec3, Vec4};
+use rayon::prelude::*;
+
+/// Tile side (low-resolution texels), as in `tiled.wgsl`.
+const TILE: u32 = 8;
+/// Relative slack of the sphere-box test (a photon wrongly kept costs one rejected test).
+const SLACK: f32 = 1e-4;
+/// The G-buffer textures read back: position, normals (f32), diffuse, specular (f16).
+const GBUFFER_TEXTURES: [(usize, u32); 4] = [(0, 16), (1, 16), (2, 8), (3, 8)];
+
+/// One view sample of the low-resolution target.
+#[derive(Clone, Copy)]
+struct ViewSample {
+    position: Vec3,
+    frame: Frame,
+    wo: Vec3,
+    material: Material,
+    /// ρ/π when the material is Lambertian (no specular lobe, no Fresnel coupling): the
+    /// BSDF is then that constant on the viewer's side, and the sum factors it out.
+    lambertian: Option<Vec3>,
+}
+
+/// The frame's parameters of the estimate.
+#[derive(Clone, Copy)]
+struct Params {
+    view_proj: Mat4,
+    eye: Vec3,
+    r_max: f32,
+}
+
+pub struct CpuEstimate {
+    pub target: IndirectTarget,
+    /// Mappable copies of the G-buffer textures and their bytes per row.
+    readback: Vec<(wgpu::Buffer, u32)>,
+    size: [u32; 2],
+    params: Option<Params>,
+    photons: Vec<Photon>,
+    /// Photon-list entries of the last estimate.
+    entries: u64,
+}
+
+impl CpuEstimate {
+    pub fn new(ctx: &GpuContext, gbuf: &GBuffer, width: u32, height: u32, k: u32) -> Self {
+        let readback = GBUFFER_TEXTURES
+            .iter()
+            .map(|&(_, texel)| {
+                let row = (width * texel).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+                let buffer = gpu::create_buffer(
+                    &ctx.device,
+                    &wgpu::BufferDescriptor {
+                        label: Some("cpu estimate gbuffer"),
+                        size: row as u64 * height as u64,
+                        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                        mapped_at_creation: false,
+                    },
+                );
+                (buffer, row)
+            })
+            .collect();
+        CpuEstimate {
+            target: IndirectTarget::new(ctx, gbuf, width, height, k),
+            readback,
+            size: [width, height],
+            params: None,
+            photons: Vec::new(),
+            entries: 0,
+        }
+    }
+
+    /// The photons of the next estimate (their `footprint_radius` is the volume radius).
+    pub fn set_photons(&mut self, photons: &[Photon]) {
+        self.photons.clear();
+        self.photons.extend_from_slice(photons);
+    }
+
+    /// The view, the eye and the radius bound of the next estimate; the upsampling's
+    /// parameters.
+    pub fn write_params(&mut self, ctx: &GpuContext, scene: &Scene, radius: VolumeRadius) {
+        self.target.write_params(ctx, scene);
+        self.params = Some(Params {
+            view_proj: self.target.view_proj(scene),
+            eye: scene.camera.position,
+            r_max: radius.r_max,
+        });
+    }
+
+    /// Photon-list entries of the last estimate.
+    pub fn entries(&self) -> u64 {
+        self.entries
+    }
+
+    /// Bytes held beyond the targets: the G-buffer copies and the photons.
+    pub fn memory(&self) -> Vec<(&'static str, u64)> {
+        vec![
+            (
+                "gbuffer copies",
+                self.readback.iter().map(|(b, _)| b.size()).sum(),
+            ),
+            (
+                "photons",
+                (self.photons.capacity() * std::mem::size_of::<Photon>()) as u64,
+            ),
+        ]
+    }
+
+    /// Reads the eye G-buffer back (waiting for the work submitted so far), computes the
+    /// estimate and writes it into the low-resolution target. Returns the seconds spent
+    /// waiting for the G-buffer (with the GPU work submitted before it).
+    pub fn compute(&mut self, ctx: &GpuContext, gbuf: &GBuffer) -> Result<f64> {
+        let params = self
+            .params
+            .ok_or_else(|| Error::Gpu("cpu estimate without parameters".into()))?;
+        let t = std::time::Instant::now();
+        let samples = self.read_samples(ctx, gbuf, params.eye)?;
+        let waited = t.elapsed().as_secs_f64();
+        let [lw, lh] = self.target.low_size;
+        let tiles = [lw.div_ceil(TILE), lh.div_ceil(TILE)];
+        let lists = bin(&self.photons, &samples, [lw, lh], tiles, params);
+        self.entries = lists.iter().map(|l| l.len() as u64).sum();
+        let rows: Vec<Vec<Vec4>> = (0..tiles[1])
+            .into_par_iter()
+            .map(|ty| {
+                let mut band = vec![Vec4::ZERO; (lw * TILE.min(lh - ty * TILE)) as usize];
+                for tx in 0..tiles[0] {
+                    let list = &lists[(ty * tiles[0] + tx) as usize];
+                    for y in ty * TILE..((ty + 1) * TILE).min(lh) {
+                        for x in tx * TILE..((tx + 1) * TILE).min(lw) {
+                            let Some(s) = &samples[(y * lw + x) as usize] else {
+                                continue;
+                            };
+                            let sum = list_sum(&self.photons, list, s, params.r_max);
+                            band[((y - ty * TILE) * lw + x) as usize] = sum.extend(0.0);
+                        }
+                    }
+                }
+                band
+            })
+            .collect();
+        let texels: Vec<Vec4> = rows.concat();
+        gpu::alloc::note_upload("cpu estimate", (texels.len() * 16) as u64);
+        ctx.queue.write_texture(
+            self.target.low.as_image_copy(),
+            bytemuck::cast_slice(&texels),
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(lw * 16),
+                rows_per_image: Some(lh),
+            },
+            self.target.low.size(),
+        );
+        Ok(waited)
+    }
+
+    /// The view samples of the low-resolution texels: the G-buffer pixel at the centre of
+    /// each block (`tiled.wgsl`'s `sample_pixel`), `None` where it saw no surface.
+    fn read_samples(
+        &self,
+        ctx: &GpuContext,
+        gbuf: &GBuffer,
+        eye: Vec3,
+    ) -> Result<Vec<Option<ViewSample>>> {
+        let [w, h] = self.size;
+        let mut encoder = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("cpu estimate gbuffer copies"),
+            });
+        for (&(texture, _), (buffer, row)) in GBUFFER_TEXTURES.iter().zip(&self.readback) {
+            encoder.copy_texture_to_buffer(
+                gbuf.textures[texture].as_image_copy(),
+                wgpu::TexelCopyBufferInfo {
+                    buffer,
+                    layout: wgpu::TexelCopyBufferLayout {
+                        offset: 0,
+                        bytes_per_row: Some(*row),
+                        rows_per_image: Some(h),
+                    },
+                },
+                gbuf.textures[texture].size(),
+            );
+        }
+        let index = ctx.queue.submit([encoder.finish()]);
+        let buffers: Vec<&wgpu::Buffer> = self.readback.iter().map(|(b, _)| b).collect();
+        let bytes = ctx.read_buffers(&buffers, Some(index))?;
+        let rows: Vec<u32> = self.readback.iter().map(|(_, r)| *r).collect();
+        let f32x4 = |t: usize, x: u32, y: u32| -> Vec4 {
+            let o = (y * rows[t] + x * 16) as usize;
+            Vec4::from_array(bytemuck::pod_read_unaligned(&bytes[t][o..o + 16]))
+        };
+        let f16x4 = |t: usize, x: u32, y: u32| -> Vec4 {
+            let o = (y * rows[t] + x * 8) as usize;
+            let h: [u16; 4] = bytemuck::pod_read_unaligned(&bytes[t][o..o + 8]);
+            Vec4::from_array(h.map(|v| half::f16::from_bits(v).to_f32()))
+        };
+        let k = self.target.subsample;
+        let [lw, lh] = self.target.low_size;
+        Ok((0..lw * lh)
+            .into_par_iter()
+            .map(|i| {
+                let (x, y) = (
+                    (i % lw * k + k / 2).min(w - 1),
+                    (i / lw * k + k / 2).min(h - 1),
+                );
+                let pos = f32x4(0, x, y);
+                if pos.w == 0.0 {
+                    return None;
+                }
+                let normals = f32x4(1, x, y);
+                let (diffuse, specular) = (f16x4(2, x, y), f16x4(3, x, y));
+                let position = pos.truncate();
+                let material = Material {
+                    diffuse: diffuse.truncate(),
+                    roughness: diffuse.w,
+                    specular: specular.truncate(),
+                    fresnel: specular.w > 0.5,
+                    transmission: Vec3::ZERO,
+                    ..Default::default()
+                };
+                let plain = material.specular == Vec3::ZERO && !material.fresnel;
+                Some(ViewSample {
+                    position,
+                    frame: Frame::new(oct_decode(Vec2::new(normals.x, normals.y))),
+                    wo: (eye - position).normalize(),
+                    lambertian: plain.then(|| material.diffuse / std::f32::consts::PI),
+                    material,
+                })
+            })
+            .collect())
+    }
+}
+
+/// Per tile, the photons whose bounding sphere may reach one of its samples: those under
+/// the tile in the screen rectangle of the sphere's box (one texel of slack), meeting the
+/// world box of the tile's samples.
+fn bin(
+    photons: &[Photon],
+    samples: &[Option<ViewSample>],
+    [lw, lh]: [u32; 2],
+    tiles: [u32; 2],
+    params: Params,
+) -> Vec<Vec<u32>> {
+    let n_tiles = (tiles[0] * tiles[1]) as usize;
+    let mut boxes = vec![(Vec3::INFINITY, Vec3::NEG_INFINITY); n_tiles];
+    for (i, s) in samples.iter().enumerate() {
+        if let Some(s) = s {
+            let (x, y) = (i as u32 % lw, i as u32 / lw);
+            let b = &mut boxes[((y / TILE) * tiles[0] + x / TILE) as usize];
+            *b = (b.0.min(s.position), b.1.max(s.position));
+        }
+    }
+    let mut lists = vec![Vec::new(); n_tiles];
+    for (i, p) in photons.iter().enumerate() {
+        let r = p.footprint_radius.min(params.r_max);
+        if r.is_nan() || r <= 0.0 {
+            continue;
+        }
+        let c = p.position();
+        let Some([x0, y0, x1, y1]) = screen_tiles(c, r, params.view_proj, [lw, lh], tiles) else {
+            continue;
+        };
+        let reach = r * (1.0 + SLACK) + SLACK * c.abs().max_element();
+        for ty in y0..=y1 {
+            for tx in x0..=x1 {
+                let t = (ty * tiles[0] + tx) as usize;
+                let (lo, hi) = boxes[t];
+                if c.clamp(lo, hi).distance_squared(c) <= reach * reach {
+                    lists[t].push(i as u32);
+                }
+            }
+        }
+    }
+    lists
+}
+
+/// The tiles (x0, y0, x1, y1, inclusive) under the screen rectangle of the box of the
+/// sphere (`c`, `r`), widened by a texel; the whole screen when the box reaches behind
+/// the eye, `None` when it lies wholly behind.
+fn screen_tiles(
+    c: Vec3,
+    r: f32,
+    view_proj: Mat4,
+    [lw, lh]: [u32; 2],
+    tiles: [u32; 2],
+) -> Option<[u32; 4]> {
+    let (mut lo, mut hi) = (Vec2::splat(1.0), Vec2::splat(-1.0));
+    let (mut w_min, mut w_max) = (f32::INFINITY, f32::NEG_INFINITY);
+    for i in 0..8 {
+        let s = Vec3::new(
+            if i & 1 == 0 { -r } else { r },
+            if i & 2 == 0 { -r } else { r },
+            if i & 4 == 0 { -r } else { r },
+        );
+        let q = view_proj * (c + s).extend(1.0);
+        w_min = w_min.min(q.w);
+        w_max = w_max.max(q.w);
+        let ndc = Vec2::new(q.x, q.y) / q.w.max(1e-6);
+        lo = lo.min(ndc);
+        hi = hi.max(ndc);
+    }
+    if w_max <= 0.0 {
+        return None;
+    }
+    if w_min <= 1e-6 {
+        (lo, hi) = (Vec2::splat(-1.0), Vec2::splat(1.0));
+    }
+    let (lo, hi) = (
+        lo.clamp(Vec2::NEG_ONE, Vec2::ONE),
+        hi.clamp(Vec2::NEG_ONE, Vec2::ONE),
+    );
+    let x0 = (lo.x * 0.5 + 0.5) * lw as f32 - 1.0;
+    let x1 = (hi.x * 0.5 + 0.5) * lw as f32 + 1.0;
+    let y0 = (0.5 - hi.y * 0.5) * lh as f32 - 1.0;
+    let y1 = (0.5 - lo.y * 0.5) * lh as f32 + 1.0;
+    let tile = |v: f32, n: u32| ((v / TILE as f32).floor().max(0.0) as u32).min(n - 1);
+    Some([
+        tile(x0, tiles[0]),
+        tile(y0, tiles[1]),
+        tile(x1, tiles[0]),
+        tile(y1, tiles[1]),
+    ])
+}
+
+/// The estimate at sample `s`: the sum of [`volume_term`] over the photons of `list`.
+fn list_sum(photons: &[Photon], list: &[u32], s: &ViewSample, r_max: f32) -> Vec3 {
+    let Some(rho) = s.lambertian else {
+        return list
+            .iter()
+            .map(|&i| {
+                let p = &photons[i as usize];
+                volume_kernel(p, s, r_max).map_or(Vec3::ZERO, |k| {
+                    let f = s
+                        .material
+                        .eval(s.frame.to_local(s.wo), s.frame.to_local(p.incident()));
+                    f * p.power() * k
+                })
+            })
+            .sum();
+    };
+    // Lambertian: f = ρ/π where the photon arrives on the viewer's side of the shading
+    // normal (`Material::eval`'s wo.z·wi.z > 0), else 0.
+    let side = s.frame.n.dot(s.wo);
+    let mut sum = Vec3::ZERO;
+    for &i in list {
+        let p = &photons[i as usize];
+        if let Some(k) = volume_kernel(p, s, r_max) {
+            if side * s.frame.n.dot(p.incident()) > 0.0 {
+                sum += p.power() * k;
+            }
+        }
+    }
+    rho * sum
+}
+
+/// `common/photon_volume.wgsl`'s `volume_kernel` and `volume_normal_agrees`: the kernel
+/// weight of photon `p` at sample `s`, `None` outside its ellipsoid or where the normals
+/// disagree.
+fn volume_kernel(p: &Photon, s: &ViewSample, r_max: f32) -> Option<f32> {
+    let n = p.normal();
+    let d = s.position - p.position();
+    let dz = d.dot(n);
+    let r = p.footprint_radius.min(r_max);
+    let d2 = (d.length_squared() - dz * dz).max(0.0);
+    let r2 = r * r;
+    let rz = r * Z_RATIO;
+    if d2 / r2 + dz * dz / (rz * rz) >= 1.0 || s.frame.n.dot(n) <= 0.5 {
+        return None;
+    }
+    Some(2.0 / (std::f32::consts::PI * r2) * (1.0 - d2 / r2))
+}
