@@ -33,9 +33,12 @@ import gi
 # equivalent of cost among 12 settings tried on cornell 128x128 (photons 3k-100k, smoothing
 # 0.15-0.6, alpha 0.5-0.95; docs/bench/progressive.md): with boundary compensation its bias
 # is small, so radii may shrink slowly and the variance falls nearly as 1/passes.
+# ispm: 80k photons at kernel scale 0.8 had the lowest FLIP after 10-16 s on cornell
+# 128x128 among 20k/0.5, 40k/0.7, 80k/0.6, 80k/0.8 and 160k/1.0 (session 9, estimator `cpu`):
+# with the estimate on the CPU a pass's fixed costs outweigh its photons' below ~80k.
 PROGRESSIVE = {
     "gather": dict(photons=30_000, spp=1, smoothing=0.6, progressive_alpha=0.9, photon_focus=0.5),
-    "ispm": dict(photons=20_000, spp=1, subsample=1, kernel_scale=0.5, adapter="cpu"),
+    "ispm": dict(photons=80_000, spp=1, subsample=1, kernel_scale=0.8, adapter="cpu"),
 }
 
 

@@ -147,15 +147,30 @@ impl CpuEstimate {
             .into_par_iter()
             .map(|ty| {
                 let mut band = vec![Vec4::ZERO; (lw * TILE.min(lh - ty * TILE)) as usize];
+                let mut lambertian = Box::new(TileSamples::default());
                 for tx in 0..tiles[0] {
                     let list = &lists[(ty * tiles[0] + tx) as usize];
+                    lambertian.clear();
                     for y in ty * TILE..((ty + 1) * TILE).min(lh) {
                         for x in tx * TILE..((tx + 1) * TILE).min(lw) {
                             let Some(s) = &samples[(y * lw + x) as usize] else {
                                 continue;
                             };
-                            let sum = list_sum(&self.photons, list, s, params.r_max);
-                            band[((y - ty * TILE) * lw + x) as usize] = sum.extend(0.0);
+                            let slot = ((y - ty * TILE) * TILE + x - tx * TILE) as usize;
+                            let out = &mut band[((y - ty * TILE) * lw + x) as usize];
+                            if !lambertian.set(slot, s) {
+                                *out = list_sum(&self.photons, list, s, params.r_max).extend(0.0);
+                            }
+                        }
+                    }
+                    if lambertian.any {
+                        lambertian.sum(&self.photons, list, params.r_max);
+                        for (slot, rho) in lambertian.rho.iter().enumerate() {
+                            let (x, y) = (tx * TILE + slot as u32 % TILE, slot as u32 / TILE);
+                            if let Some(rho) = rho {
+                                band[(y * lw + x) as usize] =
+                                    (*rho * lambertian.sum_of(slot)).extend(0.0);
+                            }
                         }
                     }
                 }
@@ -344,6 +359,97 @@ fn screen_tiles(
         tile(x1, tiles[0]),
         tile(y1, tiles[1]),
     ])
+}
+
+const SLOTS: usize = (TILE * TILE) as usize;
+
+/// A tile's Lambertian view samples as arrays: the sum runs photon by photon over all of
+/// them at once (the inner loop over samples vectorizes), and each sample still adds its
+/// photons in list order, so the sums equal [`list_sum`]'s bit for bit.
+struct TileSamples {
+    p: [[f32; SLOTS]; 3],
+    n: [[f32; SLOTS]; 3],
+    /// n·wo (the viewer's side), 0 for slots without a Lambertian sample.
+    side: [f32; SLOTS],
+    acc: [[f32; SLOTS]; 3],
+    rho: [Option<Vec3>; SLOTS],
+    any: bool,
+}
+
+impl Default for TileSamples {
+    fn default() -> Self {
+        TileSamples {
+            p: [[0.0; SLOTS]; 3],
+            n: [[0.0; SLOTS]; 3],
+            side: [0.0; SLOTS],
+            acc: [[0.0; SLOTS]; 3],
+            rho: [None; SLOTS],
+            any: false,
+        }
+    }
+}
+
+impl TileSamples {
+    fn clear(&mut self) {
+        self.side = [0.0; SLOTS];
+        self.acc = [[0.0; SLOTS]; 3];
+        self.rho = [None; SLOTS];
+        self.any = false;
+    }
+
+    /// Takes sample `s` into `slot` when it is Lambertian; false otherwise.
+    fn set(&mut self, slot: usize, s: &ViewSample) -> bool {
+        let Some(rho) = s.lambertian else {
+            return false;
+        };
+        for a in 0..3 {
+            self.p[a][slot] = s.position[a];
+            self.n[a][slot] = s.frame.n[a];
+        }
+        self.side[slot] = s.frame.n.dot(s.wo);
+        self.rho[slot] = Some(rho);
+        self.any = true;
+        true
+    }
+
+    /// Adds the photons of `list` (the terms of [`list_sum`]'s Lambertian loop).
+    fn sum(&mut self, photons: &[Photon], list: &[u32], r_max: f32) {
+        let [px, py, pz] = &self.p;
+        let [nx, ny, nz] = &self.n;
+        let [ar, ag, ab] = &mut self.acc;
+        for &i in list {
+            let ph = &photons[i as usize];
+            let [cx, cy, cz] = ph.position;
+            let [qx, qy, qz] = ph.normal;
+            let [ix, iy, iz] = ph.incident;
+            let [pr, pg, pb] = ph.power;
+            let r = ph.footprint_radius.min(r_max);
+            let r2 = r * r;
+            let rz = r * Z_RATIO;
+            let rz2 = rz * rz;
+            let k0 = 2.0 / (std::f32::consts::PI * r2);
+            for t in 0..SLOTS {
+                let (dx, dy, dz) = (px[t] - cx, py[t] - cy, pz[t] - cz);
+                let h = dx * qx + dy * qy + dz * qz;
+                let d2 = (dx * dx + dy * dy + dz * dz - h * h).max(0.0);
+                let inside = d2 / r2 + h * h / rz2 < 1.0;
+                let agree = nx[t] * qx + ny[t] * qy + nz[t] * qz > 0.5;
+                let facing = self.side[t] * (nx[t] * ix + ny[t] * iy + nz[t] * iz) > 0.0;
+                let w = if inside && agree && facing {
+                    k0 * (1.0 - d2 / r2)
+                } else {
+                    0.0
+                };
+                ar[t] += pr * w;
+                ag[t] += pg * w;
+                ab[t] += pb * w;
+            }
+        }
+    }
+
+    fn sum_of(&self, slot: usize) -> Vec3 {
+        Vec3::new(self.acc[0][slot], self.acc[1][slot], self.acc[2][slot])
+    }
 }
 
 /// The estimate at sample `s`: the sum of [`volume_term`] over the photons of `list`.
