@@ -159,7 +159,8 @@ impl CpuEstimate {
                             let slot = ((y - ty * TILE) * TILE + x - tx * TILE) as usize;
                             let out = &mut band[((y - ty * TILE) * lw + x) as usize];
                             if !lambertian.set(slot, s) {
-                                *out = list_sum(&self.photons, list, s, params.r_max).extend(0.0);
+                                *out = list_sum(&self.photons, list, s, slot, params.r_max)
+                                    .extend(0.0);
                             }
                         }
                     }
@@ -270,6 +271,21 @@ impl CpuEstimate {
     }
 }
 
+/// A photon in a tile's list: its index and the tile's texels under its screen rectangle
+/// (x0, y0, x1, y1, inclusive, relative to the tile): only they can be in its volume.
+#[derive(Clone, Copy)]
+struct Entry {
+    photon: u32,
+    rect: [u8; 4],
+}
+
+impl Entry {
+    fn covers(&self, slot: usize) -> bool {
+        let (x, y) = ((slot as u32 % TILE) as u8, (slot as u32 / TILE) as u8);
+        (self.rect[0]..=self.rect[2]).contains(&x) && (self.rect[1]..=self.rect[3]).contains(&y)
+    }
+}
+
 /// Per tile, the photons whose bounding sphere may reach one of its samples: those under
 /// the tile in the screen rectangle of the sphere's box (one texel of slack), meeting the
 /// world box of the tile's samples.
@@ -279,7 +295,7 @@ fn bin(
     [lw, lh]: [u32; 2],
     tiles: [u32; 2],
     params: Params,
-) -> Vec<Vec<u32>> {
+) -> Vec<Vec<Entry>> {
     let n_tiles = (tiles[0] * tiles[1]) as usize;
     let mut boxes = vec![(Vec3::INFINITY, Vec3::NEG_INFINITY); n_tiles];
     for (i, s) in samples.iter().enumerate() {
@@ -289,23 +305,39 @@ fn bin(
             *b = (b.0.min(s.position), b.1.max(s.position));
         }
     }
+    // The screen rectangles in parallel, then the lists in photon order.
+    let rects: Vec<Option<[u32; 4]>> = photons
+        .par_iter()
+        .map(|p| {
+            let r = p.footprint_radius.min(params.r_max);
+            if r.is_nan() || r <= 0.0 {
+                return None;
+            }
+            screen_rect(p.position(), r, params.view_proj, [lw, lh])
+        })
+        .collect();
     let mut lists = vec![Vec::new(); n_tiles];
-    for (i, p) in photons.iter().enumerate() {
-        let r = p.footprint_radius.min(params.r_max);
-        if r.is_nan() || r <= 0.0 {
-            continue;
-        }
-        let c = p.position();
-        let Some([x0, y0, x1, y1]) = screen_tiles(c, r, params.view_proj, [lw, lh], tiles) else {
+    for (i, (p, rect)) in photons.iter().zip(&rects).enumerate() {
+        let Some([x0, y0, x1, y1]) = *rect else {
             continue;
         };
+        let (c, r) = (p.position(), p.footprint_radius.min(params.r_max));
         let reach = r * (1.0 + SLACK) + SLACK * c.abs().max_element();
-        for ty in y0..=y1 {
-            for tx in x0..=x1 {
+        for ty in y0 / TILE..=y1 / TILE {
+            for tx in x0 / TILE..=x1 / TILE {
                 let t = (ty * tiles[0] + tx) as usize;
                 let (lo, hi) = boxes[t];
                 if c.clamp(lo, hi).distance_squared(c) <= reach * reach {
-                    lists[t].push(i as u32);
+                    let within = |v: u32, t: u32| v.clamp(t * TILE, t * TILE + TILE - 1) - t * TILE;
+                    lists[t].push(Entry {
+                        photon: i as u32,
+                        rect: [
+                            within(x0, tx) as u8,
+                            within(y0, ty) as u8,
+                            within(x1, tx) as u8,
+                            within(y1, ty) as u8,
+                        ],
+                    });
                 }
             }
         }
@@ -313,16 +345,10 @@ fn bin(
     lists
 }
 
-/// The tiles (x0, y0, x1, y1, inclusive) under the screen rectangle of the box of the
+/// The texels (x0, y0, x1, y1, inclusive) under the screen rectangle of the box of the
 /// sphere (`c`, `r`), widened by a texel; the whole screen when the box reaches behind
 /// the eye, `None` when it lies wholly behind.
-fn screen_tiles(
-    c: Vec3,
-    r: f32,
-    view_proj: Mat4,
-    [lw, lh]: [u32; 2],
-    tiles: [u32; 2],
-) -> Option<[u32; 4]> {
+fn screen_rect(c: Vec3, r: f32, view_proj: Mat4, [lw, lh]: [u32; 2]) -> Option<[u32; 4]> {
     let (mut lo, mut hi) = (Vec2::splat(1.0), Vec2::splat(-1.0));
     let (mut w_min, mut w_max) = (f32::INFINITY, f32::NEG_INFINITY);
     for i in 0..8 {
@@ -352,13 +378,8 @@ fn screen_tiles(
     let x1 = (hi.x * 0.5 + 0.5) * lw as f32 + 1.0;
     let y0 = (0.5 - hi.y * 0.5) * lh as f32 - 1.0;
     let y1 = (0.5 - lo.y * 0.5) * lh as f32 + 1.0;
-    let tile = |v: f32, n: u32| ((v / TILE as f32).floor().max(0.0) as u32).min(n - 1);
-    Some([
-        tile(x0, tiles[0]),
-        tile(y0, tiles[1]),
-        tile(x1, tiles[0]),
-        tile(y1, tiles[1]),
-    ])
+    let texel = |v: f32, n: u32| (v.floor().max(0.0) as u32).min(n - 1);
+    Some([texel(x0, lw), texel(y0, lh), texel(x1, lw), texel(y1, lh)])
 }
 
 const SLOTS: usize = (TILE * TILE) as usize;
@@ -412,13 +433,14 @@ impl TileSamples {
         true
     }
 
-    /// Adds the photons of `list` (the terms of [`list_sum`]'s Lambertian loop).
-    fn sum(&mut self, photons: &[Photon], list: &[u32], r_max: f32) {
+    /// Adds the photons of `list` (the terms of [`list_sum`]'s Lambertian loop) at the
+    /// slots of the rows under their rectangles.
+    fn sum(&mut self, photons: &[Photon], list: &[Entry], r_max: f32) {
         let [px, py, pz] = &self.p;
         let [nx, ny, nz] = &self.n;
         let [ar, ag, ab] = &mut self.acc;
-        for &i in list {
-            let ph = &photons[i as usize];
+        for e in list {
+            let ph = &photons[e.photon as usize];
             let [cx, cy, cz] = ph.position;
             let [qx, qy, qz] = ph.normal;
             let [ix, iy, iz] = ph.incident;
@@ -428,7 +450,9 @@ impl TileSamples {
             let rz = r * Z_RATIO;
             let rz2 = rz * rz;
             let k0 = 2.0 / (std::f32::consts::PI * r2);
-            for t in 0..SLOTS {
+            // Whole rows of the rectangle: a contiguous run of slots (vectorized).
+            let row = TILE as usize;
+            for t in usize::from(e.rect[1]) * row..(usize::from(e.rect[3]) + 1) * row {
                 let (dx, dy, dz) = (px[t] - cx, py[t] - cy, pz[t] - cz);
                 let h = dx * qx + dy * qy + dz * qz;
                 let d2 = (dx * dx + dy * dy + dz * dz - h * h).max(0.0);
@@ -452,12 +476,13 @@ impl TileSamples {
     }
 }
 
-/// The estimate at sample `s`: the sum of [`volume_term`] over the photons of `list`.
-fn list_sum(photons: &[Photon], list: &[u32], s: &ViewSample, r_max: f32) -> Vec3 {
+/// The estimate at sample `s` in `slot`: the sum of the terms of the photons of `list`
+/// whose rectangles cover the slot.
+fn list_sum(photons: &[Photon], list: &[Entry], s: &ViewSample, slot: usize, r_max: f32) -> Vec3 {
+    let mut list = list.iter().filter(|e| e.covers(slot)).map(|e| e.photon);
     let Some(rho) = s.lambertian else {
         return list
-            .iter()
-            .map(|&i| {
+            .map(|i| {
                 let p = &photons[i as usize];
                 volume_kernel(p, s, r_max).map_or(Vec3::ZERO, |k| {
                     let f = s
@@ -472,7 +497,7 @@ fn list_sum(photons: &[Photon], list: &[u32], s: &ViewSample, r_max: f32) -> Vec
     // normal (`Material::eval`'s wo.z·wi.z > 0), else 0.
     let side = s.frame.n.dot(s.wo);
     let mut sum = Vec3::ZERO;
-    for &i in list {
+    for i in list.by_ref() {
         let p = &photons[i as usize];
         if let Some(k) = volume_kernel(p, s, r_max) {
             if side * s.frame.n.dot(p.incident()) > 0.0 {
