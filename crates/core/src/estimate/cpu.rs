@@ -126,6 +126,10 @@ impl CpuEstimate {
                 "photons",
                 (self.photons.capacity() * std::mem::size_of::<Photon>()) as u64,
             ),
+            (
+                "photon lists",
+                self.entries * std::mem::size_of::<Entry>() as u64,
+            ),
         ]
     }
 
@@ -141,7 +145,7 @@ impl CpuEstimate {
         let waited = t.elapsed().as_secs_f64();
         let [lw, lh] = self.target.low_size;
         let tiles = [lw.div_ceil(TILE), lh.div_ceil(TILE)];
-        let lists = bin(&self.photons, &samples, [lw, lh], tiles, params);
+        let lists = bin(&self.photons, &samples, [lw, lh], tiles, params)?;
         self.entries = lists.iter().map(|l| l.len() as u64).sum();
         let rows: Vec<Vec<Vec4>> = (0..tiles[1])
             .into_par_iter()
@@ -295,7 +299,7 @@ fn bin(
     [lw, lh]: [u32; 2],
     tiles: [u32; 2],
     params: Params,
-) -> Vec<Vec<Entry>> {
+) -> Result<Vec<Vec<Entry>>> {
     let n_tiles = (tiles[0] * tiles[1]) as usize;
     let mut boxes = vec![(Vec3::INFINITY, Vec3::NEG_INFINITY); n_tiles];
     for (i, s) in samples.iter().enumerate() {
@@ -316,6 +320,24 @@ fn bin(
             screen_rect(p.position(), r, params.view_proj, [lw, lh])
         })
         .collect();
+    // Wide kernels over many tiles (kernel_scale 4 with a million photons) could need more
+    // memory than there is: a typed error instead of an abort, from the tiles under the
+    // rectangles (a bound of the entries).
+    let bound: u64 = rects
+        .iter()
+        .flatten()
+        .map(|[x0, y0, x1, y1]| ((x1 / TILE - x0 / TILE + 1) * (y1 / TILE - y0 / TILE + 1)) as u64)
+        .sum();
+    let needed = bound * std::mem::size_of::<Entry>() as u64;
+    if let Some(available) = crate::memory::available() {
+        if needed > available / 3 {
+            return Err(Error::OutOfMemory {
+                what: format!("the CPU estimate's photon lists ({bound} entries at most)"),
+                needed,
+                available,
+            });
+        }
+    }
     let mut lists = vec![Vec::new(); n_tiles];
     for (i, (p, rect)) in photons.iter().zip(&rects).enumerate() {
         let Some([x0, y0, x1, y1]) = *rect else {
@@ -342,7 +364,7 @@ fn bin(
             }
         }
     }
-    lists
+    Ok(lists)
 }
 
 /// The texels (x0, y0, x1, y1, inclusive) under the screen rectangle of the box of the

@@ -508,6 +508,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
                 .push(("cpu estimate".into(), t.elapsed().as_secs_f64() - waited));
             t = Instant::now();
         }
+        stats.estimator_memory = state.estimate.memory();
     }
     let data = loop {
         let mut encoder = ctx
