@@ -29,6 +29,7 @@
 //! after moving one object.
 mod common;
 
+use gi_core::estimate::Estimator;
 use gi_core::frame::{FrameDesc, Renderer};
 use gi_core::render::FirstBounce;
 use gi_core::render::Silent;
@@ -130,6 +131,19 @@ fn moving_light_serial(
     Ok((median(wall), median(serial_wall), frames))
 }
 
+/// The table's `ispm` settings: 16 direct samples per pixel, defaults otherwise.
+fn ispm_settings(w: u32, h: u32, photons: u64, estimator: Estimator) -> Settings {
+    Settings {
+        method: Method::Ispm,
+        width: Some(w),
+        height: Some(h),
+        spp: 16,
+        photons,
+        estimator,
+        ..Default::default()
+    }
+}
+
 fn direct_settings(w: u32, h: u32, edges: bool) -> Settings {
     Settings {
         method: Method::Direct,
@@ -146,8 +160,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let runs = args.runs(3)?;
     let quick = args.quick();
     let ispm_only = std::env::args().any(|a| a == "--ispm-only");
-    let estimator: gi_core::estimate::Estimator =
-        args.value("--estimator").unwrap_or("auto").parse()?;
+    let estimator: Estimator = args.value("--estimator").unwrap_or("auto").parse()?;
     common::print_adapter()?;
     let only = args.value("--scene");
     let scenes: Vec<(&str, Scene)> = ["cornell", "cornell-glass", "dense-cornell"]
@@ -190,15 +203,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     for (name, scene) in &scenes {
         for &(w, h) in &sizes {
             for &photons in budgets {
-                let settings = Settings {
-                    method: Method::Ispm,
-                    width: Some(w),
-                    height: Some(h),
-                    spp: 16,
-                    photons,
-                    estimator,
-                    ..Default::default()
-                };
+                let settings = ispm_settings(w, h, photons, estimator);
                 // One-shot: a new renderer per frame, every image read back.
                 render(scene, &settings, &Silent)?;
                 let mut wall = Vec::new();
@@ -260,14 +265,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let mut row = Vec::new();
             for first_bounce in [FirstBounce::Raster, FirstBounce::Traced] {
                 let settings = Settings {
-                    method: Method::Ispm,
-                    width: Some(w),
-                    height: Some(h),
-                    spp: 16,
-                    photons,
                     first_bounce,
-                    estimator,
-                    ..Default::default()
+                    ..ispm_settings(w, h, photons, estimator)
                 };
                 let (_, serial, frames) = moving_light_serial(scene, &settings, runs)?;
                 let bounce = median(

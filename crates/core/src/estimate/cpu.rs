@@ -71,14 +71,10 @@ impl CpuEstimate {
             .iter()
             .map(|&(_, texel)| {
                 let row = (width * texel).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
-                let buffer = gpu::create_buffer(
+                let buffer = gpu::readback_buffer(
                     &ctx.device,
-                    &wgpu::BufferDescriptor {
-                        label: Some("cpu estimate gbuffer"),
-                        size: row as u64 * height as u64,
-                        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                        mapped_at_creation: false,
-                    },
+                    "cpu estimate gbuffer",
+                    row as u64 * height as u64,
                 );
                 (buffer, row)
             })

@@ -160,15 +160,7 @@ impl IndirectTarget {
         };
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("upsample pass"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: full_view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
+            color_attachments: &[Some(crate::gpu::cleared(full_view))],
             depth_stencil_attachment: None,
             timestamp_writes: timer.pass("upsample"),
             occlusion_query_set: None,

@@ -164,15 +164,7 @@ impl Volumes {
         {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("volume pass"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &self.target.low_view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
+                color_attachments: &[Some(crate::gpu::cleared(&self.target.low_view))],
                 depth_stencil_attachment: None,
                 timestamp_writes: timer.pass("photon volumes"),
                 occlusion_query_set: None,

@@ -662,15 +662,7 @@ impl Targets {
         );
         encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("direct light cleared"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &self.accum_view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
+            color_attachments: &[Some(crate::gpu::cleared(&self.accum_view))],
             depth_stencil_attachment: None,
             timestamp_writes: None,
             occlusion_query_set: None,
@@ -808,15 +800,7 @@ impl Targets {
         let row = (w * 16).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
         for &name in names {
             if !self.readback.contains_key(name) {
-                let buffer = gpu::create_buffer(
-                    &ctx.device,
-                    &wgpu::BufferDescriptor {
-                        label: Some("readback"),
-                        size: row as u64 * h as u64,
-                        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                        mapped_at_creation: false,
-                    },
-                );
+                let buffer = gpu::readback_buffer(&ctx.device, "readback", row as u64 * h as u64);
                 self.readback.insert(name, buffer);
             }
         }

@@ -302,6 +302,33 @@ pub fn create_buffer(device: &wgpu::Device, desc: &wgpu::BufferDescriptor) -> wg
     device.create_buffer(desc)
 }
 
+/// A colour attachment of `view` cleared to transparent black and stored.
+pub fn cleared(view: &wgpu::TextureView) -> wgpu::RenderPassColorAttachment<'_> {
+    wgpu::RenderPassColorAttachment {
+        view,
+        depth_slice: None,
+        resolve_target: None,
+        ops: wgpu::Operations {
+            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+            store: wgpu::StoreOp::Store,
+        },
+    }
+}
+
+/// A mappable buffer of `size` bytes that copies from the GPU land in, for reading back
+/// (counted).
+pub fn readback_buffer(device: &wgpu::Device, label: &str, size: u64) -> wgpu::Buffer {
+    create_buffer(
+        device,
+        &wgpu::BufferDescriptor {
+            label: Some(label),
+            size,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        },
+    )
+}
+
 /// `DeviceExt::create_buffer_init`, counted.
 pub fn create_buffer_init(
     device: &wgpu::Device,

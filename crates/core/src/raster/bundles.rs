@@ -226,15 +226,7 @@ impl BundleBuffers {
         let heads = make("bundle heads", head_bytes);
         let nodes = make("bundle nodes", node_bytes);
         let counter = make("bundle counter", 4);
-        let counter_readback = gpu::create_buffer(
-            device,
-            &wgpu::BufferDescriptor {
-                label: Some("bundle counter readback"),
-                size: 4,
-                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            },
-        );
+        let counter_readback = gpu::readback_buffer(device, "bundle counter readback", 4);
         let depth = gpu::create_texture(
             device,
             &wgpu::TextureDescriptor {

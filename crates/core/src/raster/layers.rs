@@ -127,15 +127,7 @@ impl LayerTargets {
         let row = (max_res * 16).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
         let staging = (0..targets.len())
             .map(|_| {
-                gpu::create_buffer(
-                    device,
-                    &wgpu::BufferDescriptor {
-                        label: Some(name),
-                        size: row as u64 * max_res as u64 * n_layers as u64,
-                        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                        mapped_at_creation: false,
-                    },
-                )
+                gpu::readback_buffer(device, name, row as u64 * max_res as u64 * n_layers as u64)
             })
             .collect();
         Ok(LayerTargets {
