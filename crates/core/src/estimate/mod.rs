@@ -81,7 +81,7 @@ fn auto_choice(adapter: &wgpu::AdapterInfo) -> (Estimator, String) {
             Estimator::Cpu,
             format!(
                 "`{}` is a CPU device: the estimate computed natively on the CPU was the \
-                 fastest there, 1.4-1.9x tiled's frames (docs/bench/frame.md)",
+                 fastest there, 5-8x tiled's splat (docs/bench/frame.md)",
                 adapter.name
             ),
         );
