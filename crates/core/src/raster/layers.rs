@@ -172,17 +172,7 @@ impl LayerTargets {
             let (views, depth_view) = &self.layer_views[i];
             let attachments: Vec<_> = views
                 .iter()
-                .map(|view| {
-                    Some(wgpu::RenderPassColorAttachment {
-                        view,
-                        depth_slice: None,
-                        resolve_target: None,
-                        ops: wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                            store: wgpu::StoreOp::Store,
-                        },
-                    })
-                })
+                .map(|view| Some(crate::gpu::cleared(view)))
                 .collect();
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some(stage),
