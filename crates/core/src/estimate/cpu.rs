@@ -306,6 +306,7 @@ fn bin(
         }
     }
     // The screen rectangles in parallel, then the lists in photon order.
+    let corners = box_corners(params.view_proj);
     let rects: Vec<Option<[u32; 4]>> = photons
         .par_iter()
         .map(|p| {
@@ -313,7 +314,7 @@ fn bin(
             if r.is_nan() || r <= 0.0 {
                 return None;
             }
-            screen_rect(p.position(), r, params.view_proj, [lw, lh])
+            screen_rect(p.position(), r, params.view_proj, &corners, [lw, lh])
         })
         .collect();
     // Wide kernels over many tiles (kernel_scale 4 with a million photons) could need more
@@ -324,7 +325,8 @@ fn bin(
         .flatten()
         .map(|[x0, y0, x1, y1]| ((x1 / TILE - x0 / TILE + 1) * (y1 / TILE - y0 / TILE + 1)) as u64)
         .sum();
-    let needed = bound * std::mem::size_of::<Entry>() as u64;
+    // Twice: the runs' lists and the joined ones.
+    let needed = 2 * bound * std::mem::size_of::<Entry>() as u64;
     if let Some(available) = crate::memory::available() {
         if needed > available / 3 {
             return Err(Error::OutOfMemory {
@@ -334,48 +336,100 @@ fn bin(
             });
         }
     }
-    let mut lists = vec![Vec::new(); n_tiles];
-    for (i, (p, rect)) in photons.iter().zip(&rects).enumerate() {
-        let Some([x0, y0, x1, y1]) = *rect else {
-            continue;
-        };
-        let (c, r) = (p.position(), p.footprint_radius.min(params.r_max));
-        let reach = r * (1.0 + SLACK) + SLACK * c.abs().max_element();
-        for ty in y0 / TILE..=y1 / TILE {
-            for tx in x0 / TILE..=x1 / TILE {
-                let t = (ty * tiles[0] + tx) as usize;
-                let (lo, hi) = boxes[t];
-                if c.clamp(lo, hi).distance_squared(c) <= reach * reach {
-                    let within = |v: u32, t: u32| v.clamp(t * TILE, t * TILE + TILE - 1) - t * TILE;
-                    lists[t].push(Entry {
-                        photon: i as u32,
-                        rect: [
-                            within(x0, tx) as u8,
-                            within(y0, ty) as u8,
-                            within(x1, tx) as u8,
-                            within(y1, ty) as u8,
-                        ],
-                    });
+    // The lists of contiguous runs of photons in parallel, then joined per tile in run
+    // order: each list keeps photon order (the sums' order), whatever the thread count.
+    let run = photons
+        .len()
+        .div_ceil(4 * rayon::current_num_threads())
+        .max(4096);
+    let runs: Vec<Vec<Vec<Entry>>> = photons
+        .par_chunks(run)
+        .zip(rects.par_chunks(run))
+        .enumerate()
+        .map(|(k, (photons, rects))| {
+            let mut lists = vec![Vec::new(); n_tiles];
+            for (j, (p, rect)) in photons.iter().zip(rects).enumerate() {
+                if let Some(rect) = rect {
+                    let i = (k * run + j) as u32;
+                    push_entries(&mut lists, i, p, *rect, &boxes, tiles[0], params.r_max);
                 }
+            }
+            lists
+        })
+        .collect();
+    let lists = match <[_; 1]>::try_from(runs) {
+        Ok([lists]) => lists,
+        Err(runs) => (0..n_tiles)
+            .into_par_iter()
+            .map(|t| {
+                let mut list = Vec::with_capacity(runs.iter().map(|r| r[t].len()).sum());
+                for r in &runs {
+                    list.extend_from_slice(&r[t]);
+                }
+                list
+            })
+            .collect(),
+    };
+    Ok(lists)
+}
+
+/// Appends photon `i` to the lists of the tiles under its screen rectangle whose samples'
+/// world box its bounding sphere meets.
+fn push_entries(
+    lists: &mut [Vec<Entry>],
+    i: u32,
+    p: &Photon,
+    [x0, y0, x1, y1]: [u32; 4],
+    boxes: &[(Vec3, Vec3)],
+    tiles_x: u32,
+    r_max: f32,
+) {
+    let (c, r) = (p.position(), p.footprint_radius.min(r_max));
+    let reach = r * (1.0 + SLACK) + SLACK * c.abs().max_element();
+    for ty in y0 / TILE..=y1 / TILE {
+        for tx in x0 / TILE..=x1 / TILE {
+            let t = (ty * tiles_x + tx) as usize;
+            let (lo, hi) = boxes[t];
+            if c.clamp(lo, hi).distance_squared(c) <= reach * reach {
+                let within = |v: u32, t: u32| v.clamp(t * TILE, t * TILE + TILE - 1) - t * TILE;
+                lists[t].push(Entry {
+                    photon: i,
+                    rect: [
+                        within(x0, tx) as u8,
+                        within(y0, ty) as u8,
+                        within(x1, tx) as u8,
+                        within(y1, ty) as u8,
+                    ],
+                });
             }
         }
     }
-    Ok(lists)
+}
+
+/// The clip-space offsets of the corners of the box [−1, 1]³ from its centre: a box of
+/// half-size r about c has its corners at view_proj·c + r·offset.
+fn box_corners(view_proj: Mat4) -> [Vec4; 8] {
+    std::array::from_fn(|i| {
+        let sign = |bit: usize| if i & bit == 0 { -1.0 } else { 1.0 };
+        view_proj * Vec4::new(sign(1), sign(2), sign(4), 0.0)
+    })
 }
 
 /// The texels (x0, y0, x1, y1, inclusive) under the screen rectangle of the box of the
 /// sphere (`c`, `r`), widened by a texel; the whole screen when the box reaches behind
-/// the eye, `None` when it lies wholly behind.
-fn screen_rect(c: Vec3, r: f32, view_proj: Mat4, [lw, lh]: [u32; 2]) -> Option<[u32; 4]> {
+/// the eye, `None` when it lies wholly behind. `corners`: [`box_corners`] of `view_proj`.
+fn screen_rect(
+    c: Vec3,
+    r: f32,
+    view_proj: Mat4,
+    corners: &[Vec4; 8],
+    [lw, lh]: [u32; 2],
+) -> Option<[u32; 4]> {
+    let centre = view_proj * c.extend(1.0);
     let (mut lo, mut hi) = (Vec2::splat(1.0), Vec2::splat(-1.0));
     let (mut w_min, mut w_max) = (f32::INFINITY, f32::NEG_INFINITY);
-    for i in 0..8 {
-        let s = Vec3::new(
-            if i & 1 == 0 { -r } else { r },
-            if i & 2 == 0 { -r } else { r },
-            if i & 4 == 0 { -r } else { r },
-        );
-        let q = view_proj * (c + s).extend(1.0);
+    for corner in corners {
+        let q = centre + r * *corner;
         w_min = w_min.min(q.w);
         w_max = w_max.max(q.w);
         let ndc = Vec2::new(q.x, q.y) / q.w.max(1e-6);
@@ -452,10 +506,40 @@ impl TileSamples {
     }
 
     /// Adds the photons of `list` (the terms of [`list_sum`]'s Lambertian loop) at the
-    /// slots of the rows under their rectangles.
+    /// slots of the rows under their rectangles. On x86-64 CPUs with AVX2 a row of 8 slots
+    /// is one vector (the same code compiled for those features, chosen at run time: the
+    /// same operations in the same order, so the same sums; the SSE2 baseline takes two
+    /// vectors a row). Cornell 128x128, 80k photons: the estimate stage 22-25 ms a pass
+    /// against 29-35 ms with SSE2 (same runs).
     fn sum(&mut self, photons: &[Photon], list: &[Entry], r_max: f32) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+        {
+            // SAFETY: the CPU has the features the function is compiled for (checked above).
+            #[allow(unsafe_code)]
+            unsafe {
+                self.sum_avx2(photons, list, r_max)
+            };
+            return;
+        }
+        self.sum_rows(photons, list, r_max);
+    }
+
+    /// The one exception to the workspace's `unsafe_code = "deny"`: a function compiled for
+    /// CPU features is unsafe to call, and is called only where they were detected.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    #[allow(unsafe_code)]
+    unsafe fn sum_avx2(&mut self, photons: &[Photon], list: &[Entry], r_max: f32) {
+        self.sum_rows(photons, list, r_max);
+    }
+
+    #[inline(always)]
+    fn sum_rows(&mut self, photons: &[Photon], list: &[Entry], r_max: f32) {
+        const ROW: usize = TILE as usize;
         let [px, py, pz] = &self.p;
         let [nx, ny, nz] = &self.n;
+        let side = &self.side;
         let [ar, ag, ab] = &mut self.acc;
         for e in list {
             let ph = &photons[e.photon as usize];
@@ -466,25 +550,36 @@ impl TileSamples {
             let r = ph.footprint_radius.min(r_max);
             let r2 = r * r;
             let rz = r * Z_RATIO;
-            let rz2 = rz * rz;
+            let (inv_r2, inv_rz2) = (1.0 / r2, 1.0 / (rz * rz));
             let k0 = 2.0 / (std::f32::consts::PI * r2);
-            // Whole rows of the rectangle: a contiguous run of slots (vectorized).
-            let row = TILE as usize;
-            for t in usize::from(e.rect[1]) * row..(usize::from(e.rect[3]) + 1) * row {
-                let (dx, dy, dz) = (px[t] - cx, py[t] - cy, pz[t] - cz);
-                let h = dx * qx + dy * qy + dz * qz;
-                let d2 = (dx * dx + dy * dy + dz * dz - h * h).max(0.0);
-                let inside = d2 / r2 + h * h / rz2 < 1.0;
-                let agree = nx[t] * qx + ny[t] * qy + nz[t] * qz > 0.5;
-                let facing = self.side[t] * (nx[t] * ix + ny[t] * iy + nz[t] * iz) > 0.0;
-                let w = if inside && agree && facing {
-                    k0 * (1.0 - d2 / r2)
-                } else {
-                    0.0
+            // Whole rows of the rectangle, each a fixed run of 8 slots (vectorized).
+            for row in usize::from(e.rect[1])..=usize::from(e.rect[3]) {
+                let slots = row * ROW..(row + 1) * ROW;
+                let at = |a: &[f32; SLOTS]| -> [f32; ROW] {
+                    a[slots.clone()].try_into().unwrap_or([0.0; ROW])
                 };
-                ar[t] += pr * w;
-                ag[t] += pg * w;
-                ab[t] += pb * w;
+                let (px, py, pz, nx, ny, nz, side) =
+                    (at(px), at(py), at(pz), at(nx), at(ny), at(nz), at(side));
+                let mut w = [0.0f32; ROW];
+                for j in 0..ROW {
+                    let (dx, dy, dz) = (px[j] - cx, py[j] - cy, pz[j] - cz);
+                    let h = dx * qx + dy * qy + dz * qz;
+                    let d2 = (dx * dx + dy * dy + dz * dz - h * h).max(0.0);
+                    let u = d2 * inv_r2;
+                    let inside = u + h * h * inv_rz2 < 1.0;
+                    let agree = nx[j] * qx + ny[j] * qy + nz[j] * qz > 0.5;
+                    let facing = side[j] * (nx[j] * ix + ny[j] * iy + nz[j] * iz) > 0.0;
+                    w[j] = if inside && agree && facing {
+                        k0 * (1.0 - u)
+                    } else {
+                        0.0
+                    };
+                }
+                for (acc, p) in [(&mut *ar, pr), (&mut *ag, pg), (&mut *ab, pb)] {
+                    for (a, w) in acc[slots.clone()].iter_mut().zip(w) {
+                        *a += p * w;
+                    }
+                }
             }
         }
     }

@@ -375,8 +375,9 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
                     radius.r_max,
                 );
             }
-            let mut compensated = photons.clone();
+            let mut compensated = Vec::new();
             if settings.boundary_compensation && !query_side {
+                compensated = photons.clone();
                 let tc = Instant::now();
                 progress.update("boundary compensation", 0.0);
                 boundary::compensate_until(
@@ -431,7 +432,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
             scene,
             bvh,
             settings,
-            &photons.traced,
+            photons.traced(),
             &mut state.specular_landings,
             progress,
         )?;
@@ -585,7 +586,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         let empty = || Image::new(w, h);
         let direct = traced_direct.or(raster_direct).unwrap_or_else(empty);
         let indirect = indirect.unwrap_or_else(empty);
-        let hits = photon_hits(scene, &out.position, &photons.traced);
+        let hits = photon_hits(scene, &out.position, photons.traced());
         out.aovs.push(("direct".into(), direct));
         out.aovs
             .push(("specular".into(), specular.unwrap_or_else(empty)));

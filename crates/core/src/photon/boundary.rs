@@ -43,8 +43,8 @@ fn probe_at(scene: &Scene, bvh: &SceneBvh, q: Vec3, n: Vec3, h: f32) -> bool {
     let Some(hit) = bvh.intersect(q + h * n, -n, 2.0 * h) else {
         return false;
     };
-    let it = Interaction::new(scene, &hit, -n);
-    let ns = it.frame.n * it.ng.dot(n).signum();
+    let (ng, ns, _) = Interaction::normals(scene, &hit, -n);
+    let ns = ns * ng.dot(n).signum();
     ns.dot(n) > NORMAL_AGREEMENT
 }
 

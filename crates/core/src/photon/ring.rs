@@ -21,7 +21,8 @@ struct Entry {
     light: usize,
     /// As traced.
     photons: Vec<Photon>,
-    /// The same photons with boundary compensation (the splat's power).
+    /// The same photons with boundary compensation (the splat's power); empty when the
+    /// splat uses them as traced.
     compensated: Vec<Photon>,
     /// Regions whose photons in this entry are no longer valid.
     invalid: Vec<Aabb>,
@@ -37,8 +38,15 @@ pub struct PhotonRing {
 pub struct RingPhotons {
     /// With boundary compensation (for the splat).
     pub splat: Vec<Photon>,
-    /// As traced (for gathers along specular paths).
-    pub traced: Vec<Photon>,
+    /// As traced, where they differ from `splat`.
+    traced: Option<Vec<Photon>>,
+}
+
+impl RingPhotons {
+    /// The photons as traced (for gathers along specular paths).
+    pub fn traced(&self) -> &[Photon] {
+        self.traced.as_deref().unwrap_or(&self.splat)
+    }
 }
 
 impl PhotonRing {
@@ -75,7 +83,8 @@ impl PhotonRing {
         self.entries.iter().filter(|e| e.light == light).count()
     }
 
-    /// Adds frame `frame`'s photons of light `light`, dropping that light's oldest frames
+    /// Adds frame `frame`'s photons of light `light` (with their compensated copies, or
+    /// none when the splat takes them as traced), dropping that light's oldest frames
     /// beyond the capacity.
     pub fn push(
         &mut self,
@@ -84,7 +93,7 @@ impl PhotonRing {
         photons: Vec<Photon>,
         compensated: Vec<Photon>,
     ) {
-        debug_assert_eq!(photons.len(), compensated.len());
+        debug_assert!(compensated.is_empty() || photons.len() == compensated.len());
         self.entries.push_back(Entry {
             frame,
             light,
@@ -113,15 +122,18 @@ impl PhotonRing {
     /// its light that are valid at its position.
     pub fn collect(&self) -> RingPhotons {
         let total: usize = self.entries.iter().map(|e| e.photons.len()).sum();
+        // Without compensation the splat's photons are the traced ones: one copy.
+        let separate = self.entries.iter().any(|e| !e.compensated.is_empty());
         let mut out = RingPhotons {
             splat: Vec::with_capacity(total),
-            traced: Vec::with_capacity(total),
+            traced: separate.then(|| Vec::with_capacity(total)),
         };
         let inside = |e: &Entry, p: Vec3| e.invalid.iter().any(|b| b.contains(p));
         for e in &self.entries {
             let same: Vec<&Entry> = self.entries.iter().filter(|o| o.light == e.light).collect();
             let simple = same.iter().all(|o| o.invalid.is_empty());
-            for (p, c) in e.photons.iter().zip(&e.compensated) {
+            for (i, p) in e.photons.iter().enumerate() {
+                let c = e.compensated.get(i).unwrap_or(p);
                 let x = p.position();
                 let valid = if simple {
                     same.len()
@@ -132,11 +144,13 @@ impl PhotonRing {
                     same.iter().filter(|o| !inside(o, x)).count()
                 };
                 let w = 1.0 / valid as f32;
-                let mut traced = *p;
-                traced.power = (p.power() * w).into();
+                if let Some(traced) = &mut out.traced {
+                    let mut p = *p;
+                    p.power = (p.power() * w).into();
+                    traced.push(p);
+                }
                 let mut splat = *c;
                 splat.power = (c.power() * w).into();
-                out.traced.push(traced);
                 out.splat.push(splat);
             }
         }
@@ -156,6 +170,23 @@ mod tests {
         }
     }
 
+    /// Frames pushed without compensated copies splat their photons as traced, with the
+    /// same weights; a frame with copies beside them keeps both.
+    #[test]
+    fn uncompensated_frames_splat_as_traced() {
+        let mut ring = PhotonRing::new(2);
+        ring.push(0, 0, vec![photon(0.0, 2.0)], Vec::new());
+        ring.push(1, 0, vec![photon(1.0, 4.0)], Vec::new());
+        let got = ring.collect();
+        let power = |v: &[Photon]| v.iter().map(|p| p.power[0]).collect::<Vec<_>>();
+        assert_eq!(power(&got.splat), [1.0, 2.0]);
+        assert_eq!(power(got.traced()), [1.0, 2.0]);
+        ring.push(2, 0, vec![photon(2.0, 4.0)], vec![photon(2.0, 8.0)]);
+        let got = ring.collect();
+        assert_eq!(power(&got.splat), [2.0, 4.0]);
+        assert_eq!(power(got.traced()), [2.0, 2.0]);
+    }
+
     /// Power is conserved: N full frames average to one frame's power.
     #[test]
     fn frames_average() {
@@ -167,6 +198,7 @@ mod tests {
         assert_eq!(ring.held(0), 3);
         let got = ring.collect();
         assert_eq!(got.splat.len(), 6);
+        assert_eq!(got.traced().len(), 6);
         let total: f32 = got.splat.iter().map(|p| p.power[0]).sum();
         assert!((total - 6.0).abs() < 1e-5);
     }
@@ -188,13 +220,13 @@ mod tests {
         ring.push(3, 0, p, vec![photon(0.0, 2.0), photon(5.0, 2.0)]);
         let got = ring.collect();
         let near: f32 = got
-            .traced
+            .traced()
             .iter()
             .filter(|p| p.position[0] == 0.0)
             .map(|p| p.power[0])
             .sum();
         let far: f32 = got
-            .traced
+            .traced()
             .iter()
             .filter(|p| p.position[0] == 5.0)
             .map(|p| p.power[0])
@@ -221,7 +253,7 @@ mod tests {
         ring.invalidate_light(0);
         assert_eq!(ring.held(0), 0);
         assert_eq!(ring.held(1), 2);
-        let total: f32 = ring.collect().traced.iter().map(|p| p.power[0]).sum();
+        let total: f32 = ring.collect().traced().iter().map(|p| p.power[0]).sum();
         assert!((total - 1.0).abs() < 1e-6);
     }
 }

@@ -23,6 +23,26 @@ pub struct Interaction {
 
 impl Interaction {
     pub fn new(scene: &Scene, hit: &Hit, dir: Vec3) -> Self {
+        let (ng, ns, uv) = Self::normals(scene, hit, dir);
+        let t = hit.triangle as usize;
+        let [p0, p1, p2] = scene.triangles[t].map(|i| scene.positions[i as usize]);
+        let w = 1.0 - hit.u - hit.v;
+        Interaction {
+            position: p0 * w + p1 * hit.u + p2 * hit.v,
+            ng,
+            frame: Frame::new(ns),
+            // Point samples read the finest level (as the bounce maps do); only the eye
+            // passes filter by screen footprint.
+            material: scene.material_at(t, uv, 0.0),
+            triangle: hit.triangle,
+            uv,
+        }
+    }
+
+    /// The geometric and shading normals at a hit (those of [`Interaction::new`]) and its
+    /// texture coordinates, without the material: for tests that need only the surface's
+    /// orientation.
+    pub fn normals(scene: &Scene, hit: &Hit, dir: Vec3) -> (Vec3, Vec3, Vec2) {
         let t = hit.triangle as usize;
         let [i0, i1, i2] = scene.triangles[t].map(|i| i as usize);
         let (p0, p1, p2) = (
@@ -41,13 +61,10 @@ impl Interaction {
             ns = -ns;
         }
         let uv = scene.uv_at(t, hit.u, hit.v);
-        // Point samples read the finest level (as the bounce maps do); only the eye passes
-        // filter by screen footprint.
-        let lod = 0.0;
         if let Some(i) = scene.maps_of(t).normal {
             if let Some(tangent) = scene.tangent_of(t) {
                 // ns is on the winding's side here, as the tangent frame.
-                let texel = scene.texture(i).sample(uv, lod).truncate();
+                let texel = scene.texture(i).sample(uv, 0.0).truncate();
                 let n = surface::perturb_normal(ns, tangent, texel);
                 if n != Vec3::ZERO && n.is_finite() {
                     ns = n;
@@ -59,14 +76,7 @@ impl Interaction {
         if dir.dot(ns) * dir.dot(ng) <= 0.0 {
             ns = ng;
         }
-        Interaction {
-            position: p0 * w + p1 * hit.u + p2 * hit.v,
-            ng,
-            frame: Frame::new(ns),
-            material: scene.material_at(t, uv, lod),
-            triangle: hit.triangle,
-            uv,
-        }
+        (ng, ns, uv)
     }
 
     /// Ray origin for leaving the surface towards `dir` without re-hitting it.
