@@ -23,17 +23,14 @@ pub struct Interaction {
 
 impl Interaction {
     pub fn new(scene: &Scene, hit: &Hit, dir: Vec3) -> Self {
-        let (ng, ns, uv) = Self::normals(scene, hit, dir);
-        let t = hit.triangle as usize;
-        let [p0, p1, p2] = scene.triangles[t].map(|i| scene.positions[i as usize]);
-        let w = 1.0 - hit.u - hit.v;
+        let (position, ng, ns, uv) = Self::surface(scene, hit, dir);
         Interaction {
-            position: p0 * w + p1 * hit.u + p2 * hit.v,
+            position,
             ng,
             frame: Frame::new(ns),
             // Point samples read the finest level (as the bounce maps do); only the eye
             // passes filter by screen footprint.
-            material: scene.material_at(t, uv, 0.0),
+            material: scene.material_at(hit.triangle as usize, uv, 0.0),
             triangle: hit.triangle,
             uv,
         }
@@ -43,6 +40,12 @@ impl Interaction {
     /// texture coordinates, without the material: for tests that need only the surface's
     /// orientation.
     pub fn normals(scene: &Scene, hit: &Hit, dir: Vec3) -> (Vec3, Vec3, Vec2) {
+        let (_, ng, ns, uv) = Self::surface(scene, hit, dir);
+        (ng, ns, uv)
+    }
+
+    /// The position, geometric and shading normals and texture coordinates of a hit.
+    fn surface(scene: &Scene, hit: &Hit, dir: Vec3) -> (Vec3, Vec3, Vec3, Vec2) {
         let t = hit.triangle as usize;
         let [i0, i1, i2] = scene.triangles[t].map(|i| i as usize);
         let (p0, p1, p2) = (
@@ -76,7 +79,7 @@ impl Interaction {
         if dir.dot(ns) * dir.dot(ng) <= 0.0 {
             ns = ng;
         }
-        (ng, ns, uv)
+        (p0 * w + p1 * hit.u + p2 * hit.v, ng, ns, uv)
     }
 
     /// Ray origin for leaving the surface towards `dir` without re-hitting it.
