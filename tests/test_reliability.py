@@ -305,3 +305,22 @@ def test_nearly_mirror_glossy_is_finite():
             result = gi.render(scene, method, spp=4, size=(16, 16), photons=2000, max_depth=8)
             for name in result.aov_names():
                 assert np.isfinite(result.aov(name)).all(), (method, name, len(lights))
+
+
+def test_a_failed_frame_then_exit_does_not_crash():
+    """A frame that fails half-way left work in flight on lavapipe's threads, and 15% of
+    processes that exited right after the error crashed in LLVM (SIGSEGV/SIGABRT; 12 of 80
+    before the fix, 0 of 120 after). gi now waits for the devices after a failed frame and
+    at exit. 24 runs: a 15% crash rate passes all of them with probability 2%."""
+    child = (
+        "import sys, gi\n"
+        "try:\n"
+        "    gi.render(gi.load_scene('cornell'), 'ispm', size=(8, 8), spp=1, photons=10**9)\n"
+        "except gi.SettingError:\n"
+        "    sys.exit(3)\n"
+    )
+    codes = [
+        subprocess.run([sys.executable, "-c", child], capture_output=True, timeout=120).returncode
+        for _ in range(24)
+    ]
+    assert codes == [3] * 24, codes

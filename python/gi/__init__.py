@@ -7,6 +7,7 @@
 >>> gi.save_image("cornell.png", result.radiance)
 """
 
+import atexit
 import os
 
 # Mesa's device-select Vulkan layer tries to reach a Wayland display and prints
@@ -23,6 +24,7 @@ from gi._gi import (  # noqa: E402
     SceneError,
     SettingError,
     __version__,
+    _wait_gpu_idle,
     adapter_report,
     builtin_json,
     builtin_scenes,
@@ -30,6 +32,11 @@ from gi._gi import (  # noqa: E402
     gpu_counters,
     methods,
 )
+
+# lavapipe runs submitted GPU work on its own threads; a process that exits while they still
+# work (after a failed or interrupted frame) crashes in LLVM's static destructors.
+atexit.register(_wait_gpu_idle)
+
 from gi.animation import animation_updates, render_animation  # noqa: E402
 from gi.batch import render_batch  # noqa: E402  (imports Ray only when called)
 from gi.denoising import denoise  # noqa: E402

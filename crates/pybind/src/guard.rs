@@ -155,9 +155,12 @@ pub fn run<T: Send>(
                     }
                 }
             }
-            let (result, counters) = worker
-                .join()
-                .map_err(|_| "the worker thread died".to_string())?;
+            let joined = worker.join();
+            if !matches!(joined, Ok((Ok(Ok(_)), _))) {
+                // A failed or cancelled frame may leave GPU work in flight.
+                gi_core::gpu::wait_idle_all();
+            }
+            let (result, counters) = joined.map_err(|_| "the worker thread died".to_string())?;
             gi_core::gpu::alloc::merge(counters);
             Ok(result)
         })
@@ -182,6 +185,14 @@ pub fn run<T: Send>(
 /// Runs a short call `f`, turning a panic into `gi.InternalError` naming `what`.
 pub fn catch<T>(what: &str, f: impl FnOnce() -> PyResult<T>) -> PyResult<T> {
     catch_unwind(AssertUnwindSafe(f)).unwrap_or_else(|payload| Err(internal(what, payload)))
+}
+
+/// Waits until the GPU work of every device gi opened has finished; `gi` calls it at
+/// interpreter exit, since lavapipe crashes a process that exits while it still works.
+#[pyfunction]
+#[pyo3(name = "_wait_gpu_idle")]
+pub fn wait_gpu_idle(py: Python<'_>) {
+    py.detach(gi_core::gpu::wait_idle_all);
 }
 
 /// Panics inside the core's worker thread, to show that a panic becomes `gi.InternalError`.

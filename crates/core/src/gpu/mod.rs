@@ -158,14 +158,32 @@ fn create_context(choice: &Choice) -> Result<GpuContext> {
     })
 }
 
-/// The context for an adapter choice (`None` = `GI_ADAPTER` or automatic), created on first use.
-pub fn context(adapter: Option<&str>) -> Result<Arc<GpuContext>> {
+/// The process's contexts, one per adapter choice; they live until the process exits.
+fn contexts() -> std::sync::MutexGuard<'static, HashMap<Choice, Arc<GpuContext>>> {
     static CONTEXTS: OnceLock<Mutex<HashMap<Choice, Arc<GpuContext>>>> = OnceLock::new();
-    let choice = Choice::parse(adapter, std::env::var(ADAPTER_ENV).ok().as_deref());
-    let mut map = CONTEXTS
+    CONTEXTS
         .get_or_init(Default::default)
         .lock()
-        .unwrap_or_else(|p| p.into_inner());
+        .unwrap_or_else(|p| p.into_inner())
+}
+
+/// Waits until every context's submitted work has finished (errors of lost devices are
+/// ignored: their work is gone). A frame that fails half-way leaves work in flight on the
+/// cached devices; lavapipe runs it on its own threads, compiling shader variants with
+/// LLVM, and a process that exits meanwhile crashes in LLVM as its static destructors run
+/// (SIGSEGV or SIGABRT after the error was reported). Callers wait here after a failed
+/// frame and before the process exits.
+pub fn wait_idle_all() {
+    let all: Vec<Arc<GpuContext>> = contexts().values().cloned().collect();
+    for ctx in all {
+        let _ = ctx.wait();
+    }
+}
+
+/// The context for an adapter choice (`None` = `GI_ADAPTER` or automatic), created on first use.
+pub fn context(adapter: Option<&str>) -> Result<Arc<GpuContext>> {
+    let choice = Choice::parse(adapter, std::env::var(ADAPTER_ENV).ok().as_deref());
+    let mut map = contexts();
     if let Some(ctx) = map.get(&choice) {
         return Ok(ctx.clone());
     }
