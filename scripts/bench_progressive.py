@@ -218,9 +218,11 @@ def main() -> None:
         "--ref-light-paths", type=int, help="light paths per reference part (default: per sample)"
     )
     ap.add_argument("--ref-parts", type=int, default=1, help="reference = mean of this many parts")
+    ap.add_argument("--methods", default=",".join(PROGRESSIVE), help="progressive methods to run")
     ap.add_argument("--out", type=Path)
     ap.add_argument("--append", action="store_true", help="add the scenes' sections to --out")
     args = ap.parse_args()
+    methods = args.methods.split(",")
     w, h = (int(v) for v in args.size.split("x"))
     size = (w, h)
     ref_desc = f"{args.ref_spp} spp" + (
@@ -288,7 +290,7 @@ def main() -> None:
                 (f"The reference's own noise: {metric} {noise[key]:.3g}", None, metric, noise[key])
             )
         hits: dict[str, dict] = {}
-        for method in PROGRESSIVE:
+        for method in methods:
             gi.render(scene, method, size=(8, 8), photons=1000, spp=1)  # warm-up (pipelines)
             bounds = {
                 label: (metric, metrics[metric][1], bound) for label, _, metric, bound in targets
@@ -316,7 +318,7 @@ def main() -> None:
             )
         lines.append("")
         for label, beat, _, _ in targets:
-            for method in PROGRESSIVE:
+            for method in methods:
                 hit = hits[method][label]
                 if hit is None:
                     reached = f"not within {args.seconds:g} s."
