@@ -118,12 +118,15 @@ def reference_part(
     return img, seconds
 
 
-def progressive_run(scene, method: str, size, seconds: float, bounds: dict) -> tuple[list, dict]:
+def progressive_run(
+    scene, method: str, size, seconds: float, bounds: dict, stop: tuple = ()
+) -> tuple[list, dict]:
     """Passes of a progressive renderer for `seconds` of render time: (pass count, seconds,
     image) at each power of two and at the end; and for each of `bounds` (name -> (metric,
     error function, bound)) the first pass (count, seconds) whose error is at most the
     bound, or None. Every pass is scored until its bounds are met (measured, not
-    interpolated between rows); the scoring is not timed."""
+    interpolated between rows); the scoring is not timed. The run ends early once every
+    bound named in `stop` is met."""
     r = gi.Renderer(scene, method, size=size, progressive=True, **PROGRESSIVE[method])
     out: list = []
     hits: dict = {name: None for name in bounds}
@@ -143,6 +146,8 @@ def progressive_run(scene, method: str, size, seconds: float, bounds: dict) -> t
                     hits[name] = (n, elapsed)
         if n & (n - 1) == 0:
             out.append((n, elapsed, img.copy()))
+        if stop and all(hits[name] is not None for name in stop):
+            break
     if out[-1][0] != n:
         out.append((n, elapsed, img.copy()))
     return out, hits
@@ -219,6 +224,11 @@ def main() -> None:
     )
     ap.add_argument("--ref-parts", type=int, default=1, help="reference = mean of this many parts")
     ap.add_argument("--methods", default=",".join(PROGRESSIVE), help="progressive methods to run")
+    ap.add_argument(
+        "--until-noise",
+        action="store_true",
+        help="end a progressive run once both errors reach the reference's own noise",
+    )
     ap.add_argument("--out", type=Path)
     ap.add_argument("--append", action="store_true", help="add the scenes' sections to --out")
     args = ap.parse_args()
@@ -247,7 +257,9 @@ def main() -> None:
     )
     lines += [
         f"Made by `.venv/bin/python {command}` ({args.size}, reference `path` at {ref_desc},"
-        f" progressive runs of {args.seconds:g} s):",
+        f" progressive runs of {args.seconds:g} s"
+        + (" or until the reference's noise" if args.until_noise else "")
+        + "):",
         "",
     ]
     for name in args.scenes.split(","):
@@ -295,7 +307,10 @@ def main() -> None:
             bounds = {
                 label: (metric, metrics[metric][1], bound) for label, _, metric, bound in targets
             }
-            steps, hits[method] = progressive_run(scene, method, size, args.seconds, bounds)
+            stop = tuple(label for label, beat, _, _ in targets if beat is None)
+            steps, hits[method] = progressive_run(
+                scene, method, size, args.seconds, bounds, stop if args.until_noise else ()
+            )
             for n, s, img in steps:
                 row = dict(method=method, step=f"{n} passes", seconds=s, per=s / n, image=img)
                 for key, error in metrics.values():
