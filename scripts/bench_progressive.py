@@ -301,13 +301,11 @@ def main() -> None:
             targets.append(
                 (f"The reference's own noise: {metric} {noise[key]:.3g}", None, metric, noise[key])
             )
+        bounds = {label: (metric, metrics[metric][1], bound) for label, _, metric, bound in targets}
+        stop = tuple(label for label, beat, _, _ in targets if beat is None)
         hits: dict[str, dict] = {}
         for method in methods:
             gi.render(scene, method, size=(8, 8), photons=1000, spp=1)  # warm-up (pipelines)
-            bounds = {
-                label: (metric, metrics[metric][1], bound) for label, _, metric, bound in targets
-            }
-            stop = tuple(label for label, beat, _, _ in targets if beat is None)
             steps, hits[method] = progressive_run(
                 scene, method, size, args.seconds, bounds, stop if args.until_noise else ()
             )
