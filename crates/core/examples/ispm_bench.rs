@@ -21,7 +21,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let groups: [(&str, &[&str]); 9] = [
         (
             "direct light (GPU)",
-            &["shadow maps", "gbuffer", "direct light"],
+            &["shadow maps", "gbuffer", "direct light", "edge shading"],
         ),
         ("bounce maps (GPU)", &["bounce maps"]),
         ("bounce readback", &["bounce readback"]),

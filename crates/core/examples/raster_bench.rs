@@ -15,7 +15,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let runs = args.runs(5)?;
     let scene = builtin::load("cornell")?;
     common::print_adapter()?;
-    let stages = ["shadow maps", "gbuffer", "direct light", "readback"];
+    let stages = [
+        "shadow maps",
+        "gbuffer",
+        "direct light",
+        "edge shading",
+        "readback",
+    ];
     println!(
         "| resolution | {} | frame (wall) |",
         stages.map(|s| format!("{s} (ms)")).join(" | ")

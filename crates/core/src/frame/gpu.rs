@@ -625,7 +625,7 @@ impl Targets {
                 ts,
             );
             if let Some(groups) = &centre_edges {
-                let ts = timer.compute_pass("direct light");
+                let ts = timer.compute_pass("edge shading");
                 passes.edges.record_shade(&mut encoder, groups, ts);
             }
         }

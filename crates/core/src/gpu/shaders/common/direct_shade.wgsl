@@ -33,10 +33,33 @@ fn load_sample(px: vec2<i32>) -> GSample {
     return g;
 }
 
-// Shadow-map visibility of `p` from light `l` (common/shadow_lookup.wgsl).
-fn visibility(l: Light, p: vec3<f32>) -> f32 {
+// A shadow-map layer and its world -> clip matrix.
+struct ShadowView {
+    layer: u32,
+    m: mat4x4<f32>,
+}
+
+// The shadow view of light `l` that sees `p`: `known` when it is that layer (a pixel's
+// points nearly always share their centre's cube face), else read from `shadow_views`.
+// lavapipe reads storage buffers slowly where the index varies per pixel, and the penumbra
+// test and its taps need up to 21 views a pixel.
+fn view_at(l: Light, p: vec3<f32>, known: ShadowView) -> ShadowView {
     let layer = shadow_layer_of(l.first_layer, l.layers, p - l.position);
-    return shadow_pcf(shadow_maps, shadow_sampler, shadow_views[layer], layer, p);
+    if layer == known.layer {
+        return known;
+    }
+    return ShadowView(layer, shadow_views[layer]);
+}
+
+// The shadow view of light `l` that sees `p`.
+fn view_of(l: Light, p: vec3<f32>) -> ShadowView {
+    let layer = shadow_layer_of(l.first_layer, l.layers, p - l.position);
+    return ShadowView(layer, shadow_views[layer]);
+}
+
+// Shadow-map visibility of `p` in view `sv` (common/shadow_lookup.wgsl).
+fn visibility(sv: ShadowView, p: vec3<f32>) -> f32 {
+    return shadow_pcf(shadow_maps, shadow_sampler, sv.m, sv.layer, p);
 }
 
 // Whether `q` (a neighbour's position, w = coverage) lies on the tangent plane (geometric
@@ -49,15 +72,16 @@ fn on_plane(p: vec3<f32>, ng: vec3<f32>, q: vec4<f32>) -> bool {
 // Whether light `l`'s visibility varies over the pixel footprint (steps `dx`, `dy`) around
 // `q`, whose PCF visibility is `v`: fractional there, or a single bilinear tap at a corner
 // of the footprint that sees otherwise (a shadow edge sharper than a pixel).
-fn penumbra(l: Light, q: vec3<f32>, v: f32, dx: vec3<f32>, dy: vec3<f32>) -> bool {
+// `sv` is the view of `q`.
+fn penumbra(l: Light, sv: ShadowView, q: vec3<f32>, v: f32, dx: vec3<f32>, dy: vec3<f32>) -> bool {
     if v > 0.0 && v < 1.0 {
         return true;
     }
     for (var c = 0u; c < 4u; c++) {
         let u = vec2<f32>(f32(c & 1u), f32(c >> 1u)) - 0.5;
         let corner = q + u.x * dx + u.y * dy;
-        let layer = shadow_layer_of(l.first_layer, l.layers, corner - l.position);
-        if shadow_tap(shadow_maps, shadow_sampler, shadow_views[layer], layer, corner) != v {
+        let cv = view_at(l, corner, sv);
+        if shadow_tap(shadow_maps, shadow_sampler, cv.m, cv.layer, corner) != v {
             return true;
         }
     }
@@ -181,11 +205,13 @@ fn shade_pixel(g: GSample, fp: Footprint) -> vec3<f32> {
         let dist = length(to_light);
         let cos_g = dot(to_light / dist, ng);
         let offset = ng * (l.texel_scale * dist * (1.0 - cos_g) + 1e-4 * dist);
-        var v = visibility(l, p + offset);
-        if taps > 1u && penumbra(l, p + offset, v, fp.dx, fp.dy) {
+        let sv = view_of(l, p + offset);
+        var v = visibility(sv, p + offset);
+        if taps > 1u && penumbra(l, sv, p + offset, v, fp.dx, fp.dy) {
             v = 0.0;
             for (var j = 0u; j < taps * taps; j++) {
-                v += visibility(l, footprint_point(p + offset, fp, tap_offset(j, taps)));
+                let q = footprint_point(p + offset, fp, tap_offset(j, taps));
+                v += visibility(view_at(l, q, sv), q);
             }
             v /= f32(taps * taps);
         }
