@@ -5,12 +5,13 @@
 //! same run, as a markdown table.
 //!
 //! `cargo run -p gi-core --profile test --example frame_bench [-- --runs N --quick --scene NAME
-//! --size WxH --ispm-only --estimator NAME]`
+//! --size WxH --ispm-only --estimator NAME --photons N ... --spp N --shadow-map-size N]`
 //!
 //! Scenes `cornell`, `cornell-glass` and the ~246k-triangle `dense-cornell`, at 640×480 and
-//! 1280×720, 20k / 50k / 200k photons, 16 direct samples per pixel, subsample 2 (defaults
-//! otherwise). Median of N frames after a warm-up frame. `--quick` runs 640×480 and 20k only;
-//! `--size` one size; `--ispm-only` leaves out the direct-light and BVH sections.
+//! 1280×720, 20k / 50k / 200k photons (or each `--photons`), 16 direct samples per pixel
+//! (`--spp`), subsample 2, defaults otherwise (`--shadow-map-size`). Median of N frames
+//! after a warm-up frame. `--quick` runs 640×480 and 20k only; `--size` one size;
+//! `--ispm-only` leaves out the direct-light and BVH sections.
 //!
 //! Stages are wall-clock: lavapipe takes a compute pass's timestamps when it flushes its
 //! queued work, not around the pass (measured: the tiled estimator's shading pass "took"
@@ -131,13 +132,33 @@ fn moving_light_serial(
     Ok((median(wall), median(serial_wall), frames))
 }
 
-/// The table's `ispm` settings: 16 direct samples per pixel, defaults otherwise.
-fn ispm_settings(w: u32, h: u32, photons: u64, estimator: Estimator) -> Settings {
+/// The direct light's settings of the `ispm` tables: sub-pixel samples (`--spp`, 16) and
+/// shadow-map size (`--shadow-map-size`, the default).
+#[derive(Clone, Copy)]
+struct DirectOptions {
+    spp: u32,
+    shadow_map_size: u32,
+}
+
+impl DirectOptions {
+    fn get(args: &common::Args) -> Result<Self, Box<dyn std::error::Error>> {
+        Ok(DirectOptions {
+            spp: args.value("--spp").map_or(Ok(16), str::parse)?,
+            shadow_map_size: args
+                .value("--shadow-map-size")
+                .map_or(Ok(Settings::default().shadow_map_size), str::parse)?,
+        })
+    }
+}
+
+/// The table's `ispm` settings: the direct light's `d`, defaults otherwise.
+fn ispm_settings(w: u32, h: u32, photons: u64, estimator: Estimator, d: DirectOptions) -> Settings {
     Settings {
         method: Method::Ispm,
         width: Some(w),
         height: Some(h),
-        spp: 16,
+        spp: d.spp,
+        shadow_map_size: d.shadow_map_size,
         photons,
         estimator,
         ..Default::default()
@@ -161,6 +182,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let quick = args.quick();
     let ispm_only = std::env::args().any(|a| a == "--ispm-only");
     let estimator: Estimator = args.value("--estimator").unwrap_or("auto").parse()?;
+    let direct = DirectOptions::get(&args)?;
     common::print_adapter()?;
     let only = args.value("--scene");
     let scenes: Vec<(&str, Scene)> = ["cornell", "cornell-glass", "dense-cornell"]
@@ -187,7 +209,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         None if quick => vec![(640, 480)],
         None => vec![(640, 480), (1280, 720)],
     };
-    let budgets: &[u64] = if quick {
+    let photons: Vec<u64> = args
+        .values("--photons")
+        .into_iter()
+        .map(str::parse)
+        .collect::<Result<_, _>>()?;
+    let budgets: &[u64] = if !photons.is_empty() {
+        &photons
+    } else if quick {
         &[20_000]
     } else {
         &[20_000, 50_000, 200_000]
@@ -203,7 +232,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     for (name, scene) in &scenes {
         for &(w, h) in &sizes {
             for &photons in budgets {
-                let settings = ispm_settings(w, h, photons, estimator);
+                let settings = ispm_settings(w, h, photons, estimator, direct);
                 // One-shot: a new renderer per frame, every image read back.
                 render(scene, &settings, &Silent)?;
                 let mut wall = Vec::new();
@@ -266,7 +295,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             for first_bounce in [FirstBounce::Raster, FirstBounce::Traced] {
                 let settings = Settings {
                     first_bounce,
-                    ..ispm_settings(w, h, photons, estimator)
+                    ..ispm_settings(w, h, photons, estimator, direct)
                 };
                 let (_, serial, frames) = moving_light_serial(scene, &settings, runs)?;
                 let bounce = median(
