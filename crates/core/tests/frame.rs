@@ -3,6 +3,7 @@
 //! moving lights and objects move their shadows and indirect light, and temporal photon
 //! reuse converges on a still scene.
 
+use gi_core::estimate::Estimator;
 use gi_core::frame::{FrameDesc, Images, Renderer};
 use gi_core::gpu::alloc::counters;
 use gi_core::render::Silent;
@@ -429,6 +430,39 @@ fn light_only_frames_reuse_the_specular_landings() {
         turned.stats.camera_paths > 0,
         "a camera move did not re-trace"
     );
+}
+
+/// The `cpu` estimator reads the eye G-buffer back only when it was redrawn: a frame whose
+/// light alone moved reuses the view samples it read before, a camera move reads them
+/// again; every frame equals a one-shot render of its pose, bitwise.
+#[test]
+fn light_only_frames_reuse_the_view_samples() {
+    let scene = builtin::load("cornell").expect("scene");
+    let s = Settings {
+        subsample: 2,
+        estimator: Estimator::Cpu,
+        ..settings(Method::Ispm)
+    };
+    let read_back = |o: &RenderOutput| o.stats.stages.iter().any(|(n, _)| n == "gbuffer readback");
+    let same_as_one_shot = |frame: &RenderOutput, posed: &Scene| {
+        let one_shot = render(posed, &s, &Silent).expect("one-shot");
+        let d = max_difference(&frame.radiance, &one_shot.radiance);
+        assert_eq!(d, 0.0, "frames differ by {d}");
+    };
+    let mut r = Renderer::new(&scene, &s).expect("renderer");
+    let first = r.render(&all(), &Silent).expect("frame 0");
+    assert_eq!(first.stats.estimator, "cpu");
+    assert!(read_back(&first), "frame 0 did not read the G-buffer back");
+    let [camera, light, _] = <[SceneUpdate; 3]>::try_from(pose(&scene, 1.0)).expect("pose");
+    let mut posed = scene.clone();
+    for u in [light, camera] {
+        r.update(&u).expect("update");
+        posed.apply(&u).expect("valid update");
+        let frame = r.render(&all(), &Silent).expect("frame");
+        let camera_moved = matches!(u, SceneUpdate::Camera(_));
+        assert_eq!(read_back(&frame), camera_moved, "{:?}", frame.stats.stages);
+        same_as_one_shot(&frame, &posed);
+    }
 }
 
 /// A serial frame (`FrameDesc::serial`: the GPU waited on after each stage, for

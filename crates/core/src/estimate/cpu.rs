@@ -5,7 +5,8 @@
 //! The same estimate as the GPU estimators: the term of `common/photon_volume.wgsl` (the
 //! ellipsoid test, the 2D Epanechnikov kernel, the normal agreement, the BSDF of the view
 //! sample) summed over the photons whose ellipsoid holds each view sample, one sample per
-//! `subsample` × `subsample` block of the eye G-buffer (read back once per estimate). The
+//! `subsample` × `subsample` block of the eye G-buffer (read back when it was redrawn:
+//! frames whose lights or photons alone changed reuse the samples). The
 //! photons are binned like `tiled.wgsl`'s: each into the 8×8-texel tiles under the screen
 //! rectangle of its bounding sphere whose samples' world box it meets; each tile's samples
 //! then sum the photons of its list in parallel. Every step is conservative, so a sample
@@ -63,6 +64,11 @@ pub struct CpuEstimate {
     photons: Vec<Photon>,
     /// Photon-list entries of the last estimate.
     entries: u64,
+    /// The view samples of the last estimate and the G-buffer generation they were read
+    /// from: a frame whose G-buffer was not redrawn (the lights or the photons changed, not
+    /// the view) reuses them instead of reading the G-buffer back.
+    samples: Vec<Option<ViewSample>>,
+    samples_generation: Option<u64>,
 }
 
 impl CpuEstimate {
@@ -86,6 +92,8 @@ impl CpuEstimate {
             params: None,
             photons: Vec::new(),
             entries: 0,
+            samples: Vec::new(),
+            samples_generation: None,
         }
     }
 
@@ -111,7 +119,7 @@ impl CpuEstimate {
         self.entries
     }
 
-    /// Bytes held beyond the targets: the G-buffer copies and the photons.
+    /// Bytes held beyond the targets: the G-buffer copies, the view samples and the photons.
     pub fn memory(&self) -> Vec<(&'static str, u64)> {
         vec![
             (
@@ -123,25 +131,41 @@ impl CpuEstimate {
                 (self.photons.capacity() * std::mem::size_of::<Photon>()) as u64,
             ),
             (
+                "view samples",
+                (self.samples.capacity() * std::mem::size_of::<Option<ViewSample>>()) as u64,
+            ),
+            (
                 "photon lists",
                 self.entries * std::mem::size_of::<Entry>() as u64,
             ),
         ]
     }
 
-    /// Reads the eye G-buffer back (waiting for the work submitted so far), computes the
-    /// estimate and writes it into the low-resolution target. Returns the seconds spent
-    /// waiting for the G-buffer (with the GPU work submitted before it).
-    pub fn compute(&mut self, ctx: &GpuContext, gbuf: &GBuffer) -> Result<f64> {
+    /// Reads the eye G-buffer back (waiting for the work submitted so far) unless its
+    /// `generation` is that of the last estimate's, computes the estimate and writes it into
+    /// the low-resolution target. Returns the seconds spent waiting for the G-buffer (with
+    /// the GPU work submitted before it), `None` where it was not read back.
+    pub fn compute(
+        &mut self,
+        ctx: &GpuContext,
+        gbuf: &GBuffer,
+        generation: u64,
+    ) -> Result<Option<f64>> {
         let params = self
             .params
             .ok_or_else(|| Error::Gpu("cpu estimate without parameters".into()))?;
-        let t = std::time::Instant::now();
-        let samples = self.read_samples(ctx, gbuf, params.eye)?;
-        let waited = t.elapsed().as_secs_f64();
+        let mut waited = None;
+        if self.samples_generation != Some(generation) {
+            let t = std::time::Instant::now();
+            self.samples_generation = None;
+            self.samples = self.read_samples(ctx, gbuf, params.eye)?;
+            self.samples_generation = Some(generation);
+            waited = Some(t.elapsed().as_secs_f64());
+        }
+        let samples = &self.samples;
         let [lw, lh] = self.target.low_size;
         let tiles = [lw.div_ceil(TILE), lh.div_ceil(TILE)];
-        let lists = bin(&self.photons, &samples, [lw, lh], tiles, params)?;
+        let lists = bin(&self.photons, samples, [lw, lh], tiles, params)?;
         self.entries = lists.iter().map(|l| l.len() as u64).sum();
         let rows: Vec<Vec<Vec4>> = (0..tiles[1])
             .into_par_iter()

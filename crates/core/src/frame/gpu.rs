@@ -214,6 +214,12 @@ impl GpuScene {
     }
 }
 
+/// A number not handed out before in this process ([`Targets::gbuffer_generation`]).
+fn next_generation() -> u64 {
+    static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+}
+
 /// Render targets of one image size, the eye views and the bind groups that read them.
 pub(crate) struct Targets {
     pub width: u32,
@@ -237,6 +243,9 @@ pub(crate) struct Targets {
     /// The G-buffer at the pixel centres (AOVs, photon estimates, the direct light of
     /// pixels off edges).
     pub gbuf: gbuffer::GBuffer,
+    /// Which rendering of `gbuf` it holds: a new number, unique in the process, each time
+    /// its pass is recorded (what was read back of an equal generation is still valid).
+    pub gbuffer_generation: u64,
     /// The G-buffer of one jittered sub-pixel sample at a time.
     sub: gbuffer::GBuffer,
     sub_gbuffer_group: wgpu::BindGroup,
@@ -432,6 +441,7 @@ impl Targets {
             direct_current: false,
             samples_current: false,
             gbuf,
+            gbuffer_generation: next_generation(),
             sub,
             sub_gbuffer_group,
             edges,
@@ -599,6 +609,7 @@ impl Targets {
         }
         if !self.samples_current {
             gbuffer_pass(&mut encoder, timer, &self.gbuf, 0);
+            self.gbuffer_generation = next_generation();
             if let Some(find) = &centre_edges {
                 let ts = timer.compute_pass("edges");
                 passes.edges.record_find(&mut encoder, find, ts);
@@ -651,6 +662,7 @@ impl Targets {
             return;
         }
         let ts = timer.pass("gbuffer");
+        self.gbuffer_generation = next_generation();
         Passes::get(ctx).gbuffer.record(
             encoder,
             &self.gbuf,

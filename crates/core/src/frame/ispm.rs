@@ -499,14 +499,16 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         }
     }
     if let (true, IndirectEstimate::Cpu(c)) = (splat, &mut state.estimate) {
-        // Waits for the eye G-buffer (and the direct light submitted before it); in serial
-        // frames, whose direct light was waited on, this is part of "splat (wall)".
-        let waited = c.compute(&ctx, &targets.gbuf)?;
+        // Waits for the eye G-buffer (and the direct light submitted before it) when it was
+        // redrawn; in serial frames, whose direct light was waited on, this is part of
+        // "splat (wall)".
+        let waited = c.compute(&ctx, &targets.gbuf, targets.gbuffer_generation)?;
         if !serial {
-            stats.stages.push(("gbuffer readback".into(), waited));
-            stats
-                .stages
-                .push(("cpu estimate".into(), t.elapsed().as_secs_f64() - waited));
+            if let Some(w) = waited {
+                stats.stages.push(("gbuffer readback".into(), w));
+            }
+            let estimate = t.elapsed().as_secs_f64() - waited.unwrap_or(0.0);
+            stats.stages.push(("cpu estimate".into(), estimate));
             t = Instant::now();
         }
         stats.estimator_memory = state.estimate.memory();
