@@ -69,3 +69,22 @@ impl Error {
         }
     }
 }
+
+/// The member of `all` named `s` (by `name`): the `FromStr` of the settings that are one of
+/// a few named choices. Else a setting error for `setting` that names the `what` asked for
+/// and the choices available.
+pub(crate) fn parse_named<T: Copy>(
+    s: &str,
+    all: &[T],
+    name: fn(T) -> &'static str,
+    setting: &'static str,
+    what: &str,
+) -> Result<T> {
+    all.iter().copied().find(|&v| name(v) == s).ok_or_else(|| {
+        let names: Vec<_> = all.iter().map(|&v| name(v)).collect();
+        Error::setting(
+            setting,
+            format!("unknown {what} `{s}` (available: {})", names.join(", ")),
+        )
+    })
+}

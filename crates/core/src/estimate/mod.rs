@@ -109,17 +109,7 @@ fn auto_choice(adapter: &wgpu::AdapterInfo) -> (Estimator, String) {
 impl FromStr for Estimator {
     type Err = Error;
     fn from_str(s: &str) -> Result<Self> {
-        Estimator::ALL
-            .iter()
-            .copied()
-            .find(|v| v.name() == s)
-            .ok_or_else(|| {
-                let names: Vec<_> = Estimator::ALL.iter().map(|v| v.name()).collect();
-                Error::setting(
-                    "estimator",
-                    format!("unknown estimator `{s}` (available: {})", names.join(", ")),
-                )
-            })
+        crate::error::parse_named(s, Estimator::ALL, Estimator::name, "estimator", "estimator")
     }
 }
 

@@ -76,17 +76,13 @@ impl FirstBounce {
 impl FromStr for FirstBounce {
     type Err = Error;
     fn from_str(s: &str) -> Result<Self> {
-        FirstBounce::ALL
-            .iter()
-            .copied()
-            .find(|f| f.name() == s)
-            .ok_or_else(|| {
-                let names: Vec<_> = FirstBounce::ALL.iter().map(|f| f.name()).collect();
-                Error::setting(
-                    "first_bounce",
-                    format!("unknown `{s}` (one of {})", names.join(", ")),
-                )
-            })
+        crate::error::parse_named(
+            s,
+            FirstBounce::ALL,
+            FirstBounce::name,
+            "first_bounce",
+            "first bounce",
+        )
     }
 }
 

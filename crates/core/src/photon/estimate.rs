@@ -60,17 +60,7 @@ impl Kernel {
 impl FromStr for Kernel {
     type Err = Error;
     fn from_str(s: &str) -> Result<Self> {
-        Kernel::ALL
-            .iter()
-            .copied()
-            .find(|k| k.name() == s)
-            .ok_or_else(|| {
-                let names: Vec<_> = Kernel::ALL.iter().map(|k| k.name()).collect();
-                Error::setting(
-                    "kernel",
-                    format!("unknown kernel `{s}` (available: {})", names.join(", ")),
-                )
-            })
+        crate::error::parse_named(s, Kernel::ALL, Kernel::name, "kernel", "kernel")
     }
 }
 

@@ -50,20 +50,13 @@ impl VolumeShape {
 impl FromStr for VolumeShape {
     type Err = Error;
     fn from_str(s: &str) -> Result<Self> {
-        VolumeShape::ALL
-            .iter()
-            .copied()
-            .find(|v| v.name() == s)
-            .ok_or_else(|| {
-                let names: Vec<_> = VolumeShape::ALL.iter().map(|v| v.name()).collect();
-                Error::setting(
-                    "volume_shape",
-                    format!(
-                        "unknown volume shape `{s}` (available: {})",
-                        names.join(", ")
-                    ),
-                )
-            })
+        crate::error::parse_named(
+            s,
+            VolumeShape::ALL,
+            VolumeShape::name,
+            "volume_shape",
+            "volume shape",
+        )
     }
 }
 

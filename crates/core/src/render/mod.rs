@@ -69,17 +69,7 @@ impl Method {
 impl FromStr for Method {
     type Err = Error;
     fn from_str(s: &str) -> Result<Self> {
-        Method::ALL
-            .iter()
-            .copied()
-            .find(|m| m.name() == s)
-            .ok_or_else(|| {
-                let names: Vec<_> = Method::ALL.iter().map(|m| m.name()).collect();
-                Error::setting(
-                    "method",
-                    format!("unknown method `{s}` (available: {})", names.join(", ")),
-                )
-            })
+        crate::error::parse_named(s, Method::ALL, Method::name, "method", "method")
     }
 }
 
@@ -113,16 +103,13 @@ impl BidirStrategy {
 impl FromStr for BidirStrategy {
     type Err = Error;
     fn from_str(s: &str) -> Result<Self> {
-        BidirStrategy::ALL
-            .iter()
-            .copied()
-            .find(|v| v.name() == s)
-            .ok_or_else(|| {
-                Error::setting(
-                    "bidir_strategy",
-                    format!("unknown strategy `{s}` (available: mis, vpl, bundle)"),
-                )
-            })
+        crate::error::parse_named(
+            s,
+            BidirStrategy::ALL,
+            BidirStrategy::name,
+            "bidir_strategy",
+            "strategy",
+        )
     }
 }
 
