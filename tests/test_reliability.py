@@ -310,8 +310,8 @@ def test_nearly_mirror_glossy_is_finite():
 def test_a_failed_frame_then_exit_does_not_crash():
     """A frame that fails half-way left work in flight on lavapipe's threads, and 15% of
     processes that exited right after the error crashed in LLVM (SIGSEGV/SIGABRT; 12 of 80
-    before the fix, 0 of 120 after). gi now waits for the devices after a failed frame and
-    at exit. 24 runs: a 15% crash rate passes all of them with probability 2%."""
+    before the fix, 0 of 120 after). gi now waits for the devices at exit (`atexit`).
+    24 runs: a 15% crash rate passes all of them with probability 2%."""
     child = (
         "import sys, gi\n"
         "try:\n"

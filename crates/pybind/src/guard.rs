@@ -155,12 +155,9 @@ pub fn run<T: Send>(
                     }
                 }
             }
-            let joined = worker.join();
-            if !matches!(joined, Ok((Ok(Ok(_)), _))) {
-                // A failed or cancelled frame may leave GPU work in flight.
-                gi_core::gpu::wait_idle_all();
-            }
-            let (result, counters) = joined.map_err(|_| "the worker thread died".to_string())?;
+            let (result, counters) = worker
+                .join()
+                .map_err(|_| "the worker thread died".to_string())?;
             gi_core::gpu::alloc::merge(counters);
             Ok(result)
         })

@@ -171,8 +171,8 @@ fn contexts() -> std::sync::MutexGuard<'static, HashMap<Choice, Arc<GpuContext>>
 /// ignored: their work is gone). A frame that fails half-way leaves work in flight on the
 /// cached devices; lavapipe runs it on its own threads, compiling shader variants with
 /// LLVM, and a process that exits meanwhile crashes in LLVM as its static destructors run
-/// (SIGSEGV or SIGABRT after the error was reported). Callers wait here after a failed
-/// frame and before the process exits.
+/// (SIGSEGV or SIGABRT after the error was reported). The Python package waits here at
+/// interpreter exit (`atexit`), which runs before the C exit handlers.
 pub fn wait_idle_all() {
     let all: Vec<Arc<GpuContext>> = contexts().values().cloned().collect();
     for ctx in all {
