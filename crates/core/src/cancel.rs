@@ -3,8 +3,26 @@
 //! [`Progress::cancelled`]) and report finished items with [`StageProgress::advance`].
 
 use crate::error::{Error, Result};
-use crate::render::Progress;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+
+/// Receives progress; return `false` to cancel the render.
+pub trait Progress: Sync {
+    fn update(&self, stage: &str, fraction: f64) -> bool;
+    /// True once the render should stop. Long loops ask between small work items, so it
+    /// must be cheap (the Python binding's is an atomic load). Default: only `update`
+    /// cancels.
+    fn cancelled(&self) -> bool {
+        false
+    }
+}
+
+/// No progress reporting.
+pub struct Silent;
+impl Progress for Silent {
+    fn update(&self, _: &str, _: f64) -> bool {
+        true
+    }
+}
 
 /// A stage of `total` work items reported to a [`Progress`] under `name`.
 pub struct StageProgress<'a> {

@@ -34,8 +34,8 @@ pub enum Error {
     /// allocation, or an allocation that failed).
     #[error(
         "out of memory: {what} needs about {} but only {} is available",
-        crate::memory::human(*.needed),
-        crate::memory::human(*.available)
+        human(*.needed),
+        human(*.available)
     )]
     OutOfMemory {
         /// What the memory is for, e.g. "photon map (5000000 photons)".
@@ -87,4 +87,20 @@ pub(crate) fn parse_named<T: Copy>(
             format!("unknown {what} `{s}` (available: {})", names.join(", ")),
         )
     })
+}
+
+/// `bytes` in binary units, e.g. "1.5 GiB".
+pub fn human(bytes: u64) -> String {
+    const UNITS: [&str; 5] = ["B", "KiB", "MiB", "GiB", "TiB"];
+    let mut v = bytes as f64;
+    let mut unit = 0;
+    while v >= 1024.0 && unit + 1 < UNITS.len() {
+        v /= 1024.0;
+        unit += 1;
+    }
+    if unit == 0 {
+        format!("{bytes} B")
+    } else {
+        format!("{v:.1} {}", UNITS[unit])
+    }
 }

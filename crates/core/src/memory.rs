@@ -7,6 +7,8 @@
 //! and the cgroup's memory limit. Where none of these can be read (not Linux), checks pass.
 
 use crate::error::{Error, Result};
+#[cfg(test)]
+use crate::error::human;
 
 /// Headroom kept free for everything not estimated (thread stacks, allocator arenas,
 /// driver mappings): a check fails when the estimate plus this exceeds the room left.
@@ -54,22 +56,6 @@ pub fn try_with_capacity<T>(n: usize, what: impl FnOnce() -> String) -> Result<V
         available: available().unwrap_or(0),
     })?;
     Ok(v)
-}
-
-/// `bytes` in binary units, e.g. "1.5 GiB".
-pub fn human(bytes: u64) -> String {
-    const UNITS: [&str; 5] = ["B", "KiB", "MiB", "GiB", "TiB"];
-    let mut v = bytes as f64;
-    let mut unit = 0;
-    while v >= 1024.0 && unit + 1 < UNITS.len() {
-        v /= 1024.0;
-        unit += 1;
-    }
-    if unit == 0 {
-        format!("{bytes} B")
-    } else {
-        format!("{v:.1} {}", UNITS[unit])
-    }
 }
 
 /// A `key: value kB` line of a /proc file, in bytes.

@@ -109,6 +109,12 @@ impl Material {
         self.transmission.max_element() > 0.0
     }
     /// True when every lobe is a delta lobe (nothing for next-event estimation to evaluate).
+    /// True when the material can scatter into a delta lobe (perfect mirror or smooth
+    /// glass): what a rasterizer that shades the first surface cannot give.
+    pub fn has_delta_lobe(&self) -> bool {
+        (self.has_specular() && self.is_mirror()) || self.has_transmission()
+    }
+
     pub fn is_purely_specular(&self) -> bool {
         self.diffuse.max_element() <= 0.0 && (!self.has_specular() || self.is_mirror())
     }

@@ -17,6 +17,7 @@
 //! lists overflow anyway is detected at readback ([`Binned::overflowed`]) and splatted again
 //! with room for them.
 
+use crate::gpu::Pipelines;
 use super::target::IndirectTarget;
 use crate::error::{Error, Result};
 use crate::gpu::{self, shaders, GpuContext};
@@ -24,7 +25,7 @@ use crate::photon::Photon;
 use crate::raster::buffer_init;
 use crate::raster::gbuffer::GBuffer;
 use crate::raster::ispm::{tex, Z_RATIO};
-use crate::raster::timer::Timer;
+use crate::gpu::timer::Timer;
 use crate::raster::volume_shape::{projected_radius, VolumeRadius};
 use crate::scene::{Camera, Scene};
 use bytemuck::{Pod, Zeroable};
@@ -165,11 +166,6 @@ fn storage() -> wgpu::BindingType {
 }
 
 impl BinnedPasses {
-    pub fn get(ctx: &GpuContext) -> &BinnedPasses {
-        ctx.binned_passes
-            .get_or_init(|| BinnedPasses::new(&ctx.device))
-    }
-
     fn new(device: &wgpu::Device) -> Self {
         let float = texture(wgpu::TextureSampleType::Float { filterable: false });
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -1099,5 +1095,11 @@ impl Binned {
             parts.push(("sample leaves", self.cluster_of.size()));
         }
         parts
+    }
+}
+
+impl crate::gpu::Pipelines for BinnedPasses {
+    fn create(ctx: &crate::gpu::GpuContext) -> Self {
+        BinnedPasses::new(&ctx.device)
     }
 }

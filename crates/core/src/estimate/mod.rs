@@ -138,7 +138,7 @@ impl IndirectEstimate {
         &self,
         ctx: &crate::gpu::GpuContext,
         encoder: &mut wgpu::CommandEncoder,
-        timer: &mut crate::raster::timer::Timer,
+        timer: &mut crate::gpu::timer::Timer,
     ) {
         self.record_splat(ctx, encoder, timer);
         self.record_upsample(ctx, encoder, timer);
@@ -149,7 +149,7 @@ impl IndirectEstimate {
         &self,
         ctx: &crate::gpu::GpuContext,
         encoder: &mut wgpu::CommandEncoder,
-        timer: &mut crate::raster::timer::Timer,
+        timer: &mut crate::gpu::timer::Timer,
     ) {
         match self {
             IndirectEstimate::Volumes(v) => v.record(ctx, encoder, timer),
@@ -164,7 +164,7 @@ impl IndirectEstimate {
         &self,
         ctx: &crate::gpu::GpuContext,
         encoder: &mut wgpu::CommandEncoder,
-        timer: &mut crate::raster::timer::Timer,
+        timer: &mut crate::gpu::timer::Timer,
     ) {
         let target = match self {
             IndirectEstimate::Volumes(v) => &v.target,

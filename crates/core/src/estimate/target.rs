@@ -2,10 +2,11 @@
 //! centre of a `subsample` × `subsample` block, and its joint bilateral upsampling to full
 //! resolution (ISPM section 5.2) when `subsample` > 1.
 
+use crate::gpu::Pipelines;
 use crate::gpu::{self, GpuContext};
 use crate::raster::gbuffer::GBuffer;
 use crate::raster::ispm::{tex, IspmPasses, UpsampleParamsRaw, TARGET};
-use crate::raster::timer::Timer;
+use crate::gpu::timer::Timer;
 use crate::raster::{buffer_init, camera_view};
 use crate::scene::Scene;
 use glam::{Mat4, Vec2, Vec3};

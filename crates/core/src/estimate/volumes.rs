@@ -6,13 +6,14 @@
 //! the parameter buffers and bind groups, the icosahedron, and a photon buffer that grows
 //! geometrically (a frame rewrites only the photons in it).
 
+use crate::gpu::Pipelines;
 use super::target::IndirectTarget;
 use crate::gpu::{self, GpuContext};
 use crate::photon::Photon;
 use crate::raster::buffer_init;
 use crate::raster::gbuffer::GBuffer;
 use crate::raster::ispm::{icosahedron, tex, IspmPasses, VolumeParamsRaw, Z_RATIO};
-use crate::raster::timer::Timer;
+use crate::gpu::timer::Timer;
 use crate::raster::volume_shape::VolumeRadius;
 use crate::scene::Scene;
 

@@ -19,12 +19,16 @@ use super::{GpuState, Images};
 use crate::error::{Error, Result};
 use crate::gpu::{self, raw::ViewRaw, GpuContext};
 use crate::raster::bundles::{bundle_view, BundleBuffers, BundleViewRaw};
-use crate::raster::ispm::{bounce_layers, BounceLayer};
+use crate::scene::light_views::{self, light_views, LightView};
 use crate::raster::rsm::{RsmTargets, RsmTexel};
 use crate::raster::specular::specular_paths_direct;
-use crate::raster::vpl::{cube_views, BidirParamsRaw, BidirPasses, VplRaw};
-use crate::raster::{buffer_init, shadow, Passes, VIEW_SIZE};
-use crate::render::camera_pass::has_delta_lobe;
+use crate::raster::vpl::{cube_views, BidirParamsRaw, VplPass, VplRaw};
+use crate::gpu::Pipelines;
+use crate::raster::bundles::BundlePass;
+use crate::raster::direct::DirectPass;
+use crate::raster::rsm::RsmPass;
+use crate::raster::shadow::ShadowPass;
+use crate::raster::{buffer_init, shadow, VIEW_SIZE};
 use crate::render::{BidirStrategy, Progress, RenderOutput, RenderStats, Settings};
 use crate::sampling::Rng;
 use crate::scene::{Environment, Scene};
@@ -36,7 +40,7 @@ use std::time::Instant;
 /// What `bidir` keeps between frames: the RSM targets, the VPL buffers and their shadow maps,
 /// the indirect target. Rebuilt when the image size, the light views or the VPL count change.
 pub(super) struct BidirState {
-    layers: Vec<BounceLayer>,
+    layers: Vec<LightView>,
     rsm: Option<RsmTargets>,
     /// VPL slots (all lights together).
     capacity: u32,
@@ -110,14 +114,13 @@ impl BidirState {
     fn new(
         ctx: &GpuContext,
         g: &GpuState,
-        layers: Vec<BounceLayer>,
+        layers: Vec<LightView>,
         capacity: u32,
         vpl_size: u32,
         bundle_key: (u32, u32, u32),
         env: Option<&Environment>,
     ) -> Result<Self> {
-        let passes = Passes::get(ctx);
-        let bp = BidirPasses::get(ctx);
+        let direct_pass = DirectPass::get(ctx);
         let device = &ctx.device;
         let n_layers = capacity.max(1) * 6;
         let max_layers = device.limits().max_texture_array_layers;
@@ -138,7 +141,7 @@ impl BidirState {
         }
         let bytes = n_layers as u64 * vpl_size as u64 * vpl_size as u64 * 4;
         crate::memory::check(|| "the VPL shadow maps".to_string(), bytes)?;
-        let rsm = RsmTargets::new(ctx, &bp.rsm, &layers, &g.scene.materials)?;
+        let rsm = RsmTargets::new(ctx, &RsmPass::get(ctx), &layers, &g.scene.materials)?;
         let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
         // A texture, not a storage buffer: the lighting pass loops over the VPLs, and
         // lavapipe reads textures in loops many times faster.
@@ -169,7 +172,7 @@ impl BidirState {
         let (n_bundles, res, mb) = bundle_key;
         let bundles = BundleBuffers::new(
             ctx,
-            &bp.bundles,
+            &BundlePass::get(ctx),
             &g.scene.materials,
             n_bundles,
             res,
@@ -193,7 +196,7 @@ impl BidirState {
             device,
             &wgpu::BindGroupDescriptor {
                 label: Some("vpl shadow bind group"),
-                layout: &passes.shadow.layout,
+                layout: &ShadowPass::get(ctx).layout,
                 entries: &[wgpu::BindGroupEntry {
                     binding: 0,
                     resource: crate::raster::view_binding(&views),
@@ -206,7 +209,7 @@ impl BidirState {
             device,
             &wgpu::BindGroupDescriptor {
                 label: Some("vpl bind group"),
-                layout: &bp.vpl.layout,
+                layout: &VplPass::get(ctx).layout,
                 entries: &[
                     wgpu::BindGroupEntry {
                         binding: 0,
@@ -226,7 +229,7 @@ impl BidirState {
                     },
                     wgpu::BindGroupEntry {
                         binding: 4,
-                        resource: wgpu::BindingResource::Sampler(&passes.direct.shadow_sampler),
+                        resource: wgpu::BindingResource::Sampler(&direct_pass.shadow_sampler),
                     },
                     wgpu::BindGroupEntry {
                         binding: 5,
@@ -303,7 +306,7 @@ impl BidirState {
 
     fn fits(
         &self,
-        layers: &[BounceLayer],
+        layers: &[LightView],
         capacity: u32,
         vpl_size: u32,
         bundle_key: (u32, u32, u32),
@@ -377,7 +380,7 @@ fn env_table(ctx: &GpuContext, env: Option<&Environment>) -> (wgpu::Texture, f32
 
 /// The RSM layers: the bounce-map views with `rsm_size`² texels per view for a light of
 /// average power.
-fn rsm_layers(scene: &Scene, settings: &Settings) -> Vec<BounceLayer> {
+fn rsm_layers(scene: &Scene, settings: &Settings) -> Vec<LightView> {
     let views: u64 = scene
         .lights
         .iter()
@@ -387,14 +390,14 @@ fn rsm_layers(scene: &Scene, settings: &Settings) -> Vec<BounceLayer> {
         })
         .sum();
     let texels = (settings.rsm_size as u64).pow(2) * views.max(1);
-    bounce_layers(scene, texels)
+    light_views(scene, texels)
 }
 
 /// VPL records and their cube-face matrices for the GPU: `per_light` slots per light, light
 /// by light (the lighting pass finds a light's VPLs and covered flux by slot); a light
 /// without covered texels keeps zero-flux slots.
 fn vpl_records(scene: &Scene, vpls: &[Vpl], per_light: u32, size: u32) -> (Vec<VplRaw>, Vec<Mat4>) {
-    let (lo, hi) = shadow::bounds(scene);
+    let (lo, hi) = light_views::bounds(scene);
     let diag = (hi - lo).length().max(1e-6);
     let slots = per_light as usize * scene.lights.len();
     let mut raws = vec![VplRaw::zeroed(); slots];
@@ -493,7 +496,7 @@ fn bundle_views(
     b: &BundleBuffers,
     n_env: u32,
 ) -> Vec<BundleViewRaw> {
-    let (lo, hi) = shadow::bounds(scene);
+    let (lo, hi) = light_views::bounds(scene);
     let centre = (lo + hi) * 0.5;
     let radius = (hi - lo).length() * 0.5;
     let n_uni = settings.bundles - n_env;
@@ -552,8 +555,6 @@ pub(super) fn frame(
         ));
     }
     let ctx = g.ctx.clone();
-    let passes = Passes::get(&ctx);
-    let bp = BidirPasses::get(&ctx);
     g.timer.reset();
     let layers = rsm_layers(scene, settings);
     let per_light = settings.vpls_per_light;
@@ -582,7 +583,7 @@ pub(super) fn frame(
     state.layers = layers;
     let t = Instant::now();
     if let Some(rsm) = &state.rsm {
-        rsm.write_views(&ctx, &state.layers);
+        rsm.write_views(&ctx, scene, &state.layers);
     }
     g.targets.write_eye(&ctx, scene);
     let n_env = env_bundles(settings.bundles, state.env_pdf_scale);
@@ -599,11 +600,11 @@ pub(super) fn frame(
             label: Some("bidir lights"),
         });
     g.scene
-        .record_shadows(passes, &mut encoder, &mut g.timer, scene);
+        .record_shadows(&ctx, &mut encoder, &mut g.timer, scene);
     let textures = (&g.scene.textures.group, g.scene.variant);
     if let Some(rsm) = &state.rsm {
         rsm.record(
-            &bp.rsm,
+            &RsmPass::get(&ctx),
             &mut encoder,
             &state.layers,
             &g.scene.geometry,
@@ -665,7 +666,7 @@ pub(super) fn frame(
             bytemuck::cast_slice(&views),
         );
     }
-    let (lo, hi) = shadow::bounds(scene);
+    let (lo, hi) = light_views::bounds(scene);
     let min_dist = TWO_BOUNCE_MIN_DIST * (hi - lo).length();
     let env_rot = scene
         .environment
@@ -722,7 +723,7 @@ pub(super) fn frame(
         for (face, view) in chunk.iter().enumerate() {
             let offset = ((slot * 6 + face) as u64 * VIEW_SIZE) as u32;
             let ts = g.timer.pass("vpl shadow maps");
-            passes.shadow.record(
+            ShadowPass::get(&ctx).record(
                 &mut encoder,
                 view,
                 &state.view_group,
@@ -737,7 +738,7 @@ pub(super) fn frame(
 
     // 3. Ray bundles.
     state.bundles.record(
-        &bp.bundles,
+        &BundlePass::get(&ctx),
         &mut encoder,
         settings.bundles,
         &g.scene.geometry,
@@ -751,7 +752,7 @@ pub(super) fn frame(
         .record_direct(&ctx, &g.scene, encoder, &mut g.timer, progress)?;
     let indirect_view = state.indirect.create_view(&Default::default());
     let ts = g.timer.pass("bidir lighting");
-    bp.vpl.record(
+    VplPass::get(&ctx).record(
         &mut encoder,
         &indirect_view,
         [&state.group, g.targets.lighting_group()],
@@ -761,7 +762,7 @@ pub(super) fn frame(
     // 5. Mirrors and glass seen by the camera, traced on the CPU while the GPU works on the
     // lights (uploaded before the composite runs: queue writes precede the submission).
     let t = Instant::now();
-    let specular = if scene.materials.iter().any(has_delta_lobe) {
+    let specular = if scene.has_delta_materials() {
         let img = specular_paths_direct(scene, bvh, settings, progress)?;
         g.targets.write_specular(&ctx, &img);
         state.specular_written = true;

@@ -6,7 +6,7 @@ use super::gpu::{rgb_image, Targets};
 use super::{GpuState, Images};
 use crate::error::Result;
 use crate::image::Image;
-use crate::raster::{oct_decode, Passes};
+use crate::raster::oct_decode;
 use crate::render::{Progress, RenderOutput, RenderStats};
 use crate::scene::Scene;
 use glam::{Vec2, Vec3, Vec4};
@@ -34,7 +34,7 @@ pub(super) fn frame(
             label: Some("direct frame"),
         });
     g.scene
-        .record_shadows(Passes::get(&ctx), &mut encoder, &mut g.timer, scene);
+        .record_shadows(&ctx, &mut encoder, &mut g.timer, scene);
     let mut encoder = g
         .targets
         .record_direct(&ctx, &g.scene, encoder, &mut g.timer, progress)?;

@@ -7,10 +7,17 @@ use crate::error::{Error, Result};
 use crate::gpu::raw::ViewRaw;
 use crate::gpu::{self, GpuContext};
 use crate::image::Image;
-use crate::raster::timer::Timer;
+use crate::gpu::timer::Timer;
+use crate::gpu::Pipelines;
+use crate::raster::composite::CompositePass;
+use crate::raster::direct::DirectPass;
+use crate::raster::edges::EdgePass;
+use crate::raster::gbuffer::GBufferPass;
+use crate::raster::shadow::ShadowPass;
+use crate::raster::textures::TexturesLayout;
 use crate::raster::{
     self, buffer_init, camera_view, edges, gbuffer, sample_positions, shadow, view_binding,
-    Geometry, Passes, SAMPLES_PER_SUBMIT, VIEW_SIZE,
+    Geometry, SAMPLES_PER_SUBMIT, VIEW_SIZE,
 };
 use crate::scene::Scene;
 use glam::{Vec2, Vec4};
@@ -53,8 +60,7 @@ fn storage_init(ctx: &GpuContext, label: &str, bytes: &[u8]) -> wgpu::Buffer {
 
 impl GpuScene {
     pub fn new(ctx: &GpuContext, scene: &Scene, shadow_map_size: u32) -> Result<Self> {
-        let passes = Passes::get(ctx);
-        let textures = raster::textures::GpuTextures::new(ctx, scene, &passes.textures)?;
+        let textures = raster::textures::GpuTextures::new(ctx, scene, &TexturesLayout::get(ctx).layout)?;
         let shadows = shadow::ShadowViews::new(scene, shadow_map_size);
         let layers = (shadows.matrices.len() as u32).max(1);
         let materials: Vec<_> = scene.materials.iter().map(|m| m.to_raw()).collect();
@@ -71,7 +77,7 @@ impl GpuScene {
             &ctx.device,
             &wgpu::BindGroupDescriptor {
                 label: Some("shadow bind group"),
-                layout: &passes.shadow.layout,
+                layout: &ShadowPass::get(ctx).layout,
                 entries: &[wgpu::BindGroupEntry {
                     binding: 0,
                     resource: view_binding(&shadow_views),
@@ -186,7 +192,7 @@ impl GpuScene {
     /// Renders the shadow maps if lights or geometry moved since they were last rendered.
     pub fn record_shadows(
         &mut self,
-        passes: &Passes,
+        ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
         timer: &mut Timer,
         scene: &Scene,
@@ -199,7 +205,7 @@ impl GpuScene {
         for (layer, view) in self.shadow_layers.iter().enumerate() {
             let offset = (layer as u64 * VIEW_SIZE) as u32;
             let ts = timer.pass("shadow maps");
-            passes.shadow.record(
+            ShadowPass::get(ctx).record(
                 encoder,
                 view,
                 &self.shadow_group,
@@ -311,7 +317,7 @@ impl Targets {
         spp: u32,
         edge_supersampling: bool,
     ) -> Result<Self> {
-        let passes = Passes::get(ctx);
+        let direct_pass = DirectPass::get(ctx);
         let device = &ctx.device;
         let (w, h) = (scene.camera.width, scene.camera.height);
         let eye = buffer_init(
@@ -348,7 +354,7 @@ impl Targets {
             device,
             &wgpu::BindGroupDescriptor {
                 label: Some("gbuffer bind group"),
-                layout: &passes.gbuffer.layout,
+                layout: &GBufferPass::get(ctx).layout,
                 entries: &[
                     wgpu::BindGroupEntry {
                         binding: 0,
@@ -376,7 +382,7 @@ impl Targets {
             device,
             &wgpu::BindGroupDescriptor {
                 label: Some("direct scene bind group"),
-                layout: &passes.direct.scene_layout,
+                layout: &direct_pass.scene_layout,
                 entries: &[
                     wgpu::BindGroupEntry {
                         binding: 0,
@@ -393,7 +399,7 @@ impl Targets {
                     tex_entry(3, &gs.shadow_array),
                     wgpu::BindGroupEntry {
                         binding: 4,
-                        resource: wgpu::BindingResource::Sampler(&passes.direct.shadow_sampler),
+                        resource: wgpu::BindingResource::Sampler(&direct_pass.shadow_sampler),
                     },
                     wgpu::BindGroupEntry {
                         binding: 5,
@@ -407,7 +413,7 @@ impl Targets {
                 device,
                 &wgpu::BindGroupDescriptor {
                     label: Some("direct gbuffer bind group"),
-                    layout: &passes.direct.gbuffer_layout,
+                    layout: &direct_pass.gbuffer_layout,
                     entries: &g
                         .lighting_inputs()
                         .iter()
@@ -422,7 +428,7 @@ impl Targets {
         let edges = if spp > 1 && edge_supersampling {
             Some(edges::EdgeBuffers::new(
                 ctx,
-                &passes.edges.layout,
+                &EdgePass::get(ctx).layout,
                 (w, h, spp),
                 edges::initial_capacity(w * h),
                 &accum_view,
@@ -481,13 +487,12 @@ impl Targets {
     }
 
     pub fn bind_composite(&mut self, ctx: &GpuContext, indirect: Option<&wgpu::TextureView>) {
-        let passes = Passes::get(ctx);
         let indirect = indirect.unwrap_or(&self.black_view);
         self.composite_group = Some(gpu::create_bind_group(
             &ctx.device,
             &wgpu::BindGroupDescriptor {
                 label: Some("composite bind group"),
-                layout: &passes.composite.layout,
+                layout: &CompositePass::get(ctx).layout,
                 entries: &[
                     tex_entry(0, &self.accum_view),
                     tex_entry(1, &self.specular_view),
@@ -564,18 +569,22 @@ impl Targets {
         gs: &GpuScene,
         mut encoder: wgpu::CommandEncoder,
         timer: &mut Timer,
-        progress: &dyn crate::render::Progress,
+        progress: &dyn crate::cancel::Progress,
     ) -> Result<wgpu::CommandEncoder> {
         if self.direct_current {
             return Ok(encoder);
         }
-        let passes = Passes::get(ctx);
+        let (gbuffer_p, direct_p, edge_p) = (
+            GBufferPass::get(ctx),
+            DirectPass::get(ctx),
+            EdgePass::get(ctx),
+        );
         let gbuffer_pass = |encoder: &mut wgpu::CommandEncoder,
                             timer: &mut Timer,
                             target: &gbuffer::GBuffer,
                             offset: u32| {
             let ts = timer.pass("gbuffer");
-            passes.gbuffer.record(
+            gbuffer_p.record(
                 encoder,
                 target,
                 &self.gbuffer_group,
@@ -596,7 +605,7 @@ impl Targets {
             encoder = self.for_each_sample(ctx, encoder, progress, |encoder, s, offset| {
                 gbuffer_pass(encoder, timer, &self.sub, offset);
                 let ts = timer.pass("direct light");
-                passes.direct.record(
+                direct_p.record(
                     encoder,
                     &self.accum_view,
                     s == 0,
@@ -612,7 +621,7 @@ impl Targets {
             self.gbuffer_generation = next_generation();
             if let Some(find) = &centre_edges {
                 let ts = timer.compute_pass("edges");
-                passes.edges.record_find(&mut encoder, find, ts);
+                edge_p.record_find(&mut encoder, find, ts);
                 let store = edges::EdgeGroups {
                     gbuffer: &self.sub_gbuffer_group,
                     ..*find
@@ -620,13 +629,13 @@ impl Targets {
                 encoder = self.for_each_sample(ctx, encoder, progress, |encoder, s, offset| {
                     gbuffer_pass(encoder, timer, &self.sub, offset);
                     let ts = timer.compute_pass("edges");
-                    passes.edges.record_store(encoder, &store, s, ts);
+                    edge_p.record_store(encoder, &store, s, ts);
                 })?;
             }
         }
         if self.spp == 1 || centre_edges.is_some() {
             let ts = timer.pass("direct light");
-            passes.direct.record(
+            direct_p.record(
                 &mut encoder,
                 &self.accum_view,
                 true,
@@ -637,7 +646,7 @@ impl Targets {
             );
             if let Some(groups) = &centre_edges {
                 let ts = timer.compute_pass("edge shading");
-                passes.edges.record_shade(&mut encoder, groups, ts);
+                edge_p.record_shade(&mut encoder, groups, ts);
             }
         }
         // Current once recorded in full (a cancelled frame leaves it to the next).
@@ -663,7 +672,7 @@ impl Targets {
         }
         let ts = timer.pass("gbuffer");
         self.gbuffer_generation = next_generation();
-        Passes::get(ctx).gbuffer.record(
+        GBufferPass::get(ctx).record(
             encoder,
             &self.gbuf,
             &self.gbuffer_group,
@@ -692,7 +701,7 @@ impl Targets {
         &self,
         ctx: &GpuContext,
         mut encoder: wgpu::CommandEncoder,
-        progress: &dyn crate::render::Progress,
+        progress: &dyn crate::cancel::Progress,
         mut record: impl FnMut(&mut wgpu::CommandEncoder, u32, u32),
     ) -> Result<wgpu::CommandEncoder> {
         let spp = self.spp;
@@ -757,7 +766,7 @@ impl Targets {
         let capacity = (found + found / 4).min(most);
         self.edges = Some(edges::EdgeBuffers::new(
             ctx,
-            &Passes::get(ctx).edges.layout,
+            &EdgePass::get(ctx).layout,
             (self.width, self.height, self.spp),
             capacity,
             &self.accum_view,
@@ -776,8 +785,7 @@ impl Targets {
     ) {
         if let Some(group) = &self.composite_group {
             let ts = timer.pass("composite");
-            Passes::get(ctx)
-                .composite
+            CompositePass::get(ctx)
                 .record(encoder, &self.radiance_view, group, ts);
         }
     }

@@ -28,11 +28,12 @@ use crate::photon::trace::Checked;
 use crate::photon::trace::{continue_paths_from, emit_aimed_caustics, FirstSegment};
 use crate::photon::PhotonRay;
 use crate::photon::{boundary, PhotonTraceSettings};
-use crate::raster::ispm::{bounce_layers, photon_hits, BounceTargets, IspmPasses, Z_RATIO};
+use crate::gpu::Pipelines;
+use crate::raster::ispm::{photon_hits, BounceTargets, IspmPasses, Z_RATIO};
+use crate::scene::light_views::{light_views, LightView};
 use crate::raster::specular::specular_paths;
-use crate::raster::timer::Timer;
+use crate::gpu::timer::Timer;
 use crate::raster::volume_shape::{partition, VolumeRadius};
-use crate::raster::Passes;
 use crate::render::delta_paths::Landings;
 use crate::render::{Progress, RenderOutput, RenderStats, Settings};
 use crate::scene::Scene;
@@ -124,7 +125,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
 
     // Resources: created on the first frame at this size, else kept.
     let t = Instant::now();
-    let layers = bounce_layers(scene, settings.photons);
+    let layers = light_views(scene, settings.photons);
     if ispm.is_none() {
         let (kind, estimate_reason) = settings.estimator.resolve(&ctx.info);
         let (gbuf, k) = (&targets.gbuf, settings.subsample);
@@ -147,10 +148,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
             bounce: None,
             estimate,
             estimate_reason,
-            specular: scene
-                .materials
-                .iter()
-                .any(crate::render::camera_pass::has_delta_lobe),
+            specular: scene.has_delta_materials(),
             traced_seed: None,
             specular_image: None,
             specular_landings: None,
@@ -180,7 +178,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
             state.bounce = BounceTargets::new(&ctx, &layers, &gs.materials)?;
         }
         if let Some(b) = &state.bounce {
-            b.write_views(&ctx, &layers, settings.seed);
+            b.write_views(&ctx, scene, &layers, settings.seed);
         }
     }
     targets.write_eye(&ctx, scene);
@@ -196,7 +194,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         });
     if let (false, Some(b)) = (reuse, &state.bounce) {
         b.record(
-            IspmPasses::get(&ctx),
+            &IspmPasses::get(&ctx),
             &mut encoder,
             &layers,
             &gs.geometry,
@@ -223,7 +221,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         targets.record_gbuffer(&ctx, &*gs, &mut encoder, timer);
         encoder
     } else {
-        gs.record_shadows(Passes::get(&ctx), &mut encoder, timer, scene);
+        gs.record_shadows(&ctx, &mut encoder, timer, scene);
         targets.record_direct(&ctx, &*gs, encoder, timer, progress)?
     };
     ctx.queue.submit([encoder.finish()]);
@@ -635,7 +633,7 @@ fn splat_serially(
 /// angle over its bounce-map texels (a spot's square map covers about 4/π of its cone).
 fn first_segment(
     scene: &Scene,
-    layers: &[crate::raster::ispm::BounceLayer],
+    layers: &[LightView],
     light: usize,
 ) -> FirstSegment {
     let l = &scene.lights[light];

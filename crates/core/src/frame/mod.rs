@@ -63,7 +63,7 @@ struct GpuState {
     ctx: Arc<GpuContext>,
     scene: gpu::GpuScene,
     targets: gpu::Targets,
-    timer: crate::raster::timer::Timer,
+    timer: crate::gpu::timer::Timer,
     ispm: Option<ispm::IspmState>,
     bidir: Option<bidir::BidirState>,
     /// This frame waits after each stage ([`FrameDesc::serial`]).

@@ -9,8 +9,10 @@
 pub mod alloc;
 pub mod raw;
 pub mod shaders;
+pub mod timer;
 
 use crate::error::{Error, Result};
+use std::any::{Any, TypeId};
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock};
 
@@ -28,14 +30,20 @@ pub struct GpuContext {
     pub info: wgpu::AdapterInfo,
     /// Whether timestamp queries are enabled (per-pass GPU timings).
     pub timestamps: bool,
-    /// The raster passes, compiled on first use (pipelines once per device).
-    pub(crate) passes: OnceLock<crate::raster::Passes>,
-    /// The ISPM passes, compiled on first use of method `ispm`.
-    pub(crate) ispm_passes: OnceLock<crate::raster::ispm::IspmPasses>,
-    /// The binning estimators' compute passes, compiled on first use.
-    pub(crate) binned_passes: OnceLock<crate::estimate::binned::BinnedPasses>,
-    /// Method `bidir`'s passes (RSM, ray bundles, lighting), compiled on first use.
-    pub(crate) bidir_passes: OnceLock<crate::raster::vpl::BidirPasses>,
+    /// Pipelines and layouts by type, each created on first use ([`GpuContext::pipelines`]).
+    pipelines: Mutex<HashMap<TypeId, Arc<dyn Any + Send + Sync>>>,
+}
+
+/// A pass's pipelines and bind-group layouts: created once per device (a new pipeline
+/// costs 20–360 ms on lavapipe) and shared by every frame ([`GpuContext::pipelines`]).
+pub trait Pipelines: Any + Send + Sync + Sized {
+    /// Compiles the pipelines on `ctx` (may ask `ctx` for the pipelines it builds on).
+    fn create(ctx: &GpuContext) -> Self;
+
+    /// The pipelines of `ctx`, created on first use.
+    fn get(ctx: &GpuContext) -> Arc<Self> {
+        ctx.pipelines::<Self>()
+    }
 }
 
 /// How the user chose the adapter.
@@ -151,10 +159,7 @@ fn create_context(choice: &Choice) -> Result<GpuContext> {
         queue,
         info,
         timestamps,
-        passes: OnceLock::new(),
-        ispm_passes: OnceLock::new(),
-        binned_passes: OnceLock::new(),
-        bidir_passes: OnceLock::new(),
+        pipelines: Mutex::new(HashMap::new()),
     })
 }
 
@@ -219,6 +224,19 @@ pub fn adapter_report(adapter: Option<&str>) -> Result<String> {
 }
 
 impl GpuContext {
+    /// The pipelines of type `P` on this device, created on first use. The cache is keyed
+    /// by type, so the device layer names no technique.
+    pub fn pipelines<P: Pipelines>(&self) -> Arc<P> {
+        let key = TypeId::of::<P>();
+        let lock = || self.pipelines.lock().unwrap_or_else(|p| p.into_inner());
+        if let Some(p) = lock().get(&key).cloned() {
+            return downcast(p);
+        }
+        // Created without the lock held: `create` may ask for the pipelines it builds on.
+        let made: Arc<dyn Any + Send + Sync> = Arc::new(P::create(self));
+        downcast(lock().entry(key).or_insert(made).clone())
+    }
+
     /// Runs `f` inside a validation and out-of-memory error scope; a GPU error becomes `Error::Gpu`.
     pub fn scoped<T>(&self, what: &str, f: impl FnOnce() -> Result<T>) -> Result<T> {
         let oom = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
@@ -240,8 +258,8 @@ impl GpuContext {
         if bytes > max {
             return Err(Error::Gpu(format!(
                 "{what} need a {} buffer; the adapter allows at most {}",
-                crate::memory::human(bytes),
-                crate::memory::human(max)
+                crate::error::human(bytes),
+                crate::error::human(max)
             )));
         }
         crate::memory::check(|| what.to_string(), bytes)
@@ -311,6 +329,13 @@ impl GpuContext {
             .to_vec();
         buffer.unmap();
         Ok(bytes)
+    }
+}
+
+fn downcast<P: Pipelines>(p: Arc<dyn Any + Send + Sync>) -> Arc<P> {
+    match p.downcast::<P>() {
+        Ok(p) => p,
+        Err(_) => unreachable!("the pipeline cache is keyed by type"),
     }
 }
 

@@ -1,6 +1,7 @@
 //! GPU-facing data: `#[repr(C)]` Pod mirrors of the structs in `shaders/common/types.wgsl`.
 
 use crate::bsdf::Material;
+use crate::scene::light_views::LightView;
 use crate::scene::Light;
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
@@ -114,4 +115,46 @@ pub struct VertexRaw {
     pub material: u32,
     pub uv: [f32; 2],
     pub tangent: [f32; 4],
+}
+
+/// `BounceView` of `bounce.wgsl`, padded to 256 bytes for dynamic offsets.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct BounceViewRaw {
+    pub view_proj: [[f32; 4]; 4],
+    pub light_position: [f32; 3],
+    pub texel_area: f32,
+    pub forward: [f32; 3],
+    pub kind: u32,
+    pub intensity: [f32; 3],
+    pub cos_inner: f32,
+    pub spot_direction: [f32; 3],
+    pub cos_outer: f32,
+    /// Random seed of the frame (its low 32 bits, hashed with the high ones).
+    pub seed: u32,
+    /// Index of this layer among all bounce-map layers.
+    pub layer: u32,
+    pub _pad: [f32; 30],
+}
+
+impl BounceViewRaw {
+    /// Light view number `layer` (among all light views of the frame) of `light`, with the
+    /// frame's random seed.
+    pub fn new(layer: u32, view: &LightView, light: &Light, seed: u64) -> Self {
+        let raw = light.to_raw();
+        BounceViewRaw {
+            view_proj: view.view_proj.to_cols_array_2d(),
+            light_position: view.position.into(),
+            texel_area: view.texel_area,
+            forward: view.forward.into(),
+            kind: raw.kind,
+            intensity: raw.intensity,
+            cos_inner: raw.cos_inner,
+            spot_direction: raw.direction,
+            cos_outer: raw.cos_outer,
+            seed: (seed ^ (seed >> 32)) as u32,
+            layer,
+            _pad: [0.0; 30],
+        }
+    }
 }

@@ -12,12 +12,11 @@
 use super::trace::{scatter, TraceControl};
 use super::PhotonRay;
 use crate::error::{Error, Result};
-use crate::raster::ispm::{BounceLayer, BounceMap};
-use crate::render::camera_pass::has_delta_lobe;
+use crate::scene::light_views::{check_layer_memory, LightView, BOUNCE_MAPS};
 use crate::sampling::Rng;
 use crate::scene::Scene;
 use crate::trace::{Interaction, SceneBvh};
-use glam::{DMat4, DVec4, Mat4, Vec3};
+use glam::{DMat4, DVec3, DVec4};
 use rayon::prelude::*;
 use std::str::FromStr;
 
@@ -86,19 +85,45 @@ impl FromStr for FirstBounce {
     }
 }
 
-/// The bounce maps of `layers` (see [`crate::raster::ispm::bounce_layers`]) traced in `bvh`:
+/// The bounce map's result: first-scatter rays and the bookkeeping of the power.
+#[derive(Clone, Debug, Default)]
+pub struct BounceMap {
+    /// Photons that survived the first scatter, as rays for the CPU tracer (bounce 1).
+    pub rays: Vec<PhotonRay>,
+    /// Texels of all layers.
+    pub texels: u64,
+    /// Texels that hit the scene.
+    pub covered: u64,
+    /// Total power of the covered texels before the first scatter (W).
+    pub incident_power: DVec3,
+    /// Total power of the surviving rays (W).
+    pub scattered_power: DVec3,
+    /// Σ over covered texels of power × scatter probability (the expected scattered power).
+    pub expected_scattered_power: DVec3,
+    /// Seconds: rasterizing the bounce maps with the first scatter (until the GPU is done),
+    /// reading them back, and converting the survivors to rays.
+    pub raster_seconds: f64,
+    pub readback_seconds: f64,
+    pub scatter_seconds: f64,
+    /// The light of each ray (index into `Scene::lights`).
+    pub ray_lights: Vec<u32>,
+    /// Whether each ray's first hit was on a material with a delta lobe (mirror, glass).
+    pub first_delta: Vec<bool>,
+}
+
+/// The bounce maps of `layers` (see [`crate::scene::light_views::light_views`]) traced in `bvh`:
 /// the same rays, bookkeeping and grouping by light as the rasterized maps'
-/// [`crate::raster::ispm::BounceTargets::finish`]. Deterministic in `seed` (one generator
+/// `raster::ispm::BounceTargets::finish`. Deterministic in `seed` (one generator
 /// per texel). Stops with `Cancelled` when `control` asks (between rows); a setting error
 /// where the rasterized maps would not fit either.
 pub fn trace_bounce_maps(
     scene: &Scene,
     bvh: &SceneBvh,
-    layers: &[BounceLayer],
+    layers: &[LightView],
     seed: u64,
     control: &dyn TraceControl,
 ) -> Result<BounceMap> {
-    crate::raster::ispm::check_bounce_size(layers)?;
+    check_layer_memory(layers, &BOUNCE_MAPS)?;
     // Rows of all layers, each with its layer and its first texel's global index.
     let mut rows = Vec::new();
     let mut first = 0u64;
@@ -111,7 +136,7 @@ pub fn trace_bounce_maps(
     let inverses: Vec<DMat4> = layers
         .iter()
         .map(|l| {
-            Mat4::from_cols_array_2d(&l.view.view_proj)
+            l.view_proj
                 .as_dmat4()
                 .inverse()
         })
@@ -154,7 +179,7 @@ pub fn trace_bounce_maps(
 fn texel(
     scene: &Scene,
     bvh: &SceneBvh,
-    l: &BounceLayer,
+    l: &LightView,
     inverse: &DMat4,
     [x, y]: [u32; 2],
     rng: &mut Rng,
@@ -166,7 +191,7 @@ fn texel(
     let ndc_x = 2.0 * (x as f64 + j.x as f64) / res - 1.0;
     let ndc_y = 1.0 - 2.0 * (y as f64 + j.y as f64) / res;
     let far = *inverse * DVec4::new(ndc_x, ndc_y, 1.0, 1.0);
-    let origin = Vec3::from(l.view.light_position);
+    let origin = l.position;
     let d = ((far.truncate() / far.w) - origin.as_dvec3()).normalize();
     if !d.is_finite() {
         return;
@@ -176,8 +201,8 @@ fn texel(
         return;
     };
     let light = &scene.lights[l.light];
-    let c = d.dot(Vec3::from(l.view.forward)).max(0.0);
-    let phi = light.intensity_towards(d) * (l.view.texel_area * c * c * c);
+    let c = d.dot(l.forward).max(0.0);
+    let phi = light.intensity_towards(d) * (l.texel_area * c * c * c);
     out.covered += 1;
     out.incident_power += phi.as_dvec3();
     if phi.max_element() <= 0.0 || !phi.is_finite() {
@@ -199,5 +224,5 @@ fn texel(
         1,
     ));
     out.ray_lights.push(l.light as u32);
-    out.first_delta.push(has_delta_lobe(&it.material));
+    out.first_delta.push(it.material.has_delta_lobe());
 }

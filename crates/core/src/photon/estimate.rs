@@ -13,7 +13,7 @@ use super::{KdTree, Neighbour, Photon};
 use crate::cancel;
 use crate::error::{Error, Result};
 use crate::memory;
-use crate::render::Progress;
+use crate::cancel::Progress;
 use crate::trace::Interaction;
 use glam::Vec3;
 use std::f32::consts::PI;

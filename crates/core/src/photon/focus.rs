@@ -6,7 +6,6 @@
 //! balance heuristic over the whole mixture), so the estimate stays unbiased while caustic
 //! photons, which start by hitting a specular object, become far more frequent.
 
-use crate::render::camera_pass::has_delta_lobe;
 use crate::sampling::{uniform_cone, uniform_sphere, Frame, Rng};
 use crate::scene::{Light, Scene};
 use glam::Vec3;
@@ -51,7 +50,7 @@ fn specular_spheres(scene: &Scene) -> Vec<(Vec3, f32)> {
         .filter(|o| {
             scene.triangle_materials[o.triangles.start as usize..o.triangles.end as usize]
                 .iter()
-                .any(|&m| has_delta_lobe(&scene.materials[m as usize]))
+                .any(|&m| scene.materials[m as usize].has_delta_lobe())
         })
         .filter_map(|o| {
             let ps = &scene.positions[o.vertices.start as usize..o.vertices.end as usize];

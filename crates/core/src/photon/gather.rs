@@ -9,7 +9,7 @@ use super::{Kernel, Photon, PhotonSet};
 use crate::cancel;
 use crate::error::Result;
 use crate::memory;
-use crate::render::Progress;
+use crate::cancel::Progress;
 use crate::trace::Interaction;
 use glam::Vec3;
 

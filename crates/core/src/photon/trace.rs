@@ -15,8 +15,7 @@ use super::{path_density_factor, FootprintAxes, PathKind, Photon, PhotonRay, Pho
 use crate::bsdf::Lobe;
 use crate::error::{Error, Result};
 use crate::memory;
-use crate::render::camera_pass::has_delta_lobe;
-use crate::render::Progress;
+use crate::cancel::Progress;
 use crate::sampling::Rng;
 use crate::scene::Scene;
 use crate::trace::light_tracer::{choose_light, light_weights};
@@ -178,7 +177,7 @@ pub fn emit_aimed_caustics(
             out.escaped += 1;
             return;
         };
-        if !has_delta_lobe(&Interaction::new(scene, &hit, direction).material) {
+        if !Interaction::new(scene, &hit, direction).material.has_delta_lobe() {
             out.absorbed += 1;
             return;
         }

@@ -7,7 +7,7 @@
 //! Memory: `res`² head pointers per bundle and one node buffer for all bundles of a frame;
 //! fragments beyond its capacity are dropped and counted ([`BundleBuffers::overflow`]).
 
-use super::timer::Timer;
+use crate::gpu::timer::Timer;
 use super::{buffer_init, gbuffer, Geometry};
 use crate::error::{Error, Result};
 use crate::gpu::{self, shaders, GpuContext};
@@ -44,7 +44,7 @@ pub fn bundle_view(
 ) -> BundleViewRaw {
     let r = radius.max(1e-6) * 1.01;
     let up = if dir.y.abs() < 0.9 { Vec3::Y } else { Vec3::X };
-    let view = super::look_to(centre - dir * r, dir, up);
+    let view = crate::scene::light_views::look_to(centre - dir * r, dir, up);
     // Orthographic, view-space x, y in [−r, r] and depth −z in [0, 2r] to clip z in [0, 1].
     let proj = Mat4::from_cols(
         Vec4::new(1.0 / r, 0.0, 0.0, 0.0),
@@ -355,5 +355,11 @@ impl BundleBuffers {
             .ok_or_else(|| Error::Gpu("bundle counter readback".into()))?;
         let n = u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as u64;
         Ok((n, n.saturating_sub(self.capacity as u64)))
+    }
+}
+
+impl crate::gpu::Pipelines for BundlePass {
+    fn create(ctx: &crate::gpu::GpuContext) -> Self {
+        BundlePass::new(&ctx.device, &super::textures::TexturesLayout::get(ctx).layout)
     }
 }

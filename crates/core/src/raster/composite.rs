@@ -66,3 +66,9 @@ impl CompositePass {
         pass.draw(0..3, 0..1);
     }
 }
+
+impl crate::gpu::Pipelines for CompositePass {
+    fn create(ctx: &crate::gpu::GpuContext) -> Self {
+        CompositePass::new(&ctx.device)
+    }
+}

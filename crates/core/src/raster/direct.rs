@@ -182,3 +182,9 @@ impl DirectPass {
         pass.draw(0..3, 0..1);
     }
 }
+
+impl crate::gpu::Pipelines for DirectPass {
+    fn create(ctx: &crate::gpu::GpuContext) -> Self {
+        DirectPass::new(&ctx.device)
+    }
+}

@@ -358,3 +358,10 @@ impl EdgeBuffers {
         Ok(u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]]))
     }
 }
+
+impl crate::gpu::Pipelines for EdgePass {
+    fn create(ctx: &crate::gpu::GpuContext) -> Self {
+        let direct = super::direct::DirectPass::get(ctx);
+        EdgePass::new(&ctx.device, &direct.scene_layout, &direct.gbuffer_layout)
+    }
+}

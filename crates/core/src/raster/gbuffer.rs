@@ -228,3 +228,9 @@ impl GBufferPass {
         pass.draw(0..geometry.count, 0..1);
     }
 }
+
+impl crate::gpu::Pipelines for GBufferPass {
+    fn create(ctx: &crate::gpu::GpuContext) -> Self {
+        GBufferPass::new(&ctx.device, &super::textures::TexturesLayout::get(ctx).layout)
+    }
+}

@@ -25,47 +25,27 @@
 //! The final radiance is direct + specular + indirect (AOVs `direct`, `specular`,
 //! `indirect`); `caustics` stays zero.
 
-use super::layers::{LayerKind, LayerTargets};
-use super::timer::Timer;
+use crate::gpu::Pipelines;
+use super::layers::LayerTargets;
+use crate::gpu::timer::Timer;
 use super::{buffer_init, gbuffer, Geometry};
 use crate::error::{Error, Result};
 use crate::gpu::{self, shaders, GpuContext};
 use crate::image::Image;
+use crate::photon::bounce::BounceMap;
 use crate::photon::{Photon, PhotonRay};
 use crate::render::Settings;
-use crate::scene::{Light, Scene};
+use crate::gpu::raw::BounceViewRaw;
+use crate::scene::light_views::{light_views, LightView, BOUNCE_MAPS};
+use crate::scene::Scene;
 use bytemuck::{Pod, Zeroable};
-use glam::{DVec3, Vec3};
+use glam::Vec3;
 use std::time::Instant;
 
 /// r_z / r_xy of the photon volumes.
 pub(crate) const Z_RATIO: f32 = 0.5;
-/// Largest bounce-map side (texels).
-const MAX_BOUNCE_RES: u32 = 4096;
-/// Widest spot cone the bounce map covers (tan of the half angle, about 84°).
-const MAX_SPOT_TAN: f32 = 10.0;
 
 pub(crate) const TARGET: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
-
-/// `BounceView` of `bounce.wgsl`, padded to 256 bytes for dynamic offsets.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub struct BounceViewRaw {
-    pub view_proj: [[f32; 4]; 4],
-    pub light_position: [f32; 3],
-    pub texel_area: f32,
-    pub forward: [f32; 3],
-    pub kind: u32,
-    pub intensity: [f32; 3],
-    pub cos_inner: f32,
-    pub spot_direction: [f32; 3],
-    pub cos_outer: f32,
-    /// Random seed of the frame (low 32 bits of `Settings::seed`, hashed with the high ones).
-    pub seed: u32,
-    /// Index of this layer among all bounce-map layers.
-    pub layer: u32,
-    pub _pad: [f32; 30],
-}
 
 /// `VolumeParams` of `volume.wgsl`.
 #[repr(C)]
@@ -89,124 +69,6 @@ pub(crate) struct UpsampleParamsRaw {
 }
 
 const BOUNCE_VIEW_SIZE: u64 = std::mem::size_of::<BounceViewRaw>() as u64;
-
-/// One bounce-map layer: a light's view and its resolution.
-#[derive(Clone, Debug)]
-pub struct BounceLayer {
-    pub light: usize,
-    pub res: u32,
-    pub view: BounceViewRaw,
-}
-
-/// The bounce-map layers of a scene for a photon budget: resolution per light proportional
-/// to its share of the total power, texel areas corrected so that each light's texels sum
-/// to its power.
-pub fn bounce_layers(scene: &Scene, photons: u64) -> Vec<BounceLayer> {
-    let (lo, hi) = super::shadow::bounds(scene);
-    let total: f32 = scene.lights.iter().map(|l| l.power().element_sum()).sum();
-    let mut layers = Vec::new();
-    for (li, light) in scene.lights.iter().enumerate() {
-        let power = light.power().element_sum();
-        if !(power > 0.0 && total > 0.0) {
-            continue;
-        }
-        let raw = light.to_raw();
-        let p = light.position();
-        let far = super::shadow::corners(lo, hi)
-            .map(|c| (c - p).length())
-            .into_iter()
-            .fold(0.0f32, f32::max)
-            * 1.01
-            + 1e-3;
-        let near = (far * 1e-4).max(1e-6);
-        let views: Vec<(Vec3, Vec3, f32)> = match *light {
-            Light::Point { .. } => super::shadow::CUBE_FACES
-                .iter()
-                .map(|&(f, u)| (f, u, 1.0))
-                .collect(),
-            Light::Spot {
-                direction,
-                cos_outer,
-                ..
-            } => {
-                let t = cos_outer.clamp(-1.0, 1.0).acos().tan();
-                let t = if t.is_finite() && t > 0.0 {
-                    t.clamp(1e-3, MAX_SPOT_TAN)
-                } else {
-                    MAX_SPOT_TAN
-                };
-                let up = if direction.y.abs() < 0.99 {
-                    Vec3::Y
-                } else {
-                    Vec3::X
-                };
-                vec![(direction, up, t)]
-            }
-        };
-        let texels = photons as f64 * (power / total) as f64 / views.len() as f64;
-        let res = (texels.sqrt().round() as u32).clamp(1, MAX_BOUNCE_RES);
-        // Σ over texel centres of falloff·A·cos³θ, for the round-off correction.
-        let mut grid = 0.0f64;
-        for &(_, _, t) in &views {
-            let area = (2.0 * t as f64 / res as f64).powi(2);
-            for j in 0..res {
-                for i in 0..res {
-                    let x = (2.0 * (i as f64 + 0.5) / res as f64 - 1.0) * t as f64;
-                    let y = (2.0 * (j as f64 + 0.5) / res as f64 - 1.0) * t as f64;
-                    let c = 1.0 / (1.0 + x * x + y * y).sqrt();
-                    let falloff = match *light {
-                        Light::Point { .. } => 1.0,
-                        Light::Spot { .. } => {
-                            spot_falloff(c as f32, raw.cos_inner, raw.cos_outer) as f64
-                        }
-                    };
-                    grid += falloff * area * c * c * c;
-                }
-            }
-        }
-        let intensity = Vec3::from(raw.intensity).element_sum() as f64;
-        let correction = if grid > 0.0 && intensity > 0.0 {
-            power as f64 / (intensity * grid)
-        } else {
-            0.0
-        };
-        for (forward, up, t) in views {
-            let view_proj =
-                super::shadow::perspective(t, near, far) * super::look_to(p, forward, up);
-            let area = (2.0 * t / res as f32).powi(2);
-            layers.push(BounceLayer {
-                light: li,
-                res,
-                view: BounceViewRaw {
-                    view_proj: view_proj.to_cols_array_2d(),
-                    light_position: p.into(),
-                    texel_area: (area as f64 * correction) as f32,
-                    forward: forward.normalize().into(),
-                    kind: raw.kind,
-                    intensity: raw.intensity,
-                    cos_inner: raw.cos_inner,
-                    spot_direction: raw.direction,
-                    cos_outer: raw.cos_outer,
-                    seed: 0,
-                    layer: layers.len() as u32,
-                    _pad: [0.0; 30],
-                },
-            });
-        }
-    }
-    layers
-}
-
-fn spot_falloff(cos: f32, cos_inner: f32, cos_outer: f32) -> f32 {
-    if cos >= cos_inner {
-        return 1.0;
-    }
-    if cos <= cos_outer {
-        return 0.0;
-    }
-    let t = (cos - cos_outer) / (cos_inner - cos_outer);
-    t * t * (3.0 - 2.0 * t)
-}
 
 /// Pipelines of method `ispm`, compiled once per device.
 pub struct IspmPasses {
@@ -264,11 +126,6 @@ fn photon_attributes() -> [wgpu::VertexAttribute; 6] {
 }
 
 impl IspmPasses {
-    pub fn get(ctx: &GpuContext) -> &IspmPasses {
-        ctx.ispm_passes
-            .get_or_init(|| IspmPasses::new(&ctx.device, &super::Passes::get(ctx).textures))
-    }
-
     fn new(device: &wgpu::Device, textures: &wgpu::BindGroupLayout) -> Self {
         let layout = |label, entries: &[wgpu::BindGroupLayoutEntry]| {
             device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -504,32 +361,6 @@ pub fn icosahedron() -> Vec<[f32; 3]> {
         .collect()
 }
 
-/// The bounce map's result: first-scatter rays and the bookkeeping of the power.
-#[derive(Clone, Debug, Default)]
-pub struct BounceMap {
-    /// Photons that survived the first scatter, as rays for the CPU tracer (bounce 1).
-    pub rays: Vec<PhotonRay>,
-    /// Texels of all layers.
-    pub texels: u64,
-    /// Texels that hit the scene.
-    pub covered: u64,
-    /// Total power of the covered texels before the first scatter (W).
-    pub incident_power: DVec3,
-    /// Total power of the surviving rays (W).
-    pub scattered_power: DVec3,
-    /// Σ over covered texels of power × scatter probability (the expected scattered power).
-    pub expected_scattered_power: DVec3,
-    /// Seconds: rasterizing the bounce maps with the first scatter (until the GPU is done),
-    /// reading them back, and converting the survivors to rays.
-    pub raster_seconds: f64,
-    pub readback_seconds: f64,
-    pub scatter_seconds: f64,
-    /// The light of each ray (index into `Scene::lights`).
-    pub ray_lights: Vec<u32>,
-    /// Whether each ray's first hit was on a material with a delta lobe (mirror, glass).
-    pub first_delta: Vec<bool>,
-}
-
 /// [`BounceTargets`] on the context of `settings.adapter`, for inspection and tests: the
 /// bounce maps of `scene` rendered and read back once.
 pub fn render_bounce_map(scene: &Scene, settings: &Settings) -> Result<BounceMap> {
@@ -544,13 +375,13 @@ pub fn render_bounce_map(scene: &Scene, settings: &Settings) -> Result<BounceMap
             bytemuck::cast_slice(&materials),
             wgpu::BufferUsages::STORAGE,
         );
-        let layers = bounce_layers(scene, settings.photons);
+        let layers = light_views(scene, settings.photons);
         let textures =
-            super::textures::GpuTextures::new(&ctx, scene, &super::Passes::get(&ctx).textures)?;
+            super::textures::GpuTextures::new(&ctx, scene, &super::textures::TexturesLayout::get(&ctx).layout)?;
         let Some(targets) = BounceTargets::new(&ctx, &layers, &materials)? else {
             return Ok(BounceMap::default());
         };
-        targets.write_views(&ctx, &layers, settings.seed);
+        targets.write_views(&ctx, scene, &layers, settings.seed);
         let mut timer = Timer::new(&ctx, layers.len() as u32);
         let mut encoder = ctx
             .device
@@ -558,7 +389,7 @@ pub fn render_bounce_map(scene: &Scene, settings: &Settings) -> Result<BounceMap
                 label: Some("bounce maps"),
             });
         targets.record(
-            IspmPasses::get(&ctx),
+            &IspmPasses::get(&ctx),
             &mut encoder,
             &layers,
             &geometry,
@@ -586,31 +417,11 @@ pub struct BounceTargets {
     group: wgpu::BindGroup,
 }
 
-/// The bounce maps' five targets.
-const BOUNCE_MAPS: LayerKind = LayerKind {
-    name: "bounce map",
-    setting: "photons",
-    targets: &[
-        "bounce origin",
-        "bounce direction",
-        "bounce power",
-        "bounce incident",
-        "bounce expected",
-    ],
-};
-
-/// A setting error when bounce maps of `layers` would outgrow their memory bound. Traced
-/// maps ([`crate::photon::bounce`]) keep the same bound, so that `photons` means the same
-/// on every device.
-pub(crate) fn check_bounce_size(layers: &[BounceLayer]) -> Result<()> {
-    super::layers::check_size(layers, &BOUNCE_MAPS)
-}
-
 impl BounceTargets {
     /// Resources for `layers` (`None` when there are none: no light emits).
     pub fn new(
         ctx: &GpuContext,
-        layers: &[BounceLayer],
+        layers: &[LightView],
         materials: &wgpu::Buffer,
     ) -> Result<Option<Self>> {
         if layers.is_empty() {
@@ -653,19 +464,16 @@ impl BounceTargets {
     }
 
     /// Whether these resources serve `layers`.
-    pub fn fits(&self, layers: &[BounceLayer]) -> bool {
+    pub fn fits(&self, layers: &[LightView]) -> bool {
         self.layers.fits(layers)
     }
 
     /// Uploads the layers' views with the frame's random seed.
-    pub fn write_views(&self, ctx: &GpuContext, layers: &[BounceLayer], seed: u64) {
-        let seed32 = (seed ^ (seed >> 32)) as u32;
+    pub fn write_views(&self, ctx: &GpuContext, scene: &Scene, layers: &[LightView], seed: u64) {
         let views: Vec<BounceViewRaw> = layers
             .iter()
-            .map(|l| BounceViewRaw {
-                seed: seed32,
-                ..l.view
-            })
+            .enumerate()
+            .map(|(i, l)| BounceViewRaw::new(i as u32, l, &scene.lights[l.light], seed))
             .collect();
         crate::gpu::write_buffer(
             &ctx.queue,
@@ -682,7 +490,7 @@ impl BounceTargets {
         &self,
         passes: &IspmPasses,
         encoder: &mut wgpu::CommandEncoder,
-        layers: &[BounceLayer],
+        layers: &[LightView],
         geometry: &Geometry,
         cull: &super::shadow::CullUnits,
         textures: (&wgpu::BindGroup, super::textures::Variant),
@@ -706,7 +514,7 @@ impl BounceTargets {
     pub fn finish(
         &self,
         ctx: &GpuContext,
-        layers: &[BounceLayer],
+        layers: &[LightView],
         after: Option<wgpu::SubmissionIndex>,
     ) -> Result<BounceMap> {
         let mut out = BounceMap::default();
@@ -794,6 +602,13 @@ pub(crate) fn photon_hits(scene: &Scene, position: &Image, photons: &[Photon]) -
     img
 }
 
+
+impl crate::gpu::Pipelines for IspmPasses {
+    fn create(ctx: &GpuContext) -> Self {
+        IspmPasses::new(&ctx.device, &super::textures::TexturesLayout::get(ctx).layout)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -810,25 +625,4 @@ mod tests {
         }
     }
 
-    /// Cornell (one point light): six faces of √(budget / 6) texels a side whose texel
-    /// solid angles, with the round-off correction, add up to 4π.
-    #[test]
-    fn bounce_layers_follow_budget_and_power() {
-        let scene = crate::scene::builtin::load("cornell").expect("scene");
-        let layers = bounce_layers(&scene, 10_000);
-        assert_eq!(layers.len(), 6);
-        let mut solid_angle = 0.0f64;
-        for l in &layers {
-            assert_eq!(l.res, 41);
-            for j in 0..l.res {
-                for i in 0..l.res {
-                    let x = 2.0 * (i as f64 + 0.5) / l.res as f64 - 1.0;
-                    let y = 2.0 * (j as f64 + 0.5) / l.res as f64 - 1.0;
-                    let c = 1.0 / (1.0 + x * x + y * y).sqrt();
-                    solid_angle += l.view.texel_area as f64 * c * c * c;
-                }
-            }
-        }
-        assert!((solid_angle / (4.0 * std::f64::consts::PI) - 1.0).abs() < 1e-5);
-    }
 }

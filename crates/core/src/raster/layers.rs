@@ -3,9 +3,9 @@
 //! writes several `Rgba32Float` targets of one texture array each, and the copies of all
 //! layers into mappable buffers in the same submission, read back after it.
 
-use super::ispm::BounceLayer;
+use crate::scene::light_views::{check_layer_memory, LayerKind, LightView};
 use super::shadow::CullUnits;
-use super::timer::Timer;
+use crate::gpu::timer::Timer;
 use super::{gbuffer, Geometry};
 use crate::error::{Error, Result};
 use crate::gpu::{self, GpuContext};
@@ -13,38 +13,6 @@ use glam::{Mat4, Vec4};
 
 /// Format of every layer target.
 pub const TARGET: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
-/// The targets plus their readback copies stay within this many bytes.
-const MAX_BYTES: u64 = 2 << 30;
-
-/// What the targets are for, in errors and labels.
-pub struct LayerKind {
-    /// Label prefix and the name in errors ("bounce map", "reflective shadow map").
-    pub name: &'static str,
-    /// The setting that sizes the layers (named by the errors).
-    pub setting: &'static str,
-    /// One label per target.
-    pub targets: &'static [&'static str],
-}
-
-/// A setting error when the targets of `layers` would outgrow [`MAX_BYTES`].
-pub(crate) fn check_size(layers: &[BounceLayer], kind: &LayerKind) -> Result<()> {
-    let max_res = layers.iter().map(|l| l.res).max().unwrap_or(1) as u64;
-    let bytes = max_res * max_res * layers.len() as u64 * 16 * kind.targets.len() as u64;
-    if bytes > MAX_BYTES {
-        return Err(Error::setting(
-            kind.setting,
-            format!(
-                "the {}s would take {} MiB of memory (at most {} MiB); lower `{}`",
-                kind.name,
-                bytes >> 20,
-                MAX_BYTES >> 20,
-                kind.setting
-            ),
-        ));
-    }
-    Ok(())
-}
-
 pub struct LayerTargets {
     pub max_res: u32,
     pub n_layers: u32,
@@ -58,7 +26,7 @@ pub struct LayerTargets {
 
 impl LayerTargets {
     /// Targets for `layers` (not empty), or a typed error when the GPU cannot hold them.
-    pub fn new(ctx: &GpuContext, layers: &[BounceLayer], kind: &LayerKind) -> Result<Self> {
+    pub fn new(ctx: &GpuContext, layers: &[LightView], kind: &LayerKind) -> Result<Self> {
         let device = &ctx.device;
         let max_res = layers.iter().map(|l| l.res).max().unwrap_or(1);
         let limits = device.limits();
@@ -73,7 +41,7 @@ impl LayerTargets {
             ));
         }
         let n_layers = layers.len() as u32;
-        check_size(layers, kind)?;
+        check_layer_memory(layers, kind)?;
         if n_layers > limits.max_texture_array_layers {
             return Err(Error::Gpu(format!(
                 "{n_layers} {name} layers exceed the GPU's {}",
@@ -141,7 +109,7 @@ impl LayerTargets {
     }
 
     /// Whether these targets serve `layers`.
-    pub fn fits(&self, layers: &[BounceLayer]) -> bool {
+    pub fn fits(&self, layers: &[LightView]) -> bool {
         self.n_layers as usize == layers.len()
             && self.max_res == layers.iter().map(|l| l.res).max().unwrap_or(1)
     }
@@ -158,14 +126,14 @@ impl LayerTargets {
         (group, view_size): (&wgpu::BindGroup, u64),
         textures: &wgpu::BindGroup,
         geometry: &Geometry,
-        layers: &[BounceLayer],
+        layers: &[LightView],
         cull: &CullUnits,
         timer: &mut Timer,
     ) {
         // Each layer draws only the triangles that reach into its view.
         let matrices: Vec<Mat4> = layers
             .iter()
-            .map(|l| Mat4::from_cols_array_2d(&l.view.view_proj))
+            .map(|l| l.view_proj)
             .collect();
         let draws = cull.draws(&matrices);
         for (i, layer) in layers.iter().enumerate() {

@@ -12,7 +12,6 @@ pub mod rsm;
 pub mod shadow;
 pub(crate) mod specular;
 pub mod textures;
-pub(crate) mod timer;
 pub mod volume_shape;
 pub mod vpl;
 
@@ -20,40 +19,9 @@ use crate::error::{Error, Result};
 use crate::gpu::raw::{VertexRaw, ViewRaw};
 use crate::gpu::GpuContext;
 use crate::render::Settings;
+use crate::scene::light_views;
 use crate::scene::Scene;
-use glam::{Mat4, Vec2, Vec3, Vec4};
-
-/// Every pipeline of the raster methods, compiled once per device.
-pub struct Passes {
-    pub gbuffer: gbuffer::GBufferPass,
-    pub shadow: shadow::ShadowPass,
-    pub direct: direct::DirectPass,
-    pub edges: edges::EdgePass,
-    pub composite: composite::CompositePass,
-    /// Group 1 of the passes that rasterize the scene ([`textures::layout`]).
-    pub textures: wgpu::BindGroupLayout,
-}
-
-impl Passes {
-    pub fn get(ctx: &GpuContext) -> &Passes {
-        ctx.passes.get_or_init(|| {
-            let textures = textures::layout(&ctx.device);
-            let direct = direct::DirectPass::new(&ctx.device);
-            Passes {
-                gbuffer: gbuffer::GBufferPass::new(&ctx.device, &textures),
-                shadow: shadow::ShadowPass::new(&ctx.device, &textures),
-                edges: edges::EdgePass::new(
-                    &ctx.device,
-                    &direct.scene_layout,
-                    &direct.gbuffer_layout,
-                ),
-                direct,
-                composite: composite::CompositePass::new(&ctx.device),
-                textures,
-            }
-        })
-    }
-}
+use glam::{Mat4, Vec2, Vec3};
 
 /// The scene's triangles on the GPU: a non-indexed list of [`VertexRaw`].
 pub struct Geometry {
@@ -136,49 +104,24 @@ pub fn sample_positions(spp: u32) -> Vec<Vec2> {
         .collect()
 }
 
-/// World -> view for an eye at `eye` looking along `dir` (right-handed, looking down −z).
-pub(crate) fn look_to(eye: Vec3, dir: Vec3, up: Vec3) -> Mat4 {
-    let f = dir.normalize();
-    let s = f.cross(up).normalize();
-    let u = s.cross(f);
-    Mat4::from_cols(
-        Vec4::new(s.x, u.x, -f.x, 0.0),
-        Vec4::new(s.y, u.y, -f.y, 0.0),
-        Vec4::new(s.z, u.z, -f.z, 0.0),
-        Vec4::new(-eye.dot(s), -eye.dot(u), eye.dot(f), 1.0),
-    )
-}
-
-/// View -> clip with depth in [0, 1] (WebGPU), vertical field of view `fov_y` in radians.
-pub(crate) fn perspective(fov_y: f32, aspect: f32, near: f32, far: f32) -> Mat4 {
-    let h = 1.0 / (0.5 * fov_y).tan();
-    let r = far / (near - far);
-    Mat4::from_cols(
-        Vec4::new(h / aspect, 0.0, 0.0, 0.0),
-        Vec4::new(0.0, h, 0.0, 0.0),
-        Vec4::new(0.0, 0.0, r, -1.0),
-        Vec4::new(0.0, 0.0, r * near, 0.0),
-    )
-}
-
 /// The camera's world -> clip transform with the image shifted so that the pixel centre
 /// sees image position `pixel + jitter`.
 pub(crate) fn camera_view(scene: &Scene, jitter: Vec2, weight: f32) -> ViewRaw {
     let cam = &scene.camera;
-    let (lo, hi) = shadow::bounds(scene);
+    let (lo, hi) = light_views::bounds(scene);
     let far = (lo - cam.position)
         .abs()
         .max((hi - cam.position).abs())
         .length()
         * 1.01
         + 1e-3;
-    let proj = perspective(cam.fov_y.to_radians(), cam.aspect(), far * 1e-5, far);
+    let proj = light_views::perspective(cam.fov_y.to_radians(), cam.aspect(), far * 1e-5, far);
     let shift = Vec3::new(
         2.0 * (0.5 - jitter.x) / cam.width as f32,
         -2.0 * (0.5 - jitter.y) / cam.height as f32,
         0.0,
     );
-    let view = look_to(cam.position, cam.forward, cam.up);
+    let view = light_views::look_to(cam.position, cam.forward, cam.up);
     ViewRaw::new(
         Mat4::from_translation(shift) * proj * view,
         cam.position,

@@ -1,13 +1,16 @@
 //! Reflective shadow maps (Dachsbacher & Stamminger 2005) for method `bidir`: per light the
-//! views of the ISPM bounce map ([`super::ispm::bounce_layers`]: one perspective view per spot
+//! views of the ISPM bounce map ([`crate::scene::light_views::light_views`]: one perspective view per spot
 //! light, six cube faces per point light, resolutions split by power), each covered texel
 //! holding the surface point the light's flux through it reaches (position, normals,
 //! material, flux). The targets are copied into mappable buffers in the same submission and
 //! read back as [`RsmTexel`]s, from which the frame draws its VPLs.
 
-use super::ispm::{BounceLayer, BounceViewRaw};
-use super::layers::{LayerKind, LayerTargets, TARGET};
-use super::timer::Timer;
+use crate::gpu::raw::BounceViewRaw;
+use crate::scene::light_views::LightView;
+use crate::scene::Scene;
+use super::layers::{LayerTargets, TARGET};
+use crate::scene::light_views::LayerKind;
+use crate::gpu::timer::Timer;
 use super::{buffer_init, gbuffer, Geometry};
 use crate::error::{Error, Result};
 use crate::gpu::{self, shaders, GpuContext};
@@ -142,7 +145,7 @@ impl RsmTargets {
     pub fn new(
         ctx: &GpuContext,
         pass: &RsmPass,
-        layers: &[BounceLayer],
+        layers: &[LightView],
         materials: &wgpu::Buffer,
     ) -> Result<Option<Self>> {
         if layers.is_empty() {
@@ -176,23 +179,25 @@ impl RsmTargets {
                 ],
             },
         );
-        let rsm = RsmTargets {
+        Ok(Some(RsmTargets {
             layers: targets,
             views,
             group,
-        };
-        rsm.write_views(ctx, layers);
-        Ok(Some(rsm))
+        }))
     }
 
     /// Whether these resources serve `layers`.
-    pub fn fits(&self, layers: &[BounceLayer]) -> bool {
+    pub fn fits(&self, layers: &[LightView]) -> bool {
         self.layers.fits(layers)
     }
 
     /// Uploads the layers' views (after lights or geometry moved).
-    pub fn write_views(&self, ctx: &GpuContext, layers: &[BounceLayer]) {
-        let views: Vec<BounceViewRaw> = layers.iter().map(|l| l.view).collect();
+    pub fn write_views(&self, ctx: &GpuContext, scene: &Scene, layers: &[LightView]) {
+        let views: Vec<BounceViewRaw> = layers
+            .iter()
+            .enumerate()
+            .map(|(i, l)| BounceViewRaw::new(i as u32, l, &scene.lights[l.light], 0))
+            .collect();
         gpu::write_buffer(
             &ctx.queue,
             "rsm views",
@@ -208,7 +213,7 @@ impl RsmTargets {
         &self,
         pass: &RsmPass,
         encoder: &mut wgpu::CommandEncoder,
-        layers: &[BounceLayer],
+        layers: &[LightView],
         geometry: &Geometry,
         cull: &super::shadow::CullUnits,
         textures: (&wgpu::BindGroup, super::textures::Variant),
@@ -231,7 +236,7 @@ impl RsmTargets {
     pub fn read(
         &self,
         ctx: &GpuContext,
-        layers: &[BounceLayer],
+        layers: &[LightView],
         after: Option<wgpu::SubmissionIndex>,
     ) -> Result<Vec<RsmTexel>> {
         let max_res = self.layers.max_res as usize;
@@ -264,5 +269,11 @@ impl RsmTargets {
             }
         }
         Ok(out)
+    }
+}
+
+impl crate::gpu::Pipelines for RsmPass {
+    fn create(ctx: &crate::gpu::GpuContext) -> Self {
+        RsmPass::new(&ctx.device, &super::textures::TexturesLayout::get(ctx).layout)
     }
 }

@@ -6,7 +6,8 @@
 
 use crate::gpu::raw::{LightRaw, ViewRaw};
 use crate::gpu::shaders;
-use crate::scene::{Light, Scene};
+use crate::scene::light_views::shadow_views;
+use crate::scene::Scene;
 use glam::{Mat4, Vec3};
 use std::ops::Range;
 
@@ -19,20 +20,6 @@ const DEPTH_BIAS: wgpu::DepthBiasState = wgpu::DepthBiasState {
     clamp: 0.0,
 };
 
-/// Extra field of view, in shadow texels on each side, so PCF taps near a view's border
-/// stay inside it.
-const MARGIN_TEXELS: f32 = 8.0;
-
-/// Cube faces in layer order: forward and up vectors.
-pub(crate) const CUBE_FACES: [(Vec3, Vec3); 6] = [
-    (Vec3::X, Vec3::Y),
-    (Vec3::NEG_X, Vec3::Y),
-    (Vec3::Y, Vec3::Z),
-    (Vec3::NEG_Y, Vec3::Z),
-    (Vec3::Z, Vec3::Y),
-    (Vec3::NEG_Z, Vec3::Y),
-];
-
 /// The shadow views of a scene's lights and the lights' GPU records pointing at them.
 pub struct ShadowViews {
     pub lights: Vec<LightRaw>,
@@ -42,55 +29,20 @@ pub struct ShadowViews {
 
 impl ShadowViews {
     pub fn new(scene: &Scene, size: u32) -> Self {
-        let (lo, hi) = bounds(scene);
-        let mut lights = Vec::with_capacity(scene.lights.len());
-        let mut matrices = Vec::new();
-        for light in &scene.lights {
-            let mut raw = light.to_raw();
-            let p = light.position();
-            // Depth range: everything in the scene's bounding box.
-            let far = corners(lo, hi)
-                .map(|c| (c - p).length())
-                .into_iter()
-                .fold(0.0f32, f32::max)
-                * 1.01
-                + 1e-3;
-            let near = (far * 1e-3).max(1e-5);
-            let grow = 1.0 + 2.0 * MARGIN_TEXELS / size as f32;
-            raw.first_layer = matrices.len() as u32;
-            let tan_half = match *light {
-                Light::Point { .. } => {
-                    let t = grow;
-                    for (forward, up) in CUBE_FACES {
-                        matrices.push(perspective(t, near, far) * super::look_to(p, forward, up));
-                    }
-                    t
-                }
-                Light::Spot {
-                    direction,
-                    cos_outer,
-                    ..
-                } => {
-                    let t = (cos_outer.acos().tan() * grow).max(1e-3);
-                    let up = if direction.y.abs() < 0.99 {
-                        Vec3::Y
-                    } else {
-                        Vec3::X
-                    };
-                    matrices.push(perspective(t, near, far) * super::look_to(p, direction, up));
-                    t
-                }
-            };
-            raw.layers = matrices.len() as u32 - raw.first_layer;
-            raw.texel_scale = 2.0 * tan_half / size as f32;
-            lights.push(raw);
-        }
+        let (layers, matrices) = shadow_views(scene, size);
+        let lights = scene
+            .lights
+            .iter()
+            .zip(layers)
+            .map(|(light, l)| LightRaw {
+                first_layer: l.first_layer,
+                layers: l.layers,
+                texel_scale: l.texel_scale,
+                ..light.to_raw()
+            })
+            .collect();
         ShadowViews { lights, matrices }
     }
-}
-
-pub(crate) fn perspective(tan_half: f32, near: f32, far: f32) -> Mat4 {
-    super::perspective(2.0 * tan_half.atan(), 1.0, near, far)
 }
 
 /// A `layers`-deep array of `size`² shadow maps: the texture's views per layer (render
@@ -135,24 +87,6 @@ pub fn layered_maps(
         ..Default::default()
     });
     (layer_views, array)
-}
-
-/// Axis-aligned bounds of the scene's vertices.
-pub fn bounds(scene: &Scene) -> (Vec3, Vec3) {
-    scene.positions.iter().fold(
-        (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
-        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
-    )
-}
-
-pub(crate) fn corners(lo: Vec3, hi: Vec3) -> [Vec3; 8] {
-    std::array::from_fn(|i| {
-        Vec3::new(
-            if i & 1 == 0 { lo.x } else { hi.x },
-            if i & 2 == 0 { lo.y } else { hi.y },
-            if i & 4 == 0 { lo.z } else { hi.z },
-        )
-    })
 }
 
 /// Pipeline of the shadow pass (depth only).
@@ -391,10 +325,18 @@ impl CullUnits {
     }
 }
 
+
+impl crate::gpu::Pipelines for ShadowPass {
+    fn create(ctx: &crate::gpu::GpuContext) -> Self {
+        ShadowPass::new(&ctx.device, &super::textures::TexturesLayout::get(ctx).layout)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::sampling::Rng;
+    use crate::scene::light_views::{look_to, square_perspective};
 
     /// Culling is conservative: for random boxes against a cube face's view, a box judged
     /// outside has no point (of 64 random ones and its corners) inside the view volume,
@@ -402,7 +344,7 @@ mod tests {
     #[test]
     fn culled_boxes_are_outside_the_view() {
         let m =
-            perspective(1.05, 0.01, 10.0) * crate::raster::look_to(Vec3::ZERO, Vec3::X, Vec3::Y);
+            square_perspective(1.05, 0.01, 10.0) * look_to(Vec3::ZERO, Vec3::X, Vec3::Y);
         let inside = |p: Vec3| {
             let c = m * p.extend(1.0);
             c.w > 0.0 && c.x.abs() <= c.w && c.y.abs() <= c.w && c.z >= 0.0 && c.z <= c.w

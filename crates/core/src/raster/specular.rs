@@ -12,7 +12,7 @@ use crate::image::Image;
 use crate::photon::estimate::{Gather, GatherCache, PhotonMap};
 use crate::photon::irradiance::IrradianceCache;
 use crate::photon::{Neighbour, Photon};
-use crate::render::camera_pass::{delta_image, has_delta_lobe};
+use crate::render::camera_pass::delta_image;
 use crate::render::delta_paths::{adaptive_delta_image, shade_landings, trace_landings, Landings};
 use crate::render::{Progress, Settings, SpecularSampling};
 use crate::scene::Scene;
@@ -37,7 +37,7 @@ pub fn specular_paths(
     landings: &mut Option<Landings>,
     progress: &dyn Progress,
 ) -> Result<(Image, u64)> {
-    if !scene.materials.iter().any(has_delta_lobe) {
+    if !scene.has_delta_materials() {
         let cam = &scene.camera;
         return Ok((Image::new(cam.width, cam.height), 0));
     }

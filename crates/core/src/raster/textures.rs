@@ -384,6 +384,20 @@ fn maps_raw(scene: &Scene) -> Vec<MapsRaw> {
     scene.material_maps.iter().map(|m| m.to_raw()).collect()
 }
 
+
+/// Group 1 of the passes that rasterize the scene (textures and material maps).
+pub struct TexturesLayout {
+    pub layout: wgpu::BindGroupLayout,
+}
+
+impl crate::gpu::Pipelines for TexturesLayout {
+    fn create(ctx: &GpuContext) -> Self {
+        TexturesLayout {
+            layout: layout(&ctx.device),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -80,7 +80,7 @@ impl VolumeRadius {
     /// `r_max` a tenth of the scene's bounding-box diagonal.
     pub fn of_scene(scene: &Scene, photons: u64, kernel_scale: f32) -> Self {
         let r_base = super::ispm::base_radius(scene, photons, kernel_scale);
-        let (lo, hi) = super::shadow::bounds(scene);
+        let (lo, hi) = crate::scene::light_views::bounds(scene);
         VolumeRadius {
             r_base,
             r_max: (0.1 * (hi - lo).length()).max(r_base),

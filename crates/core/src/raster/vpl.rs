@@ -3,7 +3,7 @@
 //! pass that adds the indirect light of VPLs and ray bundles to every G-buffer pixel
 //! (`bidir.wgsl`).
 
-use super::shadow::{corners, perspective, CUBE_FACES};
+use crate::scene::light_views::{corners, look_to, square_perspective, CUBE_FACES};
 use crate::gpu::{self, shaders};
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
@@ -97,7 +97,7 @@ pub fn cube_views(p: Vec3, lo: Vec3, hi: Vec3, size: u32) -> ([Mat4; 6], f32) {
     let near = (far * 1e-3).max(1e-5);
     let t = 1.0 + 2.0 * MARGIN_TEXELS / size as f32;
     let m =
-        CUBE_FACES.map(|(forward, up)| perspective(t, near, far) * super::look_to(p, forward, up));
+        CUBE_FACES.map(|(forward, up)| square_perspective(t, near, far) * look_to(p, forward, up));
     (m, 2.0 * t / size as f32)
 }
 
@@ -226,22 +226,8 @@ impl VplPass {
     }
 }
 
-/// Pipelines of method `bidir`, compiled once per device on first use.
-pub struct BidirPasses {
-    pub rsm: super::rsm::RsmPass,
-    pub bundles: super::bundles::BundlePass,
-    pub vpl: VplPass,
-}
-
-impl BidirPasses {
-    pub fn get(ctx: &crate::gpu::GpuContext) -> &BidirPasses {
-        ctx.bidir_passes.get_or_init(|| {
-            let p = super::Passes::get(ctx);
-            BidirPasses {
-                rsm: super::rsm::RsmPass::new(&ctx.device, &p.textures),
-                bundles: super::bundles::BundlePass::new(&ctx.device, &p.textures),
-                vpl: VplPass::new(&ctx.device, &p.direct.gbuffer_layout),
-            }
-        })
+impl crate::gpu::Pipelines for VplPass {
+    fn create(ctx: &crate::gpu::GpuContext) -> Self {
+        VplPass::new(&ctx.device, &super::direct::DirectPass::get(ctx).gbuffer_layout)
     }
 }

@@ -105,7 +105,7 @@ pub fn delta_image<S: Default + Send>(
     let cam = &scene.camera;
     let (w, h) = (cam.width, cam.height);
     let mut image = Image::new(w, h);
-    if !scene.materials.iter().any(has_delta_lobe) {
+    if !scene.has_delta_materials() {
         return Ok(image);
     }
     let stage = StageProgress::new(progress, "specular paths", h as u64);
@@ -161,11 +161,6 @@ fn pixel_radiance(
     sum / settings.spp as f32
 }
 
-/// True when the material can scatter into a delta lobe (perfect mirror or smooth glass).
-pub fn has_delta_lobe(m: &crate::bsdf::Material) -> bool {
-    (m.has_specular() && m.is_mirror()) || m.has_transmission()
-}
-
 /// Radiance arriving at `origin` from `-dir`: estimates at every non-delta surface the ray
 /// reaches through up to `max_delta` delta scatterings (the first surface only when
 /// `estimate_first`). The estimate covers a surface's non-delta lobes; its delta lobe (if
@@ -194,7 +189,7 @@ fn radiance(
         if (depth > 0 || estimate_first) && !it.material.is_purely_specular() {
             l += beta * estimate(&it, wo);
         }
-        if depth == 0 && !estimate_first && !has_delta_lobe(&it.material) {
+        if depth == 0 && !estimate_first && !it.material.has_delta_lobe() {
             break;
         }
         // Continue only through a delta lobe, geometrically consistent.

@@ -32,7 +32,6 @@
 //!    geometry, the materials and the seed only, so the frame engine keeps them while the
 //!    lights alone change and only shades them again.
 
-use super::camera_pass::has_delta_lobe;
 use super::{Progress, Settings};
 use crate::cancel::StageProgress;
 use crate::error::Result;
@@ -124,7 +123,7 @@ fn delta_capable(scene: &Scene, i: usize) -> bool {
         .material_maps
         .get(scene.triangle_materials[i] as usize)
         .is_some_and(|maps| !maps.is_empty());
-    has_delta_lobe(m) || (mapped && m.has_specular())
+    m.has_delta_lobe() || (mapped && m.has_specular())
 }
 
 /// The object holding triangle `t` (its index in `Scene::objects`), else its material
@@ -182,7 +181,7 @@ fn follow(
         if p.depth > 0 && !it.material.is_purely_specular() {
             land(&h, p.dir, p.beta);
         }
-        if (p.depth == 0 && !has_delta_lobe(&it.material)) || p.depth >= max_delta {
+        if (p.depth == 0 && !it.material.has_delta_lobe()) || p.depth >= max_delta {
             continue;
         }
         let wo_l = it.frame.to_local(wo);
@@ -353,7 +352,7 @@ pub fn trace_landings(
         spp: settings.spp,
         ..Default::default()
     };
-    if !scene.materials.iter().any(has_delta_lobe) {
+    if !scene.has_delta_materials() {
         return Ok(result);
     }
     let mask = delta_footprint(scene);

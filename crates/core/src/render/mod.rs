@@ -13,6 +13,7 @@ pub use crate::photon::bounce::FirstBounce;
 pub use crate::photon::Kernel;
 pub use crate::raster::volume_shape::VolumeShape;
 use crate::scene::Scene;
+pub use crate::cancel::{Progress, Silent};
 pub use delta_paths::SpecularSampling;
 pub use gather::trace_settings as gather_trace_settings;
 pub use photon_map::gather_settings as photon_map_gather;
@@ -525,25 +526,6 @@ pub struct RenderOutput {
     /// "photons", a visualization of where stored photons land).
     pub aovs: Vec<(String, Image)>,
     pub stats: RenderStats,
-}
-
-/// Receives progress; return `false` to cancel the render.
-pub trait Progress: Sync {
-    fn update(&self, stage: &str, fraction: f64) -> bool;
-    /// True once the render should stop. Long loops ask between small work items, so it
-    /// must be cheap (the Python binding's is an atomic load). Default: only `update`
-    /// cancels.
-    fn cancelled(&self) -> bool {
-        false
-    }
-}
-
-/// No progress reporting.
-pub struct Silent;
-impl Progress for Silent {
-    fn update(&self, _: &str, _: f64) -> bool {
-        true
-    }
 }
 
 /// Checks that the images of a frame fit in memory: the outputs (six RGB images and the

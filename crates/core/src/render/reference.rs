@@ -34,7 +34,7 @@ pub fn render(
         max_depth: settings.max_depth,
         rr_depth: 3,
     };
-    let light_paths = if light_tracer::scene_has_delta_surfaces(scene) && settings.max_depth >= 2 {
+    let light_paths = if scene.has_delta_materials() && settings.max_depth >= 2 {
         settings
             .light_paths
             .unwrap_or(spp as u64 * w as u64 * h as u64)

@@ -34,17 +34,26 @@ impl Light {
         }
     }
 
-    /// Spot falloff: smoothstep in cos θ from the outer to the inner cone.
-    fn falloff(cos: f32, cos_inner: f32, cos_outer: f32) -> f32 {
-        if cos >= cos_inner {
-            return 1.0;
+    /// Intensity on the axis (W/sr per channel).
+    pub fn intensity(&self) -> Vec3 {
+        match *self {
+            Light::Point { intensity, .. } | Light::Spot { intensity, .. } => intensity,
         }
-        if cos <= cos_outer {
-            return 0.0;
-        }
-        let t = (cos - cos_outer) / (cos_inner - cos_outer);
-        t * t * (3.0 - 2.0 * t)
     }
+
+    /// The share of the on-axis intensity emitted at cosine `cos` from the axis: 1 for a
+    /// point light, the spot falloff for a spot light.
+    pub fn falloff(&self, cos: f32) -> f32 {
+        match *self {
+            Light::Point { .. } => 1.0,
+            Light::Spot {
+                cos_inner,
+                cos_outer,
+                ..
+            } => spot_falloff(cos, cos_inner, cos_outer),
+        }
+    }
+
 
     /// Radiant intensity (W/sr) emitted in unit direction `dir`.
     pub fn intensity_towards(&self, dir: Vec3) -> Vec3 {
@@ -56,7 +65,7 @@ impl Light {
                 cos_inner,
                 cos_outer,
                 ..
-            } => intensity * Self::falloff(dir.dot(direction), cos_inner, cos_outer),
+            } => intensity * spot_falloff(dir.dot(direction), cos_inner, cos_outer),
         }
     }
 
@@ -112,6 +121,18 @@ impl Light {
             }
         }
     }
+}
+
+/// Spot falloff: smoothstep in cos θ from the outer to the inner cone.
+pub fn spot_falloff(cos: f32, cos_inner: f32, cos_outer: f32) -> f32 {
+    if cos >= cos_inner {
+        return 1.0;
+    }
+    if cos <= cos_outer {
+        return 0.0;
+    }
+    let t = (cos - cos_outer) / (cos_inner - cos_outer);
+    t * t * (3.0 - 2.0 * t)
 }
 
 #[cfg(test)]

@@ -7,6 +7,7 @@ pub mod camera;
 pub mod desc;
 pub mod environment;
 pub mod light;
+pub mod light_views;
 pub mod primitives;
 pub mod shading;
 pub mod surface;

@@ -173,6 +173,11 @@ impl Scene {
         }
     }
 
+    /// Whether any material has a delta lobe (perfect mirrors, smooth glass).
+    pub fn has_delta_materials(&self) -> bool {
+        self.materials.iter().any(crate::bsdf::Material::has_delta_lobe)
+    }
+
     /// Whether any material is alpha-masked.
     pub fn has_alpha_masks(&self) -> bool {
         self.material_maps.iter().any(|m| m.alpha.is_some())

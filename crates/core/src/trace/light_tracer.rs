@@ -122,10 +122,3 @@ pub fn trace_path(
     }
 }
 
-/// True when some surface of the scene has a delta lobe, i.e. light tracing has work to do.
-pub fn scene_has_delta_surfaces(scene: &Scene) -> bool {
-    scene
-        .materials
-        .iter()
-        .any(|m| m.has_transmission() || (m.has_specular() && m.is_mirror()))
-}
