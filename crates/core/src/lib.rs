@@ -14,14 +14,13 @@ pub mod image;
 pub mod memory;
 pub mod photon;
 pub mod raster;
-pub mod render;
 pub mod sampling;
 pub mod scene;
 pub mod texture;
 pub mod trace;
 
 pub use error::{Error, Result};
-pub use frame::{FrameDesc, Images, Renderer};
+pub use cancel::{Progress, Silent};
+pub use frame::{render, FrameDesc, Images, Method, RenderOutput, RenderStats, Renderer, Settings};
 pub use image::Image;
-pub use render::{render, Method, Progress, RenderOutput, RenderStats, Settings};
 pub use scene::{Scene, SceneUpdate};

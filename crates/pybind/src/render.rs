@@ -453,7 +453,7 @@ pub fn footprint_radii(
     }
     let rows = crate::guard::run(py, "footprint_radii", None, |progress| {
         let bvh = gi_core::trace::SceneBvh::try_build(&scene.inner)?;
-        let mut ts = gi_core::render::gather_trace_settings(&scene.inner, &settings);
+        let mut ts = gi_core::frame::gather::trace_settings(&scene.inner, &settings);
         ts.store_direct = true;
         let control = gi_core::photon::trace::Checked::new(progress, "photon trace");
         let set = gi_core::photon::emit_and_trace_checked(

@@ -24,9 +24,11 @@ use crate::gpu::{self, shaders, GpuContext};
 use crate::photon::Photon;
 use crate::raster::buffer_init;
 use crate::raster::gbuffer::GBuffer;
-use crate::raster::ispm::{tex, Z_RATIO};
+use crate::gpu::layout::texture as tex;
+use crate::photon::radius::Z_RATIO;
 use crate::gpu::timer::Timer;
-use crate::raster::volume_shape::{projected_radius, VolumeRadius};
+use crate::estimate::volume_shape::projected_radius;
+use crate::photon::radius::VolumeRadius;
 use crate::scene::{Camera, Scene};
 use bytemuck::{Pod, Zeroable};
 use std::sync::OnceLock;
@@ -194,7 +196,7 @@ impl BinnedPasses {
                     12,
                     wgpu::BindingType::StorageTexture {
                         access: wgpu::StorageTextureAccess::WriteOnly,
-                        format: crate::raster::ispm::TARGET,
+                        format: super::target::TARGET,
                         view_dimension: wgpu::TextureViewDimension::D2,
                     },
                 ),
@@ -468,7 +470,7 @@ impl Binned {
             ctx,
             "hierarchy node texels",
             [3 * NODE_ROW, node_rows],
-            crate::raster::ispm::TARGET,
+            super::target::TARGET,
         );
         let coeffs = buffer(
             ctx,
@@ -579,7 +581,7 @@ impl Binned {
             ctx,
             "tiled photons",
             [4 * PHOTON_ROW, photons / PHOTON_ROW],
-            crate::raster::ispm::TARGET,
+            super::target::TARGET,
         )
     }
 

@@ -13,6 +13,7 @@
 pub mod binned;
 pub mod cpu;
 pub mod target;
+pub mod volume_shape;
 pub mod volumes;
 
 pub use binned::{Binned, Mode};

@@ -2,14 +2,72 @@
 //! centre of a `subsample` × `subsample` block, and its joint bilateral upsampling to full
 //! resolution (ISPM section 5.2) when `subsample` > 1.
 
-use crate::gpu::Pipelines;
-use crate::gpu::{self, GpuContext};
-use crate::raster::gbuffer::GBuffer;
-use crate::raster::ispm::{tex, IspmPasses, UpsampleParamsRaw, TARGET};
+use crate::gpu::layout::{buffer_init, texture as tex, texture_entry, uniform_entry};
+use crate::gpu::raw::UpsampleParamsRaw;
 use crate::gpu::timer::Timer;
-use crate::raster::{buffer_init, camera_view};
+use crate::gpu::{self, shaders, GpuContext, Pipelines};
+use crate::raster::camera_view;
+use crate::raster::gbuffer::GBuffer;
 use crate::scene::Scene;
 use glam::{Mat4, Vec2, Vec3};
+
+const FRAGMENT: wgpu::ShaderStages = wgpu::ShaderStages::FRAGMENT;
+
+/// Format of the indirect-light targets.
+pub(crate) const TARGET: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+
+/// The joint bilateral upsampling pipeline (ISPM section 5.2).
+pub struct UpsamplePass {
+    pipeline: wgpu::RenderPipeline,
+    layout: wgpu::BindGroupLayout,
+}
+
+impl Pipelines for UpsamplePass {
+    fn create(ctx: &GpuContext) -> Self {
+        let device = &ctx.device;
+        let layout = |label, entries: &[wgpu::BindGroupLayoutEntry]| {
+            device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some(label),
+                entries,
+            })
+        };
+        let pipeline_layout = |bgl: &wgpu::BindGroupLayout| {
+            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("upsample pipeline layout"),
+                bind_group_layouts: &[Some(bgl)],
+                immediate_size: 0,
+            })
+        };
+        let upsample_layout = layout(
+            "upsample bind group layout",
+            &[
+                uniform_entry(0),
+                texture_entry(1, FRAGMENT),
+                texture_entry(2, FRAGMENT),
+                texture_entry(3, FRAGMENT),
+                texture_entry(4, FRAGMENT),
+                texture_entry(5, FRAGMENT),
+            ],
+        );
+        let module = shaders::module(
+            device,
+            "upsample shader",
+            &[shaders::COMMON, shaders::BSDF, shaders::UPSAMPLE],
+        );
+        let upsample = crate::gpu::create_fullscreen_pipeline(
+            device,
+            "upsample pipeline",
+            &pipeline_layout(&upsample_layout),
+            &module,
+            "fs_main",
+            TARGET.into(),
+        );
+        UpsamplePass {
+            pipeline: upsample,
+            layout: upsample_layout,
+        }
+    }
+}
 
 pub struct IndirectTarget {
     pub subsample: u32,
@@ -54,7 +112,7 @@ pub(crate) fn float_target(ctx: &GpuContext, label: &str, w: u32, h: u32) -> wgp
 
 impl IndirectTarget {
     pub fn new(ctx: &GpuContext, gbuf: &GBuffer, width: u32, height: u32, subsample: u32) -> Self {
-        let passes = IspmPasses::get(ctx);
+        let passes = UpsamplePass::get(ctx);
         let k = subsample.max(1);
         let low_size = [width.div_ceil(k), height.div_ceil(k)];
         let low = float_target(ctx, "indirect (subsampled)", low_size[0], low_size[1]);
@@ -73,7 +131,7 @@ impl IndirectTarget {
                 &ctx.device,
                 &wgpu::BindGroupDescriptor {
                     label: Some("upsample bind group"),
-                    layout: &passes.upsample_layout,
+                    layout: &passes.layout,
                     entries: &[
                         wgpu::BindGroupEntry {
                             binding: 0,
@@ -167,7 +225,7 @@ impl IndirectTarget {
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_pipeline(&IspmPasses::get(ctx).upsample);
+        pass.set_pipeline(&UpsamplePass::get(ctx).pipeline);
         pass.set_bind_group(0, group, &[]);
         pass.draw(0..3, 0..1);
     }

@@ -6,16 +6,174 @@
 //! the parameter buffers and bind groups, the icosahedron, and a photon buffer that grows
 //! geometrically (a frame rewrites only the photons in it).
 
-use crate::gpu::Pipelines;
-use super::target::IndirectTarget;
-use crate::gpu::{self, GpuContext};
-use crate::photon::Photon;
-use crate::raster::buffer_init;
-use crate::raster::gbuffer::GBuffer;
-use crate::raster::ispm::{icosahedron, tex, IspmPasses, VolumeParamsRaw, Z_RATIO};
+use super::target::{IndirectTarget, TARGET};
+use crate::gpu::layout::{buffer_init, texture as tex, texture_entry, uniform_entry};
+use crate::gpu::raw::VolumeParamsRaw;
 use crate::gpu::timer::Timer;
-use crate::raster::volume_shape::VolumeRadius;
+use crate::gpu::{self, shaders, GpuContext, Pipelines};
+use crate::photon::radius::{VolumeRadius, Z_RATIO};
+use crate::photon::Photon;
+use crate::raster::gbuffer::GBuffer;
 use crate::scene::Scene;
+
+const FRAGMENT: wgpu::ShaderStages = wgpu::ShaderStages::FRAGMENT;
+
+/// The photon-volume pipelines: both bounding shapes ([`super::volume_shape`]) share the
+/// fragment stage and differ in the vertex stage and topology.
+pub struct VolumePass {
+    /// Photon volumes as icosahedra.
+    volume: wgpu::RenderPipeline,
+    /// Photon volumes as screen-aligned quads.
+    volume_quad: wgpu::RenderPipeline,
+    layout: wgpu::BindGroupLayout,
+}
+
+/// The photon attributes of [`Photon`] as an instance-rate vertex buffer (locations 1..=5).
+const PHOTON_ATTRIBUTES: [wgpu::VertexAttribute; 6] = wgpu::vertex_attr_array![
+    1 => Float32x3, 2 => Float32x3, 3 => Float32, 4 => Float32x3, 5 => Float32x3, 6 => Float32
+];
+
+fn photon_attributes() -> [wgpu::VertexAttribute; 6] {
+    // Offsets inside `Photon`: position 0, incident 16, path_density 28, power 32, normal 48,
+    // footprint radius 60.
+    let mut a = PHOTON_ATTRIBUTES;
+    for (attr, offset) in a.iter_mut().zip([0u64, 16, 28, 32, 48, 60]) {
+        attr.offset = offset;
+    }
+    a
+}
+
+impl Pipelines for VolumePass {
+    fn create(ctx: &GpuContext) -> Self {
+        let device = &ctx.device;
+        let layout = |label, entries: &[wgpu::BindGroupLayoutEntry]| {
+            device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some(label),
+                entries,
+            })
+        };
+        let pipeline_layout = |bgl: &wgpu::BindGroupLayout| {
+            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("volume pipeline layout"),
+                bind_group_layouts: &[Some(bgl)],
+                immediate_size: 0,
+            })
+        };
+        let volume_layout = layout(
+            "volume bind group layout",
+            &[
+                uniform_entry(0),
+                texture_entry(1, FRAGMENT),
+                texture_entry(2, FRAGMENT),
+                texture_entry(3, FRAGMENT),
+                texture_entry(4, FRAGMENT),
+            ],
+        );
+        let module = shaders::module(
+            device,
+            "volume shader",
+            &[
+                shaders::COMMON,
+                shaders::BSDF,
+                shaders::PHOTON_VOLUME,
+                shaders::VOLUME,
+            ],
+        );
+        let corner_attr = wgpu::vertex_attr_array![0 => Float32x3];
+        let photon_attr = photon_attributes();
+        let additive = wgpu::BlendComponent {
+            src_factor: wgpu::BlendFactor::One,
+            dst_factor: wgpu::BlendFactor::One,
+            operation: wgpu::BlendOperation::Add,
+        };
+        let photon_buffer = wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<Photon>() as u64,
+            step_mode: wgpu::VertexStepMode::Instance,
+            attributes: &photon_attr,
+        };
+        let volume_pipeline =
+            |label, entry_point, buffers: &[Option<wgpu::VertexBufferLayout>], primitive| {
+                crate::gpu::create_render_pipeline(
+                    device,
+                    &wgpu::RenderPipelineDescriptor {
+                        label: Some(label),
+                        layout: Some(&pipeline_layout(&volume_layout)),
+                        vertex: wgpu::VertexState {
+                            module: &module,
+                            entry_point: Some(entry_point),
+                            compilation_options: Default::default(),
+                            buffers,
+                        },
+                        primitive,
+                        depth_stencil: None,
+                        multisample: Default::default(),
+                        fragment: Some(wgpu::FragmentState {
+                            module: &module,
+                            entry_point: Some("fs_main"),
+                            compilation_options: Default::default(),
+                            targets: &[Some(wgpu::ColorTargetState {
+                                format: TARGET,
+                                blend: Some(wgpu::BlendState {
+                                    color: additive,
+                                    alpha: additive,
+                                }),
+                                write_mask: wgpu::ColorWrites::ALL,
+                            })],
+                        }),
+                        multiview_mask: None,
+                        cache: None,
+                    },
+                )
+            };
+        let volume = volume_pipeline(
+            "volume pipeline (icosahedron)",
+            "vs_icosahedron",
+            &[
+                Some(wgpu::VertexBufferLayout {
+                    array_stride: 12,
+                    step_mode: wgpu::VertexStepMode::Vertex,
+                    attributes: &corner_attr,
+                }),
+                Some(photon_buffer.clone()),
+            ],
+            wgpu::PrimitiveState {
+                cull_mode: Some(wgpu::Face::Front),
+                ..Default::default()
+            },
+        );
+        // Corners from the vertex index; the photons are vertex buffer 0. Not culled: the
+        // rectangle faces the camera by construction.
+        let volume_quad = volume_pipeline(
+            "volume pipeline (quad)",
+            "vs_quad",
+            &[Some(photon_buffer)],
+            wgpu::PrimitiveState {
+                topology: wgpu::PrimitiveTopology::TriangleStrip,
+                ..Default::default()
+            },
+        );
+
+        VolumePass {
+            volume,
+            volume_quad,
+            layout: volume_layout,
+        }
+    }
+}
+
+/// A regular icosahedron circumscribing the unit sphere, as 20 outward-facing (counter-
+/// clockwise seen from outside) triangles.
+pub fn icosahedron() -> Vec<[f32; 3]> {
+    let phi = (1.0 + 5f32.sqrt()) / 2.0;
+    // Inradius of the unit-circumradius icosahedron.
+    let inradius = (phi * phi / (3.0f32.sqrt() * (1.0 + phi * phi).sqrt())).min(1.0);
+    // The scene's geodesic sphere at 0 subdivisions is that icosahedron, wound outwards.
+    let ico = crate::scene::primitives::sphere(1.0, 0);
+    ico.indices
+        .iter()
+        .flat_map(|t| t.map(|i| (ico.positions[i as usize] / inradius).to_array()))
+        .collect()
+}
 
 /// Photons the buffer holds before it first grows.
 const MIN_CAPACITY: usize = 1 << 16;
@@ -49,7 +207,7 @@ fn photon_buffer(ctx: &GpuContext, capacity: usize) -> wgpu::Buffer {
 impl Volumes {
     /// Targets for a `width × height` image over the G-buffer `gbuf`.
     pub fn new(ctx: &GpuContext, gbuf: &GBuffer, width: u32, height: u32, subsample: u32) -> Self {
-        let passes = IspmPasses::get(ctx);
+        let passes = VolumePass::get(ctx);
         let target = IndirectTarget::new(ctx, gbuf, width, height, subsample);
         let params = buffer_init(
             ctx,
@@ -62,7 +220,7 @@ impl Volumes {
             &ctx.device,
             &wgpu::BindGroupDescriptor {
                 label: Some("volume bind group"),
-                layout: &passes.volume_layout,
+                layout: &passes.layout,
                 entries: &[
                     wgpu::BindGroupEntry {
                         binding: 0,
@@ -161,7 +319,7 @@ impl Volumes {
     /// [`super::target::IndirectTarget::record_upsample`]).
     pub fn record(&self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder, timer: &mut Timer) {
         let (count, quads) = (self.count, self.quads);
-        let passes = IspmPasses::get(ctx);
+        let passes = VolumePass::get(ctx);
         {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("volume pass"),
@@ -184,6 +342,24 @@ impl Volumes {
                 pass.set_vertex_buffer(1, self.photons.slice(..bytes));
                 pass.draw(0..self.ico_vertices, quads..count);
             }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    #[test]
+    fn icosahedron_contains_the_unit_sphere() {
+        let tris = icosahedron();
+        assert_eq!(tris.len(), 60);
+        for t in tris.chunks(3) {
+            let [a, b, c] = [t[0], t[1], t[2]].map(Vec3::from);
+            let n = (b - a).cross(c - a).normalize();
+            // Outward and at distance >= 1 from the centre.
+            assert!(n.dot(a) >= 1.0 - 1e-4, "{}", n.dot(a));
         }
     }
 }

@@ -21,7 +21,7 @@ use crate::gpu::{self, raw::ViewRaw, GpuContext};
 use crate::raster::bundles::{bundle_view, BundleBuffers, BundleViewRaw};
 use crate::scene::light_views::{self, light_views, LightView};
 use crate::raster::rsm::{RsmTargets, RsmTexel};
-use crate::raster::specular::specular_paths_direct;
+use crate::photon::specular::specular_paths_direct;
 use crate::raster::vpl::{cube_views, BidirParamsRaw, VplPass, VplRaw};
 use crate::gpu::Pipelines;
 use crate::raster::bundles::BundlePass;
@@ -29,7 +29,9 @@ use crate::raster::direct::DirectPass;
 use crate::raster::rsm::RsmPass;
 use crate::raster::shadow::ShadowPass;
 use crate::raster::{buffer_init, shadow, VIEW_SIZE};
-use crate::render::{BidirStrategy, Progress, RenderOutput, RenderStats, Settings};
+use super::options::BidirStrategy;
+use super::{RenderOutput, RenderStats, Settings};
+use crate::cancel::Progress;
 use crate::sampling::Rng;
 use crate::scene::{Environment, Scene};
 use crate::trace::SceneBvh;
@@ -763,7 +765,8 @@ pub(super) fn frame(
     // lights (uploaded before the composite runs: queue writes precede the submission).
     let t = Instant::now();
     let specular = if scene.has_delta_materials() {
-        let img = specular_paths_direct(scene, bvh, settings, progress)?;
+        let samples = super::photon::camera_samples(settings);
+        let img = specular_paths_direct(scene, bvh, &samples, settings.specular_sampling, progress)?;
         g.targets.write_specular(&ctx, &img);
         state.specular_written = true;
         Some(img)

@@ -19,6 +19,7 @@ use crate::raster::{
     self, buffer_init, camera_view, edges, gbuffer, sample_positions, shadow, view_binding,
     Geometry, SAMPLES_PER_SUBMIT, VIEW_SIZE,
 };
+use super::Settings;
 use crate::scene::Scene;
 use glam::{Vec2, Vec4};
 use std::collections::HashMap;
@@ -218,6 +219,37 @@ impl GpuScene {
         }
         self.shadows_stale = false;
     }
+}
+
+/// Fails with a setting or GPU error when the image, the shadow maps or their layers exceed
+/// the adapter's limits.
+pub(super) fn check_limits(
+    ctx: &GpuContext,
+    scene: &Scene,
+    settings: &Settings,
+    layers: u32,
+) -> Result<()> {
+    let l = ctx.device.limits();
+    let max = l.max_texture_dimension_2d;
+    if scene.camera.width > max || scene.camera.height > max {
+        return Err(Error::setting(
+            "width",
+            format!("the GPU allows images up to {max} pixels a side"),
+        ));
+    }
+    if settings.shadow_map_size > max {
+        return Err(Error::setting(
+            "shadow_map_size",
+            format!("the GPU allows at most {max}"),
+        ));
+    }
+    if layers > l.max_texture_array_layers {
+        return Err(Error::Gpu(format!(
+            "{layers} shadow-map layers exceed the GPU's {}",
+            l.max_texture_array_layers
+        )));
+    }
+    Ok(())
 }
 
 /// A number not handed out before in this process ([`Targets::gbuffer_generation`]).

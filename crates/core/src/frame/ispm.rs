@@ -29,13 +29,16 @@ use crate::photon::trace::{continue_paths_from, emit_aimed_caustics, FirstSegmen
 use crate::photon::PhotonRay;
 use crate::photon::{boundary, PhotonTraceSettings};
 use crate::gpu::Pipelines;
-use crate::raster::ispm::{photon_hits, BounceTargets, IspmPasses, Z_RATIO};
+use crate::photon::radius::Z_RATIO;
+use crate::raster::bounce::{BouncePass, BounceTargets};
 use crate::scene::light_views::{light_views, LightView};
-use crate::raster::specular::specular_paths;
+use crate::photon::specular::{specular_paths, SpecularPaths};
 use crate::gpu::timer::Timer;
-use crate::raster::volume_shape::{partition, VolumeRadius};
-use crate::render::delta_paths::Landings;
-use crate::render::{Progress, RenderOutput, RenderStats, Settings};
+use crate::estimate::volume_shape::partition;
+use crate::photon::radius::VolumeRadius;
+use super::{RenderOutput, RenderStats, Settings};
+use crate::cancel::Progress;
+use crate::photon::delta_paths::Landings;
 use crate::scene::Scene;
 use crate::trace::SceneBvh;
 use glam::Vec3;
@@ -194,7 +197,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         });
     if let (false, Some(b)) = (reuse, &state.bounce) {
         b.record(
-            &IspmPasses::get(&ctx),
+            &BouncePass::get(&ctx),
             &mut encoder,
             &layers,
             &gs.geometry,
@@ -286,7 +289,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         let pts = if settings.footprint_volumes {
             PhotonTraceSettings {
                 store_direct: false,
-                ..crate::render::gather_trace_settings(scene, settings)
+                ..super::gather::trace_settings(scene, settings)
             }
         } else {
             PhotonTraceSettings {
@@ -426,10 +429,16 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     let specular = if state.specular && state.specular_image.is_some() && !photons_changed {
         state.specular_image.clone()
     } else if state.specular {
+        let paths = SpecularPaths {
+            samples: super::photon::camera_samples(settings),
+            sampling: settings.specular_sampling,
+            gather: super::photon::gather_settings(scene, settings),
+            precompute: !settings.progressive,
+        };
         let (img, camera_paths) = specular_paths(
             scene,
             bvh,
-            settings,
+            &paths,
             photons.traced(),
             &mut state.specular_landings,
             progress,
@@ -650,4 +659,26 @@ fn first_segment(
         position: l.position(),
         spacing: (omega as f64 / texels.max(1.0)).sqrt() as f32,
     }
+}
+
+/// Where the stored photons land, as seen from the camera: per pixel, the number of visible
+/// photons of bounce 1 (green) and of later bounces (red).
+fn photon_hits(scene: &Scene, position: &Image, photons: &[crate::photon::Photon]) -> Image {
+    let cam = &scene.camera;
+    let mut img = Image::new(cam.width, cam.height);
+    for p in photons {
+        let pos = p.position();
+        let Some((x, y, _)) = cam.project(pos) else {
+            continue;
+        };
+        let i = y as usize * cam.width as usize + x as usize;
+        // Visible if the surface seen through the pixel is where the photon is.
+        let seen = position.pixels[i];
+        let dist = (pos - cam.position).length();
+        if (seen - pos).length() > 0.02 * dist {
+            continue;
+        }
+        img.pixels[i] += if p.bounce <= 1 { Vec3::Y } else { Vec3::X };
+    }
+    img
 }

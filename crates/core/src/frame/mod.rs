@@ -8,10 +8,14 @@
 //! methods (`path`, `photon`, `gather`) reuse the renderer's BVH ([`cpu`]).
 
 mod bidir;
-mod cpu;
 mod direct;
+pub mod gather;
 mod gpu;
 mod ispm;
+pub mod options;
+pub mod output;
+mod path;
+mod photon;
 mod progressive;
 
 use crate::error::{Error, Result};
@@ -19,7 +23,10 @@ use crate::gpu::GpuContext;
 use crate::image::Image;
 use crate::photon::lbvh::Aabb;
 use crate::photon::ring::PhotonRing;
-use crate::render::{Method, Progress, RenderOutput, Settings};
+use crate::cancel::Progress;
+pub use options::{Method, Settings};
+pub use output::{RenderOutput, RenderStats};
+pub use progressive::progressive_radius_scale;
 use crate::scene::{Changes, Scene, SceneUpdate};
 use crate::trace::SceneBvh;
 use std::sync::Arc;
@@ -136,7 +143,7 @@ impl Renderer {
             settings.width.unwrap_or(scene.camera.width),
             settings.height.unwrap_or(scene.camera.height),
         );
-        crate::render::check_image_memory(&camera, settings.method)?;
+        options::check_image_memory(&camera, settings.method)?;
         Ok(Renderer {
             scene: Scene {
                 camera,
@@ -213,7 +220,7 @@ impl Renderer {
         }
         if (width, height) != (self.scene.camera.width, self.scene.camera.height) {
             let camera = self.scene.camera.with_size(width, height);
-            crate::render::check_image_memory(&camera, self.settings.method)?;
+            options::check_image_memory(&camera, self.settings.method)?;
             self.scene.camera = camera;
             self.resized = true;
             self.accum = None;
@@ -264,7 +271,12 @@ impl Renderer {
         let mut out = match settings.method {
             Method::Path | Method::Photon | Method::Gather => {
                 let bvh = self.bvh.as_ref().ok_or(Error::Cancelled)?;
-                cpu::frame(&self.scene, bvh, &settings, progress)?
+                let scene = &self.scene;
+                match settings.method {
+                    Method::Photon => photon::render(scene, bvh, &settings, progress)?,
+                    Method::Gather => gather::render(scene, bvh, &settings, progress)?,
+                    _ => path::render(scene, bvh, &settings, progress)?,
+                }
             }
             Method::Direct | Method::Ispm | Method::Bidir => {
                 self.gpu_frame(&settings, desc.images, progress)?
@@ -401,7 +413,7 @@ impl Renderer {
         if !fits {
             crate::raster::check_scene_buffers(ctx, scene)?;
             let gs = gpu::GpuScene::new(ctx, scene, settings.shadow_map_size)?;
-            crate::raster::check_limits(ctx, scene, settings, gs.layers)?;
+            gpu::check_limits(ctx, scene, settings, gs.layers)?;
             let targets =
                 gpu::Targets::new(ctx, &gs, scene, settings.spp, settings.edge_supersampling)?;
             self.gpu = Some(GpuState {
@@ -437,7 +449,7 @@ impl Renderer {
             g.scene.write_lights(ctx, scene, settings.shadow_map_size);
         }
         if self.resized {
-            crate::raster::check_limits(ctx, scene, settings, g.scene.layers)?;
+            gpu::check_limits(ctx, scene, settings, g.scene.layers)?;
             g.targets = gpu::Targets::new(
                 ctx,
                 &g.scene,
@@ -490,4 +502,18 @@ fn keep_requested(out: &mut RenderOutput, images: Images) {
     if !images.extras {
         out.aovs.clear();
     }
+}
+
+/// Renders `scene` with `settings`: one frame of a new [`Renderer`](crate::frame::Renderer)
+/// with every image read back.
+pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Result<RenderOutput> {
+    let mut renderer = Renderer::new(scene, settings)?;
+    renderer.render(
+        &FrameDesc {
+            seed: None,
+            images: Images::ALL,
+            serial: false,
+        },
+        progress,
+    )
 }

@@ -20,15 +20,27 @@ use crate::cancel::StageProgress;
 use crate::error::Result;
 use crate::image::Image;
 use crate::photon::{boundary, Photon};
-use crate::raster::ispm::Z_RATIO;
+use crate::photon::radius::Z_RATIO;
 use crate::raster::oct_decode;
-use crate::render::{progressive_radius_scale, Progress, Settings};
+use super::options::Settings;
+use crate::cancel::Progress;
 use crate::sampling::Rng;
 use crate::scene::Scene;
 use crate::trace::path::direct_light;
 use crate::trace::{Interaction, SceneBvh};
 use glam::{DVec3, Vec2, Vec3, Vec4};
 use rayon::prelude::*;
+
+/// Kernel radius scale of progressive pass `pass` (0-based) relative to the first:
+/// r²ᵢ₊₁ = r²ᵢ (i + α)/(i + 1) with i counted from 1 (Knaus & Zwicker 2011, eq. 13).
+pub fn progressive_radius_scale(pass: u64, alpha: f32) -> f32 {
+    let alpha = alpha as f64;
+    let mut r2 = 1.0f64;
+    for i in 1..=pass {
+        r2 *= (i as f64 + alpha) / (i as f64 + 1.0);
+    }
+    r2.sqrt() as f32
+}
 
 /// The running sum of the passes since the last change of scene, camera or size.
 pub(super) struct Accumulation {

@@ -7,6 +7,7 @@
 //! name.
 
 pub mod alloc;
+pub mod layout;
 pub mod raw;
 pub mod shaders;
 pub mod timer;

@@ -158,3 +158,24 @@ impl BounceViewRaw {
         }
     }
 }
+
+/// `VolumeParams` of `volume.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct VolumeParamsRaw {
+    pub view_proj: [[f32; 4]; 4],
+    pub eye: [f32; 3],
+    pub r_base: f32,
+    pub r_max: f32,
+    pub z_ratio: f32,
+    pub subsample: u32,
+    pub _pad: f32,
+}
+
+/// `UpsampleParams` of `upsample.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct UpsampleParamsRaw {
+    pub eye: [f32; 3],
+    pub subsample: u32,
+}

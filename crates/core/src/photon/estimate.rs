@@ -10,10 +10,9 @@
 //! (k − 1)/(πr²), the unbiased kNN density for uniformly spread photons.
 
 use super::{KdTree, Neighbour, Photon};
-use crate::cancel;
+use crate::cancel::{self, Progress};
 use crate::error::{Error, Result};
 use crate::memory;
-use crate::cancel::Progress;
 use crate::trace::Interaction;
 use glam::Vec3;
 use std::f32::consts::PI;
@@ -72,6 +71,30 @@ pub struct Gather {
     /// Maximum gather radius (m).
     pub max_radius: f32,
     pub kernel: Kernel,
+}
+
+/// Default maximum gather radius, as a fraction of the scene's bounding-box diagonal.
+const DEFAULT_RADIUS_FRACTION: f32 = 0.05;
+
+impl Gather {
+    /// The estimate of `k` photons within `max_radius` (`None`: 5% of the scene's
+    /// diagonal) with `kernel`, both shrunk by a progressive pass's `radius_scale` (the
+    /// count through k ∝ r²).
+    pub fn new(
+        scene: &crate::scene::Scene,
+        k: u32,
+        max_radius: Option<f32>,
+        kernel: Kernel,
+        radius_scale: f32,
+    ) -> Gather {
+        let s2 = radius_scale * radius_scale;
+        Gather {
+            k: ((k as f32 * s2).round() as usize).max(1),
+            max_radius: radius_scale
+                * max_radius.unwrap_or_else(|| DEFAULT_RADIUS_FRACTION * scene.diagonal()),
+            kernel,
+        }
+    }
 }
 
 /// Stored photons and the kd-tree over their positions.

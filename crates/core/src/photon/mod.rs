@@ -8,6 +8,8 @@
 
 pub mod bounce;
 pub mod boundary;
+pub mod camera_pass;
+pub mod delta_paths;
 pub mod density;
 pub mod differential;
 pub mod estimate;
@@ -17,7 +19,9 @@ pub mod gather;
 pub mod irradiance;
 pub mod kdtree;
 pub mod lbvh;
+pub mod radius;
 pub mod ring;
+pub mod specular;
 pub mod trace;
 
 use crate::bsdf::{Lobe, Material};

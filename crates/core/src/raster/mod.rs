@@ -1,24 +1,22 @@
 //! GPU rasterization passes and the `direct` frame: shadow maps, then per sub-pixel sample an
 //! eye G-buffer and deferred direct lighting accumulated into one image.
 
+pub mod bounce;
 pub mod bundles;
 pub mod composite;
 pub mod direct;
 pub mod edges;
 pub mod gbuffer;
-pub mod ispm;
 pub mod layers;
 pub mod rsm;
 pub mod shadow;
-pub(crate) mod specular;
 pub mod textures;
-pub mod volume_shape;
 pub mod vpl;
 
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::gpu::raw::{VertexRaw, ViewRaw};
 use crate::gpu::GpuContext;
-use crate::render::Settings;
+pub(crate) use crate::gpu::layout::{buffer_init, storage_entry, view_binding, view_entry, VIEW_SIZE};
 use crate::scene::light_views;
 use crate::scene::Scene;
 use glam::{Mat4, Vec2, Vec3};
@@ -45,40 +43,8 @@ impl Geometry {
     }
 }
 
-/// A `View` uniform picked by dynamic offset.
-pub(crate) fn view_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Uniform,
-            has_dynamic_offset: true,
-            min_binding_size: wgpu::BufferSize::new(std::mem::size_of::<ViewRaw>() as u64),
-        },
-        count: None,
-    }
-}
-
-pub(crate) fn storage_entry(
-    binding: u32,
-    visibility: wgpu::ShaderStages,
-) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only: true },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
-}
-
 /// Eye samples per submission (bounds the timestamp queries of one submission).
 pub(crate) const SAMPLES_PER_SUBMIT: u32 = 256;
-
-pub(crate) const VIEW_SIZE: u64 = std::mem::size_of::<ViewRaw>() as u64;
 
 /// Sub-pixel sample positions in [0, 1)²: a stratified grid when `spp` is a square, else
 /// the Halton (2, 3) sequence. Their mean over the pixel is a box filter, like the path
@@ -157,33 +123,6 @@ pub(crate) fn vertices_of(scene: &Scene, range: std::ops::Range<usize>) -> Vec<V
     out
 }
 
-pub(crate) fn buffer_init(
-    ctx: &GpuContext,
-    label: &str,
-    bytes: &[u8],
-    usage: wgpu::BufferUsages,
-) -> wgpu::Buffer {
-    // Zero-sized bindings are invalid: pad empty data to one 256-byte block.
-    let zeros = [0u8; 256];
-    let contents = if bytes.is_empty() { &zeros[..] } else { bytes };
-    crate::gpu::create_buffer_init(
-        &ctx.device,
-        &wgpu::util::BufferInitDescriptor {
-            label: Some(label),
-            contents,
-            usage,
-        },
-    )
-}
-
-pub(crate) fn view_binding(buffer: &wgpu::Buffer) -> wgpu::BindingResource<'_> {
-    wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-        buffer,
-        offset: 0,
-        size: wgpu::BufferSize::new(VIEW_SIZE),
-    })
-}
-
 /// Decodes `oct_encode` of `types.wgsl`.
 pub(crate) fn oct_decode(e: Vec2) -> Vec3 {
     let mut n = Vec3::new(e.x, e.y, 1.0 - e.x.abs() - e.y.abs());
@@ -199,35 +138,6 @@ pub(crate) fn oct_decode(e: Vec2) -> Vec3 {
 pub(crate) fn samples_per_submit(w: u32, h: u32) -> u32 {
     let pixels = (w as u64 * h as u64).max(1);
     ((1u64 << 18) / pixels).clamp(1, SAMPLES_PER_SUBMIT as u64) as u32
-}
-
-pub(crate) fn check_limits(
-    ctx: &GpuContext,
-    scene: &Scene,
-    settings: &Settings,
-    layers: u32,
-) -> Result<()> {
-    let l = ctx.device.limits();
-    let max = l.max_texture_dimension_2d;
-    if scene.camera.width > max || scene.camera.height > max {
-        return Err(Error::setting(
-            "width",
-            format!("the GPU allows images up to {max} pixels a side"),
-        ));
-    }
-    if settings.shadow_map_size > max {
-        return Err(Error::setting(
-            "shadow_map_size",
-            format!("the GPU allows at most {max}"),
-        ));
-    }
-    if layers > l.max_texture_array_layers {
-        return Err(Error::Gpu(format!(
-            "{layers} shadow-map layers exceed the GPU's {}",
-            l.max_texture_array_layers
-        )));
-    }
-    Ok(())
 }
 
 /// Fails with a GPU error when the scene's vertex buffer exceeds the adapter's limits.

@@ -173,6 +173,21 @@ impl Scene {
         }
     }
 
+    /// Length of the diagonal of the scene's bounding box (m); 1 for a scene without
+    /// vertices.
+    pub fn diagonal(&self) -> f32 {
+        let (lo, hi) = self
+            .positions
+            .iter()
+            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
+                (lo.min(*p), hi.max(*p))
+            });
+        if lo.x > hi.x {
+            return 1.0;
+        }
+        (hi - lo).length()
+    }
+
     /// Whether any material has a delta lobe (perfect mirrors, smooth glass).
     pub fn has_delta_materials(&self) -> bool {
         self.materials.iter().any(crate::bsdf::Material::has_delta_lobe)

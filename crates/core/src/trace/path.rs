@@ -7,6 +7,7 @@
 //! ([`super::light_tracer`]).
 
 use super::{Interaction, SceneBvh};
+use crate::image::Image;
 use crate::sampling::Rng;
 use crate::scene::{Environment, Scene};
 use glam::Vec3;
@@ -28,6 +29,34 @@ pub struct FirstHit {
     pub position: Vec3,
     /// Distance along the camera's forward axis (view-space z), 0 on a miss.
     pub depth: f32,
+}
+
+/// The first-hit images of a frame (the AOVs of the CPU methods), `width × height`.
+#[derive(Clone, Debug)]
+pub struct FirstHitImages {
+    pub albedo: Image,
+    pub normal: Image,
+    pub position: Image,
+    pub depth: Vec<f32>,
+}
+
+impl FirstHitImages {
+    /// The images of `hits`, one per pixel in row order.
+    pub fn of(width: u32, height: u32, hits: impl IntoIterator<Item = FirstHit>) -> Self {
+        let mut out = FirstHitImages {
+            albedo: Image::new(width, height),
+            normal: Image::new(width, height),
+            position: Image::new(width, height),
+            depth: vec![0.0; (width * height) as usize],
+        };
+        for (i, fh) in hits.into_iter().enumerate() {
+            out.albedo.pixels[i] = fh.albedo;
+            out.normal.pixels[i] = fh.normal;
+            out.position.pixels[i] = fh.position;
+            out.depth[i] = fh.depth;
+        }
+        out
+    }
 }
 
 /// Light arriving at `it` from every light by direct paths, times the BSDF towards `wo`

@@ -8,9 +8,11 @@
 //!    else: direct light comes from the photons too, so the image converges to the full
 //!    solution as the photon count grows and the gather radius shrinks.
 
-use super::camera_pass::{render_image, scene_diagonal, start_frame};
-use super::{Progress, RenderOutput, Settings};
+use super::{RenderOutput, RenderStats, Settings};
+use crate::cancel::Progress;
 use crate::error::Result;
+use crate::image::Image;
+use crate::photon::camera_pass::{render_image, CameraSamples};
 use crate::photon::estimate::{Gather, PhotonMap};
 use crate::photon::trace::Checked;
 use crate::photon::{emit_and_trace_checked, Neighbour, PhotonTraceSettings};
@@ -18,21 +20,25 @@ use crate::scene::Scene;
 use crate::trace::SceneBvh;
 use std::time::Instant;
 
-/// Default maximum gather radius, as a fraction of the scene's bounding-box diagonal.
-const DEFAULT_RADIUS_FRACTION: f32 = 0.05;
-
 /// The kNN estimate of `settings` (`k`, `max_radius` or its default, `kernel`); also the
 /// gather of ISPM's specular paths.
 pub fn gather_settings(scene: &Scene, settings: &Settings) -> Gather {
-    // Progressive passes shrink the k-NN radius by `radius_scale` through k ∝ r².
-    let s2 = settings.radius_scale * settings.radius_scale;
-    Gather {
-        k: ((settings.k as f32 * s2).round() as usize).max(1),
-        max_radius: settings.radius_scale
-            * settings
-                .max_radius
-                .unwrap_or_else(|| DEFAULT_RADIUS_FRACTION * scene_diagonal(scene)),
-        kernel: settings.kernel,
+    Gather::new(
+        scene,
+        settings.k,
+        settings.max_radius,
+        settings.kernel,
+        settings.radius_scale,
+    )
+}
+
+/// The camera samples of `settings`.
+pub(super) fn camera_samples(settings: &Settings) -> CameraSamples {
+    CameraSamples {
+        spp: settings.spp,
+        seed: settings.seed,
+        max_depth: settings.max_depth,
+        first_hit_aovs: settings.first_hit_aovs,
     }
 }
 
@@ -43,7 +49,7 @@ pub fn render(
     progress: &dyn Progress,
 ) -> Result<RenderOutput> {
     let t0 = Instant::now();
-    let mut stats = start_frame(scene);
+    let mut stats = RenderStats::of(scene);
     let mut stage =
         |name: &str, t: Instant| stats.stages.push((name.into(), t.elapsed().as_secs_f64()));
 
@@ -64,14 +70,18 @@ pub fn render(
 
     let t = Instant::now();
     let gather = gather_settings(scene, settings);
-    let mut out = render_image(
+    let samples = camera_samples(settings);
+    let (radiance, first) = render_image(
         scene,
         bvh,
-        settings,
+        &samples,
         progress,
-        stats,
         |it, wo, scratch: &mut Vec<Neighbour>| map.radiance(it, wo, &gather, scratch),
     )?;
+    let caustics = Image::new(radiance.width, radiance.height);
+    let mut out = RenderOutput::of_cpu(radiance, first, caustics, stats);
+    out.stats.samples_per_pixel = samples.spp;
+    out.stats.camera_paths = samples.spp as u64 * scene.camera.width as u64 * scene.camera.height as u64;
     out.stats
         .stages
         .push(("radiance estimate".into(), t.elapsed().as_secs_f64()));

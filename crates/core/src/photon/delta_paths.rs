@@ -32,8 +32,8 @@
 //!    geometry, the materials and the seed only, so the frame engine keeps them while the
 //!    lights alone change and only shades them again.
 
-use super::{Progress, Settings};
-use crate::cancel::StageProgress;
+use super::camera_pass::CameraSamples;
+use crate::cancel::{Progress, StageProgress};
 use crate::error::Result;
 use crate::image::Image;
 use crate::sampling::Rng;
@@ -228,7 +228,7 @@ struct Landing {
 fn sample(
     scene: &Scene,
     bvh: &SceneBvh,
-    settings: &Settings,
+    settings: &CameraSamples,
     (i, s): (u32, u32),
     out: &mut Vec<Landing>,
 ) -> u64 {
@@ -340,7 +340,7 @@ impl Landings {
 pub fn trace_landings(
     scene: &Scene,
     bvh: &SceneBvh,
-    settings: &Settings,
+    settings: &CameraSamples,
     progress: &dyn Progress,
 ) -> Result<Landings> {
     let cam = &scene.camera;
@@ -519,7 +519,7 @@ pub fn shade_landings<S: Default + Send>(
 pub fn adaptive_delta_image<S: Default + Send>(
     scene: &Scene,
     bvh: &SceneBvh,
-    settings: &Settings,
+    settings: &CameraSamples,
     progress: &dyn Progress,
     direct: impl Fn(&Interaction, Vec3) -> Vec3 + Sync,
     gather: Option<&Gather<'_, S>>,
@@ -531,10 +531,11 @@ pub fn adaptive_delta_image<S: Default + Send>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::photon::estimate::{GatherCache, PhotonMap};
+    use crate::photon::estimate::{Gather, GatherCache, PhotonMap};
+    use crate::photon::Kernel;
     use crate::photon::{emit_and_trace, Neighbour, PhotonTraceSettings};
-    use crate::render::camera_pass::delta_image;
-    use crate::render::Silent;
+    use crate::cancel::Silent;
+    use crate::photon::camera_pass::delta_image;
     use crate::trace::path::direct_light;
 
     /// Mean and standard error over independent images of each pixel-set sum.
@@ -577,20 +578,22 @@ mod tests {
             differentials: None,
         };
         let map = PhotonMap::build(emit_and_trace(&scene, &bvh, 20_000, &pts, 5).photons);
-        let base = Settings {
+        let base = CameraSamples {
             spp: 16,
-            ..Default::default()
+            seed: 0,
+            max_depth: 64,
+            first_hit_aovs: true,
         };
-        let g = crate::render::photon_map_gather(&scene, &base);
+        let g = Gather::new(&scene, 100, None, Kernel::default(), 1.0);
         let gather = |it: &Interaction, wo: Vec3, cache: &mut GatherCache| {
             map.radiance_cached(it, wo, &g, cache)
         };
         let seeds = 12u64;
         let (mut full, mut adaptive) = (Vec::new(), Vec::new());
         for seed in 0..seeds {
-            let s = Settings {
+            let s = CameraSamples {
                 seed: 1000 + seed,
-                ..base.clone()
+                ..base
             };
             full.push(
                 delta_image(

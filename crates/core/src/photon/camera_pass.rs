@@ -2,39 +2,41 @@
 //! through delta lobes (mirror, glass) and ask an estimator for the radiance leaving each
 //! non-delta surface it reaches; assemble the image and the first-hit AOVs.
 
-use super::{Progress, RenderOutput, RenderStats, Settings};
-use crate::cancel::StageProgress;
+use crate::cancel::{Progress, StageProgress};
 use crate::error::Result;
 use crate::image::Image;
 use crate::sampling::Rng;
 use crate::scene::Scene;
-use crate::trace::path::{self, FirstHit};
+use crate::trace::path::{self, FirstHit, FirstHitImages};
 use crate::trace::{Interaction, SceneBvh};
 use glam::Vec3;
 use rayon::prelude::*;
 
+/// The camera samples of a frame of the photon-map methods: `spp` jittered rays per pixel
+/// drawn from `seed`, each following delta lobes through up to `max_depth` scatterings
+/// (at most [`MAX_DELTA_BOUNCES`]); with `first_hit_aovs`, one more ray through each
+/// pixel centre for the first-hit images.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CameraSamples {
+    pub spp: u32,
+    pub seed: u64,
+    pub max_depth: u32,
+    pub first_hit_aovs: bool,
+}
+
 /// Most delta scatterings a camera path follows before giving up.
 const MAX_DELTA_BOUNCES: u32 = 8;
 
-/// A frame's statistics before its first stage: the common first step of the photon-map
-/// methods (the BVH is the renderer's, built or updated before the frame).
-pub fn start_frame(scene: &Scene) -> RenderStats {
-    RenderStats {
-        triangles: scene.triangles.len() as u64,
-        ..Default::default()
-    }
-}
-
 /// Renders the image whose non-delta surfaces get their outgoing radiance from `estimate`
-/// `(interaction, wo, scratch)`; `S` is per-thread scratch space.
+/// `(interaction, wo, scratch)`, and the first-hit images (empty without `first_hit_aovs`);
+/// `S` is per-thread scratch space.
 pub fn render_image<S: Default + Send>(
     scene: &Scene,
     bvh: &SceneBvh,
-    settings: &Settings,
+    settings: &CameraSamples,
     progress: &dyn Progress,
-    stats: RenderStats,
     estimate: impl Fn(&Interaction, Vec3, &mut S) -> Vec3 + Sync,
-) -> Result<RenderOutput> {
+) -> Result<(Image, FirstHitImages)> {
     let cam = &scene.camera;
     let (w, h) = (cam.width, cam.height);
     let stage = StageProgress::new(progress, "radiance estimate", h as u64);
@@ -66,26 +68,13 @@ pub fn render_image<S: Default + Send>(
         })
         .collect();
     stage.finish()?;
-    let mut out = RenderOutput {
-        radiance: Image::new(w, h),
-        albedo: Image::new(w, h),
-        normal: Image::new(w, h),
-        position: Image::new(w, h),
-        depth: vec![0.0; (w * h) as usize],
-        caustics: Image::new(w, h),
-        stats,
-        aovs: Vec::new(),
-    };
+    let mut radiance = Image::new(w, h);
+    let mut hits = Vec::with_capacity((w * h) as usize);
     for (i, (l, fh)) in rows.into_iter().flatten().enumerate() {
-        out.radiance.pixels[i] = l;
-        out.albedo.pixels[i] = fh.albedo;
-        out.normal.pixels[i] = fh.normal;
-        out.position.pixels[i] = fh.position;
-        out.depth[i] = fh.depth;
+        radiance.pixels[i] = l;
+        hits.push(fh);
     }
-    out.stats.samples_per_pixel = settings.spp;
-    out.stats.camera_paths = settings.spp as u64 * w as u64 * h as u64;
-    Ok(out)
+    Ok((radiance, FirstHitImages::of(w, h, hits)))
 }
 
 /// The part of the image that reaches the camera through a delta lobe (mirror reflection,
@@ -98,7 +87,7 @@ pub fn render_image<S: Default + Send>(
 pub fn delta_image<S: Default + Send>(
     scene: &Scene,
     bvh: &SceneBvh,
-    settings: &Settings,
+    settings: &CameraSamples,
     progress: &dyn Progress,
     estimate: impl Fn(&Interaction, Vec3, &mut S) -> Vec3 + Sync,
 ) -> Result<Image> {
@@ -133,7 +122,7 @@ pub fn delta_image<S: Default + Send>(
 fn pixel_radiance(
     scene: &Scene,
     bvh: &SceneBvh,
-    settings: &Settings,
+    settings: &CameraSamples,
     x: u32,
     y: u32,
     estimate_first: bool,
@@ -209,18 +198,4 @@ fn radiance(
         d = wi;
     }
     l
-}
-
-/// Length of the scene's bounding-box diagonal (m).
-pub fn scene_diagonal(scene: &Scene) -> f32 {
-    let (lo, hi) = scene
-        .positions
-        .iter()
-        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
-            (lo.min(*p), hi.max(*p))
-        });
-    if lo.x > hi.x {
-        return 1.0;
-    }
-    (hi - lo).length()
 }

@@ -4,9 +4,12 @@
 //! caustics. Camera rays follow mirrors and glass (`camera_pass`), so reflections and
 //! refractions show indirect light too.
 
-use super::camera_pass::{render_image, scene_diagonal, start_frame};
-use super::{Progress, RenderOutput, Settings};
+use super::photon::camera_samples;
+use super::{RenderOutput, RenderStats, Settings};
+use crate::cancel::Progress;
 use crate::error::Result;
+use crate::image::Image;
+use crate::photon::camera_pass::render_image;
 use crate::photon::differential::global_spacing;
 use crate::photon::gather::{scene_area, FootprintMap, LeafSize};
 use crate::photon::trace::emit_and_trace_focused;
@@ -33,7 +36,7 @@ pub fn trace_settings(scene: &Scene, settings: &Settings) -> PhotonTraceSettings
             r_max: settings.radius_scale
                 * settings
                     .max_radius
-                    .unwrap_or_else(|| DEFAULT_R_MAX_FRACTION * scene_diagonal(scene)),
+                    .unwrap_or_else(|| DEFAULT_R_MAX_FRACTION * scene.diagonal()),
         }),
     }
 }
@@ -45,7 +48,7 @@ pub fn render(
     progress: &dyn Progress,
 ) -> Result<RenderOutput> {
     let t0 = Instant::now();
-    let mut stats = start_frame(scene);
+    let mut stats = RenderStats::of(scene);
     let mut stage =
         |name: &str, t: Instant| stats.stages.push((name.into(), t.elapsed().as_secs_f64()));
 
@@ -90,14 +93,14 @@ pub fn render(
     stage("photon map build", t);
 
     let t = Instant::now();
-    let mut out = render_image(
-        scene,
-        bvh,
-        settings,
-        progress,
-        stats,
-        |it, wo, _: &mut ()| direct_light(scene, bvh, it, wo) + map.radiance(it, wo),
-    )?;
+    let samples = camera_samples(settings);
+    let (radiance, first) = render_image(scene, bvh, &samples, progress, |it, wo, _: &mut ()| {
+        direct_light(scene, bvh, it, wo) + map.radiance(it, wo)
+    })?;
+    let caustics = Image::new(radiance.width, radiance.height);
+    let mut out = RenderOutput::of_cpu(radiance, first, caustics, stats);
+    out.stats.samples_per_pixel = samples.spp;
+    out.stats.camera_paths = samples.spp as u64 * scene.camera.width as u64 * scene.camera.height as u64;
     out.stats
         .stages
         .push(("radiance estimate".into(), t.elapsed().as_secs_f64()));

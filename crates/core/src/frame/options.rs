@@ -1,22 +1,11 @@
-//! Rendering a frame: settings, the method dispatch, outputs and statistics.
-
-pub(crate) mod camera_pass;
-pub mod delta_paths;
-pub(crate) mod gather;
-pub(crate) mod photon_map;
-pub(crate) mod reference;
+//! The methods and their options.
 
 use crate::error::{Error, Result};
 pub use crate::estimate::Estimator;
-use crate::image::Image;
 pub use crate::photon::bounce::FirstBounce;
 pub use crate::photon::Kernel;
-pub use crate::raster::volume_shape::VolumeShape;
-use crate::scene::Scene;
-pub use crate::cancel::{Progress, Silent};
-pub use delta_paths::SpecularSampling;
-pub use gather::trace_settings as gather_trace_settings;
-pub use photon_map::gather_settings as photon_map_gather;
+pub use crate::estimate::volume_shape::VolumeShape;
+pub use crate::photon::delta_paths::SpecularSampling;
 use std::str::FromStr;
 
 /// A rendering technique.
@@ -447,87 +436,6 @@ impl Settings {
     }
 }
 
-/// Kernel radius scale of progressive pass `pass` (0-based) relative to the first:
-/// r²ᵢ₊₁ = r²ᵢ (i + α)/(i + 1) with i counted from 1 (Knaus & Zwicker 2011, eq. 13).
-pub fn progressive_radius_scale(pass: u64, alpha: f32) -> f32 {
-    let alpha = alpha as f64;
-    let mut r2 = 1.0f64;
-    for i in 1..=pass {
-        r2 *= (i as f64 + alpha) / (i as f64 + 1.0);
-    }
-    r2.sqrt() as f32
-}
-
-/// Timings and counts of one render.
-#[derive(Clone, Debug, Default)]
-pub struct RenderStats {
-    /// (stage name, seconds), in execution order.
-    pub stages: Vec<(String, f64)>,
-    pub total_seconds: f64,
-    pub samples_per_pixel: u32,
-    /// Camera paths traced: `path`'s; `ispm`'s through mirrors and glass (0 in a frame that
-    /// reused the last frame's, see `raster::specular::specular_paths`).
-    pub camera_paths: u64,
-    pub light_paths: u64,
-    pub triangles: u64,
-    /// Method `ispm`: bounce-map texels that hit the scene and photons aimed at mirrors and
-    /// glass (`Settings::photon_focus`): the photons emitted from the lights.
-    pub photons_emitted: u64,
-    /// Method `ispm`: photons that survived the first (bounce-map) scatter.
-    pub photons_first_bounce: u64,
-    /// Method `ispm`: photons stored (and splatted as volumes), bounce 1 and later.
-    pub photons_stored: u64,
-    /// Method `ispm`: stored photons of caustic paths (light → mirrors/glass → here), traced
-    /// this frame.
-    pub caustic_photons: u64,
-    /// Method `ispm`: stored photons whose volumes were drawn as quads (the rest as
-    /// icosahedra; see `Settings::volume_shape`).
-    pub volume_quads: u64,
-    /// Passes averaged into the radiance: 1, or in progressive mode the passes since the
-    /// last change.
-    pub passes: u64,
-    /// Method `ispm`: the indirect estimator that ran, and why it was chosen.
-    pub estimator: String,
-    pub estimator_reason: String,
-    /// Method `ispm`: where the first hits were found ("raster", "traced"), and why.
-    pub first_bounce: String,
-    pub first_bounce_reason: String,
-    /// Method `ispm`: GPU memory of the estimator beyond its targets (bytes by part).
-    pub estimator_memory: Vec<(String, u64)>,
-    /// Method `ispm`, estimators `tiled` and `cluster`: photon-list entries written, and of
-    /// them the cluster hierarchy's trivial accepts (a photon for a whole node).
-    pub list_entries: u64,
-    pub trivial_accepts: u64,
-    /// Method `bidir`: virtual point lights of the frame (all lights).
-    pub vpls: u64,
-    /// Method `bidir`: ray bundles of the frame, the fragments they stored in their lists,
-    /// and the fragments dropped because the list memory (`bundle_memory_mb`) was full.
-    pub bundles: u64,
-    pub bundle_fragments: u64,
-    pub bundle_overflow: u64,
-}
-
-/// A rendered frame: radiance and auxiliary images, all `width × height`.
-#[derive(Clone, Debug)]
-pub struct RenderOutput {
-    /// Pixel radiance, W·sr⁻¹·m⁻² per channel (the box-filtered mean over each pixel).
-    pub radiance: Image,
-    /// First-hit scatter probability (reflectance) as seen from the camera.
-    pub albedo: Image,
-    /// First-hit shading normal, facing the camera; zero on a miss.
-    pub normal: Image,
-    /// First-hit world position; zero on a miss.
-    pub position: Image,
-    /// First-hit view-space depth (distance along the camera's axis), 0 on a miss.
-    pub depth: Vec<f32>,
-    /// The light-traced (caustic) part of `radiance`, already included in it.
-    pub caustics: Image,
-    /// Further method-specific images by name (method `ispm`: "direct", "indirect" and
-    /// "photons", a visualization of where stored photons land).
-    pub aovs: Vec<(String, Image)>,
-    pub stats: RenderStats,
-}
-
 /// Checks that the images of a frame fit in memory: the outputs (six RGB images and the
 /// depth, 76 bytes a pixel), the per-pixel intermediates of the CPU methods, and the render
 /// targets and readbacks of the GPU methods (G-buffer, accumulation, copies).
@@ -540,19 +448,5 @@ pub(crate) fn check_image_memory(camera: &crate::scene::Camera, method: Method) 
     crate::memory::check(
         || format!("the images of a {}x{} frame", camera.width, camera.height),
         pixels * per_pixel,
-    )
-}
-
-/// Renders `scene` with `settings`: one frame of a new [`Renderer`](crate::frame::Renderer)
-/// with every image read back.
-pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Result<RenderOutput> {
-    let mut renderer = crate::frame::Renderer::new(scene, settings)?;
-    renderer.render(
-        &crate::frame::FrameDesc {
-            seed: None,
-            images: crate::frame::Images::ALL,
-            serial: false,
-        },
-        progress,
     )
 }

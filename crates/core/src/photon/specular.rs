@@ -12,14 +12,28 @@ use crate::image::Image;
 use crate::photon::estimate::{Gather, GatherCache, PhotonMap};
 use crate::photon::irradiance::IrradianceCache;
 use crate::photon::{Neighbour, Photon};
-use crate::render::camera_pass::delta_image;
-use crate::render::delta_paths::{adaptive_delta_image, shade_landings, trace_landings, Landings};
-use crate::render::{Progress, Settings, SpecularSampling};
+use super::camera_pass::{delta_image, CameraSamples};
+use super::delta_paths::{
+    adaptive_delta_image, shade_landings, trace_landings, Landings, SpecularSampling,
+};
+use crate::cancel::Progress;
 use crate::scene::Scene;
 use crate::trace::path::direct_light;
 use crate::trace::Interaction;
 use crate::trace::SceneBvh;
 use glam::Vec3;
+
+/// How the specular paths of a frame are sampled and gathered.
+#[derive(Clone, Copy, Debug)]
+pub struct SpecularPaths {
+    pub samples: CameraSamples,
+    pub sampling: SpecularSampling,
+    /// The photon-map gather where the paths land.
+    pub gather: Gather,
+    /// Whether precomputed estimates may stand in for gathers on Lambertian landings (not
+    /// in progressive mode, whose estimates must converge as its gathers shrink).
+    pub precompute: bool,
+}
 
 /// Radiance reaching the camera through the delta lobes of the first surface seen,
 /// keeping the camera side of the adaptive sampling (its landings:
@@ -32,7 +46,7 @@ use glam::Vec3;
 pub fn specular_paths(
     scene: &Scene,
     bvh: &SceneBvh,
-    settings: &Settings,
+    paths: &SpecularPaths,
     photons: &[Photon],
     landings: &mut Option<Landings>,
     progress: &dyn Progress,
@@ -42,8 +56,8 @@ pub fn specular_paths(
         return Ok((Image::new(cam.width, cam.height), 0));
     }
     let map = PhotonMap::try_build(photons.to_vec(), progress)?;
-    let gather = crate::render::photon_map_gather(scene, settings);
-    match settings.specular_sampling {
+    let (settings, gather) = (&paths.samples, paths.gather);
+    match paths.sampling {
         SpecularSampling::Adaptive => {
             let cam = &scene.camera;
             let current = landings.as_ref().is_some_and(|l| {
@@ -63,7 +77,7 @@ pub fn specular_paths(
             // converge as its gathers shrink (the reuse distance, tied to the photons'
             // spacing, does not).
             let subset = photons.len() as u64 / crate::photon::irradiance::STRIDE as u64;
-            let precompute = !settings.progressive && 2 * subset < landings.gathers();
+            let precompute = paths.precompute && 2 * subset < landings.gathers();
             let image = shade(scene, bvh, &map, &gather, landings, precompute, progress)?;
             Ok((image, traced))
         }
@@ -119,10 +133,11 @@ fn shade(
 pub fn specular_paths_direct(
     scene: &Scene,
     bvh: &SceneBvh,
-    settings: &Settings,
+    settings: &CameraSamples,
+    sampling: SpecularSampling,
     progress: &dyn Progress,
 ) -> Result<Image> {
-    match settings.specular_sampling {
+    match sampling {
         SpecularSampling::Adaptive => adaptive_delta_image::<()>(
             scene,
             bvh,
@@ -142,8 +157,8 @@ pub fn specular_paths_direct(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::photon::{emit_and_trace, PhotonTraceSettings};
-    use crate::render::Silent;
+    use crate::cancel::Silent;
+    use crate::photon::{emit_and_trace, Kernel, PhotonTraceSettings};
 
     /// Precomputed estimates leave the specular image's mean where the gathers put it and
     /// add less difference than another photon seed does. On `cornell-glass` (its two
@@ -158,16 +173,18 @@ mod tests {
         let mut scene = crate::scene::builtin::load("cornell-glass").unwrap();
         scene.camera = scene.camera.with_size(96, 72);
         let bvh = SceneBvh::build(&scene);
-        let settings = Settings {
+        let settings = CameraSamples {
             spp: 4,
-            ..Default::default()
+            seed: 0,
+            max_depth: 64,
+            first_hit_aovs: true,
         };
         let pts = PhotonTraceSettings {
             max_bounces: 4,
             store_direct: false,
             differentials: None,
         };
-        let gather = crate::render::photon_map_gather(&scene, &settings);
+        let gather = Gather::new(&scene, 100, None, Kernel::default(), 1.0);
         let landings = trace_landings(&scene, &bvh, &settings, &Silent).unwrap();
         let image = |seed: u64, precompute: bool| {
             let map = PhotonMap::build(emit_and_trace(&scene, &bvh, 20_000, &pts, seed).photons);

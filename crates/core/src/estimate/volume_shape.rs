@@ -5,8 +5,9 @@
 //! so the choice changes the cost, not the image.
 
 use crate::error::{Error, Result};
+use crate::photon::radius::VolumeRadius;
 use crate::photon::Photon;
-use crate::scene::{Camera, Scene};
+use crate::scene::Camera;
 use std::borrow::Cow;
 use std::str::FromStr;
 
@@ -57,68 +58,6 @@ impl FromStr for VolumeShape {
             "volume_shape",
             "volume shape",
         )
-    }
-}
-
-/// Photon-volume radius ∝ ρp^(−α) ([`VolumeRadius::of`]).
-const DENSITY_EXPONENT: f32 = 0.35;
-/// Largest widening of a photon volume over the base radius ([`VolumeRadius::of`]).
-const MAX_WIDENING: f32 = 12.0;
-
-/// The radii of the photon volumes. Method `ispm` stores each photon's radius in
-/// `Photon::footprint_radius` before the splat, so `volume.wgsl` reads it from there.
-#[derive(Clone, Copy, Debug)]
-pub struct VolumeRadius {
-    /// Radius (m) of a photon of path density 1.
-    pub r_base: f32,
-    /// Largest radius (m).
-    pub r_max: f32,
-}
-
-impl VolumeRadius {
-    /// The radii of method `ispm` for `scene`: `r_base` from [`super::ispm::base_radius`],
-    /// `r_max` a tenth of the scene's bounding-box diagonal.
-    pub fn of_scene(scene: &Scene, photons: u64, kernel_scale: f32) -> Self {
-        let r_base = super::ispm::base_radius(scene, photons, kernel_scale);
-        let (lo, hi) = crate::scene::light_views::bounds(scene);
-        VolumeRadius {
-            r_base,
-            r_max: (0.1 * (hi - lo).length()).max(r_base),
-        }
-    }
-
-    /// Every radius times `s` (the progressive mode's shrinking kernels).
-    pub fn scaled(self, s: f32) -> Self {
-        VolumeRadius {
-            r_base: self.r_base * s,
-            r_max: self.r_max * s,
-        }
-    }
-
-    /// The radius of a photon after a Lambertian bounce without footprint (the widest,
-    /// r_base·G capped at r_max): that of most of the indirect light's kernels.
-    pub fn diffuse(&self) -> f32 {
-        (self.r_base * MAX_WIDENING).min(self.r_max)
-    }
-
-    /// The ellipsoid's radius in the surface plane (m), also the radius of a sphere around it
-    /// (the normal axis is shorter): the footprint when traced with differentials, else
-    /// from the path density (section 5.1), r_base·clamp(ρp^(−α), 1, G). Dense (caustic)
-    /// paths get the base radius; one Lambertian bounce (ρp = ρL/1000 ≈ 7·10⁻⁴) widens it
-    /// to the cap G, glossy ones less. α and G come from `examples/ispm_kernel_sweep.rs` on
-    /// cornell with boundary compensation: RMSE against the converged image at 200k photons
-    /// falls from 0.0430 at 4× (the earlier α = 0.2, G = 4) to 0.0249 at 12× and flattens
-    /// beyond (0.0244 at 16×), the 8×8-block error from 3.15% to 2.67%.
-    pub fn of(&self, p: &Photon) -> f32 {
-        if p.footprint_radius > 0.0 {
-            return p.footprint_radius.min(self.r_max);
-        }
-        let g = p
-            .path_density
-            .max(1e-30)
-            .powf(-DENSITY_EXPONENT)
-            .clamp(1.0, MAX_WIDENING);
-        (self.r_base * g).min(self.r_max)
     }
 }
 

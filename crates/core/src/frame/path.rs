@@ -1,7 +1,7 @@
 //! Method `path`: the reference renderer (path tracing + light tracing for caustics).
 
-use super::{Progress, RenderOutput, RenderStats, Settings};
-use crate::cancel::StageProgress;
+use super::{RenderOutput, RenderStats, Settings};
+use crate::cancel::{Progress, StageProgress};
 use crate::error::Result;
 use crate::image::Image;
 use crate::sampling::Rng;
@@ -23,10 +23,7 @@ pub fn render(
     progress: &dyn Progress,
 ) -> Result<RenderOutput> {
     let t0 = Instant::now();
-    let mut stats = RenderStats {
-        triangles: scene.triangles.len() as u64,
-        ..Default::default()
-    };
+    let mut stats = RenderStats::of(scene);
 
     let (w, h) = (scene.camera.width, scene.camera.height);
     let spp = settings.spp;
@@ -144,26 +141,14 @@ pub fn render(
         .push(("light paths".into(), t.elapsed().as_secs_f64()));
     stage.finish()?;
 
-    let mut out = RenderOutput {
-        radiance: Image::new(w, h),
-        albedo: Image::new(w, h),
-        normal: Image::new(w, h),
-        position: Image::new(w, h),
-        depth: vec![0.0; (w * h) as usize],
-        caustics,
-        stats,
-        aovs: Vec::new(),
-    };
-    for (y, row) in rows.into_iter().enumerate() {
-        for (x, (l, fh)) in row.into_iter().enumerate() {
-            let i = y * w as usize + x;
-            out.radiance.pixels[i] = l + out.caustics.pixels[i];
-            out.albedo.pixels[i] = fh.albedo;
-            out.normal.pixels[i] = fh.normal;
-            out.position.pixels[i] = fh.position;
-            out.depth[i] = fh.depth;
-        }
+    let mut radiance = Image::new(w, h);
+    let mut hits = Vec::with_capacity((w * h) as usize);
+    for (i, (l, fh)) in rows.into_iter().flatten().enumerate() {
+        radiance.pixels[i] = l + caustics.pixels[i];
+        hits.push(fh);
     }
+    let first = path::FirstHitImages::of(w, h, hits);
+    let mut out = RenderOutput::of_cpu(radiance, first, caustics, stats);
     out.stats.samples_per_pixel = spp;
     out.stats.camera_paths = spp as u64 * w as u64 * h as u64;
     out.stats.light_paths = light_paths;
