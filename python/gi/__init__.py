@@ -20,6 +20,8 @@ from gi._gi import (  # noqa: E402
     InternalError,
     OutOfMemoryError,
     RenderCancelled,
+    RenderStats,
+    RenderWarning,
     Scene,
     SceneError,
     SettingError,
@@ -43,7 +45,7 @@ from gi.denoising import denoise  # noqa: E402
 from gi.display import to_display  # noqa: E402
 from gi.io import read_channels, read_image, save_image, save_layers, save_result  # noqa: E402
 from gi.meshes import AssetWarning  # noqa: E402
-from gi.render import Renderer, RenderResult, RenderStats, render  # noqa: E402
+from gi.render import Renderer, RenderResult, options, render  # noqa: E402
 from gi.scene import load_scene  # noqa: E402
 
 __all__ = [
@@ -56,6 +58,7 @@ __all__ = [
     "RenderResult",
     "Renderer",
     "RenderStats",
+    "RenderWarning",
     "Scene",
     "SceneError",
     "SettingError",
@@ -69,6 +72,7 @@ __all__ = [
     "gpu_counters",
     "load_scene",
     "methods",
+    "options",
     "read_channels",
     "read_image",
     "render",

@@ -37,7 +37,6 @@ seconds, worker).
 
 from __future__ import annotations
 
-import inspect
 import json
 import logging
 import os
@@ -90,8 +89,8 @@ class Frame:
 
 
 def _render_keywords() -> set[str]:
-    skip = {"scene", "method", "progress", "denoise"}
-    return set(inspect.signature(gi.render).parameters) - skip
+    """The render options a job's settings may name: the core's table, and ``size``."""
+    return {row["name"] for row in gi.options()} | {"size"}
 
 
 def _scene_label(scene: str) -> str:

@@ -67,6 +67,45 @@ def _fps(text: str) -> float:
     return fps
 
 
+# Command-line spellings kept from before the options were generated from the table.
+_ALIASES = {"progressive_alpha": ["--alpha"], "bundle_memory_mb": ["--bundle-memory"]}
+
+
+def _option_names() -> list[str]:
+    """The render options the command line takes: the table's, but width and height
+    (``--size``)."""
+    names = dict.fromkeys(row["name"] for row in gi.options())
+    return [n for n in names if n not in ("width", "height")]
+
+
+def _add_options(parser: argparse.ArgumentParser) -> None:
+    """One argument per render option of the core's table (:func:`gi.options`), its help
+    the option's doc, default and methods; the value is checked by the core."""
+    rows: dict[str, list[dict]] = {}
+    for row in gi.options():
+        rows.setdefault(row["name"], []).append(row)
+    for name in _option_names():
+        variants = rows[name]
+        first = variants[0]
+        parts = []
+        for row in variants:
+            default = "auto" if row["default"] is None else row["default"]
+            methods = ", ".join(row["methods"])
+            parts.append(f"{row['doc']} [{row['range']}; default {default}; {methods}]")
+        flags = [f"--{name.replace('_', '-')}", *_ALIASES.get(name, [])]
+        kind = first["kind"]
+        kw: dict[str, object] = {"default": None, "dest": name, "help": "; ".join(parts)}
+        if kind == "bool":
+            kw["action"] = argparse.BooleanOptionalAction
+        elif kind == "int":
+            kw["type"] = int
+        elif kind == "float":
+            kw["type"] = float
+        elif kind == "choice":
+            kw["choices"] = first["choices"]
+        parser.add_argument(*flags, **kw)  # type: ignore[arg-type]
+
+
 def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="gi", description="Global illumination renderer (ISPM).")
     p.add_argument("--version", action="version", version=f"gi {gi.__version__}")
@@ -95,100 +134,12 @@ def _parser() -> argparse.ArgumentParser:
         "--fps", type=_fps, default=30.0, help="frames a second: frame n shows n/fps s (30)"
     )
     r.add_argument("--method", default="ispm", help="rendering method (see `gi methods`)")
-    r.add_argument(
-        "--spp",
-        type=int,
-        help="samples per pixel (default 64; 16 direct-light samples for direct and ispm)",
-    )
     r.add_argument("--size", type=_size, help="image size WIDTHxHEIGHT (default: the scene's)")
-    r.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    r.add_argument("--max-depth", type=int, default=64, help="maximum path length")
-    r.add_argument("--light-paths", type=int, help="light paths for caustics (default spp·pixels)")
-    r.add_argument("--photons", type=int, default=200_000, help="photons (method photon)")
-    r.add_argument("--k", type=int, default=100, help="nearest photons per estimate")
-    r.add_argument("--max-radius", type=float, help="photon search radius in metres")
-    r.add_argument(
-        "--kernel", default="cone", choices=["box", "cone", "epanechnikov"], help="photon kernel"
-    )
-    r.add_argument("--smoothing", type=float, default=1.0, help="footprint scale (gather)")
-    r.add_argument("--leaf-size", type=int, help="photon-map BVH leaf size (gather; default auto)")
-    r.add_argument("--kernel-scale", type=float, default=1.0, help="photon volume scale (ispm)")
-    r.add_argument(
-        "--subsample", type=int, default=2, help="splat at 1/k resolution (ispm; default 2)"
-    )
-    r.add_argument(
-        "--footprint-volumes",
-        action="store_true",
-        help="size ISPM photon volumes by photon-differential footprints",
-    )
-    r.add_argument(
-        "--no-boundary-compensation",
-        action="store_true",
-        help="don't correct ISPM/gather photon power for kernels that fall off surfaces",
-    )
-    r.add_argument(
-        "--no-edge-supersampling",
-        action="store_true",
-        help="supersample the GPU direct light at every pixel, not only at edges",
-    )
-    r.add_argument(
-        "--volume-shape",
-        default="auto",
-        choices=["auto", "icosahedron", "quad"],
-        help="shape drawn per ISPM photon volume (default auto: quads for small volumes)",
-    )
-    r.add_argument(
-        "--progressive",
-        action="store_true",
-        help="progressive photon mapping: average independent passes with shrinking kernels"
-        " until --time or --passes (ispm, gather, path, direct); Ctrl-C writes the passes so far",
-    )
     r.add_argument(
         "--time", type=_fps, metavar="SECONDS", help="progressive: stop after this many seconds"
     )
     r.add_argument("--passes", type=int, help="progressive: stop after this many passes")
-    r.add_argument(
-        "--alpha",
-        type=float,
-        default=0.7,
-        help="progressive: radius reduction α in (0, 1), r²ᵢ₊₁ = r²ᵢ (i + α)/(i + 1) (0.7)",
-    )
-    r.add_argument(
-        "--estimator",
-        default="auto",
-        choices=["auto", "volumes", "tiled", "cluster", "directional", "cpu"],
-        help="how ISPM splats photons: raster volumes; tiled, cluster-hierarchy or its "
-        "directional approximation in compute; on the CPU; or auto (per adapter)",
-    )
-    r.add_argument(
-        "--first-bounce",
-        default="auto",
-        choices=["auto", "raster", "traced"],
-        help="where ISPM finds the photons' first hits: rasterized bounce maps, cast in the "
-        "CPU BVH, or auto (traced on CPU devices)",
-    )
-    r.add_argument(
-        "--vpls-per-light", type=int, default=64, help="bidir: virtual point lights per light"
-    )
-    r.add_argument("--bundles", type=int, default=16, help="bidir: ray bundles per frame")
-    r.add_argument(
-        "--bundle-resolution", type=int, default=128, help="bidir: ray-bundle pixels a side"
-    )
-    r.add_argument(
-        "--bundle-memory",
-        type=int,
-        default=64,
-        metavar="MIB",
-        help="bidir: MiB for the ray bundles' fragment lists (overflow is counted, not fatal)",
-    )
-    r.add_argument(
-        "--bidir-strategy",
-        default="mis",
-        choices=["mis", "vpl", "bundle"],
-        help="bidir: one-bounce light by MIS of VPLs and bundles, or one strategy alone",
-    )
-    r.add_argument("--adapter", help='GPU adapter: "cpu" (lavapipe), "gpu" or part of a name')
-    r.add_argument("--shadow-map-size", type=int, default=1024, help="shadow map texels per side")
+    _add_options(r)
     r.add_argument(
         "--exposure", type=float, default=0.0, help="exposure in stops for 8-bit outputs"
     )
@@ -315,34 +266,15 @@ def _load(source: str) -> gi.Scene:
 
 
 def _settings(args: argparse.Namespace) -> dict[str, object]:
-    return dict(
-        spp=args.spp,
-        size=args.size,
-        seed=args.seed,
-        max_depth=args.max_depth,
-        light_paths=args.light_paths,
-        photons=args.photons,
-        k=args.k,
-        max_radius=args.max_radius,
-        kernel=args.kernel,
-        smoothing=args.smoothing,
-        leaf_size=args.leaf_size,
-        kernel_scale=args.kernel_scale,
-        subsample=args.subsample,
-        footprint_volumes=args.footprint_volumes,
-        boundary_compensation=not args.no_boundary_compensation,
-        edge_supersampling=not args.no_edge_supersampling,
-        volume_shape=args.volume_shape,
-        estimator=args.estimator,
-        first_bounce=args.first_bounce,
-        adapter=args.adapter,
-        shadow_map_size=args.shadow_map_size,
-        vpls_per_light=args.vpls_per_light,
-        bundles=args.bundles,
-        bundle_resolution=args.bundle_resolution,
-        bundle_memory_mb=args.bundle_memory,
-        bidir_strategy=args.bidir_strategy,
-    )
+    """The render options given on the command line (the rest take the core's defaults)."""
+    given: dict[str, object] = {}
+    for name in _option_names():
+        value = getattr(args, name)
+        if value is not None:
+            given[name] = value
+    if args.size is not None:
+        given["size"] = args.size
+    return given
 
 
 def _render(args: argparse.Namespace) -> int:
@@ -385,9 +317,8 @@ def _render_progressive(args: argparse.Namespace, aovs: list[str]) -> int:
     if args.passes is not None and args.passes < 1:
         raise ValueError("--passes must be at least 1")
     scene = _load(args.scene)
-    renderer = gi.Renderer(
-        scene, args.method, progressive=True, progressive_alpha=args.alpha, **_settings(args)
-    )
+    options = {**_settings(args), "progressive": True}
+    renderer = gi.Renderer(scene, args.method, **options)
     interrupted = False
 
     def on_interrupt(_sig: int, _frame: object) -> None:

@@ -130,10 +130,6 @@ def denoise(result: RenderResult) -> RenderResult:
         radiance = result.extra["direct"] + result.extra["specular"] + filtered
     clean = denoise_image(radiance, result.albedo, result.normal)
     seconds = time.perf_counter() - t
-    stats = dataclasses.replace(
-        result.stats,
-        stages=[*result.stats.stages, ("denoise", seconds)],
-        total_seconds=result.stats.total_seconds + seconds,
-    )
+    stats = result.stats.with_stage("denoise", seconds)
     extra = {**result.extra, "noisy": result.radiance}
     return dataclasses.replace(result, radiance=clean, extra=extra, stats=stats)

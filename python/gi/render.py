@@ -4,59 +4,21 @@ from __future__ import annotations
 
 import json
 import math
+import sys
 import time
+import warnings
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from gi import _checks, _gi
-from gi._gi import Scene, SettingError
+from gi._gi import RenderStats, RenderWarning, Scene, SettingError
 from gi.progress import ProgressBar
 
 ProgressCallback = Callable[[str, float], "bool | None"]
-
-
-@dataclass(frozen=True)
-class RenderStats:
-    """Timings (seconds) and counts of one render."""
-
-    method: str
-    total_seconds: float
-    stages: list[tuple[str, float]] = field(default_factory=list)
-    samples_per_pixel: int = 0
-    #: Camera paths traced: method ``path``'s; method ``ispm``'s through mirrors and glass,
-    #: 0 in a frame whose lights alone changed (it reuses where they landed).
-    camera_paths: int = 0
-    light_paths: int = 0
-    triangles: int = 0
-    photons_emitted: int = 0
-    photons_first_bounce: int = 0
-    photons_stored: int = 0
-    #: Method ``ispm``: stored photons of caustic paths (light → mirrors/glass → surface).
-    caustic_photons: int = 0
-    volume_quads: int = 0
-    passes: int = 1
-    #: Method ``ispm``: the indirect estimator that ran ("volumes", "tiled", ...), why it was
-    #: chosen, and its GPU memory beyond the image targets (bytes by part).
-    estimator: str = ""
-    estimator_reason: str = ""
-    estimator_memory: list[tuple[str, int]] = field(default_factory=list)
-    #: Method ``ispm``: where the photons' first hits were found ("raster" bounce maps or
-    #: "traced" in the CPU BVH) and why.
-    first_bounce: str = ""
-    first_bounce_reason: str = ""
-    #: Estimators "tiled" and "cluster": photon-list entries written, and of them the
-    #: cluster hierarchy's trivial accepts (one photon for a whole node of view samples).
-    list_entries: int = 0
-    trivial_accepts: int = 0
-    #: Method ``bidir``: virtual point lights and ray bundles of the frame, the fragments the
-    #: bundles stored, and those dropped because ``bundle_memory_mb`` was full.
-    vpls: int = 0
-    bundles: int = 0
-    bundle_fragments: int = 0
-    bundle_overflow: int = 0
 
 
 @dataclass(frozen=True)
@@ -115,15 +77,32 @@ class RenderResult:
         return png_bytes(self.display())
 
 
-def _settings(**kw: object) -> dict[str, object]:
-    """Keyword settings for the native module, with ``size`` split into width and height."""
-    size = kw.pop("size", None)
+def _options(options: dict[str, Any]) -> dict[str, Any]:
+    """Render options for the native module, with ``size`` split into width and height."""
+    size = options.pop("size", None)
     if size is not None:
         try:
-            kw["width"], kw["height"] = size  # type: ignore[misc]
+            options["width"], options["height"] = size
         except (TypeError, ValueError):
             raise _checks.setting_error("size", f"expected (width, height), got {size!r}") from None
-    return kw
+    return options
+
+
+def options(method: str | None = None) -> list[dict[str, Any]]:
+    """The render options (the core's table): one dict per option with ``name``, ``kind``
+    ("bool", "int", "float", "choice", "text"), ``default``, ``optional`` (``None`` allowed,
+    meaning automatic), ``range`` (the values taken, in words), ``min``/``max`` or
+    ``choices``, ``methods`` and ``doc``. With ``method``, only the options it takes (one
+    row per name). ``gi.render``, ``gi.Renderer``, the CLI and batch jobs take exactly
+    these (and ``size=(width, height)`` for width and height)."""
+    rows = _gi.options()
+    if method is None:
+        return rows
+    if method not in _gi.methods():
+        raise _checks.setting_error(
+            "method", f"unknown method {method!r} (available: {', '.join(_gi.methods())})"
+        )
+    return [row for row in rows if method in row["methods"]]
 
 
 def _progress(progress: bool | ProgressCallback) -> ProgressCallback | None:
@@ -137,33 +116,6 @@ def _progress(progress: bool | ProgressCallback) -> ProgressCallback | None:
 
 
 def _result(out: dict[str, Any]) -> RenderResult:
-    s = out["stats"]
-    stats = RenderStats(
-        method=s["method"],
-        total_seconds=s["total_seconds"],
-        stages=[(str(n), float(t)) for n, t in s["stages"]],
-        samples_per_pixel=s["samples_per_pixel"],
-        camera_paths=s["camera_paths"],
-        light_paths=s["light_paths"],
-        triangles=s["triangles"],
-        photons_emitted=s["photons_emitted"],
-        photons_first_bounce=s["photons_first_bounce"],
-        photons_stored=s["photons_stored"],
-        caustic_photons=s["caustic_photons"],
-        volume_quads=s["volume_quads"],
-        passes=s["passes"],
-        estimator=s["estimator"],
-        estimator_reason=s["estimator_reason"],
-        estimator_memory=[(str(n), int(b)) for n, b in s["estimator_memory"]],
-        first_bounce=s["first_bounce"],
-        first_bounce_reason=s["first_bounce_reason"],
-        list_entries=s["list_entries"],
-        trivial_accepts=s["trivial_accepts"],
-        vpls=s["vpls"],
-        bundles=s["bundles"],
-        bundle_fragments=s["bundle_fragments"],
-        bundle_overflow=s["bundle_overflow"],
-    )
     return RenderResult(
         radiance=out["radiance"],
         albedo=out["albedo"],
@@ -171,14 +123,14 @@ def _result(out: dict[str, Any]) -> RenderResult:
         position=out["position"],
         depth=out["depth"],
         caustics=out["caustics"],
-        stats=stats,
+        stats=out["stats"],
         extra=dict(out["extra"]),
     )
 
 
 class Renderer:
-    """A persistent renderer: made once from a scene, a method and its settings (the
-    keywords of :func:`render`, plus ``temporal_frames`` for method ``ispm``), then one
+    """A persistent renderer: made once from a scene, a method and its options (the
+    keywords of :func:`render`; :func:`gi.options` lists them), then one
     :meth:`render` per frame with :meth:`update` calls between frames. GPU resources, the
     BVH and the photon ring live from one frame to the next; a frame uploads only what
     changed and reads back only the images asked for.
@@ -197,11 +149,13 @@ class Renderer:
     images are those of the last pass.
     """
 
-    def __init__(self, scene: Scene, method: str = "ispm", **settings: Any) -> None:
+    def __init__(self, scene: Scene, method: str = "ispm", **options: Any) -> None:
         if not isinstance(method, str):
             raise _checks.setting_error("method", f"must be a string, got {method!r}")
-        self._native = _gi.Renderer(scene, method, _settings(**settings))
+        self._native = _gi.Renderer(scene, method, _options(options))
         self._scene = scene
+        for message in self._native.warnings:
+            warnings.warn(message, RenderWarning, stacklevel=_caller_level())
 
     @property
     def method(self) -> str:
@@ -406,150 +360,58 @@ def render(
     scene: Scene,
     method: str = "path",
     *,
-    spp: int | None = None,
-    size: tuple[int, int] | None = None,
-    seed: int = 0,
-    max_depth: int = 64,
-    light_paths: int | None = None,
-    photons: int = 200_000,
-    k: int = 100,
-    max_radius: float | None = None,
-    kernel: str = "cone",
-    smoothing: float = 1.0,
-    leaf_size: int | None = None,
-    kernel_scale: float = 1.0,
-    subsample: int = 2,
-    footprint_volumes: bool = False,
-    boundary_compensation: bool = True,
-    edge_supersampling: bool = True,
-    volume_shape: str = "auto",
-    estimator: str = "auto",
-    first_bounce: str = "auto",
-    adapter: str | None = None,
-    shadow_map_size: int = 1024,
-    caustic_density_bound: bool = True,
-    photon_focus: float = 0.25,
-    vpls_per_light: int = 64,
-    rsm_size: int = 64,
-    vpl_shadow_map_size: int = 128,
-    bundles: int = 16,
-    bundle_resolution: int = 128,
-    bundle_memory_mb: int = 64,
-    bidir_strategy: str = "mis",
-    roughness_clamping: bool = True,
     progress: bool | ProgressCallback = False,
     denoise: bool = False,
+    **options: Any,
 ) -> RenderResult:
-    """Renders ``scene`` with ``method`` (see :func:`gi.methods`).
+    """Renders ``scene`` with ``method`` (see :func:`gi.methods`): one frame of a
+    :class:`Renderer` with every image read back.
 
-    ``size`` is ``(width, height)`` and defaults to the scene camera's. ``spp`` is camera
-    samples per pixel (default 64; 16 direct-light samples for the GPU methods ``direct`` and
-    ``ispm``, chosen by measurement); ``light_paths`` the caustic light paths of method ``path``
-    (default one per camera sample). Method ``photon`` (classic photon mapping) emits
-    ``photons`` photons and estimates radiance from the ``k`` nearest within ``max_radius``
-    (metres; default 5% of the scene's diagonal) with a ``kernel`` of "box", "cone" or
-    "epanechnikov".
-    Method ``gather`` traces ``photons`` photons with photon differentials and gathers every
-    photon whose footprint (scaled by ``smoothing``, semi-axes at most ``max_radius``)
-    contains the shading point, from a linear BVH with ``leaf_size`` footprints per leaf
-    (default: the automatic T_auto).
-    Method ``ispm`` (image-space photon mapping) rasterizes a bounce map per light with
-    ``photons`` first-bounce photons in all, traces later bounces on the CPU and splats one
-    photon volume per stored photon, ``kernel_scale`` times the default radius (or sized by
-    photon-differential footprints with ``footprint_volumes``), at 1/``subsample``
-    resolution with joint bilateral upsampling; ``boundary_compensation`` divides each
-    photon's power by the fraction of its kernel that lies on surfaces (probe rays), so
-    edges and corners keep their energy (for ``gather`` too, on its footprints). Mirrors
-    and glass seen by the camera are traced backwards on the CPU with a photon-map gather
-    (``k``, ``max_radius``, ``kernel``). ``volume_shape`` picks the shape drawn per photon
-    volume: "icosahedron", "quad" (a screen-aligned bounding rectangle, cheaper for
-    small volumes) or "auto" (quads for volumes under 16 pixels in radius, else icosahedra);
-    it changes the cost, not the image. ``estimator`` picks how the photons are splatted:
-    "volumes" (the rasterizer draws the volumes), "tiled" (compute passes bin the photons to
-    screen tiles), "cluster" (a hierarchy over the view samples with whole nodes accepted at
-    once; Moreau et al. 2016), all three the same image up to float rounding; "directional"
-    (the cluster hierarchy's approximation: per-cluster irradiance from 8 directions,
-    faster, blockier), "cpu" (the tiled estimate computed on the CPU, the same image; fastest
-    on CPU devices) or "auto" (per adapter; ``stats.estimator_reason`` says why).
-    ``first_bounce`` picks where ``ispm`` finds its photons' first hits: "raster" (the bounce
-    maps), "traced" (the same photons cast from the lights in the CPU BVH, cheaper on a CPU
-    rasterizer) or "auto" ("traced" on CPU devices such as lavapipe, else "raster"); the
-    photons have the same distribution either way.
-    GPU methods (``direct``, ``ispm``, ``bidir``) run on ``adapter`` ("cpu" for lavapipe,
-    "gpu", or part of an adapter's name; default: the ``GI_ADAPTER`` environment variable,
-    else a real GPU when present, else lavapipe) with ``shadow_map_size``² texels per
-    shadow-map face. Their direct light is supersampled ``spp`` times only at pixels on
-    silhouettes, creases and material boundaries and shaded once at the centre elsewhere
-    (box-filtered over the pixel's footprint); ``edge_supersampling=False`` supersamples
-    every pixel (a full-screen pass per sample: the same image to ~1e-4, 6–9× slower).
-    ``caustic_density_bound`` (methods ``ispm`` and ``gather``) keeps each caustic photon's
-    kernel radius within 0.75–1.5 times the distance to its 16th nearest caustic photon, so
-    caustic kernels are small where caustics focus and wide where they spread.
-    ``photon_focus`` aims that share of each light's photons at the mirrors and glass
-    through a projection map, weighted so that the image is unchanged (method ``ispm``:
-    those aimed photons, traced on the CPU, carry every first hit on a mirror or glass).
-    Method ``bidir`` (Tokuyoshi & Ogaki 2012, bidirectional path tracing by rasterization)
-    adds to the GPU direct light the indirect light of ``vpls_per_light`` virtual point lights
-    per light (drawn by flux from reflective shadow maps of about ``rsm_size``² texels per
-    view, each with a cube shadow map of ``vpl_shadow_map_size``² texels per face) and of
-    ``bundles`` global ray bundles per frame (the scene rasterized along random directions at
-    ``bundle_resolution``² pixels into fragment lists of ``bundle_memory_mb`` MiB; fragments
-    beyond it are dropped and counted in ``stats.bundle_overflow``), combined by multiple
-    importance sampling (``bidir_strategy`` "mis"; "vpl" or "bundle" for one strategy alone),
-    with a clamped two-bounce term when ``max_depth`` ≥ 3 and, with ``roughness_clamping``,
-    glossy lobes widened where samples are sparse. It lights scenes with an environment
-    light through the bundles (direct light from the sky; 3/4 of the bundle directions
-    drawn from an image sky's luminance).
+    ``options`` are the method's render options (listed below, and by
+    :func:`gi.options`); ``size=(width, height)`` sets width and height. An option that
+    does not apply to the method is ignored with a :class:`gi.RenderWarning`.
     ``progress`` is a callable ``(stage, fraction) -> bool | None`` (return ``False`` to
     cancel), or ``True`` for progress bars (tqdm; in a terminal or a notebook, nothing in
     logs). The GIL is released while rendering; Ctrl-C cancels with
-    :class:`KeyboardInterrupt`.
-    ``denoise`` runs Intel Open Image Denoise on the radiance, guided by the albedo and
-    normal AOVs (:func:`gi.denoise`); the noisy radiance is kept as the AOV ``noisy``.
+    :class:`KeyboardInterrupt`. ``denoise`` runs Intel Open Image Denoise on the radiance,
+    guided by the albedo and normal AOVs (:func:`gi.denoise`); the noisy radiance is kept
+    as the AOV ``noisy``.
     """
     if denoise:
         from gi.denoising import INSTALL_HINT, available
 
         if not available():
             raise SettingError(INSTALL_HINT)
-    renderer = Renderer(
-        scene,
-        method,
-        spp=spp,
-        size=size,
-        seed=seed,
-        max_depth=max_depth,
-        light_paths=light_paths,
-        photons=photons,
-        k=k,
-        max_radius=max_radius,
-        kernel=kernel,
-        smoothing=smoothing,
-        leaf_size=leaf_size,
-        kernel_scale=kernel_scale,
-        subsample=subsample,
-        footprint_volumes=footprint_volumes,
-        boundary_compensation=boundary_compensation,
-        edge_supersampling=edge_supersampling,
-        volume_shape=volume_shape,
-        estimator=estimator,
-        first_bounce=first_bounce,
-        adapter=adapter,
-        shadow_map_size=shadow_map_size,
-        caustic_density_bound=caustic_density_bound,
-        photon_focus=photon_focus,
-        vpls_per_light=vpls_per_light,
-        rsm_size=rsm_size,
-        vpl_shadow_map_size=vpl_shadow_map_size,
-        bundles=bundles,
-        bundle_resolution=bundle_resolution,
-        bundle_memory_mb=bundle_memory_mb,
-        bidir_strategy=bidir_strategy,
-        roughness_clamping=roughness_clamping,
-    )
+    renderer = Renderer(scene, method, **options)
     result = renderer.render(aovs=True, extras=True, progress=progress)
     if denoise:
         from gi.denoising import denoise as run_denoiser
 
         result = run_denoiser(result)
     return result
+
+
+def _option_docs() -> str:
+    """The options of :func:`render` and :class:`Renderer`, from the core's table."""
+    lines = ["Options (default; methods):", ""]
+    for row in _gi.options():
+        default = "None" if row["default"] is None else repr(row["default"])
+        methods = ", ".join(row["methods"])
+        lines.append(f"- ``{row['name']}`` ({default}; {methods}): {row['doc']}")
+    return "\n".join(lines)
+
+
+render.__doc__ = f"{render.__doc__}\n{_option_docs()}\n"
+
+
+def _caller_level() -> int:
+    """``stacklevel`` of a warning that names the first frame outside the package."""
+    frame = sys._getframe(1)
+    level = 1
+    while frame.f_back is not None and frame.f_code.co_filename.startswith(_PACKAGE_DIR):
+        frame = frame.f_back
+        level += 1
+    return level
+
+
+_PACKAGE_DIR = str(Path(__file__).parent)

@@ -15,9 +15,10 @@
 //!    then `path` at 1, 2, 4, … spp until its RMSE is at most theirs, the time interpolated
 //!    log-linearly between the last two counts.
 
-use gi_core::render::{render, BidirStrategy, Silent};
+use gi_core::frame::options::BidirStrategy;
 use gi_core::scene::builtin;
-use gi_core::{FrameDesc, Image, Images, Method, Renderer, Scene, SceneUpdate, Settings};
+use gi_core::{render, Silent};
+use gi_core::{FrameDesc, Image, Images, Method, Renderer, Scene, SceneUpdate};
 use std::collections::BTreeMap;
 use std::time::Instant;
 
@@ -33,7 +34,11 @@ fn rmse(a: &Image, b: &Image) -> f64 {
 }
 
 /// One warm frame of `settings`: (seconds, radiance, stats stages).
-fn warm_frame(scene: &Scene, s: &Settings, seed: u64) -> (f64, Image, Vec<(String, f64)>) {
+fn warm_frame(
+    scene: &Scene,
+    s: &gi_core::RenderOptions,
+    seed: u64,
+) -> (f64, Image, Vec<(String, f64)>) {
     let mut r = Renderer::new(scene, s).expect("renderer");
     r.render(&FrameDesc::default(), &Silent).expect("warm-up");
     let t = Instant::now();
@@ -87,11 +92,9 @@ fn stage_table(scene: &Scene, frames: u32) {
     let mut order: Vec<String> = Vec::new();
     let mut per_size: Vec<BTreeMap<String, f64>> = Vec::new();
     for (w, h) in sizes {
-        let s = Settings {
-            width: Some(w),
-            height: Some(h),
-            ..Settings::for_method(Method::Bidir)
-        };
+        let s = gi_core::RenderOptions::defaults(Method::Bidir)
+            .with("width", w)
+            .with("height", h);
         let mut r = Renderer::new(scene, &s).expect("renderer");
         r.render(&FrameDesc::default(), &Silent).expect("warm-up");
         let mut sums: BTreeMap<String, f64> = BTreeMap::new();
@@ -153,12 +156,7 @@ fn stage_table(scene: &Scene, frames: u32) {
 
 fn equal_error_table(scene: &Scene) {
     let (w, h) = (160, 120);
-    let base = Settings {
-        width: Some(w),
-        height: Some(h),
-        max_depth: 3,
-        ..Default::default()
-    };
+    let base = gi_core::options!(Path, width: w, height: h, max_depth: 3);
     println!("\n## Equal error against `ispm` and `path` (cornell)\n");
     println!(
         "Command: `cargo run -p gi-core --profile test --example bidir_bench -- \
@@ -167,26 +165,18 @@ fn equal_error_table(scene: &Scene) {
          frames timed on a warm renderer · wall-clock seconds on the same 2 shared cores \
          (lavapipe).\n"
     );
-    let reference = render(
-        scene,
-        &Settings {
-            spp: 2048,
-            ..base.clone()
-        },
-        &Silent,
-    )
-    .expect("reference")
-    .radiance;
+    let reference = render(scene, &base.clone().with("spp", 2048), &Silent)
+        .expect("reference")
+        .radiance;
     let mut entries: Vec<(String, f64, f64)> = Vec::new();
     for (vpls, bundles) in [(16u32, 8u32), (64, 16), (128, 32)] {
-        let s = Settings {
-            method: Method::Bidir,
-            spp: 4,
-            vpls_per_light: vpls,
-            bundles,
-            bidir_strategy: BidirStrategy::Mis,
-            ..base.clone()
-        };
+        let s = base
+            .clone()
+            .with_method(gi_core::Method::Bidir)
+            .with("spp", 4)
+            .with("vpls_per_light", vpls)
+            .with("bundles", bundles)
+            .with("bidir_strategy", BidirStrategy::Mis);
         let (t, img, _) = warm_frame(scene, &s, 11);
         entries.push((
             format!("`bidir` {vpls} VPLs, {bundles} bundles, 4 spp"),
@@ -194,12 +184,10 @@ fn equal_error_table(scene: &Scene) {
             rmse(&img, &reference),
         ));
     }
-    let s = Settings {
-        width: Some(w),
-        height: Some(h),
-        max_depth: 3,
-        ..Settings::for_method(Method::Ispm)
-    };
+    let s = gi_core::RenderOptions::defaults(Method::Ispm)
+        .with("width", w)
+        .with("height", h)
+        .with("max_depth", 3);
     let (t, img, _) = warm_frame(scene, &s, 11);
     entries.push((
         "`ispm` defaults (200k photons)".into(),
@@ -210,11 +198,7 @@ fn equal_error_table(scene: &Scene) {
     let mut curve = Vec::new();
     let mut spp = 1;
     loop {
-        let s = Settings {
-            spp,
-            seed: 5,
-            ..base.clone()
-        };
+        let s = base.clone().with("spp", spp).with("seed", 5);
         let t = Instant::now();
         let img = render(scene, &s, &Silent).expect("path").radiance;
         let e = rmse(&img, &reference);

@@ -14,9 +14,9 @@ mod common;
 
 use gi_core::estimate::Estimator;
 use gi_core::frame::{FrameDesc, Renderer};
-use gi_core::render::Silent;
 use gi_core::scene::{builtin, SceneUpdate};
-use gi_core::{Method, RenderOutput, Scene, Settings};
+use gi_core::Silent;
+use gi_core::{RenderOutput, Scene};
 
 const ESTIMATORS: [Estimator; 4] = [
     Estimator::Volumes,
@@ -67,7 +67,7 @@ struct Measured {
 
 fn measure(
     scene: &Scene,
-    settings: &Settings,
+    settings: &gi_core::RenderOptions,
     runs: usize,
 ) -> Result<Measured, Box<dyn std::error::Error>> {
     let mut r = Renderer::new(scene, settings)?;
@@ -141,16 +141,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             for &kernel_scale in scales_at(photons, w) {
                 let mut m = Vec::new();
                 for estimator in ESTIMATORS {
-                    let settings = Settings {
-                        method: Method::Ispm,
-                        width: Some(w),
-                        height: Some(h),
-                        spp: 16,
-                        photons,
-                        kernel_scale,
-                        estimator,
-                        ..Default::default()
-                    };
+                    let settings = gi_core::options!(Ispm, width: w, height: h, spp: 16, photons: photons, kernel_scale: kernel_scale, estimator: estimator);
                     m.push(measure(&scene, &settings, runs)?);
                 }
                 let (v, t, c, d) = (&m[0], &m[1], &m[2], &m[3]);

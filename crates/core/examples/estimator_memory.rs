@@ -5,9 +5,9 @@
 //! `cargo run -p gi-core --profile test --example estimator_memory [-- --size WxH]`
 
 use gi_core::estimate::Estimator;
-use gi_core::render::Silent;
 use gi_core::scene::builtin;
-use gi_core::{render, Method, Settings};
+use gi_core::Silent;
+use gi_core::{render, Method};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
@@ -29,13 +29,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Estimator::Cluster,
         Estimator::Directional,
     ] {
-        let settings = Settings {
-            width: Some(w),
-            height: Some(h),
-            spp: 1,
-            estimator,
-            ..Settings::for_method(Method::Ispm)
-        };
+        let settings = gi_core::RenderOptions::defaults(Method::Ispm)
+            .with("width", w)
+            .with("height", h)
+            .with("spp", 1)
+            .with("estimator", estimator);
         let out = render(&scene, &settings, &Silent)?;
         let mut total = 0;
         for (part, bytes) in &out.stats.estimator_memory {

@@ -11,9 +11,9 @@
 //! what the table can resolve.
 
 use gi_core::estimate::Estimator;
-use gi_core::render::Silent;
 use gi_core::scene::{bench::dense_cornell, builtin};
-use gi_core::{render, Image, Method, Scene, Settings};
+use gi_core::Silent;
+use gi_core::{render, Image, Method, Scene};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
@@ -39,14 +39,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("| scene | estimator | PSNR (dB) | SSIM | estimate (ms) |");
     println!("|---|---|---|---|---|");
     for (name, scene) in &scenes {
-        let path = |seed| Settings {
-            method: Method::Path,
-            spp,
-            seed,
-            width: Some(w),
-            height: Some(h),
-            ..Default::default()
-        };
+        let path = |seed| gi_core::options!(Path, spp: spp, seed: seed, width: w, height: h);
         let a = render(scene, &path(1), &Silent)?.radiance;
         let b = render(scene, &path(2), &Silent)?.radiance;
         let reference = Image {
@@ -69,12 +62,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             Estimator::Cluster,
             Estimator::Directional,
         ] {
-            let settings = Settings {
-                width: Some(w),
-                height: Some(h),
-                estimator,
-                ..Settings::for_method(Method::Ispm)
-            };
+            let settings = gi_core::RenderOptions::defaults(Method::Ispm)
+                .with("width", w)
+                .with("height", h)
+                .with("estimator", estimator);
             let out = render(scene, &settings, &Silent)?;
             let ms: f64 = out
                 .stats

@@ -31,12 +31,12 @@
 mod common;
 
 use gi_core::estimate::Estimator;
+use gi_core::frame::options::FirstBounce;
 use gi_core::frame::{FrameDesc, Renderer};
-use gi_core::render::FirstBounce;
-use gi_core::render::Silent;
 use gi_core::scene::desc::LightDesc;
 use gi_core::scene::{bench::dense_cornell, builtin, SceneUpdate};
-use gi_core::{render, Method, RenderOutput, Scene, Settings};
+use gi_core::Silent;
+use gi_core::{render, RenderOutput, Scene};
 use std::time::Instant;
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -84,7 +84,7 @@ fn nudge(scene: &Scene, t: f32) -> SceneUpdate {
 /// moving before each (after a warm-up frame), and the frames.
 fn moving_light(
     scene: &Scene,
-    settings: &Settings,
+    settings: &gi_core::RenderOptions,
     runs: usize,
 ) -> Result<(f64, Vec<RenderOutput>), Box<dyn std::error::Error>> {
     let mut r = Renderer::new(scene, settings)?;
@@ -105,7 +105,7 @@ fn moving_light(
 /// serial frames.
 fn moving_light_serial(
     scene: &Scene,
-    settings: &Settings,
+    settings: &gi_core::RenderOptions,
     runs: usize,
 ) -> Result<(f64, f64, Vec<RenderOutput>), Box<dyn std::error::Error>> {
     let serial = FrameDesc {
@@ -144,36 +144,29 @@ impl DirectOptions {
     fn get(args: &common::Args) -> Result<Self, Box<dyn std::error::Error>> {
         Ok(DirectOptions {
             spp: args.value("--spp").map_or(Ok(16), str::parse)?,
-            shadow_map_size: args
-                .value("--shadow-map-size")
-                .map_or(Ok(Settings::default().shadow_map_size), str::parse)?,
+            shadow_map_size: args.value("--shadow-map-size").map_or(
+                Ok(gi_core::frame::options::DirectOptions::default()
+                    .direct
+                    .shadow_map_size),
+                str::parse,
+            )?,
         })
     }
 }
 
 /// The table's `ispm` settings: the direct light's `d`, defaults otherwise.
-fn ispm_settings(w: u32, h: u32, photons: u64, estimator: Estimator, d: DirectOptions) -> Settings {
-    Settings {
-        method: Method::Ispm,
-        width: Some(w),
-        height: Some(h),
-        spp: d.spp,
-        shadow_map_size: d.shadow_map_size,
-        photons,
-        estimator,
-        ..Default::default()
-    }
+fn ispm_settings(
+    w: u32,
+    h: u32,
+    photons: u64,
+    estimator: Estimator,
+    d: DirectOptions,
+) -> gi_core::RenderOptions {
+    gi_core::options!(Ispm, width: w, height: h, spp: d.spp, shadow_map_size: d.shadow_map_size, photons: photons, estimator: estimator)
 }
 
-fn direct_settings(w: u32, h: u32, edges: bool) -> Settings {
-    Settings {
-        method: Method::Direct,
-        width: Some(w),
-        height: Some(h),
-        spp: 16,
-        edge_supersampling: edges,
-        ..Default::default()
-    }
+fn direct_settings(w: u32, h: u32, edges: bool) -> gi_core::RenderOptions {
+    gi_core::options!(Direct, width: w, height: h, spp: 16, edge_supersampling: edges)
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -293,10 +286,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         for &photons in budgets {
             let mut row = Vec::new();
             for first_bounce in [FirstBounce::Raster, FirstBounce::Traced] {
-                let settings = Settings {
-                    first_bounce,
-                    ..ispm_settings(w, h, photons, estimator, direct)
-                };
+                let settings = ispm_settings(w, h, photons, estimator, direct)
+                    .with("first_bounce", first_bounce);
                 let (_, serial, frames) = moving_light_serial(scene, &settings, runs)?;
                 let bounce = median(
                     frames

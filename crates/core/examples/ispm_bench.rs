@@ -9,8 +9,8 @@
 
 mod common;
 
-use gi_core::render::Silent;
-use gi_core::{render, scene::builtin, Method, Settings};
+use gi_core::Silent;
+use gi_core::{render, scene::builtin};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args = common::Args::get();
@@ -54,15 +54,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         };
         for photons in [50_000u64, 100_000, 200_000] {
             for subsample in [1u32, 2] {
-                let settings = Settings {
-                    method: Method::Ispm,
-                    spp: 1,
-                    width: Some(640),
-                    height: Some(480),
-                    photons,
-                    subsample,
-                    ..Default::default()
-                };
+                let settings = gi_core::options!(Ispm, spp: 1, width: 640, height: 480, photons: photons, subsample: subsample);
                 render(&scene, &settings, &Silent)?;
                 let mut samples: Vec<Vec<f64>> = vec![Vec::new(); groups.len() + 1];
                 let mut present = vec![false; groups.len() + 1];

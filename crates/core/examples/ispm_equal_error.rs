@@ -8,15 +8,15 @@
 //! before boundary compensation; the defaults, subsample 2); then `path` at 1, 2, 4, … spp until its RMSE
 //! is at most ISPM's, interpolating the time log-linearly between the last two counts.
 
-use gi_core::render::{render, Silent};
 use gi_core::scene::{bench::dense_cornell, builtin};
-use gi_core::{Image, Method, Scene, Settings};
+use gi_core::{render, Silent};
+use gi_core::{Image, Scene};
 use std::time::Instant;
 
 const W: u32 = 160;
 const H: u32 = 120;
 
-fn timed(scene: &Scene, s: &Settings) -> (f64, Image) {
+fn timed(scene: &Scene, s: &gi_core::RenderOptions) -> (f64, Image) {
     let t = Instant::now();
     let out = render(scene, s, &Silent).expect("render");
     (t.elapsed().as_secs_f64(), out.radiance)
@@ -54,19 +54,8 @@ fn main() {
         ("dense cornell", dense_cornell()),
     ];
     for (name, scene) in &scenes {
-        let base = Settings {
-            width: Some(W),
-            height: Some(H),
-            ..Default::default()
-        };
-        let (_, converged) = timed(
-            scene,
-            &Settings {
-                spp: 2048,
-                seed: 99,
-                ..base.clone()
-            },
-        );
+        let base = gi_core::options!(Path, width: W, height: H);
+        let (_, converged) = timed(scene, &base.clone().with("spp", 2048).with("seed", 99));
         let configs = [
             ("subsample 1", 1.0, 1),
             ("kernel_scale 1/3, subsample 1", 1.0 / 3.0, 1),
@@ -75,14 +64,13 @@ fn main() {
         let results: Vec<(&str, f64, f64)> = configs
             .iter()
             .map(|&(label, kernel_scale, subsample)| {
-                let ispm = Settings {
-                    method: Method::Ispm,
-                    spp: 4,
-                    photons: 200_000,
-                    kernel_scale,
-                    subsample,
-                    ..base.clone()
-                };
+                let ispm = base
+                    .clone()
+                    .with_method(gi_core::Method::Ispm)
+                    .with("spp", 4)
+                    .with("photons", 200_000)
+                    .with("kernel_scale", kernel_scale)
+                    .with("subsample", subsample);
                 let _ = timed(scene, &ispm); // warm-up: pipelines, device
                 let (t, img) = timed(scene, &ispm);
                 (label, t, img.rmse(&converged))
@@ -94,14 +82,7 @@ fn main() {
         let mut curve: Vec<(u32, f64, f64)> = Vec::new();
         for k in 0..11 {
             let spp = 1u32 << k;
-            let (t, img) = timed(
-                scene,
-                &Settings {
-                    spp,
-                    seed: k as u64,
-                    ..base.clone()
-                },
-            );
+            let (t, img) = timed(scene, &base.clone().with("spp", spp).with("seed", k as u64));
             curve.push((spp, t, img.rmse(&converged)));
             if curve[curve.len() - 1].2 <= target {
                 break;

@@ -8,9 +8,9 @@
 //! of finite surfaces (bias): RMSE and the mean relative error of 8×8-pixel blocks show the
 //! trade-off, the image-mean bias shows the energy loss.
 
-use gi_core::render::{render, Silent};
 use gi_core::scene::builtin;
-use gi_core::{Image, Method, Settings};
+use gi_core::Image;
+use gi_core::{render, Silent};
 use glam::DVec3;
 
 const W: u32 = 160;
@@ -36,18 +36,10 @@ fn block_error(a: &Image, b: &Image, block: u32) -> f64 {
 
 fn main() {
     let scene = builtin::load("cornell").expect("built-in");
-    let base = Settings {
-        width: Some(W),
-        height: Some(H),
-        ..Default::default()
-    };
+    let base = gi_core::options!(Path, width: W, height: H);
     let converged = render(
         &scene,
-        &Settings {
-            spp: 1024,
-            seed: 99,
-            ..base.clone()
-        },
+        &base.clone().with("spp", 1024).with("seed", 99),
         &Silent,
     )
     .expect("render")
@@ -64,13 +56,12 @@ fn main() {
         for scale in [1.0f32, 1.5, 2.0, 3.0, 4.0] {
             let out = render(
                 &scene,
-                &Settings {
-                    method: Method::Ispm,
-                    spp: 4,
-                    photons,
-                    kernel_scale: scale,
-                    ..base.clone()
-                },
+                &base
+                    .clone()
+                    .with_method(gi_core::Method::Ispm)
+                    .with("spp", 4)
+                    .with("photons", photons)
+                    .with("kernel_scale", scale),
                 &Silent,
             )
             .expect("render")

@@ -9,13 +9,14 @@
 //! `cargo run -p gi-core --profile test --example photon_map_bench > docs/bench/photon-map.md`
 //! (`-- obvhs` or `-- radii` runs section 4 or 5 alone).
 
+use gi_core::frame::gather::gather_trace_settings;
 use gi_core::photon::estimate::PhotonMap;
 use gi_core::photon::gather::{scene_area, FootprintMap, LeafSize};
 use gi_core::photon::{emit_and_trace, Kernel};
-use gi_core::render::{gather_trace_settings, render, Silent};
 use gi_core::scene::builtin;
 use gi_core::trace::SceneBvh;
-use gi_core::{Method, Settings};
+use gi_core::Method;
+use gi_core::{render, Silent};
 use std::time::Instant;
 
 fn best_of<T>(n: usize, mut f: impl FnMut() -> T) -> (f64, T) {
@@ -70,11 +71,7 @@ fn main() {
     println!("| photons emitted | stored (bounce ≥ 1) | footprint LBVH build (ms) | kd-tree build (ms) | LBVH / kd-tree |");
     println!("|---|---|---|---|---|");
     for n in [10_000u64, 100_000, 1_000_000] {
-        let s = Settings {
-            method: Method::Gather,
-            photons: n,
-            ..Default::default()
-        };
+        let s = gi_core::options!(Gather, photons: n);
         let set = emit_and_trace(&scene, &bvh, n, &gather_trace_settings(&scene, &s), 1);
         let (t_lbvh, map) = best_of(3, || {
             FootprintMap::build(&set, 1, area, LeafSize::Auto, Kernel::Epanechnikov)
@@ -99,13 +96,7 @@ fn main() {
     let size = 64;
     let reference = render(
         &scene,
-        &Settings {
-            spp: 1024,
-            width: Some(size),
-            height: Some(size),
-            seed: 77,
-            ..Default::default()
-        },
+        &gi_core::options!(Path, spp: 1024, width: size, height: size, seed: 77),
         &Silent,
     )
     .expect("reference")
@@ -123,20 +114,20 @@ fn main() {
     for method in [Method::Photon, Method::Gather] {
         let mut curve = Vec::new();
         for n in [50_000u64, 200_000, 800_000] {
-            let s = Settings {
-                method,
-                spp: 4,
-                width: Some(size),
-                height: Some(size),
-                photons: n,
-                kernel: if method == Method::Gather {
-                    Kernel::Epanechnikov
-                } else {
-                    Kernel::Cone
-                },
-                smoothing: GATHER_SMOOTHING,
-                ..Default::default()
-            };
+            let s = gi_core::RenderOptions::defaults(method)
+                .with("spp", 4)
+                .with("width", size)
+                .with("height", size)
+                .with("photons", n)
+                .with(
+                    "kernel",
+                    if method == Method::Gather {
+                        Kernel::Epanechnikov
+                    } else {
+                        Kernel::Cone
+                    },
+                )
+                .with("smoothing", GATHER_SMOOTHING);
             let (t, out) = best_of(3, || render(&scene, &s, &Silent).expect("render"));
             let e = out.radiance.rmse(&reference);
             let build = stage(&out, "kd-tree build") + stage(&out, "photon map build");
@@ -196,15 +187,7 @@ fn main() {
         Some(64),
         None,
     ] {
-        let s = Settings {
-            method: Method::Gather,
-            spp: 8,
-            width: Some(SWEEP_SIZE),
-            height: Some(SWEEP_SIZE),
-            photons: 400_000,
-            leaf_size: leaf,
-            ..Default::default()
-        };
+        let s = gi_core::options!(Gather, spp: 8, width: SWEEP_SIZE, height: SWEEP_SIZE, photons: 400_000, leaf_size: leaf);
         let est = (0..3)
             .map(|_| {
                 stage(
@@ -224,14 +207,7 @@ fn main() {
         &scene,
         &bvh,
         400_000,
-        &gather_trace_settings(
-            &scene,
-            &Settings {
-                method: Method::Gather,
-                photons: 400_000,
-                ..Default::default()
-            },
-        ),
+        &gather_trace_settings(&scene, &gi_core::options!(Gather, photons: 400_000)),
         0,
     );
     let map = FootprintMap::build(&set, 1, area, LeafSize::Auto, Kernel::Epanechnikov);
@@ -281,11 +257,7 @@ fn lbvh_vs_obvhs(scene: &gi_core::Scene) {
     use obvhs::{aabb::Aabb, bvh2::builder::build_bvh2, BvhBuildParams};
     let bvh = SceneBvh::build(scene);
     let n = 400_000;
-    let s = Settings {
-        method: Method::Gather,
-        photons: n,
-        ..Default::default()
-    };
+    let s = gi_core::options!(Gather, photons: n);
     let set = emit_and_trace(scene, &bvh, n, &gather_trace_settings(scene, &s), 1);
     let map = FootprintMap::build(
         &set,
@@ -415,11 +387,7 @@ fn radii_per_kind() {
     for name in ["ring-room", "cornell-glass"] {
         let scene = builtin::load(name).expect("built-in");
         let bvh = SceneBvh::build(&scene);
-        let s = Settings {
-            method: Method::Gather,
-            photons: n,
-            ..Default::default()
-        };
+        let s = gi_core::options!(Gather, photons: n);
         let mut ts = gather_trace_settings(&scene, &s);
         ts.store_direct = true;
         let set = emit_and_trace(&scene, &bvh, n, &ts, 1);

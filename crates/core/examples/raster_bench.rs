@@ -7,8 +7,8 @@
 
 mod common;
 
-use gi_core::render::Silent;
-use gi_core::{render, scene::builtin, Method, Settings};
+use gi_core::Silent;
+use gi_core::{render, scene::builtin};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args = common::Args::get();
@@ -28,14 +28,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
     println!("|---|{}---|", "---|".repeat(stages.len()));
     for (w, h) in [(640, 480), (1280, 720)] {
-        let settings = Settings {
-            method: Method::Direct,
-            spp: 1,
-            width: Some(w),
-            height: Some(h),
-            shadow_map_size: 1024,
-            ..Default::default()
-        };
+        let settings =
+            gi_core::options!(Direct, spp: 1, width: w, height: h, shadow_map_size: 1024);
         render(&scene, &settings, &Silent)?;
         let mut samples: Vec<Vec<f64>> = vec![Vec::new(); stages.len() + 1];
         for _ in 0..runs {

@@ -16,11 +16,12 @@
 
 mod common;
 
+use gi_core::frame::options::SpecularSampling;
 use gi_core::frame::{FrameDesc, Renderer};
-use gi_core::render::{Silent, SpecularSampling};
 use gi_core::scene::desc::LightDesc;
 use gi_core::scene::{builtin, SceneUpdate};
-use gi_core::{render, Image, Method, RenderOutput, Scene, Settings};
+use gi_core::Silent;
+use gi_core::{render, Image, RenderOutput, Scene};
 use std::time::Instant;
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -57,7 +58,7 @@ fn nudge(scene: &Scene, t: f32) -> Result<SceneUpdate, Box<dyn std::error::Error
 /// Median (frame, specular stage) seconds of `runs` steady-state frames.
 fn frames(
     scene: &Scene,
-    settings: &Settings,
+    settings: &gi_core::RenderOptions,
     runs: usize,
 ) -> Result<(f64, f64), Box<dyn std::error::Error>> {
     let mut r = Renderer::new(scene, settings)?;
@@ -75,7 +76,7 @@ fn frames(
 
 fn specular_image(
     scene: &Scene,
-    settings: &Settings,
+    settings: &gi_core::RenderOptions,
 ) -> Result<(Image, f64), Box<dyn std::error::Error>> {
     let out = render(scene, settings, &Silent)?;
     let seconds = specular_seconds(&out);
@@ -129,18 +130,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("|---|---|---|---|---|---|---|---|---|");
     for &(w, h) in sizes {
         for &photons in budgets {
-            let base = Settings {
-                method: Method::Ispm,
-                width: Some(w),
-                height: Some(h),
-                spp: 16,
-                photons,
-                ..Default::default()
-            };
-            let full = Settings {
-                specular_sampling: SpecularSampling::Full,
-                ..base.clone()
-            };
+            let base = gi_core::options!(Ispm, width: w, height: h, spp: 16, photons: photons);
+            let full = base
+                .clone()
+                .with("specular_sampling", SpecularSampling::Full);
             let (f_frame, f_spec) = frames(&scene, &full, runs)?;
             let (a_frame, a_spec) = frames(&scene, &base, runs)?;
             println!(
@@ -161,19 +154,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
     println!("\n| sampling | samples per pixel | specular (ms) | RMS error | mean |");
     println!("|---|---|---|---|---|");
-    let base = Settings {
-        method: Method::Ispm,
-        width: Some(320),
-        height: Some(240),
-        spp: 16,
-        photons: 20_000,
-        seed: 99,
-        ..Default::default()
-    };
-    let full = |spp| Settings {
-        spp,
-        specular_sampling: SpecularSampling::Full,
-        ..base.clone()
+    let base = gi_core::options!(Ispm, width: 320, height: 240, spp: 16, photons: 20_000, seed: 99);
+    let full = |spp| {
+        base.clone()
+            .with("spp", spp)
+            .with("specular_sampling", SpecularSampling::Full)
     };
     let (reference, seconds) = specular_image(&scene, &full(256))?;
     println!(

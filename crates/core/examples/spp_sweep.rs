@@ -7,8 +7,8 @@
 //! 160×120, 200k photons, other settings default; reference: `path` at `--ref-spp`
 //! (default 2048) samples per pixel.
 
-use gi_core::render::Silent;
-use gi_core::{render, scene::builtin, Image, Method, Settings};
+use gi_core::Silent;
+use gi_core::{render, scene::builtin, Image};
 use std::time::Instant;
 
 fn block_error(a: &Image, b: &Image) -> f64 {
@@ -43,27 +43,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("|---|---|---|---|---|");
     for name in ["cornell", "cornell-glass"] {
         let scene = builtin::load(name)?;
-        let base = Settings {
-            width: Some(160),
-            height: Some(120),
-            ..Default::default()
-        };
+        let base = gi_core::options!(Path, width: 160, height: 120);
         let reference = render(
             &scene,
-            &Settings {
-                method: Method::Path,
-                spp: ref_spp,
-                ..base.clone()
-            },
+            &base
+                .clone()
+                .with_method(gi_core::Method::Path)
+                .with("spp", ref_spp),
             &Silent,
         )?;
         for spp in [1, 4, 16, 64] {
-            let s = Settings {
-                method: Method::Ispm,
-                spp,
-                photons: 200_000,
-                ..base.clone()
-            };
+            let s = base
+                .clone()
+                .with_method(gi_core::Method::Ispm)
+                .with("spp", spp)
+                .with("photons", 200_000);
             render(&scene, &s, &Silent)?;
             let t = Instant::now();
             let out = render(&scene, &s, &Silent)?;

@@ -13,9 +13,9 @@
 //! frames after the ring filled (4..N).
 
 use gi_core::frame::{FrameDesc, Renderer};
-use gi_core::render::Silent;
+use gi_core::render;
 use gi_core::scene::{builtin, SceneUpdate};
-use gi_core::{render, Method, Settings};
+use gi_core::Silent;
 use glam::{Mat4, Vec3};
 use std::time::Instant;
 
@@ -46,36 +46,24 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         transform: Mat4::from_translation(Vec3::new(0.02 * f as f32, 0.0, -0.01 * f as f32))
             * start,
     };
-    let base = Settings {
-        method: Method::Ispm,
-        width: Some(width),
-        height: Some(height),
-        spp: 4,
-        photons: 20_000,
-        ..Default::default()
-    };
+    let base = gi_core::options!(Ispm, width: width, height: height, spp: 4, photons: 20_000);
     // Converged references, one per pose.
     let mut references = Vec::new();
     for f in 0..frames {
         let mut posed = scene.clone();
         posed.apply(&pose(f))?;
         let s = if ref_photons > 0 {
-            Settings {
-                photons: ref_photons as u64,
-                ..base.clone()
-            }
+            base.clone().with("photons", ref_photons as u64)
         } else {
-            Settings {
-                method: Method::Path,
-                spp: ref_spp,
-                ..base.clone()
-            }
+            base.clone()
+                .with_method(gi_core::Method::Path)
+                .with("spp", ref_spp)
         };
         references.push(render(&posed, &s, &Silent)?.radiance);
     }
     println!("| frame | RMSE without reuse | RMSE with reuse (4 frames) | ms without | ms with |");
     println!("|---|---|---|---|---|");
-    let run = |s: &Settings| -> Result<Vec<(f64, f64)>, Box<dyn std::error::Error>> {
+    let run = |s: &gi_core::RenderOptions| -> Result<Vec<(f64, f64)>, Box<dyn std::error::Error>> {
         let mut r = Renderer::new(&scene, s)?;
         let mut rows = Vec::new();
         for f in 0..frames {
@@ -89,10 +77,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     let mut runs = Vec::new();
     for temporal_frames in [1, 4] {
-        runs.push(run(&Settings {
-            temporal_frames,
-            ..base.clone()
-        })?);
+        runs.push(run(&base.clone().with("temporal_frames", temporal_frames))?);
     }
     for (f, (a, b)) in runs[0].iter().zip(&runs[1]).enumerate() {
         println!(
@@ -116,11 +101,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
     // Equal frame time: no reuse, with the photons scaled by the time ratio.
     let scale = mean(&runs[1], 1) / mean(&runs[0], 1);
-    let photons = (base.photons as f64 * scale).round() as u64;
-    let equal = run(&Settings {
-        photons,
-        ..base.clone()
-    })?;
+    let gi_core::MethodOptions::Ispm(o) = &base.method else {
+        unreachable!("ispm options")
+    };
+    let photons = (o.photons as f64 * scale).round() as u64;
+    let equal = run(&base.clone().with("photons", photons))?;
     println!(
         "\nEqual time: without reuse at {photons} photons a frame ({scale:.2}× the photons, the \
          reuse run's time ratio): mean RMSE of frames 4.. {:.4} in {:.0} ms, against {:.4} with \

@@ -14,12 +14,13 @@
 
 mod common;
 
+use gi_core::estimate::volume_shape::projected_radius;
+use gi_core::frame::options::VolumeShape;
+use gi_core::photon::radius::VolumeRadius;
 use gi_core::photon::{continue_paths, PhotonTraceSettings};
-use gi_core::raster::ispm::render_bounce_map;
-use gi_core::raster::volume_shape::{projected_radius, VolumeRadius};
-use gi_core::render::{Silent, VolumeShape};
 use gi_core::trace::SceneBvh;
-use gi_core::{render, scene::builtin, Method, Scene, Settings};
+use gi_core::Silent;
+use gi_core::{render, scene::builtin, Scene};
 
 const SHAPES: [VolumeShape; 3] = [
     VolumeShape::Icosahedron,
@@ -28,20 +29,23 @@ const SHAPES: [VolumeShape; 3] = [
 ];
 
 /// Projected radii (px) of the stored photons' volumes at `kernel_scale`, sorted.
-fn projected_radii(scene: &Scene, s: &Settings) -> Result<Vec<f32>, gi_core::Error> {
-    let bm = render_bounce_map(scene, s)?;
+fn projected_radii(scene: &Scene, s: &gi_core::RenderOptions) -> Result<Vec<f32>, gi_core::Error> {
+    let bm = gi_core::frame::bounce_map(scene, s)?;
+    let gi_core::MethodOptions::Ispm(o) = &s.method else {
+        unreachable!("ispm options")
+    };
     let bvh = SceneBvh::build(scene);
     let pts = PhotonTraceSettings {
-        max_bounces: s.max_depth - 1,
+        max_bounces: o.max_depth - 1,
         store_direct: false,
         differentials: None,
     };
-    let photons = continue_paths(scene, &bvh, &bm.rays, &pts, s.seed).photons;
-    let radius = VolumeRadius::of_scene(scene, s.photons, s.kernel_scale);
+    let photons = continue_paths(scene, &bvh, &bm.rays, &pts, s.common.seed).photons;
+    let radius = VolumeRadius::of_scene(scene, o.photons, o.kernel_scale);
     let camera = scene.camera.with_size(640, 480);
     let mut px: Vec<f32> = photons
         .iter()
-        .map(|p| projected_radius(&camera, s.subsample, p.position(), radius.of(p)))
+        .map(|p| projected_radius(&camera, o.subsample, p.position(), radius.of(p)))
         .collect();
     px.sort_by(f32::total_cmp);
     Ok(px)
@@ -57,13 +61,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let runs = args.runs(3)?;
     common::print_adapter()?;
     let scene = builtin::load("cornell")?;
-    let base = Settings {
-        method: Method::Ispm,
-        spp: 1,
-        width: Some(640),
-        height: Some(480),
-        ..Default::default()
-    };
+    let base = gi_core::options!(Ispm, spp: 1, width: 640, height: 480);
     // (target median radius in px, photons); `None` = the defaults.
     let rows: [(Option<f32>, u64); 7] = [
         (Some(2.0), 200_000),
@@ -89,10 +87,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         if !only.is_empty() && !target.is_some_and(|t| only.contains(&t)) {
             continue;
         }
-        let unit = Settings {
-            photons,
-            ..base.clone()
-        };
+        let unit = base.clone().with("photons", photons);
         let kernel_scale = match target {
             Some(t) => {
                 let px = projected_radii(&scene, &unit)?;
@@ -100,16 +95,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
             None => 1.0,
         };
-        let settings = Settings {
-            kernel_scale,
-            ..unit
-        };
+        let settings = unit.with("kernel_scale", kernel_scale);
         let px = projected_radii(&scene, &settings)?;
         let med_px = px[px.len() / 2];
-        let with = |shape| Settings {
-            volume_shape: shape,
-            estimator: gi_core::estimate::Estimator::Volumes,
-            ..settings.clone()
+        let with = |shape| {
+            settings
+                .clone()
+                .with("volume_shape", shape)
+                .with("estimator", gi_core::estimate::Estimator::Volumes)
         };
         for shape in SHAPES {
             render(&scene, &with(shape), &Silent)?;

@@ -70,6 +70,28 @@ impl Error {
     }
 }
 
+/// A choice among a few named values: the options that take one of a set of names.
+pub trait Named: Copy + PartialEq + 'static {
+    /// Every value, in the order the choices are listed.
+    fn all() -> &'static [Self];
+    fn name(self) -> &'static str;
+}
+
+/// Implements [`Named`] for enums with an inherent `ALL` and `name()`.
+macro_rules! named {
+    ($($t:ty),* $(,)?) => {$(
+        impl $crate::error::Named for $t {
+            fn all() -> &'static [Self] {
+                <$t>::ALL
+            }
+            fn name(self) -> &'static str {
+                <$t>::name(self)
+            }
+        }
+    )*};
+}
+pub(crate) use named;
+
 /// The member of `all` named `s` (by `name`): the `FromStr` of the settings that are one of
 /// a few named choices. Else a setting error for `setting` that names the `what` asked for
 /// and the choices available.

@@ -19,8 +19,11 @@ pub mod scene;
 pub mod texture;
 pub mod trace;
 
-pub use error::{Error, Result};
 pub use cancel::{Progress, Silent};
-pub use frame::{render, FrameDesc, Images, Method, RenderOutput, RenderStats, Renderer, Settings};
+pub use error::{Error, Result};
+pub use frame::{
+    render, FrameDesc, Images, Method, MethodOptions, RenderOptions, RenderOutput, RenderStats,
+    Renderer,
+};
 pub use image::Image;
 pub use scene::{Scene, SceneUpdate};

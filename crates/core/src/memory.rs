@@ -6,9 +6,9 @@
 //! (`MemAvailable` + free swap), the address space left under `RLIMIT_AS` (`ulimit -v`)
 //! and the cgroup's memory limit. Where none of these can be read (not Linux), checks pass.
 
-use crate::error::{Error, Result};
 #[cfg(test)]
 use crate::error::human;
+use crate::error::{Error, Result};
 
 /// Headroom kept free for everything not estimated (thread stacks, allocator arenas,
 /// driver mappings): a check fails when the estimate plus this exceeds the room left.

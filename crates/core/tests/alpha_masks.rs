@@ -2,10 +2,9 @@
 //! bounce maps (ISPM's first photon hits) treat a fully cut-out quad as absent, and a
 //! half-cut quad as half there.
 
-use gi_core::raster::ispm::render_bounce_map;
 use gi_core::scene::TextureMap;
 use gi_core::texture::Texture;
-use gi_core::{Method, Scene, Settings};
+use gi_core::Scene;
 use std::collections::HashMap;
 use std::sync::Arc;
 
@@ -36,26 +35,22 @@ fn scene(with_quad: bool, alpha: f32) -> Scene {
     Scene::from_json_textured(&json.to_string(), "t", &HashMap::new(), &textures).unwrap()
 }
 
-fn settings() -> Settings {
-    Settings {
-        method: Method::Ispm,
-        photons: 20_000,
-        ..Default::default()
-    }
+fn settings() -> gi_core::RenderOptions {
+    gi_core::options!(Ispm, photons: 20_000)
 }
 
 #[test]
 fn bounce_maps_skip_cut_out_texels() {
     let s = settings();
-    let floor = render_bounce_map(&scene(false, 1.0), &s).unwrap();
-    let cut = render_bounce_map(&scene(true, 0.0), &s).unwrap();
-    let opaque = render_bounce_map(&scene(true, 1.0), &s).unwrap();
+    let floor = gi_core::frame::bounce_map(&scene(false, 1.0), &s).unwrap();
+    let cut = gi_core::frame::bounce_map(&scene(true, 0.0), &s).unwrap();
+    let opaque = gi_core::frame::bounce_map(&scene(true, 1.0), &s).unwrap();
     // The spot's 12° cone lights a disc of radius 0.21 on the quad (half-width 0.5): all of
     // its power reaches the quad when it is opaque, half of it passes the cut half. The
     // expected scattered power is Σ Φ·albedo over covered texels: floor 0.8, quad green 0.9
     // and red 0.2 (bounce-map texels carry equal powers, whatever they hit: exact ratios
     // up to the texels on the quad's centre line).
-    let ratio = |a: &gi_core::raster::ispm::BounceMap, b: &gi_core::raster::ispm::BounceMap| {
+    let ratio = |a: &gi_core::photon::bounce::BounceMap, b: &gi_core::photon::bounce::BounceMap| {
         a.expected_scattered_power.y / b.expected_scattered_power.y
     };
     assert_eq!(cut.covered, floor.covered);

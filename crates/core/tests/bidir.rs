@@ -7,8 +7,9 @@
 
 mod common;
 
-use gi_core::render::{BidirStrategy, Silent};
-use gi_core::{render, scene::builtin, Method, RenderOutput, Scene, Settings};
+use gi_core::frame::options::BidirStrategy;
+use gi_core::Silent;
+use gi_core::{render, scene::builtin, Method, RenderOutput, Scene};
 use glam::DVec3;
 use std::f64::consts::PI;
 
@@ -20,19 +21,12 @@ fn mean(img: &gi_core::image::Image) -> DVec3 {
     img.pixels.iter().map(|p| p.as_dvec3()).sum::<DVec3>() / img.pixels.len() as f64
 }
 
-fn run(scene: &Scene, s: &Settings) -> RenderOutput {
+fn run(scene: &Scene, s: &gi_core::RenderOptions) -> RenderOutput {
     render(scene, s, &Silent).expect("render")
 }
 
-fn bidir_settings(size: u32) -> Settings {
-    Settings {
-        method: Method::Bidir,
-        spp: 1,
-        width: Some(size),
-        height: Some(size),
-        seed: 3,
-        ..Default::default()
-    }
+fn bidir_settings(size: u32) -> gi_core::RenderOptions {
+    gi_core::options!(Bidir, spp: 1, width: size, height: size, seed: 3)
 }
 
 /// Means of the `block`×`block` pixel blocks.
@@ -68,20 +62,8 @@ fn rel_err(got: DVec3, expected: DVec3) -> DVec3 {
 #[test]
 fn furnace_matches_analytic() {
     let scene = load("furnace");
-    let base = Settings {
-        max_depth: 2,
-        ..bidir_settings(32)
-    };
-    let direct = mean(
-        &run(
-            &scene,
-            &Settings {
-                method: Method::Direct,
-                ..base.clone()
-            },
-        )
-        .radiance,
-    );
+    let base = bidir_settings(32).with("max_depth", 2);
+    let direct = mean(&run(&scene, &base.clone().with_method(gi_core::Method::Direct)).radiance);
     let mut failures = Vec::new();
     for (strategy, depth, expected) in [
         (BidirStrategy::Mis, 2, 0.25 / PI),
@@ -91,11 +73,10 @@ fn furnace_matches_analytic() {
     ] {
         let out = run(
             &scene,
-            &Settings {
-                bidir_strategy: strategy,
-                max_depth: depth,
-                ..base.clone()
-            },
+            &base
+                .clone()
+                .with("bidir_strategy", strategy)
+                .with("max_depth", depth),
         );
         let indirect = mean(&out.radiance) - direct;
         let err = rel_err(indirect, DVec3::splat(expected));
@@ -145,21 +126,17 @@ fn cornell_matches_path_tracer() {
     for depth in [2, 3] {
         let bidir = run(
             &scene,
-            &Settings {
-                spp: 4,
-                bundles: 32,
-                max_depth: depth,
-                ..bidir_settings(size)
-            },
+            &bidir_settings(size)
+                .with("spp", 4)
+                .with("bundles", 32)
+                .with("max_depth", depth),
         );
         let path = run(
             &scene,
-            &Settings {
-                method: Method::Path,
-                spp: 1024,
-                max_depth: depth,
-                ..bidir_settings(size)
-            },
+            &bidir_settings(size)
+                .with_method(gi_core::Method::Path)
+                .with("spp", 1024)
+                .with("max_depth", depth),
         );
         let (a, b) = (mean(&bidir.radiance), mean(&path.radiance));
         let rel = rel_err(a, b);
@@ -205,20 +182,17 @@ fn glossy_cornell_matches_path_tracer() {
         m.roughness = 0.5;
         m.diffuse *= 0.6;
     }
-    let base = Settings {
-        spp: 4,
-        bundles: 32,
-        max_depth: 2,
-        ..bidir_settings(48)
-    };
+    let base = bidir_settings(48)
+        .with("spp", 4)
+        .with("bundles", 32)
+        .with("max_depth", 2);
     let bidir = run(&scene, &base);
     let path = run(
         &scene,
-        &Settings {
-            method: Method::Path,
-            spp: 1024,
-            ..base.clone()
-        },
+        &base
+            .clone()
+            .with_method(gi_core::Method::Path)
+            .with("spp", 1024),
     );
     let (a, b) = (mean(&bidir.radiance), mean(&path.radiance));
     let rel = rel_err(a, b);
@@ -242,22 +216,19 @@ fn glossy_cornell_matches_path_tracer() {
 fn mis_removes_the_corner_spike() {
     let scene = load("cornell");
     let size = 48;
-    let base = Settings {
-        spp: 4,
-        max_depth: 2,
-        vpls_per_light: 16,
-        bundles: 16,
-        ..bidir_settings(size)
-    };
+    let base = bidir_settings(size)
+        .with("spp", 4)
+        .with("max_depth", 2)
+        .with("vpls_per_light", 16)
+        .with("bundles", 16);
     let path = |depth| {
         run(
             &scene,
-            &Settings {
-                method: Method::Path,
-                spp: 1024,
-                max_depth: depth,
-                ..base.clone()
-            },
+            &base
+                .clone()
+                .with_method(gi_core::Method::Path)
+                .with("spp", 1024)
+                .with("max_depth", depth),
         )
         .radiance
     };
@@ -284,13 +255,7 @@ fn mis_removes_the_corner_spike() {
         BidirStrategy::Bundle,
         BidirStrategy::Mis,
     ] {
-        let out = run(
-            &scene,
-            &Settings {
-                bidir_strategy: strategy,
-                ..base.clone()
-            },
-        );
+        let out = run(&scene, &base.clone().with("bidir_strategy", strategy));
         let (_, indirect) = out
             .aovs
             .iter()
@@ -344,12 +309,10 @@ fn convex_object_under_constant_environment() {
     for (method, spp) in [(Method::Bidir, 4), (Method::Path, 64)] {
         let out = run(
             &scene,
-            &Settings {
-                method,
-                spp,
-                bundles: 32,
-                ..bidir_settings(32)
-            },
+            &bidir_settings(32)
+                .with_method(method)
+                .with("spp", spp)
+                .with("bundles", 32),
         );
         // Pixels whose 3×3 neighbourhood is all sphere (all sky for the background): the
         // path tracer's pixels are box-filtered, so edge pixels mix the two.
@@ -384,15 +347,7 @@ fn convex_object_under_constant_environment() {
         );
         assert!(rel_err(bg, DVec3::new(1.0, 2.0, 3.0)).max_element() < 1e-3);
     }
-    let e = render(
-        &scene,
-        &Settings {
-            bundles: 0,
-            ..bidir_settings(16)
-        },
-        &Silent,
-    )
-    .err();
+    let e = render(&scene, &bidir_settings(16).with("bundles", 0), &Silent).err();
     assert!(matches!(e, Some(gi_core::Error::Setting { .. })), "{e:?}");
 }
 
@@ -442,12 +397,10 @@ fn importance_sampled_bundles_find_a_small_sun() {
     let path = mean(
         &run(
             &scene,
-            &Settings {
-                method: Method::Path,
-                spp: 256,
-                max_depth: 1,
-                ..bidir_settings(32)
-            },
+            &bidir_settings(32)
+                .with_method(gi_core::Method::Path)
+                .with("spp", 256)
+                .with("max_depth", 1),
         )
         .radiance,
     );
@@ -455,13 +408,11 @@ fn importance_sampled_bundles_find_a_small_sun() {
     for seed in 0..4 {
         let out = run(
             &scene,
-            &Settings {
-                spp: 4,
-                bundles: 64,
-                bundle_resolution: 64,
-                seed,
-                ..bidir_settings(32)
-            },
+            &bidir_settings(32)
+                .with("spp", 4)
+                .with("bundles", 64)
+                .with("bundle_resolution", 64)
+                .with("seed", seed),
         );
         assert_eq!(out.stats.bundle_overflow, 0);
         ratios.push(mean(&out.radiance) / path);
@@ -476,18 +427,9 @@ fn importance_sampled_bundles_find_a_small_sun() {
 fn bad_settings_are_setting_errors() {
     let scene = load("cornell");
     for s in [
-        Settings {
-            vpls_per_light: 0,
-            ..bidir_settings(16)
-        },
-        Settings {
-            vpl_shadow_map_size: 8,
-            ..bidir_settings(16)
-        },
-        Settings {
-            rsm_size: 0,
-            ..bidir_settings(16)
-        },
+        bidir_settings(16).with("vpls_per_light", 0),
+        bidir_settings(16).with("vpl_shadow_map_size", 8),
+        bidir_settings(16).with("rsm_size", 0),
     ] {
         let e = render(&scene, &s, &Silent).err();
         assert!(matches!(e, Some(gi_core::Error::Setting { .. })), "{e:?}");

@@ -10,11 +10,10 @@
 //! CPU's level-0 albedo averaged over the surviving photons' points is E[a²]/E[a] (≈ 0.70
 //! for this checker), not E[a] (0.5).
 
-use gi_core::raster::ispm::render_bounce_map;
 use gi_core::scene::TextureMap;
 use gi_core::texture::Texture;
 use gi_core::trace::SceneBvh;
-use gi_core::{Method, Scene, Settings};
+use gi_core::Scene;
 use glam::{Vec2, Vec3};
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -51,12 +50,8 @@ fn scene() -> Scene {
 #[test]
 fn bounce_map_photons_see_the_cpu_material() {
     let scene = scene();
-    let settings = Settings {
-        method: Method::Ispm,
-        photons: 20_000,
-        ..Default::default()
-    };
-    let bm = render_bounce_map(&scene, &settings).unwrap();
+    let settings = gi_core::options!(Ispm, photons: 20_000);
+    let bm = gi_core::frame::bounce_map(&scene, &settings).unwrap();
     let bvh = SceneBvh::build(&scene);
     let light = Vec3::new(0.0, 2.0, 0.0);
     // The CPU's level-0 albedo where each surviving photon left the floor (found by casting

@@ -1,6 +1,6 @@
 //! The light-traced part of the reference renderer, checked in absolute terms.
 
-use gi_core::{render, render::Silent, scene::builtin, Image, Method, Scene, Settings};
+use gi_core::{render, scene::builtin, Image, Scene, Silent};
 use glam::Vec3;
 use std::collections::HashMap;
 
@@ -26,14 +26,7 @@ fn planar_mirror_caustic_matches_image_light() {
     );
     let scene = Scene::from_json(&json, "mirror-test", &HashMap::new()).unwrap();
     // max_depth 2: light → mirror → floor → eye only (no floor → mirror → floor chains).
-    let settings = Settings {
-        method: Method::Path,
-        spp: 1,
-        max_depth: 2,
-        light_paths: Some(6_000_000),
-        seed: 3,
-        ..Default::default()
-    };
+    let settings = gi_core::options!(Path, spp: 1, max_depth: 2, light_paths: 6_000_000, seed: 3);
     let out = render(&scene, &settings, &Silent).unwrap();
     let image_light = Vec3::new(-a, h, 0.0);
     let (mut sum_mc, mut sum_exact, mut n) = (0.0f64, 0.0f64, 0);
@@ -86,13 +79,7 @@ fn box_blur(img: &Image, r: i32) -> Vec<f32> {
 #[test]
 fn caustic_ring_shows_the_cardioid() {
     let scene = builtin::load("caustic-ring").unwrap();
-    let settings = Settings {
-        spp: 16,
-        width: Some(96),
-        height: Some(96),
-        seed: 1,
-        ..Default::default()
-    };
+    let settings = gi_core::options!(Path, spp: 16, width: 96, height: 96, seed: 1);
     let out = render(&scene, &settings, &Silent).unwrap();
     let caustic = box_blur(&out.caustics, 1);
     let total = box_blur(&out.radiance, 1);

@@ -1,19 +1,13 @@
 //! The path tracer converges at the Monte Carlo rate: error against a high-sample render
 //! of the same scene falls as 1/√spp.
 
-use gi_core::{render, render::Silent, scene::builtin, Settings};
+use gi_core::{render, scene::builtin, Silent};
 
 #[test]
 fn error_falls_as_inverse_sqrt_spp() {
     let scene = builtin::load("cornell").unwrap();
     let at = |spp: u32, seed: u64| {
-        let s = Settings {
-            spp,
-            width: Some(24),
-            height: Some(24),
-            seed,
-            ..Default::default()
-        };
+        let s = gi_core::options!(Path, spp: spp, width: 24, height: 24, seed: seed);
         render(&scene, &s, &Silent).unwrap().radiance
     };
     let reference = at(4096, 1000);

@@ -14,24 +14,22 @@
 mod common;
 
 use gi_core::frame::{FrameDesc, Renderer};
-use gi_core::render::Silent;
 use gi_core::scene::desc::LightDesc;
 use gi_core::scene::{builtin, SceneUpdate};
-use gi_core::{render, Image, Method, Scene, Settings};
+use gi_core::Silent;
+use gi_core::{render, Image, Method, Scene};
 use std::collections::HashMap;
 
 const W: u32 = 96;
 const H: u32 = 72;
 
-fn settings(spp: u32, edges: bool) -> Settings {
-    Settings {
-        method: Method::Direct,
-        spp,
-        width: Some(W),
-        height: Some(H),
-        edge_supersampling: edges,
-        ..Settings::for_method(Method::Direct)
-    }
+fn settings(spp: u32, edges: bool) -> gi_core::RenderOptions {
+    gi_core::RenderOptions::defaults(Method::Direct)
+        .with_method(gi_core::Method::Direct)
+        .with("spp", spp)
+        .with("width", W)
+        .with("height", H)
+        .with("edge_supersampling", edges)
 }
 
 /// A spot-lit floor with a checker of 8-pixel cells (texture edges inside pixels) and a

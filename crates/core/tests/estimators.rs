@@ -3,8 +3,8 @@
 //! against tiled compute splatting, on lavapipe at small sizes.
 
 use gi_core::estimate::Estimator;
-use gi_core::render::Silent;
-use gi_core::{render, scene::builtin, Method, RenderOutput, Scene, Settings};
+use gi_core::Silent;
+use gi_core::{render, scene::builtin, RenderOutput, Scene};
 use std::collections::HashMap;
 
 /// A spot light over glossy and metallic surfaces (the BSDF's specular lobes are evaluated
@@ -39,30 +39,12 @@ fn scene(name: &str) -> Scene {
     }
 }
 
-fn settings(size: u32, subsample: u32, kernel_scale: f32) -> Settings {
-    Settings {
-        method: Method::Ispm,
-        spp: 1,
-        width: Some(size),
-        height: Some(size),
-        seed: 7,
-        photons: 50_000,
-        subsample,
-        kernel_scale,
-        ..Default::default()
-    }
+fn settings(size: u32, subsample: u32, kernel_scale: f32) -> gi_core::RenderOptions {
+    gi_core::options!(Ispm, spp: 1, width: size, height: size, seed: 7, photons: 50_000, subsample: subsample, kernel_scale: kernel_scale)
 }
 
-fn run(scene: &Scene, s: &Settings, estimator: Estimator) -> RenderOutput {
-    render(
-        scene,
-        &Settings {
-            estimator,
-            ..s.clone()
-        },
-        &Silent,
-    )
-    .expect("render")
+fn run(scene: &Scene, s: &gi_core::RenderOptions, estimator: Estimator) -> RenderOutput {
+    render(scene, &s.clone().with("estimator", estimator), &Silent).expect("render")
 }
 
 fn indirect(out: &RenderOutput) -> &gi_core::Image {
@@ -157,10 +139,7 @@ fn binned_estimators_give_the_same_image_as_volumes() {
         if name == "cornell" && size == 64 && subsample == 1 {
             let smaller = run(
                 &sc,
-                &Settings {
-                    kernel_scale: 0.97,
-                    ..s.clone()
-                },
+                &s.clone().with("kernel_scale", 0.97),
                 Estimator::Cluster,
             );
             let d = max_difference(indirect(&smaller), v, scale);
@@ -243,7 +222,10 @@ fn binned_estimators_are_reproducible() {
 
 #[test]
 fn estimator_setting_parses_and_auto_reports_its_choice() {
-    assert_eq!(Settings::default().estimator, Estimator::Auto);
+    assert_eq!(
+        gi_core::frame::options::IspmOptions::default().estimator,
+        Estimator::Auto
+    );
     assert_eq!("tiled".parse::<Estimator>().ok(), Some(Estimator::Tiled));
     let e = "splat".parse::<Estimator>().err();
     assert!(
@@ -276,10 +258,7 @@ fn estimator_setting_parses_and_auto_reports_its_choice() {
 fn directional_is_close_to_cluster() {
     for (name, min_psnr, min_ssim) in [("cornell", 26.0, 0.77), ("spot-glossy", 45.0, 0.98)] {
         let sc = scene(name);
-        let s = Settings {
-            photons: 100_000,
-            ..settings(256, 2, 1.0)
-        };
+        let s = settings(256, 2, 1.0).with("photons", 100_000);
         let cluster = run(&sc, &s, Estimator::Cluster);
         let directional = run(&sc, &s, Estimator::Directional);
         assert_eq!(directional.stats.estimator, "directional");

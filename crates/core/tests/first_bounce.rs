@@ -2,14 +2,15 @@
 //! devices) against the rasterized bounce maps (section 4.2): the same photons in
 //! distribution, so the same image in expectation.
 
+use gi_core::photon::bounce::BounceMap;
 use gi_core::photon::bounce::{trace_bounce_maps, FirstBounce};
 use gi_core::photon::trace::Checked;
-use gi_core::raster::ispm::{bounce_layers, render_bounce_map, BounceMap};
-use gi_core::render::Silent;
+use gi_core::render;
 use gi_core::sampling::Rng;
 use gi_core::scene::builtin;
+use gi_core::scene::light_views::light_views as bounce_layers;
 use gi_core::trace::{Interaction, SceneBvh};
-use gi_core::{render, Method, Settings};
+use gi_core::Silent;
 
 /// Σ over a map's rays of their squared power (all channels summed): a bound on the variance
 /// of its scattered power, whose texels scatter independently.
@@ -93,14 +94,10 @@ fn traced_bounce_maps_are_unbiased() {
 fn traced_bounce_maps_match_the_rasterized_ones() {
     for name in ["cornell", "cornell-glass"] {
         let scene = builtin::load(name).unwrap();
-        let settings = Settings {
-            method: Method::Ispm,
-            photons: 20_000,
-            seed: 3,
-            ..Default::default()
-        };
-        let raster = render_bounce_map(&scene, &settings).unwrap();
-        let layers = bounce_layers(&scene, settings.photons);
+        let photons = 20_000u64;
+        let settings = gi_core::options!(Ispm, photons: photons, seed: 3);
+        let raster = gi_core::frame::bounce_map(&scene, &settings).unwrap();
+        let layers = bounce_layers(&scene, photons);
         let control = Checked::new(&Silent, "bounce maps");
         let traced =
             trace_bounce_maps(&scene, &SceneBvh::build(&scene), &layers, 3, &control).unwrap();
@@ -163,14 +160,7 @@ fn first_bounce_choice_keeps_the_image() {
     let mut scene = builtin::load("cornell-glass").unwrap();
     scene.camera = scene.camera.with_size(64, 48);
     let image = |first_bounce: FirstBounce, seed: u64| {
-        let settings = Settings {
-            method: Method::Ispm,
-            photons: 20_000,
-            spp: 1,
-            seed,
-            first_bounce,
-            ..Default::default()
-        };
+        let settings = gi_core::options!(Ispm, photons: 20_000, spp: 1, seed: seed, first_bounce: first_bounce);
         let out = render(&scene, &settings, &Silent).unwrap();
         assert_eq!(out.stats.first_bounce, first_bounce.name());
         out.radiance.mean().element_sum() as f64

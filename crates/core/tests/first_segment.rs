@@ -2,13 +2,13 @@
 //! from the light, re-cast on the CPU, gives photons whose first scattering was a mirror the
 //! footprint a full CPU trace gives them (issue 11), instead of a zero footprint.
 
+use gi_core::frame::gather::gather_trace_settings;
 use gi_core::photon::trace::{continue_paths_from, emit_and_trace_focused, Checked, FirstSegment};
 use gi_core::photon::{focus::Focus, PathKind, PhotonRay};
-use gi_core::render::{gather_trace_settings, Silent};
 use gi_core::sampling::{uniform_sphere, Rng};
 use gi_core::scene::builtin;
 use gi_core::trace::{Interaction, SceneBvh};
-use gi_core::{Method, Settings};
+use gi_core::Silent;
 
 fn median(mut v: Vec<f32>) -> f32 {
     v.sort_by(f32::total_cmp);
@@ -20,12 +20,7 @@ fn recast_first_segment_matches_a_full_trace() {
     let scene = builtin::load("caustic-ring").unwrap();
     let bvh = SceneBvh::build(&scene);
     let n = 200_000u64;
-    let settings = Settings {
-        method: Method::Gather,
-        photons: n,
-        max_depth: 2,
-        ..Default::default()
-    };
+    let settings = gi_core::options!(Gather, photons: n, max_depth: 2);
     let pts = gather_trace_settings(&scene, &settings);
     let light = scene.lights[0].position();
     // The mirror bounces a bounce map would hand over: first hits on the ring, reflected.

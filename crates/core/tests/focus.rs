@@ -2,13 +2,14 @@
 //! mirrors and glass; caustic photons become more frequent and the power they carry is
 //! unchanged in expectation.
 
+use gi_core::frame::gather::gather_trace_settings;
 use gi_core::photon::focus::Focus;
 use gi_core::photon::trace::{emit_and_trace_focused, Checked};
 use gi_core::photon::PathKind;
-use gi_core::render::{gather_trace_settings, Silent};
 use gi_core::scene::builtin;
 use gi_core::trace::SceneBvh;
-use gi_core::{Method, Settings};
+use gi_core::Method;
+use gi_core::Silent;
 use glam::DVec3;
 
 /// Per run of `n` photons: caustic photons stored, and the caustic power per chunk of
@@ -16,11 +17,7 @@ use glam::DVec3;
 fn caustics(focus: f32, n: u64, seed: u64) -> (u64, Vec<DVec3>) {
     let scene = builtin::load("cornell-glass").unwrap();
     let bvh = SceneBvh::build(&scene);
-    let settings = Settings {
-        method: Method::Gather,
-        photons: n,
-        ..Default::default()
-    };
+    let settings = gi_core::options!(Gather, photons: n);
     let pts = gather_trace_settings(&scene, &settings);
     let f = Focus::of_scene(&scene, focus);
     let mut count = 0;
@@ -95,15 +92,13 @@ fn ispm_frames(focus: f32, seeds: std::ops::Range<u64>) -> (u64, u64, Vec<f64>) 
     let scene = builtin::load("cornell-glass").unwrap();
     let (mut caustic, mut emitted, mut means) = (0, 0, Vec::new());
     for seed in seeds {
-        let settings = Settings {
-            method: Method::Ispm,
-            width: Some(48),
-            height: Some(48),
-            photons: 50_000,
-            photon_focus: focus,
-            seed,
-            ..Settings::for_method(Method::Ispm)
-        };
+        let settings = gi_core::RenderOptions::defaults(Method::Ispm)
+            .with_method(gi_core::Method::Ispm)
+            .with("width", 48)
+            .with("height", 48)
+            .with("photons", 50_000)
+            .with("photon_focus", focus)
+            .with("seed", seed);
         let out = gi_core::render(&scene, &settings, &Silent).unwrap();
         caustic += out.stats.caustic_photons;
         emitted += out.stats.photons_emitted;
@@ -129,14 +124,12 @@ fn ispm_focusing_multiplies_caustic_photons_and_keeps_the_image_mean() {
     let scene = builtin::load("cornell-glass").unwrap();
     let reference: f64 = (0..2)
         .map(|seed| {
-            let s = Settings {
-                method: Method::Path,
-                width: Some(48),
-                height: Some(48),
-                spp: 64,
-                seed,
-                ..Settings::for_method(Method::Path)
-            };
+            let s = gi_core::RenderOptions::defaults(Method::Path)
+                .with_method(gi_core::Method::Path)
+                .with("width", 48)
+                .with("height", 48)
+                .with("spp", 64)
+                .with("seed", seed);
             let out = gi_core::render(&scene, &s, &Silent).unwrap();
             out.radiance.mean().as_dvec3().element_sum() / 2.0
         })

@@ -6,23 +6,20 @@
 use gi_core::estimate::Estimator;
 use gi_core::frame::{FrameDesc, Images, Renderer};
 use gi_core::gpu::alloc::counters;
-use gi_core::render::Silent;
 use gi_core::scene::desc::{CameraDesc, LightDesc};
 use gi_core::scene::{builtin, SceneUpdate};
-use gi_core::{render, Image, Method, RenderOutput, Scene, Settings};
+use gi_core::Silent;
+use gi_core::{render, Image, Method, RenderOutput, Scene};
 use glam::{Mat4, Vec3};
 
-fn settings(method: Method) -> Settings {
-    Settings {
-        method,
-        width: Some(40),
-        height: Some(30),
-        spp: 4,
-        photons: 6_000,
-        k: 20,
-        max_depth: 4,
-        ..Default::default()
-    }
+fn settings(method: Method) -> gi_core::RenderOptions {
+    gi_core::RenderOptions::defaults(method)
+        .with("width", 40)
+        .with("height", 30)
+        .with("spp", 4)
+        .with("photons", 6_000)
+        .with("k", 20)
+        .with("max_depth", 4)
 }
 
 /// The light moved and dimmed, the camera turned, the last object (the tall box) moved.
@@ -121,13 +118,11 @@ fn steady_state_creates_nothing_and_uploads_what_changed() {
     let scene = builtin::load("cornell").expect("scene");
     // Auto on lavapipe: the first bounce traced and the estimate on the CPU; then the
     // rasterized bounce maps and the tiled estimator.
-    let raster = Settings {
-        first_bounce: gi_core::render::FirstBounce::Raster,
-        estimator: gi_core::estimate::Estimator::Tiled,
-        ..settings(Method::Ispm)
-    };
+    let raster = settings(Method::Ispm)
+        .with("first_bounce", gi_core::frame::options::FirstBounce::Raster)
+        .with("estimator", gi_core::estimate::Estimator::Tiled);
     for s in [settings(Method::Direct), settings(Method::Ispm), raster] {
-        let method = s.method;
+        let method = s.method();
         let mut r = Renderer::new(&scene, &s).expect("renderer");
         let frame = FrameDesc::default();
         r.render(&frame, &Silent).expect("first frame");
@@ -301,17 +296,12 @@ fn animation_frames_equal_one_shot_poses() {
 #[test]
 fn temporal_reuse_converges_on_a_still_scene() {
     let scene = builtin::load("cornell").expect("scene");
-    let s = Settings {
-        temporal_frames: 8,
-        photons: 3_000,
-        ..settings(Method::Ispm)
-    };
+    let s = settings(Method::Ispm)
+        .with("temporal_frames", 8)
+        .with("photons", 3_000);
     let reference = render(
         &scene,
-        &Settings {
-            photons: 3_000 * 64,
-            ..settings(Method::Ispm)
-        },
+        &settings(Method::Ispm).with("photons", 3_000 * 64),
         &Silent,
     )
     .expect("reference");
@@ -397,10 +387,7 @@ fn cancelled_frame_leaves_the_renderer_consistent() {
 #[test]
 fn light_only_frames_reuse_the_specular_landings() {
     let scene = builtin::load("cornell-glass").expect("scene");
-    let s = Settings {
-        spp: 16,
-        ..settings(Method::Ispm)
-    };
+    let s = settings(Method::Ispm).with("spp", 16);
     let mut r = Renderer::new(&scene, &s).expect("renderer");
     let first = r.render(&all(), &Silent).expect("frame 0");
     assert!(
@@ -438,11 +425,9 @@ fn light_only_frames_reuse_the_specular_landings() {
 #[test]
 fn light_only_frames_reuse_the_view_samples() {
     let scene = builtin::load("cornell").expect("scene");
-    let s = Settings {
-        subsample: 2,
-        estimator: Estimator::Cpu,
-        ..settings(Method::Ispm)
-    };
+    let s = settings(Method::Ispm)
+        .with("subsample", 2)
+        .with("estimator", Estimator::Cpu);
     let read_back = |o: &RenderOutput| o.stats.stages.iter().any(|(n, _)| n == "gbuffer readback");
     let same_as_one_shot = |frame: &RenderOutput, posed: &Scene| {
         let one_shot = render(posed, &s, &Silent).expect("one-shot");
@@ -471,10 +456,7 @@ fn light_only_frames_reuse_the_view_samples() {
 #[test]
 fn serial_frames_equal_overlapped_frames() {
     let scene = builtin::load("cornell-glass").expect("scene");
-    let s = Settings {
-        subsample: 2,
-        ..settings(Method::Ispm)
-    };
+    let s = settings(Method::Ispm).with("subsample", 2);
     let frame = |serial: bool| {
         let mut r = Renderer::new(&scene, &s).expect("renderer");
         let desc = FrameDesc { serial, ..all() };

@@ -3,7 +3,7 @@
 //! indirect irradiance, so the outgoing radiance with all bounces is
 //! L = ρ·I / (π·R²·(1 − ρ)).
 
-use gi_core::{render, scene::builtin, Method, Scene, Settings};
+use gi_core::{render, scene::builtin, Scene};
 use std::collections::HashMap;
 
 fn furnace(albedo: f32, intensity: f32, radius: f32) -> Scene {
@@ -18,15 +18,8 @@ fn furnace(albedo: f32, intensity: f32, radius: f32) -> Scene {
 fn check(albedo: f32) {
     let (i, r) = (2.0f32, 1.0f32);
     let scene = furnace(albedo, i, r);
-    let settings = Settings {
-        method: Method::Path,
-        spp: 32,
-        width: Some(48),
-        height: Some(48),
-        seed: 7,
-        ..Default::default()
-    };
-    let out = render(&scene, &settings, &gi_core::render::Silent).unwrap();
+    let settings = gi_core::options!(Path, spp: 32, width: 48, height: 48, seed: 7);
+    let out = render(&scene, &settings, &gi_core::Silent).unwrap();
     let expected = albedo * i / (std::f32::consts::PI * r * r * (1.0 - albedo));
     let mean = out.radiance.mean();
     // 1% is the bound. Error budget: the geodesic sphere (20480 flat faces) is

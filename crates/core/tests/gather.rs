@@ -2,10 +2,10 @@
 //! truth: the analytic furnace and the reference path tracer.
 
 use gi_core::photon::{emit_and_trace, PathKind};
-use gi_core::render::{render, Silent};
 use gi_core::scene::builtin;
 use gi_core::trace::SceneBvh;
-use gi_core::{Image, Method, Settings};
+use gi_core::Image;
+use gi_core::{render, Silent};
 
 fn block_means(img: &Image, block: u32) -> Vec<glam::Vec3> {
     let (bw, bh) = (img.width / block, img.height / block);
@@ -21,14 +21,7 @@ fn block_means(img: &Image, block: u32) -> Vec<glam::Vec3> {
 #[test]
 fn furnace_matches_analytic() {
     let scene = builtin::load("furnace").unwrap();
-    let s = Settings {
-        method: Method::Gather,
-        spp: 1,
-        width: Some(32),
-        height: Some(32),
-        photons: 200_000,
-        ..Default::default()
-    };
+    let s = gi_core::options!(Gather, spp: 1, width: 32, height: 32, photons: 200_000);
     let out = render(&scene, &s, &Silent).unwrap();
     // L = ρI/(πR²(1−ρ)) = 1/π for ρ = 0.5, I = R = 1. Direct light is exact (NEE); the
     // indirect half carries the photon noise (~0.3% for the image mean) and the footprint
@@ -50,22 +43,9 @@ fn furnace_matches_analytic() {
 fn cornell_matches_reference() {
     let scene = builtin::load("cornell").unwrap();
     let size = (Some(48), Some(48));
-    let reference = Settings {
-        spp: 512,
-        width: size.0,
-        height: size.1,
-        seed: 9,
-        ..Default::default()
-    };
+    let reference = gi_core::options!(Path, spp: 512, width: size.0, height: size.1, seed: 9);
     let reference = render(&scene, &reference, &Silent).unwrap().radiance;
-    let s = Settings {
-        method: Method::Gather,
-        spp: 16,
-        width: size.0,
-        height: size.1,
-        photons: 400_000,
-        ..Default::default()
-    };
+    let s = gi_core::options!(Gather, spp: 16, width: size.0, height: size.1, photons: 400_000);
     let out = render(&scene, &s, &Silent).unwrap().radiance;
     // Mean relative error over 8×8-pixel blocks, per channel: 3% (the bound;
     // measured 1.4–1.6% with the scale-free compression of diffuse footprints, 1.6–1.8% with
@@ -88,14 +68,11 @@ fn cornell_matches_reference() {
 fn caustic_footprints_follow_focusing() {
     let scene = builtin::load("caustic-ring").unwrap();
     let bvh = SceneBvh::build(&scene);
-    let s = Settings {
-        method: Method::Gather,
-        photons: 200_000,
-        ..Default::default()
-    };
-    let mut ts = gi_core::render::gather_trace_settings(&scene, &s);
+    let photons = 200_000;
+    let s = gi_core::options!(Gather, photons: photons);
+    let mut ts = gi_core::frame::gather::gather_trace_settings(&scene, &s);
     ts.store_direct = true;
-    let set = emit_and_trace(&scene, &bvh, s.photons, &ts, 1);
+    let set = emit_and_trace(&scene, &bvh, photons, &ts, 1);
     let percentiles = |kind: PathKind| {
         let mut r: Vec<f32> = set
             .photons
@@ -134,12 +111,8 @@ fn caustic_footprints_follow_focusing() {
 /// Photons of `scene` traced as method `gather` does, with direct hits stored too.
 fn trace_footprints(scene: &gi_core::Scene, photons: u64, seed: u64) -> gi_core::photon::PhotonSet {
     let bvh = SceneBvh::build(scene);
-    let s = Settings {
-        method: Method::Gather,
-        photons,
-        ..Default::default()
-    };
-    let mut ts = gi_core::render::gather_trace_settings(scene, &s);
+    let s = gi_core::options!(Gather, photons: photons);
+    let mut ts = gi_core::frame::gather::gather_trace_settings(scene, &s);
     ts.store_direct = true;
     emit_and_trace(scene, &bvh, photons, &ts, seed)
 }

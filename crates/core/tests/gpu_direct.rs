@@ -18,8 +18,8 @@
 
 mod common;
 
-use gi_core::render::Silent;
-use gi_core::{render, scene::builtin, Error, Method, RenderOutput, Scene, Settings};
+use gi_core::Silent;
+use gi_core::{render, scene::builtin, Error, Method, RenderOutput, Scene};
 use std::collections::HashMap;
 
 const SIZE: u32 = 64;
@@ -47,16 +47,13 @@ const SPOT_SCENE: &str = r#"{
   ]
 }"#;
 
-fn settings(method: Method, spp: u32) -> Settings {
-    Settings {
-        method,
-        spp,
-        width: Some(SIZE),
-        height: Some(SIZE),
-        seed: 3,
-        max_depth: 1,
-        ..Default::default()
-    }
+fn settings(method: Method, spp: u32) -> gi_core::RenderOptions {
+    gi_core::RenderOptions::defaults(method)
+        .with("spp", spp)
+        .with("width", SIZE)
+        .with("height", SIZE)
+        .with("seed", 3)
+        .with("max_depth", 1)
 }
 
 fn compare(name: &str, scene: &Scene) {
@@ -163,10 +160,7 @@ fn spot_scene_matches_path_tracer() {
 #[test]
 fn direct_reports_stages() {
     let scene = builtin::load("cornell").expect("built-in scene");
-    let s = Settings {
-        shadow_map_size: 256,
-        ..settings(Method::Direct, 4)
-    };
+    let s = settings(Method::Direct, 4).with("shadow_map_size", 256);
     let out = render(&scene, &s, &Silent).expect("direct render");
     let names: Vec<_> = out.stats.stages.iter().map(|(n, _)| n.as_str()).collect();
     let timed = gi_core::gpu::context(None).expect("adapter").timestamps;
@@ -188,10 +182,7 @@ fn direct_reports_stages() {
 #[test]
 fn bad_adapter_is_a_gpu_error() {
     let scene = builtin::load("cornell").expect("built-in scene");
-    let s = Settings {
-        adapter: Some("no-such-adapter-42".into()),
-        ..settings(Method::Direct, 1)
-    };
+    let s = settings(Method::Direct, 1).with("adapter", "no-such-adapter-42");
     match render(&scene, &s, &Silent) {
         Err(Error::Gpu(msg)) => assert!(msg.contains("mesa-vulkan-drivers"), "{msg}"),
         other => panic!("expected Error::Gpu, got {:?}", other.map(|_| ())),
@@ -210,10 +201,7 @@ fn bad_adapter_is_a_gpu_error() {
 #[test]
 fn bad_shadow_map_size_is_a_setting_error() {
     let scene = builtin::load("cornell").expect("built-in scene");
-    let s = Settings {
-        shadow_map_size: 3,
-        ..settings(Method::Direct, 1)
-    };
+    let s = settings(Method::Direct, 1).with("shadow_map_size", 3);
     assert!(matches!(
         render(&scene, &s, &Silent),
         Err(Error::Setting {
@@ -228,11 +216,11 @@ fn bad_shadow_map_size_is_a_setting_error() {
 #[test]
 fn samples_across_submissions() {
     let scene = builtin::load("cornell").expect("built-in scene");
-    let small = |spp| Settings {
-        width: Some(24),
-        height: Some(24),
-        shadow_map_size: 512,
-        ..settings(Method::Direct, spp)
+    let small = |spp| {
+        settings(Method::Direct, spp)
+            .with("width", 24)
+            .with("height", 24)
+            .with("shadow_map_size", 512)
     };
     let a = render(&scene, &small(300), &Silent).expect("direct render");
     let b = render(&scene, &small(256), &Silent).expect("direct render");

@@ -10,7 +10,8 @@
 //! still agree to rounding. 8-bit sources are not involved: images arrive as floats.
 
 use gi_core::gpu;
-use gi_core::raster::{textures::GpuTextures, Passes};
+use gi_core::gpu::Pipelines;
+use gi_core::raster::textures::{GpuTextures, TexturesLayout};
 use gi_core::sampling::Rng;
 use gi_core::scene::TextureMap;
 use gi_core::texture::Texture;
@@ -114,7 +115,7 @@ fn wgsl_texture_lookup_matches_cpu() {
 fn gpu_sample(scene: &Scene, queries: &[(u32, Vec2, f32)]) -> Vec<Vec4> {
     let ctx = gpu::context(None).expect("a GPU adapter (lavapipe in CI)");
     let device = &ctx.device;
-    let textures_layout = &Passes::get(&ctx).textures;
+    let textures_layout = &TexturesLayout::get(&ctx).layout;
     let textures = GpuTextures::new(&ctx, scene, textures_layout).unwrap();
     let raw: Vec<QueryRaw> = queries
         .iter()

@@ -7,9 +7,10 @@
 
 mod common;
 
-use gi_core::raster::ispm::render_bounce_map;
-use gi_core::render::{Silent, VolumeShape};
-use gi_core::{render, scene::builtin, Method, RenderOutput, Scene, Settings};
+use gi_core::frame::options::IspmOptions;
+use gi_core::frame::options::VolumeShape;
+use gi_core::{render, scene::builtin, Method, RenderOutput, Scene};
+use gi_core::{MethodOptions, RenderOptions, Silent};
 use glam::DVec3;
 use std::f64::consts::PI;
 
@@ -21,22 +22,14 @@ fn mean(img: &gi_core::image::Image) -> DVec3 {
     img.pixels.iter().map(|p| p.as_dvec3()).sum::<DVec3>() / img.pixels.len() as f64
 }
 
-fn run(scene: &Scene, s: &Settings) -> RenderOutput {
+fn run(scene: &Scene, s: &gi_core::RenderOptions) -> RenderOutput {
     render(scene, s, &Silent).expect("render")
 }
 
 /// ISPM at full-resolution splats (subsample 1): the accuracy tests measure the estimator,
 /// the subsampled path has its own comparison.
-fn ispm_settings(size: u32) -> Settings {
-    Settings {
-        method: Method::Ispm,
-        subsample: 1,
-        spp: 1,
-        width: Some(size),
-        height: Some(size),
-        seed: 7,
-        ..Default::default()
-    }
+fn ispm_settings(size: u32) -> gi_core::RenderOptions {
+    gi_core::options!(Ispm, subsample: 1, spp: 1, width: size, height: size, seed: 7)
 }
 
 /// Furnace (ρ = 0.5, I = 1, R = 1): indirect radiance = ρE0/(π(1−ρ)) − ρE0/π = 0.5/π.
@@ -45,13 +38,7 @@ fn furnace_indirect_matches_analytic() {
     let scene = load("furnace");
     let s = ispm_settings(48);
     let ispm = run(&scene, &s);
-    let direct = run(
-        &scene,
-        &Settings {
-            method: Method::Direct,
-            ..s.clone()
-        },
-    );
+    let direct = run(&scene, &s.clone().with_method(gi_core::Method::Direct));
     let indirect = mean(&ispm.radiance) - mean(&direct.radiance);
     let expected = 0.5 / PI;
     eprintln!(
@@ -72,11 +59,8 @@ fn furnace_indirect_matches_analytic() {
 #[test]
 fn bounce_map_power_bookkeeping() {
     let scene = load("furnace");
-    let s = Settings {
-        photons: 100_000,
-        ..ispm_settings(16)
-    };
-    let bm = render_bounce_map(&scene, &s).expect("bounce map");
+    let s = ispm_settings(16).with("photons", 100_000);
+    let bm = gi_core::frame::bounce_map(&scene, &s).expect("bounce map");
     let power = 4.0 * PI;
     eprintln!(
         "texels {} covered {} incident {:?} scattered {:?} expected {:?} rays {}",
@@ -188,19 +172,13 @@ fn cornell_matches_path_tracer() {
     let size = 48;
     let ispm = run(
         &scene,
-        &Settings {
-            photons: 400_000,
-            spp: 4,
-            ..ispm_settings(size)
-        },
+        &ispm_settings(size).with("photons", 400_000).with("spp", 4),
     );
     let path = run(
         &scene,
-        &Settings {
-            method: Method::Path,
-            spp: 512,
-            ..ispm_settings(size)
-        },
+        &ispm_settings(size)
+            .with_method(gi_core::Method::Path)
+            .with("spp", 512),
     );
     let (a, b) = (mean(&ispm.radiance), mean(&path.radiance));
     let rel = (a / b - DVec3::ONE).abs();
@@ -246,11 +224,9 @@ fn cornell_matches_path_tracer() {
     // 6%: both images carry their own kernel noise at 48×48).
     let sub = run(
         &scene,
-        &Settings {
-            subsample: 2,
-            photons: 400_000,
-            ..ispm_settings(size)
-        },
+        &ispm_settings(size)
+            .with("subsample", 2)
+            .with("photons", 400_000),
     );
     let c = mean(&sub.radiance);
     let rel2 = (c / b - DVec3::ONE).abs();
@@ -284,23 +260,17 @@ struct CausticRenders {
     select: RenderOutput,
 }
 
-fn caustic_renders(scene: &Scene, s: &Settings, path_spp: u32) -> CausticRenders {
-    let with = |method, seed| Settings {
-        method,
-        spp: path_spp,
-        seed,
-        ..s.clone()
+fn caustic_renders(scene: &Scene, s: &gi_core::RenderOptions, path_spp: u32) -> CausticRenders {
+    let with = |method, seed| {
+        s.clone()
+            .with_method(method)
+            .with("spp", path_spp)
+            .with("seed", seed)
     };
     CausticRenders {
         ispm: run(scene, s),
-        direct: run(
-            scene,
-            &Settings {
-                method: Method::Direct,
-                ..s.clone()
-            },
-        ),
-        path: run(scene, &with(Method::Path, s.seed)),
+        direct: run(scene, &s.clone().with_method(gi_core::Method::Direct)),
+        path: run(scene, &with(Method::Path, s.common.seed)),
         select: run(scene, &with(Method::Path, 1234)),
     }
 }
@@ -335,10 +305,7 @@ fn brightest_caustic(select: &RenderOutput, region: &[bool], percentile: usize) 
 fn caustic_ring_is_brighter_than_surroundings() {
     let scene = load("caustic-ring");
     let size = 96;
-    let s = Settings {
-        photons: 400_000,
-        ..ispm_settings(size)
-    };
+    let s = ispm_settings(size).with("photons", 400_000);
     let CausticRenders {
         ispm,
         direct,
@@ -375,26 +342,20 @@ fn caustic_ring_is_brighter_than_surroundings() {
 #[test]
 fn ispm_settings_are_validated() {
     assert_eq!("ispm".parse::<Method>().ok(), Some(Method::Ispm));
-    let ok = Settings::default();
-    assert_eq!((ok.kernel_scale, ok.subsample), (1.0, 2));
+    let defaults = IspmOptions::default();
+    let ok = RenderOptions::of(MethodOptions::Ispm(defaults.clone()));
+    assert_eq!((defaults.kernel_scale, defaults.subsample), (1.0, 2));
     assert!(ok.validate().is_ok());
+    let with = |change: fn(&mut IspmOptions)| {
+        let mut o = defaults.clone();
+        change(&mut o);
+        RenderOptions::of(MethodOptions::Ispm(o))
+    };
     for bad in [
-        Settings {
-            subsample: 0,
-            ..ok.clone()
-        },
-        Settings {
-            subsample: 9,
-            ..ok.clone()
-        },
-        Settings {
-            kernel_scale: 0.0,
-            ..ok.clone()
-        },
-        Settings {
-            kernel_scale: f32::NAN,
-            ..ok.clone()
-        },
+        with(|o| o.subsample = 0),
+        with(|o| o.subsample = 9),
+        with(|o| o.kernel_scale = 0.0),
+        with(|o| o.kernel_scale = f32::NAN),
     ] {
         assert!(matches!(
             bad.validate(),
@@ -406,10 +367,7 @@ fn ispm_settings_are_validated() {
 /// A photon budget whose bounce maps would not fit is a setting error, not a crash.
 #[test]
 fn huge_photon_budget_is_a_setting_error() {
-    let s = Settings {
-        photons: 900_000_000,
-        ..ispm_settings(8)
-    };
+    let s = ispm_settings(8).with("photons", 900_000_000);
     let e = render(&load("cornell"), &s, &Silent).err();
     assert!(matches!(e, Some(gi_core::Error::Setting { .. })), "{e:?}");
 }
@@ -421,27 +379,16 @@ fn huge_photon_budget_is_a_setting_error() {
 #[test]
 fn footprint_sized_volumes_match_furnace() {
     let scene = gi_core::scene::builtin::load("furnace").unwrap();
-    let base = Settings {
-        spp: 1,
-        width: Some(32),
-        height: Some(32),
-        photons: 100_000,
-        ..Default::default()
-    };
+    let base = gi_core::options!(Path, spp: 1, width: 32, height: 32, photons: 100_000);
     let direct = gi_core::render(
         &scene,
-        &Settings {
-            method: Method::Direct,
-            ..base.clone()
-        },
+        &base.clone().with_method(gi_core::Method::Direct),
         &Silent,
     )
     .unwrap();
-    let ispm = Settings {
-        method: Method::Ispm,
-        footprint_volumes: true,
-        ..base
-    };
+    let ispm = base
+        .with_method(gi_core::Method::Ispm)
+        .with("footprint_volumes", true);
     let out = gi_core::render(&scene, &ispm, &Silent).unwrap();
     let indirect = (out.radiance.mean() - direct.radiance.mean()).x;
     let expected = 0.5 / std::f32::consts::PI;
@@ -464,10 +411,7 @@ fn footprint_sized_volumes_match_furnace() {
 fn cornell_glass_caustic_and_specular_surfaces() {
     let scene = load("cornell-glass");
     let size = 128;
-    let s = Settings {
-        photons: 400_000,
-        ..ispm_settings(size)
-    };
+    let s = ispm_settings(size).with("photons", 400_000);
     let CausticRenders {
         ispm,
         direct,
@@ -524,14 +468,16 @@ fn cornell_glass_caustic_and_specular_surfaces() {
 
 /// The indirect AOV of `s` with volume shape `shape`, and (stored photons, volumes drawn as
 /// quads).
-fn indirect_with(scene: &Scene, s: &Settings, shape: VolumeShape) -> (gi_core::Image, (u64, u64)) {
+fn indirect_with(
+    scene: &Scene,
+    s: &gi_core::RenderOptions,
+    shape: VolumeShape,
+) -> (gi_core::Image, (u64, u64)) {
     let out = run(
         scene,
-        &Settings {
-            volume_shape: shape,
-            estimator: gi_core::estimate::Estimator::Volumes,
-            ..s.clone()
-        },
+        &s.clone()
+            .with("volume_shape", shape)
+            .with("estimator", gi_core::estimate::Estimator::Volumes),
     );
     let counts = (out.stats.photons_stored, out.stats.volume_quads);
     let img = out
@@ -581,12 +527,10 @@ fn volume_shapes_give_the_same_image() {
     ];
     for (name, size, subsample, kernel_scale) in cases {
         let scene = load(name);
-        let s = Settings {
-            photons: 50_000,
-            subsample,
-            kernel_scale,
-            ..ispm_settings(size)
-        };
+        let s = ispm_settings(size)
+            .with("photons", 50_000)
+            .with("subsample", subsample)
+            .with("kernel_scale", kernel_scale);
         let (ico, _) = indirect_with(&scene, &s, VolumeShape::Icosahedron);
         let (quad, _) = indirect_with(&scene, &s, VolumeShape::Quad);
         let (auto, quads) = indirect_with(&scene, &s, VolumeShape::Auto);
@@ -620,10 +564,7 @@ fn volume_shapes_give_the_same_image() {
         if name == "cornell" && size == 64 && subsample == 1 {
             let (smaller, _) = indirect_with(
                 &scene,
-                &Settings {
-                    kernel_scale: 0.97,
-                    ..s.clone()
-                },
+                &s.clone().with("kernel_scale", 0.97),
                 VolumeShape::Quad,
             );
             let d = max_difference(&smaller, &ico, scale);
@@ -635,7 +576,10 @@ fn volume_shapes_give_the_same_image() {
 
 #[test]
 fn volume_shape_setting_parses() {
-    assert_eq!(Settings::default().volume_shape, VolumeShape::Auto);
+    assert_eq!(
+        gi_core::frame::options::IspmOptions::default().volume_shape,
+        VolumeShape::Auto
+    );
     assert_eq!("quad".parse::<VolumeShape>().ok(), Some(VolumeShape::Quad));
     let e = "cube".parse::<VolumeShape>().err();
     assert!(
@@ -654,11 +598,9 @@ fn volume_shape_setting_parses() {
 fn upsampling_gives_mirrors_no_indirect_light() {
     use gi_core::trace::SceneBvh;
     let scene = load("caustic-ring");
-    let s = Settings {
-        subsample: 2,
-        photons: 50_000,
-        ..ispm_settings(48)
-    };
+    let s = ispm_settings(48)
+        .with("subsample", 2)
+        .with("photons", 50_000);
     let out = run(&scene, &s);
     let indirect = &out
         .aovs
@@ -730,11 +672,9 @@ fn upsampling_keeps_texture_detail_in_indirect_light() {
     )
     .expect("scene");
     let indirect = |subsample: u32| {
-        let s = Settings {
-            subsample,
-            photons: 100_000,
-            ..ispm_settings(96)
-        };
+        let s = ispm_settings(96)
+            .with("subsample", subsample)
+            .with("photons", 100_000);
         let out = run(&scene, &s);
         out.aovs
             .into_iter()

@@ -4,10 +4,10 @@
 //! bounce limit, so the power stored at each bounce is known from the scatter probabilities.
 
 use gi_core::photon::{continue_paths, emit_and_trace, PhotonRay, PhotonSet, PhotonTraceSettings};
-use gi_core::render::Silent;
 use gi_core::scene::builtin;
 use gi_core::trace::{Interaction, SceneBvh};
-use gi_core::{render, Error, Method, Scene, Settings};
+use gi_core::Silent;
+use gi_core::{render, Error, Method, Scene};
 use glam::{DVec3, Vec3};
 use std::collections::HashMap;
 
@@ -221,11 +221,7 @@ fn continue_paths_from_rays() {
 fn absurd_photon_counts_are_rejected() {
     let scene = furnace(0.5, 1.0);
     for photons in [0, 2_000_000_000] {
-        let s = Settings {
-            method: Method::Photon,
-            photons,
-            ..Default::default()
-        };
+        let s = gi_core::options!(Photon, photons: photons);
         assert!(matches!(
             render(&scene, &s, &Silent),
             Err(Error::Setting {
@@ -234,11 +230,7 @@ fn absurd_photon_counts_are_rejected() {
             })
         ));
     }
-    let s = Settings {
-        method: Method::Photon,
-        k: 0,
-        ..Default::default()
-    };
+    let s = gi_core::options!(Photon, k: 0);
     assert!(matches!(
         render(&scene, &s, &Silent),
         Err(Error::Setting { name: "k", .. })
@@ -254,15 +246,8 @@ fn absurd_photon_counts_are_rejected() {
 fn photon_furnace_matches_analytic() {
     let (rho, i) = (0.5f32, 2.0f32);
     let scene = furnace(rho, i);
-    let settings = Settings {
-        method: Method::Photon,
-        spp: 1,
-        width: Some(32),
-        height: Some(32),
-        photons: 200_000,
-        seed: 3,
-        ..Default::default()
-    };
+    let settings =
+        gi_core::options!(Photon, spp: 1, width: 32, height: 32, photons: 200_000, seed: 3);
     let out = render(&scene, &settings, &Silent).unwrap();
     let expected = rho * i / (std::f32::consts::PI * (1.0 - rho));
     let mean = out.radiance.mean();
@@ -310,24 +295,10 @@ fn block_error(a: &gi_core::Image, b: &gi_core::Image, n: u32) -> Vec3 {
 fn photon_cornell_matches_path() {
     let scene = builtin::load("cornell").unwrap();
     let size = Some(64);
-    let reference = Settings {
-        method: Method::Path,
-        spp: 256,
-        width: size,
-        height: size,
-        seed: 1,
-        ..Default::default()
-    };
+    let reference = gi_core::options!(Path, spp: 256, width: size, height: size, seed: 1);
     let reference = render(&scene, &reference, &Silent).unwrap();
-    let photon = Settings {
-        method: Method::Photon,
-        spp: 4,
-        width: size,
-        height: size,
-        photons: 1_000_000,
-        seed: 2,
-        ..Default::default()
-    };
+    let photon =
+        gi_core::options!(Photon, spp: 4, width: size, height: size, photons: 1_000_000, seed: 2);
     let photon = render(&scene, &photon, &Silent).unwrap();
     println!("photon stages {:?}", photon.stats.stages);
     let (a, b) = (photon.radiance.mean(), reference.radiance.mean());
@@ -352,24 +323,10 @@ fn photon_cornell_matches_path() {
 fn photon_cornell_glass_matches_path() {
     let scene = builtin::load("cornell-glass").unwrap();
     let size = Some(48);
-    let reference = Settings {
-        method: Method::Path,
-        spp: 128,
-        width: size,
-        height: size,
-        seed: 1,
-        ..Default::default()
-    };
+    let reference = gi_core::options!(Path, spp: 128, width: size, height: size, seed: 1);
     let reference = render(&scene, &reference, &Silent).unwrap();
-    let photon = Settings {
-        method: Method::Photon,
-        spp: 4,
-        width: size,
-        height: size,
-        photons: 500_000,
-        seed: 2,
-        ..Default::default()
-    };
+    let photon =
+        gi_core::options!(Photon, spp: 4, width: size, height: size, photons: 500_000, seed: 2);
     let photon = render(&scene, &photon, &Silent).unwrap();
     assert!(photon
         .radiance

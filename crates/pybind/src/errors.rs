@@ -1,7 +1,7 @@
 //! Python exception types and the mapping from `gi_core::Error`.
 
 use pyo3::create_exception;
-use pyo3::exceptions::{PyException, PyMemoryError};
+use pyo3::exceptions::{PyException, PyMemoryError, PyUserWarning};
 use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
 use pyo3::types::{PyDict, PyType};
@@ -42,6 +42,14 @@ create_exception!(
     RenderCancelled,
     GiError,
     "The render was cancelled (progress callback or Ctrl-C)."
+);
+
+create_exception!(
+    _gi,
+    RenderWarning,
+    PyUserWarning,
+    "A render does not compute what it was asked for: an option the method ignores, or light \
+     transport it leaves out."
 );
 
 /// `OutOfMemoryError(GiError, MemoryError)`, made when the module is registered (a class
@@ -122,6 +130,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("GpuError", py.get_type::<GpuError>())?;
     m.add("RenderCancelled", py.get_type::<RenderCancelled>())?;
     m.add("InternalError", py.get_type::<InternalError>())?;
+    m.add("RenderWarning", py.get_type::<RenderWarning>())?;
     m.add("OutOfMemoryError", out_of_memory_type(py)?)?;
     Ok(())
 }

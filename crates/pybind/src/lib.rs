@@ -3,8 +3,10 @@
 
 mod errors;
 mod guard;
+mod options;
 mod render;
 mod scene;
+mod stats;
 
 use pyo3::prelude::*;
 
@@ -17,6 +19,8 @@ fn _gi(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<render::PyRenderer>()?;
     m.add_function(wrap_pyfunction!(render::gpu_counters, m)?)?;
     m.add_function(wrap_pyfunction!(render::methods, m)?)?;
+    m.add_function(wrap_pyfunction!(options::options, m)?)?;
+    m.add_class::<stats::PyStats>()?;
     m.add_function(wrap_pyfunction!(render::adapter_report, m)?)?;
     m.add_function(wrap_pyfunction!(render::footprint_radii, m)?)?;
     m.add_function(wrap_pyfunction!(guard::panic_for_tests, m)?)?;

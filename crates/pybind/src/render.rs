@@ -4,7 +4,7 @@ use crate::errors::to_py;
 use crate::scene::PyScene;
 use gi_core::frame::{FrameDesc, Images, Renderer};
 use gi_core::scene::update::UpdateTarget;
-use gi_core::{Image, Method, Settings};
+use gi_core::{Image, Method, MethodOptions, RenderOptions};
 use numpy::{IntoPyArray, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -26,138 +26,9 @@ fn setting_error(py: Python<'_>, name: &'static str, message: impl Into<String>)
     )
 }
 
-/// An integer setting of any Python size, range-checked into `T`.
-fn int<T: TryFrom<i128>>(v: &Bound<'_, PyAny>, name: &'static str) -> PyResult<T> {
-    let py = v.py();
-    if v.is_instance_of::<pyo3::types::PyBool>() {
-        return Err(setting_error(py, name, "must be an integer, not a bool"));
-    }
-    let i: i128 = v
-        .extract()
-        .map_err(|_| setting_error(py, name, format!("must be an integer, got {v}")))?;
-    T::try_from(i).map_err(|_| setting_error(py, name, format!("{i} is out of range")))
-}
-
-fn opt_int<T: TryFrom<i128>>(v: &Bound<'_, PyAny>, name: &'static str) -> PyResult<Option<T>> {
-    if v.is_none() {
-        Ok(None)
-    } else {
-        int(v, name).map(Some)
-    }
-}
-
-fn float(v: &Bound<'_, PyAny>, name: &'static str) -> PyResult<f32> {
-    let py = v.py();
-    let x: f64 = v
-        .extract()
-        .map_err(|_| setting_error(py, name, format!("must be a number, got {v}")))?;
-    if !x.is_finite() || x.abs() > f32::MAX as f64 {
-        return Err(setting_error(py, name, format!("must be finite, got {x}")));
-    }
-    Ok(x as f32)
-}
-
-fn flag(v: &Bound<'_, PyAny>, name: &'static str) -> PyResult<bool> {
-    v.extract()
-        .map_err(|_| setting_error(v.py(), name, format!("must be a bool, got {v}")))
-}
-
-fn text(v: &Bound<'_, PyAny>, name: &'static str) -> PyResult<String> {
-    v.extract()
-        .map_err(|_| setting_error(v.py(), name, format!("must be a string, got {v}")))
-}
-
-/// The settings of `method` from keyword arguments (the names of `gi.render`); defaults and
-/// validation are the core's (`Settings::default`, `Settings::validate`).
-pub fn settings_from(
-    py: Python<'_>,
-    method: &str,
-    kw: Option<&Bound<'_, PyDict>>,
-) -> PyResult<Settings> {
-    let mut s = Settings::for_method(method.parse().map_err(|e| to_py(py, e))?);
-    for (k, v) in kw.into_iter().flat_map(|d| d.iter()) {
-        let key: String = k.extract()?;
-        let v = &v;
-        match key.as_str() {
-            "spp" => {
-                if !v.is_none() {
-                    s.spp = int(v, "spp")?
-                }
-            }
-            "width" => s.width = opt_int(v, "width")?,
-            "height" => s.height = opt_int(v, "height")?,
-            "seed" => s.seed = int(v, "seed")?,
-            "max_depth" => s.max_depth = int(v, "max_depth")?,
-            "light_paths" => s.light_paths = opt_int(v, "light_paths")?,
-            "photons" => s.photons = int(v, "photons")?,
-            "k" => s.k = int(v, "k")?,
-            "max_radius" => {
-                s.max_radius = if v.is_none() {
-                    None
-                } else {
-                    Some(float(v, "max_radius")?)
-                }
-            }
-            "kernel" => s.kernel = text(v, "kernel")?.parse().map_err(|e| to_py(py, e))?,
-            "smoothing" => s.smoothing = float(v, "smoothing")?,
-            "leaf_size" => s.leaf_size = opt_int(v, "leaf_size")?,
-            "kernel_scale" => s.kernel_scale = float(v, "kernel_scale")?,
-            "subsample" => s.subsample = int(v, "subsample")?,
-            "footprint_volumes" => s.footprint_volumes = flag(v, "footprint_volumes")?,
-            "boundary_compensation" => s.boundary_compensation = flag(v, "boundary_compensation")?,
-            "edge_supersampling" => s.edge_supersampling = flag(v, "edge_supersampling")?,
-            "volume_shape" => {
-                s.volume_shape = text(v, "volume_shape")?.parse().map_err(|e| to_py(py, e))?
-            }
-            "estimator" => s.estimator = text(v, "estimator")?.parse().map_err(|e| to_py(py, e))?,
-            "first_bounce" => {
-                s.first_bounce = text(v, "first_bounce")?.parse().map_err(|e| to_py(py, e))?
-            }
-            "adapter" => {
-                s.adapter = if v.is_none() {
-                    None
-                } else {
-                    Some(text(v, "adapter")?)
-                }
-            }
-            "shadow_map_size" => s.shadow_map_size = int(v, "shadow_map_size")?,
-            "temporal_frames" => s.temporal_frames = int(v, "temporal_frames")?,
-            "progressive" => s.progressive = flag(v, "progressive")?,
-            "photon_focus" => s.photon_focus = float(v, "photon_focus")?,
-            "caustic_density_bound" => s.caustic_density_bound = flag(v, "caustic_density_bound")?,
-            "progressive_alpha" => s.progressive_alpha = float(v, "progressive_alpha")?,
-            "vpls_per_light" => s.vpls_per_light = int(v, "vpls_per_light")?,
-            "rsm_size" => s.rsm_size = int(v, "rsm_size")?,
-            "vpl_shadow_map_size" => s.vpl_shadow_map_size = int(v, "vpl_shadow_map_size")?,
-            "bundles" => s.bundles = int(v, "bundles")?,
-            "bundle_resolution" => s.bundle_resolution = int(v, "bundle_resolution")?,
-            "bundle_memory_mb" => s.bundle_memory_mb = int(v, "bundle_memory_mb")?,
-            "bidir_strategy" => {
-                s.bidir_strategy = text(v, "bidir_strategy")?
-                    .parse()
-                    .map_err(|e| to_py(py, e))?
-            }
-            "roughness_clamping" => s.roughness_clamping = flag(v, "roughness_clamping")?,
-            other => {
-                return Err(setting_error(
-                    py,
-                    "settings",
-                    format!("unknown setting `{other}`"),
-                ))
-            }
-        }
-    }
-    s.validate().map_err(|e| to_py(py, e))?;
-    Ok(s)
-}
-
 /// A frame as a dict of float32 arrays (radiance, albedo, normal, position, caustics:
 /// H×W×3, empty when not read back; depth: H×W), `extra` and `stats`.
-fn output_dict<'py>(
-    py: Python<'py>,
-    out: gi_core::RenderOutput,
-    method: Method,
-) -> PyResult<Bound<'py, PyDict>> {
+fn output_dict<'py>(py: Python<'py>, out: gi_core::RenderOutput) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     let (w, h) = (out.albedo.width as usize, out.albedo.height as usize);
     d.set_item("radiance", image_array(py, out.radiance)?)?;
@@ -171,32 +42,7 @@ fn output_dict<'py>(
         extra.set_item(name, image_array(py, img)?)?;
     }
     d.set_item("extra", extra)?;
-    let stats = PyDict::new(py);
-    let s = &out.stats;
-    stats.set_item("method", method.name())?;
-    stats.set_item("stages", s.stages.clone())?;
-    stats.set_item("total_seconds", s.total_seconds)?;
-    stats.set_item("samples_per_pixel", s.samples_per_pixel)?;
-    stats.set_item("camera_paths", s.camera_paths)?;
-    stats.set_item("light_paths", s.light_paths)?;
-    stats.set_item("triangles", s.triangles)?;
-    stats.set_item("photons_emitted", s.photons_emitted)?;
-    stats.set_item("photons_first_bounce", s.photons_first_bounce)?;
-    stats.set_item("photons_stored", s.photons_stored)?;
-    stats.set_item("caustic_photons", s.caustic_photons)?;
-    stats.set_item("volume_quads", s.volume_quads)?;
-    stats.set_item("passes", s.passes)?;
-    stats.set_item("estimator", s.estimator.clone())?;
-    stats.set_item("estimator_reason", s.estimator_reason.clone())?;
-    stats.set_item("estimator_memory", s.estimator_memory.clone())?;
-    stats.set_item("first_bounce", s.first_bounce.clone())?;
-    stats.set_item("first_bounce_reason", s.first_bounce_reason.clone())?;
-    stats.set_item("list_entries", s.list_entries)?;
-    stats.set_item("trivial_accepts", s.trivial_accepts)?;
-    stats.set_item("vpls", s.vpls)?;
-    stats.set_item("bundles", s.bundles)?;
-    stats.set_item("bundle_fragments", s.bundle_fragments)?;
-    stats.set_item("bundle_overflow", s.bundle_overflow)?;
+    let stats = crate::stats::PyStats(out.stats);
     d.set_item("stats", stats)?;
     Ok(d)
 }
@@ -206,23 +52,31 @@ fn output_dict<'py>(
 #[pyclass(module = "gi._gi", name = "Renderer")]
 pub struct PyRenderer {
     inner: Renderer,
+    /// Options given that don't apply to the method (ignored).
+    warnings: Vec<String>,
 }
 
 #[pymethods]
 impl PyRenderer {
     #[new]
-    #[pyo3(signature = (scene, method = "ispm", settings = None))]
+    #[pyo3(signature = (scene, method = "ispm", options = None))]
     fn new(
         py: Python<'_>,
         scene: &PyScene,
         method: &str,
-        settings: Option<&Bound<'_, PyDict>>,
+        options: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
-        let settings = settings_from(py, method, settings)?;
+        let (options, warnings) = crate::options::from_keywords(py, method, options)?;
         let inner = crate::guard::catch("Renderer", || {
-            Renderer::new(&scene.inner, &settings).map_err(|e| to_py(py, e))
+            Renderer::new(&scene.inner, &options).map_err(|e| to_py(py, e))
         })?;
-        Ok(PyRenderer { inner })
+        Ok(PyRenderer { inner, warnings })
+    }
+
+    /// The options given that don't apply to the method (ignored), one message each.
+    #[getter]
+    fn warnings(&self) -> Vec<String> {
+        self.warnings.clone()
     }
 
     /// Renders one frame; `aovs` adds albedo/normal/position/depth, `extras` the method's
@@ -245,7 +99,7 @@ impl PyRenderer {
         let out = crate::guard::run(py, "Renderer.render", progress.as_ref(), |reporter| {
             inner.render(&desc, reporter)
         })?;
-        output_dict(py, out, self.inner.settings().method)
+        output_dict(py, out)
     }
 
     /// Applies a scene update given as JSON: `target` is "camera", "light" (key: index),
@@ -311,10 +165,10 @@ impl PyRenderer {
         })
     }
 
-    /// Whether each frame is a progressive pass (setting `progressive`).
+    /// Whether each frame is a progressive pass (option `progressive`).
     #[getter]
     fn progressive(&self) -> bool {
-        self.inner.settings().progressive
+        self.inner.options().common.progressive
     }
 
     /// Progressive mode: passes in the current running mean (0 after a change).
@@ -331,7 +185,7 @@ impl PyRenderer {
 
     #[getter]
     fn method(&self) -> &'static str {
-        self.inner.settings().method.name()
+        self.inner.method().name()
     }
 
     /// (width, height) of the frames.
@@ -438,14 +292,16 @@ pub fn footprint_radii(
     percentiles: Vec<f64>,
 ) -> PyResult<std::collections::BTreeMap<&'static str, (usize, Vec<f32>)>> {
     use gi_core::photon::{gather::radius_percentiles, PathKind};
-    let settings = Settings {
-        method: Method::Gather,
+    let mut options = gi_core::frame::options::GatherOptions {
         photons,
-        seed,
-        smoothing,
         ..Default::default()
     };
-    settings.validate().map_err(|e| to_py(py, e))?;
+    options.refine.smoothing = smoothing;
+    let options = RenderOptions::of(MethodOptions::Gather(options)).with_seed(seed);
+    options.validate().map_err(|e| to_py(py, e))?;
+    let MethodOptions::Gather(gather) = &options.method else {
+        return Err(setting_error(py, "method", "not gather"));
+    };
     if percentiles.iter().any(|q| !(0.0..=100.0).contains(q)) {
         return Err(pyo3::exceptions::PyValueError::new_err(
             "percentiles must be in [0, 100]",
@@ -453,7 +309,14 @@ pub fn footprint_radii(
     }
     let rows = crate::guard::run(py, "footprint_radii", None, |progress| {
         let bvh = gi_core::trace::SceneBvh::try_build(&scene.inner)?;
-        let mut ts = gi_core::frame::gather::trace_settings(&scene.inner, &settings);
+        let mut ts = gi_core::frame::gather::trace_settings(
+            &scene.inner,
+            gather.photons,
+            gather.max_depth,
+            gather.refine.smoothing,
+            &gather.kernel,
+            1.0,
+        );
         ts.store_direct = true;
         let control = gi_core::photon::trace::Checked::new(progress, "photon trace");
         let set = gi_core::photon::emit_and_trace_checked(

@@ -17,18 +17,18 @@
 //! lists overflow anyway is detected at readback ([`Binned::overflowed`]) and splatted again
 //! with room for them.
 
-use crate::gpu::Pipelines;
 use super::target::IndirectTarget;
 use crate::error::{Error, Result};
+use crate::estimate::volume_shape::projected_radius;
+use crate::gpu::layout::texture as tex;
+use crate::gpu::timer::Timer;
+use crate::gpu::Pipelines;
 use crate::gpu::{self, shaders, GpuContext};
+use crate::photon::radius::VolumeRadius;
+use crate::photon::radius::Z_RATIO;
 use crate::photon::Photon;
 use crate::raster::buffer_init;
 use crate::raster::gbuffer::GBuffer;
-use crate::gpu::layout::texture as tex;
-use crate::photon::radius::Z_RATIO;
-use crate::gpu::timer::Timer;
-use crate::estimate::volume_shape::projected_radius;
-use crate::photon::radius::VolumeRadius;
 use crate::scene::{Camera, Scene};
 use bytemuck::{Pod, Zeroable};
 use std::sync::OnceLock;

@@ -15,24 +15,25 @@
 
 use super::direct::{assemble, normalized, readback_names};
 use super::gpu::rgb_image;
+use super::options::BidirOptions;
+use super::options::BidirStrategy;
+use super::{FrameParams, RenderOutput, RenderStats};
 use super::{GpuState, Images};
+use crate::cancel::Progress;
 use crate::error::{Error, Result};
-use crate::gpu::{self, raw::ViewRaw, GpuContext};
-use crate::raster::bundles::{bundle_view, BundleBuffers, BundleViewRaw};
-use crate::scene::light_views::{self, light_views, LightView};
-use crate::raster::rsm::{RsmTargets, RsmTexel};
-use crate::photon::specular::specular_paths_direct;
-use crate::raster::vpl::{cube_views, BidirParamsRaw, VplPass, VplRaw};
 use crate::gpu::Pipelines;
+use crate::gpu::{self, raw::ViewRaw, GpuContext};
+use crate::photon::specular::specular_paths_direct;
 use crate::raster::bundles::BundlePass;
+use crate::raster::bundles::{bundle_view, BundleBuffers, BundleViewRaw};
 use crate::raster::direct::DirectPass;
 use crate::raster::rsm::RsmPass;
+use crate::raster::rsm::{RsmTargets, RsmTexel};
 use crate::raster::shadow::ShadowPass;
+use crate::raster::vpl::{cube_views, BidirParamsRaw, VplPass, VplRaw};
 use crate::raster::{buffer_init, shadow, VIEW_SIZE};
-use super::options::BidirStrategy;
-use super::{RenderOutput, RenderStats, Settings};
-use crate::cancel::Progress;
 use crate::sampling::Rng;
+use crate::scene::light_views::{self, light_views, LightView};
 use crate::scene::{Environment, Scene};
 use crate::trace::SceneBvh;
 use bytemuck::Zeroable;
@@ -382,7 +383,7 @@ fn env_table(ctx: &GpuContext, env: Option<&Environment>) -> (wgpu::Texture, f32
 
 /// The RSM layers: the bounce-map views with `rsm_size`² texels per view for a light of
 /// average power.
-fn rsm_layers(scene: &Scene, settings: &Settings) -> Vec<LightView> {
+fn rsm_layers(scene: &Scene, rsm_size: u32) -> Vec<LightView> {
     let views: u64 = scene
         .lights
         .iter()
@@ -391,7 +392,7 @@ fn rsm_layers(scene: &Scene, settings: &Settings) -> Vec<LightView> {
             crate::scene::Light::Spot { .. } => 1,
         })
         .sum();
-    let texels = (settings.rsm_size as u64).pow(2) * views.max(1);
+    let texels = (rsm_size as u64).pow(2) * views.max(1);
     light_views(scene, texels)
 }
 
@@ -494,18 +495,19 @@ fn env_bundles(n: u32, env_pdf_scale: f32) -> u32 {
 /// hemisphere.
 fn bundle_views(
     scene: &Scene,
-    settings: &Settings,
+    bundles: u32,
+    seed: u64,
     b: &BundleBuffers,
     n_env: u32,
 ) -> Vec<BundleViewRaw> {
     let (lo, hi) = light_views::bounds(scene);
     let centre = (lo + hi) * 0.5;
     let radius = (hi - lo).length() * 0.5;
-    let n_uni = settings.bundles - n_env;
-    let mut dirs = bundle_directions(n_uni, settings.seed);
+    let n_uni = bundles - n_env;
+    let mut dirs = bundle_directions(n_uni, seed);
     let env = scene.environment.as_deref().filter(|_| n_env > 0);
     if let Some(env) = env {
-        let mut rng = Rng::new(settings.seed, 0xe17, 0);
+        let mut rng = Rng::new(seed, 0xe17, 0);
         let (j1, j2) = (rng.next_f32(), rng.next_f32());
         let golden = 0.618_034f32;
         for i in 0..n_env {
@@ -546,11 +548,12 @@ pub(super) fn frame(
     g: &mut GpuState,
     scene: &Scene,
     bvh: &SceneBvh,
-    settings: &Settings,
+    options: &BidirOptions,
+    frame: &FrameParams,
     images: Images,
     progress: &dyn Progress,
 ) -> Result<RenderOutput> {
-    if scene.environment.is_some() && settings.bundles == 0 {
+    if scene.environment.is_some() && options.bundles == 0 {
         return Err(Error::setting(
             "bundles",
             "the environment light reaches `bidir` through its ray bundles: use bundles > 0",
@@ -558,14 +561,14 @@ pub(super) fn frame(
     }
     let ctx = g.ctx.clone();
     g.timer.reset();
-    let layers = rsm_layers(scene, settings);
-    let per_light = settings.vpls_per_light;
+    let layers = rsm_layers(scene, options.rsm_size);
+    let per_light = options.vpls_per_light;
     let capacity = per_light * scene.lights.len() as u32;
-    let size = settings.vpl_shadow_map_size;
+    let size = options.vpl_shadow_map_size;
     let bundle_key = (
-        settings.bundles.max(1),
-        settings.bundle_resolution,
-        settings.bundle_memory_mb,
+        options.bundles.max(1),
+        options.bundle_resolution,
+        options.bundle_memory_mb,
     );
     if !g
         .bidir
@@ -588,8 +591,8 @@ pub(super) fn frame(
         rsm.write_views(&ctx, scene, &state.layers);
     }
     g.targets.write_eye(&ctx, scene);
-    let n_env = env_bundles(settings.bundles, state.env_pdf_scale);
-    let views = bundle_views(scene, settings, &state.bundles, n_env);
+    let n_env = env_bundles(options.bundles, state.env_pdf_scale);
+    let views = bundle_views(scene, options.bundles, frame.seed, &state.bundles, n_env);
     if !views.is_empty() {
         state.bundles.write_views(&ctx, &views);
     }
@@ -626,7 +629,7 @@ pub(super) fn frame(
 
     // 2. VPLs and their shadow maps.
     let t = Instant::now();
-    let vpls = sample_vpls(&texels, scene.lights.len(), per_light, settings.seed);
+    let vpls = sample_vpls(&texels, scene.lights.len(), per_light, frame.seed);
     let (raws, matrices) = vpl_records(scene, &vpls, per_light, size);
     let vpl_seconds = t.elapsed().as_secs_f64();
     let t = Instant::now();
@@ -678,17 +681,17 @@ pub(super) fn frame(
         eye: scene.camera.position.into(),
         vpl_count: raws.len() as u32,
         vpls_per_light: per_light,
-        bundles: settings.bundles,
-        mode: match settings.bidir_strategy {
+        bundles: options.bundles,
+        mode: match options.strategy {
             BidirStrategy::Mis => 0,
             BidirStrategy::Vpl => 1,
             BidirStrategy::Bundle => 2,
         },
-        two_bounce: (settings.max_depth >= 3) as u32,
+        two_bounce: (options.max_depth >= 3) as u32,
         min_dist2: min_dist * min_dist,
         max_walk: MAX_WALK,
-        pair_offset: Rng::new(settings.seed, 0xfa17, 0).next_f32(),
-        clamp_roughness: settings.roughness_clamping as u32,
+        pair_offset: Rng::new(frame.seed, 0xfa17, 0).next_f32(),
+        clamp_roughness: options.roughness_clamping as u32,
         inv_view_proj: glam::Mat4::from_cols_array_2d(
             &crate::raster::camera_view(scene, glam::Vec2::splat(0.5), 0.0).view_proj,
         )
@@ -698,7 +701,7 @@ pub(super) fn frame(
         env_cos: env_rot.0,
         env_sin: env_rot.1,
         bundles_env: n_env as f32,
-        bundles_uniform: (settings.bundles - n_env) as f32,
+        bundles_uniform: (options.bundles - n_env) as f32,
         env_pdf_scale: state.env_pdf_scale,
         _pad1: [0.0; 2],
     };
@@ -742,7 +745,7 @@ pub(super) fn frame(
     state.bundles.record(
         &BundlePass::get(&ctx),
         &mut encoder,
-        settings.bundles,
+        options.bundles,
         &g.scene.geometry,
         textures,
         &mut g.timer,
@@ -765,8 +768,8 @@ pub(super) fn frame(
     // lights (uploaded before the composite runs: queue writes precede the submission).
     let t = Instant::now();
     let specular = if scene.has_delta_materials() {
-        let samples = super::photon::camera_samples(settings);
-        let img = specular_paths_direct(scene, bvh, &samples, settings.specular_sampling, progress)?;
+        let samples = super::photon::camera_samples(options.direct.spp, options.max_depth, frame);
+        let img = specular_paths_direct(scene, bvh, &samples, options.specular_sampling, progress)?;
         g.targets.write_specular(&ctx, &img);
         state.specular_written = true;
         Some(img)
@@ -787,7 +790,7 @@ pub(super) fn frame(
     let index = ctx.queue.submit([encoder.finish()]);
     let t = Instant::now();
     let data = g.targets.read(&ctx, &names)?;
-    let (fragments, overflow) = if settings.bundles > 0 {
+    let (fragments, overflow) = if options.bundles > 0 {
         state.bundles.fragments(&ctx, Some(index))?
     } else {
         (0, 0)
@@ -799,7 +802,7 @@ pub(super) fn frame(
         triangles: scene.triangles.len() as u64,
         samples_per_pixel: g.targets.spp(),
         vpls: vpls.len() as u64,
-        bundles: settings.bundles as u64,
+        bundles: options.bundles as u64,
         bundle_fragments: fragments,
         bundle_overflow: overflow,
         ..Default::default()

@@ -4,11 +4,11 @@
 
 use super::gpu::{rgb_image, Targets};
 use super::{GpuState, Images};
+use super::{RenderOutput, RenderStats};
+use crate::cancel::Progress;
 use crate::error::Result;
 use crate::image::Image;
 use crate::raster::oct_decode;
-use super::{RenderOutput, RenderStats};
-use crate::cancel::Progress;
 use crate::scene::Scene;
 use glam::{Vec2, Vec3, Vec4};
 use std::collections::HashMap;

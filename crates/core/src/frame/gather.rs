@@ -4,8 +4,9 @@
 //! caustics. Camera rays follow mirrors and glass (`camera_pass`), so reflections and
 //! refractions show indirect light too.
 
+use super::options::{GatherOptions, KernelOptions};
 use super::photon::camera_samples;
-use super::{RenderOutput, RenderStats, Settings};
+use super::{FrameParams, Method, MethodOptions, RenderOptions, RenderOutput, RenderStats};
 use crate::cancel::Progress;
 use crate::error::Result;
 use crate::image::Image;
@@ -24,27 +25,55 @@ use std::time::Instant;
 /// Default largest footprint semi-axis, as a fraction of the scene's diagonal.
 const DEFAULT_R_MAX_FRACTION: f32 = 0.1;
 
-/// Photon-trace settings of the gather method for `n` photons (shared with the statistics
-/// of `footprint_statistics`).
-pub fn trace_settings(scene: &Scene, settings: &Settings) -> PhotonTraceSettings {
+/// Photon-trace settings of the gather method for `photons` photons traced to `max_depth`
+/// with differentials smoothed by `smoothing` and footprints capped at the kernel's
+/// `max_radius`, both shrunk by `radius_scale` (shared with the statistics of
+/// `footprint_statistics` and ISPM's footprint volumes).
+pub fn trace_settings(
+    scene: &Scene,
+    photons: u64,
+    max_depth: u32,
+    smoothing: f32,
+    kernel: &KernelOptions,
+    radius_scale: f32,
+) -> PhotonTraceSettings {
     PhotonTraceSettings {
-        max_bounces: settings.max_depth.saturating_sub(1).max(1),
+        max_bounces: max_depth.saturating_sub(1).max(1),
         store_direct: false,
         differentials: Some(DifferentialSettings {
-            spacing: global_spacing(4.0 * std::f32::consts::PI, settings.photons),
-            smoothing: settings.smoothing * settings.radius_scale,
-            r_max: settings.radius_scale
-                * settings
+            spacing: global_spacing(4.0 * std::f32::consts::PI, photons),
+            smoothing: smoothing * radius_scale,
+            r_max: radius_scale
+                * kernel
                     .max_radius
                     .unwrap_or_else(|| DEFAULT_R_MAX_FRACTION * scene.diagonal()),
         }),
     }
 }
 
-pub fn render(
+/// [`trace_settings`] of method `gather` with the photon options of `options` (those of
+/// `gather` or `ispm`; another method's: `gather`'s defaults), at the first pass's kernel
+/// scale.
+pub fn gather_trace_settings(scene: &Scene, options: &RenderOptions) -> PhotonTraceSettings {
+    let o = options.with_method(Method::Gather);
+    let MethodOptions::Gather(g) = &o.method else {
+        unreachable!("with_method(Gather) gives gather options")
+    };
+    trace_settings(
+        scene,
+        g.photons,
+        g.max_depth,
+        g.refine.smoothing,
+        &g.kernel,
+        1.0,
+    )
+}
+
+pub(super) fn render(
     scene: &Scene,
     bvh: &SceneBvh,
-    settings: &Settings,
+    options: &GatherOptions,
+    frame: &FrameParams,
     progress: &dyn Progress,
 ) -> Result<RenderOutput> {
     let t0 = Instant::now();
@@ -53,22 +82,30 @@ pub fn render(
         |name: &str, t: Instant| stats.stages.push((name.into(), t.elapsed().as_secs_f64()));
 
     let t = Instant::now();
-    let pts = trace_settings(scene, settings);
-    let focus = crate::photon::focus::Focus::of_scene(scene, settings.photon_focus);
+    let refine = &options.refine;
+    let pts = trace_settings(
+        scene,
+        options.photons,
+        options.max_depth,
+        refine.smoothing,
+        &options.kernel,
+        frame.radius_scale,
+    );
+    let focus = crate::photon::focus::Focus::of_scene(scene, refine.photon_focus);
     let mut set = emit_and_trace_focused(
         scene,
         bvh,
-        settings.photons,
+        options.photons,
         &pts,
-        settings.seed,
+        frame.seed,
         &Checked::new(progress, "photon trace"),
         &focus,
     )?;
-    if let (true, Some(ds)) = (settings.caustic_density_bound, &pts.differentials) {
-        crate::photon::density::bound_footprints(&mut set, settings.radius_scale, ds.r_max);
+    if let (true, Some(ds)) = (refine.caustic_density_bound, &pts.differentials) {
+        crate::photon::density::bound_footprints(&mut set, frame.radius_scale, ds.r_max);
     }
     stage("photon trace", t);
-    if settings.boundary_compensation {
+    if refine.boundary_compensation {
         // Footprints cut by an edge lose the energy off the surface: a darkening along
         // edges and corners that shrinks only as fast as the radius (in progressive mode
         // the slowest term of the error), so each photon's power is divided by the
@@ -79,28 +116,36 @@ pub fn render(
             bvh,
             &mut set,
             crate::photon::gather::THICKNESS,
-            settings.kernel,
-            settings.seed,
+            options.kernel.kernel,
+            frame.seed,
         );
         stage("boundary compensation", t);
     }
 
     let t = Instant::now();
-    let leaf = settings
+    let leaf = options
         .leaf_size
         .map_or(LeafSize::Auto, |n| LeafSize::Fixed(n as usize));
-    let map = FootprintMap::try_build(&set, 1, scene_area(scene), leaf, settings.kernel, progress)?;
+    let map = FootprintMap::try_build(
+        &set,
+        1,
+        scene_area(scene),
+        leaf,
+        options.kernel.kernel,
+        progress,
+    )?;
     stage("photon map build", t);
 
     let t = Instant::now();
-    let samples = camera_samples(settings);
+    let samples = camera_samples(options.spp, options.max_depth, frame);
     let (radiance, first) = render_image(scene, bvh, &samples, progress, |it, wo, _: &mut ()| {
         direct_light(scene, bvh, it, wo) + map.radiance(it, wo)
     })?;
     let caustics = Image::new(radiance.width, radiance.height);
     let mut out = RenderOutput::of_cpu(radiance, first, caustics, stats);
     out.stats.samples_per_pixel = samples.spp;
-    out.stats.camera_paths = samples.spp as u64 * scene.camera.width as u64 * scene.camera.height as u64;
+    out.stats.camera_paths =
+        samples.spp as u64 * scene.camera.width as u64 * scene.camera.height as u64;
     out.stats
         .stages
         .push(("radiance estimate".into(), t.elapsed().as_secs_f64()));

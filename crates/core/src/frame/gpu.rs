@@ -5,10 +5,10 @@
 
 use crate::error::{Error, Result};
 use crate::gpu::raw::ViewRaw;
-use crate::gpu::{self, GpuContext};
-use crate::image::Image;
 use crate::gpu::timer::Timer;
 use crate::gpu::Pipelines;
+use crate::gpu::{self, GpuContext};
+use crate::image::Image;
 use crate::raster::composite::CompositePass;
 use crate::raster::direct::DirectPass;
 use crate::raster::edges::EdgePass;
@@ -19,7 +19,6 @@ use crate::raster::{
     self, buffer_init, camera_view, edges, gbuffer, sample_positions, shadow, view_binding,
     Geometry, SAMPLES_PER_SUBMIT, VIEW_SIZE,
 };
-use super::Settings;
 use crate::scene::Scene;
 use glam::{Vec2, Vec4};
 use std::collections::HashMap;
@@ -61,7 +60,8 @@ fn storage_init(ctx: &GpuContext, label: &str, bytes: &[u8]) -> wgpu::Buffer {
 
 impl GpuScene {
     pub fn new(ctx: &GpuContext, scene: &Scene, shadow_map_size: u32) -> Result<Self> {
-        let textures = raster::textures::GpuTextures::new(ctx, scene, &TexturesLayout::get(ctx).layout)?;
+        let textures =
+            raster::textures::GpuTextures::new(ctx, scene, &TexturesLayout::get(ctx).layout)?;
         let shadows = shadow::ShadowViews::new(scene, shadow_map_size);
         let layers = (shadows.matrices.len() as u32).max(1);
         let materials: Vec<_> = scene.materials.iter().map(|m| m.to_raw()).collect();
@@ -226,7 +226,7 @@ impl GpuScene {
 pub(super) fn check_limits(
     ctx: &GpuContext,
     scene: &Scene,
-    settings: &Settings,
+    shadow_map_size: u32,
     layers: u32,
 ) -> Result<()> {
     let l = ctx.device.limits();
@@ -237,7 +237,7 @@ pub(super) fn check_limits(
             format!("the GPU allows images up to {max} pixels a side"),
         ));
     }
-    if settings.shadow_map_size > max {
+    if shadow_map_size > max {
         return Err(Error::setting(
             "shadow_map_size",
             format!("the GPU allows at most {max}"),
@@ -817,8 +817,7 @@ impl Targets {
     ) {
         if let Some(group) = &self.composite_group {
             let ts = timer.pass("composite");
-            CompositePass::get(ctx)
-                .record(encoder, &self.radiance_view, group, ts);
+            CompositePass::get(ctx).record(encoder, &self.radiance_view, group, ts);
         }
     }
 

@@ -15,30 +15,31 @@
 
 use super::direct::{assemble, normalized, readback_names};
 use super::gpu::rgb_image;
+use super::options::IspmOptions;
+use super::{FrameParams, RenderOutput, RenderStats};
 use super::{GpuState, Images};
+use crate::cancel::Progress;
 use crate::error::{Error, Result};
+use crate::estimate::volume_shape::partition;
 use crate::estimate::{Binned, CpuEstimate, Estimator, IndirectEstimate, Mode, Volumes};
+use crate::gpu::timer::Timer;
 use crate::gpu::GpuContext;
+use crate::gpu::Pipelines;
 use crate::image::Image;
-use crate::photon::bounce::{trace_bounce_maps, FirstBounce};
+use crate::photon::bounce::{trace_bounce_maps, BounceMap, FirstBounce};
+use crate::photon::delta_paths::Landings;
 use crate::photon::focus::Focus;
 use crate::photon::lbvh::Aabb;
+use crate::photon::radius::VolumeRadius;
+use crate::photon::radius::Z_RATIO;
 use crate::photon::ring::PhotonRing;
+use crate::photon::specular::{specular_paths, SpecularPaths};
 use crate::photon::trace::Checked;
 use crate::photon::trace::{continue_paths_from, emit_aimed_caustics, FirstSegment};
 use crate::photon::PhotonRay;
 use crate::photon::{boundary, PhotonTraceSettings};
-use crate::gpu::Pipelines;
-use crate::photon::radius::Z_RATIO;
 use crate::raster::bounce::{BouncePass, BounceTargets};
 use crate::scene::light_views::{light_views, LightView};
-use crate::photon::specular::{specular_paths, SpecularPaths};
-use crate::gpu::timer::Timer;
-use crate::estimate::volume_shape::partition;
-use crate::photon::radius::VolumeRadius;
-use super::{RenderOutput, RenderStats, Settings};
-use crate::cancel::Progress;
-use crate::photon::delta_paths::Landings;
 use crate::scene::Scene;
 use crate::trace::SceneBvh;
 use glam::Vec3;
@@ -82,7 +83,8 @@ pub(super) struct FrameInputs<'a> {
     pub invalid: Invalidation<'a>,
     pub scene: &'a Scene,
     pub bvh: &'a SceneBvh,
-    pub settings: &'a Settings,
+    pub options: &'a IspmOptions,
+    pub params: &'a FrameParams,
     pub frame: u64,
     pub changes: crate::scene::Changes,
     pub images: Images,
@@ -96,7 +98,8 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         invalid,
         scene,
         bvh,
-        settings,
+        options,
+        params,
         frame,
         changes,
         images,
@@ -128,10 +131,10 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
 
     // Resources: created on the first frame at this size, else kept.
     let t = Instant::now();
-    let layers = light_views(scene, settings.photons);
+    let layers = light_views(scene, options.photons);
     if ispm.is_none() {
-        let (kind, estimate_reason) = settings.estimator.resolve(&ctx.info);
-        let (gbuf, k) = (&targets.gbuf, settings.subsample);
+        let (kind, estimate_reason) = options.estimator.resolve(&ctx.info);
+        let (gbuf, k) = (&targets.gbuf, options.subsample);
         let binned =
             |mode| IndirectEstimate::Binned(Box::new(Binned::new(&ctx, gbuf, mode, [w, h], k)));
         let estimate = match kind {
@@ -147,7 +150,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         };
         targets.bind_composite(&ctx, Some(estimate.output().1));
         *ispm = Some(IspmState {
-            first_bounce: settings.first_bounce.resolve(&ctx.info),
+            first_bounce: options.first_bounce.resolve(&ctx.info),
             bounce: None,
             estimate,
             estimate_reason,
@@ -174,14 +177,14 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         state.specular_landings = None;
     }
     // A still scene with frame-coherent random numbers has this frame's photons already.
-    let reuse = ring.frames() == 1 && !changes.lighting() && traced_seed == Some(settings.seed);
+    let reuse = ring.frames() == 1 && !changes.lighting() && traced_seed == Some(params.seed);
     let raster_bounce = state.first_bounce.0 == FirstBounce::Raster;
     if !reuse && raster_bounce {
         if !state.bounce.as_ref().is_some_and(|b| b.fits(&layers)) {
             state.bounce = BounceTargets::new(&ctx, &layers, &gs.materials)?;
         }
         if let Some(b) = &state.bounce {
-            b.write_views(&ctx, scene, &layers, settings.seed);
+            b.write_views(&ctx, scene, &layers, params.seed);
         }
     }
     targets.write_eye(&ctx, scene);
@@ -220,7 +223,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
             label: Some("direct frame"),
         });
     // Progressive mode traces the direct light on the CPU (step 4): the eye G-buffer alone.
-    let encoder = if settings.progressive {
+    let encoder = if params.progressive {
         targets.record_gbuffer(&ctx, &*gs, &mut encoder, timer);
         encoder
     } else {
@@ -241,7 +244,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         (false, _) if raster_bounce => Default::default(),
         (false, _) => {
             let control = Checked::new(progress, "bounce maps");
-            trace_bounce_maps(scene, bvh, &layers, settings.seed, &control)?
+            trace_bounce_maps(scene, bvh, &layers, params.seed, &control)?
         }
     };
     let bounce_stage = if raster_bounce {
@@ -263,8 +266,8 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     for &l in invalid.lights {
         ring.invalidate_light(l);
     }
-    let grow = VolumeRadius::of_scene(scene, settings.photons, settings.kernel_scale)
-        .scaled(settings.radius_scale)
+    let grow = VolumeRadius::of_scene(scene, options.photons, options.kernel_scale)
+        .scaled(params.radius_scale)
         .r_max;
     for (object, before) in invalid.moved {
         let o = &scene.objects[*object];
@@ -281,19 +284,26 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     // coverage differs (cornell 24x24, subsample 2: relMSE at 64 passes 0.0175 against
     // 0.0072 with the photon-side compensation; subsample 1: 0.0012 against 0.0022).
     let query_side =
-        settings.progressive && settings.boundary_compensation && settings.subsample <= 1;
+        params.progressive && options.refine.boundary_compensation && options.subsample <= 1;
     let t = Instant::now();
     let mut traced = 0u64;
     let mut compensation_seconds = 0.0;
-    if !reuse && settings.max_depth >= 2 {
-        let pts = if settings.footprint_volumes {
+    if !reuse && options.max_depth >= 2 {
+        let pts = if options.footprint_volumes {
             PhotonTraceSettings {
                 store_direct: false,
-                ..super::gather::trace_settings(scene, settings)
+                ..super::gather::trace_settings(
+                    scene,
+                    options.photons,
+                    options.max_depth,
+                    options.refine.smoothing,
+                    &options.kernel,
+                    params.radius_scale,
+                )
             }
         } else {
             PhotonTraceSettings {
-                max_bounces: settings.max_depth - 1,
+                max_bounces: options.max_depth - 1,
                 store_direct: false,
                 differentials: None,
             }
@@ -302,7 +312,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         // mirror and glass first hits from aimed CPU photons instead of the bounce map.
         let focus = Focus::of_scene(
             scene,
-            if settings.photon_focus > 0.0 {
+            if options.refine.photon_focus > 0.0 {
                 1.0
             } else {
                 0.0
@@ -316,7 +326,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
                     .iter()
                     .take_while(|&&l| l == light)
                     .count();
-            let seed = settings.seed ^ (light as u64).wrapping_mul(0xA24B_AED4_963E_E407);
+            let seed = params.seed ^ (light as u64).wrapping_mul(0xA24B_AED4_963E_E407);
             let control = Checked::new(progress, "cpu trace");
             let aimed = focus.covers_all(light as usize);
             // Aimed: the bounce map's own mirror and glass first hits are dropped.
@@ -330,7 +340,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
             };
             // With footprints, photons that met a mirror or glass first carry the footprint
             // of their first segment from the light (re-cast on the CPU).
-            let first = settings
+            let first = options
                 .footprint_volumes
                 .then(|| first_segment(scene, &layers, light as usize));
             let mut photons =
@@ -341,7 +351,8 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
                     .filter(|l| l.light == light as usize)
                     .map(|l| l.res as u64 * l.res as u64)
                     .sum();
-                let n = ((texels as f64 * settings.photon_focus as f64).round() as u64).max(1);
+                let n =
+                    ((texels as f64 * options.refine.photon_focus as f64).round() as u64).max(1);
                 let set = emit_aimed_caustics(
                     scene,
                     bvh,
@@ -364,20 +375,20 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
             // (the splat reads `footprint_radius`).
             let frames = (ring.held(light as usize) + 1).min(ring.frames()) as u64;
             let radius =
-                VolumeRadius::of_scene(scene, settings.photons * frames, settings.kernel_scale)
-                    .scaled(settings.radius_scale);
+                VolumeRadius::of_scene(scene, options.photons * frames, options.kernel_scale)
+                    .scaled(params.radius_scale);
             for p in &mut photons {
                 p.footprint_radius = radius.of(p);
             }
-            if settings.caustic_density_bound {
+            if options.refine.caustic_density_bound {
                 crate::photon::density::bound_volume_radii(
                     &mut photons,
-                    settings.radius_scale,
+                    params.radius_scale,
                     radius.r_max,
                 );
             }
             let mut compensated = Vec::new();
-            if settings.boundary_compensation && !query_side {
+            if options.refine.boundary_compensation && !query_side {
                 compensated = photons.clone();
                 let tc = Instant::now();
                 progress.update("boundary compensation", 0.0);
@@ -404,16 +415,22 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         "cpu trace".into(),
         t.elapsed().as_secs_f64() - compensation_seconds,
     ));
-    if settings.boundary_compensation && !query_side {
+    if options.refine.boundary_compensation && !query_side {
         stats
             .stages
             .push(("boundary compensation".into(), compensation_seconds));
     }
     // Progressive mode: the direct light ray traced on the CPU (the GPU rendered the eye
     // G-buffer alone), added to the composite below; shadow maps are a bias no pass removes.
-    let traced_direct = if settings.progressive {
+    let traced_direct = if params.progressive {
         let t = Instant::now();
-        let d = super::progressive::direct_image(scene, bvh, settings, progress)?;
+        let d = super::progressive::direct_image(
+            scene,
+            bvh,
+            options.direct.spp,
+            params.seed,
+            progress,
+        )?;
         stage(&mut stats, "direct light (ray traced)", t);
         Some(d)
     } else {
@@ -430,10 +447,10 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         state.specular_image.clone()
     } else if state.specular {
         let paths = SpecularPaths {
-            samples: super::photon::camera_samples(settings),
-            sampling: settings.specular_sampling,
-            gather: super::photon::gather_settings(scene, settings),
-            precompute: !settings.progressive,
+            samples: super::photon::camera_samples(options.direct.spp, options.max_depth, params),
+            sampling: options.specular_sampling,
+            gather: super::photon::knn_gather(scene, options.k, &options.kernel, params),
+            precompute: !params.progressive,
         };
         let (img, camera_paths) = specular_paths(
             scene,
@@ -454,8 +471,8 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
 
     // 6. The indirect estimate, upsampling, composite, readback.
     let mut t = Instant::now();
-    let radius = VolumeRadius::of_scene(scene, settings.photons, settings.kernel_scale)
-        .scaled(settings.radius_scale);
+    let radius = VolumeRadius::of_scene(scene, options.photons, options.kernel_scale)
+        .scaled(params.radius_scale);
     state.estimate.set_sample_centre(targets.sample_centre());
     stats.estimator = state.estimate.kind().name().into();
     stats.estimator_reason = state.estimate_reason.clone();
@@ -465,10 +482,10 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     match &mut state.estimate {
         IndirectEstimate::Volumes(v) => {
             let (ordered, quads) = partition(
-                settings.volume_shape,
+                options.volume_shape,
                 &photons.splat,
                 cam,
-                settings.subsample.max(1),
+                options.subsample.max(1),
                 radius,
             );
             stats.volume_quads = quads as u64;
@@ -568,7 +585,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     ) {
         let t = Instant::now();
         let r = radius.diffuse();
-        let coverage = super::progressive::query_coverage(scene, bvh, pos, nrm, r, settings.seed);
+        let coverage = super::progressive::query_coverage(scene, bvh, pos, nrm, r, params.seed);
         for ((o, i), c) in out
             .radiance
             .pixels
@@ -602,9 +619,20 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         out.aovs.push(("indirect".into(), indirect));
         out.aovs.push(("photons".into(), hits));
     }
-    state.traced_seed = Some(settings.seed);
+    state.traced_seed = Some(params.seed);
     state.splat_current = true;
     Ok(out)
+}
+
+/// The bounce maps of method `ispm` with `options` rendered on the GPU for `scene` and read
+/// back once, for inspection and tests (the first frame's: the options' seed).
+pub fn bounce_map(scene: &Scene, options: &super::RenderOptions) -> Result<BounceMap> {
+    options.validate()?;
+    let super::MethodOptions::Ispm(o) = &options.method else {
+        return Err(Error::setting("method", "bounce maps are method `ispm`'s"));
+    };
+    let adapter = o.direct.adapter.as_deref();
+    crate::raster::bounce::render_bounce_map(scene, adapter, o.photons, options.common.seed)
 }
 
 /// The splat recorded into `encoder` (the photons' upload began at `t`) and the upsampling,
@@ -640,11 +668,7 @@ fn splat_serially(
 
 /// The light of bounce-map photons of `light` and their angular spacing: the light's solid
 /// angle over its bounce-map texels (a spot's square map covers about 4/π of its cone).
-fn first_segment(
-    scene: &Scene,
-    layers: &[LightView],
-    light: usize,
-) -> FirstSegment {
+fn first_segment(scene: &Scene, layers: &[LightView], light: usize) -> FirstSegment {
     let l = &scene.lights[light];
     let texels: f64 = layers
         .iter()

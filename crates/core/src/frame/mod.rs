@@ -1,4 +1,4 @@
-//! The frame engine. A [`Renderer`] is made once from a scene and settings and owns what
+//! The frame engine. A [`Renderer`] is made once from a scene and options and owns what
 //! lives from one frame to the next: the scene (updated in place by [`SceneUpdate`]s), its
 //! CPU BVH, and for the GPU methods the device, the scene's GPU buffers, the render targets
 //! of one size, the estimator's resources and the temporal photon ring. A frame re-uploads
@@ -18,17 +18,19 @@ mod path;
 mod photon;
 mod progressive;
 
+use crate::cancel::Progress;
 use crate::error::{Error, Result};
 use crate::gpu::GpuContext;
 use crate::image::Image;
 use crate::photon::lbvh::Aabb;
 use crate::photon::ring::PhotonRing;
-use crate::cancel::Progress;
-pub use options::{Method, Settings};
-pub use output::{RenderOutput, RenderStats};
-pub use progressive::progressive_radius_scale;
 use crate::scene::{Changes, Scene, SceneUpdate};
 use crate::trace::SceneBvh;
+pub use ispm::bounce_map;
+use options::DirectLightOptions;
+pub use options::{Method, MethodOptions, RenderOptions};
+pub use output::{RenderOutput, RenderStats};
+pub use progressive::progressive_radius_scale;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -53,9 +55,9 @@ impl Images {
 /// What to render in one frame.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct FrameDesc {
-    /// Random seed of the frame; `None`: the settings' seed, varied per frame when temporal
-    /// reuse is on (`Settings::temporal_frames` > 1) and kept otherwise (frame-coherent
-    /// random numbers, ISPM section 4.1: a still scene does not flicker).
+    /// Random seed of the frame; `None`: the options' seed, varied per frame when temporal
+    /// reuse is on (`temporal_frames` > 1) and kept otherwise (frame-coherent random
+    /// numbers, ISPM section 4.1: a still scene does not flicker).
     pub seed: Option<u64>,
     pub images: Images,
     /// Wait for the GPU after each stage, so that the stages' wall-clock times
@@ -63,6 +65,20 @@ pub struct FrameDesc {
     /// devices whose timestamps cannot place compute passes (lavapipe). Slower: the CPU
     /// trace no longer overlaps the GPU's direct light. Method `ispm` only.
     pub serial: bool,
+}
+
+/// What varies from frame to frame beyond the scene: the frame's seed, the kernel scale
+/// of a progressive pass, and whether the first-hit images are wanted.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct FrameParams {
+    pub seed: u64,
+    /// Scale of every photon kernel radius (ISPM volumes, gather footprints and their caps,
+    /// k-NN gathers): shrinks per progressive pass, 1 otherwise.
+    pub radius_scale: f32,
+    /// The CPU methods trace one more camera ray per pixel for the first-hit images.
+    pub first_hit_aovs: bool,
+    /// The frame is a progressive pass.
+    pub progressive: bool,
 }
 
 /// The GPU side of a renderer (methods `direct` and `ispm`).
@@ -80,7 +96,7 @@ struct GpuState {
 /// A persistent renderer of one scene with one method.
 pub struct Renderer {
     scene: Scene,
-    settings: Settings,
+    options: RenderOptions,
     bvh: Option<SceneBvh>,
     /// What changed since the last frame.
     changes: Changes,
@@ -134,29 +150,30 @@ struct BvhCost {
 }
 
 impl Renderer {
-    /// A renderer of `scene` (copied) with `settings`; the image size is the settings' or,
+    /// A renderer of `scene` (copied) with `options`; the image size is the options' or,
     /// failing that, the scene camera's.
-    pub fn new(scene: &Scene, settings: &Settings) -> Result<Self> {
-        settings.validate()?;
-        check_environment(scene, settings.method)?;
+    pub fn new(scene: &Scene, options: &RenderOptions) -> Result<Self> {
+        options.validate()?;
+        let method = options.method();
+        check_environment(scene, method)?;
         let camera = scene.camera.with_size(
-            settings.width.unwrap_or(scene.camera.width),
-            settings.height.unwrap_or(scene.camera.height),
+            options.common.width.unwrap_or(scene.camera.width),
+            options.common.height.unwrap_or(scene.camera.height),
         );
-        options::check_image_memory(&camera, settings.method)?;
+        options::check_image_memory(&camera, method)?;
         Ok(Renderer {
             scene: Scene {
                 camera,
                 ..scene.clone()
             },
-            settings: settings.clone(),
+            options: options.clone(),
             bvh: None,
             changes: Changes::default(),
             moved: Vec::new(),
             lights_changed: Vec::new(),
             resized: false,
             gpu: None,
-            ring: PhotonRing::new(settings.temporal_frames as usize),
+            ring: PhotonRing::new(options.method.temporal_frames() as usize),
             frame_index: 0,
             bvh_cost: BvhCost::default(),
             accum: None,
@@ -167,8 +184,12 @@ impl Renderer {
         &self.scene
     }
 
-    pub fn settings(&self) -> &Settings {
-        &self.settings
+    pub fn options(&self) -> &RenderOptions {
+        &self.options
+    }
+
+    pub fn method(&self) -> Method {
+        self.options.method()
     }
 
     /// Frames rendered so far.
@@ -220,7 +241,7 @@ impl Renderer {
         }
         if (width, height) != (self.scene.camera.width, self.scene.camera.height) {
             let camera = self.scene.camera.with_size(width, height);
-            options::check_image_memory(&camera, self.settings.method)?;
+            options::check_image_memory(&camera, self.method())?;
             self.scene.camera = camera;
             self.resized = true;
             self.accum = None;
@@ -230,10 +251,11 @@ impl Renderer {
 
     /// The seed of the next frame (see [`FrameDesc::seed`]).
     fn frame_seed(&self) -> u64 {
-        if self.settings.temporal_frames <= 1 || self.frame_index == 0 {
-            self.settings.seed
+        let seed = self.options.common.seed;
+        if self.options.method.temporal_frames() <= 1 || self.frame_index == 0 {
+            seed
         } else {
-            self.settings.seed ^ self.frame_index.wrapping_mul(0x9E37_79B9_7F4A_7C15)
+            seed ^ self.frame_index.wrapping_mul(0x9E37_79B9_7F4A_7C15)
         }
     }
 
@@ -252,40 +274,42 @@ impl Renderer {
             }
         }
         let pass = self.passes();
-        let mut settings = if self.settings.progressive {
-            progressive::pass_settings(&self.settings, desc.seed, pass)
+        let common = &self.options.common;
+        let mut frame = if common.progressive {
+            progressive::pass_params(common, desc.seed, pass)
         } else {
-            Settings {
+            FrameParams {
                 seed: desc.seed.unwrap_or_else(|| self.frame_seed()),
-                ..self.settings.clone()
+                radius_scale: 1.0,
+                first_hit_aovs: true,
+                progressive: false,
             }
         };
         // Not asked for: the CPU methods skip their first-hit rays (`keep_requested` drops
         // the images anyway).
-        settings.first_hit_aovs &= desc.images.aovs;
+        frame.first_hit_aovs &= desc.images.aovs;
         if let Some(g) = self.gpu.as_mut() {
             g.targets
-                .set_sample_offset(progressive::sample_offset(&self.settings, pass));
+                .set_sample_offset(progressive::sample_offset(common, pass));
             g.serial = desc.serial;
         }
-        let mut out = match settings.method {
-            Method::Path | Method::Photon | Method::Gather => {
-                let bvh = self.bvh.as_ref().ok_or(Error::Cancelled)?;
-                let scene = &self.scene;
-                match settings.method {
-                    Method::Photon => photon::render(scene, bvh, &settings, progress)?,
-                    Method::Gather => gather::render(scene, bvh, &settings, progress)?,
-                    _ => path::render(scene, bvh, &settings, progress)?,
-                }
+        let mut out = match &self.options.method {
+            MethodOptions::Path(o) => {
+                path::render(&self.scene, self.cpu_bvh()?, o, &frame, progress)?
             }
-            Method::Direct | Method::Ispm | Method::Bidir => {
-                self.gpu_frame(&settings, desc.images, progress)?
+            MethodOptions::Photon(o) => {
+                photon::render(&self.scene, self.cpu_bvh()?, o, &frame, progress)?
             }
+            MethodOptions::Gather(o) => {
+                gather::render(&self.scene, self.cpu_bvh()?, o, &frame, progress)?
+            }
+            _ => self.gpu_frame(&frame, desc.images, progress)?,
         };
+        out.stats.method = self.method().name().to_string();
         stages.append(&mut out.stats.stages);
         out.stats.stages = stages;
         keep_requested(&mut out, desc.images);
-        if self.settings.progressive {
+        if self.options.common.progressive {
             let acc = self
                 .accum
                 .get_or_insert_with(|| progressive::Accumulation::new(&out.radiance));
@@ -339,25 +363,35 @@ impl Renderer {
         Ok((name.to_string(), seconds))
     }
 
+    /// The CPU BVH (built or updated at the start of every frame).
+    fn cpu_bvh(&self) -> Result<&SceneBvh> {
+        self.bvh.as_ref().ok_or(Error::Cancelled)
+    }
+
     fn gpu_frame(
         &mut self,
-        settings: &Settings,
+        frame: &FrameParams,
         images: Images,
         progress: &dyn Progress,
     ) -> Result<RenderOutput> {
+        let Some(direct) = self.options.method.direct_light() else {
+            return Err(Error::setting("method", "not a GPU method"));
+        };
         let ctx = match &self.gpu {
             Some(g) => g.ctx.clone(),
-            None => crate::gpu::context(settings.adapter.as_deref())?,
+            None => crate::gpu::context(direct.adapter.as_deref())?,
         };
+        let direct = direct.clone();
+        let ispm = self.method() == Method::Ispm;
         ctx.scoped("frame", || {
-            self.sync_gpu(&ctx, settings)?;
-            let mut out = self.gpu_method_frame(settings, images, progress)?;
+            self.sync_gpu(&ctx, &direct)?;
+            let mut out = self.gpu_method_frame(frame, images, progress)?;
             let g = self.gpu.as_mut().ok_or(Error::Cancelled)?;
             if g.targets.grow_edges(&ctx)? {
-                if settings.progressive && settings.method == Method::Ispm {
+                if frame.progressive && ispm {
                     // Progressive `ispm` corrects the composite on the CPU (ray-traced
                     // direct light, per-pixel kernel coverage): the whole pass again.
-                    out = self.gpu_method_frame(settings, images, progress)?;
+                    out = self.gpu_method_frame(frame, images, progress)?;
                 } else {
                     // More edge pixels than their buffers held: grown, and the direct light
                     // and the composite redone over the frame's indirect and specular light.
@@ -371,51 +405,52 @@ impl Renderer {
     /// One frame of a GPU method on the synchronized GPU state.
     fn gpu_method_frame(
         &mut self,
-        settings: &Settings,
+        frame: &FrameParams,
         images: Images,
         progress: &dyn Progress,
     ) -> Result<RenderOutput> {
-        {
-            let gpu = self.gpu.as_mut().ok_or(Error::Cancelled)?;
-            let bvh = self.bvh.as_ref().ok_or(Error::Cancelled)?;
-            match settings.method {
-                Method::Ispm => {
-                    let invalid = ispm::Invalidation {
-                        all: self.changes.materials,
-                        lights: &self.lights_changed,
-                        moved: &self.moved,
-                    };
-                    ispm::frame(ispm::FrameInputs {
-                        gpu,
-                        ring: &mut self.ring,
-                        invalid,
-                        scene: &self.scene,
-                        bvh,
-                        settings,
-                        frame: self.frame_index,
-                        changes: self.changes,
-                        images,
-                        progress,
-                    })
-                }
-                Method::Bidir => bidir::frame(gpu, &self.scene, bvh, settings, images, progress),
-                _ => direct::frame(gpu, &self.scene, images, progress),
+        let gpu = self.gpu.as_mut().ok_or(Error::Cancelled)?;
+        let bvh = self.bvh.as_ref().ok_or(Error::Cancelled)?;
+        match &self.options.method {
+            MethodOptions::Ispm(options) => {
+                let invalid = ispm::Invalidation {
+                    all: self.changes.materials,
+                    lights: &self.lights_changed,
+                    moved: &self.moved,
+                };
+                ispm::frame(ispm::FrameInputs {
+                    gpu,
+                    ring: &mut self.ring,
+                    invalid,
+                    scene: &self.scene,
+                    bvh,
+                    options,
+                    params: frame,
+                    frame: self.frame_index,
+                    changes: self.changes,
+                    images,
+                    progress,
+                })
             }
+            MethodOptions::Bidir(options) => {
+                bidir::frame(gpu, &self.scene, bvh, options, frame, images, progress)
+            }
+            _ => direct::frame(gpu, &self.scene, images, progress),
         }
     }
 
     /// Creates the GPU state on the first frame, else uploads what changed and rebuilds
     /// the targets after a resize.
-    fn sync_gpu(&mut self, ctx: &Arc<GpuContext>, settings: &Settings) -> Result<()> {
+    fn sync_gpu(&mut self, ctx: &Arc<GpuContext>, direct: &DirectLightOptions) -> Result<()> {
         let scene = &self.scene;
         let layers = self.gpu.as_ref().map(|g| g.scene.layers);
         let fits = layers.is_some_and(|l| gpu::GpuScene::fits(scene, l));
         if !fits {
             crate::raster::check_scene_buffers(ctx, scene)?;
-            let gs = gpu::GpuScene::new(ctx, scene, settings.shadow_map_size)?;
-            gpu::check_limits(ctx, scene, settings, gs.layers)?;
+            let gs = gpu::GpuScene::new(ctx, scene, direct.shadow_map_size)?;
+            gpu::check_limits(ctx, scene, direct.shadow_map_size, gs.layers)?;
             let targets =
-                gpu::Targets::new(ctx, &gs, scene, settings.spp, settings.edge_supersampling)?;
+                gpu::Targets::new(ctx, &gs, scene, direct.spp, direct.edge_supersampling)?;
             self.gpu = Some(GpuState {
                 ctx: ctx.clone(),
                 scene: gs,
@@ -446,17 +481,12 @@ impl Renderer {
             g.scene.write_materials(ctx, scene);
         }
         if c.lights || c.geometry {
-            g.scene.write_lights(ctx, scene, settings.shadow_map_size);
+            g.scene.write_lights(ctx, scene, direct.shadow_map_size);
         }
         if self.resized {
-            gpu::check_limits(ctx, scene, settings, g.scene.layers)?;
-            g.targets = gpu::Targets::new(
-                ctx,
-                &g.scene,
-                scene,
-                settings.spp,
-                settings.edge_supersampling,
-            )?;
+            gpu::check_limits(ctx, scene, direct.shadow_map_size, g.scene.layers)?;
+            g.targets =
+                gpu::Targets::new(ctx, &g.scene, scene, direct.spp, direct.edge_supersampling)?;
             g.ispm = None;
             g.bidir = None;
         } else {
@@ -504,10 +534,14 @@ fn keep_requested(out: &mut RenderOutput, images: Images) {
     }
 }
 
-/// Renders `scene` with `settings`: one frame of a new [`Renderer`](crate::frame::Renderer)
-/// with every image read back.
-pub fn render(scene: &Scene, settings: &Settings, progress: &dyn Progress) -> Result<RenderOutput> {
-    let mut renderer = Renderer::new(scene, settings)?;
+/// Renders `scene` with `options`: one frame of a new [`Renderer`] with every image read
+/// back.
+pub fn render(
+    scene: &Scene,
+    options: &RenderOptions,
+    progress: &dyn Progress,
+) -> Result<RenderOutput> {
+    let mut renderer = Renderer::new(scene, options)?;
     renderer.render(
         &FrameDesc {
             seed: None,

@@ -5,8 +5,10 @@ use crate::scene::Scene;
 use crate::trace::path::FirstHitImages;
 
 /// Timings and counts of one render.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RenderStats {
+    /// The method's name.
+    pub method: String,
     /// (stage name, seconds), in execution order.
     pub stages: Vec<(String, f64)>,
     pub total_seconds: f64,

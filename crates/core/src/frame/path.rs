@@ -1,6 +1,7 @@
 //! Method `path`: the reference renderer (path tracing + light tracing for caustics).
 
-use super::{RenderOutput, RenderStats, Settings};
+use super::options::PathOptions;
+use super::{FrameParams, RenderOutput, RenderStats};
 use crate::cancel::{Progress, StageProgress};
 use crate::error::Result;
 use crate::image::Image;
@@ -19,20 +20,21 @@ const LIGHT_CHUNK: u64 = 1 << 14;
 pub fn render(
     scene: &Scene,
     bvh: &SceneBvh,
-    settings: &Settings,
+    options: &PathOptions,
+    frame: &FrameParams,
     progress: &dyn Progress,
 ) -> Result<RenderOutput> {
     let t0 = Instant::now();
     let mut stats = RenderStats::of(scene);
 
     let (w, h) = (scene.camera.width, scene.camera.height);
-    let spp = settings.spp;
+    let spp = options.spp;
     let ps = PathSettings {
-        max_depth: settings.max_depth,
+        max_depth: options.max_depth,
         rr_depth: 3,
     };
-    let light_paths = if scene.has_delta_materials() && settings.max_depth >= 2 {
-        settings
+    let light_paths = if scene.has_delta_materials() && options.max_depth >= 2 {
+        options
             .light_paths
             .unwrap_or(spp as u64 * w as u64 * h as u64)
     } else {
@@ -69,13 +71,13 @@ pub fn render(
                         if s % 64 == 63 && stage.stopped() {
                             return None;
                         }
-                        let mut rng = Rng::new(settings.seed, pixel, s as u64);
+                        let mut rng = Rng::new(frame.seed, pixel, s as u64);
                         let j = rng.next_2d();
                         let dir = cam.direction(x as f32 + j.x, y as f32 + j.y);
                         sum += path::radiance(scene, bvh, cam.position, dir, &mut rng, &ps);
                     }
                     // Auxiliary images through the pixel centre are noise-free.
-                    let first = if settings.first_hit_aovs {
+                    let first = if frame.first_hit_aovs {
                         path::first_hit(
                             scene,
                             bvh,
@@ -102,7 +104,7 @@ pub fn render(
     let t = Instant::now();
     let weights = light_tracer::light_weights(scene);
     let lts = LightTraceSettings {
-        max_depth: settings.max_depth,
+        max_depth: options.max_depth,
         rr_depth: 3,
     };
     let splats: Vec<Vec<(u32, Vec3)>> = (0..light_chunks)
@@ -117,7 +119,7 @@ pub fn render(
                 if i % 256 == 0 && stage.stopped() {
                     return splats;
                 }
-                let mut rng = Rng::new(settings.seed, u64::MAX - 1, i);
+                let mut rng = Rng::new(frame.seed, u64::MAX - 1, i);
                 light_tracer::trace_path(
                     scene,
                     bvh,

@@ -8,7 +8,8 @@
 //!    else: direct light comes from the photons too, so the image converges to the full
 //!    solution as the photon count grows and the gather radius shrinks.
 
-use super::{RenderOutput, RenderStats, Settings};
+use super::options::{KernelOptions, PhotonOptions};
+use super::{FrameParams, RenderOutput, RenderStats};
 use crate::cancel::Progress;
 use crate::error::Result;
 use crate::image::Image;
@@ -20,32 +21,33 @@ use crate::scene::Scene;
 use crate::trace::SceneBvh;
 use std::time::Instant;
 
-/// The kNN estimate of `settings` (`k`, `max_radius` or its default, `kernel`); also the
-/// gather of ISPM's specular paths.
-pub fn gather_settings(scene: &Scene, settings: &Settings) -> Gather {
+/// The k-nearest-neighbour gather of `k` photons with `kernel`, shrunk for the frame: the
+/// radiance estimate of method `photon`, and the gather of ISPM's specular paths.
+pub fn knn_gather(scene: &Scene, k: u32, kernel: &KernelOptions, frame: &FrameParams) -> Gather {
     Gather::new(
         scene,
-        settings.k,
-        settings.max_radius,
-        settings.kernel,
-        settings.radius_scale,
+        k,
+        kernel.max_radius,
+        kernel.kernel,
+        frame.radius_scale,
     )
 }
 
-/// The camera samples of `settings`.
-pub(super) fn camera_samples(settings: &Settings) -> CameraSamples {
+/// The frame's camera samples: `spp` per pixel through delta lobes up to `max_depth`.
+pub(super) fn camera_samples(spp: u32, max_depth: u32, frame: &FrameParams) -> CameraSamples {
     CameraSamples {
-        spp: settings.spp,
-        seed: settings.seed,
-        max_depth: settings.max_depth,
-        first_hit_aovs: settings.first_hit_aovs,
+        spp,
+        seed: frame.seed,
+        max_depth,
+        first_hit_aovs: frame.first_hit_aovs,
     }
 }
 
 pub fn render(
     scene: &Scene,
     bvh: &SceneBvh,
-    settings: &Settings,
+    options: &PhotonOptions,
+    frame: &FrameParams,
     progress: &dyn Progress,
 ) -> Result<RenderOutput> {
     let t0 = Instant::now();
@@ -56,12 +58,12 @@ pub fn render(
     // Photon tracing: every bounce, direct light included.
     let t = Instant::now();
     let pts = PhotonTraceSettings {
-        max_bounces: settings.max_depth - 1,
+        max_bounces: options.max_depth - 1,
         store_direct: true,
         differentials: None,
     };
     let control = Checked::new(progress, "photon trace");
-    let set = emit_and_trace_checked(scene, bvh, settings.photons, &pts, settings.seed, &control)?;
+    let set = emit_and_trace_checked(scene, bvh, options.photons, &pts, frame.seed, &control)?;
     stage("photon trace", t);
 
     let t = Instant::now();
@@ -69,8 +71,8 @@ pub fn render(
     stage("kd-tree build", t);
 
     let t = Instant::now();
-    let gather = gather_settings(scene, settings);
-    let samples = camera_samples(settings);
+    let gather = knn_gather(scene, options.k, &options.kernel, frame);
+    let samples = camera_samples(options.spp, options.max_depth, frame);
     let (radiance, first) = render_image(
         scene,
         bvh,
@@ -81,7 +83,8 @@ pub fn render(
     let caustics = Image::new(radiance.width, radiance.height);
     let mut out = RenderOutput::of_cpu(radiance, first, caustics, stats);
     out.stats.samples_per_pixel = samples.spp;
-    out.stats.camera_paths = samples.spp as u64 * scene.camera.width as u64 * scene.camera.height as u64;
+    out.stats.camera_paths =
+        samples.spp as u64 * scene.camera.width as u64 * scene.camera.height as u64;
     out.stats
         .stages
         .push(("radiance estimate".into(), t.elapsed().as_secs_f64()));

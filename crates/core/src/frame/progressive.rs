@@ -16,14 +16,15 @@
 //! the scene BVH at new jittered sub-pixel positions per pass), as `path` does, and
 //! replaces the rasterized one in the pass.
 
+use super::options::Common;
+use super::FrameParams;
+use crate::cancel::Progress;
 use crate::cancel::StageProgress;
 use crate::error::Result;
 use crate::image::Image;
-use crate::photon::{boundary, Photon};
 use crate::photon::radius::Z_RATIO;
+use crate::photon::{boundary, Photon};
 use crate::raster::oct_decode;
-use super::options::Settings;
-use crate::cancel::Progress;
 use crate::sampling::Rng;
 use crate::scene::Scene;
 use crate::trace::path::direct_light;
@@ -89,31 +90,31 @@ fn mix(mut z: u64) -> u64 {
     z ^ (z >> 31)
 }
 
-/// The settings of progressive pass `pass` (0-based): the base seed (`seed`, else the
-/// settings') for the first pass, then a new one per pass, and the kernel radius scale of
-/// the pass times the settings' own.
-pub(super) fn pass_settings(settings: &Settings, seed: Option<u64>, pass: u64) -> Settings {
-    let base = seed.unwrap_or(settings.seed);
-    Settings {
+/// The frame parameters of progressive pass `pass` (0-based): the base seed (`seed`, else
+/// the options') for the first pass, then a new one per pass, and the kernel radius scale
+/// of the pass.
+pub(super) fn pass_params(common: &Common, seed: Option<u64>, pass: u64) -> FrameParams {
+    let base = seed.unwrap_or(common.seed);
+    FrameParams {
         seed: if pass == 0 {
             base
         } else {
             base ^ mix(pass.wrapping_add(0x5851_F42D_4C95_7F2D))
         },
-        radius_scale: settings.radius_scale
-            * progressive_radius_scale(pass, settings.progressive_alpha),
-        ..settings.clone()
+        radius_scale: progressive_radius_scale(pass, common.progressive_alpha),
+        first_hit_aovs: true,
+        progressive: true,
     }
 }
 
 /// The sub-pixel offset of the GPU methods' sample positions in pass `pass` (a
 /// Cranley–Patterson rotation, new per pass; zero outside progressive mode and in the first
 /// pass, so that pass is the ordinary frame).
-pub(super) fn sample_offset(settings: &Settings, pass: u64) -> Vec2 {
-    if !settings.progressive || pass == 0 {
+pub(super) fn sample_offset(common: &Common, pass: u64) -> Vec2 {
+    if !common.progressive || pass == 0 {
         return Vec2::ZERO;
     }
-    let h = mix(settings.seed ^ mix(pass));
+    let h = mix(common.seed ^ mix(pass));
     Vec2::new(
         (h >> 40) as f32 / (1u64 << 24) as f32,
         ((h >> 16) & 0xFF_FFFF) as f32 / (1u64 << 24) as f32,
@@ -193,12 +194,13 @@ const DIRECT_STREAM: u64 = 0xD1EC_7000_0000_0000;
 /// rasterizes with shadow maps: next-event estimation of every point and spot light on the
 /// surface's non-delta lobes, nothing on misses), ray traced on the CPU as `path` does at
 /// its first vertex: the mean of k×k camera rays per pixel (k = ⌈√spp⌉, at least 2), one
-/// at a uniformly random point of each stratum drawn from `settings.seed`, so that the
+/// at a uniformly random point of each stratum drawn from `seed`, so that the
 /// mean over passes of new seeds converges to the pixel's exact direct light.
 pub(super) fn direct_image(
     scene: &Scene,
     bvh: &SceneBvh,
-    settings: &Settings,
+    spp: u32,
+    seed: u64,
     progress: &dyn Progress,
 ) -> Result<Image> {
     let cam = &scene.camera;
@@ -206,7 +208,7 @@ pub(super) fn direct_image(
     // k×k strata per pixel, one random point in each: at least 2×2 (a few ms per pass at
     // 128x128), since one random point per pass had 3× the variance of the shadow-mapped
     // direct light at mirror-shadow's shadow edges (relMSE 6.5e-4 vs 2.1e-4 after 16 passes).
-    let k = (settings.spp.max(1) as f32).sqrt().ceil().max(2.0) as u32;
+    let k = (spp.max(1) as f32).sqrt().ceil().max(2.0) as u32;
     let spp = k * k;
     let mut image = Image::new(w, h);
     let stage = StageProgress::new(progress, "direct light", h as u64);
@@ -222,7 +224,7 @@ pub(super) fn direct_image(
                 let pixel = y as u64 * w as u64 + x as u64;
                 let mut sum = Vec3::ZERO;
                 for s in 0..spp {
-                    let mut rng = Rng::new(settings.seed, pixel, DIRECT_STREAM + s as u64);
+                    let mut rng = Rng::new(seed, pixel, DIRECT_STREAM + s as u64);
                     let j = rng.next_2d();
                     let (sx, sy) = ((s % k) as f32, (s / k) as f32);
                     let dir = cam.direction(
@@ -341,12 +343,11 @@ mod tests {
         let m = acc.add(&img);
         assert_eq!(m.pixels[0], glam::Vec3::splat(2.0));
         assert_eq!(m.pixels[1], glam::Vec3::ZERO);
-        let s = Settings {
-            progressive: true,
-            ..Settings::default()
-        };
+        let s = super::super::RenderOptions::defaults(super::super::Method::Gather)
+            .progressive()
+            .common;
         let seeds: std::collections::HashSet<u64> =
-            (0..100).map(|p| pass_settings(&s, None, p).seed).collect();
+            (0..100).map(|p| pass_params(&s, None, p).seed).collect();
         assert_eq!(seeds.len(), 100);
         assert_eq!(sample_offset(&s, 0), Vec2::ZERO);
         let o = sample_offset(&s, 3);

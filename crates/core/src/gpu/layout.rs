@@ -8,7 +8,12 @@ pub const VIEW_SIZE: u64 = std::mem::size_of::<ViewRaw>() as u64;
 
 /// A `View` uniform picked by dynamic offset, seen by the vertex and fragment stages.
 pub fn view_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
-    uniform_entry_sized(binding, wgpu::ShaderStages::VERTEX_FRAGMENT, true, VIEW_SIZE)
+    uniform_entry_sized(
+        binding,
+        wgpu::ShaderStages::VERTEX_FRAGMENT,
+        true,
+        VIEW_SIZE,
+    )
 }
 
 /// A uniform buffer bound whole, seen by the vertex and fragment stages.

@@ -12,8 +12,8 @@
 use super::trace::{scatter, TraceControl};
 use super::PhotonRay;
 use crate::error::{Error, Result};
-use crate::scene::light_views::{check_layer_memory, LightView, BOUNCE_MAPS};
 use crate::sampling::Rng;
+use crate::scene::light_views::{check_layer_memory, LightView, BOUNCE_MAPS};
 use crate::scene::Scene;
 use crate::trace::{Interaction, SceneBvh};
 use glam::{DMat4, DVec3, DVec4};
@@ -135,11 +135,7 @@ pub fn trace_bounce_maps(
     }
     let inverses: Vec<DMat4> = layers
         .iter()
-        .map(|l| {
-            l.view_proj
-                .as_dmat4()
-                .inverse()
-        })
+        .map(|l| l.view_proj.as_dmat4().inverse())
         .collect();
     let parts: Vec<BounceMap> = rows
         .par_iter()

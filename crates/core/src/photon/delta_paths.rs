@@ -69,6 +69,18 @@ pub enum SpecularSampling {
     Full,
 }
 
+impl SpecularSampling {
+    pub const ALL: &'static [SpecularSampling] =
+        &[SpecularSampling::Adaptive, SpecularSampling::Full];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            SpecularSampling::Adaptive => "adaptive",
+            SpecularSampling::Full => "full",
+        }
+    }
+}
+
 /// Marks the pixels whose footprint may see a triangle with a delta lobe first.
 pub fn delta_footprint(scene: &Scene) -> Vec<bool> {
     let cam = &scene.camera;
@@ -531,11 +543,11 @@ pub fn adaptive_delta_image<S: Default + Send>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::cancel::Silent;
+    use crate::photon::camera_pass::delta_image;
     use crate::photon::estimate::{Gather, GatherCache, PhotonMap};
     use crate::photon::Kernel;
     use crate::photon::{emit_and_trace, Neighbour, PhotonTraceSettings};
-    use crate::cancel::Silent;
-    use crate::photon::camera_pass::delta_image;
     use crate::trace::path::direct_light;
 
     /// Mean and standard error over independent images of each pixel-set sum.

@@ -7,9 +7,9 @@ use super::footprint::{t_auto, Footprint};
 use super::lbvh::{Aabb, LinearBvh};
 use super::{Kernel, Photon, PhotonSet};
 use crate::cancel;
+use crate::cancel::Progress;
 use crate::error::Result;
 use crate::memory;
-use crate::cancel::Progress;
 use crate::trace::Interaction;
 use glam::Vec3;
 

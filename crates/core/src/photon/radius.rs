@@ -80,4 +80,3 @@ impl VolumeRadius {
         (self.r_base * g).min(self.r_max)
     }
 }
-

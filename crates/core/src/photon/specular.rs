@@ -7,16 +7,16 @@
 //! the bounce-map hits, i.e. direct light) wherever the specular path lands; on Lambertian
 //! surfaces, the estimate precomputed at a nearby photon (`photon::irradiance`).
 
-use crate::error::Result;
-use crate::image::Image;
-use crate::photon::estimate::{Gather, GatherCache, PhotonMap};
-use crate::photon::irradiance::IrradianceCache;
-use crate::photon::{Neighbour, Photon};
 use super::camera_pass::{delta_image, CameraSamples};
 use super::delta_paths::{
     adaptive_delta_image, shade_landings, trace_landings, Landings, SpecularSampling,
 };
 use crate::cancel::Progress;
+use crate::error::Result;
+use crate::image::Image;
+use crate::photon::estimate::{Gather, GatherCache, PhotonMap};
+use crate::photon::irradiance::IrradianceCache;
+use crate::photon::{Neighbour, Photon};
 use crate::scene::Scene;
 use crate::trace::path::direct_light;
 use crate::trace::Interaction;

@@ -13,9 +13,9 @@ use super::differential::{self, Differentials};
 use super::focus::Focus;
 use super::{path_density_factor, FootprintAxes, PathKind, Photon, PhotonRay, PhotonSet};
 use crate::bsdf::Lobe;
+use crate::cancel::Progress;
 use crate::error::{Error, Result};
 use crate::memory;
-use crate::cancel::Progress;
 use crate::sampling::Rng;
 use crate::scene::Scene;
 use crate::trace::light_tracer::{choose_light, light_weights};
@@ -177,7 +177,10 @@ pub fn emit_aimed_caustics(
             out.escaped += 1;
             return;
         };
-        if !Interaction::new(scene, &hit, direction).material.has_delta_lobe() {
+        if !Interaction::new(scene, &hit, direction)
+            .material
+            .has_delta_lobe()
+        {
             out.absorbed += 1;
             return;
         }

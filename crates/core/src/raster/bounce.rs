@@ -320,4 +320,3 @@ impl BounceTargets {
         Ok(out)
     }
 }
-

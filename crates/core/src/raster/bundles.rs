@@ -7,9 +7,9 @@
 //! Memory: `res`² head pointers per bundle and one node buffer for all bundles of a frame;
 //! fragments beyond its capacity are dropped and counted ([`BundleBuffers::overflow`]).
 
-use crate::gpu::timer::Timer;
 use super::{buffer_init, gbuffer, Geometry};
 use crate::error::{Error, Result};
+use crate::gpu::timer::Timer;
 use crate::gpu::{self, shaders, GpuContext};
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3, Vec4};
@@ -360,6 +360,9 @@ impl BundleBuffers {
 
 impl crate::gpu::Pipelines for BundlePass {
     fn create(ctx: &crate::gpu::GpuContext) -> Self {
-        BundlePass::new(&ctx.device, &super::textures::TexturesLayout::get(ctx).layout)
+        BundlePass::new(
+            &ctx.device,
+            &super::textures::TexturesLayout::get(ctx).layout,
+        )
     }
 }

@@ -231,6 +231,9 @@ impl GBufferPass {
 
 impl crate::gpu::Pipelines for GBufferPass {
     fn create(ctx: &crate::gpu::GpuContext) -> Self {
-        GBufferPass::new(&ctx.device, &super::textures::TexturesLayout::get(ctx).layout)
+        GBufferPass::new(
+            &ctx.device,
+            &super::textures::TexturesLayout::get(ctx).layout,
+        )
     }
 }

@@ -3,12 +3,12 @@
 //! writes several `Rgba32Float` targets of one texture array each, and the copies of all
 //! layers into mappable buffers in the same submission, read back after it.
 
-use crate::scene::light_views::{check_layer_memory, LayerKind, LightView};
 use super::shadow::CullUnits;
-use crate::gpu::timer::Timer;
 use super::{gbuffer, Geometry};
 use crate::error::{Error, Result};
+use crate::gpu::timer::Timer;
 use crate::gpu::{self, GpuContext};
+use crate::scene::light_views::{check_layer_memory, LayerKind, LightView};
 use glam::{Mat4, Vec4};
 
 /// Format of every layer target.
@@ -131,10 +131,7 @@ impl LayerTargets {
         timer: &mut Timer,
     ) {
         // Each layer draws only the triangles that reach into its view.
-        let matrices: Vec<Mat4> = layers
-            .iter()
-            .map(|l| l.view_proj)
-            .collect();
+        let matrices: Vec<Mat4> = layers.iter().map(|l| l.view_proj).collect();
         let draws = cull.draws(&matrices);
         for (i, layer) in layers.iter().enumerate() {
             let (views, depth_view) = &self.layer_views[i];

@@ -14,9 +14,11 @@ pub mod textures;
 pub mod vpl;
 
 use crate::error::Result;
+pub(crate) use crate::gpu::layout::{
+    buffer_init, storage_entry, view_binding, view_entry, VIEW_SIZE,
+};
 use crate::gpu::raw::{VertexRaw, ViewRaw};
 use crate::gpu::GpuContext;
-pub(crate) use crate::gpu::layout::{buffer_init, storage_entry, view_binding, view_entry, VIEW_SIZE};
 use crate::scene::light_views;
 use crate::scene::Scene;
 use glam::{Mat4, Vec2, Vec3};

@@ -5,15 +5,15 @@
 //! material, flux). The targets are copied into mappable buffers in the same submission and
 //! read back as [`RsmTexel`]s, from which the frame draws its VPLs.
 
-use crate::gpu::raw::BounceViewRaw;
-use crate::scene::light_views::LightView;
-use crate::scene::Scene;
 use super::layers::{LayerTargets, TARGET};
-use crate::scene::light_views::LayerKind;
-use crate::gpu::timer::Timer;
 use super::{buffer_init, gbuffer, Geometry};
 use crate::error::{Error, Result};
+use crate::gpu::raw::BounceViewRaw;
+use crate::gpu::timer::Timer;
 use crate::gpu::{self, shaders, GpuContext};
+use crate::scene::light_views::LayerKind;
+use crate::scene::light_views::LightView;
+use crate::scene::Scene;
 use glam::{Vec2, Vec3};
 
 const VIEW_SIZE: u64 = std::mem::size_of::<BounceViewRaw>() as u64;
@@ -274,6 +274,9 @@ impl RsmTargets {
 
 impl crate::gpu::Pipelines for RsmPass {
     fn create(ctx: &crate::gpu::GpuContext) -> Self {
-        RsmPass::new(&ctx.device, &super::textures::TexturesLayout::get(ctx).layout)
+        RsmPass::new(
+            &ctx.device,
+            &super::textures::TexturesLayout::get(ctx).layout,
+        )
     }
 }

@@ -325,10 +325,12 @@ impl CullUnits {
     }
 }
 
-
 impl crate::gpu::Pipelines for ShadowPass {
     fn create(ctx: &crate::gpu::GpuContext) -> Self {
-        ShadowPass::new(&ctx.device, &super::textures::TexturesLayout::get(ctx).layout)
+        ShadowPass::new(
+            &ctx.device,
+            &super::textures::TexturesLayout::get(ctx).layout,
+        )
     }
 }
 
@@ -343,8 +345,7 @@ mod tests {
     /// and both outcomes occur.
     #[test]
     fn culled_boxes_are_outside_the_view() {
-        let m =
-            square_perspective(1.05, 0.01, 10.0) * look_to(Vec3::ZERO, Vec3::X, Vec3::Y);
+        let m = square_perspective(1.05, 0.01, 10.0) * look_to(Vec3::ZERO, Vec3::X, Vec3::Y);
         let inside = |p: Vec3| {
             let c = m * p.extend(1.0);
             c.w > 0.0 && c.x.abs() <= c.w && c.y.abs() <= c.w && c.z >= 0.0 && c.z <= c.w

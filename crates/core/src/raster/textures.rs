@@ -384,7 +384,6 @@ fn maps_raw(scene: &Scene) -> Vec<MapsRaw> {
     scene.material_maps.iter().map(|m| m.to_raw()).collect()
 }
 
-
 /// Group 1 of the passes that rasterize the scene (textures and material maps).
 pub struct TexturesLayout {
     pub layout: wgpu::BindGroupLayout,

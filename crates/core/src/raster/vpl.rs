@@ -3,8 +3,8 @@
 //! pass that adds the indirect light of VPLs and ray bundles to every G-buffer pixel
 //! (`bidir.wgsl`).
 
-use crate::scene::light_views::{corners, look_to, square_perspective, CUBE_FACES};
 use crate::gpu::{self, shaders};
+use crate::scene::light_views::{corners, look_to, square_perspective, CUBE_FACES};
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 
@@ -228,6 +228,9 @@ impl VplPass {
 
 impl crate::gpu::Pipelines for VplPass {
     fn create(ctx: &crate::gpu::GpuContext) -> Self {
-        VplPass::new(&ctx.device, &super::direct::DirectPass::get(ctx).gbuffer_layout)
+        VplPass::new(
+            &ctx.device,
+            &super::direct::DirectPass::get(ctx).gbuffer_layout,
+        )
     }
 }

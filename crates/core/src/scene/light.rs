@@ -54,7 +54,6 @@ impl Light {
         }
     }
 
-
     /// Radiant intensity (W/sr) emitted in unit direction `dir`.
     pub fn intensity_towards(&self, dir: Vec3) -> Vec3 {
         match *self {

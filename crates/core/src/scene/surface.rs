@@ -190,7 +190,9 @@ impl Scene {
 
     /// Whether any material has a delta lobe (perfect mirrors, smooth glass).
     pub fn has_delta_materials(&self) -> bool {
-        self.materials.iter().any(crate::bsdf::Material::has_delta_lobe)
+        self.materials
+            .iter()
+            .any(crate::bsdf::Material::has_delta_lobe)
     }
 
     /// Whether any material is alpha-masked.

@@ -121,4 +121,3 @@ pub fn trace_path(
         d = wi;
     }
 }
-
