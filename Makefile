@@ -11,6 +11,7 @@ render: setup
 	$(BIN)/gi render cornell -o out/cornell.exr -o out/cornell.png
 
 lint: setup
+	python3 scripts/check_layers.py
 	cargo fmt --all -- --check
 	cargo clippy --workspace --all-targets -- -D warnings
 	$(BIN)/ruff check python tests

@@ -45,7 +45,7 @@ from gi.denoising import denoise  # noqa: E402
 from gi.display import to_display  # noqa: E402
 from gi.io import read_channels, read_image, save_image, save_layers, save_result  # noqa: E402
 from gi.meshes import AssetWarning  # noqa: E402
-from gi.render import Renderer, RenderResult, options, render  # noqa: E402
+from gi.render import Renderer, RenderResult, method_options, options_table, render  # noqa: E402
 from gi.scene import load_scene  # noqa: E402
 
 __all__ = [
@@ -71,8 +71,9 @@ __all__ = [
     "footprint_radii",
     "gpu_counters",
     "load_scene",
+    "method_options",
     "methods",
-    "options",
+    "options_table",
     "read_channels",
     "read_image",
     "render",

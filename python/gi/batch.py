@@ -90,7 +90,7 @@ class Frame:
 
 def _render_keywords() -> set[str]:
     """The render options a job's settings may name: the core's table, and ``size``."""
-    return {row["name"] for row in gi.options()} | {"size"}
+    return {row["name"] for row in gi.options_table()} | {"size"}
 
 
 def _scene_label(scene: str) -> str:

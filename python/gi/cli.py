@@ -74,7 +74,7 @@ _ALIASES = {"progressive_alpha": ["--alpha"], "bundle_memory_mb": ["--bundle-mem
 def _option_names() -> list[str]:
     """The render options the command line takes: the table's, but width and height
     (``--size``)."""
-    names = dict.fromkeys(row["name"] for row in gi.options())
+    names = dict.fromkeys(row["name"] for row in gi.options_table())
     return [n for n in names if n not in ("width", "height")]
 
 
@@ -82,7 +82,7 @@ def _add_options(parser: argparse.ArgumentParser) -> None:
     """One argument per render option of the core's table (:func:`gi.options`), its help
     the option's doc, default and methods; the value is checked by the core."""
     rows: dict[str, list[dict]] = {}
-    for row in gi.options():
+    for row in gi.options_table():
         rows.setdefault(row["name"], []).append(row)
     for name in _option_names():
         variants = rows[name]

@@ -88,7 +88,7 @@ def _options(options: dict[str, Any]) -> dict[str, Any]:
     return options
 
 
-def options(method: str | None = None) -> list[dict[str, Any]]:
+def options_table(method: str | None = None) -> list[dict[str, Any]]:
     """The render options (the core's table): one dict per option with ``name``, ``kind``
     ("bool", "int", "float", "choice", "text"), ``default``, ``optional`` (``None`` allowed,
     meaning automatic), ``range`` (the values taken, in words), ``min``/``max`` or
@@ -354,6 +354,14 @@ def _jsonable(value: Any) -> Any:
     if isinstance(value, np.ndarray):
         return value.tolist()
     return value
+
+
+def method_options(method: str, **options: Any) -> dict[str, Any]:
+    """The ``options`` that ``method`` takes (with ``size``), the rest dropped: for sweeps
+    that share options across methods, which would otherwise warn for each option a
+    method ignores."""
+    names = {row["name"] for row in options_table(method)} | {"size"}
+    return {name: value for name, value in options.items() if name in names}
 
 
 def render(

@@ -101,6 +101,43 @@ fn within_extent(v: V3) -> bool {
     v.iter().all(|x| x.is_finite() && x.abs() <= MAX_EXTENT)
 }
 
+/// An object's mesh before placement, the mesh file's data when it is one, and its texture
+/// coordinates per triangle corner; errors as (field, message).
+type ObjectMesh<'a> = (TriMesh, Option<&'a MeshData>, Vec<[Vec2; 3]>);
+fn object_mesh<'a>(
+    shape: &ShapeDesc,
+    meshes: &'a HashMap<String, MeshData>,
+) -> std::result::Result<ObjectMesh<'a>, (String, String)> {
+    match shape {
+        ShapeDesc::Mesh { file } => {
+            let data = meshes.get(file).ok_or_else(|| {
+                (
+                    "shape.file".to_string(),
+                    format!("mesh `{file}` was not loaded"),
+                )
+            })?;
+            let uvs = if data.uvs.is_empty() {
+                vec![[Vec2::ZERO; 3]; data.mesh.indices.len()]
+            } else if data.uvs.len() == data.mesh.indices.len()
+                && data.uvs.iter().flatten().all(|u| u.is_finite())
+            {
+                data.uvs.clone()
+            } else {
+                return Err((
+                    "shape.file".into(),
+                    "texture coordinates must be finite, one per vertex".into(),
+                ));
+            };
+            Ok((data.mesh.clone(), Some(data), uvs))
+        }
+        shape => {
+            let mesh = primitive(shape).map_err(|(f, m)| (format!("shape.{f}"), m.to_string()))?;
+            let uvs = primitives::uvs(shape, &mesh);
+            Ok((mesh, None, uvs))
+        }
+    }
+}
+
 impl Scene {
     /// Parses and validates a JSON scene description. `source_name` names the file (or
     /// built-in) in error messages.
@@ -240,32 +277,8 @@ impl Scene {
             let at = |f: &str| format!("objects[{i}].{f}");
             let xf = transform_matrix(&obj.transform)
                 .map_err(|(f, m)| err(at(&format!("transform.{f}")), m))?;
-            let (mesh, file_materials, uvs) = match &obj.shape {
-                ShapeDesc::Mesh { file } => {
-                    let data = meshes.get(file).ok_or_else(|| {
-                        err(at("shape.file"), &format!("mesh `{file}` was not loaded"))
-                    })?;
-                    let uvs = if data.uvs.is_empty() {
-                        vec![[Vec2::ZERO; 3]; data.mesh.indices.len()]
-                    } else if data.uvs.len() == data.mesh.indices.len()
-                        && data.uvs.iter().flatten().all(|u| u.is_finite())
-                    {
-                        data.uvs.clone()
-                    } else {
-                        return Err(err(
-                            at("shape.file"),
-                            "texture coordinates must be finite, one per vertex",
-                        ));
-                    };
-                    (data.mesh.clone(), Some(data), uvs)
-                }
-                shape => {
-                    let mesh =
-                        primitive(shape).map_err(|(f, m)| err(at(&format!("shape.{f}")), m))?;
-                    let uvs = primitives::uvs(shape, &mesh);
-                    (mesh, None, uvs)
-                }
-            };
+            let (mesh, file_materials, uvs) =
+                object_mesh(&obj.shape, meshes).map_err(|(f, m)| err(at(&f), &m))?;
             validate_mesh(&mesh).map_err(|m| err(at("shape"), &m))?;
             if scene.positions.len() + mesh.positions.len() > MAX_VERTICES {
                 return Err(err(

@@ -1,9 +1,10 @@
-//! What the GPU methods keep from one frame to the next: the scene on the GPU (vertices,
-//! materials, lights, shadow maps), the render targets of one image size with their bind
-//! groups, the pass timer and the readback buffers. Everything is created once; a frame
-//! writes only what changed ([`crate::scene::Changes`]) and records passes.
+//! Render targets of one image size, the eye views and the bind groups that read them: the
+//! direct light (G-buffers, edge-adaptive supersampling, accumulation), the composite and
+//! the readback of what a frame asks for.
 
+use super::scene::GpuScene;
 use crate::error::{Error, Result};
+use crate::gpu::layout::texture;
 use crate::gpu::raw::ViewRaw;
 use crate::gpu::timer::Timer;
 use crate::gpu::Pipelines;
@@ -13,11 +14,9 @@ use crate::raster::composite::CompositePass;
 use crate::raster::direct::DirectPass;
 use crate::raster::edges::EdgePass;
 use crate::raster::gbuffer::GBufferPass;
-use crate::raster::shadow::ShadowPass;
-use crate::raster::textures::TexturesLayout;
 use crate::raster::{
-    self, buffer_init, camera_view, edges, gbuffer, sample_positions, shadow, view_binding,
-    Geometry, SAMPLES_PER_SUBMIT, VIEW_SIZE,
+    self, buffer_init, camera_view, edges, gbuffer, sample_positions, view_binding,
+    SAMPLES_PER_SUBMIT, VIEW_SIZE,
 };
 use crate::scene::Scene;
 use glam::{Vec2, Vec4};
@@ -25,232 +24,6 @@ use std::collections::HashMap;
 
 /// Timestamp queries of one frame (wgpu's maximum per set); passes beyond it go untimed.
 const TIMER_PASSES: u32 = wgpu::QUERY_SET_MAX_QUERIES / 2;
-
-/// The scene's GPU-resident data.
-pub(crate) struct GpuScene {
-    pub geometry: Geometry,
-    pub materials: wgpu::Buffer,
-    /// Textures and material maps (group 1 of the passes that rasterize the scene).
-    pub textures: raster::textures::GpuTextures,
-    /// Whether any material is alpha-masked (the shadow pass then discards cut-outs).
-    masked: bool,
-    /// The fragment shaders the scene needs (textures, alpha masks).
-    pub variant: raster::textures::Variant,
-    pub lights: wgpu::Buffer,
-    shadow_matrices: wgpu::Buffer,
-    shadow_views: wgpu::Buffer,
-    shadow_layers: Vec<wgpu::TextureView>,
-    shadow_array: wgpu::TextureView,
-    shadow_group: wgpu::BindGroup,
-    /// Shadow-map layers (one per spot light, six per point light).
-    pub layers: u32,
-    /// The shadow maps must be rendered again (lights or geometry moved).
-    pub shadows_stale: bool,
-    /// World -> clip per shadow layer (CPU copies, for culling the shadow passes).
-    shadow_clip: Vec<glam::Mat4>,
-    /// The geometry's culling units for the light-view passes (shadow, bounce, RSM, VPL
-    /// maps), rebuilt when geometry moves.
-    pub cull: shadow::CullUnits,
-}
-
-fn storage_init(ctx: &GpuContext, label: &str, bytes: &[u8]) -> wgpu::Buffer {
-    let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
-    buffer_init(ctx, label, bytes, usage)
-}
-
-impl GpuScene {
-    pub fn new(ctx: &GpuContext, scene: &Scene, shadow_map_size: u32) -> Result<Self> {
-        let textures =
-            raster::textures::GpuTextures::new(ctx, scene, &TexturesLayout::get(ctx).layout)?;
-        let shadows = shadow::ShadowViews::new(scene, shadow_map_size);
-        let layers = (shadows.matrices.len() as u32).max(1);
-        let materials: Vec<_> = scene.materials.iter().map(|m| m.to_raw()).collect();
-        let matrices: Vec<[f32; 16]> = shadows.matrices.iter().map(|m| m.to_cols_array()).collect();
-        let shadow_views = buffer_init(
-            ctx,
-            "shadow views",
-            bytemuck::cast_slice(&shadow::ShadowPass::views(&shadows)),
-            wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-        );
-        let (shadow_layers, shadow_array) =
-            shadow::layered_maps(&ctx.device, "shadow maps", shadow_map_size, layers);
-        let shadow_group = gpu::create_bind_group(
-            &ctx.device,
-            &wgpu::BindGroupDescriptor {
-                label: Some("shadow bind group"),
-                layout: &ShadowPass::get(ctx).layout,
-                entries: &[wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: view_binding(&shadow_views),
-                }],
-            },
-        );
-        Ok(GpuScene {
-            geometry: Geometry::upload(ctx, scene),
-            materials: storage_init(ctx, "materials", bytemuck::cast_slice(&materials)),
-            textures,
-            masked: scene.has_alpha_masks(),
-            variant: raster::textures::Variant::of(scene),
-            lights: storage_init(ctx, "lights", bytemuck::cast_slice(&shadows.lights)),
-            shadow_matrices: storage_init(ctx, "shadow matrices", bytemuck::cast_slice(&matrices)),
-            shadow_views,
-            shadow_layers,
-            shadow_array,
-            shadow_group,
-            layers,
-            shadows_stale: true,
-            shadow_clip: shadows.matrices,
-            cull: shadow::CullUnits::of(scene),
-        })
-    }
-
-    /// Whether the scene's lights still fit these shadow maps (same number of layers).
-    pub fn fits(scene: &Scene, layers: u32) -> bool {
-        let needed: u32 = scene
-            .lights
-            .iter()
-            .map(|l| match l {
-                crate::scene::Light::Point { .. } => 6,
-                crate::scene::Light::Spot { .. } => 1,
-            })
-            .sum();
-        needed.max(1) == layers
-    }
-
-    /// Uploads the vertices of scene triangles `range`.
-    pub fn write_triangles(&self, ctx: &GpuContext, scene: &Scene, range: std::ops::Range<usize>) {
-        let verts = raster::vertices_of(scene, range.clone());
-        let offset = (range.start * 3 * std::mem::size_of::<crate::gpu::raw::VertexRaw>()) as u64;
-        gpu::write_buffer(
-            &ctx.queue,
-            "scene vertices",
-            &self.geometry.vertices,
-            offset,
-            bytemuck::cast_slice(&verts),
-        );
-    }
-
-    pub fn write_materials(&mut self, ctx: &GpuContext, scene: &Scene) {
-        let materials: Vec<_> = scene.materials.iter().map(|m| m.to_raw()).collect();
-        gpu::write_buffer(
-            &ctx.queue,
-            "materials",
-            &self.materials,
-            0,
-            bytemuck::cast_slice(&materials),
-        );
-        self.textures.write_maps(ctx, scene);
-        let masked = scene.has_alpha_masks();
-        if masked || self.masked {
-            // Cut-outs appeared, changed or went: the shadow maps change with them.
-            self.shadows_stale = true;
-        }
-        self.masked = masked;
-        self.variant = raster::textures::Variant::of(scene);
-    }
-
-    /// Uploads the lights and their shadow views (they depend on the scene's bounds too).
-    pub fn write_lights(&mut self, ctx: &GpuContext, scene: &Scene, shadow_map_size: u32) {
-        let shadows = shadow::ShadowViews::new(scene, shadow_map_size);
-        let matrices: Vec<[f32; 16]> = shadows.matrices.iter().map(|m| m.to_cols_array()).collect();
-        let q = &ctx.queue;
-        gpu::write_buffer(
-            q,
-            "lights",
-            &self.lights,
-            0,
-            bytemuck::cast_slice(&shadows.lights),
-        );
-        gpu::write_buffer(
-            q,
-            "shadow matrices",
-            &self.shadow_matrices,
-            0,
-            bytemuck::cast_slice(&matrices),
-        );
-        gpu::write_buffer(
-            q,
-            "shadow views",
-            &self.shadow_views,
-            0,
-            bytemuck::cast_slice(&shadow::ShadowPass::views(&shadows)),
-        );
-        self.shadow_clip = shadows.matrices;
-        self.shadows_stale = true;
-    }
-
-    /// The lights' shadow matrices and maps (for lookups outside the direct pass).
-    pub fn shadow_lookup(&self) -> (&wgpu::Buffer, &wgpu::TextureView) {
-        (&self.shadow_matrices, &self.shadow_array)
-    }
-
-    /// The texture group for shadow passes of scenes with alpha masks (they discard
-    /// cut-outs), `None` otherwise.
-    pub fn shadow_masks(&self) -> Option<&wgpu::BindGroup> {
-        self.masked.then_some(&self.textures.group)
-    }
-
-    /// Renders the shadow maps if lights or geometry moved since they were last rendered.
-    pub fn record_shadows(
-        &mut self,
-        ctx: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
-        timer: &mut Timer,
-        scene: &Scene,
-    ) {
-        if !self.shadows_stale || scene.lights.is_empty() {
-            return;
-        }
-        // Each layer draws only the triangle runs that reach into its view.
-        let draws = self.cull.draws(&self.shadow_clip);
-        for (layer, view) in self.shadow_layers.iter().enumerate() {
-            let offset = (layer as u64 * VIEW_SIZE) as u32;
-            let ts = timer.pass("shadow maps");
-            ShadowPass::get(ctx).record(
-                encoder,
-                view,
-                &self.shadow_group,
-                offset,
-                &self.geometry,
-                draws.get(layer).map(|d| d.as_slice()),
-                self.masked.then_some(&self.textures.group),
-                ts,
-            );
-        }
-        self.shadows_stale = false;
-    }
-}
-
-/// Fails with a setting or GPU error when the image, the shadow maps or their layers exceed
-/// the adapter's limits.
-pub(super) fn check_limits(
-    ctx: &GpuContext,
-    scene: &Scene,
-    shadow_map_size: u32,
-    layers: u32,
-) -> Result<()> {
-    let l = ctx.device.limits();
-    let max = l.max_texture_dimension_2d;
-    if scene.camera.width > max || scene.camera.height > max {
-        return Err(Error::setting(
-            "width",
-            format!("the GPU allows images up to {max} pixels a side"),
-        ));
-    }
-    if shadow_map_size > max {
-        return Err(Error::setting(
-            "shadow_map_size",
-            format!("the GPU allows at most {max}"),
-        ));
-    }
-    if layers > l.max_texture_array_layers {
-        return Err(Error::Gpu(format!(
-            "{layers} shadow-map layers exceed the GPU's {}",
-            l.max_texture_array_layers
-        )));
-    }
-    Ok(())
-}
 
 /// A number not handed out before in this process ([`Targets::gbuffer_generation`]).
 fn next_generation() -> u64 {
@@ -332,11 +105,83 @@ fn target(
     )
 }
 
-fn tex_entry(binding: u32, view: &wgpu::TextureView) -> wgpu::BindGroupEntry<'_> {
-    wgpu::BindGroupEntry {
-        binding,
-        resource: wgpu::BindingResource::TextureView(view),
-    }
+/// The G-buffer pass's bind group: the eye views and the materials.
+fn gbuffer_group(ctx: &GpuContext, eye: &wgpu::Buffer, gs: &GpuScene) -> wgpu::BindGroup {
+    gpu::create_bind_group(
+        &ctx.device,
+        &wgpu::BindGroupDescriptor {
+            label: Some("gbuffer bind group"),
+            layout: &GBufferPass::get(ctx).layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: view_binding(eye),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: gs.materials.as_entire_binding(),
+                },
+            ],
+        },
+    )
+}
+
+/// The direct pass's scene group: eye views, lights, shadow matrices and maps, the
+/// comparison sampler and the penumbra taps.
+fn direct_scene_group(
+    ctx: &GpuContext,
+    eye: &wgpu::Buffer,
+    gs: &GpuScene,
+    penumbra: &wgpu::Buffer,
+) -> wgpu::BindGroup {
+    let direct_pass = DirectPass::get(ctx);
+    gpu::create_bind_group(
+        &ctx.device,
+        &wgpu::BindGroupDescriptor {
+            label: Some("direct scene bind group"),
+            layout: &direct_pass.scene_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: view_binding(eye),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: gs.lights.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: gs.shadow_matrices.as_entire_binding(),
+                },
+                texture(3, &gs.shadow_array),
+                wgpu::BindGroupEntry {
+                    binding: 4,
+                    resource: wgpu::BindingResource::Sampler(&direct_pass.shadow_sampler),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 5,
+                    resource: penumbra.as_entire_binding(),
+                },
+            ],
+        },
+    )
+}
+
+/// The direct pass's G-buffer group of `g`: its lighting inputs.
+fn lighting_group(ctx: &GpuContext, g: &gbuffer::GBuffer) -> wgpu::BindGroup {
+    gpu::create_bind_group(
+        &ctx.device,
+        &wgpu::BindGroupDescriptor {
+            label: Some("direct gbuffer bind group"),
+            layout: &DirectPass::get(ctx).gbuffer_layout,
+            entries: &g
+                .lighting_inputs()
+                .iter()
+                .enumerate()
+                .map(|(i, v)| texture(i as u32, v))
+                .collect::<Vec<_>>(),
+        },
+    )
 }
 
 impl Targets {
@@ -349,7 +194,6 @@ impl Targets {
         spp: u32,
         edge_supersampling: bool,
     ) -> Result<Self> {
-        let direct_pass = DirectPass::get(ctx);
         let device = &ctx.device;
         let (w, h) = (scene.camera.width, scene.camera.height);
         let eye = buffer_init(
@@ -382,23 +226,7 @@ impl Targets {
         let view = |t: &wgpu::Texture| t.create_view(&Default::default());
         let (accum_view, specular_view, black_view, radiance_view) =
             (view(&accum), view(&specular), view(&black), view(&radiance));
-        let gbuffer_group = gpu::create_bind_group(
-            device,
-            &wgpu::BindGroupDescriptor {
-                label: Some("gbuffer bind group"),
-                layout: &GBufferPass::get(ctx).layout,
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: view_binding(&eye),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: gs.materials.as_entire_binding(),
-                    },
-                ],
-            },
-        );
+        let gbuffer_group = gbuffer_group(ctx, &eye, gs);
         let taps = if edge_supersampling {
             raster::direct::penumbra_taps(spp)
         } else {
@@ -410,51 +238,8 @@ impl Targets {
             bytemuck::cast_slice(&[taps, 0, 0, 0]),
             wgpu::BufferUsages::UNIFORM,
         );
-        let direct_scene_group = gpu::create_bind_group(
-            device,
-            &wgpu::BindGroupDescriptor {
-                label: Some("direct scene bind group"),
-                layout: &direct_pass.scene_layout,
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: view_binding(&eye),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: gs.lights.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 2,
-                        resource: gs.shadow_matrices.as_entire_binding(),
-                    },
-                    tex_entry(3, &gs.shadow_array),
-                    wgpu::BindGroupEntry {
-                        binding: 4,
-                        resource: wgpu::BindingResource::Sampler(&direct_pass.shadow_sampler),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 5,
-                        resource: penumbra.as_entire_binding(),
-                    },
-                ],
-            },
-        );
-        let lighting_group = |g: &gbuffer::GBuffer| {
-            gpu::create_bind_group(
-                device,
-                &wgpu::BindGroupDescriptor {
-                    label: Some("direct gbuffer bind group"),
-                    layout: &direct_pass.gbuffer_layout,
-                    entries: &g
-                        .lighting_inputs()
-                        .iter()
-                        .enumerate()
-                        .map(|(i, v)| tex_entry(i as u32, v))
-                        .collect::<Vec<_>>(),
-                },
-            )
-        };
+        let direct_scene_group = direct_scene_group(ctx, &eye, gs, &penumbra);
+        let lighting_group = |g: &gbuffer::GBuffer| lighting_group(ctx, g);
         let direct_gbuffer_group = lighting_group(&gbuf);
         let sub_gbuffer_group = lighting_group(&sub);
         let edges = if spp > 1 && edge_supersampling {
@@ -526,9 +311,9 @@ impl Targets {
                 label: Some("composite bind group"),
                 layout: &CompositePass::get(ctx).layout,
                 entries: &[
-                    tex_entry(0, &self.accum_view),
-                    tex_entry(1, &self.specular_view),
-                    tex_entry(2, indirect),
+                    texture(0, &self.accum_view),
+                    texture(1, &self.specular_view),
+                    texture(2, indirect),
                 ],
             },
         ));

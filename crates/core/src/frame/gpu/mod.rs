@@ -1,0 +1,9 @@
+//! What the GPU methods keep from one frame to the next: the scene on the GPU ([`scene`])
+//! and the render targets of one image size ([`targets`]). Everything is created once; a
+//! frame writes only what changed ([`crate::scene::Changes`]) and records passes.
+
+mod scene;
+mod targets;
+
+pub(crate) use scene::{check_limits, GpuScene};
+pub(crate) use targets::{frame_timer, rgb_image, Targets};

@@ -1,0 +1,140 @@
+//! Step 1 and 3 of an `ispm` frame: the photons' first hits, from rasterized bounce maps
+//! (section 4.2, submitted first and read back after the direct light was submitted:
+//! section 4.3's asynchronous readback) or the same photons cast in the CPU BVH
+//! ([`crate::photon::bounce`], cheaper on CPU devices).
+
+use super::super::RenderStats;
+use super::stage;
+use crate::cancel::Progress;
+use crate::error::{Error, Result};
+use crate::gpu::timer::Timer;
+use crate::gpu::{GpuContext, Pipelines};
+use crate::photon::bounce::{trace_bounce_maps, BounceMap, FirstBounce};
+use crate::photon::trace::Checked;
+use crate::raster::bounce::{BouncePass, BounceTargets};
+use crate::scene::light_views::LightView;
+use crate::scene::Scene;
+use crate::trace::SceneBvh;
+use std::time::Instant;
+
+/// Where the first hits are found, and the bounce maps' resources.
+pub(super) struct FirstHits {
+    /// The choice, and why (`FirstBounce::resolve`).
+    pub choice: (FirstBounce, String),
+    /// The rasterized bounce maps' resources (`FirstBounce::Raster` only).
+    targets: Option<BounceTargets>,
+}
+
+impl FirstHits {
+    pub fn new(choice: (FirstBounce, String)) -> Self {
+        FirstHits {
+            choice,
+            targets: None,
+        }
+    }
+
+    fn raster(&self) -> bool {
+        self.choice.0 == FirstBounce::Raster
+    }
+
+    /// Makes the bounce maps' resources fit `layers` and uploads their views with the
+    /// frame's seed (nothing when the frame `reuse`s the photons it has).
+    pub fn prepare(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &Scene,
+        materials: &wgpu::Buffer,
+        layers: &[LightView],
+        seed: u64,
+        reuse: bool,
+    ) -> Result<()> {
+        if reuse || !self.raster() {
+            return Ok(());
+        }
+        if !self.targets.as_ref().is_some_and(|b| b.fits(layers)) {
+            self.targets = BounceTargets::new(ctx, layers, materials)?;
+        }
+        if let Some(b) = &self.targets {
+            b.write_views(ctx, scene, layers, seed);
+        }
+        Ok(())
+    }
+
+    /// Submits the bounce maps with their readback copies (an empty submission when
+    /// traced or reused); in `serial` frames waits and times them.
+    #[allow(clippy::too_many_arguments)]
+    pub fn submit(
+        &self,
+        ctx: &GpuContext,
+        gs: &super::super::gpu::GpuScene,
+        layers: &[LightView],
+        reuse: bool,
+        timer: &mut Timer,
+        serial: bool,
+        stats: &mut RenderStats,
+    ) -> Result<wgpu::SubmissionIndex> {
+        let t = Instant::now();
+        let mut encoder = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("bounce maps"),
+            });
+        if let (false, Some(b)) = (reuse, &self.targets) {
+            b.record(
+                &BouncePass::get(ctx),
+                &mut encoder,
+                layers,
+                &gs.geometry,
+                &gs.cull,
+                (&gs.textures.group, gs.variant),
+                timer,
+            );
+        }
+        let submission = ctx.queue.submit([encoder.finish()]);
+        if serial {
+            ctx.wait()?;
+            stage(stats, "bounce maps (wall)", t);
+        }
+        Ok(submission)
+    }
+
+    /// The first scatter of the frame's photons: the bounce maps read back once
+    /// `submission` is done, or the same photons traced in `bvh`; nothing when the frame
+    /// `reuse`s its photons.
+    #[allow(clippy::too_many_arguments)]
+    pub fn finish(
+        &self,
+        ctx: &GpuContext,
+        scene: &Scene,
+        bvh: &SceneBvh,
+        layers: &[LightView],
+        submission: wgpu::SubmissionIndex,
+        (reuse, seed): (bool, u64),
+        progress: &dyn Progress,
+        stats: &mut RenderStats,
+    ) -> Result<BounceMap> {
+        let t = Instant::now();
+        let raster = self.raster();
+        let bm = match (reuse, &self.targets) {
+            (true, _) => Default::default(),
+            (false, Some(b)) if raster => b.finish(ctx, layers, Some(submission))?,
+            (false, _) if raster => Default::default(),
+            (false, _) => {
+                let control = Checked::new(progress, "bounce maps");
+                trace_bounce_maps(scene, bvh, layers, seed, &control)?
+            }
+        };
+        let name = if raster {
+            "bounce readback"
+        } else {
+            "bounce trace"
+        };
+        stage(stats, name, t);
+        stats.photons_emitted = bm.covered;
+        stats.photons_first_bounce = bm.rays.len() as u64;
+        if !progress.update("bounce maps", 1.0) {
+            return Err(Error::Cancelled);
+        }
+        Ok(bm)
+    }
+}

@@ -1,0 +1,269 @@
+//! Step 4 of an `ispm` frame: temporal reuse (Jozwowski 2002) and the CPU photon trace of
+//! the bounces after the first. The ring of the last frames' photons loses what the
+//! frame's changes made stale; each light's first-scatter rays are traced on, sized
+//! (volume radii, the caustic density bound), compensated at boundaries and pushed.
+
+use super::super::options::IspmOptions;
+use super::super::{FrameParams, RenderStats};
+use crate::cancel::Progress;
+use crate::error::{Error, Result};
+use crate::photon::bounce::BounceMap;
+use crate::photon::focus::Focus;
+use crate::photon::lbvh::Aabb;
+use crate::photon::radius::{VolumeRadius, Z_RATIO};
+use crate::photon::ring::PhotonRing;
+use crate::photon::trace::{continue_paths_from, emit_aimed_caustics, Checked, FirstSegment};
+use crate::photon::{boundary, Photon, PhotonRay, PhotonTraceSettings};
+use crate::scene::light_views::LightView;
+use crate::scene::{Light, Scene};
+use crate::trace::SceneBvh;
+use glam::Vec3;
+use std::borrow::Cow;
+use std::time::Instant;
+
+/// What changed since the photons in the ring were traced.
+pub(in crate::frame) struct Invalidation<'a> {
+    /// Materials changed: every photon is stale.
+    pub all: bool,
+    pub lights: &'a [usize],
+    /// Objects moved, with their bounds before the move.
+    pub moved: &'a [(usize, Aabb)],
+}
+
+/// Drops the photons of `ring` that `invalid` made stale: all of them, a light's, or those
+/// within reach of a moved object (its bounds before and after, grown by the largest
+/// kernel).
+pub(super) fn invalidate(
+    ring: &mut PhotonRing,
+    invalid: &Invalidation,
+    scene: &Scene,
+    options: &IspmOptions,
+    params: &FrameParams,
+) {
+    if invalid.all {
+        ring.clear();
+    }
+    for &l in invalid.lights {
+        ring.invalidate_light(l);
+    }
+    let grow = VolumeRadius::of_scene(scene, options.photons, options.kernel_scale)
+        .scaled(params.radius_scale)
+        .r_max;
+    for (object, before) in invalid.moved {
+        let o = &scene.objects[*object];
+        let after = super::super::object_bounds(scene, o);
+        let b = before.union(after);
+        ring.invalidate_region(Aabb {
+            min: b.min - Vec3::splat(grow),
+            max: b.max + Vec3::splat(grow),
+        });
+    }
+}
+
+/// The CPU photon trace of a frame: its inputs and where it puts its photons.
+pub(super) struct Trace<'a> {
+    pub scene: &'a Scene,
+    pub bvh: &'a SceneBvh,
+    pub options: &'a IspmOptions,
+    pub params: &'a FrameParams,
+    pub layers: &'a [LightView],
+    /// Frame number the photons are stored under.
+    pub frame: u64,
+    /// Compensate each photon's boundary loss (photon side); progressive passes at full
+    /// resolution compensate per pixel instead (`progressive::query_coverage`).
+    pub compensate: bool,
+    pub progress: &'a dyn Progress,
+}
+
+impl Trace<'_> {
+    /// The photon-trace settings of the later bounces.
+    fn settings(&self) -> PhotonTraceSettings {
+        let (o, p) = (self.options, self.params);
+        if o.footprint_volumes {
+            PhotonTraceSettings {
+                store_direct: false,
+                ..super::super::gather::trace_settings(
+                    self.scene,
+                    o.photons,
+                    o.max_depth,
+                    o.refine.smoothing,
+                    &o.kernel,
+                    p.radius_scale,
+                )
+            }
+        } else {
+            PhotonTraceSettings {
+                max_bounces: o.max_depth - 1,
+                store_direct: false,
+                differentials: None,
+            }
+        }
+    }
+
+    /// Traces the rays of `bm` on per light and pushes each light's photons into `ring`;
+    /// adds the stages "cpu trace" and "boundary compensation" (when compensating).
+    pub fn run(
+        &self,
+        bm: &BounceMap,
+        ring: &mut PhotonRing,
+        stats: &mut RenderStats,
+    ) -> Result<()> {
+        let t = Instant::now();
+        let mut compensation = 0.0;
+        let pts = self.settings();
+        // Photon focusing: lights whose projection maps hold every specular object get
+        // their mirror and glass first hits from aimed CPU photons instead of the bounce
+        // map.
+        let focus = Focus::of_scene(
+            self.scene,
+            if self.options.refine.photon_focus > 0.0 {
+                1.0
+            } else {
+                0.0
+            },
+        );
+        let mut start = 0;
+        while start < bm.rays.len() {
+            let light = bm.ray_lights[start];
+            let end = start
+                + bm.ray_lights[start..]
+                    .iter()
+                    .take_while(|&&l| l == light)
+                    .count();
+            let mut photons = self.trace_light(bm, start..end, &pts, &focus, stats)?;
+            self.size(ring, light as usize, &mut photons);
+            let tc = Instant::now();
+            let compensated = self.compensated(light, &photons)?;
+            compensation += tc.elapsed().as_secs_f64();
+            ring.push(self.frame, light as usize, photons, compensated);
+            start = end;
+            let done = start as f64 / bm.rays.len() as f64;
+            if !self.progress.update("cpu trace", done) {
+                return Err(Error::Cancelled);
+            }
+        }
+        stats
+            .stages
+            .push(("cpu trace".into(), t.elapsed().as_secs_f64() - compensation));
+        if self.compensate {
+            stats
+                .stages
+                .push(("boundary compensation".into(), compensation));
+        }
+        Ok(())
+    }
+
+    /// The random seed of `light`'s photons.
+    fn seed(&self, light: u32) -> u64 {
+        self.params.seed ^ (light as u64).wrapping_mul(0xA24B_AED4_963E_E407)
+    }
+
+    /// The photons of one light: its first-scatter rays `range` of `bm` traced on, and
+    /// (photon focusing) its aimed caustic photons.
+    fn trace_light(
+        &self,
+        bm: &BounceMap,
+        range: std::ops::Range<usize>,
+        pts: &PhotonTraceSettings,
+        focus: &Focus,
+        stats: &mut RenderStats,
+    ) -> Result<Vec<Photon>> {
+        let (scene, bvh) = (self.scene, self.bvh);
+        let light = bm.ray_lights[range.start];
+        let seed = self.seed(light);
+        let control = Checked::new(self.progress, "cpu trace");
+        let aimed = focus.covers_all(light as usize);
+        // Aimed: the bounce map's own mirror and glass first hits are dropped.
+        let rays: Cow<[PhotonRay]> = if aimed {
+            range
+                .filter(|&i| !bm.first_delta[i])
+                .map(|i| bm.rays[i])
+                .collect()
+        } else {
+            Cow::Borrowed(&bm.rays[range])
+        };
+        // With footprints, photons that met a mirror or glass first carry the footprint
+        // of their first segment from the light (re-cast on the CPU).
+        let first = self
+            .options
+            .footprint_volumes
+            .then(|| first_segment(scene, self.layers, light as usize));
+        let mut photons =
+            continue_paths_from(scene, bvh, &rays, pts, seed, &control, first)?.photons;
+        if aimed {
+            let texels: u64 = self
+                .layers
+                .iter()
+                .filter(|l| l.light == light as usize)
+                .map(|l| l.res as u64 * l.res as u64)
+                .sum();
+            let share = self.options.refine.photon_focus as f64;
+            let n = ((texels as f64 * share).round() as u64).max(1);
+            let set =
+                emit_aimed_caustics(scene, bvh, light as usize, n, pts, seed, &control, focus)?;
+            stats.photons_emitted += n;
+            photons.extend(set.photons);
+        }
+        stats.caustic_photons += photons
+            .iter()
+            .filter(|p| crate::photon::density::is_caustic(p))
+            .count() as u64;
+        Ok(photons)
+    }
+
+    /// Decides the photons' volume radii, once, for the photon count the ring will hold
+    /// (the splat reads `footprint_radius`), bounded by the caustic density where asked.
+    fn size(&self, ring: &PhotonRing, light: usize, photons: &mut [Photon]) {
+        let (o, p) = (self.options, self.params);
+        let frames = (ring.held(light) + 1).min(ring.frames()) as u64;
+        let radius = VolumeRadius::of_scene(self.scene, o.photons * frames, o.kernel_scale)
+            .scaled(p.radius_scale);
+        for photon in photons.iter_mut() {
+            photon.footprint_radius = radius.of(photon);
+        }
+        if o.refine.caustic_density_bound {
+            crate::photon::density::bound_volume_radii(photons, p.radius_scale, radius.r_max);
+        }
+    }
+
+    /// The photons with their power divided by the share of their kernel on surfaces
+    /// (empty when not compensating).
+    fn compensated(&self, light: u32, photons: &[Photon]) -> Result<Vec<Photon>> {
+        if !self.compensate {
+            return Ok(Vec::new());
+        }
+        let mut compensated = photons.to_vec();
+        let progress = self.progress;
+        progress.update("boundary compensation", 0.0);
+        boundary::compensate_until(
+            self.scene,
+            self.bvh,
+            &mut compensated,
+            |p| p.footprint_radius,
+            Z_RATIO,
+            self.seed(light),
+            &|| progress.cancelled(),
+        );
+        crate::cancel::check(progress)?;
+        Ok(compensated)
+    }
+}
+
+/// The light of bounce-map photons of `light` and their angular spacing: the light's solid
+/// angle over its bounce-map texels (a spot's square map covers about 4/π of its cone).
+fn first_segment(scene: &Scene, layers: &[LightView], light: usize) -> FirstSegment {
+    let l = &scene.lights[light];
+    let texels: f64 = layers
+        .iter()
+        .filter(|b| b.light == light)
+        .map(|b| (b.res as f64).powi(2))
+        .sum();
+    let omega = match l {
+        Light::Point { .. } => l.solid_angle(),
+        Light::Spot { .. } => l.solid_angle() * 4.0 / std::f32::consts::PI,
+    };
+    FirstSegment {
+        position: l.position(),
+        spacing: (omega as f64 / texels.max(1.0)).sqrt() as f32,
+    }
+}

@@ -1,0 +1,90 @@
+//! Step 5 of an `ispm` frame: mirrors and glass seen by the camera, traced backwards on the
+//! CPU with a photon-map gather where the paths land (section 4), kept while nothing
+//! changes and their landings kept while only the lights change.
+
+use super::super::gpu::Targets;
+use super::super::options::IspmOptions;
+use super::super::{FrameParams, RenderStats};
+use super::stage;
+use crate::cancel::Progress;
+use crate::error::Result;
+use crate::gpu::GpuContext;
+use crate::image::Image;
+use crate::photon::delta_paths::Landings;
+use crate::photon::specular::{specular_paths, SpecularPaths};
+use crate::photon::Photon;
+use crate::scene::{Changes, Scene};
+use crate::trace::SceneBvh;
+use std::time::Instant;
+
+/// The specular paths' state across frames.
+pub(super) struct Specular {
+    /// Whether the scene has mirrors or glass (the specular texture is written each frame).
+    enabled: bool,
+    /// The specular image of the last frame (reused while the camera and scene stand still).
+    image: Option<Image>,
+    /// The camera side of the specular paths (kept while only the lights change).
+    landings: Option<Landings>,
+}
+
+impl Specular {
+    pub fn new(scene: &Scene) -> Self {
+        Specular {
+            enabled: scene.has_delta_materials(),
+            image: None,
+            landings: None,
+        }
+    }
+
+    /// Forgets what `changes` made stale: the image on any change; the landings, which
+    /// depend on the view, the geometry and the materials, not on the lights.
+    pub fn invalidate(&mut self, changes: Changes) {
+        if changes.any() {
+            self.image = None;
+        }
+        if changes.camera || changes.geometry || changes.materials {
+            self.landings = None;
+        }
+    }
+
+    /// The frame's specular image, traced (and uploaded) when the `photons` changed or no
+    /// image is kept; `None` for a scene without mirrors or glass.
+    #[allow(clippy::too_many_arguments)]
+    pub fn render(
+        &mut self,
+        ctx: &GpuContext,
+        targets: &Targets,
+        (scene, bvh): (&Scene, &SceneBvh),
+        (options, params): (&IspmOptions, &FrameParams),
+        photons: &[Photon],
+        photons_changed: bool,
+        progress: &dyn Progress,
+        stats: &mut RenderStats,
+    ) -> Result<Option<Image>> {
+        let t = Instant::now();
+        let image = if self.enabled && self.image.is_some() && !photons_changed {
+            self.image.clone()
+        } else if self.enabled {
+            let paths = SpecularPaths {
+                samples: super::super::photon::camera_samples(
+                    options.direct.spp,
+                    options.max_depth,
+                    params,
+                ),
+                sampling: options.specular_sampling,
+                gather: super::super::photon::knn_gather(scene, options.k, &options.kernel, params),
+                precompute: !params.progressive,
+            };
+            let (img, camera_paths) =
+                specular_paths(scene, bvh, &paths, photons, &mut self.landings, progress)?;
+            stats.camera_paths = camera_paths;
+            targets.write_specular(ctx, &img);
+            Some(img)
+        } else {
+            None
+        };
+        self.image = image.clone();
+        stage(stats, "specular paths", t);
+        Ok(image)
+    }
+}
