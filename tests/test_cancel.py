@@ -144,5 +144,6 @@ def test_callback_cancels_within_half_a_second(method, settings, stage):
     print(f"{method}/{stage}: cancelled {latency:.3f} s after the callback")
     assert latency < 0.5, f"{method}/{stage}: stopped {latency:.2f} s after the callback"
     # The process renders again.
-    img = gi.render(scene, method, spp=1, size=(8, 8), photons=2000).radiance
+    img = gi.render(scene, method, **gi.method_options(method, spp=1, size=(8, 8), photons=2000))
+    img = img.radiance
     assert np.isfinite(img).all() and img.max() > 0

@@ -84,7 +84,9 @@ def test_geometry_within_the_extent_renders_finite(write_scene, cornell_desc):
     }
     scene = gi.load_scene(write_scene(with_object(cornell_desc, obj)))
     for method in gi.methods():
-        img = gi.render(scene, method, spp=1, size=(16, 16), photons=2000).radiance
+        img = gi.render(
+            scene, method, **gi.method_options(method, spp=1, size=(16, 16), photons=2000)
+        ).radiance
         assert np.isfinite(img).all() and img.max() > 0, method
 
 
@@ -106,7 +108,9 @@ def test_largest_intensity_renders_finite(write_scene, cornell_desc):
     cornell_desc["lights"][0]["intensity"] = [1e10, 1e10, 1e10]  # MAX_INTENSITY
     scene = gi.load_scene(write_scene(cornell_desc))
     for method in gi.methods():
-        img = gi.render(scene, method, spp=1, size=(16, 16), photons=2000).radiance
+        img = gi.render(
+            scene, method, **gi.method_options(method, spp=1, size=(16, 16), photons=2000)
+        ).radiance
         assert np.isfinite(img).all(), method
 
 
@@ -302,7 +306,11 @@ def test_nearly_mirror_glossy_is_finite():
         desc["lights"] = lights
         scene = gi.Scene.from_json(json.dumps(desc), "fuzz")
         for method in gi.methods():
-            result = gi.render(scene, method, spp=4, size=(16, 16), photons=2000, max_depth=8)
+            result = gi.render(
+                scene,
+                method,
+                **gi.method_options(method, spp=4, size=(16, 16), photons=2000, max_depth=8),
+            )
             for name in result.aov_names():
                 assert np.isfinite(result.aov(name)).all(), (method, name, len(lights))
 

@@ -17,14 +17,14 @@ def cornell() -> gi.Scene:
 def test_frame_equals_one_shot(cornell: gi.Scene, method: str) -> None:
     """A renderer's frame after an update and its undo equals gi.render of the scene (every
     method is deterministic for a seed)."""
-    r = gi.Renderer(cornell, method, **SMALL)
+    r = gi.Renderer(cornell, method, **gi.method_options(method, **SMALL))
     r.render()
     light = r.describe("light", 0)
     r.update(lights={0: {"intensity": [1.0, 1.0, 1.0]}})
     r.render()
     r.update(lights={0: light})
     frame = r.render(aovs=True, extras=True)
-    one_shot = gi.render(cornell, method, **SMALL)
+    one_shot = gi.render(cornell, method, **gi.method_options(method, **SMALL))
     np.testing.assert_array_equal(frame.radiance, one_shot.radiance)
     np.testing.assert_array_equal(frame.albedo, one_shot.albedo)
     assert sorted(frame.extra) == sorted(one_shot.extra)
@@ -32,7 +32,7 @@ def test_frame_equals_one_shot(cornell: gi.Scene, method: str) -> None:
 
 
 def test_only_requested_images_are_returned(cornell: gi.Scene) -> None:
-    r = gi.Renderer(cornell, "direct", **SMALL)
+    r = gi.Renderer(cornell, "direct", **gi.method_options("direct", **SMALL))
     frame = r.render()
     assert frame.radiance.shape == (24, 32, 3)
     assert frame.albedo.size == 0 and frame.depth.size == 0 and frame.extra == {}
@@ -63,7 +63,7 @@ def test_steady_state_creates_no_gpu_objects(cornell: gi.Scene) -> None:
 
 
 def test_moving_an_object_and_a_material(cornell: gi.Scene) -> None:
-    r = gi.Renderer(cornell, "direct", **SMALL)
+    r = gi.Renderer(cornell, "direct", **gi.method_options("direct", **SMALL))
     still = r.render().radiance
     r.update(objects={len(r.object_names) - 1: {"translate": [0.3, 0.0, 0.0]}})
     moved = r.render().radiance
@@ -94,7 +94,7 @@ def test_resize(cornell: gi.Scene) -> None:
     ],
 )
 def test_bad_updates_are_scene_errors(cornell: gi.Scene, update: dict, field: str) -> None:
-    r = gi.Renderer(cornell, "direct", **SMALL)
+    r = gi.Renderer(cornell, "direct", **gi.method_options("direct", **SMALL))
     with pytest.raises(gi.SceneError) as e:
         r.update(**update)
     assert e.value.field == field  # type: ignore[attr-defined]

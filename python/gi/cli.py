@@ -448,6 +448,19 @@ def _footprints(args: argparse.Namespace) -> int:
     return 0
 
 
+def _render_warnings_printed(show):  # type: ignore[no-untyped-def]
+    """``warnings.showwarning`` that prints a :class:`gi.RenderWarning` as
+    ``gi: warning: ...`` and hands the others to ``show``."""
+
+    def showwarning(message, category, filename, lineno, file=None, line=None):  # type: ignore[no-untyped-def]
+        if issubclass(category, gi.RenderWarning):
+            print(f"gi: warning: {message}", file=sys.stderr)
+        else:
+            show(message, category, filename, lineno, file, line)
+
+    return showwarning
+
+
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     try:
@@ -466,7 +479,11 @@ def main(argv: list[str] | None = None) -> int:
         if args.command == "methods":
             print("\n".join(gi.methods()))
             return 0
-        return _render(args)
+        with warnings.catch_warnings():
+            # Options the method ignores: a line on stderr, the render goes on.
+            warnings.simplefilter("always", gi.RenderWarning)
+            warnings.showwarning = _render_warnings_printed(warnings.showwarning)
+            return _render(args)
     except gi.GiError as e:
         print(f"gi: error: {e}", file=sys.stderr)
         return 2

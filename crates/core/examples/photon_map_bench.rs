@@ -10,8 +10,8 @@
 //! (`-- obvhs` or `-- radii` runs section 4 or 5 alone).
 
 use gi_core::frame::gather::gather_trace_settings;
-use gi_core::photon::estimate::PhotonMap;
-use gi_core::photon::gather::{scene_area, FootprintMap, LeafSize};
+use gi_core::photon::footprint_map::{scene_area, FootprintMap, LeafSize};
+use gi_core::photon::knn::PhotonMap;
 use gi_core::photon::{emit_and_trace, Kernel};
 use gi_core::scene::builtin;
 use gi_core::trace::SceneBvh;
@@ -375,7 +375,7 @@ fn lbvh_vs_obvhs(scene: &gi_core::Scene) {
 
 /// Section 5: footprint radii per path kind (the paper's Table 3), as `gi footprints` prints them.
 fn radii_per_kind() {
-    use gi_core::photon::gather::radius_percentiles;
+    use gi_core::photon::footprint_map::radius_percentiles;
     let (n, qs) = (400_000u64, [5.0, 25.0, 50.0, 75.0, 95.0]);
     println!("\n## Footprint radii per path kind\n");
     println!(

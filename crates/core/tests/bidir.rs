@@ -310,9 +310,9 @@ fn convex_object_under_constant_environment() {
         let out = run(
             &scene,
             &bidir_settings(32)
+                .with("bundles", 32)
                 .with_method(method)
-                .with("spp", spp)
-                .with("bundles", 32),
+                .with("spp", spp),
         );
         // Pixels whose 3×3 neighbourhood is all sphere (all sky for the background): the
         // path tracer's pixels are box-filtered, so edge pixels mix the two.
@@ -426,10 +426,17 @@ fn importance_sampled_bundles_find_a_small_sun() {
 #[test]
 fn bad_settings_are_setting_errors() {
     let scene = load("cornell");
+    let bad = |change: fn(&mut gi_core::frame::options::BidirOptions)| {
+        let mut s = bidir_settings(16);
+        if let gi_core::MethodOptions::Bidir(o) = &mut s.method {
+            change(o);
+        }
+        s
+    };
     for s in [
-        bidir_settings(16).with("vpls_per_light", 0),
-        bidir_settings(16).with("vpl_shadow_map_size", 8),
-        bidir_settings(16).with("rsm_size", 0),
+        bad(|o| o.vpls_per_light = 0),
+        bad(|o| o.vpl_shadow_map_size = 8),
+        bad(|o| o.rsm_size = 0),
     ] {
         let e = render(&scene, &s, &Silent).err();
         assert!(matches!(e, Some(gi_core::Error::Setting { .. })), "{e:?}");

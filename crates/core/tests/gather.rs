@@ -226,7 +226,8 @@ fn median(v: &mut [f32]) -> f32 {
 fn caustic_footprints_are_far_smaller_where_the_caustic_is() {
     let scene = builtin::load("ring-room").unwrap();
     let set = trace_footprints(&scene, 400_000, 1);
-    let table = gi_core::photon::gather::radius_percentiles(&set, &[5.0, 25.0, 50.0, 75.0, 95.0]);
+    let table =
+        gi_core::photon::footprint_map::radius_percentiles(&set, &[5.0, 25.0, 50.0, 75.0, 95.0]);
     for (kind, n, r) in &table {
         eprintln!("{kind:?}: {n} photons, radius p5/25/50/75/95 (m) {r:.4?}");
     }

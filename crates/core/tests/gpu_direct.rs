@@ -201,7 +201,10 @@ fn bad_adapter_is_a_gpu_error() {
 #[test]
 fn bad_shadow_map_size_is_a_setting_error() {
     let scene = builtin::load("cornell").expect("built-in scene");
-    let s = settings(Method::Direct, 1).with("shadow_map_size", 3);
+    let mut s = settings(Method::Direct, 1);
+    if let gi_core::MethodOptions::Direct(o) = &mut s.method {
+        o.direct.shadow_map_size = 3;
+    }
     assert!(matches!(
         render(&scene, &s, &Silent),
         Err(Error::Setting {

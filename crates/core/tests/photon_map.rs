@@ -220,8 +220,13 @@ fn continue_paths_from_rays() {
 #[test]
 fn absurd_photon_counts_are_rejected() {
     let scene = furnace(0.5, 1.0);
+    let photon = |change: &dyn Fn(&mut gi_core::frame::options::PhotonOptions)| {
+        let mut o = gi_core::frame::options::PhotonOptions::default();
+        change(&mut o);
+        gi_core::RenderOptions::of(gi_core::MethodOptions::Photon(o))
+    };
     for photons in [0, 2_000_000_000] {
-        let s = gi_core::options!(Photon, photons: photons);
+        let s = photon(&|o| o.photons = photons);
         assert!(matches!(
             render(&scene, &s, &Silent),
             Err(Error::Setting {
@@ -230,7 +235,7 @@ fn absurd_photon_counts_are_rejected() {
             })
         ));
     }
-    let s = gi_core::options!(Photon, k: 0);
+    let s = photon(&|o| o.k = 0);
     assert!(matches!(
         render(&scene, &s, &Silent),
         Err(Error::Setting { name: "k", .. })

@@ -291,7 +291,7 @@ pub fn footprint_radii(
     smoothing: f32,
     percentiles: Vec<f64>,
 ) -> PyResult<std::collections::BTreeMap<&'static str, (usize, Vec<f32>)>> {
-    use gi_core::photon::{gather::radius_percentiles, PathKind};
+    use gi_core::photon::{footprint_map::radius_percentiles, PathKind};
     let mut options = gi_core::frame::options::GatherOptions {
         photons,
         ..Default::default()

@@ -348,7 +348,7 @@ fn delta_lobes_match_sampling_in_expectation() {
 /// `Material::lambertian` claims a constant BSDF only where `eval` is one: over the grid,
 /// every material it accepts evaluates to ρ/π for directions on one side and 0 across,
 /// and every material it rejects differs from that somewhere (so the fast path of the
-/// photon gathers, `photon::estimate`, cannot change an estimate).
+/// photon gathers, `photon::knn`, cannot change an estimate).
 #[test]
 fn lambertian_shortcut_equals_eval() {
     let dirs: Vec<Vec3> = (0..12)

@@ -18,6 +18,7 @@
 //! with room for them.
 
 use super::target::IndirectTarget;
+use super::wgsl;
 use crate::error::{Error, Result};
 use crate::estimate::volume_shape::projected_radius;
 use crate::gpu::layout::texture as tex;
@@ -250,9 +251,9 @@ impl BinnedPasses {
                 &[
                     shaders::COMMON,
                     shaders::BSDF,
-                    shaders::PHOTON_VOLUME,
+                    wgsl::PHOTON_VOLUME,
                     shaders::FIXED_SUM,
-                    shaders::TILED,
+                    wgsl::TILED,
                 ],
                 ["tile_bounds", "bin_count", "scan", "bin_fill", "shade"],
             );
@@ -292,10 +293,10 @@ impl BinnedPasses {
                     &[
                         shaders::COMMON,
                         shaders::BSDF,
-                        shaders::PHOTON_VOLUME,
+                        wgsl::PHOTON_VOLUME,
                         shaders::FIXED_SUM,
-                        shaders::TILED,
-                        shaders::CLUSTER,
+                        wgsl::TILED,
+                        wgsl::CLUSTER,
                     ],
                     [
                         "cluster_leaves",

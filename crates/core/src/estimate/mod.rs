@@ -15,6 +15,7 @@ pub mod cpu;
 pub mod target;
 pub mod volume_shape;
 pub mod volumes;
+pub mod wgsl;
 
 pub use binned::{Binned, Mode};
 pub use cpu::CpuEstimate;

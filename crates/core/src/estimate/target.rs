@@ -2,6 +2,7 @@
 //! centre of a `subsample` × `subsample` block, and its joint bilateral upsampling to full
 //! resolution (ISPM section 5.2) when `subsample` > 1.
 
+use super::wgsl;
 use crate::gpu::layout::{buffer_init, texture as tex, texture_entry, uniform_entry};
 use crate::gpu::raw::UpsampleParamsRaw;
 use crate::gpu::timer::Timer;
@@ -52,7 +53,12 @@ impl Pipelines for UpsamplePass {
         let module = shaders::module(
             device,
             "upsample shader",
-            &[shaders::COMMON, shaders::BSDF, shaders::UPSAMPLE],
+            &[
+                shaders::COMMON,
+                shaders::BSDF,
+                shaders::FULLSCREEN,
+                wgsl::UPSAMPLE,
+            ],
         );
         let upsample = crate::gpu::create_fullscreen_pipeline(
             device,

@@ -7,6 +7,7 @@
 //! geometrically (a frame rewrites only the photons in it).
 
 use super::target::{IndirectTarget, TARGET};
+use super::wgsl;
 use crate::gpu::layout::{buffer_init, texture as tex, texture_entry, uniform_entry};
 use crate::gpu::raw::VolumeParamsRaw;
 use crate::gpu::timer::Timer;
@@ -75,8 +76,8 @@ impl Pipelines for VolumePass {
             &[
                 shaders::COMMON,
                 shaders::BSDF,
-                shaders::PHOTON_VOLUME,
-                shaders::VOLUME,
+                wgsl::PHOTON_VOLUME,
+                wgsl::VOLUME,
             ],
         );
         let corner_attr = wgpu::vertex_attr_array![0 => Float32x3];

@@ -12,7 +12,7 @@ use crate::error::Result;
 use crate::image::Image;
 use crate::photon::camera_pass::render_image;
 use crate::photon::differential::global_spacing;
-use crate::photon::gather::{scene_area, FootprintMap, LeafSize};
+use crate::photon::footprint_map::{scene_area, FootprintMap, LeafSize};
 use crate::photon::trace::emit_and_trace_focused;
 use crate::photon::trace::Checked;
 use crate::photon::trace::DifferentialSettings;
@@ -115,7 +115,7 @@ pub(super) fn render(
             scene,
             bvh,
             &mut set,
-            crate::photon::gather::THICKNESS,
+            crate::photon::footprint_map::THICKNESS,
             options.kernel.kernel,
             frame.seed,
         );

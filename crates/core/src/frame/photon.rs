@@ -14,7 +14,7 @@ use crate::cancel::Progress;
 use crate::error::Result;
 use crate::image::Image;
 use crate::photon::camera_pass::{render_image, CameraSamples};
-use crate::photon::estimate::{Gather, PhotonMap};
+use crate::photon::knn::{Gather, PhotonMap};
 use crate::photon::trace::Checked;
 use crate::photon::{emit_and_trace_checked, Neighbour, PhotonTraceSettings};
 use crate::scene::Scene;

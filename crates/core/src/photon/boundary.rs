@@ -10,8 +10,8 @@
 //! down through the volume: the point counts if the ray meets a surface within the volume
 //! whose normal agrees with the photon's, which is the test the splat applies per pixel.
 
-use super::estimate::Kernel;
-use super::estimate::NORMAL_AGREEMENT;
+use super::knn::Kernel;
+use super::knn::NORMAL_AGREEMENT;
 use super::{Photon, PhotonSet};
 use crate::sampling::{Frame, Rng};
 use crate::scene::Scene;

@@ -25,7 +25,7 @@
 //!    (k = 100 neighbours, smooth) on the first [`EDGE_GATHERS`] samples of an edge pixel,
 //!    averaged over those: the samples are identically distributed, so the mean over any
 //!    fixed subset has the same expectation. The gathers of a thread share a
-//!    `photon::estimate::GatherCache` (the same k nearest photons, found among the
+//!    `photon::knn::GatherCache` (the same k nearest photons, found among the
 //!    photons around a recent query point instead of in the kd-tree).
 //! 5. **Tracing apart from shading.** Steps 1–3 record where every sample's delta paths
 //!    land ([`Landings`]); step 4 shades them. The landings depend on the camera, the
@@ -545,7 +545,7 @@ mod tests {
     use super::*;
     use crate::cancel::Silent;
     use crate::photon::camera_pass::delta_image;
-    use crate::photon::estimate::{Gather, GatherCache, PhotonMap};
+    use crate::photon::knn::{Gather, GatherCache, PhotonMap};
     use crate::photon::Kernel;
     use crate::photon::{emit_and_trace, Neighbour, PhotonTraceSettings};
     use crate::trace::path::direct_light;

@@ -18,7 +18,7 @@
 //! The estimates are computed on first use, only where queries land, and shared between
 //! threads (each is the same whichever thread makes it).
 
-use super::estimate::{Gather, PhotonMap};
+use super::knn::{Gather, PhotonMap};
 use super::{KdTree, Neighbour};
 use crate::trace::Interaction;
 use glam::Vec3;

@@ -12,12 +12,12 @@ pub mod camera_pass;
 pub mod delta_paths;
 pub mod density;
 pub mod differential;
-pub mod estimate;
 pub mod focus;
 pub mod footprint;
-pub mod gather;
+pub mod footprint_map;
 pub mod irradiance;
 pub mod kdtree;
+pub mod knn;
 pub mod lbvh;
 pub mod radius;
 pub mod ring;
@@ -28,8 +28,8 @@ use crate::bsdf::{Lobe, Material};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
-pub use estimate::Kernel;
 pub use kdtree::{KdTree, Neighbour};
+pub use knn::Kernel;
 pub use trace::{
     continue_paths, continue_paths_checked, emit_and_trace, emit_and_trace_checked,
     PhotonTraceSettings,

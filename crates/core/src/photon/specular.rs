@@ -14,8 +14,8 @@ use super::delta_paths::{
 use crate::cancel::Progress;
 use crate::error::Result;
 use crate::image::Image;
-use crate::photon::estimate::{Gather, GatherCache, PhotonMap};
 use crate::photon::irradiance::IrradianceCache;
+use crate::photon::knn::{Gather, GatherCache, PhotonMap};
 use crate::photon::{Neighbour, Photon};
 use crate::scene::Scene;
 use crate::trace::path::direct_light;

@@ -12,6 +12,7 @@
 
 use super::layers::{LayerTargets, TARGET};
 use super::textures::{TexturesLayout, Variant};
+use super::wgsl;
 use super::{buffer_init, gbuffer, Geometry};
 use crate::error::{Error, Result};
 use crate::gpu::layout::{storage_entry, uniform_entry_sized};
@@ -61,8 +62,9 @@ impl Pipelines for BouncePass {
                 shaders::COMMON,
                 shaders::BSDF,
                 shaders::TEXTURE,
-                shaders::LIGHT_VIEW,
-                shaders::BOUNCE,
+                shaders::SCENE_VERTEX,
+                wgsl::LIGHT_VIEW,
+                wgsl::BOUNCE,
             ],
         );
         let bounce_pipeline_layout =

@@ -7,6 +7,7 @@
 //! Memory: `res`² head pointers per bundle and one node buffer for all bundles of a frame;
 //! fragments beyond its capacity are dropped and counted ([`BundleBuffers::overflow`]).
 
+use super::wgsl;
 use super::{buffer_init, gbuffer, Geometry};
 use crate::error::{Error, Result};
 use crate::gpu::timer::Timer;
@@ -112,8 +113,9 @@ impl BundlePass {
                 shaders::COMMON,
                 shaders::BSDF,
                 shaders::TEXTURE,
-                shaders::BUNDLE_TYPES,
-                shaders::BUNDLES,
+                wgsl::BUNDLE_TYPES,
+                shaders::SCENE_VERTEX,
+                wgsl::BUNDLES,
             ],
         );
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {

@@ -1,6 +1,7 @@
 //! The composite pass: direct (accumulated supersamples) + specular + indirect into the
 //! frame's radiance target, on the GPU, so that only the images asked for are read back.
 
+use super::wgsl;
 use crate::gpu::shaders;
 
 /// The radiance target (rgb; alpha 1).
@@ -33,7 +34,11 @@ impl CompositePass {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let module = shaders::module(device, "composite shader", &[shaders::COMPOSITE]);
+        let module = shaders::module(
+            device,
+            "composite shader",
+            &[shaders::FULLSCREEN, wgsl::COMPOSITE],
+        );
         let pipeline = crate::gpu::create_fullscreen_pipeline(
             device,
             "composite pipeline",

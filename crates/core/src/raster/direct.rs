@@ -4,6 +4,7 @@
 //! `FLOAT32_BLENDABLE`) or writing the pixel-centre sample (edge-adaptive supersampling,
 //! [`super::edges`]). The layouts are visible to compute too: the edge passes share them.
 
+use super::wgsl;
 use crate::gpu::shaders;
 
 /// The accumulation target: radiance·weight in rgb, the sum of weights in alpha.
@@ -92,9 +93,10 @@ impl DirectPass {
             &[
                 shaders::COMMON,
                 shaders::BSDF,
-                shaders::SHADOW_LOOKUP,
-                shaders::DIRECT_SHADE,
-                shaders::DIRECT,
+                wgsl::SHADOW_LOOKUP,
+                wgsl::DIRECT_SHADE,
+                shaders::FULLSCREEN,
+                wgsl::DIRECT,
             ],
         );
         let add = wgpu::BlendComponent {

@@ -15,6 +15,7 @@
 //! buffers). Sub-pixel features that no pixel centre sees (a wire thinner than a pixel) are
 //! not found; [`crate::render::Settings::edge_supersampling`] turns the whole scheme off.
 
+use super::wgsl;
 use crate::error::Result;
 use crate::gpu::{self, shaders, GpuContext};
 
@@ -101,9 +102,9 @@ impl EdgePass {
             &[
                 shaders::COMMON,
                 shaders::BSDF,
-                shaders::SHADOW_LOOKUP,
-                shaders::DIRECT_SHADE,
-                shaders::DIRECT_EDGES,
+                wgsl::SHADOW_LOOKUP,
+                wgsl::DIRECT_SHADE,
+                wgsl::DIRECT_EDGES,
             ],
         );
         let pipeline = |entry: &str| {

@@ -12,6 +12,7 @@
 //! - `albedo` `Rgba32Float`: the albedo AOV, read back as is.
 //! - depth `Depth32Float`: visibility only; view depth is derived from `position`.
 
+use super::wgsl;
 use crate::gpu::raw::VertexRaw;
 use crate::gpu::shaders;
 
@@ -131,7 +132,8 @@ impl GBufferPass {
                 shaders::COMMON,
                 shaders::BSDF,
                 shaders::TEXTURE,
-                shaders::GBUFFER,
+                shaders::SCENE_VERTEX,
+                wgsl::GBUFFER,
             ],
         );
         let targets: Vec<_> = TARGETS

@@ -12,6 +12,7 @@ pub mod rsm;
 pub mod shadow;
 pub mod textures;
 pub mod vpl;
+pub mod wgsl;
 
 use crate::error::Result;
 pub(crate) use crate::gpu::layout::{

@@ -6,6 +6,7 @@
 //! read back as [`RsmTexel`]s, from which the frame draws its VPLs.
 
 use super::layers::{LayerTargets, TARGET};
+use super::wgsl;
 use super::{buffer_init, gbuffer, Geometry};
 use crate::error::{Error, Result};
 use crate::gpu::raw::BounceViewRaw;
@@ -69,8 +70,9 @@ impl RsmPass {
                 shaders::COMMON,
                 shaders::BSDF,
                 shaders::TEXTURE,
-                shaders::LIGHT_VIEW,
-                shaders::RSM,
+                shaders::SCENE_VERTEX,
+                wgsl::LIGHT_VIEW,
+                wgsl::RSM,
             ],
         );
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {

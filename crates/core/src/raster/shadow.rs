@@ -4,6 +4,7 @@
 //! Acne is fought twice: slope-scaled depth bias when rendering, and a normal offset of
 //! about one texel at lookup (`direct.wgsl`); edges are softened by PCF there.
 
+use super::wgsl;
 use crate::gpu::raw::{LightRaw, ViewRaw};
 use crate::gpu::shaders;
 use crate::scene::light_views::shadow_views;
@@ -110,7 +111,7 @@ impl ShadowPass {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let module = shaders::module(device, "shadow shader", &[shaders::COMMON, shaders::SHADOW]);
+        let module = shaders::module(device, "shadow shader", &[shaders::COMMON, wgsl::SHADOW]);
         let masked_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("masked shadow pipeline layout"),
             bind_group_layouts: &[Some(&layout), Some(textures)],
@@ -119,7 +120,7 @@ impl ShadowPass {
         let masked_module = shaders::module(
             device,
             "masked shadow shader",
-            &[shaders::COMMON, shaders::TEXTURE, shaders::SHADOW_MASKED],
+            &[shaders::COMMON, shaders::TEXTURE, wgsl::SHADOW_MASKED],
         );
         let attributes = super::gbuffer::VERTEX_ATTRIBUTES;
         let masked_attributes = [attributes[0], attributes[3], attributes[4]];

@@ -3,6 +3,7 @@
 //! pass that adds the indirect light of VPLs and ray bundles to every G-buffer pixel
 //! (`bidir.wgsl`).
 
+use super::wgsl;
 use crate::gpu::{self, shaders};
 use crate::scene::light_views::{corners, look_to, square_perspective, CUBE_FACES};
 use bytemuck::{Pod, Zeroable};
@@ -187,9 +188,10 @@ impl VplPass {
             &[
                 shaders::COMMON,
                 shaders::BSDF,
-                shaders::SHADOW_LOOKUP,
-                shaders::BUNDLE_TYPES,
-                shaders::BIDIR,
+                wgsl::SHADOW_LOOKUP,
+                wgsl::BUNDLE_TYPES,
+                shaders::FULLSCREEN,
+                wgsl::BIDIR,
             ],
         );
         let pipeline = gpu::create_fullscreen_pipeline(

@@ -175,10 +175,14 @@ impl RenderOptions {
         Ok(RenderOptions::new(method, &given)?.0)
     }
 
-    /// [`RenderOptions::set`] that panics on an invalid option: for tests, examples and
-    /// benchmarks.
+    /// [`RenderOptions::set`] for tests, examples and benchmarks: an option the method
+    /// doesn't take is ignored (as a sweep over methods sharing options wants), and an
+    /// invalid value or an unknown name panics.
     #[track_caller]
     pub fn with(&self, name: &str, value: impl Into<Value>) -> RenderOptions {
+        if spec(name, self.method()).is_none() && OPTIONS.iter().any(|s| s.name == name) {
+            return self.clone();
+        }
         match self.set(name, value) {
             Ok(o) => o,
             Err(e) => panic!("{e}"),

@@ -5,13 +5,6 @@
 // (edge-adaptive supersampling: direct_edges.wgsl then overwrites the pixels on geometric
 // edges with the mean of their sub-pixel samples).
 
-@vertex
-fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
-    // One triangle covering the screen.
-    let uv = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
-    return vec4<f32>(uv * 2.0 - 1.0, 0.0, 1.0);
-}
-
 @fragment
 fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
     let sum = shade(load_sample(vec2<i32>(frag.xy)));

@@ -97,12 +97,6 @@ struct Params {
 
 const TWO_PI: f32 = 6.28318530718;
 
-@vertex
-fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
-    let uv = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
-    return vec4<f32>(uv * 2.0 - 1.0, 0.0, 1.0);
-}
-
 fn spot(l: Light, cos_t: f32) -> f32 {
     if l.kind != 1u {
         return 1.0;

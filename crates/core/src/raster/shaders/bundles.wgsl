@@ -9,36 +9,9 @@
 @group(0) @binding(3) var<storage, read_write> nodes: array<Node>;
 @group(0) @binding(4) var<storage, read_write> counter: atomic<u32>;
 
-struct VertexIn {
-    @location(0) position: vec3<f32>,
-    @location(1) normal: vec3<f32>,
-    @location(2) geometric_normal: vec3<f32>,
-    @location(3) material: u32,
-    @location(4) uv: vec2<f32>,
-    @location(5) tangent: vec4<f32>,
-}
-
-struct VertexOut {
-    @builtin(position) clip: vec4<f32>,
-    @location(0) normal: vec3<f32>,
-    @location(1) @interpolate(flat) geometric_normal: vec3<f32>,
-    @location(2) @interpolate(flat) material: u32,
-    @location(3) uv: vec2<f32>,
-    @location(4) @interpolate(flat) tangent: vec4<f32>,
-    @location(5) world: vec3<f32>,
-}
-
 @vertex
 fn vs_main(v: VertexIn) -> VertexOut {
-    var o: VertexOut;
-    o.clip = bundle.view_proj * vec4<f32>(v.position, 1.0);
-    o.world = v.position;
-    o.normal = v.normal;
-    o.geometric_normal = v.geometric_normal;
-    o.material = v.material;
-    o.uv = v.uv;
-    o.tangent = v.tangent;
-    return o;
+    return scene_vertex(v, bundle.view_proj);
 }
 
 @fragment

@@ -1,0 +1,8 @@
+// The vertex stage of a full-screen pass: one triangle covering the target, drawn with
+// `draw(0..3)` and no vertex buffer.
+
+@vertex
+fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
+    let uv = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
+    return vec4<f32>(uv * 2.0 - 1.0, 0.0, 1.0);
+}

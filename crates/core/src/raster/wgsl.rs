@@ -1,0 +1,22 @@
+//! The raster passes' WGSL (`raster/shaders/`), each joined after the shared code of
+//! `gpu::shaders` and of `raster/shaders/common/` when its module is created.
+
+/// Light views of the bounce maps and reflective shadow maps: view and spot falloff.
+pub const LIGHT_VIEW: &str = include_str!("shaders/common/light_view.wgsl");
+/// Global ray-bundle views and fragment nodes (`bidir`).
+pub const BUNDLE_TYPES: &str = include_str!("shaders/common/bundle_types.wgsl");
+/// Shadow-map layer choice and PCF lookup.
+pub const SHADOW_LOOKUP: &str = include_str!("shaders/common/shadow_lookup.wgsl");
+/// Deferred direct lighting of one G-buffer sample (groups 0 and 1 of the direct passes).
+pub const DIRECT_SHADE: &str = include_str!("shaders/common/direct_shade.wgsl");
+
+pub const GBUFFER: &str = include_str!("shaders/gbuffer.wgsl");
+pub const SHADOW: &str = include_str!("shaders/shadow.wgsl");
+pub const SHADOW_MASKED: &str = include_str!("shaders/shadow_masked.wgsl");
+pub const DIRECT: &str = include_str!("shaders/direct.wgsl");
+pub const DIRECT_EDGES: &str = include_str!("shaders/direct_edges.wgsl");
+pub const BOUNCE: &str = include_str!("shaders/bounce.wgsl");
+pub const COMPOSITE: &str = include_str!("shaders/composite.wgsl");
+pub const RSM: &str = include_str!("shaders/rsm.wgsl");
+pub const BIDIR: &str = include_str!("shaders/bidir.wgsl");
+pub const BUNDLES: &str = include_str!("shaders/bundles.wgsl");
