@@ -197,6 +197,49 @@ def test_picking_rays_meet_the_rendered_surfaces():
     assert np.mean(same) > 0.95
 
 
+def test_pick_and_drag_move_a_light_and_an_object():
+    """A pick on a light's mark or on an object, then drags: the light or object follows the
+    pointer in the plane facing the camera."""
+    from gi.viewer.engine import Engine
+
+    events: list[dict] = []
+    engine = Engine(
+        gi.load_scene("cornell"),
+        "direct",
+        {"size": (32, 24), "spp": 1},
+        on_frame=lambda frame: None,
+        on_event=lambda client, event: events.append(event),
+    )
+    engine.start()
+    try:
+
+        def send(msg):
+            return engine.submit(msg, 1, wait=True).result(timeout=60)
+
+        state = engine.state()
+        view = View.of(state["camera"], 32, 24)
+        x, y = view.project(np.array(state["lights"][0]["position"]))
+        assert send(m.Pick(x, y))["kind"] == "light"
+        send(m.Drag(x + 0.1, y - 0.05))
+        moved = engine.state()["lights"][0]["position"]
+        # The camera looks along -z: the light stays at z = 0, moves right and up.
+        assert moved[0] > 0.1 and moved[1] > 1.6 and abs(moved[2]) < 1e-5
+        send(m.Drop())
+        with pytest.raises(m.MessageError):
+            send(m.Drag(0.5, 0.5))
+
+        picked = send(m.Pick(0.62, 0.85))  # the short box
+        assert picked["kind"] == "object"
+        before = np.array(engine._object_descs[picked["index"]]["matrix"])
+        send(m.Drag(0.52, 0.85))
+        after = np.array(engine._object_descs[picked["index"]]["matrix"])
+        assert after[0, 3] < before[0, 3] - 0.05 and np.allclose(after[:3, :3], before[:3, :3])
+        assert send(m.Pick(0.5, 0.001))["kind"] in ("object", None)  # the ceiling or nothing
+        assert any(e["type"] == "picked" for e in events)
+    finally:
+        engine.stop()
+
+
 # The server ---------------------------------------------------------------------------------
 
 
@@ -256,6 +299,15 @@ def test_gi_view_returns_its_url_and_shows_inline_in_jupyter(monkeypatch):
         gi.viewer.stop(url)
     with pytest.raises(gi.SettingError, match="method"):
         gi.view("cornell", "raytrace")
+
+
+def test_other_addresses_than_loopback_warn():
+    from gi.viewer import warn_if_exposed
+
+    for host in ("127.0.0.1", "127.0.0.2", "::1", "localhost"):
+        assert warn_if_exposed(host) is None
+    for host in ("0.0.0.0", "192.0.2.7", "::", "myhost.example"):
+        assert "no password" in (warn_if_exposed(host) or "")
 
 
 def test_cli_view_refuses_bad_input_at_once():
@@ -417,12 +469,51 @@ def test_browser_drives_the_viewer(tmp_path):
                 "n => parseInt(document.getElementById('passes').textContent) > n", arg=passes
             )
 
+            # Pause stops the passes; resume goes on.
+            page.click("#pause")
+            page.wait_for_function("giViewer.state.paused")
+            assert page.locator("#pause").text_content() == "Resume"
+            page.click("#pause")
+            page.wait_for_function("!giViewer.state.paused")
+
+            # Exposure, the AOV shown and flying with the keys.
+            shown = page.evaluate("giViewer.meta.id")
+            page.locator("#exposure").fill("2")
+            page.wait_for_function("n => giViewer.meta.id > n", arg=shown)
+            page.wait_for_function("giViewer.state.display.exposure === 2")
+            assert canvas_pixels(page).mean() > after.mean()
+            page.select_option("#aov", "normal")
+            page.wait_for_function("giViewer.meta.aov === 'normal'")
+            page.select_option("#aov", "radiance")
+            page.locator("#exposure").fill("0")
+            page.wait_for_function(
+                "giViewer.meta.aov === 'radiance' && giViewer.state.display.exposure === 0"
+            )
+            z = page.evaluate("giViewer.camera.position[2]")
+            page.locator("#view").focus()
+            page.keyboard.down("w")
+            page.wait_for_function("z => giViewer.camera.position[2] < z - 0.01", arg=z)
+            page.keyboard.up("w")
+            wait_frame_after(page, page.evaluate("giViewer.orbit(0, 0)"))
+
+            # The render follows the window's aspect.
+            page.set_viewport_size({"width": 760, "height": 560})
+            page.wait_for_function(
+                "giViewer.meta.width === giViewer.size[0] && giViewer.meta.height ="
+                "== giViewer.size[1] && giViewer.size[0] < giViewer.size[1]"
+            )
+            page.set_viewport_size({"width": 900, "height": 560})
+            page.wait_for_function(
+                "giViewer.meta.width === giViewer.size[0] && giViewer.meta.height ="
+                "== giViewer.size[1] && giViewer.size[0] > giViewer.size[1]"
+            )
+
             # Changing the method in the panel changes the image: direct light only.
             ispm = canvas_pixels(page)
             page.select_option("#method", "direct")
             page.wait_for_function("giViewer.meta.method === 'direct'")
             direct = canvas_pixels(page)
-            assert np.abs(direct - ispm).mean() > 0.01
+            assert direct.shape == ispm.shape and np.abs(direct - ispm).mean() > 0.01
             assert direct.mean() < ispm.mean()  # the indirect light is gone
 
             # A malformed message shows an error on the page; the server keeps serving.

@@ -32,6 +32,7 @@ from gi.viewer.picking import ObjectPicker, View, pick_light, translated
 
 #: Seconds a view must stay unchanged before progressive passes start.
 REFINE_AFTER = 0.2
+_UNCHANGED = object()
 
 
 @dataclass(frozen=True)
@@ -108,7 +109,7 @@ class Engine:
         self._progressive_error: str | None = None
         self._pixels = self._size
         self._adapter = _adapter_name(self._options.get("adapter"))
-        self._estimators = setting_choices(scene, "estimator")
+        self._estimators = setting_choices(scene, method, "estimator")
         self._scene_camera = self._interactive.renderer.describe("camera")
         self._light_descs = [
             self._interactive.renderer.describe("light", i) for i in range(scene.light_count)
@@ -212,8 +213,13 @@ class Engine:
                     if self._stop:
                         break
                     ops, self._ops = self._ops, []
-                for op in ops:
-                    self._apply(op)
+                changed_by = {self._apply(op) for op in ops} - {_UNCHANGED}
+                if changed_by:
+                    # Pages keep their own camera while they move it, so they take the
+                    # camera of a state that another page caused (source None: everyone).
+                    only = changed_by.pop() if len(changed_by) == 1 else None
+                    source = only if isinstance(only, int) else None
+                    self._on_event(None, {**self.state(source), "type": "state"})
                 with self._cond:
                     if not (self._dirty or self._redisplay):
                         self._frame_ops = max(self._frame_ops, self._done)
@@ -267,10 +273,15 @@ class Engine:
 
     # Changes ------------------------------------------------------------------------------
 
-    def _apply(self, op: _Op) -> None:
+    def _apply(self, op: _Op) -> int | None | object:
+        """Applies one message; returns who changed the state (the client, ``None`` for
+        everyone) or ``_UNCHANGED``."""
         msg = op.message
+        changed_by: int | None | object = _UNCHANGED
         try:
             result = self._dispatch(msg, op.client)
+            if not isinstance(msg, m.Pick):
+                changed_by = None if isinstance(msg, m.ResetView) else op.client
         except (gi.GiError, ValueError) as e:
             self._report(op.client, e)
             result = e
@@ -285,6 +296,7 @@ class Engine:
         seq = getattr(msg, "seq", None)
         if seq is not None and op.client is not None:
             self._seqs[op.client] = seq
+        return changed_by
 
     def _dispatch(self, msg: Any, client: int | None) -> Any:
         if isinstance(msg, m.Camera):
@@ -321,10 +333,6 @@ class Engine:
             self._drag = None
         else:
             raise m.MessageError("type", f"not a change: {type(msg).__name__}")
-        # Pages keep their own camera while they move it, so they take the camera of a
-        # state that another page caused; a reset is taken by every page.
-        source = None if isinstance(msg, m.ResetView) else client
-        self._on_event(None, {**self.state(source), "type": "state"})
         return None
 
     def _update(self, target: str, key: Any, fields: dict[str, Any]) -> None:
@@ -626,12 +634,12 @@ def _adapter_name(adapter: str | None) -> str:
     return lines[0] if lines else ""
 
 
-def setting_choices(scene: gi.Scene, name: str) -> list[str]:
+def setting_choices(scene: gi.Scene, method: str, name: str) -> list[str]:
     """The names a choice setting takes, read from the renderer's own error for a name it
     does not know ("unknown estimator `?` (available: auto, volumes, ...)"); ``[]`` if the
     error does not list them."""
     try:
-        Renderer(scene, "ispm", **{name: "?"})
+        Renderer(scene, method, **{name: "?"})
     except gi.SettingError as e:
         found = re.search(r"\(available: ([^)]*)\)", str(e))
         if found:

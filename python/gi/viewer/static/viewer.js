@@ -270,8 +270,8 @@
       applyState(message, message.source !== clientId);
     } else if (message.type === "error") {
       showError(message.message);
-      // A camera the server refused: go back to the one it has.
-      if (server && String(message.field || "").startsWith("camera")) camera = structuredClone(server.camera);
+      // A change the server refused: back to the panel values and camera it has.
+      if (server) applyState(server, String(message.field || "").startsWith("camera"));
     } else if (message.type === "picked") {
       giViewer.picked = message;
       moving = message.kind ? message : null;
