@@ -11,8 +11,9 @@
   `--seconds` and counts the frames it draws (the server renders the newest camera each time
   and drops none it could send, sends none the page has not asked for).
 
-The render time per frame (the renderer's `stats.total_seconds`, median) is given beside
-them. The page's window is sized so that the view keeps the asked size exactly.
+The render time per frame (the renderer's `stats.total_seconds`) and the server's tone
+mapping and PNG encoding of it (medians over the frame-rate run) are given beside them.
+The page's window is sized so that the view keeps the asked size exactly.
 
     .venv/bin/python scripts/bench_view.py --out docs/bench/view.md
 """
@@ -53,7 +54,7 @@ FPS_JS = """async (ms) => {
     await new Promise((r) => setTimeout(r, 5));
     if (giViewer.meta.id !== last) {
       last = giViewer.meta.id;
-      renders.push(giViewer.meta.total_seconds);
+      renders.push([giViewer.meta.total_seconds, giViewer.meta.encode_seconds]);
     }
   }
   clearInterval(timer);
@@ -84,7 +85,8 @@ def measure(browser, scene: str, size: tuple[int, int], options: dict, args) -> 
         "moving": moving,
         "still": still,
         "fps": fps,
-        "render_ms": 1000 * statistics.median(renders) if renders else float("nan"),
+        "render_ms": 1000 * statistics.median(r[0] for r in renders),
+        "encode_ms": 1000 * statistics.median(r[1] for r in renders),
     }
 
 
@@ -116,6 +118,7 @@ def main(argv: list[str] | None = None) -> int:
                 r = measure(browser, args.scene, size, options, args)
                 row = (
                     f"| {size[0]}×{size[1]} | {photons} | {r['render_ms']:.0f}"
+                    f" | {r['encode_ms']:.0f}"
                     f" | {statistics.median(r['moving']):.0f} | {pct(r['moving'], 0.9):.0f}"
                     f" | {statistics.median(r['still']):.0f} | {pct(r['still'], 0.9):.0f}"
                     f" | {r['fps']:.1f} |"
@@ -125,9 +128,9 @@ def main(argv: list[str] | None = None) -> int:
         browser.close()
     load_after = os.getloadavg()
     head = [
-        "| size | photons | render (ms, median) | latency moving (ms, median) | p90"
-        " | latency from still (ms, median) | p90 | frames/s delivered |",
-        "|---|---|---|---|---|---|---|---|",
+        "| size | photons | render (ms, median) | tone map + PNG (ms) | latency moving (ms,"
+        " median) | p90 | latency from still (ms, median) | p90 | frames/s delivered |",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
     text = "\n".join(head + rows)
     note = (

@@ -361,6 +361,10 @@ def test_gi_view_serves_a_frame_and_stops_on_sigint(tmp_path):
         assert np.abs(moved - first).mean() > 0.02
         status, state = post(base + "light", {"0": {"position": [0.3, 1.5, 0.2]}})
         assert status == 200 and state["lights"][0]["position"] == [0.3, 1.5, 0.2]
+        status, _ = post(base + "object", {"5": {"translate": [0.1, 0.0, 0.0]}})
+        assert status == 200
+        status, _ = post(base + "material", {"white": {"diffuse": [0.5, 0.5, 0.5]}})
+        assert status == 200
         status, state = post(base + "settings", {"method": "direct", "exposure": 1.0})
         assert status == 200 and state["method"] == "direct"
         assert state["display"]["exposure"] == 1.0
@@ -370,6 +374,8 @@ def test_gi_view_serves_a_frame_and_stops_on_sigint(tmp_path):
         assert status == 400 and err["field"] == "camera.position[1]"
         status, err = post(base + "light", {"7": {"position": [0, 1, 0]}})
         assert status == 400 and "7" in err["error"]
+        status, err = post(base + "object", {"5": {"translate": [0, 0]}})
+        assert status == 400 and "translate" in err["error"]
         status, err = post(base + "settings", {"estimator": "sideways"})
         assert status == 400 and "available:" in err["error"]
         status, err = post(base + "camera", b"{not json")

@@ -12,6 +12,7 @@ Needs ``pip install 'gi[view]'`` (aiohttp).
 from __future__ import annotations
 
 import asyncio
+import atexit
 import contextlib
 import signal
 import sys
@@ -189,6 +190,11 @@ def stop(url: str | None = None) -> None:
         background = _running.pop(u, None)
         if background is not None:
             background.stop()
+
+
+# Viewers still running at exit stop first: a frame under way is cancelled before gi waits
+# for the GPU (atexit runs this before gi's own handler, registered earlier).
+atexit.register(stop)
 
 
 def _show_inline(url: str) -> None:

@@ -339,13 +339,7 @@ class Engine:
         """Applies one scene change to the interactive renderer (which checks it) and
         records the whole resulting description for the progressive one."""
         r = self._sync(self._interactive)
-        kwargs: dict[str, Any] = {
-            "camera": {"camera": fields},
-            "light": {"lights": {key: fields}},
-            "object": {"objects": {key: fields}},
-            "material": {"materials": {key: fields}},
-        }[target]
-        r.update(**kwargs)
+        r.update(**_update_arguments(target, key, fields))
         if target == "camera":
             value = {k: v for k, v in r.describe("camera").items() if k not in ("width", "height")}
         elif target == "light":
@@ -353,11 +347,7 @@ class Engine:
             self._light_descs[key] = value
         elif target == "object":
             desc = r.describe("object", key)
-            key = next(
-                i
-                for i, d in enumerate(self._object_descs)
-                if d["name"] == desc["name"] and d["triangles"] == desc["triangles"]
-            )
+            key = key if isinstance(key, int) else r.object_names.index(key)
             self._object_descs[key] = desc
             value = {"matrix": desc["matrix"]}
         else:
@@ -376,13 +366,7 @@ class Engine:
         r = slot.renderer
         for (target, key), (version, value) in self._changes.items():
             if version > slot.version:
-                kwargs: dict[str, Any] = {
-                    "camera": {"camera": value},
-                    "light": {"lights": {key: value}},
-                    "object": {"objects": {key: value}},
-                    "material": {"materials": {key: value}},
-                }[target]
-                r.update(**kwargs)
+                r.update(**_update_arguments(target, key, value))
         slot.version = self._version
         if slot.size != self._size:
             r.resize(*self._size)
@@ -400,9 +384,9 @@ class Engine:
             else:
                 options[k] = v
         slot = _Slot(Renderer(self._scene, method, **options))  # raises SettingError
+        self._sync(slot)
         self._method, self._options = method, options
         self._interactive = slot
-        self._sync(slot)
         self._progressive, self._progressive_error = None, None
         self._adapter = _adapter_name(options.get("adapter"))
         if self._display.aov not in aov_names(method):
@@ -542,6 +526,7 @@ class Engine:
         if result is None:
             return
         self._result, self._result_meta = result, meta
+        start = time.perf_counter()
         d = self._display
         if d.aov == "radiance" or not _has_image(result, d.aov):
             shown = to_display(result.radiance, d.tonemap, d.exposure)
@@ -549,6 +534,7 @@ class Engine:
             depth = result.depth if result.depth.size else None
             shown = aov_display(d.aov, result.aov(d.aov), depth, d.tonemap, d.exposure)
         pixels = quantize8(shown)
+        png = png_bytes(pixels, compression=1)
         s = result.stats
         h, w = pixels.shape[:2]
         self._frame_id += 1
@@ -565,13 +551,15 @@ class Engine:
             "photons_emitted": s.photons_emitted,
             "photons_stored": s.photons_stored,
             "estimator": s.estimator,
+            # Tone mapping and PNG encoding of this frame.
+            "encode_seconds": time.perf_counter() - start,
         }
         with self._cond:
             ops = self._done if ops is None else ops
             frame = Frame(
                 self._frame_id,
                 pixels,
-                png_bytes(pixels, compression=1),
+                png,
                 frame_meta,
                 ops,
                 dict(self._seqs) if seqs is None else seqs,
@@ -618,6 +606,13 @@ class Engine:
             "pixels": list(self._pixels),
             "estimators": self._estimators,
         }
+
+
+def _update_arguments(target: str, key: Any, value: dict[str, Any]) -> dict[str, Any]:
+    """The :meth:`gi.Renderer.update` keywords of one change."""
+    if target == "camera":
+        return {"camera": value}
+    return {f"{target}s": {key: value}}
 
 
 def _has_image(result: RenderResult, name: str) -> bool:

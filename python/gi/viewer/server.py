@@ -134,8 +134,9 @@ class ViewerServer:
 
     async def stop(self) -> None:
         """Cancels the frame under way, closes the pages' sockets and stops serving."""
-        assert self._loop is not None
-        await self._loop.run_in_executor(None, self.engine.stop)
+        # Blocks the loop for at most the cancel of the frame under way (the executors may
+        # be shut down already when this runs at interpreter exit).
+        self.engine.stop()
         for c in list(self._clients.values()):
             with contextlib.suppress(Exception):
                 await asyncio.wait_for(c.ws.close(code=1001, message=b"server stopped"), 0.5)
