@@ -301,6 +301,16 @@ def test_gi_view_returns_its_url_and_shows_inline_in_jupyter(monkeypatch):
         gi.view("cornell", "raytrace")
 
 
+def test_without_aiohttp_the_viewer_says_what_to_install(monkeypatch):
+    import gi.viewer.server  # noqa: F401  (so that there is something to hide)
+
+    monkeypatch.setitem(sys.modules, "aiohttp", None)
+    monkeypatch.delitem(sys.modules, "gi.viewer.server")
+    monkeypatch.delattr(gi.viewer, "server")
+    with pytest.raises(gi.SettingError, match=r"gi\[view\]"):
+        gi.view("cornell")
+
+
 def test_other_addresses_than_loopback_warn():
     from gi.viewer import warn_if_exposed
 
