@@ -7,14 +7,16 @@ a burst of camera messages becomes one frame showing the last of them. A changed
 rendered by the interactive renderer (the method and options as given); once the view has
 been still for :data:`REFINE_AFTER` seconds and a page is watching, a second renderer
 with ``progressive=True`` adds passes to a running mean (Knaus & Zwicker 2011) until the
-next change, which cancels the pass under way. Methods without a progressive mode keep
-their last frame (the renderer's own error says why, shown on the page).
+next change, which cancels the pass under way. Methods without a progressive mode (the
+option table, :func:`gi.options`) keep their last frame.
+
+Options the method does not take are kept for the methods that do: each renderer made after
+the first gets only its method's options (so a method switch in the panel warns of none).
 """
 
 from __future__ import annotations
 
 import concurrent.futures
-import re
 import threading
 import time
 from collections.abc import Callable
@@ -97,7 +99,8 @@ class Engine:
     ) -> None:
         self._scene = scene
         self._method = method
-        self._options = dict(options)
+        # The viewer refines a still view itself (a second, progressive renderer).
+        self._options = {k: v for k, v in options.items() if k != "progressive"}
         self._on_frame = on_frame
         self._on_event = on_event
         self._display = display or DisplayState()
@@ -109,7 +112,6 @@ class Engine:
         self._progressive_error: str | None = None
         self._pixels = self._size
         self._adapter = _adapter_name(self._options.get("adapter"))
-        self._estimators = setting_choices(scene, method, "estimator")
         self._scene_camera = self._interactive.renderer.describe("camera")
         self._light_descs = [
             self._interactive.renderer.describe("light", i) for i in range(scene.light_count)
@@ -383,7 +385,7 @@ class Engine:
                 options.pop(k, None)
             else:
                 options[k] = v
-        slot = _Slot(Renderer(self._scene, method, **options))  # raises SettingError
+        slot = _Slot(self._renderer(method, options, progressive=False))  # SettingError
         self._sync(slot)
         self._method, self._options = method, options
         self._interactive = slot
@@ -495,10 +497,24 @@ class Engine:
         self._show(result, meta, ops, seqs)
         return True
 
+    def _renderer(self, method: str, options: dict[str, Any], *, progressive: bool) -> Renderer:
+        """A renderer of ``method`` with the options it takes; ``progressive`` is the
+        viewer's to set."""
+        taken = {row["name"] for row in gi.options(method)}
+        given = {k: v for k, v in options.items() if k in taken or k == "size"}
+        given.pop("progressive", None)
+        if progressive:
+            given["progressive"] = True
+        return Renderer(self._scene, method, **given)
+
     def _refine(self) -> None:
         if self._progressive is None:
+            if not any(row["name"] == "progressive" for row in gi.options(self._method)):
+                self._progressive_error = f"method {self._method!r} has no progressive mode"
+                self._on_event(None, {**self.state(), "type": "state"})
+                return
             try:
-                r = Renderer(self._scene, self._method, progressive=True, **self._options)
+                r = self._renderer(self._method, self._options, progressive=True)
             except gi.GiError as e:
                 self._progressive_error = str(e)
                 self._on_event(None, {**self.state(), "type": "state"})
@@ -604,7 +620,12 @@ class Engine:
             "adapter": self._adapter,
             "scene": self._scene.source,
             "pixels": list(self._pixels),
-            "estimators": self._estimators,
+            # The panel's options for this method (gi.options rows; absent: not taken).
+            "options": {
+                row["name"]: {k: row.get(k) for k in ("default", "range", "doc", "choices")}
+                for row in gi.options(self._method)
+                if row["name"] in m.SETTINGS
+            },
         }
 
 
@@ -627,16 +648,3 @@ def _adapter_name(adapter: str | None) -> str:
         return f"adapter: {e}"
     lines = [ln.strip() for ln in report.splitlines() if ln.strip()]
     return lines[0] if lines else ""
-
-
-def setting_choices(scene: gi.Scene, method: str, name: str) -> list[str]:
-    """The names a choice setting takes, read from the renderer's own error for a name it
-    does not know ("unknown estimator `?` (available: auto, volumes, ...)"); ``[]`` if the
-    error does not list them."""
-    try:
-        Renderer(scene, method, **{name: "?"})
-    except gi.SettingError as e:
-        found = re.search(r"\(available: ([^)]*)\)", str(e))
-        if found:
-            return [c.strip() for c in found.group(1).split(",") if c.strip()]
-    return []

@@ -20,6 +20,7 @@ from typing import Any
 from gi._checks import MAX_EXPOSURE
 from gi._gi import GiError
 from gi.display import TONEMAPS
+from gi.render import options
 
 #: Longest message accepted (bytes of JSON).
 MAX_MESSAGE_BYTES = 64 * 1024
@@ -307,13 +308,27 @@ def materials(value: Any, field: str = "materials") -> dict[str, dict[str, Any]]
     return {_string(k, field): _fields(v, f"{field}.{k}") for k, v in obj.items()}
 
 
-#: The render options the side panel changes; the renderer checks their values.
+#: The render options the side panel changes (their values are checked against the core's
+#: option table, :func:`gi.options`).
 SETTINGS = ("method", "estimator", "photons", "subsample")
 
 
+def _option(name: str, value: Any, field: str) -> Any:
+    """``value`` if some row of the option table for ``name`` takes it (its choices or
+    min..max), whatever the current method: the panel keeps options for other methods."""
+    rows = [row for row in options() if row["name"] == name]
+    for row in rows:
+        if "choices" in row and value not in row["choices"]:
+            continue
+        if "min" in row and not row["min"] <= value <= row["max"]:
+            continue
+        return value
+    raise MessageError(field, f"{value!r} is not {rows[0]['range'] if rows else 'an option'}")
+
+
 def settings(value: Any, methods: list[str], field: str = "settings") -> dict[str, Any]:
-    """Method (one of ``methods``), estimator (a name), photons and subsample (positive
-    integers); ``null`` goes back to the renderer's default."""
+    """Method (one of ``methods``), estimator, photons and subsample (checked against the
+    option table); ``null`` goes back to the renderer's default."""
     obj = _obj(value, field)
     _only(obj, field, SETTINGS)
     if not obj:
@@ -328,11 +343,9 @@ def settings(value: Any, methods: list[str], field: str = "settings") -> dict[st
         elif key == "method":
             out[key] = _string(v, where, methods)
         elif key == "estimator":
-            out[key] = _string(v, where)
-        elif key == "photons":
-            out[key] = _int(v, where, 1, 2**32 - 1)
+            out[key] = _option(key, _string(v, where), where)
         else:
-            out[key] = _int(v, where, 1, 64)
+            out[key] = _option(key, _int(v, where, 1, 2**63), where)
     return out
 
 

@@ -288,11 +288,19 @@
     fillSelect($("method"), state.methods, state.method);
     fillSelect($("tonemap"), state.tonemaps, state.display.tonemap);
     fillSelect($("aov"), state.aovs, state.display.aov, (n) => (n === "radiance" ? "beauty" : n));
-    const est = $("estimators");
-    est.replaceChildren(...(state.estimators || []).map((n) => new Option(n, n)));
-    setInput($("estimator"), state.settings.estimator);
-    setInput($("photons-setting"), state.settings.photons);
-    setInput($("subsample"), state.settings.subsample);
+    // The option table's rows for this method (gi.options): choices, defaults, docs; an
+    // option the method does not take is disabled (kept for the methods that do).
+    const options = state.options || {};
+    const est = options.estimator && options.estimator.choices ? options.estimator.choices : [];
+    $("estimators").replaceChildren(...est.map((n) => new Option(n, n)));
+    for (const [id, name] of [["estimator", "estimator"], ["photons-setting", "photons"], ["subsample", "subsample"]]) {
+      const input = $(id);
+      const row = options[name];
+      input.disabled = !row;
+      input.placeholder = row ? `default ${row.default ?? "auto"}` : "not for this method";
+      input.title = row ? `${row.doc} (${row.range})` : "";
+      setInput(input, state.settings[name]);
+    }
     if (document.activeElement !== $("exposure")) {
       $("exposure").value = state.display.exposure;
       $("exposure-value").textContent = Number(state.display.exposure).toFixed(1);
