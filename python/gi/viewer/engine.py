@@ -8,7 +8,7 @@ rendered by the interactive renderer (the method and options as given); once the
 been still for :data:`REFINE_AFTER` seconds and a page is watching, a second renderer
 with ``progressive=True`` adds passes to a running mean (Knaus & Zwicker 2011) until the
 next change, which cancels the pass under way. Methods without a progressive mode (the
-option table, :func:`gi.options`) keep their last frame.
+option table, :func:`gi.options_table`) keep their last frame.
 
 Options the method does not take are kept for the methods that do: each renderer made after
 the first gets only its method's options (so a method switch in the panel warns of none).
@@ -28,7 +28,7 @@ import numpy as np
 import gi
 from gi.aovs import aov_names
 from gi.display import TONEMAPS, aov_display, png_bytes, quantize8, to_display
-from gi.render import Renderer, RenderResult
+from gi.render import Renderer, RenderResult, method_options, options_table
 from gi.viewer import messages as m
 from gi.viewer.picking import ObjectPicker, View, pick_light, translated
 
@@ -500,8 +500,7 @@ class Engine:
     def _renderer(self, method: str, options: dict[str, Any], *, progressive: bool) -> Renderer:
         """A renderer of ``method`` with the options it takes; ``progressive`` is the
         viewer's to set."""
-        taken = {row["name"] for row in gi.options(method)}
-        given = {k: v for k, v in options.items() if k in taken or k == "size"}
+        given = method_options(method, **options)
         given.pop("progressive", None)
         if progressive:
             given["progressive"] = True
@@ -509,7 +508,7 @@ class Engine:
 
     def _refine(self) -> None:
         if self._progressive is None:
-            if not any(row["name"] == "progressive" for row in gi.options(self._method)):
+            if not any(row["name"] == "progressive" for row in options_table(self._method)):
                 self._progressive_error = f"method {self._method!r} has no progressive mode"
                 self._on_event(None, {**self.state(), "type": "state"})
                 return
@@ -620,10 +619,10 @@ class Engine:
             "adapter": self._adapter,
             "scene": self._scene.source,
             "pixels": list(self._pixels),
-            # The panel's options for this method (gi.options rows; absent: not taken).
+            # The panel's options for this method (option table rows; absent: not taken).
             "options": {
                 row["name"]: {k: row.get(k) for k in ("default", "range", "doc", "choices")}
-                for row in gi.options(self._method)
+                for row in options_table(self._method)
                 if row["name"] in m.SETTINGS
             },
         }

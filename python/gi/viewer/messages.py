@@ -20,7 +20,7 @@ from typing import Any
 from gi._checks import MAX_EXPOSURE
 from gi._gi import GiError
 from gi.display import TONEMAPS
-from gi.render import options
+from gi.render import options_table
 
 #: Longest message accepted (bytes of JSON).
 MAX_MESSAGE_BYTES = 64 * 1024
@@ -309,14 +309,14 @@ def materials(value: Any, field: str = "materials") -> dict[str, dict[str, Any]]
 
 
 #: The render options the side panel changes (their values are checked against the core's
-#: option table, :func:`gi.options`).
+#: option table, :func:`gi.options_table`).
 SETTINGS = ("method", "estimator", "photons", "subsample")
 
 
 def _option(name: str, value: Any, field: str) -> Any:
     """``value`` if some row of the option table for ``name`` takes it (its choices or
     min..max), whatever the current method: the panel keeps options for other methods."""
-    rows = [row for row in options() if row["name"] == name]
+    rows = [row for row in options_table() if row["name"] == name]
     for row in rows:
         if "choices" in row and value not in row["choices"]:
             continue

@@ -288,7 +288,7 @@
     fillSelect($("method"), state.methods, state.method);
     fillSelect($("tonemap"), state.tonemaps, state.display.tonemap);
     fillSelect($("aov"), state.aovs, state.display.aov, (n) => (n === "radiance" ? "beauty" : n));
-    // The option table's rows for this method (gi.options): choices, defaults, docs; an
+    // The option table's rows for this method (gi.options_table): choices, defaults, docs; an
     // option the method does not take is disabled (kept for the methods that do).
     const options = state.options || {};
     const est = options.estimator && options.estimator.choices ? options.estimator.choices : [];
