@@ -104,7 +104,9 @@ def _add_options(parser: argparse.ArgumentParser) -> None:
             parts.append(f"{row['doc']} [{row['range']}; default {default}; {methods}]")
         flags = [f"--{name.replace('_', '-')}", *_ALIASES.get(name, [])]
         kind = first["kind"]
-        kw: dict[str, object] = {"default": None, "dest": name, "help": "; ".join(parts)}
+        # argparse expands %-formats in help; the docs have literal percents ("0.5%").
+        help_text = "; ".join(parts).replace("%", "%%")
+        kw: dict[str, object] = {"default": None, "dest": name, "help": help_text}
         if kind == "bool":
             kw["action"] = argparse.BooleanOptionalAction
         elif kind == "int":
