@@ -323,6 +323,10 @@ def test_other_addresses_than_loopback_warn():
 
 
 def test_cli_view_refuses_bad_input_at_once():
+    p = subprocess.run(
+        [sys.executable, "-m", "gi.cli", "view", "--help"], capture_output=True, text=True
+    )
+    assert p.returncode == 0 and "--no-browser" in p.stdout and "--photons" in p.stdout
     run = [sys.executable, "-m", "gi.cli", "view", "cornell", "--no-browser"]
     p = subprocess.run([*run, "--method", "raytrace"], capture_output=True, text=True, timeout=60)
     assert p.returncode == 2 and "unknown method" in p.stderr
