@@ -1,12 +1,13 @@
 #!/usr/bin/env bash
 # Installs everything gi needs on a fresh Debian/Ubuntu machine with Rust and Python 3:
-# Mesa lavapipe (software Vulkan, for the GPU passes), a virtual environment in .venv,
-# and gi itself (built by maturin) with its test tools.
+# Mesa lavapipe (software Vulkan, for the GPU passes), Chromium (the viewer's browser test
+# drives it headless), a virtual environment in .venv, and gi itself (built by maturin)
+# with its test tools.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 need_apt=()
-for pkg in mesa-vulkan-drivers libvulkan1; do
+for pkg in mesa-vulkan-drivers libvulkan1 chromium; do
   dpkg -s "$pkg" >/dev/null 2>&1 || need_apt+=("$pkg")
 done
 if [ ${#need_apt[@]} -gt 0 ]; then

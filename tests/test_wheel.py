@@ -41,6 +41,9 @@ def test_wheel_is_abi3_manylinux_and_small(tmp_path):
         assert ext.filename == "gi/_gi.abi3.so"
         # 62 MB with debug info before; the stripped extension is well under the bound.
         assert ext.file_size < MAX_EXTENSION_BYTES, ext.file_size
+        # The viewer's page is package data (it must work offline).
+        for name in ("index.html", "viewer.js", "viewer.css"):
+            assert f"gi/viewer/static/{name}" in z.namelist(), name
         dist_info = next(n for n in z.namelist() if n.endswith(".dist-info/METADATA"))
         metadata = z.read(dist_info).decode()
         wheel_meta = z.read(dist_info.replace("METADATA", "WHEEL")).decode()
@@ -49,6 +52,7 @@ def test_wheel_is_abi3_manylinux_and_small(tmp_path):
     assert "Author: The gi developers" in metadata or "The gi developers" in metadata
     assert "Classifier: Programming Language :: Rust" in metadata
     assert "Requires-Dist: pyoidn" in metadata  # the denoise extra
+    assert "Requires-Dist: aiohttp" in metadata and "extra == 'view'" in metadata
 
     # auditwheel (PyPA's checker) agrees the wheel meets its manylinux tag: no libraries
     # outside the manylinux set, no too-new glibc symbols.

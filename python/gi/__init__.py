@@ -47,6 +47,7 @@ from gi.io import read_channels, read_image, save_image, save_layers, save_resul
 from gi.meshes import AssetWarning  # noqa: E402
 from gi.render import Renderer, RenderResult, method_options, options_table, render  # noqa: E402
 from gi.scene import load_scene  # noqa: E402
+from gi.viewer import view  # noqa: E402  (imports aiohttp only when called)
 
 __all__ = [
     "AssetWarning",
@@ -83,4 +84,5 @@ __all__ = [
     "save_layers",
     "save_result",
     "to_display",
+    "view",
 ]

@@ -57,6 +57,16 @@ def _frames(text: str) -> range:
     return range(start, end, step)
 
 
+def _port(text: str) -> int:
+    try:
+        port = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a port number, got {text!r}") from None
+    if not 0 <= port <= 65535:
+        raise argparse.ArgumentTypeError(f"port {port} is outside 0..65535")
+    return port
+
+
 def _fps(text: str) -> float:
     try:
         fps = float(text)
@@ -94,7 +104,9 @@ def _add_options(parser: argparse.ArgumentParser) -> None:
             parts.append(f"{row['doc']} [{row['range']}; default {default}; {methods}]")
         flags = [f"--{name.replace('_', '-')}", *_ALIASES.get(name, [])]
         kind = first["kind"]
-        kw: dict[str, object] = {"default": None, "dest": name, "help": "; ".join(parts)}
+        # argparse expands %-formats in help; the docs have literal percents ("0.5%").
+        help_text = "; ".join(parts).replace("%", "%%")
+        kw: dict[str, object] = {"default": None, "dest": name, "help": help_text}
         if kind == "bool":
             kw["action"] = argparse.BooleanOptionalAction
         elif kind == "int":
@@ -165,6 +177,30 @@ def _parser() -> argparse.ArgumentParser:
         " --denoise adds noisy. EXR: layers of the output file; other formats: NAME.AOV.EXT",
     )
     r.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
+    v = sub.add_parser("view", help="interactive viewer in the browser (pip install 'gi[view]')")
+    v.add_argument("scene", help="built-in scene name, JSON scene file or Mitsuba 3 XML")
+    v.add_argument("--method", default="ispm", help="rendering method (see `gi methods`)")
+    v.add_argument(
+        "--size",
+        type=_size,
+        help="image size WIDTHxHEIGHT (default: the scene's); the page keeps its pixel count"
+        " and takes the window's aspect",
+    )
+    _add_options(v)
+    v.add_argument("--exposure", type=float, default=0.0, help="exposure in stops (0)")
+    v.add_argument(
+        "--tonemap", default="clip", choices=list(TONEMAPS), help="display transform (clip)"
+    )
+    v.add_argument(
+        "--port", type=_port, default=0, help="TCP port (default 0: a free one; the URL is printed)"
+    )
+    v.add_argument(
+        "--host",
+        default="127.0.0.1",
+        help="address to serve on (default 127.0.0.1: this machine only; any other warns,"
+        " as the viewer has no password)",
+    )
+    v.add_argument("--no-browser", action="store_true", help="don't open the page in a browser")
     sub.add_parser("scenes", help="list the built-in scenes")
     sub.add_parser("methods", help="list the rendering methods")
     f = sub.add_parser(
@@ -438,6 +474,25 @@ def _render_sequence(args: argparse.Namespace, outputs: list[_Output]) -> int:
     return 0
 
 
+def _view(args: argparse.Namespace) -> int:
+    """``gi view``: serves the viewer until Ctrl-C."""
+    from gi import viewer
+
+    if args.method not in gi.methods():
+        raise gi.SettingError(f"unknown method {args.method!r} (use {', '.join(gi.methods())})")
+    scene = _load(args.scene)
+    return viewer.serve(
+        scene,
+        args.method,
+        _settings(args),
+        host=args.host,
+        port=args.port,
+        open_browser=not args.no_browser,
+        exposure=args.exposure,
+        tonemap=args.tonemap,
+    )
+
+
 def _footprints(args: argparse.Namespace) -> int:
     qs = [1.0, 5.0, 25.0, 50.0, 75.0, 95.0, 99.0]
     rows = gi.footprint_radii(_load(args.scene), args.photons, args.seed, args.smoothing, qs)
@@ -476,6 +531,8 @@ def main(argv: list[str] | None = None) -> int:
             print(f"gi {gi.__version__}")
             print(gi.adapter_report(args.adapter))
             return 0
+        if args.command == "view":
+            return _view(args)
         if args.command == "methods":
             print("\n".join(gi.methods()))
             return 0

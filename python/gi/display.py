@@ -176,8 +176,9 @@ def aov_display(
     return to_display(img, tonemap, exposure)
 
 
-def png_bytes(pixels: np.ndarray) -> bytes:
-    """Encodes uint8 H×W (grey) or H×W×3 (RGB) pixels as a PNG file in memory."""
+def png_bytes(pixels: np.ndarray, compression: int = 6) -> bytes:
+    """Encodes uint8 H×W (grey) or H×W×3 (RGB) pixels as a PNG file in memory, deflated
+    at zlib level ``compression`` (1 fastest, 9 smallest)."""
     px = np.ascontiguousarray(pixels, dtype=np.uint8)
     if px.ndim == 3 and px.shape[2] == 1:
         px = px[:, :, 0]
@@ -194,6 +195,6 @@ def png_bytes(pixels: np.ndarray) -> bytes:
     return (
         b"\x89PNG\r\n\x1a\n"
         + chunk(b"IHDR", header)
-        + chunk(b"IDAT", zlib.compress(raw, 6))
+        + chunk(b"IDAT", zlib.compress(raw, compression))
         + chunk(b"IEND", b"")
     )

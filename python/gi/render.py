@@ -183,7 +183,9 @@ class Renderer:
 
     def describe(self, target: str, key: int | str | None = None) -> dict[str, Any]:
         """The current ``"camera"``, ``"light"`` (key: index) or ``"material"`` (key: name)
-        in the scene format."""
+        in the scene format; ``"object"`` (key: index or name) as ``{"name", "matrix"
+        (4×4 rows, what :meth:`update` takes), "triangles": [start, end]}`` (its range of
+        ``Scene.mesh_arrays()``' triangles)."""
         return json.loads(self._native.describe(target, key))  # type: ignore[no-any-return]
 
     def update(

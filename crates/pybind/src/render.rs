@@ -206,7 +206,8 @@ impl PyRenderer {
             .collect()
     }
 
-    /// The current camera, light `i` or material as scene-format JSON.
+    /// The current camera, light `i` or material as scene-format JSON; object `i` (index or
+    /// name) as `{"name", "matrix": 4×4 rows, "triangles": [start, end]}`.
     #[pyo3(signature = (target, key = None))]
     fn describe(
         &self,
@@ -236,6 +237,23 @@ impl PyRenderer {
                         ))
                     }
                 }
+            }
+            "object" => {
+                let i = match key.map(|k| k.extract::<String>()) {
+                    Some(Ok(name)) => scene.object_index(&name),
+                    _ => key.map(|k| k.extract::<usize>()).transpose()?,
+                };
+                let Some(object) = i.and_then(|i| scene.objects.get(i)) else {
+                    return Err(setting_error(py, "object", "no such object"));
+                };
+                // The transform as the rows that `update("object", ..)` takes as `matrix`,
+                // and the object's range of the scene's triangles (`Scene.mesh_arrays`).
+                let rows = object.transform.transpose().to_cols_array_2d();
+                serde_json::to_string(&serde_json::json!({
+                    "name": object.name,
+                    "matrix": rows,
+                    "triangles": [object.triangles.start, object.triangles.end],
+                }))
             }
             other => {
                 return Err(setting_error(
