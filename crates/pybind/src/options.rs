@@ -12,7 +12,7 @@ fn setting_error(py: Python<'_>, name: &str, message: String) -> PyErr {
     let name = OPTIONS
         .iter()
         .find(|s| s.name == name)
-        .map_or("options", |s| s.name);
+        .map_or("settings", |s| s.name);
     to_py(py, gi_core::Error::Setting { name, message })
 }
 
@@ -65,7 +65,7 @@ pub fn from_keywords(
     let mut given = Vec::new();
     for (k, v) in kw.into_iter().flat_map(|d| d.iter()) {
         let name: String = k.extract().map_err(|_| {
-            setting_error(py, "options", format!("option names are strings, got {k}"))
+            setting_error(py, "settings", format!("option names are strings, got {k}"))
         })?;
         let v = value(method, &name, &v)?;
         given.push((name, v));

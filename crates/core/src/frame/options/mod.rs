@@ -160,7 +160,7 @@ impl RenderOptions {
         let method = self.method();
         if spec(name, method).is_none() {
             return Err(Error::setting(
-                "options",
+                "settings",
                 format!("method `{}` takes no option `{name}`", method.name()),
             ));
         }

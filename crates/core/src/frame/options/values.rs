@@ -218,7 +218,7 @@ fn unknown_option(name: &str) -> Error {
     } else {
         format!("did you mean {}?", close.join(" or "))
     };
-    Error::setting("options", format!("unknown option `{name}` ({hint})"))
+    Error::setting("settings", format!("unknown option `{name}` ({hint})"))
 }
 
 /// Levenshtein distance (for "did you mean").
