@@ -102,7 +102,8 @@ def test_each_methods_aov_names_are_known_before_rendering():
     # up front; this keeps the declaration equal to what the renderer really returns.
     scene = gi.load_scene("cornell")
     for method in gi.methods():
-        r = gi.render(scene, method, spp=1, size=(8, 8), photons=2000, adapter="cpu")
+        options = gi.method_options(method, spp=1, size=(8, 8), photons=2000, adapter="cpu")
+        r = gi.render(scene, method, **options)
         assert r.aov_names() == aovs.aov_names(method), method
 
 

@@ -130,7 +130,7 @@ def _result(out: dict[str, Any]) -> RenderResult:
 
 class Renderer:
     """A persistent renderer: made once from a scene, a method and its options (the
-    keywords of :func:`render`; :func:`gi.options` lists them), then one
+    keywords of :func:`render`; :func:`gi.options_table` lists them), then one
     :meth:`render` per frame with :meth:`update` calls between frames. GPU resources, the
     BVH and the photon ring live from one frame to the next; a frame uploads only what
     changed and reads back only the images asked for.
@@ -160,6 +160,11 @@ class Renderer:
     @property
     def method(self) -> str:
         return self._native.method
+
+    @property
+    def options(self) -> dict[str, Any]:
+        """Every option of the method with its value (given, or the table's default)."""
+        return self._native.options  # type: ignore[no-any-return]
 
     @property
     def size(self) -> tuple[int, int]:

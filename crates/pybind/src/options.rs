@@ -2,7 +2,7 @@
 //! from `gi_core::frame::options::OPTIONS`, so no option is named here.
 
 use crate::errors::to_py;
-use gi_core::frame::options::{describe_kind, spec, Default, Kind, Method, Value, OPTIONS};
+use gi_core::frame::options::{describe_kind, spec, Kind, Method, Value, OPTIONS};
 use gi_core::RenderOptions;
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyList, PyString};
@@ -73,13 +73,14 @@ pub fn from_keywords(
     RenderOptions::new(method, &given).map_err(|e| to_py(py, e))
 }
 
-fn default_object<'py>(py: Python<'py>, d: Default) -> PyResult<Bound<'py, PyAny>> {
-    Ok(match d {
-        Default::None => py.None().into_bound(py),
-        Default::Bool(b) => PyBool::new(py, b).to_owned().into_any(),
-        Default::Int(i) => i.into_pyobject(py)?.into_any(),
-        Default::Float(x) => x.into_pyobject(py)?.into_any(),
-        Default::Str(s) => s.into_pyobject(py)?.into_any(),
+/// An option value as a Python object.
+pub fn to_object<'py>(py: Python<'py>, v: &Value) -> PyResult<Bound<'py, PyAny>> {
+    Ok(match v {
+        Value::None => py.None().into_bound(py),
+        Value::Bool(b) => PyBool::new(py, *b).to_owned().into_any(),
+        Value::Int(i) => i.into_pyobject(py)?.into_any(),
+        Value::Float(x) => x.into_pyobject(py)?.into_any(),
+        Value::Str(s) => s.into_pyobject(py)?.into_any(),
     })
 }
 
@@ -113,7 +114,7 @@ pub fn options(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
         d.set_item("kind", kind)?;
         d.set_item("range", describe_kind(&s.kind))?;
         d.set_item("optional", s.optional)?;
-        d.set_item("default", default_object(py, s.default)?)?;
+        d.set_item("default", to_object(py, &s.default.value())?)?;
         let methods: Vec<&str> = s.methods.iter().map(|m| m.name()).collect();
         d.set_item("methods", methods)?;
         d.set_item("doc", s.doc)?;

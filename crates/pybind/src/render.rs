@@ -79,6 +79,16 @@ impl PyRenderer {
         self.warnings.clone()
     }
 
+    /// Every option of the renderer's method with its value (given or the table's default).
+    #[getter]
+    fn options<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        for (name, value) in self.inner.options().values() {
+            d.set_item(name, crate::options::to_object(py, &value)?)?;
+        }
+        Ok(d)
+    }
+
     /// Renders one frame; `aovs` adds albedo/normal/position/depth, `extras` the method's
     /// own images. Returns the dict of `render()`.
     #[pyo3(signature = (aovs = false, extras = false, seed = None, progress = None))]
