@@ -74,42 +74,14 @@ impl Pipelines for BouncePass {
                 immediate_size: 0,
             });
         let targets: [_; 5] = std::array::from_fn(|_| Some(wgpu::ColorTargetState::from(TARGET)));
-        let bounce_pipeline = |entry: &str| {
-            crate::gpu::create_render_pipeline(
-                device,
-                &wgpu::RenderPipelineDescriptor {
-                    label: Some("bounce pipeline"),
-                    layout: Some(&bounce_pipeline_layout),
-                    vertex: wgpu::VertexState {
-                        module: &module,
-                        entry_point: Some("vs_main"),
-                        compilation_options: Default::default(),
-                        buffers: &[Some(gbuffer::vertex_layout())],
-                    },
-                    primitive: wgpu::PrimitiveState::default(),
-                    depth_stencil: Some(wgpu::DepthStencilState {
-                        format: gbuffer::DEPTH,
-                        depth_write_enabled: Some(true),
-                        depth_compare: Some(wgpu::CompareFunction::Less),
-                        stencil: Default::default(),
-                        bias: Default::default(),
-                    }),
-                    multisample: Default::default(),
-                    fragment: Some(wgpu::FragmentState {
-                        module: &module,
-                        entry_point: Some(entry),
-                        compilation_options: Default::default(),
-                        targets: &targets,
-                    }),
-                    multiview_mask: None,
-                    cache: None,
-                },
-            )
-        };
-        let pipelines = Variant::ALL
-            .iter()
-            .map(|v| bounce_pipeline(v.entry_point()))
-            .collect();
+        let pipelines = gbuffer::scene_pipelines(
+            device,
+            "bounce pipeline",
+            &bounce_pipeline_layout,
+            &module,
+            &targets,
+            true,
+        );
 
         BouncePass {
             pipelines,

@@ -123,43 +123,14 @@ impl BundlePass {
             bind_group_layouts: &[Some(&layout), Some(textures)],
             immediate_size: 0,
         });
-        let pipeline = |entry: &str| {
-            gpu::create_render_pipeline(
-                device,
-                &wgpu::RenderPipelineDescriptor {
-                    label: Some("bundle pipeline"),
-                    layout: Some(&pipeline_layout),
-                    vertex: wgpu::VertexState {
-                        module: &module,
-                        entry_point: Some("vs_main"),
-                        compilation_options: Default::default(),
-                        buffers: &[Some(gbuffer::vertex_layout())],
-                    },
-                    primitive: wgpu::PrimitiveState::default(),
-                    // Every fragment is kept: no depth test, no writes.
-                    depth_stencil: Some(wgpu::DepthStencilState {
-                        format: gbuffer::DEPTH,
-                        depth_write_enabled: Some(false),
-                        depth_compare: Some(wgpu::CompareFunction::Always),
-                        stencil: Default::default(),
-                        bias: Default::default(),
-                    }),
-                    multisample: Default::default(),
-                    fragment: Some(wgpu::FragmentState {
-                        module: &module,
-                        entry_point: Some(entry),
-                        compilation_options: Default::default(),
-                        targets: &[],
-                    }),
-                    multiview_mask: None,
-                    cache: None,
-                },
-            )
-        };
-        let pipelines = super::textures::Variant::ALL
-            .iter()
-            .map(|v| pipeline(v.entry_point()))
-            .collect();
+        let pipelines = gbuffer::scene_pipelines(
+            device,
+            "bundle pipeline",
+            &pipeline_layout,
+            &module,
+            &[],
+            false,
+        );
         BundlePass { pipelines, layout }
     }
 }

@@ -2,6 +2,7 @@
 //! frame's radiance target, on the GPU, so that only the images asked for are read back.
 
 use super::wgsl;
+use crate::gpu::layout::texture_entry;
 use crate::gpu::shaders;
 
 /// The radiance target (rgb; alpha 1).
@@ -15,16 +16,7 @@ pub struct CompositePass {
 
 impl CompositePass {
     pub fn new(device: &wgpu::Device) -> Self {
-        let texture = |binding| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::FRAGMENT,
-            ty: wgpu::BindingType::Texture {
-                sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                view_dimension: wgpu::TextureViewDimension::D2,
-                multisampled: false,
-            },
-            count: None,
-        };
+        let texture = |binding| texture_entry(binding, wgpu::ShaderStages::FRAGMENT);
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("composite bind group layout"),
             entries: &[texture(0), texture(1), texture(2)],

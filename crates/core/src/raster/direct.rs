@@ -5,6 +5,7 @@
 //! [`super::edges`]). The layouts are visible to compute too: the edge passes share them.
 
 use super::wgsl;
+use crate::gpu::layout::texture_entry;
 use crate::gpu::shaders;
 
 /// The accumulation target: radiance·weight in rgb, the sum of weights in alpha.
@@ -68,16 +69,7 @@ impl DirectPass {
                 },
             ],
         });
-        let texture = |binding| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: frag,
-            ty: wgpu::BindingType::Texture {
-                sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                view_dimension: wgpu::TextureViewDimension::D2,
-                multisampled: false,
-            },
-            count: None,
-        };
+        let texture = |binding| texture_entry(binding, frag);
         let gbuffer_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("direct gbuffer bind group layout"),
             entries: &[texture(0), texture(1), texture(2), texture(3)],

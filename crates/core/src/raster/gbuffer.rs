@@ -103,6 +103,61 @@ impl GBuffer {
     }
 }
 
+/// The pipelines of a pass that rasterizes the scene: one per texture
+/// [`Variant`](super::textures::Variant) (its fragment entry point), the scene's vertices
+/// in (`vs_main`), `targets` out, with a depth test (`Less`, writing) or, without
+/// `depth_test`, every fragment kept.
+pub fn scene_pipelines(
+    device: &wgpu::Device,
+    label: &str,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    targets: &[Option<wgpu::ColorTargetState>],
+    depth_test: bool,
+) -> Vec<wgpu::RenderPipeline> {
+    let depth = if depth_test {
+        (true, wgpu::CompareFunction::Less)
+    } else {
+        (false, wgpu::CompareFunction::Always)
+    };
+    let pipeline = |entry: &str| {
+        crate::gpu::create_render_pipeline(
+            device,
+            &wgpu::RenderPipelineDescriptor {
+                label: Some(label),
+                layout: Some(layout),
+                vertex: wgpu::VertexState {
+                    module,
+                    entry_point: Some("vs_main"),
+                    compilation_options: Default::default(),
+                    buffers: &[Some(vertex_layout())],
+                },
+                primitive: wgpu::PrimitiveState::default(),
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: DEPTH,
+                    depth_write_enabled: Some(depth.0),
+                    depth_compare: Some(depth.1),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module,
+                    entry_point: Some(entry),
+                    compilation_options: Default::default(),
+                    targets,
+                }),
+                multiview_mask: None,
+                cache: None,
+            },
+        )
+    };
+    super::textures::Variant::ALL
+        .iter()
+        .map(|v| pipeline(v.entry_point()))
+        .collect()
+}
+
 /// Pipeline and bind group layout of the G-buffer pass.
 pub struct GBufferPass {
     /// One per [`super::textures::Variant`], in `Variant::ALL` order.
@@ -140,42 +195,14 @@ impl GBufferPass {
             .iter()
             .map(|(_, f)| Some(wgpu::ColorTargetState::from(*f)))
             .collect();
-        let pipeline = |entry: &str| {
-            crate::gpu::create_render_pipeline(
-                device,
-                &wgpu::RenderPipelineDescriptor {
-                    label: Some("gbuffer pipeline"),
-                    layout: Some(&pipeline_layout),
-                    vertex: wgpu::VertexState {
-                        module: &module,
-                        entry_point: Some("vs_main"),
-                        compilation_options: Default::default(),
-                        buffers: &[Some(vertex_layout())],
-                    },
-                    primitive: wgpu::PrimitiveState::default(),
-                    depth_stencil: Some(wgpu::DepthStencilState {
-                        format: DEPTH,
-                        depth_write_enabled: Some(true),
-                        depth_compare: Some(wgpu::CompareFunction::Less),
-                        stencil: Default::default(),
-                        bias: Default::default(),
-                    }),
-                    multisample: Default::default(),
-                    fragment: Some(wgpu::FragmentState {
-                        module: &module,
-                        entry_point: Some(entry),
-                        compilation_options: Default::default(),
-                        targets: &targets,
-                    }),
-                    multiview_mask: None,
-                    cache: None,
-                },
-            )
-        };
-        let pipelines = super::textures::Variant::ALL
-            .iter()
-            .map(|v| pipeline(v.entry_point()))
-            .collect();
+        let pipelines = scene_pipelines(
+            device,
+            "gbuffer pipeline",
+            &pipeline_layout,
+            &module,
+            &targets,
+            true,
+        );
         GBufferPass { pipelines, layout }
     }
 

@@ -82,42 +82,14 @@ impl RsmPass {
         });
         let targets: [_; TARGETS] =
             std::array::from_fn(|_| Some(wgpu::ColorTargetState::from(TARGET)));
-        let pipeline = |entry: &str| {
-            gpu::create_render_pipeline(
-                device,
-                &wgpu::RenderPipelineDescriptor {
-                    label: Some("rsm pipeline"),
-                    layout: Some(&pipeline_layout),
-                    vertex: wgpu::VertexState {
-                        module: &module,
-                        entry_point: Some("vs_main"),
-                        compilation_options: Default::default(),
-                        buffers: &[Some(gbuffer::vertex_layout())],
-                    },
-                    primitive: wgpu::PrimitiveState::default(),
-                    depth_stencil: Some(wgpu::DepthStencilState {
-                        format: gbuffer::DEPTH,
-                        depth_write_enabled: Some(true),
-                        depth_compare: Some(wgpu::CompareFunction::Less),
-                        stencil: Default::default(),
-                        bias: Default::default(),
-                    }),
-                    multisample: Default::default(),
-                    fragment: Some(wgpu::FragmentState {
-                        module: &module,
-                        entry_point: Some(entry),
-                        compilation_options: Default::default(),
-                        targets: &targets,
-                    }),
-                    multiview_mask: None,
-                    cache: None,
-                },
-            )
-        };
-        let pipelines = super::textures::Variant::ALL
-            .iter()
-            .map(|v| pipeline(v.entry_point()))
-            .collect();
+        let pipelines = gbuffer::scene_pipelines(
+            device,
+            "rsm pipeline",
+            &pipeline_layout,
+            &module,
+            &targets,
+            true,
+        );
         RsmPass { pipelines, layout }
     }
 }

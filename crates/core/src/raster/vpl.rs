@@ -4,6 +4,7 @@
 //! (`bidir.wgsl`).
 
 use super::wgsl;
+use crate::gpu::layout::texture_entry;
 use crate::gpu::{self, shaders};
 use crate::scene::light_views::{corners, look_to, square_perspective, CUBE_FACES};
 use bytemuck::{Pod, Zeroable};
@@ -141,16 +142,7 @@ impl VplPass {
                     },
                     count: None,
                 },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 1,
-                    visibility: frag,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
+                texture_entry(1, frag),
                 super::storage_entry(2, frag),
                 depth_array(3),
                 wgpu::BindGroupLayoutEntry {
@@ -165,16 +157,7 @@ impl VplPass {
                 super::storage_entry(8, frag),
                 super::storage_entry(9, frag),
                 super::storage_entry(10, frag),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 11,
-                    visibility: frag,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
+                texture_entry(11, frag),
             ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
