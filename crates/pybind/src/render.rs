@@ -70,10 +70,13 @@ impl PyRenderer {
         let inner = crate::guard::catch("Renderer", || {
             Renderer::new(&scene.inner, &options).map_err(|e| to_py(py, e))
         })?;
+        let mut warnings = warnings;
+        warnings.extend(inner.warnings().iter().cloned());
         Ok(PyRenderer { inner, warnings })
     }
 
-    /// The options given that don't apply to the method (ignored), one message each.
+    /// The options given that don't apply to the method (ignored) and what the method leaves
+    /// out of the scene's light, one message each.
     #[getter]
     fn warnings(&self) -> Vec<String> {
         self.warnings.clone()

@@ -97,6 +97,8 @@ struct GpuState {
 pub struct Renderer {
     scene: Scene,
     options: RenderOptions,
+    /// What the renderer leaves out of the scene's light (see [`Renderer::warnings`]).
+    warnings: Vec<String>,
     bvh: Option<SceneBvh>,
     /// What changed since the last frame.
     changes: Changes,
@@ -136,6 +138,28 @@ fn check_environment(scene: &Scene, method: Method) -> Result<()> {
     ))
 }
 
+/// What `method` leaves out of `scene`'s light, one message each (they become
+/// `gi.RenderWarning`s): kinds of light a method does not render yet.
+fn unrendered_lights(scene: &Scene, method: Method) -> Vec<String> {
+    let mut out = Vec::new();
+    let emitters = scene.materials.iter().any(|m| m.emits());
+    let directional = scene.lights.iter().any(|l| !l.is_local());
+    let name = method.name();
+    if emitters && method != Method::Path {
+        out.push(format!(
+            "method `{name}` does not render emitting surfaces (area lights) yet: their light \
+             is missing; use method `path`"
+        ));
+    }
+    if directional && method.uses_gpu() {
+        out.push(format!(
+            "method `{name}` does not render directional lights on the GPU yet: their direct \
+             light is missing; use method `path`, `photon` or `gather`"
+        ));
+    }
+    out
+}
+
 /// Most refits before the BVH is built anew (a refitted tree keeps its topology and slows
 /// down as objects travel).
 const MAX_REFITS: u32 = 16;
@@ -161,12 +185,14 @@ impl Renderer {
             options.common.height.unwrap_or(scene.camera.height),
         );
         options::check_image_memory(&camera, method)?;
+        let warnings = unrendered_lights(scene, method);
         Ok(Renderer {
             scene: Scene {
                 camera,
                 ..scene.clone()
             },
             options: options.clone(),
+            warnings,
             bvh: None,
             changes: Changes::default(),
             moved: Vec::new(),
@@ -186,6 +212,12 @@ impl Renderer {
 
     pub fn options(&self) -> &RenderOptions {
         &self.options
+    }
+
+    /// What the method leaves out of the scene's light, one message each (e.g. a kind of
+    /// light it does not render yet).
+    pub fn warnings(&self) -> &[String] {
+        &self.warnings
     }
 
     pub fn method(&self) -> Method {

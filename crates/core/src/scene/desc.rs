@@ -71,6 +71,15 @@ pub enum LightDesc {
         #[serde(default = "default_outer")]
         outer_angle: f32,
     },
+    /// A distant light (the sun): light travelling along `direction` with `irradiance`
+    /// (W·m⁻² per channel) on a surface facing it, from a disc of `angular_diameter`
+    /// degrees (0: parallel light, hard shadows).
+    Directional {
+        direction: V3,
+        irradiance: V3,
+        #[serde(default)]
+        angular_diameter: f32,
+    },
 }
 
 fn default_inner() -> f32 {
@@ -115,6 +124,24 @@ pub struct MaterialDesc {
     pub alpha_texture: Option<String>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub alpha_cutoff: Option<f32>,
+    /// Emitted radiance, W·sr⁻¹·m⁻² per channel, from the front face (the side the
+    /// triangles' winding faces): the surface is an area light.
+    #[serde(default, skip_serializing_if = "is_zero3")]
+    pub emission: V3,
+    /// RGB multiplies `emission`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub emission_texture: Option<String>,
+    /// The back face emits too.
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub two_sided: bool,
+}
+
+fn is_zero3(v: &V3) -> bool {
+    *v == [0.0; 3]
+}
+
+fn is_false(b: &bool) -> bool {
+    !*b
 }
 
 impl MaterialDesc {
@@ -127,6 +154,7 @@ impl MaterialDesc {
             normal: self.normal_texture.clone(),
             alpha: self.alpha_texture.clone(),
             alpha_cutoff: self.alpha_cutoff,
+            emission: self.emission_texture.clone(),
         }
     }
 }
@@ -140,6 +168,7 @@ pub struct TextureRefs {
     pub normal: Option<String>,
     pub alpha: Option<String>,
     pub alpha_cutoff: Option<f32>,
+    pub emission: Option<String>,
 }
 
 fn default_diffuse() -> V3 {

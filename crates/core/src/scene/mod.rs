@@ -5,21 +5,25 @@ pub mod bench;
 pub mod builtin;
 pub mod camera;
 pub mod desc;
+pub mod emitters;
 pub mod environment;
 pub mod light;
 pub mod light_views;
 pub mod primitives;
 pub mod shading;
+pub mod sources;
 pub mod surface;
 pub mod update;
 
 pub use animation::Animation;
 pub use camera::Camera;
 pub use desc::SceneDesc;
+pub use emitters::Emitters;
 pub use environment::{EnvImage, Environment};
-pub use light::Light;
+pub use light::{Bounds, Light};
 pub use primitives::TriMesh;
 pub use shading::Smoothing;
+pub use sources::{Source, Sources};
 pub use surface::{MaterialMaps, TextureMap};
 pub use update::{Changes, SceneObject, SceneUpdate};
 
@@ -94,6 +98,11 @@ pub const MAX_SCALE: f32 = 1.0e6;
 /// Largest light intensity per channel (W/sr): emitted powers, photon powers and radiance
 /// estimates stay far from f32 overflow (3.4·10³⁸) even at millimetre distances.
 pub const MAX_INTENSITY: f32 = 1.0e10;
+/// Largest emitted radiance of a surface (W·sr⁻¹·m⁻² per channel) and irradiance of a
+/// directional light (W·m⁻² per channel).
+pub const MAX_RADIANCE: f32 = 1.0e10;
+/// Widest directional light (degrees of angular diameter).
+pub const MAX_ANGULAR_DIAMETER: f32 = 90.0;
 /// Most vertices (and triangles) a scene may hold: indices are 32-bit.
 pub const MAX_VERTICES: usize = u32::MAX as usize;
 
@@ -397,9 +406,31 @@ impl Scene {
         &self.materials[self.triangle_materials[t] as usize]
     }
 
-    /// Total power of all lights (W per channel).
+    /// Total power of all light sources (W per channel): lights, emitting surfaces and the
+    /// environment (distant lights and the environment through the bounding sphere).
     pub fn total_power(&self) -> Vec3 {
-        self.lights.iter().map(|l| l.power()).sum()
+        Sources::of(self).power()
+    }
+
+    /// The bounding sphere of the scene's vertices (a unit sphere at the origin without
+    /// any).
+    pub fn bounds(&self) -> Bounds {
+        let (lo, hi) = self
+            .positions
+            .iter()
+            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
+                (lo.min(*p), hi.max(*p))
+            });
+        if lo.x > hi.x {
+            return Bounds {
+                centre: Vec3::ZERO,
+                radius: 1.0,
+            };
+        }
+        Bounds {
+            centre: 0.5 * (lo + hi),
+            radius: (0.5 * (hi - lo).length()).max(1e-6),
+        }
     }
 }
 
@@ -543,6 +574,36 @@ pub(crate) fn light_from_desc(l: &LightDesc) -> std::result::Result<Light, Field
                 cos_outer: outer_angle.to_radians().cos(),
             })
         }
+        LightDesc::Directional {
+            direction,
+            irradiance,
+            angular_diameter,
+        } => {
+            let d = Vec3::from(direction);
+            if !finite3(direction) || d.length() < 1e-6 {
+                return Err(("direction".into(), "must be finite and non-zero"));
+            }
+            if !finite3(irradiance) || irradiance.iter().any(|x| *x < 0.0) {
+                return Err(("irradiance".into(), "must be finite and non-negative"));
+            }
+            if irradiance.iter().any(|x| *x > MAX_RADIANCE) {
+                return Err((
+                    "irradiance".into(),
+                    "must be at most 1e10 W/m² per channel (MAX_RADIANCE)",
+                ));
+            }
+            if !(0.0..MAX_ANGULAR_DIAMETER).contains(&angular_diameter) {
+                return Err((
+                    "angular_diameter".into(),
+                    "must be in [0, 90) degrees (MAX_ANGULAR_DIAMETER)",
+                ));
+            }
+            Ok(Light::Directional {
+                direction: d.normalize(),
+                irradiance: Vec3::from(irradiance),
+                cos_half_angle: (0.5 * angular_diameter).to_radians().cos(),
+            })
+        }
     }
 }
 
@@ -568,6 +629,15 @@ pub(crate) fn material_from_desc(m: &MaterialDesc) -> std::result::Result<Materi
     if !(m.ior >= 1.0 && m.ior <= 4.0) {
         return Err(("ior".into(), "must be in [1, 4]"));
     }
+    if !finite3(m.emission) || m.emission.iter().any(|x| *x < 0.0) {
+        return Err(("emission".into(), "must be finite and non-negative"));
+    }
+    if m.emission.iter().any(|x| *x > MAX_RADIANCE) {
+        return Err((
+            "emission".into(),
+            "must be at most 1e10 W·sr⁻¹·m⁻² per channel (MAX_RADIANCE)",
+        ));
+    }
     Ok(Material {
         diffuse: m.diffuse.into(),
         specular: m.specular.into(),
@@ -575,6 +645,8 @@ pub(crate) fn material_from_desc(m: &MaterialDesc) -> std::result::Result<Materi
         fresnel: m.fresnel,
         transmission: m.transmission.into(),
         ior: m.ior,
+        emission: m.emission.into(),
+        two_sided: m.two_sided,
     })
 }
 

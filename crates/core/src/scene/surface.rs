@@ -27,6 +27,8 @@ pub struct MaterialMaps {
     /// Alpha is the coverage; cut out below `alpha_cutoff`.
     pub alpha: Option<u32>,
     pub alpha_cutoff: f32,
+    /// RGB multiplies the emitted radiance.
+    pub emission: Option<u32>,
 }
 
 impl MaterialMaps {
@@ -75,6 +77,7 @@ impl MaterialMaps {
             normal: find("normal_texture", &refs.normal)?,
             alpha,
             alpha_cutoff,
+            emission: find("emission_texture", &refs.emission)?,
         })
     }
 
@@ -88,6 +91,7 @@ impl MaterialMaps {
             normal: name(self.normal),
             alpha: name(self.alpha),
             alpha_cutoff: self.alpha.map(|_| self.alpha_cutoff),
+            emission: name(self.emission),
         }
     }
 }
@@ -150,6 +154,9 @@ impl Scene {
         }
         if let Some(i) = maps.specular {
             m.specular *= self.texture(i).sample(uv, lod).xyz();
+        }
+        if let Some(i) = maps.emission {
+            m.emission *= self.texture(i).sample(uv, lod).xyz();
         }
         if let Some(i) = maps.roughness {
             // A map never turns a glossy lobe into a mirror (a delta lobe the scene-level

@@ -227,6 +227,15 @@ impl Scene {
                 inner_angle: degrees(cos_inner),
                 outer_angle: degrees(cos_outer),
             },
+            Light::Directional {
+                direction,
+                irradiance,
+                cos_half_angle,
+            } => LightDesc::Directional {
+                direction: direction.into(),
+                irradiance: irradiance.into(),
+                angular_diameter: 2.0 * degrees(cos_half_angle),
+            },
         })
     }
 
@@ -248,6 +257,9 @@ impl Scene {
             normal_texture: t.normal,
             alpha_texture: t.alpha,
             alpha_cutoff: t.alpha_cutoff,
+            emission: m.emission.into(),
+            emission_texture: t.emission,
+            two_sided: m.two_sided,
         })
     }
 }
@@ -430,7 +442,12 @@ mod tests {
         }
         for (a, b) in scene.lights.iter().zip(&lights) {
             assert_eq!(a.position(), b.position());
-            assert!((a.power() - b.power()).abs().max_element() < 1e-3 * b.power().max_element());
+            assert!(
+                (a.power(scene.bounds()) - b.power(scene.bounds()))
+                    .abs()
+                    .max_element()
+                    < 1e-3 * b.power(scene.bounds()).max_element()
+            );
         }
         let camera = scene.camera;
         scene
