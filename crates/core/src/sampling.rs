@@ -146,7 +146,7 @@ impl AliasTable {
         let total: f64 = weights.iter().map(|&w| w as f64).sum();
         if weights.is_empty()
             || !(total > 0.0 && total.is_finite())
-            || weights.iter().any(|w| !(*w >= 0.0))
+            || weights.iter().any(|w| w.is_nan() || *w < 0.0)
         {
             return None;
         }

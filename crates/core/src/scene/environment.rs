@@ -392,7 +392,7 @@ impl Environment {
         bounds: super::light::Bounds,
     ) -> Option<super::light::Emission> {
         let s = self.sample(rng.next_2d())?;
-        if !(s.pdf > 0.0) {
+        if s.pdf.is_nan() || s.pdf <= 0.0 {
             return None;
         }
         let (origin, area) = bounds.disc_point(s.wi, rng.next_2d());
