@@ -76,6 +76,16 @@ fn nudge(scene: &Scene, t: f32) -> SceneUpdate {
             inner_angle,
             outer_angle,
         },
+        // A distant light turns instead.
+        LightDesc::Directional {
+            direction,
+            irradiance,
+            angular_diameter,
+        } => LightDesc::Directional {
+            direction: [direction[0] + t, direction[1], direction[2]],
+            irradiance,
+            angular_diameter,
+        },
     };
     SceneUpdate::Light { index: 0, light }
 }
