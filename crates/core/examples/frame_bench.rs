@@ -28,6 +28,14 @@
 //! Also: the direct light alone with every pixel supersampled against edge-adaptive
 //! supersampling (method `direct`), and CPU BVH rebuild against a refit of the same tree
 //! after moving one object.
+//!
+//! `--lights` times instead the direct light of each kind of light (method `direct`, default
+//! options, 640×480 or `--size`) in the same run: a point light against an area light
+//! (`area_samples` points), the sun (parallel-ish and with a 5° disc) and the sky
+//! (`sky_samples` directions), on an open yard and on `cornell` with its point light or an
+//! emitting ceiling quad: a frame after the camera moved (G-buffer, edges, direct light;
+//! the shadow maps kept), and a progressive pass (new light samples: their shadow maps and
+//! the direct light), with the GPU-timestamp stages of each.
 mod common;
 
 use gi_core::estimate::Estimator;
@@ -179,9 +187,190 @@ fn direct_settings(w: u32, h: u32, edges: bool) -> gi_core::RenderOptions {
     gi_core::options!(Direct, width: w, height: h, spp: 16, edge_supersampling: edges)
 }
 
+/// The yard of `--lights`: a floor with boxes and spheres (5.2k triangles).
+const YARD: &str = r#"{
+  "camera": { "position": [0, 2.5, 7], "look_at": [0, 0.5, 0], "fov": 45 },
+  "materials": {
+    "ground": { "diffuse": [0.6, 0.6, 0.55] },
+    "box": { "diffuse": [0.7, 0.4, 0.3] },
+    "ball": { "diffuse": [0.3, 0.5, 0.7], "specular": [0.04, 0.04, 0.04], "roughness": 0.3, "fresnel": true },
+    "lamp": { "diffuse": [0, 0, 0], "emission": [20, 20, 20] }
+  },
+  "objects": [
+    { "shape": { "type": "quad", "size": [10, 10] }, "material": "ground" },
+    { "shape": { "type": "box", "size": [1, 1, 1] }, "transform": { "rotate": [0, 20, 0], "translate": [-1.5, 0.5, 0] }, "material": "box" },
+    { "shape": { "type": "box", "size": [0.6, 2, 0.6] }, "transform": { "translate": [1.8, 1, -1] }, "material": "box" },
+    { "shape": { "type": "sphere", "radius": 0.7, "subdivisions": 4 }, "transform": { "translate": [0.4, 0.7, 0.8] }, "material": "ball" },
+    { "shape": { "type": "sphere", "radius": 0.4, "subdivisions": 4 }, "transform": { "translate": [-0.6, 0.4, 2] }, "material": "ball" }
+    LAMP
+  ]
+  LIGHTS
+}"#;
+
+/// The yard lit by `lights` (JSON after the objects: lights and environment), with the
+/// lamp (an emitting 1 m² quad 4 m up) when `lamp`.
+fn yard(lights: &str, lamp: bool) -> Result<Scene, Box<dyn std::error::Error>> {
+    let lamp = if lamp {
+        r#", { "shape": { "type": "quad", "size": [1, 1] }, "transform": { "rotate": [180, 0, 0], "translate": [1, 4, 1] }, "material": "lamp" }"#
+    } else {
+        ""
+    };
+    let json = YARD.replace("LAMP", lamp).replace("LIGHTS", lights);
+    Ok(Scene::from_json(&json, "yard", &Default::default())?)
+}
+
+/// `cornell` with its point light replaced by an emitting 0.5 m² ceiling quad.
+fn cornell_area() -> Result<Scene, Box<dyn std::error::Error>> {
+    let mut v: serde_json::Value =
+        serde_json::from_str(builtin::json("cornell").ok_or("cornell")?)?;
+    v["lights"] = serde_json::json!([]);
+    v["materials"]["lamp"] = serde_json::json!({ "diffuse": [0, 0, 0], "emission": [12, 12, 12] });
+    v["objects"]
+        .as_array_mut()
+        .ok_or("objects")?
+        .push(serde_json::json!({
+            "shape": { "type": "quad", "size": [0.7, 0.7] },
+            "transform": { "rotate": [180, 0, 0], "translate": [0, 1.98, 0] },
+            "material": "lamp"
+        }));
+    Ok(Scene::from_json(
+        &v.to_string(),
+        "cornell-area",
+        &Default::default(),
+    )?)
+}
+
+/// `--lights`: the direct light's cost per kind of light (see the header).
+fn lights_table(args: &common::Args, runs: usize) -> Result<(), Box<dyn std::error::Error>> {
+    let (w, h) = match args.value("--size") {
+        Some(v) => {
+            let (w, h) = v.split_once('x').ok_or("--size WxH")?;
+            (w.parse()?, h.parse()?)
+        }
+        None => (640, 480),
+    };
+    let point =
+        r#", "lights": [ { "type": "point", "position": [1, 4, 1], "intensity": [30, 30, 30] } ]"#;
+    let sun = |deg: f32| {
+        format!(
+            r#", "lights": [ {{ "type": "directional", "direction": [-0.4, -1, -0.3], "irradiance": [3, 3, 3], "angular_diameter": {deg} }} ]"#
+        )
+    };
+    let sky = r#", "environment": { "radiance": [0.5, 0.6, 0.8] }"#;
+    let all = format!("{}{sky}", sun(0.53));
+    type Row = (String, Scene, Vec<(&'static str, u32)>);
+    let rows: Vec<Row> = vec![
+        ("yard, point light".into(), yard(point, false)?, vec![]),
+        (
+            "yard, area light".into(),
+            yard("", true)?,
+            vec![("area_samples", 4)],
+        ),
+        ("yard, area light".into(), yard("", true)?, vec![]),
+        (
+            "yard, area light".into(),
+            yard("", true)?,
+            vec![("area_samples", 64)],
+        ),
+        ("yard, sun 0.53°".into(), yard(&sun(0.53), false)?, vec![]),
+        ("yard, sun 5°".into(), yard(&sun(5.0), false)?, vec![]),
+        (
+            "yard, sky".into(),
+            yard(sky, false)?,
+            vec![("sky_samples", 8)],
+        ),
+        ("yard, sky".into(), yard(sky, false)?, vec![]),
+        (
+            "yard, sky".into(),
+            yard(sky, false)?,
+            vec![("sky_samples", 64)],
+        ),
+        ("yard, sun + sky + area".into(), yard(&all, true)?, vec![]),
+        (
+            "cornell, point light".into(),
+            builtin::load("cornell")?,
+            vec![],
+        ),
+        ("cornell, area light".into(), cornell_area()?, vec![]),
+    ];
+    println!(
+        "| scene | samples | camera moved: frame (ms) | direct light (ms) | progressive pass (ms) | \
+         light shadow maps (ms) | sampled-light shadow maps (ms) | direct light (ms) |"
+    );
+    println!("|---|---|---|---|---|---|---|---|");
+    for (name, scene, extra) in rows {
+        let mut o = gi_core::options!(Direct, width: w, height: h);
+        for (k, v) in &extra {
+            o = o.with(k, *v);
+        }
+        let d = gi_core::frame::options::DirectOptions::default().direct;
+        let samples = if scene.environment.is_some() && !name.contains("area") {
+            format!("{} sky", o_value(&extra, "sky_samples", d.sky_samples))
+        } else if name.contains("sun + sky") {
+            format!(
+                "{} area, {} sky",
+                o_value(&extra, "area_samples", d.area_samples),
+                o_value(&extra, "sky_samples", d.sky_samples)
+            )
+        } else if name.contains("area") {
+            format!("{} area", o_value(&extra, "area_samples", d.area_samples))
+        } else {
+            "–".into()
+        };
+        // Camera moves: the G-buffer, edges and direct light again, shadows kept.
+        let mut r = Renderer::new(&scene, &o)?;
+        r.render(&FrameDesc::default(), &Silent)?;
+        let (mut moved, mut moved_direct) = (Vec::new(), Vec::new());
+        for i in 0..runs {
+            let mut camera = r.scene().camera_desc();
+            camera.position[0] += 0.001 * (i + 1) as f32;
+            r.update(&SceneUpdate::Camera(camera))?;
+            let t = Instant::now();
+            let out = r.render(&FrameDesc::default(), &Silent)?;
+            moved.push(t.elapsed().as_secs_f64());
+            moved_direct.push(stage(&out, &["direct light", "edge shading"]));
+        }
+        // Progressive passes: new samples each, their shadow maps rendered again.
+        let mut p = Renderer::new(&scene, &o.clone().progressive())?;
+        p.render(&FrameDesc::default(), &Silent)?;
+        let (mut pass, mut shadows, mut sampled, mut direct) = (vec![], vec![], vec![], vec![]);
+        for _ in 0..runs {
+            let t = Instant::now();
+            let out = p.render(&FrameDesc::default(), &Silent)?;
+            pass.push(t.elapsed().as_secs_f64());
+            shadows.push(stage(&out, &["shadow maps"]));
+            sampled.push(stage(&out, &["sampled light shadow maps"]));
+            direct.push(stage(&out, &["direct light", "edge shading"]));
+        }
+        let ms = |v: Vec<f64>| format!("{:.0}", median(v) * 1e3);
+        println!(
+            "| {name} | {samples} | {} | {} | {} | {} | {} | {} |",
+            ms(moved),
+            ms(moved_direct),
+            ms(pass),
+            ms(shadows),
+            ms(sampled),
+            ms(direct),
+        );
+    }
+    Ok(())
+}
+
+/// An option's value in `extra`, else `default`.
+fn o_value(extra: &[(&str, u32)], name: &str, default: u32) -> u32 {
+    extra
+        .iter()
+        .find(|(n, _)| *n == name)
+        .map_or(default, |(_, v)| *v)
+}
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args = common::Args::get();
     let runs = args.runs(3)?;
+    if std::env::args().any(|a| a == "--lights") {
+        common::print_adapter()?;
+        return lights_table(&args, runs);
+    }
     let quick = args.quick();
     let ispm_only = std::env::args().any(|a| a == "--ispm-only");
     let estimator: Estimator = args.value("--estimator").unwrap_or("auto").parse()?;

@@ -2,7 +2,7 @@
 //! an eye G-buffer and deferred lighting accumulated on the GPU, the G-buffer at the pixel
 //! centres, the composite, and the readback of what was asked for.
 
-use super::gpu::{rgb_image, Targets};
+use super::gpu::{rgb_image, LightDraw, Targets};
 use super::{GpuState, Images};
 use super::{RenderOutput, RenderStats};
 use crate::cancel::Progress;
@@ -17,6 +17,7 @@ use std::time::Instant;
 pub(super) fn frame(
     g: &mut GpuState,
     scene: &Scene,
+    draw: LightDraw,
     images: Images,
     progress: &dyn Progress,
 ) -> Result<RenderOutput> {
@@ -34,8 +35,11 @@ pub(super) fn frame(
         .create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("direct frame"),
         });
-    g.scene
-        .record_shadows(&ctx, &mut encoder, &mut g.timer, scene);
+    if g.scene
+        .record_shadows(&ctx, &mut encoder, &mut g.timer, scene, draw)
+    {
+        g.targets.direct_current = false;
+    }
     let mut encoder = g
         .targets
         .record_direct(&ctx, &g.scene, encoder, &mut g.timer, progress)?;

@@ -114,47 +114,69 @@ pub struct Renderer {
     accum: Option<progressive::Accumulation>,
 }
 
-/// Only `path` and `bidir` light a scene with its environment light so far; the other
-/// methods refuse rather than render the scene without it.
+/// `path`, `bidir`, `direct` and `ispm` light a scene with its environment light so far
+/// (`ispm` its direct light only, see [`unrendered_lights`]); the other methods refuse
+/// rather than render the scene without it.
 fn check_environment(scene: &Scene, method: Method) -> Result<()> {
-    if scene.environment.is_none() || method == Method::Path {
+    if scene.environment.is_none() {
         return Ok(());
     }
-    if method == Method::Bidir {
-        // Seen through the ray bundles (§6); without bundles it would be missing.
+    // `bidir` sees it through the ray bundles (§6); without bundles it would be missing.
+    if matches!(
+        method,
+        Method::Path | Method::Bidir | Method::Direct | Method::Ispm
+    ) {
         return Ok(());
     }
-    let how = match method {
-        Method::Direct | Method::Ispm => "its GPU passes have no environment light yet",
-        _ => "its photons are emitted by point and spot lights only",
-    };
     Err(Error::setting(
         "method",
         format!(
-            "method `{}` cannot render a scene with an environment light ({how}); \
-             use method `path`",
+            "method `{}` cannot render a scene with an environment light (its photons are \
+             emitted by point and spot lights only); use method `path`",
             method.name()
         ),
     ))
 }
 
 /// What `method` leaves out of `scene`'s light, one message each (they become
-/// `gi.RenderWarning`s): kinds of light a method does not render yet.
+/// `gi.RenderWarning`s): kinds of light a method does not render yet. The GPU methods render
+/// the direct light of every kind (`raster::direct`); `ispm`'s photons and `bidir`'s VPLs
+/// leave out the indirect light of emitters and directional lights (and `ispm`'s of the
+/// environment).
 fn unrendered_lights(scene: &Scene, method: Method) -> Vec<String> {
     let mut out = Vec::new();
     let emitters = scene.materials.iter().any(|m| m.emits());
     let directional = scene.lights.iter().any(|l| !l.is_local());
     let name = method.name();
-    if emitters && method != Method::Path {
+    let indirect = match method {
+        Method::Ispm => Some("photons"),
+        Method::Bidir => Some("VPLs"),
+        _ => None,
+    };
+    if emitters && matches!(method, Method::Photon | Method::Gather) {
         out.push(format!(
             "method `{name}` does not render emitting surfaces (area lights) yet: their light \
              is missing; use method `path`"
         ));
     }
-    if directional && method.uses_gpu() {
+    let mut partly = |what: &str| {
+        if let Some(carriers) = indirect {
+            out.push(format!(
+                "method `{name}` renders the direct light of {what} but not yet their \
+                 indirect light (its {carriers} leave them out); use method `path` for it"
+            ));
+        }
+    };
+    if emitters {
+        partly("emitting surfaces (area lights)");
+    }
+    if directional {
+        partly("directional lights");
+    }
+    if scene.environment.is_some() && method == Method::Ispm {
         out.push(format!(
-            "method `{name}` does not render directional lights on the GPU yet: their direct \
-             light is missing; use method `path`, `photon` or `gather`"
+            "method `{name}` renders the direct light of the environment but not yet its \
+             indirect light (its photons leave it out); use method `path` for it"
         ));
     }
     out
@@ -443,6 +465,17 @@ impl Renderer {
     ) -> Result<RenderOutput> {
         let gpu = self.gpu.as_mut().ok_or(Error::Cancelled)?;
         let bvh = self.bvh.as_ref().ok_or(Error::Cancelled)?;
+        // The sampled lights: drawn once from the options' seed (a still view re-draws
+        // nothing), anew per progressive pass.
+        let draw = gpu::LightDraw {
+            seed: if frame.progressive {
+                frame.seed
+            } else {
+                self.options.common.seed
+            },
+            disc_scale: frame.radius_scale,
+            progressive: frame.progressive,
+        };
         match &self.options.method {
             MethodOptions::Ispm(options) => {
                 let invalid = ispm::Invalidation {
@@ -460,14 +493,16 @@ impl Renderer {
                     params: frame,
                     frame: self.frame_index,
                     changes: self.changes,
+                    draw,
                     images,
                     progress,
                 })
             }
             MethodOptions::Bidir(options) => {
-                bidir::frame(gpu, &self.scene, bvh, options, frame, images, progress)
+                let inputs = (frame, draw);
+                bidir::frame(gpu, &self.scene, bvh, options, inputs, images, progress)
             }
-            _ => direct::frame(gpu, &self.scene, images, progress),
+            _ => direct::frame(gpu, &self.scene, draw, images, progress),
         }
     }
 
@@ -475,11 +510,20 @@ impl Renderer {
     /// the targets after a resize.
     fn sync_gpu(&mut self, ctx: &Arc<GpuContext>, direct: &DirectLightOptions) -> Result<()> {
         let scene = &self.scene;
-        let layers = self.gpu.as_ref().map(|g| g.scene.layers);
-        let fits = layers.is_some_and(|l| gpu::GpuScene::fits(scene, l));
+        let counts = gpu::SampleCounts {
+            area: direct.area_samples,
+            sky: direct.sky_samples,
+            size: direct.sample_map_size(),
+            // `bidir` draws the environment (and lights with it) through its bundles.
+            background: self.method() != Method::Bidir,
+        };
+        let fits = self
+            .gpu
+            .as_ref()
+            .is_some_and(|g| g.scene.fits(scene, counts));
         if !fits {
             crate::raster::check_scene_buffers(ctx, scene)?;
-            let gs = gpu::GpuScene::new(ctx, scene, direct.shadow_map_size)?;
+            let gs = gpu::GpuScene::new(ctx, scene, direct.shadow_map_size, counts)?;
             gpu::check_limits(ctx, scene, direct.shadow_map_size, gs.layers)?;
             let targets =
                 gpu::Targets::new(ctx, &gs, scene, direct.spp, direct.edge_supersampling)?;
@@ -507,13 +551,13 @@ impl Renderer {
                     o.triangles.start as usize..o.triangles.end as usize,
                 );
             }
-            g.scene.cull = crate::raster::shadow::CullUnits::of(scene);
+            g.scene.geometry_moved(scene);
         }
         if c.materials {
             g.scene.write_materials(ctx, scene);
         }
         if c.lights || c.geometry {
-            g.scene.write_lights(ctx, scene, direct.shadow_map_size);
+            g.scene.write_lights(ctx, scene, None);
         }
         if self.resized {
             gpu::check_limits(ctx, scene, direct.shadow_map_size, g.scene.layers)?;

@@ -12,8 +12,9 @@
 //! ISPM's rasterized direct light is the exception: its shadow maps (resolution, PCF
 //! filtering, the normal offset against acne) are a bias that no pass removes, and
 //! progressive `ispm` flattened at it. In progressive mode the direct light of the first
-//! surface is therefore ray traced on the CPU ([`direct_image`]: next-event estimation with
-//! the scene BVH at new jittered sub-pixel positions per pass), as `path` does, and
+//! surface is therefore ray traced on the CPU ([`direct_image`]: the surface's emission and
+//! next-event estimation of every light, emitter and the sky with the scene BVH at new
+//! jittered sub-pixel positions per pass; the environment where the ray escapes), and
 //! replaces the rasterized one in the pass.
 
 use super::options::Common;
@@ -26,8 +27,8 @@ use crate::photon::radius::Z_RATIO;
 use crate::photon::{boundary, Photon};
 use crate::raster::oct_decode;
 use crate::sampling::Rng;
-use crate::scene::Scene;
-use crate::trace::path::direct_light;
+use crate::scene::emitters::Emitters;
+use crate::scene::{Light, Scene};
 use crate::trace::{Interaction, SceneBvh};
 use glam::{DVec3, Vec2, Vec3, Vec4};
 use rayon::prelude::*;
@@ -191,11 +192,12 @@ fn facing_normal(p: Vec4, n: Vec4, eye: Vec3) -> Vec3 {
 const DIRECT_STREAM: u64 = 0xD1EC_7000_0000_0000;
 
 /// The direct light of the first surface seen through each pixel (the part ISPM
-/// rasterizes with shadow maps: next-event estimation of every point and spot light on the
-/// surface's non-delta lobes, nothing on misses), ray traced on the CPU as `path` does at
-/// its first vertex: the mean of k×k camera rays per pixel (k = ⌈√spp⌉, at least 2), one
-/// at a uniformly random point of each stratum drawn from `seed`, so that the
-/// mean over passes of new seeds converges to the pixel's exact direct light.
+/// rasterizes with shadow maps: the surface's emission and next-event estimation of every
+/// light on its non-delta lobes, [`first_surface_light`]; the environment where the ray
+/// escapes), ray traced on the CPU as `path` does at its first vertex: the mean of k×k
+/// camera rays per pixel (k = ⌈√spp⌉, at least 2), one at a uniformly random point of each
+/// stratum drawn from `seed`, so that the mean over passes of new seeds converges to the
+/// pixel's exact direct light.
 pub(super) fn direct_image(
     scene: &Scene,
     bvh: &SceneBvh,
@@ -210,6 +212,7 @@ pub(super) fn direct_image(
     // direct light at mirror-shadow's shadow edges (relMSE 6.5e-4 vs 2.1e-4 after 16 passes).
     let k = (spp.max(1) as f32).sqrt().ceil().max(2.0) as u32;
     let spp = k * k;
+    let emitters = Emitters::of(scene);
     let mut image = Image::new(w, h);
     let stage = StageProgress::new(progress, "direct light", h as u64);
     image
@@ -231,9 +234,17 @@ pub(super) fn direct_image(
                         x as f32 + (sx + j.x) / k as f32,
                         y as f32 + (sy + j.y) / k as f32,
                     );
-                    if let Some(hit) = bvh.intersect(cam.position, dir, f32::INFINITY) {
-                        let it = Interaction::new(scene, &hit, dir);
-                        sum += direct_light(scene, bvh, &it, -dir);
+                    match bvh.intersect(cam.position, dir, f32::INFINITY) {
+                        Some(hit) => {
+                            let it = Interaction::new(scene, &hit, dir);
+                            let sources = (scene, bvh, &emitters);
+                            sum += first_surface_light(sources, &it, -dir, &mut rng);
+                        }
+                        None => {
+                            if let Some(env) = &scene.environment {
+                                sum += env.radiance(dir);
+                            }
+                        }
                     }
                 }
                 *px = sum / spp as f32;
@@ -242,6 +253,77 @@ pub(super) fn direct_image(
         });
     stage.finish()?;
     Ok(image)
+}
+
+/// The light leaving the first surface `it` towards `wo` (world, away from the surface)
+/// without a later bounce: its emission, and next-event estimation of every source without
+/// multiple importance sampling (this image traces no BSDF-sampled continuation): each point
+/// and spot light; each directional light along a direction drawn uniformly from its disc
+/// (f·|cos θ|·E: its radiance times the disc's solid angle); one point drawn on the emitters
+/// by power (f·|cos θ|·L·|cos θ'| / (d²·p_A)); one direction drawn from the environment
+/// (f·|cos θ|·L / p). Unbiased; reflection only (the light on the viewer's side of the
+/// geometry), as the rasterized direct light.
+pub(super) fn first_surface_light(
+    (scene, bvh, emitters): (&Scene, &SceneBvh, &Emitters),
+    it: &Interaction,
+    wo: Vec3,
+    rng: &mut Rng,
+) -> Vec3 {
+    let mut sum = it.material.emitted(it.ng, wo);
+    let m = it.material;
+    if m.is_purely_specular() {
+        return sum;
+    }
+    let wo_l = it.frame.to_local(wo);
+    // f·|cos θ| towards `wi` times `li`, if unoccluded up to `dist`.
+    let mut add = |wi: Vec3, li: Vec3, dist: f32| {
+        if wi.dot(it.ng) * wo.dot(it.ng) <= 0.0 || li.max_element() <= 0.0 || !li.is_finite() {
+            return;
+        }
+        let wi_l = it.frame.to_local(wi);
+        let f = m.eval(wo_l, wi_l);
+        if f == Vec3::ZERO {
+            return;
+        }
+        let origin = it.spawn(wi);
+        if !bvh.occluded(origin, wi, dist) {
+            sum += f * wi_l.z.abs() * li;
+        }
+    };
+    for light in &scene.lights {
+        if let Light::Directional { irradiance, .. } = *light {
+            let dir = crate::scene::light_views::distant_direction(light, Some(rng.next_2d()));
+            add(-dir, irradiance, f32::INFINITY);
+            continue;
+        }
+        let to_light = light.position() - it.position;
+        let dist = to_light.length();
+        let wi = to_light / dist;
+        let li = light.intensity_towards(-wi) / (dist * dist);
+        add(wi, li, dist * (1.0 - 1e-4));
+    }
+    if let Some(s) = emitters.sample(scene, rng.next_f32(), rng.next_2d()) {
+        let to = s.point - it.position;
+        let d2 = to.length_squared();
+        let wi = to / d2.sqrt();
+        let cos_e = s.normal.dot(-wi).abs();
+        let le = emitters.radiance(scene, &s, -wi);
+        if d2 > 0.0 && s.pdf_area > 0.0 {
+            add(
+                wi,
+                le * (cos_e / (d2 * s.pdf_area)),
+                d2.sqrt() * (1.0 - 1e-4),
+            );
+        }
+    }
+    if let Some(env) = &scene.environment {
+        if let Some(s) = env.sample(rng.next_2d()) {
+            if s.pdf > 0.0 {
+                add(s.wi, s.radiance / s.pdf, f32::INFINITY);
+            }
+        }
+    }
+    sum
 }
 
 #[cfg(test)]

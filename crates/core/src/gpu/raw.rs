@@ -6,7 +6,7 @@ use crate::scene::Light;
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 
-/// `Material` in WGSL: 48 bytes.
+/// `Material` in WGSL: 64 bytes.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct MaterialRaw {
@@ -16,6 +16,10 @@ pub struct MaterialRaw {
     pub fresnel: u32,
     pub transmission: [f32; 3],
     pub ior: f32,
+    /// Emitted radiance of the front face (W·sr⁻¹·m⁻²).
+    pub emission: [f32; 3],
+    /// 1: the back face emits too.
+    pub two_sided: u32,
 }
 
 impl Material {
@@ -27,6 +31,8 @@ impl Material {
             fresnel: self.fresnel as u32,
             transmission: self.transmission.into(),
             ior: self.ior,
+            emission: self.emission.into(),
+            two_sided: self.two_sided as u32,
         }
     }
 }
@@ -36,16 +42,21 @@ impl Material {
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct LightRaw {
     pub position: [f32; 3],
-    /// 0 = point, 1 = spot.
+    /// 0 = point, 1 = spot, 2 = directional.
     pub kind: u32,
+    /// Point and spot lights: intensity (W/sr); directional: irradiance (W/m²).
     pub intensity: [f32; 3],
+    /// Spot: the inner cone's cosine; directional: the cosine of its disc's half angle.
     pub cos_inner: f32,
+    /// Spot: its axis; directional: the way its light travels (the shadow's direction).
     pub direction: [f32; 3],
     pub cos_outer: f32,
     pub first_layer: u32,
     pub layers: u32,
+    /// World size of a shadow texel, at unit distance for the perspective views.
     pub texel_scale: f32,
-    pub _pad: f32,
+    /// Directional: the world depth of its orthographic shadow view (0 for the others).
+    pub depth_extent: f32,
 }
 
 impl Light {
@@ -76,7 +87,6 @@ impl Light {
                 raw.cos_inner = cos_inner;
                 raw.cos_outer = cos_outer;
             }
-            // Kind 2: not shaded by the GPU passes yet (they warn).
             Light::Directional {
                 direction,
                 irradiance,
@@ -101,7 +111,9 @@ pub struct ViewRaw {
     pub eye: [f32; 3],
     /// Weight of this view's sample in the accumulated image.
     pub weight: f32,
-    pub _pad: [f32; 44],
+    /// Clip -> world (the view rays of pixels that no surface covers).
+    pub inv_view_proj: [[f32; 4]; 4],
+    pub _pad: [f32; 28],
 }
 
 impl ViewRaw {
@@ -110,7 +122,8 @@ impl ViewRaw {
             view_proj: view_proj.to_cols_array_2d(),
             eye: eye.into(),
             weight,
-            _pad: [0.0; 44],
+            inv_view_proj: view_proj.inverse().to_cols_array_2d(),
+            _pad: [0.0; 28],
         }
     }
 }

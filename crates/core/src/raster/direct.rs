@@ -3,10 +3,113 @@
 //! sample into an `Rgba32Float` accumulation target (additive blending; needs
 //! `FLOAT32_BLENDABLE`) or writing the pixel-centre sample (edge-adaptive supersampling,
 //! [`super::edges`]). The layouts are visible to compute too: the edge passes share them.
+//!
+//! Besides the scene's lights (point, spot, directional with an orthographic shadow map), it
+//! shades the sampled lights of [`SampledLightRaw`] (points drawn on the emitters, directions
+//! drawn from the sky, each with its shadow layers in a second, smaller array of maps), the
+//! emission the G-buffer saw and the environment behind uncovered samples; the formulas and
+//! their bias are in `shaders/common/direct_shade.wgsl`.
 
 use super::wgsl;
 use crate::gpu::layout::texture_entry;
 use crate::gpu::shaders;
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+
+/// Texels per sampled light in the records texture (`SAMPLE_TEXELS` in WGSL).
+pub const SAMPLE_TEXELS: u32 = 4;
+
+/// A sampled light of the direct pass, four `Rgba32Float` texels a row of the records
+/// texture: a point on the emitters (an oriented point light with a cosine lobe and a cube
+/// of six shadow layers) or a direction of the sky (a distant light with one orthographic
+/// layer). Layers index the sampled lights' own array of maps.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SampledLightRaw {
+    Point {
+        position: Vec3,
+        first_layer: u32,
+        normal: Vec3,
+        /// World size of a shadow texel at unit distance.
+        texel_scale: f32,
+        /// Intensity along the normal (W/sr).
+        intensity: Vec3,
+        /// Radius² of the disc of the area the point stands for (the near-field bound).
+        disc_r2: f32,
+        two_sided: bool,
+    },
+    Sky {
+        /// Unit direction towards the sky.
+        towards: Vec3,
+        layer: u32,
+        /// L(ω)/(n·p(ω)) (W/m²).
+        irradiance: Vec3,
+        /// World size of a shadow texel.
+        texel: f32,
+    },
+}
+
+impl SampledLightRaw {
+    /// The record's texels (integers as float values).
+    pub fn texels(&self) -> [[f32; 4]; SAMPLE_TEXELS as usize] {
+        let v = |a: Vec3, w: f32| [a.x, a.y, a.z, w];
+        match *self {
+            SampledLightRaw::Point {
+                position,
+                first_layer,
+                normal,
+                texel_scale,
+                intensity,
+                disc_r2,
+                two_sided,
+            } => [
+                v(position, first_layer as f32),
+                v(normal, texel_scale),
+                v(intensity, disc_r2),
+                [two_sided as u32 as f32, 0.0, 0.0, 0.0],
+            ],
+            SampledLightRaw::Sky {
+                towards,
+                layer,
+                irradiance,
+                texel,
+            } => [
+                v(towards, layer as f32),
+                v(irradiance, texel),
+                [0.0; 4],
+                [0.0; 4],
+            ],
+        }
+    }
+}
+
+/// `DirectParams` of `direct_shade.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct DirectParamsRaw {
+    /// Points drawn on the emitters (the first records).
+    pub area_count: u32,
+    /// Directions drawn from the sky (the records after them).
+    pub sky_count: u32,
+    /// 1: uncovered samples see the environment.
+    pub background: u32,
+    /// 1: the diffuse light of the sky and of the emitter polygons by the ratio estimator
+    /// (0: the plain sums over the samples, unbiased: progressive passes).
+    pub ratio: u32,
+    /// (cos, sin) of the environment's rotation about +y.
+    pub env_cos: f32,
+    pub env_sin: f32,
+    /// Emitting triangles in the polygons texture (0: the emitters' light is sampled only).
+    pub polygons: u32,
+    pub _pad: f32,
+}
+
+/// Texels per emitting triangle in the polygons texture: the corners (w: 1 when two-sided)
+/// and the radiance.
+pub const POLYGON_TEXELS: u32 = 4;
+
+/// Most emitting triangles whose unshadowed diffuse light the direct pass sums in closed
+/// form per pixel (beyond, their light is sampled only).
+pub const MAX_POLYGONS: usize = 64;
 
 /// The accumulation target: radiance·weight in rgb, the sum of weights in alpha.
 pub const ACCUM: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
@@ -16,10 +119,12 @@ pub struct DirectPass {
     pub pipeline: wgpu::RenderPipeline,
     /// Writes the pixel-centre sample with weight 1.
     pub centre: wgpu::RenderPipeline,
-    /// Group 0: view, lights, shadow matrices, shadow maps, comparison sampler, and the
-    /// penumbra taps per axis of the pixel-centre pass ([`penumbra_taps`]).
+    /// Group 0: view, lights, shadow matrices, shadow maps, comparison sampler, the
+    /// penumbra taps per axis of the pixel-centre pass ([`penumbra_taps`]), the sampled
+    /// lights' records, shadow matrices (a texture) and maps, the environment's radiance and
+    /// irradiance tables, the [`DirectParamsRaw`] and the emitting polygons.
     pub scene_layout: wgpu::BindGroupLayout,
-    /// Group 1: the G-buffer's position, normals, diffuse and specular textures.
+    /// Group 1: the G-buffer's position, normals, diffuse, specular and emission textures.
     pub gbuffer_layout: wgpu::BindGroupLayout,
     pub shadow_sampler: wgpu::Sampler,
 }
@@ -67,12 +172,39 @@ impl DirectPass {
                     },
                     count: None,
                 },
+                texture_entry(6, frag),
+                texture_entry(7, frag),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 8,
+                    visibility: frag,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Depth,
+                        view_dimension: wgpu::TextureViewDimension::D2Array,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                texture_entry(9, frag),
+                texture_entry(10, frag),
+                texture_entry(12, frag),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 11,
+                    visibility: frag,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: wgpu::BufferSize::new(
+                            std::mem::size_of::<DirectParamsRaw>() as u64,
+                        ),
+                    },
+                    count: None,
+                },
             ],
         });
         let texture = |binding| texture_entry(binding, frag);
         let gbuffer_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("direct gbuffer bind group layout"),
-            entries: &[texture(0), texture(1), texture(2), texture(3)],
+            entries: &[texture(0), texture(1), texture(2), texture(3), texture(4)],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("direct pipeline layout"),

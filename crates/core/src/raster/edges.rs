@@ -19,8 +19,9 @@ use super::wgsl;
 use crate::error::Result;
 use crate::gpu::{self, shaders, GpuContext};
 
-/// Bytes kept per listed pixel and sub-pixel sample: position, normals, packed materials.
-pub const SAMPLE_BYTES: u64 = 48;
+/// Bytes kept per listed pixel and sub-pixel sample: position, normals, packed materials,
+/// emission.
+pub const SAMPLE_BYTES: u64 = 64;
 /// Threads per workgroup of the passes over the listed pixels.
 const GROUP: u32 = 64;
 /// The most bytes the kept samples may take: beyond them (only with edge pixels in the

@@ -10,6 +10,9 @@
 //!   `f16` keeps 11 significant bits (0.05% relative) where 8-bit unorm would be off by 2.6%
 //!   on a reflectance of 0.065 (the Cornell red wall's green channel).
 //! - `albedo` `Rgba32Float`: the albedo AOV, read back as is.
+//! - `emission` `Rgba32Float`: the radiance the surface emits towards the viewer (its
+//!   material's `emission`, textured, on a face that emits), which the direct light adds;
+//!   emission may exceed `f16`'s range.
 //! - depth `Depth32Float`: visibility only; view depth is derived from `position`.
 
 use super::wgsl;
@@ -20,15 +23,17 @@ pub const POSITION: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 pub const NORMALS: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 pub const MATERIAL: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 pub const ALBEDO: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+pub const EMISSION: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 pub const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
 /// The G-buffer's colour targets in location order, with their labels.
-const TARGETS: [(&str, wgpu::TextureFormat); 5] = [
+const TARGETS: [(&str, wgpu::TextureFormat); 6] = [
     ("gbuffer position", POSITION),
     ("gbuffer normals", NORMALS),
     ("gbuffer diffuse", MATERIAL),
     ("gbuffer specular", MATERIAL),
     ("gbuffer albedo", ALBEDO),
+    ("gbuffer emission", EMISSION),
 ];
 
 /// Vertex layout of [`VertexRaw`], shared with the shadow pass (which reads location 0 only).
@@ -97,9 +102,14 @@ impl GBuffer {
         }
     }
 
-    /// Views of the targets the lighting pass reads: position, normals, diffuse, specular.
+    /// Views of the targets the lighting passes read: position, normals, diffuse, specular.
     pub fn lighting_inputs(&self) -> &[wgpu::TextureView] {
         &self.views[..4]
+    }
+
+    /// The view of the emission target (read by the direct light).
+    pub fn emission(&self) -> &wgpu::TextureView {
+        &self.views[5]
     }
 }
 

@@ -7,7 +7,8 @@
 use super::wgsl;
 use crate::gpu::raw::{LightRaw, ViewRaw};
 use crate::gpu::shaders;
-use crate::scene::light_views::shadow_views;
+use crate::sampling::Rng;
+use crate::scene::light_views::{distant_direction, shadow_views};
 use crate::scene::Scene;
 use glam::{Mat4, Vec3};
 use std::ops::Range;
@@ -29,17 +30,42 @@ pub struct ShadowViews {
 }
 
 impl ShadowViews {
-    pub fn new(scene: &Scene, size: u32) -> Self {
-        let (layers, matrices) = shadow_views(scene, size);
+    /// The views of `scene`'s lights for `size`² maps. With `jitter` (a progressive pass's
+    /// seed) a directional light with a disc of directions casts its shadow along one drawn
+    /// from it, hard (its record's `cos_inner` 1), so that the passes' mean has its penumbra;
+    /// without, along its axis, the penumbra widened by the disc in the lighting pass.
+    pub fn new(scene: &Scene, size: u32, jitter: Option<u64>) -> Self {
+        let directions: Vec<Vec3> = scene
+            .lights
+            .iter()
+            .enumerate()
+            .map(|(i, light)| {
+                let u = jitter.map(|seed| Rng::new(seed, 0x5017_D15C, i as u64).next_2d());
+                distant_direction(light, u)
+            })
+            .collect();
+        let (layers, matrices) = shadow_views(scene, size, Some(&directions));
         let lights = scene
             .lights
             .iter()
             .zip(layers)
-            .map(|(light, l)| LightRaw {
-                first_layer: l.first_layer,
-                layers: l.layers,
-                texel_scale: l.texel_scale,
-                ..light.to_raw()
+            .zip(&directions)
+            .map(|((light, l), dir)| {
+                let mut raw = LightRaw {
+                    first_layer: l.first_layer,
+                    layers: l.layers,
+                    texel_scale: l.texel_scale,
+                    depth_extent: l.depth_extent,
+                    ..light.to_raw()
+                };
+                if !light.is_local() {
+                    raw.direction = (*dir).into();
+                    if jitter.is_some() {
+                        raw.cos_inner = 1.0;
+                        raw.cos_outer = 1.0;
+                    }
+                }
+                raw
             })
             .collect();
         ShadowViews { lights, matrices }
@@ -376,7 +402,7 @@ mod tests {
     #[test]
     fn cube_faces_draw_only_what_they_see() {
         let scene = crate::scene::bench::dense_cornell();
-        let views = ShadowViews::new(&scene, 1024);
+        let views = ShadowViews::new(&scene, 1024, None);
         let draws = CullUnits::of(&scene).draws(&views.matrices);
         assert_eq!(draws.len(), 6);
         let drawn: u64 = draws

@@ -42,7 +42,8 @@ pub struct MapsRaw {
     pub normal: u32,
     pub alpha: u32,
     pub alpha_cutoff: f32,
-    pub _pad: [u32; 2],
+    pub emission: u32,
+    pub _pad: u32,
 }
 
 impl MaterialMaps {
@@ -55,7 +56,8 @@ impl MaterialMaps {
             normal: i(self.normal),
             alpha: i(self.alpha),
             alpha_cutoff: self.alpha_cutoff,
-            _pad: [0; 2],
+            emission: i(self.emission),
+            _pad: 0,
         }
     }
 }

@@ -37,6 +37,31 @@ pub struct EmitterSample {
     pub pdf_area: f32,
 }
 
+/// A point drawn on the emitters for a rasterized direct light: an oriented point light with
+/// a cosine lobe, standing for the part of the emitters' area it was drawn from.
+#[derive(Clone, Copy, Debug)]
+pub struct EmitterPoint {
+    pub position: Vec3,
+    /// The triangle's geometric normal (its front face's side).
+    pub normal: Vec3,
+    /// Radiant intensity along the normal (W/sr per channel), L(x)/(n·p_A(x)) for `n` points
+    /// of area density p_A; towards ω it is this times |cos θ'| on a side that emits.
+    pub intensity: Vec3,
+    pub two_sided: bool,
+    /// The area the point stands for, 1/(n·p_A(x)) (m²).
+    pub area: f32,
+}
+
+/// An emitting triangle of uniform radiance, for the closed-form (unshadowed) light of
+/// its polygon.
+#[derive(Clone, Copy, Debug)]
+pub struct EmitterTriangle {
+    /// Corners in winding order (the front face's normal is (b − a) × (c − a)).
+    pub corners: [Vec3; 3],
+    pub radiance: Vec3,
+    pub two_sided: bool,
+}
+
 /// Power a triangle of `area` emits with the (untextured) radiance of its material: the
 /// weight it is drawn with.
 fn triangle_power(scene: &Scene, t: usize, area: f32) -> Vec3 {
@@ -106,6 +131,60 @@ impl Emitters {
             uv: t0 * (1.0 - b1 - b2) + t1 * b1 + t2 * b2,
             pdf_area: p / self.areas[i],
         })
+    }
+
+    /// `n` points drawn on the emitters by [`Emitters::sample`] from `seed`, stratified: the
+    /// i-th triangle choice in [i/n, (i+1)/n), its position within the triangle the i-th
+    /// point of the R2 sequence (Roberts 2018) moved by a random offset, whose runs of
+    /// consecutive points (those that fall on one triangle) are evenly spread too. Each is
+    /// an oriented point light: their lighting (Σ over points of I·cos θ'·cos θ/d²) is an
+    /// unbiased estimate of the emitters'.
+    pub fn points(&self, scene: &Scene, n: u32, seed: u64) -> Vec<EmitterPoint> {
+        if self.is_empty() || n == 0 {
+            return Vec::new();
+        }
+        let mut rng = Rng::new(seed, 0xE417_7E25, 0);
+        let offset = rng.next_2d();
+        let r2 = Vec2::new(0.754_877_7, 0.569_840_3);
+        (0..n)
+            .filter_map(|i| {
+                let u_select = ((i as f32 + rng.next_f32()) / n as f32).min(1.0 - f32::EPSILON);
+                let u = (offset + r2 * i as f32).fract();
+                let s = self.sample(scene, u_select, u)?;
+                let m = scene.material_at(s.triangle as usize, s.uv, 0.0);
+                let area = 1.0 / (n as f32 * s.pdf_area);
+                Some(EmitterPoint {
+                    position: s.point,
+                    normal: s.normal,
+                    intensity: m.emission * area,
+                    two_sided: m.two_sided,
+                    area,
+                })
+            })
+            .collect()
+    }
+
+    /// The emitting triangles as polygons of uniform radiance, when there are at most `max`
+    /// and none has an emission texture (`None` otherwise: their light is then sampled only).
+    pub fn polygons(&self, scene: &Scene, max: usize) -> Option<Vec<EmitterTriangle>> {
+        if self.triangles.len() > max {
+            return None;
+        }
+        self.triangles
+            .iter()
+            .map(|&t| {
+                let t = t as usize;
+                if scene.maps_of(t).emission.is_some() {
+                    return None;
+                }
+                let m = scene.material_of(t);
+                Some(EmitterTriangle {
+                    corners: scene.triangle(t),
+                    radiance: m.emission,
+                    two_sided: m.two_sided,
+                })
+            })
+            .collect()
     }
 
     /// Density over area with which [`Emitters::sample`] draws a point of scene triangle

@@ -421,6 +421,114 @@ impl Environment {
     }
 }
 
+/// The 2D point `i` of `n` of a Fibonacci lattice in [0, 1)² moved by `offset` (mod 1):
+/// stratified in both coordinates for any `n`.
+fn lattice(i: u32, n: u32, offset: Vec2) -> Vec2 {
+    let golden = 0.618_034f32;
+    Vec2::new(
+        ((i as f32 + 0.5) / n as f32 + offset.x).fract(),
+        (i as f32 * golden + offset.y).fract(),
+    )
+}
+
+/// A direction of the sky drawn for a rasterized direct light: a distant light of
+/// `irradiance` L(ω)/(n·p(ω)) arriving from `towards` (unit, pointing to the sky).
+#[derive(Clone, Copy, Debug)]
+pub struct SkyDirection {
+    pub towards: Vec3,
+    pub irradiance: Vec3,
+}
+
+impl Environment {
+    /// `n` directions, each at a point of a Fibonacci lattice moved by a random offset from
+    /// `seed` (stratified): uniformly over the sphere for a constant colour or without
+    /// `importance`; for an image drawn by importance, half of them uniformly and half by
+    /// [`Environment::sample`], each weighted by the mixture of both densities (so that every
+    /// hemisphere gets directions, and bright regions more). Σ f·|cos θ|·E over them is an
+    /// unbiased estimate of the environment's direct light.
+    pub fn directions(&self, n: u32, seed: u64) -> Vec<SkyDirection> {
+        let mut rng = crate::sampling::Rng::new(seed, 0x5C1E_D12E, 0);
+        let offset = rng.next_2d();
+        let image = matches!(self.source, Source::Image { dist: Some(_), .. });
+        let n_env = if self.importance && image { n / 2 } else { 0 };
+        let n_uniform = n - n_env;
+        let uniform_pdf = 1.0 / (4.0 * PI);
+        let mixture =
+            |d: Vec3| (n_uniform as f32 * uniform_pdf + n_env as f32 * self.pdf(d)) / n as f32;
+        let uniform = (0..n_uniform).map(|i| uniform_sphere(lattice(i, n_uniform, offset)));
+        let drawn = (0..n_env).filter_map(|i| self.sample(lattice(i, n_env, offset)).map(|s| s.wi));
+        uniform
+            .chain(drawn)
+            .filter_map(|towards| {
+                let pdf = mixture(towards);
+                (pdf > 0.0 && pdf.is_finite()).then(|| SkyDirection {
+                    towards,
+                    irradiance: self.radiance(towards) / (n as f32 * pdf),
+                })
+            })
+            .collect()
+    }
+
+    /// The irradiance E(n) = ∫ L(ω)·max(0, n·ω) dω on a surface facing `n`, tabulated over
+    /// the environment's own frame as a `w`×`h` equirectangular table (texel centres, the
+    /// mapping of the radiance table; rotate `n` into that frame to look it up): exact for a
+    /// constant colour (πL); for an image, the convolution of its texels averaged down to at
+    /// most 64×32.
+    pub fn irradiance_table(&self, w: u32, h: u32) -> Vec<Vec3> {
+        let (w, h) = (w.max(1) as usize, h.max(1) as usize);
+        let coarse: Vec<(Vec3, Vec3)> = match &self.source {
+            Source::Constant(c) => return vec![*c * (self.scale * PI); w * h],
+            Source::Image { image, .. } => coarse_radiance(image, self.scale),
+        };
+        let mut out = Vec::with_capacity(w * h);
+        for y in 0..h {
+            for x in 0..w {
+                let n = table_direction(x, y, w, h);
+                let e: glam::DVec3 = coarse
+                    .iter()
+                    .map(|(d, l)| (l.as_dvec3()) * n.dot(*d).max(0.0) as f64)
+                    .sum();
+                out.push(e.as_vec3());
+            }
+        }
+        out
+    }
+}
+
+/// The unit direction (environment frame) of texel centre (`x`, `y`) of a `w`×`h`
+/// equirectangular table.
+fn table_direction(x: usize, y: usize, w: usize, h: usize) -> Vec3 {
+    let theta = PI * (y as f32 + 0.5) / h as f32;
+    let phi = 2.0 * PI * (x as f32 + 0.5) / w as f32;
+    let s = theta.sin();
+    Vec3::new(s * phi.sin(), theta.cos(), -s * phi.cos())
+}
+
+/// An image environment averaged down to at most 64×32 cells: per cell its central
+/// direction and its radiance integrated over its solid angle (times `scale`).
+fn coarse_radiance(image: &EnvImage, scale: f32) -> Vec<(Vec3, Vec3)> {
+    let (w, h) = (image.width as usize, image.height as usize);
+    let (cw, ch) = (w.min(64), h.min(32));
+    let mut sums = vec![glam::DVec3::ZERO; cw * ch];
+    for y in 0..h {
+        let theta = std::f64::consts::PI * (y as f64 + 0.5) / h as f64;
+        let d_omega =
+            2.0 * std::f64::consts::PI * std::f64::consts::PI * theta.sin() / (w * h) as f64;
+        let cy = y * ch / h;
+        for x in 0..w {
+            let cx = x * cw / w;
+            sums[cy * cw + cx] += image.texels[y * w + x].as_dvec3() * d_omega;
+        }
+    }
+    sums.iter()
+        .enumerate()
+        .map(|(i, s)| {
+            let d = table_direction(i % cw, i / cw, cw, ch);
+            (d, s.as_vec3() * scale)
+        })
+        .collect()
+}
+
 /// Checks an image handed in by the loader: size and finite, non-negative texels.
 pub fn validate_image(img: &EnvImage) -> Result<(), String> {
     if img.width == 0 || img.height == 0 || img.width > MAX_SIDE || img.height > MAX_SIDE {

@@ -4,8 +4,8 @@
 //! photons through them (`photon::bounce`).
 
 use crate::error::{Error, Result};
-use crate::scene::{Light, Scene};
-use glam::{Mat4, Vec3, Vec4};
+use crate::scene::{Bounds, Light, Scene};
+use glam::{Mat4, Vec2, Vec3, Vec4};
 
 /// Cube faces in layer order: forward and up vectors.
 pub const CUBE_FACES: [(Vec3, Vec3); 6] = [
@@ -58,6 +58,48 @@ pub fn square_perspective(tan_half: f32, near: f32, far: f32) -> Mat4 {
     perspective(2.0 * tan_half.atan(), 1.0, near, far)
 }
 
+/// View -> clip of a square orthographic view of half-width `half`, depth 0 at the eye to 1
+/// at `depth` along the view axis (WebGPU's depth range).
+pub fn orthographic(half: f32, depth: f32) -> Mat4 {
+    Mat4::from_cols(
+        Vec4::new(1.0 / half, 0.0, 0.0, 0.0),
+        Vec4::new(0.0, 1.0 / half, 0.0, 0.0),
+        Vec4::new(0.0, 0.0, -1.0 / depth, 0.0),
+        Vec4::new(0.0, 0.0, 0.0, 1.0),
+    )
+}
+
+/// An orthographic view along the unit direction `dir` (the way the light travels) that
+/// covers the sphere `bounds`, its square `grow` times the sphere's cross-section: world ->
+/// clip, the world size of its square's side and its depth extent (world units from depth 0
+/// to 1). For distant lights: the sun, the sky's sampled directions.
+pub fn orthographic_view(dir: Vec3, bounds: Bounds, grow: f32) -> (Mat4, f32, f32) {
+    let r = bounds.radius * 1.01 + 1e-4;
+    let eye = bounds.centre - dir * r;
+    let up = if dir.y.abs() < 0.99 { Vec3::Y } else { Vec3::X };
+    let half = r * grow;
+    let depth = 2.0 * r;
+    (
+        orthographic(half, depth) * look_to(eye, dir, up),
+        2.0 * half,
+        depth,
+    )
+}
+
+/// The direction a directional light's shadow is cast along: its axis, or with `u` a
+/// direction drawn uniformly from its disc of directions (progressive passes draw a new one
+/// each, so that their mean has the disc's penumbra); other lights: their axis or zero.
+pub fn distant_direction(light: &Light, u: Option<Vec2>) -> Vec3 {
+    match (*light, u) {
+        (Light::Directional { direction, .. }, None) => direction,
+        (Light::Directional { direction, .. }, Some(u)) => light
+            .sample_towards(u)
+            .map_or(direction, |(towards, _)| -towards),
+        (Light::Spot { direction, .. }, _) => direction,
+        _ => Vec3::ZERO,
+    }
+}
+
 /// Axis-aligned bounds of the scene's vertices.
 pub fn bounds(scene: &Scene) -> (Vec3, Vec3) {
     scene.positions.iter().fold(
@@ -88,6 +130,15 @@ pub fn views_of(light: &Light) -> u32 {
     }
 }
 
+/// Shadow-map layers of a light: a cube of six for a point light, one perspective view for a
+/// spot light, one orthographic view over the scene for a directional light.
+pub fn shadow_layers_of(light: &Light) -> u32 {
+    match light {
+        Light::Point { .. } => 6,
+        Light::Spot { .. } | Light::Directional { .. } => 1,
+    }
+}
+
 /// Light views of all the scene's lights.
 pub fn view_count(scene: &Scene) -> u32 {
     scene.lights.iter().map(views_of).sum()
@@ -113,35 +164,44 @@ fn spot_axes(direction: Vec3) -> (Vec3, Vec3) {
     (direction, up)
 }
 
-/// A light's layers among the shadow maps: the first, how many, and the world size of a
-/// texel at unit distance.
+/// A light's layers among the shadow maps: the first, how many, the world size of a texel
+/// at unit distance (perspective views) or of a texel (orthographic views), and an
+/// orthographic view's depth extent in world units (0 for perspective views).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ShadowLayers {
     pub first_layer: u32,
     pub layers: u32,
     pub texel_scale: f32,
+    pub depth_extent: f32,
 }
 
 /// The shadow-map views of the scene's lights for `size`² maps: per light its layers, and
-/// world -> clip per layer (a cube of six for a point light, one view for a spot light),
-/// depth ranges covering the scene's bounds.
-pub fn shadow_views(scene: &Scene, size: u32) -> (Vec<ShadowLayers>, Vec<Mat4>) {
+/// world -> clip per layer (a cube of six for a point light, one view for a spot light, an
+/// orthographic view over the scene's bounding sphere for a directional light along
+/// `directions[i]`, else its axis), depth ranges covering the scene's bounds.
+pub fn shadow_views(
+    scene: &Scene,
+    size: u32,
+    directions: Option<&[Vec3]>,
+) -> (Vec<ShadowLayers>, Vec<Mat4>) {
     let (lo, hi) = bounds(scene);
     let mut lights = Vec::with_capacity(scene.lights.len());
     let mut matrices = Vec::new();
-    for light in &scene.lights {
+    let grow = 1.0 + 2.0 * SHADOW_MARGIN_TEXELS / size as f32;
+    for (i, light) in scene.lights.iter().enumerate() {
+        let first_layer = matrices.len() as u32;
         let p = light.position();
         let far = far_from(p, lo, hi);
         let near = (far * 1e-3).max(1e-5);
-        let grow = 1.0 + 2.0 * SHADOW_MARGIN_TEXELS / size as f32;
-        let first_layer = matrices.len() as u32;
-        let tan_half = match *light {
+        // The world size of a texel (at unit distance for perspective views) and the depth
+        // extent of an orthographic view.
+        let (texel_scale, depth_extent) = match *light {
             Light::Point { .. } => {
                 let t = grow;
                 for (forward, up) in CUBE_FACES {
                     matrices.push(square_perspective(t, near, far) * look_to(p, forward, up));
                 }
-                t
+                (2.0 * t / size as f32, 0.0)
             }
             Light::Spot {
                 direction,
@@ -151,15 +211,20 @@ pub fn shadow_views(scene: &Scene, size: u32) -> (Vec<ShadowLayers>, Vec<Mat4>) 
                 let t = (cos_outer.acos().tan() * grow).max(1e-3);
                 let (forward, up) = spot_axes(direction);
                 matrices.push(square_perspective(t, near, far) * look_to(p, forward, up));
-                t
+                (2.0 * t / size as f32, 0.0)
             }
-            // No shadow map yet: the GPU methods do not render distant lights.
-            Light::Directional { .. } => 0.0,
+            Light::Directional { .. } => {
+                let dir = directions.map_or_else(|| distant_direction(light, None), |d| d[i]);
+                let (m, side, depth) = orthographic_view(dir, scene.bounds(), grow);
+                matrices.push(m);
+                (side / size as f32, depth)
+            }
         };
         lights.push(ShadowLayers {
             first_layer,
             layers: matrices.len() as u32 - first_layer,
-            texel_scale: 2.0 * tan_half / size as f32,
+            texel_scale,
+            depth_extent,
         });
     }
     (lights, matrices)

@@ -17,7 +17,7 @@ mod bundles;
 mod vpls;
 
 use super::direct::{assemble, normalized, readback_names};
-use super::gpu::{rgb_image, GpuScene};
+use super::gpu::{rgb_image, GpuScene, LightDraw};
 use super::options::{BidirOptions, BidirStrategy};
 use super::{FrameParams, GpuState, Images, RenderOutput, RenderStats};
 use crate::cancel::Progress;
@@ -307,7 +307,7 @@ pub(super) fn frame(
     scene: &Scene,
     bvh: &SceneBvh,
     options: &BidirOptions,
-    frame: &FrameParams,
+    (frame, draw): (&FrameParams, LightDraw),
     images: Images,
     progress: &dyn Progress,
 ) -> Result<RenderOutput> {
@@ -338,7 +338,9 @@ pub(super) fn frame(
         .create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("bidir lights"),
         });
-    gs.record_shadows(&ctx, &mut encoder, timer, scene);
+    if gs.record_shadows(&ctx, &mut encoder, timer, scene, draw) {
+        targets.direct_current = false;
+    }
     let textures = (&gs.textures.group, gs.variant);
     if let Some(rsm) = &state.rsm {
         let pass = RsmPass::get(&ctx);

@@ -2,8 +2,10 @@
 //! and the render targets of one image size ([`targets`]). Everything is created once; a
 //! frame writes only what changed ([`crate::scene::Changes`]) and records passes.
 
+mod samples;
 mod scene;
 mod targets;
 
-pub(crate) use scene::{check_limits, GpuScene};
+pub(crate) use samples::SampleCounts;
+pub(crate) use scene::{check_limits, GpuScene, LightDraw};
 pub(crate) use targets::{frame_timer, rgb_image, Targets};

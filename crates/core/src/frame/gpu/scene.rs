@@ -1,6 +1,8 @@
 //! The scene's GPU-resident data: vertices, materials, textures, lights and their shadow
-//! maps, uploaded once and then only what changed.
+//! maps, the sampled lights of the direct pass ([`super::samples`]), uploaded once and then
+//! only what changed.
 
+use super::samples::{LightSamples, SampleCounts};
 use crate::error::{Error, Result};
 use crate::gpu::timer::Timer;
 use crate::gpu::Pipelines;
@@ -9,6 +11,18 @@ use crate::raster::shadow::ShadowPass;
 use crate::raster::textures::TexturesLayout;
 use crate::raster::{self, buffer_init, shadow, view_binding, Geometry, VIEW_SIZE};
 use crate::scene::Scene;
+
+/// How a frame draws its light samples: the sampled lights' seed, and for progressive passes
+/// the shrinking near-field discs and a new direction within each directional light's disc.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct LightDraw {
+    pub seed: u64,
+    /// Scale of the emitter points' near-field disc radii (1; shrinking per progressive pass).
+    pub disc_scale: f32,
+    /// A progressive pass: directional lights cast hard shadows along a direction drawn
+    /// from their disc (seeded by `seed`).
+    pub progressive: bool,
+}
 
 /// The scene's GPU-resident data.
 pub(crate) struct GpuScene {
@@ -35,6 +49,12 @@ pub(crate) struct GpuScene {
     /// The geometry's culling units for the light-view passes (shadow, bounce, RSM, VPL
     /// maps), rebuilt when geometry moves.
     pub cull: shadow::CullUnits,
+    /// Points drawn on the emitters and directions drawn from the sky.
+    pub samples: LightSamples,
+    shadow_map_size: u32,
+    /// The progressive pass whose directional-light directions the lights hold (`None`:
+    /// their axes).
+    lights_jitter: Option<u64>,
 }
 
 fn storage_init(ctx: &GpuContext, label: &str, bytes: &[u8]) -> wgpu::Buffer {
@@ -43,10 +63,16 @@ fn storage_init(ctx: &GpuContext, label: &str, bytes: &[u8]) -> wgpu::Buffer {
 }
 
 impl GpuScene {
-    pub fn new(ctx: &GpuContext, scene: &Scene, shadow_map_size: u32) -> Result<Self> {
+    pub fn new(
+        ctx: &GpuContext,
+        scene: &Scene,
+        shadow_map_size: u32,
+        counts: SampleCounts,
+    ) -> Result<Self> {
         let textures =
             raster::textures::GpuTextures::new(ctx, scene, &TexturesLayout::get(ctx).layout)?;
-        let shadows = shadow::ShadowViews::new(scene, shadow_map_size);
+        let samples = LightSamples::new(ctx, scene, SampleCounts::of(scene, counts))?;
+        let shadows = shadow::ShadowViews::new(scene, shadow_map_size, None);
         let layers = (shadows.matrices.len() as u32).max(1);
         let materials: Vec<_> = scene.materials.iter().map(|m| m.to_raw()).collect();
         let matrices: Vec<[f32; 16]> = shadows.matrices.iter().map(|m| m.to_cols_array()).collect();
@@ -85,17 +111,21 @@ impl GpuScene {
             shadows_stale: true,
             shadow_clip: shadows.matrices,
             cull: shadow::CullUnits::of(scene),
+            samples,
+            shadow_map_size,
+            lights_jitter: None,
         })
     }
 
-    /// Whether the scene's lights still fit these shadow maps (same number of layers).
-    pub fn fits(scene: &Scene, layers: u32) -> bool {
+    /// Whether the scene's lights still fit these shadow maps (same number of layers) and
+    /// its emitters and sky the sampled lights drawn for `counts`.
+    pub fn fits(&self, scene: &Scene, counts: SampleCounts) -> bool {
         let needed: u32 = scene
             .lights
             .iter()
-            .map(crate::scene::light_views::views_of)
+            .map(crate::scene::light_views::shadow_layers_of)
             .sum();
-        needed.max(1) == layers
+        needed.max(1) == self.layers && SampleCounts::of(scene, counts) == self.samples.counts
     }
 
     /// Uploads the vertices of scene triangles `range`.
@@ -126,13 +156,17 @@ impl GpuScene {
             // Cut-outs appeared, changed or went: the shadow maps change with them.
             self.shadows_stale = true;
         }
+        // Emission may have changed (and the sampled lights' shadows with the cut-outs).
+        self.samples.invalidate(true);
         self.masked = masked;
         self.variant = raster::textures::Variant::of(scene);
     }
 
-    /// Uploads the lights and their shadow views (they depend on the scene's bounds too).
-    pub fn write_lights(&mut self, ctx: &GpuContext, scene: &Scene, shadow_map_size: u32) {
-        let shadows = shadow::ShadowViews::new(scene, shadow_map_size);
+    /// Uploads the lights and their shadow views (they depend on the scene's bounds too);
+    /// with `jitter`, a progressive pass's directions of the directional lights.
+    pub fn write_lights(&mut self, ctx: &GpuContext, scene: &Scene, jitter: Option<u64>) {
+        let shadows = shadow::ShadowViews::new(scene, self.shadow_map_size, jitter);
+        self.lights_jitter = jitter;
         let matrices: Vec<[f32; 16]> = shadows.matrices.iter().map(|m| m.to_cols_array()).collect();
         let q = &ctx.queue;
         gpu::write_buffer(
@@ -171,16 +205,39 @@ impl GpuScene {
         self.masked.then_some(&self.textures.group)
     }
 
-    /// Renders the shadow maps if lights or geometry moved since they were last rendered.
+    /// The geometry moved: its culling units and the sampled lights' shadows with it.
+    pub fn geometry_moved(&mut self, scene: &Scene) {
+        self.cull = shadow::CullUnits::of(scene);
+        self.samples.invalidate(true);
+    }
+
+    /// Renders the shadow maps if lights or geometry moved since they were last rendered,
+    /// and draws the sampled lights of `draw` (with their shadow maps) unless drawn already.
+    /// True when the direct light changed with them.
     pub fn record_shadows(
         &mut self,
         ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
         timer: &mut Timer,
         scene: &Scene,
-    ) {
+        draw: LightDraw,
+    ) -> bool {
+        // Progressive passes: a new direction within each directional light's disc.
+        let soft_sun = scene.lights.iter().any(|l| {
+            matches!(l, crate::scene::Light::Directional { cos_half_angle, .. } if *cos_half_angle < 1.0)
+        });
+        let jitter = (draw.progressive && soft_sun).then_some(draw.seed);
+        if jitter != self.lights_jitter {
+            self.write_lights(ctx, scene, jitter);
+        }
+        let mut changed = self.shadows_stale && !scene.lights.is_empty();
+        let sampling = (draw.seed, draw.disc_scale, !draw.progressive);
+        changed |= self.samples.prepare(ctx, scene, sampling);
+        let masks = self.masked.then_some(&self.textures.group);
+        self.samples
+            .record_shadows(ctx, encoder, timer, (&self.geometry, &self.cull, masks));
         if !self.shadows_stale || scene.lights.is_empty() {
-            return;
+            return changed;
         }
         // Each layer draws only the triangle runs that reach into its view.
         let draws = self.cull.draws(&self.shadow_clip);
@@ -199,6 +256,7 @@ impl GpuScene {
             );
         }
         self.shadows_stale = false;
+        changed
     }
 }
 

@@ -127,7 +127,7 @@ fn gbuffer_group(ctx: &GpuContext, eye: &wgpu::Buffer, gs: &GpuScene) -> wgpu::B
 }
 
 /// The direct pass's scene group: eye views, lights, shadow matrices and maps, the
-/// comparison sampler and the penumbra taps.
+/// comparison sampler, the penumbra taps, the sampled lights and the environment's tables.
 fn direct_scene_group(
     ctx: &GpuContext,
     eye: &wgpu::Buffer,
@@ -162,24 +162,36 @@ fn direct_scene_group(
                     binding: 5,
                     resource: penumbra.as_entire_binding(),
                 },
+                texture(6, &gs.samples.records_view),
+                texture(7, &gs.samples.matrices_view),
+                texture(8, &gs.samples.array),
+                texture(9, &gs.samples.env_view),
+                texture(10, &gs.samples.irradiance_view),
+                wgpu::BindGroupEntry {
+                    binding: 11,
+                    resource: gs.samples.params.as_entire_binding(),
+                },
+                texture(12, &gs.samples.polygons_view),
             ],
         },
     )
 }
 
-/// The direct pass's G-buffer group of `g`: its lighting inputs.
+/// The direct pass's G-buffer group of `g`: its lighting inputs and its emission.
 fn lighting_group(ctx: &GpuContext, g: &gbuffer::GBuffer) -> wgpu::BindGroup {
+    let mut entries: Vec<_> = g
+        .lighting_inputs()
+        .iter()
+        .enumerate()
+        .map(|(i, v)| texture(i as u32, v))
+        .collect();
+    entries.push(texture(entries.len() as u32, g.emission()));
     gpu::create_bind_group(
         &ctx.device,
         &wgpu::BindGroupDescriptor {
             label: Some("direct gbuffer bind group"),
             layout: &DirectPass::get(ctx).gbuffer_layout,
-            entries: &g
-                .lighting_inputs()
-                .iter()
-                .enumerate()
-                .map(|(i, v)| texture(i as u32, v))
-                .collect::<Vec<_>>(),
+            entries: &entries,
         },
     )
 }

@@ -19,7 +19,7 @@ mod photons;
 mod specular;
 
 use super::direct::{assemble, normalized, readback_names};
-use super::gpu::{rgb_image, GpuScene, Targets};
+use super::gpu::{rgb_image, GpuScene, LightDraw, Targets};
 use super::options::IspmOptions;
 use super::{FrameParams, GpuState, Images, RenderOutput, RenderStats};
 use crate::cancel::Progress;
@@ -71,6 +71,7 @@ pub(super) struct FrameInputs<'a> {
     pub params: &'a FrameParams,
     pub frame: u64,
     pub changes: Changes,
+    pub draw: LightDraw,
     pub images: Images,
     pub progress: &'a dyn Progress,
 }
@@ -93,6 +94,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         params,
         frame,
         changes,
+        draw,
         images,
         progress,
     } = f;
@@ -132,7 +134,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     // 1. Bounce maps, submitted first with their readback copies.
     let bounce = first_hits.submit(&ctx, gs, &layers, reuse, timer, serial, &mut stats)?;
     // 2. Direct light and the eye G-buffer, not waited on.
-    let light = (params.progressive, serial);
+    let light = (params.progressive, serial, draw);
     record_direct_light(&ctx, gs, targets, timer, scene, light, progress, &mut stats)?;
     // 3. The first hits: the bounce-map readback (or the traced first bounce).
     let seed = (reuse, params.seed);
@@ -226,7 +228,7 @@ fn record_direct_light(
     targets: &mut Targets,
     timer: &mut Timer,
     scene: &Scene,
-    (progressive, serial): (bool, bool),
+    (progressive, serial, draw): (bool, bool, LightDraw),
     progress: &dyn Progress,
     stats: &mut RenderStats,
 ) -> Result<()> {
@@ -240,7 +242,9 @@ fn record_direct_light(
         targets.record_gbuffer(ctx, gs, &mut encoder, timer);
         encoder
     } else {
-        gs.record_shadows(ctx, &mut encoder, timer, scene);
+        if gs.record_shadows(ctx, &mut encoder, timer, scene, draw) {
+            targets.direct_current = false;
+        }
         targets.record_direct(ctx, gs, encoder, timer, progress)?
     };
     ctx.queue.submit([encoder.finish()]);

@@ -34,16 +34,29 @@ pub struct DirectLightOptions {
     pub spp: u32,
     pub shadow_map_size: u32,
     pub edge_supersampling: bool,
+    /// Points drawn on the emitters per frame.
+    pub area_samples: u32,
+    /// Directions drawn from the sky per frame (not read by `bidir`, whose bundles light
+    /// the sky).
+    pub sky_samples: u32,
 }
 
 impl DirectLightOptions {
-    pub(super) fn read(v: &Values) -> Self {
+    /// The options of `v`; `sky`: the method lights the sky by sampled directions.
+    pub(super) fn read(v: &Values, sky: bool) -> Self {
         DirectLightOptions {
             adapter: v.text("adapter"),
             spp: v.u32("spp"),
             shadow_map_size: v.u32("shadow_map_size"),
             edge_supersampling: v.bool("edge_supersampling"),
+            area_samples: v.u32("area_samples"),
+            sky_samples: if sky { v.u32("sky_samples") } else { 0 },
         }
+    }
+
+    /// Side of the sampled lights' shadow maps: a quarter of the lights', at least 64.
+    pub fn sample_map_size(&self) -> u32 {
+        (self.shadow_map_size / 4).max(64)
     }
 }
 
@@ -194,10 +207,10 @@ impl MethodOptions {
                 leaf_size: v.opt_u32("leaf_size"),
             }),
             Method::Direct => MethodOptions::Direct(DirectOptions {
-                direct: DirectLightOptions::read(v),
+                direct: DirectLightOptions::read(v, true),
             }),
             Method::Ispm => MethodOptions::Ispm(IspmOptions {
-                direct: DirectLightOptions::read(v),
+                direct: DirectLightOptions::read(v, true),
                 max_depth: v.u32("max_depth"),
                 photons: v.u64("photons"),
                 k: v.u32("k"),
@@ -213,7 +226,7 @@ impl MethodOptions {
                 specular_sampling: v.choice("specular_sampling"),
             }),
             Method::Bidir => MethodOptions::Bidir(BidirOptions {
-                direct: DirectLightOptions::read(v),
+                direct: DirectLightOptions::read(v, false),
                 max_depth: v.u32("max_depth"),
                 vpls_per_light: v.u32("vpls_per_light"),
                 rsm_size: v.u32("rsm_size"),

@@ -132,6 +132,10 @@ pub const MAX_K: u32 = 1 << 16;
 pub const MAX_TEMPORAL_FRAMES: u32 = 64;
 /// VPLs per light (each takes six shadow-map layers).
 pub const MAX_VPLS_PER_LIGHT: u32 = 1024;
+/// Most points drawn on the emitters per frame (six shadow layers each).
+pub const MAX_AREA_SAMPLES: u32 = 128;
+/// Most directions drawn from the sky per frame (one shadow layer each).
+pub const MAX_SKY_SAMPLES: u32 = 256;
 /// Ray bundles per frame.
 pub const MAX_BUNDLES: u32 = 4096;
 /// Largest image side (pixels).
@@ -311,6 +315,11 @@ impl RenderOptions {
             out.push(("spp", int(d.spp as u64)));
             out.push(("shadow_map_size", int(d.shadow_map_size as u64)));
             out.push(("edge_supersampling", Value::Bool(d.edge_supersampling)));
+            out.push(("area_samples", int(d.area_samples as u64)));
+        };
+        // `bidir` lights the sky through its bundles.
+        let sky = |d: &DirectLightOptions, out: &mut Vec<(&'static str, Value)>| {
+            out.push(("sky_samples", int(d.sky_samples as u64)));
         };
         let kernel = |k: &KernelOptions, out: &mut Vec<(&'static str, Value)>| {
             out.push(("max_radius", k.max_radius.map_or(Value::None, float)));
@@ -349,9 +358,13 @@ impl RenderOptions {
                 refine(&o.refine, &mut out);
                 out.push(("leaf_size", opt_int(o.leaf_size.map(u64::from))));
             }
-            MethodOptions::Direct(o) => direct(&o.direct, &mut out),
+            MethodOptions::Direct(o) => {
+                direct(&o.direct, &mut out);
+                sky(&o.direct, &mut out);
+            }
             MethodOptions::Ispm(o) => {
                 direct(&o.direct, &mut out);
+                sky(&o.direct, &mut out);
                 out.push(("max_depth", int(o.max_depth as u64)));
                 out.push(("photons", int(o.photons)));
                 out.push(("k", int(o.k as u64)));

@@ -4,8 +4,8 @@
 use super::values::Value;
 use super::{
     BidirStrategy, Estimator, FirstBounce, Kernel, Method, SpecularSampling, VolumeShape,
-    MAX_BUNDLES, MAX_IMAGE_SIDE, MAX_K, MAX_LIGHT_PATHS, MAX_PHOTONS, MAX_SPP, MAX_TEMPORAL_FRAMES,
-    MAX_VPLS_PER_LIGHT,
+    MAX_AREA_SAMPLES, MAX_BUNDLES, MAX_IMAGE_SIDE, MAX_K, MAX_LIGHT_PATHS, MAX_PHOTONS,
+    MAX_SKY_SAMPLES, MAX_SPP, MAX_TEMPORAL_FRAMES, MAX_VPLS_PER_LIGHT,
 };
 use crate::error::{Error, Named, Result};
 
@@ -244,6 +244,23 @@ pub const OPTIONS: &[OptionSpec] = &[
         GPU,
         "supersample the direct light only where the pixel's neighbourhood crosses an edge \
          (False: every pixel, a full-screen pass per sample, 6-9x slower, same image to ~1e-4)",
+    ),
+    row(
+        "area_samples",
+        int(1, MAX_AREA_SAMPLES as i128),
+        Default::Int(16),
+        GPU,
+        "points drawn on the emitting surfaces by power for the direct light, each an \
+         oriented point light with a cube shadow map of shadow_map_size/4 (new points per \
+         progressive pass)",
+    ),
+    row(
+        "sky_samples",
+        int(1, MAX_SKY_SAMPLES as i128),
+        Default::Int(16),
+        &[Direct, Ispm],
+        "directions drawn from the environment for the direct light, each a distant light with \
+         an orthographic shadow map of shadow_map_size/4 (new ones per progressive pass)",
     ),
     row(
         "kernel_scale",

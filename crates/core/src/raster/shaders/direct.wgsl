@@ -7,13 +7,20 @@
 
 @fragment
 fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
-    let sum = shade(load_sample(vec2<i32>(frag.xy)));
+    var g = load_sample(vec2<i32>(frag.xy));
+    if g.position.w == 0.0 {
+        g.ray = view_ray(frag.xy);
+    }
+    let sum = shade(g);
     return vec4<f32>(sum * view.weight, view.weight);
 }
 
 @fragment
 fn fs_centre(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
-    let g = load_sample(vec2<i32>(frag.xy));
+    var g = load_sample(vec2<i32>(frag.xy));
+    if g.position.w == 0.0 {
+        g.ray = view_ray(frag.xy);
+    }
     // The pixel's footprint on its surface: across a discontinuity the difference is
     // meaningless, but such pixels are edge pixels, overwritten by direct_edges.wgsl.
     var fp: Footprint;

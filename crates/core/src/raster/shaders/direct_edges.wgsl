@@ -20,7 +20,8 @@ struct EdgeParams {
 
 @group(2) @binding(0) var<storage, read_write> edges: array<u32>;
 @group(2) @binding(1) var<storage, read_write> edge_count: array<atomic<u32>>;
-// Per sample and listed pixel, three texels: position, normals, packed f16 materials.
+// Per sample and listed pixel, four texels: position, normals, packed f16 materials,
+// emission.
 @group(2) @binding(2) var<storage, read_write> cache: array<vec4<u32>>;
 @group(2) @binding(3) var accum_out: texture_storage_2d<rgba32float, write>;
 @group(2) @binding(4) var<storage, read_write> args: array<u32>;
@@ -44,7 +45,12 @@ fn differs(c: GSample, ng: vec3<f32>, ns: vec3<f32>, n: GSample) -> bool {
         return true;
     }
     let dm = max(abs(c.diffuse - n.diffuse), abs(c.specular - n.specular));
-    return max(max(dm.x, dm.y), max(dm.z, dm.w)) > 0.1;
+    if max(max(dm.x, dm.y), max(dm.z, dm.w)) > 0.1 {
+        return true;
+    }
+    // An emitter's edge (emission differing by more than 10%).
+    let de = abs(c.emission.xyz - n.emission.xyz);
+    return max3(de) > 0.1 * max(max3(c.emission.xyz), max3(n.emission.xyz));
 }
 
 @compute @workgroup_size(8, 8)
@@ -101,7 +107,7 @@ fn store_samples(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let g = load_sample(pixel_of(id.x));
-    let base = (params.sample * params.capacity + id.x) * 3u;
+    let base = (params.sample * params.capacity + id.x) * 4u;
     cache[base] = bitcast<vec4<u32>>(g.position);
     cache[base + 1u] = bitcast<vec4<u32>>(g.normals);
     // The diffuse and specular targets are f16: packing them loses nothing.
@@ -111,6 +117,7 @@ fn store_samples(@builtin(global_invocation_id) id: vec3<u32>) {
         pack2x16float(g.specular.xy),
         pack2x16float(g.specular.zw),
     );
+    cache[base + 3u] = bitcast<vec4<u32>>(g.emission);
 }
 
 @compute @workgroup_size(64)
@@ -119,14 +126,18 @@ fn shade_edges(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     var sum = vec3<f32>(0.0);
+    // Samples without a surface see the environment along the pixel centre's ray.
+    let ray = view_ray(vec2<f32>(pixel_of(id.x)) + 0.5);
     for (var s = 0u; s < params.samples; s++) {
-        let base = (s * params.capacity + id.x) * 3u;
+        let base = (s * params.capacity + id.x) * 4u;
         let m = cache[base + 2u];
         var g: GSample;
         g.position = bitcast<vec4<f32>>(cache[base]);
         g.normals = bitcast<vec4<f32>>(cache[base + 1u]);
         g.diffuse = vec4<f32>(unpack2x16float(m.x), unpack2x16float(m.y));
         g.specular = vec4<f32>(unpack2x16float(m.z), unpack2x16float(m.w));
+        g.emission = bitcast<vec4<f32>>(cache[base + 3u]);
+        g.ray = ray;
         sum += shade(g);
     }
     // Equal weights: the box filter of the full supersampling (direct.wgsl `fs_main`).

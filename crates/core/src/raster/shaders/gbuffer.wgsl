@@ -20,6 +20,8 @@ struct GBufferOut {
     @location(3) specular: vec4<f32>,
     // Scatter probability towards the viewer (the albedo AOV).
     @location(4) albedo: vec4<f32>,
+    // Radiance emitted towards the viewer.
+    @location(5) emission: vec4<f32>,
 }
 
 // Three entry points, one per kind of scene (`raster::textures::Variant`): without textures,
@@ -55,6 +57,8 @@ fn gbuffer(in: VertexOut, textured: bool, duvdx: vec2<f32>, duvdy: vec2<f32>) ->
     }
     let wo = normalize(view.eye - in.world);
     var ng = in.geometric_normal;
+    // `Material::emitted`: the front face (the winding's side) emits, both when two-sided.
+    let emits = m.two_sided != 0u || dot(wo, ng) > 0.0;
     // Shading normal as in trace::Interaction::new: on the side of ng, and replaced by ng
     // where the two disagree about the side the view ray comes from.
     var ns = in.normal;
@@ -83,5 +87,6 @@ fn gbuffer(in: VertexOut, textured: bool, duvdx: vec2<f32>, duvdy: vec2<f32>) ->
     o.diffuse = vec4<f32>(m.diffuse, m.roughness);
     o.specular = vec4<f32>(m.specular, f32(m.fresnel));
     o.albedo = vec4<f32>(scatter_probability(m, dot(wo, ns)), 1.0);
+    o.emission = vec4<f32>(select(vec3<f32>(0.0), m.emission, emits), 0.0);
     return o;
 }

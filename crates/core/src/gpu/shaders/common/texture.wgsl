@@ -19,7 +19,7 @@ struct MaterialMaps {
     normal: u32,
     alpha: u32,
     alpha_cutoff: f32,
-    _p0: u32,
+    emission: u32,
     _p1: u32,
 }
 
@@ -118,6 +118,9 @@ fn textured_material(maps: MaterialMaps, base: Material, uv: vec2<f32>, duvdx: v
         if glossy {
             m.roughness = max(m.roughness, TEX_MIRROR_ROUGHNESS);
         }
+    }
+    if maps.emission != NO_TEXTURE && max(m.emission.x, max(m.emission.y, m.emission.z)) > 0.0 {
+        m.emission *= tex_sample_grad(maps.emission, uv, duvdx, duvdy).xyz;
     }
     return m;
 }

@@ -7,11 +7,17 @@ struct Material {
     fresnel: u32,
     transmission: vec3<f32>,
     ior: f32,
+    // Radiance emitted by the front face (the side of the winding's normal); both faces
+    // when `two_sided` is 1.
+    emission: vec3<f32>,
+    two_sided: u32,
 }
 
-// kind: 0 = point, 1 = spot, 2 = directional (not shaded by the raster passes yet).
+// kind: 0 = point, 1 = spot, 2 = directional (`intensity` its irradiance, `direction` the
+// way its light travels, `cos_inner` the cosine of its disc's half angle).
 // Shadow layers `first_layer .. first_layer + layers` (6 for a
-// point light's cube faces, +x -x +y -y +z -z; 1 for a spot light).
+// point light's cube faces, +x -x +y -y +z -z; 1 for a spot light or a directional light's
+// orthographic view).
 struct Light {
     position: vec3<f32>,
     kind: u32,
@@ -21,9 +27,10 @@ struct Light {
     cos_outer: f32,
     first_layer: u32,
     layers: u32,
-    // World size of one shadow texel at unit distance from the light.
+    // World size of one shadow texel, at unit distance from the light for perspective views.
     texel_scale: f32,
-    _pad: f32,
+    // Directional: the world depth of its orthographic view (depth 0 to 1).
+    depth_extent: f32,
 }
 
 // A camera or shadow view: world -> clip, and the eye position.
@@ -31,6 +38,8 @@ struct View {
     view_proj: mat4x4<f32>,
     eye: vec3<f32>,
     weight: f32,
+    // Clip -> world.
+    inv_view_proj: mat4x4<f32>,
 }
 
 // Spot falloff: smoothstep in cos θ from the outer to the inner cone

@@ -1,6 +1,27 @@
 // Deferred direct lighting of one G-buffer sample, shared by the full-screen passes
-// (direct.wgsl) and the edge-sample compute passes (direct_edges.wgsl): the sum over lights
-// of f(wo, wi)·|cos θi|·I(−wi)/d² times the PCF shadow-map visibility.
+// (direct.wgsl) and the edge-sample compute passes (direct_edges.wgsl): the radiance the
+// surface emits towards the eye, plus
+// - per point or spot light f(wo, wi)·|cos θi|·I(−wi)/d² times the PCF shadow-map visibility;
+// - per directional light (the sun) f·|cos θi|·E times its orthographic shadow map's
+//   visibility, the penumbra widened by its disc of directions (percentage-closer soft
+//   shadows) unless the record says parallel (`cos_inner` 1);
+// - per point drawn on the emitters (`area_count` records, raster/direct.rs
+//   `SampledLightRaw`), an oriented point light with a cosine lobe:
+//   f·|cos θi|·I·cos θ'/(d² + r²) times one bilinear tap of its cube shadow map, where r² is
+//   the radius² of the disc of the area the point stands for (the disc's on-axis form factor:
+//   bounded where d → 0, exact for the disc there, ≈ r²/d² dark relative elsewhere); with
+//   `ratio` and the emitters as `polygons` (untextured, few), the diffuse lobe is the ratio
+//   estimator: the unshadowed diffuse light of the polygons in closed form (Lambert's
+//   formula for the irradiance of a polygon clipped to the horizon, i.e. linearly
+//   transformed cosines for the diffuse lobe, the Fresnel coupling taken at the polygons'
+//   mean direction) times Σ f_d·G·V / Σ f_d·G over the points;
+// - per direction drawn from the sky (`sky_count` records), a distant light of irradiance
+//   L/(n·p) with one tap of its orthographic shadow map; with `ratio` the diffuse lobe is
+//   the ratio estimator (Heitz, Hill & McGuire 2018): the unshadowed diffuse light from the
+//   irradiance table times Σ f_d·cos·E·V / Σ f_d·cos·E over the directions (exact where
+//   every direction is unoccluded), the glossy lobe the plain sum;
+// - where no surface covers the sample, the environment seen along the view ray
+//   (`background`).
 
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<storage, read> lights: array<Light>;
@@ -10,18 +31,55 @@
 // Sub-pixel visibility taps per axis where a pixel-centre sample lies in a shadow's
 // penumbra (1: none).
 @group(0) @binding(5) var<uniform> penumbra_taps: vec4<u32>;
+// The sampled lights: emitter points then sky directions, `SAMPLE_TEXELS` texels a row.
+@group(0) @binding(6) var sample_records: texture_2d<f32>;
+// World -> clip of the sampled lights' shadow layers, one matrix (four column texels) a row.
+@group(0) @binding(7) var sample_views: texture_2d<f32>;
+@group(0) @binding(8) var sample_maps: texture_depth_2d_array;
+// The environment's radiance table (equirectangular; 1×1 for a constant colour or none)
+// and its irradiance table (same mapping).
+@group(0) @binding(9) var env_table: texture_2d<f32>;
+@group(0) @binding(10) var irradiance_table: texture_2d<f32>;
+@group(0) @binding(11) var<uniform> direct_params: DirectParams;
+// The emitting triangles (`polygons` of them): corners (w of the first: 1 when two-sided)
+// and radiance, four texels a row.
+@group(0) @binding(12) var emitter_polygons: texture_2d<f32>;
 @group(1) @binding(0) var g_position: texture_2d<f32>;
 @group(1) @binding(1) var g_normals: texture_2d<f32>;
 @group(1) @binding(2) var g_diffuse: texture_2d<f32>;
 @group(1) @binding(3) var g_specular: texture_2d<f32>;
+@group(1) @binding(4) var g_emission: texture_2d<f32>;
+
+// `DirectParamsRaw` of raster/direct.rs.
+struct DirectParams {
+    area_count: u32,
+    sky_count: u32,
+    // 1: the environment is seen where no surface covers a sample.
+    background: u32,
+    // 1: the diffuse light of the sky and of the emitter polygons by the ratio estimator.
+    ratio: u32,
+    // (cos, sin) of the environment's rotation about +y.
+    env_cos: f32,
+    env_sin: f32,
+    // Emitting triangles in `emitter_polygons` (0: their light is sampled only).
+    polygons: u32,
+    _pad: f32,
+}
+
+const SAMPLE_TEXELS: u32 = 4u;
+const TWO_PI: f32 = 6.28318530718;
 
 // One G-buffer sample: world position (w = coverage, 0 where no surface was hit),
-// octahedral shading and geometric normals, diffuse + roughness, specular + Fresnel flag.
+// octahedral shading and geometric normals, diffuse + roughness, specular + Fresnel flag,
+// the radiance emitted towards the eye; and for a sample without a surface, the unit
+// direction of its view ray (set by the caller, for the environment behind it).
 struct GSample {
     position: vec4<f32>,
     normals: vec4<f32>,
     diffuse: vec4<f32>,
     specular: vec4<f32>,
+    emission: vec4<f32>,
+    ray: vec3<f32>,
 }
 
 fn load_sample(px: vec2<i32>) -> GSample {
@@ -30,7 +88,62 @@ fn load_sample(px: vec2<i32>) -> GSample {
     g.normals = textureLoad(g_normals, px, 0);
     g.diffuse = textureLoad(g_diffuse, px, 0);
     g.specular = textureLoad(g_specular, px, 0);
+    g.emission = textureLoad(g_emission, px, 0);
     return g;
+}
+
+// The unit direction of the view ray through window position `xy` (pixels) of the view
+// (for the environment behind samples that no surface covers).
+fn view_ray(xy: vec2<f32>) -> vec3<f32> {
+    let size = vec2<f32>(textureDimensions(g_position));
+    let ndc = vec2<f32>(xy.x / size.x * 2.0 - 1.0, 1.0 - xy.y / size.y * 2.0);
+    let w = view.inv_view_proj * vec4<f32>(ndc, 1.0, 1.0);
+    return normalize(w.xyz / w.w - view.eye);
+}
+
+// The environment's frame: world direction `d` rotated back about +y.
+fn env_local(d: vec3<f32>) -> vec3<f32> {
+    let c = direct_params.env_cos;
+    let s = direct_params.env_sin;
+    return vec3<f32>(c * d.x - s * d.z, d.y, s * d.x + c * d.z);
+}
+
+// Texel coordinates (continuous, texel centres at + 0.5) of local direction `l` in a
+// `size` equirectangular table (`Environment::uv`).
+fn env_st(l: vec3<f32>, size: vec2<u32>) -> vec2<f32> {
+    let sin_t = sqrt(l.x * l.x + l.z * l.z);
+    var u = atan2(l.x, -l.z) / TWO_PI;
+    u = u - floor(u);
+    let v = atan2(sin_t, l.y) / PI;
+    return vec2<f32>(u, v) * vec2<f32>(size);
+}
+
+// Radiance of the environment from world direction `d` (`Environment::radiance`: the texel
+// it falls in).
+fn env_radiance(d: vec3<f32>) -> vec3<f32> {
+    let size = textureDimensions(env_table);
+    let st = env_st(env_local(d), size);
+    let x = min(u32(st.x), size.x - 1u);
+    let y = min(u32(st.y), size.y - 1u);
+    return textureLoad(env_table, vec2<u32>(x, y), 0).xyz;
+}
+
+// The environment's irradiance on a surface facing world direction `n`, bilinear in the
+// table (wrapping in longitude, clamped in latitude).
+fn env_irradiance(n: vec3<f32>) -> vec3<f32> {
+    let size = textureDimensions(irradiance_table);
+    let st = env_st(env_local(n), size) - 0.5;
+    let base = floor(st);
+    let f = st - base;
+    let w = i32(size.x);
+    let h = i32(size.y) - 1;
+    let x0 = (i32(base.x) % w + w) % w;
+    let x1 = (x0 + 1) % w;
+    let y0 = clamp(i32(base.y), 0, h);
+    let y1 = clamp(i32(base.y) + 1, 0, h);
+    let a = mix(textureLoad(irradiance_table, vec2<i32>(x0, y0), 0).xyz, textureLoad(irradiance_table, vec2<i32>(x1, y0), 0).xyz, f.x);
+    let b = mix(textureLoad(irradiance_table, vec2<i32>(x0, y1), 0).xyz, textureLoad(irradiance_table, vec2<i32>(x1, y1), 0).xyz, f.x);
+    return mix(a, b, f.y);
 }
 
 // A shadow-map layer and its world -> clip matrix.
@@ -107,20 +220,110 @@ fn shade(g: GSample) -> vec3<f32> {
 
 // Unshadowed light from `l` scattered towards the eye at `p` (shading normal `ns`,
 // geometric `ng`): f(wo, wi)·|cos θi|·I(−wi)/d², 0 behind the geometry.
+// A directional light's: f(wo, wi)·|cos θi|·E along its axis.
 fn light_term(l: Light, m: Material, p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>) -> vec3<f32> {
-    let to_light = l.position - p;
-    let dist2 = dot(to_light, to_light);
-    let wi = to_light * inverseSqrt(dist2);
+    var wi = -l.direction;
+    var li = l.intensity;
+    if l.kind != 2u {
+        let to_light = l.position - p;
+        let dist2 = dot(to_light, to_light);
+        wi = to_light * inverseSqrt(dist2);
+        li = l.intensity / dist2;
+        if l.kind == 1u {
+            li *= cone_falloff(dot(-wi, l.direction), l.cos_inner, l.cos_outer);
+        }
+    }
     // Reflection only: the light must be on the viewer's side of the geometry.
     if dot(wi, ng) <= 0.0 {
         return vec3<f32>(0.0);
     }
-    var li = l.intensity / dist2;
-    if l.kind == 1u {
-        li *= cone_falloff(dot(-wi, l.direction), l.cos_inner, l.cos_outer);
-    }
     let wo = normalize(view.eye - p);
     return bsdf_eval(m, ns, wo, wi) * abs(dot(ns, wi)) * li;
+}
+
+// The unit direction from `p` towards light `l` and its distance (a directional light's
+// along its axis, at the depth of its orthographic view).
+fn towards_light(l: Light, p: vec3<f32>) -> vec4<f32> {
+    if l.kind == 2u {
+        return vec4<f32>(-l.direction, l.depth_extent);
+    }
+    let to_light = l.position - p;
+    let d = length(to_light);
+    return vec4<f32>(to_light / d, d);
+}
+
+// The normal offset of `p` (geometric normal `ng`) before a shadow lookup towards light `l`:
+// about one shadow texel at grazing light, against acne.
+fn shadow_offset(l: Light, p: vec3<f32>, ng: vec3<f32>) -> vec3<f32> {
+    let t = towards_light(l, p);
+    let cos_g = dot(t.xyz, ng);
+    if l.kind == 2u {
+        return ng * (l.texel_scale * (1.0 - cos_g) + 1e-4 * l.depth_extent);
+    }
+    return ng * (l.texel_scale * t.w * (1.0 - cos_g) + 1e-4 * t.w);
+}
+
+// A directional light's visibility at `q` in view `sv` with its penumbra widened by its
+// disc of directions (half angle θ): percentage-closer soft shadows. The blockers are
+// searched within the widest penumbra (the receiver's depth in the view times tan θ),
+// their mean depth gives the penumbra's radius (receiver − blocker)·tan θ, and the
+// visibility is the mean of 16 bilinear taps on a disc of that radius (at least the 3×3
+// PCF's). Parallel light (`cos_inner` 1) or a penumbra under a texel: the PCF.
+fn sun_visibility(l: Light, sv: ShadowView, q: vec3<f32>) -> f32 {
+    let c = clamp(l.cos_inner, 0.0, 1.0);
+    let pcf = shadow_pcf(shadow_maps, shadow_sampler, sv.m, sv.layer, q);
+    if c >= 1.0 {
+        return pcf;
+    }
+    let tan_t = sqrt(1.0 - c * c) / max(c, 1e-4);
+    let clip = sv.m * vec4<f32>(q, 1.0);
+    let uv = clip.xy * vec2<f32>(0.5, -0.5) + 0.5;
+    let size = f32(textureDimensions(shadow_maps).x);
+    // World units per texel and per unit of depth.
+    let texel = l.texel_scale;
+    let depth = l.depth_extent;
+    let z = clip.z;
+    let search = min(z * depth * tan_t / texel, 32.0);
+    if search < 1.0 {
+        return pcf;
+    }
+    // Blocker search: 16 depths on a 4×4 grid over the search square.
+    var blockers = 0.0;
+    var zb = 0.0;
+    for (var j = 0u; j < 16u; j++) {
+        let o = (vec2<f32>(f32(j % 4u), f32(j / 4u)) - 1.5) / 1.5 * search;
+        let t = vec2<i32>(floor(uv * size + o));
+        let d = textureLoad(shadow_maps, t, sv.layer, 0);
+        if d < z {
+            blockers += 1.0;
+            zb += d;
+        }
+    }
+    if blockers == 0.0 {
+        return pcf;
+    }
+    zb /= blockers;
+    let radius = min((z - zb) * depth * tan_t / texel, 32.0);
+    if radius < 1.0 {
+        return pcf;
+    }
+    // 16 bilinear taps on a Vogel disc of the penumbra's radius.
+    var v = 0.0;
+    for (var j = 0u; j < 16u; j++) {
+        let r = sqrt((f32(j) + 0.5) / 16.0) * radius;
+        let a = f32(j) * 2.39996323;
+        let o = vec2<f32>(cos(a), sin(a)) * r / size;
+        v += textureSampleCompareLevel(shadow_maps, shadow_sampler, uv + o, sv.layer, z);
+    }
+    return v / 16.0;
+}
+
+// Shadow-map visibility of light `l` at `q` in view `sv`.
+fn light_visibility(l: Light, sv: ShadowView, q: vec3<f32>) -> f32 {
+    if l.kind == 2u {
+        return sun_visibility(l, sv, q);
+    }
+    return visibility(sv, q);
 }
 
 // The point and shading normal of sub-pixel offset `u` (in pixels from the centre).
@@ -146,10 +349,17 @@ fn flat_across(l: Light, m: Material, p: vec3<f32>, fp: Footprint) -> bool {
     if max3(m.specular) > 0.0 || m.fresnel != 0u {
         return false;
     }
+    if length(fp.dndx) + length(fp.dndy) > 0.03 {
+        return false;
+    }
+    // A directional light's term varies with the normal alone.
+    if l.kind == 2u {
+        return true;
+    }
     let to_light = l.position - p;
     let d = length(to_light);
     let s = length(fp.dx) + length(fp.dy);
-    if s > 0.03 * d || length(fp.dndx) + length(fp.dndy) > 0.03 {
+    if s > 0.03 * d {
         return false;
     }
     return l.kind != 1u || dot(-to_light / d, l.direction) >= l.cos_inner + s / d;
@@ -164,6 +374,9 @@ fn flat_across(l: Light, m: Material, p: vec3<f32>, fp: Footprint) -> bool {
 // same points. With one tap, the centre sample alone (a sub-pixel sample's own shading).
 fn shade_pixel(g: GSample, fp: Footprint) -> vec3<f32> {
     if g.position.w == 0.0 {
+        if direct_params.background != 0u {
+            return env_radiance(g.ray);
+        }
         return vec3<f32>(0.0);
     }
     let p = g.position.xyz;
@@ -174,14 +387,11 @@ fn shade_pixel(g: GSample, fp: Footprint) -> vec3<f32> {
     m.roughness = g.diffuse.w;
     m.specular = g.specular.xyz;
     m.fresnel = u32(g.specular.w > 0.5);
+    let wo = normalize(view.eye - p);
+    var sum = g.emission.xyz + sampled_light(p, ns, ng, m, wo);
     let taps = fp.taps;
-    var sum = vec3<f32>(0.0);
     for (var i = 0u; i < arrayLength(&lights); i++) {
         let l = lights[i];
-        // Kind 2 (directional): not shaded here yet.
-        if l.kind == 2u {
-            continue;
-        }
         var term = light_term(l, m, p, ns, ng);
         if taps > 1u && !flat_across(l, m, p, fp) {
             var corners = vec3<f32>(0.0);
@@ -205,21 +415,203 @@ fn shade_pixel(g: GSample, fp: Footprint) -> vec3<f32> {
             continue;
         }
         // Normal offset of about one shadow texel against acne on surfaces at grazing light.
-        let to_light = l.position - p;
-        let dist = length(to_light);
-        let cos_g = dot(to_light / dist, ng);
-        let offset = ng * (l.texel_scale * dist * (1.0 - cos_g) + 1e-4 * dist);
+        let offset = shadow_offset(l, p, ng);
         let sv = view_of(l, p + offset);
-        var v = visibility(sv, p + offset);
+        var v = light_visibility(l, sv, p + offset);
         if taps > 1u && penumbra(l, sv, p + offset, v, fp.dx, fp.dy) {
             v = 0.0;
             for (var j = 0u; j < taps * taps; j++) {
                 let q = footprint_point(p + offset, fp, tap_offset(j, taps));
-                v += visibility(view_at(l, q, sv), q);
+                v += light_visibility(l, view_at(l, q, sv), q);
             }
             v /= f32(taps * taps);
         }
         sum += term * v;
+    }
+    return sum;
+}
+
+// World -> clip of sampled-light shadow layer `layer`.
+fn sample_view(layer: u32) -> mat4x4<f32> {
+    return mat4x4<f32>(
+        textureLoad(sample_views, vec2<u32>(0u, layer), 0),
+        textureLoad(sample_views, vec2<u32>(1u, layer), 0),
+        textureLoad(sample_views, vec2<u32>(2u, layer), 0),
+        textureLoad(sample_views, vec2<u32>(3u, layer), 0),
+    );
+}
+
+// The diffuse lobe of `bsdf_eval` alone (Lambert with its Fresnel coupling).
+fn diffuse_eval(m: Material, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
+    let co = dot(n, wo);
+    let ci = dot(n, wi);
+    if co * ci <= 0.0 || max3(m.diffuse) <= 0.0 {
+        return vec3<f32>(0.0);
+    }
+    let one_minus_avg = vec3<f32>(1.0) - fresnel_avg(m);
+    let num = (vec3<f32>(1.0) - fresnel_spec(m, abs(co))) * (vec3<f32>(1.0) - fresnel_spec(m, abs(ci)));
+    let coupling = select(vec3<f32>(0.0), num / one_minus_avg, one_minus_avg > vec3<f32>(1e-6));
+    return m.diffuse / PI * coupling;
+}
+
+// Lambert's vector irradiance ½ Σ θᵢ·ûᵢ of the triangle `a`, `b`, `c` (relative to the
+// receiver) of unit radiance, clipped to the hemisphere above `n`: its irradiance is
+// |n·Φ|, its direction the mean direction of the light arriving from it.
+fn polygon_vector(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    var tri = array<vec3<f32>, 3>(a, b, c);
+    var v: array<vec3<f32>, 4>;
+    var count = 0u;
+    for (var i = 0u; i < 3u; i++) {
+        let cur = tri[i];
+        let next = tri[(i + 1u) % 3u];
+        let dc = dot(cur, n);
+        let dn = dot(next, n);
+        if dc > 0.0 {
+            v[count] = cur;
+            count++;
+        }
+        if (dc > 0.0) != (dn > 0.0) {
+            v[count] = mix(cur, next, dc / (dc - dn));
+            count++;
+        }
+    }
+    var phi = vec3<f32>(0.0);
+    for (var i = 0u; i < count; i++) {
+        let p0 = normalize(v[i]);
+        let p1 = normalize(v[(i + 1u) % count]);
+        let cr = cross(p0, p1);
+        let l = length(cr);
+        if l > 1e-12 {
+            phi += cr * (atan2(l, dot(p0, p1)) / l);
+        }
+    }
+    return 0.5 * phi;
+}
+
+// The unshadowed diffuse light of the emitter polygons at `p` (see the header).
+fn polygons_diffuse(p: vec3<f32>, ns: vec3<f32>, m: Material, wo: vec3<f32>) -> vec3<f32> {
+    var e = vec3<f32>(0.0);
+    var dir = vec3<f32>(0.0);
+    for (var t = 0u; t < direct_params.polygons; t++) {
+        let t0 = textureLoad(emitter_polygons, vec2<u32>(0u, t), 0);
+        let a = t0.xyz - p;
+        let b = textureLoad(emitter_polygons, vec2<u32>(1u, t), 0).xyz - p;
+        let c = textureLoad(emitter_polygons, vec2<u32>(2u, t), 0).xyz - p;
+        // A one-sided emitter lights its front side only.
+        if t0.w < 0.5 && dot(a, cross(b - a, c - a)) >= 0.0 {
+            continue;
+        }
+        let phi = polygon_vector(a, b, c, ns);
+        let en = dot(ns, phi);
+        let l = textureLoad(emitter_polygons, vec2<u32>(3u, t), 0).xyz;
+        e += l * abs(en);
+        dir += phi * (select(-1.0, 1.0, en >= 0.0) * (l.x + l.y + l.z));
+    }
+    let len = length(dir);
+    if len <= 0.0 {
+        return vec3<f32>(0.0);
+    }
+    return diffuse_eval(m, ns, wo, dir / len) * e;
+}
+
+// The visibility ratio Σ f_d·G·V / Σ f_d·G per channel, 1 where no sample lit the point
+// (nothing known of its visibility).
+fn visible_ratio(lit: vec3<f32>, unshadowed: vec3<f32>) -> vec3<f32> {
+    return select(vec3<f32>(1.0), lit / max(unshadowed, vec3<f32>(1e-30)), unshadowed > vec3<f32>(0.0));
+}
+
+// The light of the points drawn on the emitters and of the directions drawn from the sky
+// at `p` (see the header).
+fn sampled_light(p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, wo: vec3<f32>) -> vec3<f32> {
+    var sum = vec3<f32>(0.0);
+    // Glossy lobe alone (the diffuse one is summed apart for the ratio estimator).
+    var glossy = m;
+    glossy.diffuse = vec3<f32>(0.0);
+    let has_glossy = max3(m.specular) > 0.0;
+    var lit = vec3<f32>(0.0);
+    var unshadowed = vec3<f32>(0.0);
+    for (var i = 0u; i < direct_params.area_count; i++) {
+        let t0 = textureLoad(sample_records, vec2<u32>(0u, i), 0);
+        let to_point = t0.xyz - p;
+        let d2 = dot(to_point, to_point);
+        let wi = to_point * inverseSqrt(d2);
+        let cos_g = dot(wi, ng);
+        if cos_g <= 0.0 {
+            continue;
+        }
+        let t1 = textureLoad(sample_records, vec2<u32>(1u, i), 0);
+        let t3 = textureLoad(sample_records, vec2<u32>(3u, i), 0);
+        var cos_e = -dot(wi, t1.xyz);
+        if t3.x > 0.5 {
+            cos_e = abs(cos_e);
+        }
+        if cos_e <= 0.0 {
+            continue;
+        }
+        let t2 = textureLoad(sample_records, vec2<u32>(2u, i), 0);
+        let g = t2.xyz * (abs(dot(ns, wi)) * cos_e / (d2 + t2.w));
+        let fd = diffuse_eval(m, ns, wo, wi) * g;
+        var fs = vec3<f32>(0.0);
+        if has_glossy {
+            fs = bsdf_eval(glossy, ns, wo, wi) * g;
+        }
+        if max3(fd + fs) <= 0.0 {
+            continue;
+        }
+        let dist = sqrt(d2);
+        let q = p + ng * (t1.w * dist * (1.0 - cos_g) + 1e-4 * dist);
+        let layer = shadow_layer_of(u32(t0.w + 0.5), 6u, q - t0.xyz);
+        let v = shadow_tap(sample_maps, shadow_sampler, sample_view(layer), layer, q);
+        lit += fd * v;
+        unshadowed += fd;
+        sum += fs * v;
+    }
+    if direct_params.ratio != 0u && direct_params.polygons > 0u && max3(m.diffuse) > 0.0 {
+        sum += polygons_diffuse(p, ns, m, wo) * visible_ratio(lit, unshadowed);
+    } else {
+        sum += lit;
+    }
+    if direct_params.sky_count == 0u {
+        return sum;
+    }
+    lit = vec3<f32>(0.0);
+    unshadowed = vec3<f32>(0.0);
+    let end = direct_params.area_count + direct_params.sky_count;
+    for (var i = direct_params.area_count; i < end; i++) {
+        let t0 = textureLoad(sample_records, vec2<u32>(0u, i), 0);
+        let wi = t0.xyz;
+        let cos_g = dot(wi, ng);
+        if cos_g <= 0.0 {
+            continue;
+        }
+        let t1 = textureLoad(sample_records, vec2<u32>(1u, i), 0);
+        let e = t1.xyz * abs(dot(ns, wi));
+        let fd = diffuse_eval(m, ns, wo, wi) * e;
+        var fs = vec3<f32>(0.0);
+        if has_glossy {
+            fs = bsdf_eval(glossy, ns, wo, wi) * e;
+        }
+        if max3(fd + fs) <= 0.0 {
+            continue;
+        }
+        let layer = u32(t0.w + 0.5);
+        let q = p + ng * (t1.w * (1.0 - cos_g) + 0.5 * t1.w);
+        let v = shadow_tap(sample_maps, shadow_sampler, sample_view(layer), layer, q);
+        lit += fd * v;
+        unshadowed += fd;
+        sum += fs * v;
+    }
+    if direct_params.ratio == 0u {
+        return sum + lit;
+    }
+    // The ratio estimator of the diffuse lobe: its unshadowed light in closed form (the
+    // irradiance table; the Fresnel coupling's mean over the incident cosines is 1 − F_avg,
+    // exact for a constant sky) times the sampled visibility ratio.
+    if max3(m.diffuse) > 0.0 {
+        let one_minus_avg = vec3<f32>(1.0) - fresnel_avg(m);
+        let coupling = select(vec3<f32>(0.0), (vec3<f32>(1.0) - fresnel_spec(m, abs(dot(ns, wo)))), one_minus_avg > vec3<f32>(1e-6));
+        let u = m.diffuse / PI * coupling * env_irradiance(ns);
+        sum += u * visible_ratio(lit, unshadowed);
     }
     return sum;
 }

@@ -1,0 +1,469 @@
+//! The direct pass's sampled lights: points drawn on the emitters by power and directions
+//! drawn from the sky, each with its shadow layers in one array of maps a quarter of the
+//! lights' side, their records, and the environment's radiance and irradiance tables.
+//!
+//! The samples are drawn from a seed: the options' seed for ordinary frames (a still view
+//! re-draws and re-renders nothing), a new one per progressive pass (their mean converges
+//! to the emitters' and the sky's exact direct light, bar the shadow maps' own bias).
+//! Shadow layers: six per emitter point (a cube; for a one-sided emitter the faces wholly
+//! behind it are not rendered: they are never looked up), one orthographic view per sky
+//! direction.
+
+use crate::error::{Error, Result};
+use crate::gpu::raw::ViewRaw;
+use crate::gpu::timer::Timer;
+use crate::gpu::{self, GpuContext, Pipelines};
+use crate::raster::direct::{
+    DirectParamsRaw, SampledLightRaw, MAX_POLYGONS, POLYGON_TEXELS, SAMPLE_TEXELS,
+};
+use crate::raster::shadow::{self, CullUnits, ShadowPass};
+use crate::raster::{buffer_init, view_binding, Geometry, VIEW_SIZE};
+use crate::scene::emitters::Emitters;
+use crate::scene::light_views::{self, orthographic_view, CUBE_FACES};
+use crate::scene::{Environment, Scene};
+use bytemuck::Zeroable;
+use glam::{Mat4, Vec3};
+use std::f32::consts::PI;
+
+/// Side of the irradiance table (longitude; half that in latitude).
+const IRRADIANCE_SIDE: u32 = 32;
+/// Extra field of view of the sampled lights' shadow views, in texels on each side.
+const MARGIN_TEXELS: f32 = 4.0;
+
+/// How many lights to draw and where: from the options and the method.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct SampleCounts {
+    /// Points drawn on the emitters per frame.
+    pub area: u32,
+    /// Directions drawn from the sky per frame (0: the method lights the sky otherwise).
+    pub sky: u32,
+    /// Side of their shadow maps.
+    pub size: u32,
+    /// Uncovered samples see the environment (false: the method draws it itself).
+    pub background: bool,
+}
+
+impl SampleCounts {
+    /// The counts `scene` needs: no points without emitters, no directions without sky.
+    pub fn of(scene: &Scene, requested: SampleCounts) -> SampleCounts {
+        let emits = scene.materials.iter().any(|m| m.emits());
+        let sky = scene.environment.is_some();
+        SampleCounts {
+            area: if emits { requested.area } else { 0 },
+            sky: if sky { requested.sky } else { 0 },
+            size: requested.size,
+            background: sky && requested.background,
+        }
+    }
+
+    fn layers(&self) -> u32 {
+        6 * self.area + self.sky
+    }
+}
+
+/// The sampled lights' GPU resources and what was drawn into them.
+pub(crate) struct LightSamples {
+    pub counts: SampleCounts,
+    records: wgpu::Texture,
+    pub records_view: wgpu::TextureView,
+    matrices: wgpu::Texture,
+    pub matrices_view: wgpu::TextureView,
+    views: wgpu::Buffer,
+    view_group: wgpu::BindGroup,
+    layer_views: Vec<wgpu::TextureView>,
+    pub array: wgpu::TextureView,
+    pub env_view: wgpu::TextureView,
+    pub irradiance_view: wgpu::TextureView,
+    pub params: wgpu::Buffer,
+    params_raw: DirectParamsRaw,
+    polygons: wgpu::Texture,
+    pub polygons_view: wgpu::TextureView,
+    /// The emitting triangles (kept until geometry or materials change) and how many of
+    /// them the polygons texture holds (0: their light is sampled only).
+    emitters: Option<(Emitters, u32)>,
+    /// CPU copies of the layers' matrices (for culling), and which layers to render.
+    clip: Vec<Mat4>,
+    render: Vec<bool>,
+    /// The seed and near-field scale of the samples drawn; `None`: to be drawn.
+    drawn: Option<(u64, f32)>,
+    shadows_stale: bool,
+}
+
+/// An `Rgba32Float` texture of `w`×`h` texels, with `data` (row-major) when given.
+fn float_texture(
+    ctx: &GpuContext,
+    label: &str,
+    w: u32,
+    h: u32,
+    data: Option<&[[f32; 4]]>,
+) -> wgpu::Texture {
+    let texture = gpu::create_texture(
+        &ctx.device,
+        &wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba32Float,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            view_formats: &[],
+        },
+    );
+    if let Some(data) = data {
+        write_rows(ctx, &texture, label, w, data);
+    }
+    texture
+}
+
+/// Writes `data` into the first rows of `texture` (`w` texels a row).
+fn write_rows(ctx: &GpuContext, texture: &wgpu::Texture, label: &str, w: u32, data: &[[f32; 4]]) {
+    if data.is_empty() {
+        return;
+    }
+    let rows = data.len() as u32 / w;
+    crate::gpu::alloc::note_upload(label, data.len() as u64 * 16);
+    ctx.queue.write_texture(
+        texture.as_image_copy(),
+        bytemuck::cast_slice(data),
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(w * 16),
+            rows_per_image: Some(rows),
+        },
+        wgpu::Extent3d {
+            width: w,
+            height: rows,
+            depth_or_array_layers: 1,
+        },
+    );
+}
+
+/// The environment's radiance table and its irradiance table (1×1 black without one).
+fn env_tables(ctx: &GpuContext, env: Option<&Environment>) -> (wgpu::Texture, wgpu::Texture) {
+    let rgba =
+        |v: &[Vec3]| -> Vec<[f32; 4]> { v.iter().map(|t| t.extend(0.0).to_array()).collect() };
+    match env {
+        Some(e) => {
+            let (w, h, texels, _) = e.gpu_table();
+            let (iw, ih) = (IRRADIANCE_SIDE, IRRADIANCE_SIDE / 2);
+            let irradiance = e.irradiance_table(iw, ih);
+            (
+                float_texture(ctx, "environment radiance", w, h, Some(&rgba(&texels))),
+                float_texture(
+                    ctx,
+                    "environment irradiance",
+                    iw,
+                    ih,
+                    Some(&rgba(&irradiance)),
+                ),
+            )
+        }
+        None => {
+            let black = [[0.0f32; 4]];
+            (
+                float_texture(ctx, "environment radiance", 1, 1, Some(&black)),
+                float_texture(ctx, "environment irradiance", 1, 1, Some(&black)),
+            )
+        }
+    }
+}
+
+impl LightSamples {
+    /// Resources for `counts` (already fitted to the scene by [`SampleCounts::of`]), or a
+    /// setting error when the GPU cannot hold their shadow maps.
+    pub fn new(ctx: &GpuContext, scene: &Scene, counts: SampleCounts) -> Result<Self> {
+        let device = &ctx.device;
+        let layers = counts.layers().max(1);
+        let max_layers = device.limits().max_texture_array_layers;
+        if layers > max_layers {
+            return Err(Error::setting(
+                "area_samples",
+                format!(
+                    "the sampled lights need {layers} shadow-map layers; the GPU allows {max_layers}"
+                ),
+            ));
+        }
+        let bytes = layers as u64 * counts.size as u64 * counts.size as u64 * 4;
+        crate::memory::check(|| "the sampled lights' shadow maps".to_string(), bytes)?;
+        let rows = (counts.area + counts.sky).max(1);
+        let records = float_texture(ctx, "sampled lights", SAMPLE_TEXELS, rows, None);
+        let matrices = float_texture(ctx, "sampled light matrices", 4, layers, None);
+        let views = buffer_init(
+            ctx,
+            "sampled light views",
+            &vec![0u8; layers as usize * VIEW_SIZE as usize],
+            wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        );
+        let view_group = gpu::create_bind_group(
+            device,
+            &wgpu::BindGroupDescriptor {
+                label: Some("sampled light shadow bind group"),
+                layout: &ShadowPass::get(ctx).layout,
+                entries: &[wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: view_binding(&views),
+                }],
+            },
+        );
+        let (layer_views, array) =
+            shadow::layered_maps(device, "sampled light shadow maps", counts.size, layers);
+        let (env, irradiance) = env_tables(ctx, scene.environment.as_deref());
+        let rows = if counts.area > 0 {
+            MAX_POLYGONS as u32
+        } else {
+            1
+        };
+        let polygons = float_texture(ctx, "emitter polygons", POLYGON_TEXELS, rows, None);
+        let params_raw = DirectParamsRaw::zeroed();
+        let params = buffer_init(
+            ctx,
+            "direct params",
+            bytemuck::bytes_of(&params_raw),
+            wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        );
+        let view = |t: &wgpu::Texture| t.create_view(&Default::default());
+        Ok(LightSamples {
+            counts,
+            records_view: view(&records),
+            records,
+            matrices_view: view(&matrices),
+            matrices,
+            views,
+            view_group,
+            layer_views,
+            array,
+            env_view: view(&env),
+            irradiance_view: view(&irradiance),
+            params,
+            params_raw,
+            polygons_view: view(&polygons),
+            polygons,
+            emitters: None,
+            clip: Vec::new(),
+            render: Vec::new(),
+            drawn: None,
+            shadows_stale: false,
+        })
+    }
+
+    /// The samples are to be drawn again at the next frame (the lights, the geometry or the
+    /// materials changed); `emitters`: the emitting triangles may have changed too.
+    pub fn invalidate(&mut self, emitters: bool) {
+        self.drawn = None;
+        if emitters {
+            self.emitters = None;
+        }
+    }
+
+    /// Draws the samples of `seed` (their near-field discs' radii scaled by `disc_scale`)
+    /// unless they are drawn already, and uploads them; `ratio`: the ratio estimator (not
+    /// in progressive passes, whose mean must converge). True when it drew.
+    pub fn prepare(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &Scene,
+        (seed, disc_scale, ratio): (u64, f32, bool),
+    ) -> bool {
+        let c = self.counts;
+        if c.area + c.sky == 0 || self.drawn == Some((seed, disc_scale)) {
+            return false;
+        }
+        if self.emitters.is_none() && c.area > 0 {
+            let emitters = Emitters::of(scene);
+            let polygons = emitters.polygons(scene, MAX_POLYGONS).unwrap_or_default();
+            let texels: Vec<[f32; 4]> = polygons
+                .iter()
+                .flat_map(|t| {
+                    let [a, b, c] = t.corners;
+                    let side = t.two_sided as u32 as f32;
+                    [
+                        a.extend(side).to_array(),
+                        b.extend(0.0).to_array(),
+                        c.extend(0.0).to_array(),
+                        t.radiance.extend(0.0).to_array(),
+                    ]
+                })
+                .collect();
+            write_rows(
+                ctx,
+                &self.polygons,
+                "emitter polygons",
+                POLYGON_TEXELS,
+                &texels,
+            );
+            self.emitters = Some((emitters, polygons.len() as u32));
+        }
+        let (emitters, polygons) = match &self.emitters {
+            Some((e, n)) => (Some(e), *n),
+            None => (None, 0),
+        };
+        let (lo, hi) = light_views::bounds(scene);
+        let mut records = Vec::new();
+        self.clip.clear();
+        self.render.clear();
+        let points = emitters.map_or_else(Vec::new, |e| e.points(scene, c.area, seed));
+        for p in points {
+            // Just off the emitter, so that its own surface is behind the cube's centre.
+            let origin = p.position + p.normal * (1e-4 * (hi - lo).length());
+            let (faces, texel_scale) = crate::raster::vpl::cube_views(origin, lo, hi, c.size);
+            let first_layer = self.clip.len() as u32;
+            for (m, (forward, up)) in faces.iter().zip(CUBE_FACES) {
+                self.clip.push(*m);
+                self.render
+                    .push(p.two_sided || faces_front(forward, up, p.normal));
+            }
+            records.push(SampledLightRaw::Point {
+                position: origin,
+                first_layer,
+                normal: p.normal,
+                texel_scale,
+                intensity: p.intensity,
+                disc_r2: p.area / PI * disc_scale * disc_scale,
+                two_sided: p.two_sided,
+            });
+        }
+        let area = records.len() as u32;
+        if let Some(env) = scene.environment.as_deref().filter(|_| c.sky > 0) {
+            let grow = 1.0 + 2.0 * MARGIN_TEXELS / c.size as f32;
+            for d in env.directions(c.sky, seed) {
+                let (m, side, _) = orthographic_view(-d.towards, scene.bounds(), grow);
+                records.push(SampledLightRaw::Sky {
+                    towards: d.towards,
+                    layer: self.clip.len() as u32,
+                    irradiance: d.irradiance,
+                    texel: side / c.size as f32,
+                });
+                self.clip.push(m);
+                self.render.push(true);
+            }
+        }
+        let sky = records.len() as u32 - area;
+        let texels: Vec<[f32; 4]> = records.iter().flat_map(|r| r.texels()).collect();
+        write_rows(ctx, &self.records, "sampled lights", SAMPLE_TEXELS, &texels);
+        let columns: Vec<[f32; 4]> = self
+            .clip
+            .iter()
+            .flat_map(|m| m.to_cols_array_2d())
+            .collect();
+        write_rows(ctx, &self.matrices, "sampled light matrices", 4, &columns);
+        let views: Vec<ViewRaw> = self
+            .clip
+            .iter()
+            .map(|m| ViewRaw::new(*m, Vec3::ZERO, 1.0))
+            .collect();
+        if !views.is_empty() {
+            gpu::write_buffer(
+                &ctx.queue,
+                "sampled light views",
+                &self.views,
+                0,
+                bytemuck::cast_slice(&views),
+            );
+        }
+        let params = DirectParamsRaw {
+            polygons,
+            ratio: ratio as u32,
+            ..params_of(scene, c, area, sky)
+        };
+        if params != self.params_raw {
+            gpu::write_buffer(
+                &ctx.queue,
+                "direct params",
+                &self.params,
+                0,
+                bytemuck::bytes_of(&params),
+            );
+            self.params_raw = params;
+        }
+        self.drawn = Some((seed, disc_scale));
+        self.shadows_stale = true;
+        true
+    }
+
+    /// Renders the sampled lights' shadow maps if they were drawn anew (each layer only the
+    /// triangle runs that reach into its view).
+    pub fn record_shadows(
+        &mut self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        timer: &mut Timer,
+        (geometry, cull, masks): (&Geometry, &CullUnits, Option<&wgpu::BindGroup>),
+    ) {
+        if !std::mem::take(&mut self.shadows_stale) {
+            return;
+        }
+        let pass = ShadowPass::get(ctx);
+        let draws = cull.draws(&self.clip);
+        for (layer, view) in self.layer_views.iter().enumerate().take(self.clip.len()) {
+            if !self.render[layer] {
+                continue;
+            }
+            let offset = (layer as u64 * VIEW_SIZE) as u32;
+            let ts = timer.pass("sampled light shadow maps");
+            pass.record(
+                encoder,
+                view,
+                &self.view_group,
+                offset,
+                geometry,
+                draws.get(layer).map(|d| d.as_slice()),
+                masks,
+                ts,
+            );
+        }
+    }
+}
+
+/// Whether any of the cube face (`forward`, `up`)'s frustum lies in front of a surface of
+/// normal `n` (its corner directions, at the margin's widening, reach dot(·, n) > 0).
+fn faces_front(forward: Vec3, up: Vec3, n: Vec3) -> bool {
+    let right = forward.cross(up);
+    let t = 1.1;
+    [(-1.0, -1.0), (-1.0, 1.0), (1.0, -1.0), (1.0, 1.0)]
+        .iter()
+        .any(|(a, b)| (forward + right * (a * t) + up * (b * t)).dot(n) > 0.0)
+}
+
+/// The direct pass's parameters for `area` points and `sky` directions.
+fn params_of(scene: &Scene, c: SampleCounts, area: u32, sky: u32) -> DirectParamsRaw {
+    let (env_cos, env_sin) = scene
+        .environment
+        .as_ref()
+        .map_or((1.0, 0.0), |e| e.rotation());
+    DirectParamsRaw {
+        area_count: area,
+        sky_count: sky,
+        background: c.background as u32,
+        ratio: 0,
+        env_cos,
+        env_sin,
+        polygons: 0,
+        _pad: 0.0,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A one-sided emitter facing down (−y) renders the five faces that see below it and
+    /// skips +y, as one tilted a little; one facing a cube corner needs all six.
+    #[test]
+    fn faces_behind_a_one_sided_emitter_are_skipped() {
+        let faces = |n: Vec3| -> Vec<bool> {
+            CUBE_FACES
+                .iter()
+                .map(|(f, u)| faces_front(*f, *u, n.normalize()))
+                .collect()
+        };
+        let five = [true, true, false, true, true, true];
+        assert_eq!(faces(Vec3::NEG_Y), five);
+        assert_eq!(faces(Vec3::new(0.3, -1.0, 0.2)), five);
+        assert_eq!(faces(Vec3::new(1.0, -1.0, 1.0)), [true; 6]);
+    }
+}
