@@ -73,6 +73,7 @@ fi
 # mostly the same code, which a 256 MiB dictionary finds across files (~11 MB).
 say "building the test binaries"
 rm -rf target/gpu-tests .gpu/tests.tar.xz .gpu/tests && mkdir -p target/gpu-tests/tests
+cargo test -q --release -p gi-core --no-run # its errors readable; then their paths
 cargo test -q --release -p gi-core --no-run --message-format=json 2>/dev/null |
   "$PY" -c '
 import json, sys

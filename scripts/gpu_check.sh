@@ -16,7 +16,8 @@
 # Options: --smoke, --out DIR (everything; default /tmp/gpu-check), --ret DIR (the returned
 # files; default $OUT when set), --parts a,b,c, --budget SECONDS (whole run, default 510),
 # --adapter gpu|cpu, --python EXE, --wheels DIR, --sizes "WxH ...", --photons "N ...",
-# --runs N.
+# --runs N; the parts' limits from GPU_CHECK_CARGO_S (110), GPU_CHECK_PYTEST_S (90) and
+# GPU_CHECK_IMAGES_S (75); frame_bench gets the rest.
 set -euo pipefail
 trap 'echo "gpu_check: line $LINENO failed: $BASH_COMMAND" >&2' ERR
 
@@ -37,7 +38,7 @@ while [ $# -gt 0 ]; do
     --sizes) sizes=$2; shift ;;
     --photons) photons=$2; shift ;;
     --runs) runs=$2; shift ;;
-    -h | --help) sed -n '2,21p' "${BASH_SOURCE[0]}"; exit 0 ;;
+    -h | --help) sed -n '2,23p' "${BASH_SOURCE[0]}"; exit 0 ;;
     *) echo "gpu_check: unknown option $1" >&2; exit 2 ;;
   esac
   shift
@@ -53,7 +54,8 @@ fi
 out=$(realpath -m "$out")
 [ -z "$ret" ] || ret=$(realpath -m "$ret")
 # Seconds per part, of the budget: (a) cargo tests, pytest; (b) images; (c) the rest.
-budget_cargo=110 budget_pytest=90 budget_images=75
+budget_cargo=${GPU_CHECK_CARGO_S:-110} budget_pytest=${GPU_CHECK_PYTEST_S:-90}
+budget_images=${GPU_CHECK_IMAGES_S:-75}
 start=$SECONDS
 deadline=$((start + budget))
 
