@@ -172,7 +172,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
     (out / "renders").mkdir(parents=True, exist_ok=True)
     size, seed = meta["size"], meta["seeds"][0]
     adapter = adapter_line()
-    print(f"adapter: {adapter}\nreferences: {meta['adapter']} (gi {meta['gi']})", flush=True)
+    print(f"{adapter}\nreferences: {meta['adapter']} (gi {meta['gi']})", flush=True)
     if meta["gi"] != gi.__version__:
         print(f"warning: references from gi {meta['gi']}, this is gi {gi.__version__}")
     todo = [c for c in selected(args.cases) if c[0] in meta["cases"]]
@@ -214,7 +214,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
     log.close()
     bad = [r for r in rows if r["verdict"] != "agrees"]
     lines = [
-        f"adapter: {adapter}",
+        adapter,
         f"references: {meta['adapter']} (gi {meta['gi']}), {size[0]}×{size[1]}, seed {seed}",
         "",
         "| case | ran (estimator/first bounce) | reference ran | time (s) | reference time (s) | "
