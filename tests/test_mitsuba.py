@@ -129,7 +129,7 @@ def test_gi_render_reads_mitsuba_xml(tmp_path, cornell_desc):
 
 
 SENSOR = """<sensor type="perspective"><float name="fov" value="40"/>
-<transform name="to_world"><lookat origin="0, 1, 4" target="0, 1, 0"/></transform>
+<transform name="to_world"><lookat origin="0, 1, 4" target="0, 1, 0" up="0, 1, 0"/></transform>
 <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="16"/></film>
 </sensor>"""
 

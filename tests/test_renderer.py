@@ -90,7 +90,7 @@ def test_resize(cornell: gi.Scene) -> None:
         ({"lights": {0: {"intensity": [1, "x", 1]}}}, "lights[0].intensity"),
         ({"lights": {5: {"intensity": [1, 1, 1]}}}, "lights[5]"),
         ({"camera": {"fov": 500}}, "camera.fov"),
-        ({"objects": {"nope": {"translate": [0, 0, 0]}}}, "object"),
+        ({"objects": {"nope": {"translate": [0, 0, 0]}}}, "objects"),
         ({"objects": {0: {"scale": 0}}}, "objects[0].transform.scale"),
         ({"materials": {"nope": {"roughness": 0.5}}}, "materials.nope"),
     ],

@@ -149,7 +149,7 @@ class _Reader:
         uri = img.get("uri")
         if uri is not None and not uri.startswith("data:"):
             return textures.add(self.path.parent / urllib.parse.unquote(uri), colour)
-        key = f"{self.path}#image{i}"
+        key = f"{textures.name(self.path)}#image{i}"
         if (key if colour else f"{key}#linear") in textures.arrays:
             return key if colour else f"{key}#linear"
         if uri is not None:

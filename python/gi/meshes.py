@@ -37,7 +37,10 @@ class AssetWarning(UserWarning):
 
 
 def scene_error(file: str, field: str, reason: str) -> SceneError:
-    err = SceneError(f"{file}: {field}: {reason}")
+    """A :class:`gi.SceneError` with ``file``, ``field`` and ``reason``; a field that names
+    no field (``(file)``, ``(root)``: the whole file) is left out of the message."""
+    where = f"{file}: " if field in ("(file)", "(root)") else f"{file}: {field}: "
+    err = SceneError(f"{where}{reason}")
     err.file = file  # type: ignore[attr-defined]
     err.field = field  # type: ignore[attr-defined]
     err.reason = reason  # type: ignore[attr-defined]
@@ -240,7 +243,19 @@ def load_mesh(
     except MemoryError as e:
         raise OutOfMemoryError(f"{scene_file}: {field}: mesh {path} is too large: {e}") from e
     except Exception as e:  # content the loaders accepted but numpy could not convert
-        raise scene_error(scene_file, field, f"cannot convert mesh {path}: {e!r}") from e
+        raise scene_error(scene_file, field, load_failure(path, e)) from e
+
+
+def load_failure(path: Path, e: BaseException) -> str:
+    """What a mesh reader's exception means to the user: the file is unreadable, truncated
+    or malformed (the reader's own words follow in brackets)."""
+    if isinstance(e, OSError) and not isinstance(e, GiError):
+        return f"cannot read mesh file {path}: {e.strerror or e}"
+    kind = path.suffix.lstrip(".").upper() or "mesh"
+    return (
+        f"{path} is not a valid {kind} file: it is truncated or malformed (the reader"
+        f" stopped with {type(e).__name__}: {e})"
+    )
 
 
 def _entry(
@@ -312,7 +327,7 @@ def _load_trimesh(path: Path, scene_file: str, field: str, textures: TextureSet)
     try:
         loaded = trimesh.load(str(path), force="scene", process=False)
     except Exception as e:  # trimesh raises many types for bad files
-        raise scene_error(scene_file, field, f"cannot load mesh {path}: {e}") from e
+        raise scene_error(scene_file, field, load_failure(path, e)) from e
     notes: dict[str, str] = {}
     mtl: dict[str, dict[str, Any]] = {}
     is_obj = path.suffix.lower() == ".obj"

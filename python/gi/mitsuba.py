@@ -67,6 +67,18 @@ CONDUCTOR_F0 = {
 _IGNORED = {"integrator", "sampler", "rfilter"}  # render settings: gi.render chooses these
 
 
+def coordinate_system(n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Two unit vectors completing the unit vector ``n`` to an orthonormal basis, as Mitsuba
+    3's ``coordinate_system`` builds them (Duff et al. 2017, "Building an orthonormal basis,
+    revisited"): what its ``<lookat>`` takes as ``up`` when none is given."""
+    sign = math.copysign(1.0, n[2])
+    a = -1.0 / (sign + n[2])
+    b = n[0] * n[1] * a
+    s = np.array([1.0 + sign * n[0] * n[0] * a, sign * b, -sign * n[0]])
+    t = np.array([b, sign + n[1] * n[1] * a, -n[1]])
+    return s, t
+
+
 @dataclass
 class Element:
     """One XML element with the line it starts on."""
@@ -120,7 +132,7 @@ class _Translator:
         self.lights: list[dict[str, Any]] = []
         self.camera: dict[str, Any] | None = None
         self.notes: dict[str, str] = {}
-        self.textures = TextureSet()
+        self.textures = TextureSet(path.parent)
         self.environment: dict[str, Any] | None = None
         self.env_images: dict[str, np.ndarray] = {}
 
@@ -327,11 +339,14 @@ class _Translator:
         elif op.tag == "lookat":
             origin = np.array(self.numbers(op, self.attr(op, "origin"), 3))
             target = np.array(self.numbers(op, self.attr(op, "target"), 3))
-            up = np.array(self.numbers(op, self.attr(op, "up", "0, 1, 0"), 3))
+            up = np.array(self.numbers(op, self.attr(op, "up", "0, 0, 0"), 3))
             d = target - origin
             if np.linalg.norm(d) == 0:
                 raise self.error(op, "origin and target must differ")
             d /= np.linalg.norm(d)
+            if not up.any():
+                # No `up` (or a zero one): Mitsuba 3 takes one perpendicular to the view.
+                up = coordinate_system(d)[0]
             left = np.cross(up, d)
             if np.linalg.norm(left) < 1e-9:
                 raise self.error(op, "up must not be parallel to the viewing direction")

@@ -19,8 +19,20 @@ from gi.meshes import MeshEntry, load_mesh
 from gi.meshes import scene_error as _scene_error
 from gi.textures import TextureError, TextureSet
 
-# Material texture fields and whether they hold colours (sRGB-decoded from integer files).
-_TEXTURE_FIELDS = {
+
+class SceneWarning(UserWarning):
+    """A scene that renders, but not as meant: no lights (the image is black), no objects;
+    ``file`` and ``field`` say where."""
+
+    def __init__(self, file: str, field: str, reason: str):
+        super().__init__(f"{file}: {field}: {reason}")
+        self.file = file
+        self.field = field
+        self.reason = reason
+
+
+#: Material texture fields and whether they hold colours (sRGB-decoded from integer files).
+TEXTURE_FIELDS = {
     "diffuse_texture": True,
     "specular_texture": True,
     "roughness_texture": False,
@@ -76,7 +88,7 @@ def scene_from_desc(
     """A scene from a parsed scene description (the JSON format of ``load_scene``), its mesh,
     texture and environment files relative to ``base_dir``; ``source`` names it in
     errors. ``text``: the description as read (used unless texture names are rewritten)."""
-    textures = TextureSet()
+    textures = TextureSet(base_dir)
     meshes = _load_meshes(desc, base_dir, source, textures)
     images = load_environment(desc, base_dir, source)
     if _load_material_textures(desc, base_dir, source, textures) or text is None:
@@ -92,7 +104,7 @@ def _load_material_textures(desc: Any, base_dir: Path, file: str, textures: Text
     for name, mat in (mats or {}).items() if isinstance(mats, dict) else []:
         if not isinstance(mat, dict):
             continue
-        for field, colour in _TEXTURE_FIELDS.items():
+        for field, colour in TEXTURE_FIELDS.items():
             value = mat.get(field)
             if not isinstance(value, str):
                 continue  # the core reports a mistyped field

@@ -132,7 +132,7 @@ fn check_environment(scene: &Scene, method: Method) -> Result<()> {
         "method",
         format!(
             "method `{}` cannot render a scene with an environment light ({how}); \
-             use method `path`",
+             use method `path` or `bidir`",
             method.name()
         ),
     ))
