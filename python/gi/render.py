@@ -210,13 +210,14 @@ class Renderer:
         nothing.
         """
         if camera is not None:
-            self._native.update("camera", None, json.dumps(camera))
+            self._native.update("camera", None, _update_json(camera, "camera"))
         for i, light in (lights or {}).items():
-            self._native.update("light", i, json.dumps(light))
+            self._native.update("light", i, _update_json(light, f"lights[{i}]"))
         for key, transform in (objects or {}).items():
-            self._native.update("object", key, json.dumps(_jsonable(transform)))
+            where = f"objects[{key}].transform"
+            self._native.update("object", key, _update_json(_jsonable(transform), where))
         for name, material in (materials or {}).items():
-            self._native.update("material", name, json.dumps(material))
+            self._native.update("material", name, _update_json(material, f"materials.{name}"))
 
     def resize(self, width: int, height: int) -> None:
         """Changes the image size (render targets are rebuilt at the next frame)."""
@@ -352,6 +353,25 @@ class Renderer:
             seed=seed,
             progress=progress,
         )
+
+
+def _update_json(value: Any, where: str) -> str:
+    """An update's fields as JSON; a NaN or infinite number (which JSON cannot hold) is a
+    :class:`gi.SceneError` naming its field, as the core names the fields it rejects."""
+    try:
+        return json.dumps(value, allow_nan=False)
+    except ValueError:
+        pass
+    from gi.meshes import scene_error
+
+    items = value.items() if isinstance(value, dict) else [("", value)]
+    for key, v in items:
+        try:
+            json.dumps(v, allow_nan=False)
+        except ValueError:
+            field = f"{where}.{key}" if key else where
+            raise scene_error("scene update", field, "must be finite") from None
+    raise scene_error("scene update", where, "must be finite")
 
 
 def _jsonable(value: Any) -> Any:
