@@ -6,13 +6,14 @@ scene and method the ratio of gi's image mean to the reference's and HDR-FLIP.
     .venv/bin/python scripts/lights_reference.py gi        # gi per method -> the table
     .venv/bin/python scripts/lights_reference.py all
 
-The references are committed beside their scenes (`reference.exr`: all light paths;
-`reference-direct.exr`: emission seen by the camera and direct light, what method `direct`
-renders), SIZE×SIZE float EXRs that `tests/test_lights_reference.py` reads; CI never runs
-Mitsuba. Both renderers trace the same light paths: gi's `max_depth` counts scattering
-events, Mitsuba's path segments, so gi's default 64 is Mitsuba's 65 (and `direct`, gi's 1,
-is Mitsuba's 2); Mitsuba's pixel filter is set to a box, as gi's. The reference's own noise
-is estimated from independent batches (its mean's standard error is in the table).
+The references are committed beside their scenes, SIZE×SIZE float EXRs that
+`tests/test_lights_reference.py` reads (CI never runs Mitsuba), one per `max_depth` that
+gi's methods default to: `reference-depth64.exr` (`path`, `photon`, `gather`, `ispm`),
+`reference-depth3.exr` (`bidir`: two indirect bounces) and `reference-depth1.exr` (`direct`:
+emission seen by the camera and direct light). Both renderers trace the same light paths:
+gi's `max_depth` counts scattering events, Mitsuba's path segments, so gi's N is Mitsuba's
+N + 1; Mitsuba's pixel filter is set to a box, as gi's. The reference's own noise is
+estimated from independent batches (its mean's standard error is in the table).
 Mitsuba's `scalar_rgb` variant needs nothing else; `--variant llvm_ad_rgb` needs libLLVM
 19 (e.g. Debian's `libllvm19` unpacked with `dpkg -x`, `DRJIT_LIBLLVM_PATH` pointing at
 `libLLVM-19.so`; versions 14-16 abort).
@@ -36,7 +37,9 @@ SCENES = ROOT / "docs" / "scenes"
 TABLE = ROOT / "docs" / "bench" / "lights.md"
 NAMES = ["cornell-box", "sun-sky", "emissive-room"]
 SIZE = 64
-GI_DEPTH = 64  # gi's default max_depth (scattering events)
+# gi's default max_depth per method (scattering events; `direct` renders direct light: 1)
+# and the Mitsuba samples per pixel of its reference, as a fraction of --spp.
+DEPTHS = {64: 1, 3: 1, 1: 1 / 4}
 METHODS = ["path", "photon", "gather", "direct", "ispm", "bidir"]
 
 # gi's settings per method for the table (converged further than the CI test's).
@@ -54,8 +57,14 @@ def scene_file(name: str) -> Path:
     return SCENES / name / f"{name}.xml"
 
 
-def reference_file(name: str, direct: bool = False) -> Path:
-    return SCENES / name / ("reference-direct.exr" if direct else "reference.exr")
+def reference_file(name: str, depth: int) -> Path:
+    """The reference of `name` at gi's `max_depth` `depth`."""
+    return SCENES / name / f"reference-depth{depth}.exr"
+
+
+def method_depth(renderer) -> int:
+    """The max_depth a gi.Renderer traces (`direct`, which has none, renders direct light)."""
+    return int(renderer.options.get("max_depth", 1))
 
 
 # -- Mitsuba --------------------------------------------------------------------------------
@@ -133,13 +142,11 @@ def write_exr(path: Path, img: np.ndarray) -> None:
 def mitsuba_references(args: argparse.Namespace) -> None:
     out = SCENES / "references.json"
     for name in args.scenes:
-        for direct in (False, True):
-            depth = 2 if direct else GI_DEPTH + 1
-            spp = args.spp // 4 if direct else args.spp
-            per_batch = spp // args.batches
-            img, err, info = render_mitsuba(name, depth, per_batch, args.batches, args.variant)
-            write_exr(reference_file(name, direct), img)
-            key = f"{name}{'-direct' if direct else ''}"
+        for depth in args.depths:
+            per_batch = int(args.spp * DEPTHS[depth]) // args.batches
+            img, err, info = render_mitsuba(name, depth + 1, per_batch, args.batches, args.variant)
+            write_exr(reference_file(name, depth), img)
+            key = f"{name}-depth{depth}"
             meta = json.loads(out.read_text()) if out.exists() else {}
             meta[key] = info
             out.write_text(json.dumps(meta, indent=1, sort_keys=True) + "\n")
@@ -181,6 +188,7 @@ def render_gi(name: str, method: str, settings: dict) -> dict:
         "why": "; ".join(warned),
         "image": img,
         "seconds": time.perf_counter() - t,
+        "depth": method_depth(r),
     }
 
 
@@ -200,15 +208,19 @@ def gi_table(args: argparse.Namespace) -> None:
     meta = json.loads((SCENES / "references.json").read_text())
     rows, warned = [], {}
     for name in args.scenes:
-        refs = {d: gi.read_image(reference_file(name, d))[..., :3] for d in (False, True)}
         for method in args.methods:
             out = render_gi(name, method, GI_SETTINGS[method])
-            ref = refs[method == "direct"]
             if "image" in out:
+                ref = gi.read_image(reference_file(name, out["depth"]))[..., :3]
                 ratio = out["image"].mean() / ref.mean()
-                cells = [f"{ratio:.4f}", f"{flip(ref, out['image']):.3f}", f"{out['seconds']:.1f}"]
+                cells = [
+                    str(out["depth"]),
+                    f"{ratio:.4f}",
+                    f"{flip(ref, out['image']):.3f}",
+                    f"{out['seconds']:.1f}",
+                ]
             else:
-                cells = ["–", "–", "–"]
+                cells = ["–", "–", "–", "–"]
             if out["status"] != "renders":
                 warned.setdefault(method, []).append(f"{name}: {out['why']}")
             rows.append([name, method, out["status"], *cells])
@@ -226,14 +238,16 @@ def write_table(rows: list, warned: dict, meta: dict, args: argparse.Namespace) 
         "The reference scenes of issue 28 (`docs/scenes/`: Mitsuba's own Cornell box with its",
         "area light, a sun-and-sky scene, a room lit by emissive surfaces only), rendered by",
         f"Mitsuba 3 ({first['mitsuba']}, `{first['variant']}`, path tracer) and by gi in each",
-        f"method at {SIZE}×{SIZE}. *ratio*: gi's image mean over the",
-        "reference's (1 is right); *FLIP*: mean HDR-FLIP against the reference (flip-evaluator,",
-        "67 ppd; 0 is identical; it includes the noise of gi's image). Method `direct` is",
-        "compared with a direct-light reference (Mitsuba `max_depth` 2: emission seen by the",
-        "camera and light that reaches a surface straight from a source), every other method",
-        f"with all paths (gi's default `max_depth` {GI_DEPTH}, Mitsuba's {GI_DEPTH + 1}).",
-        "*status*: `renders` (no warning), `warns` (a `gi.RenderWarning`: a kind of light is",
-        "left out, so the ratio measures what is missing) or `refused` (`gi.SettingError`).",
+        f"method at {SIZE}×{SIZE}, each method against the reference of the `max_depth` it",
+        "traces by default (*depth*, scattering events; Mitsuba's `max_depth` is one more:",
+        "64 for all paths, 3 for `bidir`'s two indirect bounces, 1 for `direct`: emission seen",
+        "by the camera and light that reaches a surface straight from a source). *ratio*: gi's",
+        "image mean over the reference's (1 is right); *FLIP*: mean HDR-FLIP against the",
+        "reference (flip-evaluator, 67 ppd; 0 is identical; it includes the noise of gi's",
+        "image). *status*: `renders` (no warning), `warns` (a `gi.RenderWarning`: a kind of",
+        "light is left out, so the ratio measures what is missing) or `refused`",
+        "(`gi.SettingError`). *seconds*: gi's render time on a 2-core machine shared with",
+        "other builds (a rough guide only).",
         "",
         "Command: `.venv/bin/python scripts/lights_reference.py all` (references:",
         "`scripts/lights_reference.py mitsuba`, then gi: `... gi`). gi "
@@ -257,8 +271,8 @@ def write_table(rows: list, warned: dict, meta: dict, args: argparse.Namespace) 
         "",
         "## gi per method",
         "",
-        "| scene | method | status | ratio | FLIP | seconds |",
-        "|---|---|---|---|---|---|",
+        "| scene | method | status | depth | ratio | FLIP | seconds |",
+        "|---|---|---|---|---|---|---|",
     ]
     lines += ["| " + " | ".join(r) + " |" for r in rows]
     if warned:
@@ -274,6 +288,10 @@ def main() -> None:
     ap.add_argument("what", choices=["mitsuba", "gi", "all"])
     ap.add_argument("--scenes", nargs="+", default=NAMES, choices=NAMES)
     ap.add_argument("--methods", nargs="+", default=METHODS, choices=METHODS)
+    ap.add_argument(
+        "--depths", nargs="+", type=int, default=list(DEPTHS), choices=list(DEPTHS),
+        help="gi max_depth of the references to render",
+    )  # fmt: skip
     ap.add_argument("--spp", type=int, default=4096, help="Mitsuba samples per pixel")
     ap.add_argument("--batches", type=int, default=16, help="independent Mitsuba renders")
     ap.add_argument("--variant", default="scalar_rgb", help="Mitsuba variant")

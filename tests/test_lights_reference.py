@@ -2,14 +2,16 @@
 Cornell box (an area light), a sun and a sky, a room lit by emissive surfaces only.
 
 The references are Mitsuba 3 path-traced images, 64×64, committed beside the scenes
-(`scripts/lights_reference.py mitsuba` renders them; CI never runs Mitsuba). Their means are
-known to better than 0.1% (`docs/scenes/references.json`: the standard error of each mean
-from 16 independent batches). Each method that renders a scene without a
-`gi.RenderWarning` (a kind of light it leaves out) must match the reference's image mean:
-`path` within 1%, the others within 3%; method `direct` is compared with the direct-light
-reference (Mitsuba's `max_depth` 2). A method that warns or refuses a scene is skipped, with
-the reason in the summary (`-ra`), so that the table of what renders what stays visible;
-`docs/bench/lights.md` has every method's ratio and FLIP at converged settings.
+(`scripts/lights_reference.py mitsuba` renders them; CI never runs Mitsuba), one per
+`max_depth` that gi's methods trace by default (64; `bidir`'s 3; 1 for `direct`, which
+renders direct light), Mitsuba's `max_depth` one more (it counts path segments, gi
+scattering events). Their means are known to better than 0.1% (`docs/scenes/references.json`:
+the standard error of each mean from 16 independent batches). Each method that renders a
+scene without a `gi.RenderWarning` (a kind of light it leaves out) must match the image
+mean of the reference of its `max_depth`: `path` within 1%, the others within 3%. A method
+that warns or refuses a scene is skipped, with the reason in the summary (`-ra`), so that
+what renders what stays visible; `docs/bench/lights.md` has every method's ratio and FLIP
+at converged settings.
 
 The settings keep the file to about a minute on two cores. `path`'s image mean has a
 standard error (measured over six seeds) of 0.53% in the Cornell box at 256 samples per
@@ -46,26 +48,25 @@ TOLERANCE = {"path": 0.01}  # the others: 0.03
 MORE = {("cornell-box", "path"): {"spp": 1024}}  # see the module doc
 
 
-def reference_file(name: str, direct: bool) -> Path:
-    return SCENES / name / ("reference-direct.exr" if direct else "reference.exr")
+DEPTHS = (64, 3, 1)  # the references' gi max_depth
 
 
-def reference(name: str, direct: bool) -> np.ndarray:
-    return gi.read_image(reference_file(name, direct))[..., :3]
+def reference_file(name: str, depth: int) -> Path:
+    return SCENES / name / f"reference-depth{depth}.exr"
 
 
 def test_references_are_small_and_converged():
     meta = json.loads((SCENES / "references.json").read_text())
     for name in NAMES:
-        for direct in (False, True):
-            key = f"{name}-direct" if direct else name
-            img = reference(name, direct)
+        for depth in DEPTHS:
+            key = f"{name}-depth{depth}"
+            img = gi.read_image(reference_file(name, depth))[..., :3]
             assert img.shape == (SIZE, SIZE, 3) and np.isfinite(img).all()
-            assert reference_file(name, direct).stat().st_size < 80_000
+            assert reference_file(name, depth).stat().st_size < 80_000
             assert img.mean() == pytest.approx(meta[key]["mean"], rel=1e-5)
             # The reference's own noise is well below the tolerances checked against it.
             assert meta[key]["stderr"] < 0.001 * meta[key]["mean"], key
-            assert meta[key]["max_depth"] == (2 if direct else 65)
+            assert meta[key]["max_depth"] == depth + 1
 
 
 @pytest.mark.parametrize("method", gi.methods())
@@ -84,13 +85,16 @@ def test_method_matches_mitsuba(name, method):
     warned = [str(w.message) for w in caught if issubclass(w.category, gi.RenderWarning)]
     if warned:
         pytest.skip(f"`{method}` warns on {name}: {'; '.join(warned)}")
+    depth = int(r.options.get("max_depth", 1))  # `direct` renders direct light
+    if depth not in DEPTHS:
+        pytest.fail(f"no reference for max_depth {depth} (scripts/lights_reference.py)")
     img = r.render().radiance
-    ref = reference(name, direct=method == "direct")
+    ref = gi.read_image(reference_file(name, depth))[..., :3]
     assert np.isfinite(img).all()
     ratio = float(img.mean() / ref.mean())
     assert abs(ratio - 1) <= TOLERANCE.get(method, 0.03), (
-        f"{method} on {name}: image mean {img.mean():.5f}, Mitsuba's {ref.mean():.5f} "
-        f"(ratio {ratio:.4f})"
+        f"{method} on {name}: image mean {img.mean():.5f}, Mitsuba's {ref.mean():.5f} at "
+        f"max_depth {depth} (ratio {ratio:.4f})"
     )
 
 
