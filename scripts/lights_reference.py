@@ -222,7 +222,8 @@ def gi_table(args: argparse.Namespace) -> None:
             else:
                 cells = ["–", "–", "–", "–"]
             if out["status"] != "renders":
-                warned.setdefault(method, []).append(f"{name}: {out['why']}")
+                for why in out["why"].split("; "):
+                    warned.setdefault((method, why), []).append(name)
             rows.append([name, method, out["status"], *cells])
             print(" | ".join(rows[-1]), flush=True)
     write_table(rows, warned, meta, args)
@@ -277,8 +278,9 @@ def write_table(rows: list, warned: dict, meta: dict, args: argparse.Namespace) 
     lines += ["| " + " | ".join(r) + " |" for r in rows]
     if warned:
         lines += ["", "## What the methods left out", ""]
-        for method, whys in warned.items():
-            lines += [f"- `{method}`: " + "; ".join(whys)]
+        lines += ["| method | scenes | warning or refusal |", "|---|---|---|"]
+        for (method, why), names in warned.items():
+            lines += [f"| `{method}` | {', '.join(names)} | {why} |"]
     TABLE.write_text("\n".join(lines) + "\n")
     print(f"wrote {TABLE.relative_to(ROOT)}")
 
