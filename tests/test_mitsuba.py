@@ -146,11 +146,12 @@ def write(tmp_path, body):
         ('<bsdf type="roughdielectric" id="g"/>', '<bsdf type="roughdielectric">', 6),
         ('<shape type="serialized"/>', '<shape type="serialized">', 6),
         (
-            '<shape type="cube">\n<emitter type="area"/></shape>',
-            '<emitter type="area">',
+            '<shape type="cube">\n<emitter type="point"/></shape>',
+            '<emitter type="point">',
             7,
         ),
-        ('<emitter type="directional"/>', '<emitter type="directional">', 6),
+        ('<emitter type="area"/>', '<emitter type="area">', 6),
+        ('<emitter type="sunsky"/>', '<emitter type="sunsky">', 6),
         ('<shape type="cube"><ref id="missing"/></shape>', "<ref>", 6),
         (
             '<shape type="sphere"><float name="radius" value="$r"/></shape>',

@@ -449,6 +449,37 @@ mod tests {
         assert!(e.to_string().contains("colour"), "{e}");
     }
 
+    /// An update that gives a light another `type` replaces the whole light; one that
+    /// gives the same type merges as any other.
+    #[test]
+    fn light_updates_change_the_type() {
+        let mut scene = builtin::load("cornell").expect("scene");
+        let v = |s: &str| serde_json::from_str::<serde_json::Value>(s).expect("json");
+        let sun = r#"{"type": "directional", "direction": [0, -2, 0], "irradiance": [3, 3, 3]}"#;
+        let u = scene
+            .update_from_json(&UpdateTarget::Light(0), &v(sun))
+            .expect("valid");
+        scene.apply(&u).expect("valid");
+        assert!(matches!(
+            scene.lights[0],
+            Light::Directional { direction, .. } if direction == Vec3::NEG_Y
+        ));
+        let u = scene
+            .update_from_json(
+                &UpdateTarget::Light(0),
+                &v(r#"{"type": "directional", "angular_diameter": 2}"#),
+            )
+            .expect("valid");
+        scene.apply(&u).expect("valid");
+        let desc = serde_json::to_value(scene.light_desc(0).expect("light")).expect("json");
+        assert_eq!(desc["irradiance"], v("[3.0, 3.0, 3.0]"));
+        assert!((desc["angular_diameter"].as_f64().expect("f") - 2.0).abs() < 1e-3);
+        let e = scene
+            .update_from_json(&UpdateTarget::Light(0), &v(r#"{"type": "point"}"#))
+            .expect_err("a point light needs its fields");
+        assert!(e.to_string().contains("position"), "{e}");
+    }
+
     /// Updating the camera's position keeps its look-at point and up vector exactly, however
     /// often: going back to the first position gives the first camera bit for bit.
     #[test]
@@ -724,6 +755,9 @@ impl Scene {
                 // Lights are an internally tagged enum, whose errors carry no field path:
                 // name the first field that fails on its own.
                 let light = typed(merged(current.clone()), &prefix).map_err(|e| {
+                    if replaced {
+                        return e;
+                    }
                     for (k, v) in obj {
                         let mut one = current.clone();
                         if let Some(map) = one.as_object_mut() {
