@@ -731,6 +731,9 @@ impl Scene {
                     )
                 })?;
                 let mut current = to_value(serde_json::to_value(desc))?;
+                let replaced = obj
+                    .get("type")
+                    .is_some_and(|t| Some(t) != current.get("type"));
                 if let Some(map) = current.as_object_mut() {
                     // Another type of light keeps the fields the two types share.
                     if let Some(new) = obj.get("type").filter(|t| Some(*t) != map.get("type")) {
