@@ -470,12 +470,15 @@ impl Environment {
     }
 
     /// The irradiance E(n) = ∫ L(ω)·max(0, n·ω) dω on a surface facing `n`, tabulated over
-    /// the environment's own frame as a `w`×`h` equirectangular table (texel centres, the
-    /// mapping of the radiance table; rotate `n` into that frame to look it up): exact for a
-    /// constant colour (πL); for an image, the convolution of its texels averaged down to at
-    /// most 64×32.
+    /// the environment's own frame as a `w`×`h` table: column x at longitude 2π(x + ½)/w (the
+    /// radiance table's), row y at colatitude π·y/(h − 1), so that the first and last rows
+    /// are the poles themselves (a normal at a pole needs no longitude: interpolating
+    /// between rows a half-row off the pole would mix in its neighbours' tilt, 6% too
+    /// bright on a floor under a sun 45° up in a 16-row table). Rotate `n` into that frame
+    /// to look it up. Exact for a constant colour (πL); for an image, the convolution of its
+    /// texels averaged down to at most 64×32 cells.
     pub fn irradiance_table(&self, w: u32, h: u32) -> Vec<Vec3> {
-        let (w, h) = (w.max(1) as usize, h.max(1) as usize);
+        let (w, h) = (w.max(1) as usize, h.max(2) as usize);
         let coarse: Vec<(Vec3, Vec3)> = match &self.source {
             Source::Constant(c) => return vec![*c * (self.scale * PI); w * h],
             Source::Image { image, .. } => coarse_radiance(image, self.scale),
@@ -483,7 +486,7 @@ impl Environment {
         let mut out = Vec::with_capacity(w * h);
         for y in 0..h {
             for x in 0..w {
-                let n = table_direction(x, y, w, h);
+                let n = pole_table_direction(x, y, w, h);
                 let e: glam::DVec3 = coarse
                     .iter()
                     .map(|(d, l)| (l.as_dvec3()) * n.dot(*d).max(0.0) as f64)
@@ -493,6 +496,15 @@ impl Environment {
         }
         out
     }
+}
+
+/// The unit direction (environment frame) of column `x` and row `y` of the `w`×`h`
+/// irradiance table: rows from pole to pole (see [`Environment::irradiance_table`]).
+fn pole_table_direction(x: usize, y: usize, w: usize, h: usize) -> Vec3 {
+    let theta = PI * y as f32 / (h - 1) as f32;
+    let phi = 2.0 * PI * (x as f32 + 0.5) / w as f32;
+    let s = theta.sin();
+    Vec3::new(s * phi.sin(), theta.cos(), -s * phi.cos())
 }
 
 /// The unit direction (environment frame) of texel centre (`x`, `y`) of a `w`×`h`

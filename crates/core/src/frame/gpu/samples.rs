@@ -25,8 +25,8 @@ use bytemuck::Zeroable;
 use glam::{Mat4, Vec3};
 use std::f32::consts::PI;
 
-/// Side of the irradiance table (longitude; half that in latitude).
-const IRRADIANCE_SIDE: u32 = 32;
+/// Columns of the irradiance table (longitude); its rows: half that plus one, pole to pole.
+const IRRADIANCE_SIDE: u32 = 64;
 /// Extra field of view of the sampled lights' shadow views, in texels on each side.
 const MARGIN_TEXELS: f32 = 4.0;
 
@@ -150,7 +150,7 @@ fn env_tables(ctx: &GpuContext, env: Option<&Environment>) -> (wgpu::Texture, wg
     match env {
         Some(e) => {
             let (w, h, texels, _) = e.gpu_table();
-            let (iw, ih) = (IRRADIANCE_SIDE, IRRADIANCE_SIDE / 2);
+            let (iw, ih) = (IRRADIANCE_SIDE, IRRADIANCE_SIDE / 2 + 1);
             let irradiance = e.irradiance_table(iw, ih);
             (
                 float_texture(ctx, "environment radiance", w, h, Some(&rgba(&texels))),

@@ -129,10 +129,12 @@ fn env_radiance(d: vec3<f32>) -> vec3<f32> {
 }
 
 // The environment's irradiance on a surface facing world direction `n`, bilinear in the
-// table (wrapping in longitude, clamped in latitude).
+// table (`Environment::irradiance_table`: columns at the radiance table's longitudes,
+// wrapping; rows from pole to pole).
 fn env_irradiance(n: vec3<f32>) -> vec3<f32> {
     let size = textureDimensions(irradiance_table);
-    let st = env_st(env_local(n), size) - 0.5;
+    let uv = env_st(env_local(n), vec2<u32>(1u, 1u));
+    let st = vec2<f32>(uv.x * f32(size.x) - 0.5, uv.y * f32(size.y - 1u));
     let base = floor(st);
     let f = st - base;
     let w = i32(size.x);
