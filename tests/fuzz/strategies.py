@@ -326,6 +326,8 @@ def render_settings(draw: st.DrawFn) -> dict[str, Any]:
                 "footprint_volumes": pick(st.booleans()),
                 "boundary_compensation": pick(st.booleans()),
                 "edge_supersampling": pick(st.booleans()),
+                "area_samples": pick(st.integers(1, 8)),
+                "sky_samples": pick(st.integers(1, 8)),
                 "volume_shape": pick(st.sampled_from(["auto", "quad", "icosahedron"])),
             },
         )
