@@ -60,15 +60,19 @@ def emitting_cornell() -> gi.Scene:
 
 @pytest.mark.parametrize("method", gi.methods())
 def test_area_lights_are_rendered_or_named(method):
-    """An emitting box: `path` renders it without a word; a method that does not render area
-    lights yet says so (and still renders the rest)."""
+    """An emitting box: `path` and `direct` (its GPU direct light) render it without a word;
+    `ispm` and `bidir` render its direct light and say that their photons or VPLs leave out
+    its indirect light; a method that does not render area lights yet says so (and still
+    renders the rest)."""
     scene = emitting_cornell()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         r = gi.Renderer(scene, method, **gi.method_options(method, **SMALL))
     messages = [str(w.message) for w in caught if issubclass(w.category, gi.RenderWarning)]
-    if method == "path":
+    if method in ("path", "direct"):
         assert messages == []
     for m in messages:
         assert "emitting surfaces" in m and f"`{method}`" in m, m
+        if method in ("ispm", "bidir"):
+            assert "indirect light" in m, m
     assert r.render().radiance.max() > 0
