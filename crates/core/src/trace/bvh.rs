@@ -11,7 +11,6 @@ use obvhs::{
     cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh, cwbvh::CwBvh, ploc::PlocBuilder, ray::Ray,
     triangle::Triangle, BvhBuildParams,
 };
-use rayon::prelude::*;
 use std::collections::HashMap;
 
 /// Peak memory of a BVH build per triangle (bytes): the obvhs triangles, the PLOC build's
@@ -150,7 +149,7 @@ pub struct BuildSettings {
     /// PLOC pairs two nodes only when each is the other's cheapest neighbour, and breaks ties
     /// toward the right: a run of identical boxes (copies of one mesh at one place) merges
     /// one pair per pass into a chain as deep as the copies, quadratic in them (242 copies of
-    /// a 20k-triangle sphere: 33 s). With this set, coincident boxes are moved apart for the
+    /// a 20k-triangle sphere: 33 s). With this set, coincident triangles' boxes are moved apart for the
     /// build ([`separated_boxes`]) so that the copies pair up into a balanced subtree; the
     /// leaves get their exact boxes back (and the tree is refitted) before it is used.
     pub separate_coincident: bool,
@@ -174,8 +173,10 @@ impl std::hash::Hasher for BoxHasher {
         self.0
     }
     fn write(&mut self, bytes: &[u8]) {
-        for b in bytes {
-            self.write_u32(*b as u32);
+        for w in bytes.chunks(4) {
+            let mut word = [0u8; 4];
+            word[..w.len()].copy_from_slice(w);
+            self.write_u32(u32::from_le_bytes(word));
         }
     }
     fn write_u32(&mut self, v: u32) {
@@ -185,45 +186,43 @@ impl std::hash::Hasher for BoxHasher {
     }
 }
 
-/// Each triangle's box, with the boxes of coincident triangles (bitwise equal boxes) moved
+/// The bit pattern of a triangle's vertices: equal for coincident triangles.
+fn vertex_bits(t: &Triangle) -> [u32; 9] {
+    let (a, b, c) = (t.v0.to_array(), t.v1.to_array(), t.v2.to_array());
+    [a[0], a[1], a[2], b[0], b[1], b[2], c[0], c[1], c[2]].map(f32::to_bits)
+}
+
+/// Each triangle's box, with the boxes of coincident triangles (bitwise equal vertices) moved
 /// apart for the build: the k-th of m copies is shifted along the diagonal by k/m of half
 /// its extent, so that PLOC pairs neighbouring copies into a balanced subtree instead of
-/// absorbing them one per pass. `None` when no two boxes are equal.
+/// absorbing them one per pass. `None` when no two triangles are coincident.
 fn separated_boxes(triangles: &[Triangle]) -> Option<Vec<Aabb>> {
-    let key = |b: &Aabb| {
-        let (a, c) = (b.min.to_array(), b.max.to_array());
-        [a[0], a[1], a[2], c[0], c[1], c[2]].map(f32::to_bits)
-    };
-    let boxes: Vec<Aabb> = triangles.iter().map(|t| t.aabb()).collect();
-    // Fast path (most scenes): sorted 64-bit hashes of the boxes all differ, so no two boxes
-    // are equal (a map of every box cost ~40% of the build of 246k triangles).
-    let mut hashes: Vec<u64> = boxes
-        .par_iter()
-        .map(|b| {
-            use std::hash::Hasher;
+    use std::hash::Hasher;
+    // Fast path (most scenes): sorted 64-bit hashes of the triangles all differ.
+    let mut hashes: Vec<u64> = triangles
+        .iter()
+        .map(|t| {
             let mut h = BoxHasher::default();
-            key(b).iter().for_each(|w| h.write_u32(*w));
+            vertex_bits(t).iter().for_each(|w| h.write_u32(*w));
             h.finish()
         })
         .collect();
-    hashes.par_sort_unstable();
+    hashes.sort_unstable();
     if hashes.windows(2).all(|w| w[0] != w[1]) {
         return None;
     }
     drop(hashes);
-    // Per distinct box: (copies, copies seen so far).
-    let mut seen: HashMap<[u32; 6], (u32, u32), std::hash::BuildHasherDefault<BoxHasher>> =
-        HashMap::with_capacity_and_hasher(boxes.len(), Default::default());
-    for b in &boxes {
-        seen.entry(key(b)).or_insert((0, 0)).0 += 1;
+    // Per distinct triangle: (copies, copies seen so far).
+    let mut seen: HashMap<[u32; 9], (u32, u32), std::hash::BuildHasherDefault<BoxHasher>> =
+        HashMap::with_capacity_and_hasher(triangles.len(), Default::default());
+    for t in triangles {
+        seen.entry(vertex_bits(t)).or_insert((0, 0)).0 += 1;
     }
-    if seen.len() == boxes.len() {
-        return None;
-    }
-    let moved = boxes
-        .into_iter()
-        .map(|b| {
-            let Some(e) = seen.get_mut(&key(&b)).filter(|e| e.0 > 1) else {
+    let moved = triangles
+        .iter()
+        .map(|t| {
+            let b = t.aabb();
+            let Some(e) = seen.get_mut(&vertex_bits(t)).filter(|e| e.0 > 1) else {
                 return b;
             };
             let rank = e.1;
@@ -482,7 +481,7 @@ mod tests {
 
     /// 300 coincident copies of 40 random triangles: PLOC alone pairs one copy per pass and
     /// builds a chain (depth ≥ the copies, the quadratic build of the 242-sphere scene);
-    /// with coincident boxes told apart the tree is logarithmic (≤ 4·log2 n), its leaves
+    /// with coincident triangles told apart the tree is logarithmic (≤ 4·log2 n), its leaves
     /// have their exact boxes, and every query finds what brute force finds (the closest
     /// distance; any hit exactly below and none just above it).
     #[test]
