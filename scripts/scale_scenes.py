@@ -4,8 +4,8 @@
 
 Writes into OUT_DIR:
 - `forest.json`: a ground quad and N trees (default 2500), each an object referencing one
-  of U tree meshes (default 50, `meshes/tree_K.obj`, 4,032 triangles each: a 64-segment
-  trunk and a displaced geodesic crown), so ~10M triangles from U unique meshes; every
+  of U tree meshes (default 50, `meshes/tree_K.obj`, 5,248 triangles each: a 64-segment
+  trunk and a displaced geodesic crown), so ~13M triangles from U unique meshes; every
   tree that uses a mesh names the same file (the instancing key of issue 33, item 1).
 - `terrain.json`: one heightfield mesh (`terrain.obj`) of 2·G² unique triangles (default
   G = 1024: 2,097,152 triangles) under a point light.
@@ -83,7 +83,7 @@ def forest(out: Path, trees: int, variants: int, small: bool) -> int:
     (out / "meshes").mkdir(parents=True, exist_ok=True)
     counts = []
     for k in range(variants):
-        verts, faces = tree(rng, 8 if small else 64, 1 if small else 3)
+        verts, faces = tree(rng, 8 if small else 64, 1 if small else 4)
         write_obj(out / "meshes" / f"tree_{k}.obj", verts, faces)
         counts.append(len(faces))
     side = math.ceil(math.sqrt(trees))
