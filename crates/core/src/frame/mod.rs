@@ -114,20 +114,20 @@ pub struct Renderer {
     accum: Option<progressive::Accumulation>,
 }
 
-/// Only `path` and `bidir` light a scene with its environment light so far; the other
-/// methods refuse rather than render the scene without it.
+/// The CPU methods and `bidir` light a scene with its environment light; the other methods
+/// refuse rather than render the scene without it.
 fn check_environment(scene: &Scene, method: Method) -> Result<()> {
-    if scene.environment.is_none() || method == Method::Path {
+    if scene.environment.is_none()
+        || matches!(method, Method::Path | Method::Photon | Method::Gather)
+    {
+        // `photon` and `gather` emit photons from the sky too and see it directly.
         return Ok(());
     }
     if method == Method::Bidir {
         // Seen through the ray bundles (§6); without bundles it would be missing.
         return Ok(());
     }
-    let how = match method {
-        Method::Direct | Method::Ispm => "its GPU passes have no environment light yet",
-        _ => "its photons are emitted by point and spot lights only",
-    };
+    let how = "its GPU passes have no environment light yet";
     Err(Error::setting(
         "method",
         format!(
@@ -145,10 +145,17 @@ fn unrendered_lights(scene: &Scene, method: Method) -> Vec<String> {
     let emitters = scene.materials.iter().any(|m| m.emits());
     let directional = scene.lights.iter().any(|l| !l.is_local());
     let name = method.name();
-    if emitters && method != Method::Path {
+    // The CPU methods render every light; `ispm`'s photons leave emitters too (their
+    // indirect light is there), its GPU direct light does not yet.
+    if emitters && !matches!(method, Method::Path | Method::Photon | Method::Gather) {
+        let missing = if method == Method::Ispm {
+            "their direct light is missing (their indirect light is rendered)"
+        } else {
+            "their light is missing"
+        };
         out.push(format!(
-            "method `{name}` does not render emitting surfaces (area lights) yet: their light \
-             is missing; use method `path`"
+            "method `{name}` does not render emitting surfaces (area lights) yet: {missing}; \
+             use method `path`, `photon` or `gather`"
         ));
     }
     if directional && method.uses_gpu() {
