@@ -739,10 +739,11 @@ fn area_lit_cornell(size: u32, extra: &str) -> Scene {
 
 /// `ispm`'s photons leave emitting surfaces too (their first hits traced on the CPU, the
 /// bounce maps see point and spot lights only): in the area-lit Cornell box, the indirect
-/// AOV's mean is the path tracer's indirect light (all bounces minus max_depth 1: direct
-/// light and the lamp seen) within 5%, with the area light alone and with a point light
+/// AOV's mean is the path tracer's indirect light (all bounces, the default depth 64, minus
+/// max_depth 1: direct light and the lamp seen) within 4%, with the area light alone and with a point light
 /// taking part of the photon budget. The bound: 3% for the kernel estimate as in the
-/// furnace, plus the reference's noise in a difference of two means (about 1%).
+/// furnace, plus the reference's noise in a difference of two means (about 1%); measured
+/// under 1%.
 #[test]
 fn area_light_photons_give_ispm_indirect_light() {
     for extra in [
@@ -767,7 +768,7 @@ fn area_light_photons_give_ispm_indirect_light() {
                 .with("max_depth", depth);
             mean(&run(&scene, &s).radiance)
         };
-        let reference = path(5) - path(1);
+        let reference = path(64) - path(1);
         let rel = (indirect / reference - DVec3::ONE).abs();
         eprintln!(
             "area-lit cornell (extra: {extra:?}): ispm indirect {indirect:?} vs path {reference:?}: \
@@ -775,6 +776,6 @@ fn area_light_photons_give_ispm_indirect_light() {
             out.stats
         );
         assert!(out.stats.photons_emitted > 0);
-        assert!(rel.max_element() < 0.05, "{indirect:?} vs {reference:?}");
+        assert!(rel.max_element() < 0.04, "{indirect:?} vs {reference:?}");
     }
 }

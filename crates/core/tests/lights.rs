@@ -494,3 +494,118 @@ fn photon_and_gather_match_path_under_an_image_environment() {
         Scene::from_json_with_images(json, "env-test", &HashMap::new(), &images).expect("scene");
     photon_methods_match_path(&s, 256, 800_000, |_| false);
 }
+
+/// Bad input that reaches the light code renders finite images: emitters of zero area
+/// (a mesh of degenerate triangles, collinear and with coincident corners, which the
+/// scene format lets through from mesh files, and a quad scaled to 10⁻⁶ m, the smallest
+/// scale the format takes: nothing or next to nothing to sample, they emit nothing), and
+/// lights enclosed by a closed mesh (a point light and an emitting sphere
+/// inside a closed box seen from outside: every photon and light path stays inside, the
+/// box's outside is black), in every CPU method.
+#[test]
+fn degenerate_and_enclosed_lights_render_finite_images() {
+    let flat = gi_core::scene::MeshData {
+        mesh: gi_core::scene::primitives::TriMesh {
+            positions: vec![
+                Vec3::new(0.0, 1.0, 0.0),
+                Vec3::new(0.5, 1.0, 0.0),
+                Vec3::new(1.0, 1.0, 0.0),
+                Vec3::new(0.0, 1.0, 0.0),
+            ],
+            normals: Vec::new(),
+            indices: vec![[0, 1, 2], [0, 3, 1], [2, 2, 2]],
+        },
+        materials: Vec::new(),
+        face_materials: Vec::new(),
+        material_textures: Vec::new(),
+        uvs: Vec::new(),
+    };
+    let degenerate = Scene::from_json(
+        r#"{
+        "camera": {"position": [0, 1, 4], "look_at": [0, 0, 0], "width": 12, "height": 12},
+        "materials": {"floor": {"diffuse": [0.5, 0.5, 0.5]},
+                      "lamp": {"diffuse": [0, 0, 0], "emission": [5, 5, 5], "two_sided": true}},
+        "objects": [
+            {"shape": {"type": "quad", "size": [4, 4]}, "material": "floor"},
+            {"shape": {"type": "mesh", "file": "flat.obj"}, "material": "lamp"},
+            {"shape": {"type": "quad", "size": [1, 1]}, "material": "lamp",
+             "transform": {"translate": [0, 1, 0], "scale": 1e-6}}
+        ]
+    }"#,
+        "lights-test",
+        &HashMap::from([("flat.obj".to_string(), flat)]),
+    )
+    .expect("scene");
+    let enclosed = scene(
+        r#"{
+        "camera": {"position": [0, 1, 4], "look_at": [0, 0, 0], "width": 12, "height": 12},
+        "lights": [{"type": "point", "position": [0.2, 0, 0], "intensity": [3, 3, 3]}],
+        "materials": {"box": {"diffuse": [0.8, 0.8, 0.8]},
+                      "lamp": {"diffuse": [0, 0, 0], "emission": [5, 5, 5]},
+                      "glass": {"diffuse": [0, 0, 0], "transmission": [1, 1, 1]}},
+        "objects": [
+            {"shape": {"type": "box", "size": [1, 1, 1]}, "material": "box"},
+            {"shape": {"type": "sphere", "radius": 0.1, "subdivisions": 1}, "material": "lamp",
+             "transform": {"translate": [-0.2, 0, 0]}},
+            {"shape": {"type": "sphere", "radius": 0.1, "subdivisions": 1}, "material": "glass",
+             "transform": {"translate": [0, 0.2, 0]}}
+        ]
+    }"#,
+    );
+    for options in [
+        gi_core::options!(Path, spp: 4),
+        gi_core::options!(Photon, spp: 1, photons: 20_000),
+        gi_core::options!(Gather, spp: 1, photons: 20_000),
+    ] {
+        for (name, s) in [("degenerate", &degenerate), ("enclosed", &enclosed)] {
+            let out = render(s, &options, &Silent).unwrap();
+            assert!(
+                out.radiance.pixels.iter().all(|p| p.is_finite()),
+                "{name}: {:?}",
+                options.method()
+            );
+            if name == "enclosed" {
+                let m = mean(&out.radiance);
+                assert!(
+                    m == DVec3::ZERO,
+                    "{:?}: outside of a closed box {m:?}",
+                    options.method()
+                );
+            }
+        }
+    }
+}
+
+/// 163 840 emitting triangles (two finely tessellated spheres of many colours) render in
+/// every CPU method: the light BVH is built once per frame (0.2 s here, docs/bench/
+/// light-sampling.md) and the image is finite.
+#[test]
+fn many_emitting_triangles_render() {
+    let s = scene(
+        r#"{
+        "camera": {"position": [0, 1, 4], "look_at": [0, 0.5, 0], "width": 8, "height": 8},
+        "materials": {"floor": {"diffuse": [0.5, 0.5, 0.5]},
+                      "a": {"diffuse": [0.2, 0.2, 0.2], "emission": [2, 1, 0.5]},
+                      "b": {"diffuse": [0.2, 0.2, 0.2], "emission": [0.5, 1, 2]}},
+        "objects": [
+            {"shape": {"type": "quad", "size": [6, 6]}, "material": "floor"},
+            {"shape": {"type": "sphere", "radius": 0.4, "subdivisions": 6}, "material": "a",
+             "transform": {"translate": [-0.6, 0.5, 0]}},
+            {"shape": {"type": "sphere", "radius": 0.4, "subdivisions": 6}, "material": "b",
+             "transform": {"translate": [0.6, 0.5, 0]}}
+        ]
+    }"#,
+    );
+    assert!(gi_core::scene::Emitters::of(&s).len() >= 100_000);
+    for options in [
+        gi_core::options!(Path, spp: 2, max_depth: 3),
+        gi_core::options!(Photon, spp: 1, photons: 20_000, max_depth: 3),
+        gi_core::options!(Gather, spp: 1, photons: 20_000, max_depth: 3),
+    ] {
+        let t = std::time::Instant::now();
+        let out = render(&s, &options, &Silent).unwrap();
+        eprintln!("{:?}: {:.2} s", options.method(), t.elapsed().as_secs_f64());
+        assert!(out.radiance.pixels.iter().all(|p| p.is_finite()));
+        assert!(mean(&out.radiance).x > 0.0);
+    }
+}

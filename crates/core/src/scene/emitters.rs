@@ -202,11 +202,18 @@ pub enum Selection {
     Bvh,
 }
 
-/// Emitting triangles from which the BVH pays (docs/bench/light-sampling.md): with fewer,
-/// the power alias table's constant-time choice costs less than the tree's descent for
-/// about the same noise; with more, small and distant emitters make the power choice waste
-/// most samples on lights far from the point.
-pub const BVH_MIN_EMITTERS: usize = 64;
+/// Emitting triangles from which the light BVH may pay (docs/bench/light-sampling.md): a
+/// lamp of one or two triangles gains nothing from the tree's descent, which costs more
+/// than the alias table's constant-time choice.
+pub const BVH_MIN_EMITTERS: usize = 8;
+
+/// The emitters' spread (the diagonal of their bounding box over the scene's) from which
+/// the light BVH pays (docs/bench/light-sampling.md): emitters in one compact lamp (a
+/// tessellated sphere, 9% of the room) are about equally far from every point, and the
+/// BVH's choice by orientation halved their error at 2.5 times the cost; spread out, the
+/// power choice wastes most samples on lights far from the point (3–7 times less efficient
+/// from 8 scattered triangles on).
+pub const BVH_MIN_SPREAD: f32 = 0.25;
 
 /// The emitting triangles of a scene with a way to choose one for a shading point.
 #[derive(Clone, Debug)]
@@ -219,7 +226,10 @@ pub struct EmitterSampler {
 impl EmitterSampler {
     /// The emitters of `scene`, chosen by `selection`.
     pub fn new(scene: &Scene, selection: Selection) -> Self {
-        let emitters = Emitters::of(scene);
+        EmitterSampler::of_emitters(scene, Emitters::of(scene), selection)
+    }
+
+    fn of_emitters(scene: &Scene, emitters: Emitters, selection: Selection) -> Self {
         let bvh = if selection == Selection::Bvh {
             let bounds: Vec<LightBounds> = emitters
                 .triangles
@@ -244,20 +254,25 @@ impl EmitterSampler {
         }
     }
 
-    /// The emitters of `scene` with the choice that pays for their number: the BVH from
-    /// [`BVH_MIN_EMITTERS`] triangles, the power table below.
+    /// The emitters of `scene` with the choice that pays for them: the BVH from
+    /// [`BVH_MIN_EMITTERS`] triangles spread over at least [`BVH_MIN_SPREAD`] of the scene,
+    /// the power table otherwise.
     pub fn auto(scene: &Scene) -> Self {
-        let count = scene
-            .triangle_materials
+        let emitters = Emitters::of(scene);
+        let (lo, hi) = emitters
+            .triangles
             .iter()
-            .filter(|&&m| scene.materials[m as usize].emits())
-            .count();
-        let selection = if count >= BVH_MIN_EMITTERS {
+            .flat_map(|&t| scene.triangle(t as usize))
+            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
+                (lo.min(p), hi.max(p))
+            });
+        let spread = (hi - lo).length() / (2.0 * scene.bounds().radius);
+        let selection = if emitters.len() >= BVH_MIN_EMITTERS && spread >= BVH_MIN_SPREAD {
             Selection::Bvh
         } else {
             Selection::Power
         };
-        EmitterSampler::new(scene, selection)
+        EmitterSampler::of_emitters(scene, emitters, selection)
     }
 
     pub fn selection(&self) -> Selection {
