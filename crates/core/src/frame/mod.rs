@@ -132,7 +132,7 @@ fn check_environment(scene: &Scene, method: Method) -> Result<()> {
         "method",
         format!(
             "method `{}` cannot render a scene with an environment light ({how}); \
-             use method `path`",
+             use method `path` or `bidir`",
             method.name()
         ),
     ))
@@ -167,6 +167,31 @@ fn unrendered_lights(scene: &Scene, method: Method) -> Vec<String> {
     out
 }
 
+/// Light transport `options` ask for that their method does not compute, one message each
+/// (they become `gi.RenderWarning`s).
+fn transport_omissions(scene: &Scene, options: &RenderOptions) -> Vec<String> {
+    let mut out = Vec::new();
+    if let MethodOptions::Bidir(o) = &options.method {
+        if o.max_depth > 3 {
+            out.push(format!(
+                "method `bidir` computes one- and two-bounce indirect light only: max_depth {} \
+                 asks for {} more bounce(s), which are missing (use max_depth 3, or method \
+                 `ispm` or `path` for more)",
+                o.max_depth,
+                o.max_depth - 3
+            ));
+        }
+        if scene.has_delta_materials() {
+            out.push(
+                "method `bidir` traces mirrors and glass seen by the camera with direct light \
+                 only: the indirect light seen through them is missing"
+                    .to_string(),
+            );
+        }
+    }
+    out
+}
+
 /// Most refits before the BVH is built anew (a refitted tree keeps its topology and slows
 /// down as objects travel).
 const MAX_REFITS: u32 = 16;
@@ -192,7 +217,8 @@ impl Renderer {
             options.common.height.unwrap_or(scene.camera.height),
         );
         options::check_image_memory(&camera, method)?;
-        let warnings = unrendered_lights(scene, method);
+        let mut warnings = unrendered_lights(scene, method);
+        warnings.extend(transport_omissions(scene, options));
         Ok(Renderer {
             scene: Scene {
                 camera,

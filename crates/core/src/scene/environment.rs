@@ -249,7 +249,7 @@ impl Environment {
         if env.max_radiance() > MAX_RADIANCE {
             return err(
                 "intensity",
-                "radiance times intensity must be at most 1e10 per channel (MAX_RADIANCE)",
+                "radiance times intensity must be at most 1e10 per channel",
             );
         }
         env.importance = d.importance;

@@ -291,10 +291,7 @@ impl Scene {
                 object_mesh(&obj.shape, meshes).map_err(|(f, m)| err(at(&f), &m))?;
             validate_mesh(&mesh).map_err(|m| err(at("shape"), &m))?;
             if scene.positions.len() + mesh.positions.len() > MAX_VERTICES {
-                return Err(err(
-                    at("shape"),
-                    "the scene would exceed 2^32 - 1 vertices (MAX_VERTICES)",
-                ));
+                return Err(err(at("shape"), "the scene would exceed 2^32 - 1 vertices"));
             }
             validate_placed(&mesh, xf).map_err(|(f, m)| err(at(&f), &m))?;
             let smoothing = smoothing(obj.smooth).map_err(|m| err(at("smooth"), m))?;
@@ -349,6 +346,9 @@ impl Scene {
                 }
             }
             scene.append(obj.name.clone(), &mesh, xf, &tri_mats, &uvs);
+            if let Some(o) = scene.objects.last_mut() {
+                o.described = Some(obj.transform.clone());
+            }
         }
         if let Some(anim) = &desc.animation {
             scene.animation = Some(Animation::from_desc(anim, desc, &scene, source_name)?);
@@ -393,6 +393,7 @@ impl Scene {
             flipped: flip,
             local_positions: mesh.positions.clone(),
             local_normals: mesh.normals.clone(),
+            described: None,
         };
         object.place(&mut self.positions, &mut self.normals);
         self.objects.push(object);
@@ -486,7 +487,7 @@ pub(crate) fn camera_from_desc(
     }
     for (name, v) in [("position", c.position), ("look_at", c.look_at)] {
         if !within_extent(v) {
-            return Err((name.into(), "must lie within ±100000 m (MAX_EXTENT)"));
+            return Err((name.into(), "must lie within ±100000 m"));
         }
     }
     let (pos, at, up) = (
@@ -519,10 +520,7 @@ fn check_intensity(v: V3) -> std::result::Result<Vec3, FieldError> {
         return Err(("intensity".into(), "must be finite and non-negative"));
     }
     if v.iter().any(|x| *x > MAX_INTENSITY) {
-        return Err((
-            "intensity".into(),
-            "must be at most 1e10 W/sr per channel (MAX_INTENSITY)",
-        ));
+        return Err(("intensity".into(), "must be at most 1e10 W/sr per channel"));
     }
     Ok(Vec3::from(v))
 }
@@ -532,7 +530,7 @@ fn check_light_position(v: V3) -> std::result::Result<Vec3, FieldError> {
         return Err(("position".into(), "must be finite"));
     }
     if !within_extent(v) {
-        return Err(("position".into(), "must lie within ±100000 m (MAX_EXTENT)"));
+        return Err(("position".into(), "must lie within ±100000 m"));
     }
     Ok(Vec3::from(v))
 }
@@ -561,11 +559,16 @@ pub(crate) fn light_from_desc(l: &LightDesc) -> std::result::Result<Light, Field
             if !finite3(direction) || d.length() < 1e-6 {
                 return Err(("direction".into(), "must be finite and non-zero"));
             }
+            let (inner_angle, outer_angle) = desc::spot_angles(inner_angle, outer_angle);
             if !(outer_angle > 0.0 && outer_angle < 90.0) {
                 return Err(("outer_angle".into(), "must be in (0, 90) degrees"));
             }
             if !(inner_angle >= 0.0 && inner_angle <= outer_angle) {
-                return Err(("inner_angle".into(), "must be in [0, outer_angle] degrees"));
+                return Err((
+                    "inner_angle".into(),
+                    "must be in [0, outer_angle] degrees (the angle of full intensity \
+                     lies within the cone's outer angle)",
+                ));
             }
             Ok(Light::Spot {
                 position,
@@ -656,7 +659,7 @@ pub(crate) fn transform_matrix(t: &desc::TransformDesc) -> std::result::Result<M
         return Err(("translate".into(), "must be finite"));
     }
     if !within_extent(t.translate) {
-        return Err(("translate".into(), "must lie within ±100000 m (MAX_EXTENT)"));
+        return Err(("translate".into(), "must lie within ±100000 m"));
     }
     if !finite3(t.rotate) {
         return Err(("rotate".into(), "must be finite"));
@@ -671,7 +674,7 @@ pub(crate) fn transform_matrix(t: &desc::TransformDesc) -> std::result::Result<M
     if scale.abs().max_element() > MAX_SCALE || scale.abs().min_element() < 1.0 / MAX_SCALE {
         return Err((
             "scale".into(),
-            "each factor's magnitude must be in [1e-6, 1e6] (MAX_SCALE)",
+            "each factor's magnitude must be in [1e-6, 1e6]",
         ));
     }
     let [rx, ry, rz] = t.rotate.map(f32::to_radians);
@@ -689,7 +692,7 @@ fn primitive(shape: &ShapeDesc) -> std::result::Result<TriMesh, FieldError> {
         if !(v.is_finite() && v > 0.0) {
             Err((name.to_string(), "must be positive and finite"))
         } else if v > MAX_EXTENT {
-            Err((name.to_string(), "must be at most 100000 m (MAX_EXTENT)"))
+            Err((name.to_string(), "must be at most 100000 m"))
         } else {
             Ok(v)
         }
@@ -762,10 +765,7 @@ fn primitive(shape: &ShapeDesc) -> std::result::Result<TriMesh, FieldError> {
 fn validate_placed(m: &TriMesh, xf: Mat4) -> std::result::Result<(), (String, String)> {
     let outside = |p: Vec3| !(p.is_finite() && p.abs().max_element() <= MAX_EXTENT);
     if let Some(i) = m.positions.iter().position(|p| outside(*p)) {
-        return Err((
-            "shape".into(),
-            format!("vertex {i} lies outside ±100000 m (MAX_EXTENT)"),
-        ));
+        return Err(("shape".into(), format!("vertex {i} lies outside ±100000 m")));
     }
     if let Some(i) = m
         .positions
@@ -774,7 +774,7 @@ fn validate_placed(m: &TriMesh, xf: Mat4) -> std::result::Result<(), (String, St
     {
         return Err((
             "transform".into(),
-            format!("places vertex {i} outside ±100000 m (MAX_EXTENT)"),
+            format!("places vertex {i} outside ±100000 m"),
         ));
     }
     Ok(())

@@ -45,9 +45,16 @@ impl MaterialMaps {
             match name {
                 None => Ok(None),
                 Some(n) => index.get(n).copied().map(Some).ok_or_else(|| {
+                    let mut loaded: Vec<&str> = index.keys().map(String::as_str).collect();
+                    loaded.sort_unstable();
+                    let loaded = if loaded.is_empty() {
+                        "none".to_string()
+                    } else {
+                        loaded.join(", ")
+                    };
                     (
                         field.to_string(),
-                        format!("no texture named `{n}` was loaded"),
+                        format!("no texture named `{n}` was loaded (loaded: {loaded})"),
                     )
                 }),
             }
