@@ -2,6 +2,9 @@
 //!
 //! The generator is PCG32 seeded from a hash of (seed, stream, index), so every pixel sample
 //! and every light path draws from its own reproducible sequence whatever the thread schedule.
+//! A generator made by [`Rng::sobol`] instead draws its `next_f32`/`next_2d` values from a
+//! padded, Owen-scrambled Sobol sequence ([`SobolSampler`]): low-discrepancy per pixel, for
+//! the path tracer's camera and bounce dimensions.
 
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
@@ -23,11 +26,13 @@ pub fn hash3(a: u32, b: u32, c: u32) -> u32 {
     hash_u32(a ^ hash_u32(b ^ hash_u32(c)))
 }
 
-/// PCG32 (O'Neill), one stream per generator.
+/// PCG32 (O'Neill), one stream per generator; optionally a low-discrepancy sampler for the
+/// `f32` draws ([`Rng::sobol`]).
 #[derive(Clone, Debug)]
 pub struct Rng {
     state: u64,
     inc: u64,
+    sobol: Option<SobolSampler>,
 }
 
 impl Rng {
@@ -37,6 +42,7 @@ impl Rng {
         let mut rng = Rng {
             state: 0,
             inc: (splitmix64(index ^ s) << 1) | 1,
+            sobol: None,
         };
         rng.next_u32();
         rng.state = rng.state.wrapping_add(s);
@@ -55,16 +61,128 @@ impl Rng {
         xorshifted.rotate_right(rot)
     }
 
+    /// A generator whose `next_f32` and `next_2d` draw sample `index` of pixel `pixel` from
+    /// a padded Owen-scrambled Sobol sequence ([`SobolSampler`]) under `seed`; `next_u32`
+    /// stays PCG32 (the generator of [`Rng::new`] for the same arguments).
+    pub fn sobol(seed: u64, pixel: u64, index: u32) -> Self {
+        let mut rng = Rng::new(seed, pixel, index as u64);
+        rng.sobol = Some(SobolSampler::new(seed, pixel, index));
+        rng
+    }
+
+    /// Moves a low-discrepancy generator to dimension `dim` (or leaves it where it is when
+    /// it has already passed it, so that no dimension is drawn twice); the path tracer gives
+    /// each bounce its own dimensions so that bounce `k` of every sample of a pixel draws
+    /// from the same well-distributed point set. A plain PCG32 generator ignores it.
+    #[inline]
+    pub fn start_dimension(&mut self, dim: u32) {
+        if let Some(s) = &mut self.sobol {
+            s.dim = s.dim.max(dim);
+        }
+    }
+
     /// Uniform in [0, 1).
     #[inline]
     pub fn next_f32(&mut self) -> f32 {
-        (self.next_u32() >> 8) as f32 * (1.0 / 16_777_216.0)
+        if let Some(s) = &mut self.sobol {
+            return s.next_1d();
+        }
+        u32_to_unit(self.next_u32())
     }
 
     #[inline]
     pub fn next_2d(&mut self) -> Vec2 {
+        if let Some(s) = &mut self.sobol {
+            return s.next_2d();
+        }
         Vec2::new(self.next_f32(), self.next_f32())
     }
+}
+
+#[inline]
+fn u32_to_unit(x: u32) -> f32 {
+    (x >> 8) as f32 * (1.0 / 16_777_216.0)
+}
+
+/// A padded Owen-scrambled Sobol sampler (Burley 2020, "Practical Hash-based Owen
+/// Scrambling"; pbrt-v4's `PaddedSobolSampler`): every 1D or 2D draw takes the first one or
+/// two Sobol dimensions (a (0,2)-sequence) of the sample's index, the index shuffled per
+/// pixel and draw by a nested uniform scramble (so that the first 2^k samples of a pixel are
+/// an aligned block of the sequence, a (0,k,2)-net) and the point Owen-scrambled per pixel
+/// and draw. Each draw is thus uniform and independent of the other draws of the sample,
+/// while the `spp` samples of one draw are stratified: for power-of-two sample counts, every
+/// elementary interval of area 1/spp holds one point.
+#[derive(Clone, Debug)]
+pub struct SobolSampler {
+    seed: u32,
+    index: u32,
+    dim: u32,
+}
+
+impl SobolSampler {
+    pub fn new(seed: u64, pixel: u64, index: u32) -> Self {
+        let h = splitmix64(seed ^ splitmix64(pixel ^ 0x5851_f42d_4c95_7f2d));
+        SobolSampler {
+            seed: (h ^ (h >> 32)) as u32,
+            index,
+            dim: 0,
+        }
+    }
+
+    /// The shuffled index and two scrambling seeds of the next draw.
+    #[inline]
+    fn draw(&mut self) -> (u32, u32, u32) {
+        let h = hash3(self.seed, self.dim, 0x68e3_1da4);
+        let index = nested_uniform_scramble(self.index, h);
+        (index, hash_u32(h ^ 0xb529_7a4d), hash_u32(h ^ 0x1b56_c4e9))
+    }
+
+    #[inline]
+    pub fn next_1d(&mut self) -> f32 {
+        let (i, s0, _) = self.draw();
+        self.dim += 1;
+        u32_to_unit(nested_uniform_scramble(i.reverse_bits(), s0))
+    }
+
+    #[inline]
+    pub fn next_2d(&mut self) -> Vec2 {
+        let (i, s0, s1) = self.draw();
+        self.dim += 2;
+        Vec2::new(
+            u32_to_unit(nested_uniform_scramble(i.reverse_bits(), s0)),
+            u32_to_unit(nested_uniform_scramble(sobol_dim1(i), s1)),
+        )
+    }
+}
+
+/// The second dimension of the Sobol sequence (primitive polynomial x + 1, all initial
+/// direction numbers 1) at `index`, as a 32-bit binary fraction.
+#[inline]
+pub fn sobol_dim1(mut index: u32) -> u32 {
+    let mut v = 1u32 << 31;
+    let mut x = 0;
+    while index != 0 {
+        if index & 1 != 0 {
+            x ^= v;
+        }
+        index >>= 1;
+        v ^= v >> 1;
+    }
+    x
+}
+
+/// Owen scrambling of a 32-bit binary fraction: each bit flipped by a hash of `seed` and
+/// the bits above it (Burley 2020's hash-based nested uniform scramble: a Laine-Karras style
+/// permutation, in which every bit depends only on the bits below it, of the reversed bits).
+#[inline]
+pub fn nested_uniform_scramble(x: u32, seed: u32) -> u32 {
+    let mut v = x.reverse_bits();
+    v = v.wrapping_add(seed);
+    v ^= v.wrapping_mul(0x6c50_b47c);
+    v ^= v.wrapping_mul(0xb82f_1e52);
+    v ^= v.wrapping_mul(0xc7af_e638);
+    v ^= v.wrapping_mul(0x8d22_f6e6);
+    v.reverse_bits()
 }
 
 fn splitmix64(mut z: u64) -> u64 {
@@ -291,6 +409,78 @@ mod tests {
         // Mean of U(0,1): sigma = 1/sqrt(12 n) ~ 0.0009; allow 5 sigma.
         assert!((mean / n as f64 - 0.5).abs() < 0.0046);
         assert!(same_as_c < 10);
+    }
+
+    /// Every elementary interval of area 1/2^k (2^a × 2^(k-a) cells) holds exactly one of
+    /// the first 2^k points of a pixel's 2D draw: the shuffled, scrambled sequence is a
+    /// (0,k,2)-net for every draw, pixel and power-of-two sample count.
+    #[test]
+    fn sobol_draws_are_nets() {
+        for k in [2u32, 4, 6, 8] {
+            let n = 1u32 << k;
+            for (pixel, draws) in [(0u64, 1usize), (17, 3), (123_456, 6)] {
+                let points: Vec<Vec<Vec2>> = (0..n)
+                    .map(|i| {
+                        let mut rng = Rng::sobol(5, pixel, i);
+                        (0..draws).map(|_| rng.next_2d()).collect()
+                    })
+                    .collect();
+                for d in 0..draws {
+                    for a in 0..=k {
+                        let (nx, ny) = (1u32 << a, 1u32 << (k - a));
+                        let mut cells = vec![0u32; n as usize];
+                        for p in &points {
+                            let (x, y) = ((p[d].x * nx as f32) as u32, (p[d].y * ny as f32) as u32);
+                            cells[(y * nx + x) as usize] += 1;
+                        }
+                        assert!(
+                            cells.iter().all(|&c| c == 1),
+                            "2^{k} points, pixel {pixel}, draw {d}, {nx}×{ny} cells: {cells:?}"
+                        );
+                    }
+                }
+                // 1D draws: one point per interval of 1/2^k.
+                let mut cells = vec![0u32; n as usize];
+                for i in 0..n {
+                    let mut rng = Rng::sobol(5, pixel, i);
+                    rng.start_dimension(7);
+                    cells[(rng.next_f32() * n as f32) as usize] += 1;
+                }
+                assert!(cells.iter().all(|&c| c == 1), "1D, 2^{k}: {cells:?}");
+            }
+        }
+    }
+
+    /// Draws of one sample are independent of each other (products of different draws
+    /// average 1/4, as for independent uniforms) and uniform over pixels; different pixels
+    /// and seeds get different points.
+    #[test]
+    fn sobol_draws_are_uniform_and_independent() {
+        let (mut m, mut xy, mut x1x2, mut xz) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+        let mut n = 0.0f64;
+        for pixel in 0..4096u64 {
+            for i in 0..16u32 {
+                let mut rng = Rng::sobol(9, pixel, i);
+                let a = rng.next_2d();
+                let b = rng.next_f32();
+                let c = rng.next_2d();
+                m += (a.x + a.y + b + c.x + c.y) as f64 / 5.0;
+                xy += (a.x * a.y) as f64;
+                x1x2 += (a.x * c.x) as f64;
+                xz += (a.y * b) as f64;
+                n += 1.0;
+            }
+        }
+        // 65536 samples: sigma of a mean of U(0,1) is 0.0011, of a product of two 0.0009.
+        assert!((m / n - 0.5).abs() < 0.004, "mean {}", m / n);
+        for (what, v) in [("x·y", xy), ("draw 1 · draw 3", x1x2), ("y · 1D", xz)] {
+            assert!((v / n - 0.25).abs() < 0.005, "{what}: {}", v / n);
+        }
+        let first = |seed, pixel| Rng::sobol(seed, pixel, 0).next_2d();
+        assert_ne!(first(1, 0), first(1, 1));
+        assert_ne!(first(1, 0), first(2, 0));
+        // next_u32 stays the PCG32 stream of Rng::new.
+        assert_eq!(Rng::sobol(3, 4, 5).next_u32(), Rng::new(3, 4, 5).next_u32());
     }
 
     #[test]

@@ -77,7 +77,8 @@ pub fn render(
                         if s % 64 == 63 && stage.stopped() {
                             return None;
                         }
-                        let mut rng = Rng::new(frame.seed, pixel, s as u64);
+                        // Camera paths draw from a per-pixel low-discrepancy sequence.
+                        let mut rng = Rng::sobol(frame.seed, pixel, s);
                         let j = rng.next_2d();
                         let dir = cam.direction(x as f32 + j.x, y as f32 + j.y);
                         let ray = (cam.position, dir);

@@ -15,6 +15,14 @@ use crate::sampling::Rng;
 use crate::scene::{Environment, Scene};
 use glam::Vec3;
 
+/// Dimensions of a low-discrepancy sample that the camera draws (the pixel jitter) before
+/// [`radiance`] draws its own.
+pub const CAMERA_DIMENSIONS: u32 = 2;
+/// Dimensions [`radiance`] sets apart for each bounce: light selection and a point on it
+/// (3), the BSDF's lobe and direction (3), Russian roulette (1); a bounce that draws more
+/// (several suns, the sky) goes on into the next bounce's, which then starts after it.
+pub const BOUNCE_DIMENSIONS: u32 = 8;
+
 /// Path tracer settings.
 #[derive(Clone, Copy, Debug)]
 pub struct PathSettings {
@@ -186,6 +194,10 @@ pub fn radiance(
     // vertex still finds emitters, suns' discs and the sky (so that `max_depth` 1 is direct
     // light for both sampling strategies).
     for depth in 0..=s.max_depth {
+        // A low-discrepancy generator ([`Rng::sobol`]) gives every bounce its own dimensions
+        // (after the camera's two), so that bounce `depth` of all samples of a pixel is one
+        // stratified point set.
+        rng.start_dimension(CAMERA_DIMENSIONS + depth * BOUNCE_DIMENSIONS);
         // Light reached through a delta scattering after a non-delta first one belongs to
         // the light tracer (its paths start at the source, scatter through that delta lobe
         // first and connect to the camera from the first surface).
