@@ -137,6 +137,54 @@ fn emitting_square_over_a_plane_gives_the_form_factor() {
     );
 }
 
+/// A closed emitter close to a surface facing it (a sphere of radius r = 0.2 and radiance
+/// L = 5 whose lowest point is 5 cm over a Lambertian floor of albedo 0.5): next-event
+/// estimation of the sphere at the floor point under its centre gives ρ·L·(r/h)², the
+/// radiance under a Lambertian sphere at height h = 0.25 (irradiance πL(r/h)²). Here the
+/// shadow ray's two offsets, off the floor and off the emitter, nearly cancel: a ray along
+/// the direction to the sampled point from the moved origin found the emitter itself for
+/// most samples (0.93 instead of 1.6, the emissive room of docs/scenes 2% dark). Bound 2%:
+/// the 5120-triangle sphere's irradiance is 0.6% below the smooth one's (by direct sampling
+/// without shadow rays), the mean of 400k samples has a standard error of about 0.3%.
+#[test]
+fn emitter_facing_a_close_surface_is_not_shadowed_by_itself() {
+    let s = scene(
+        r#"{
+        "camera": {"position": [2, 0.3, 0], "look_at": [0, 0, 0], "width": 8, "height": 8},
+        "materials": {"floor": {"diffuse": [0.5, 0.5, 0.5]},
+                      "lamp": {"diffuse": [0, 0, 0], "emission": [5, 5, 5]}},
+        "objects": [
+            {"shape": {"type": "quad", "size": [4, 4]}, "material": "floor"},
+            {"shape": {"type": "sphere", "radius": 0.2, "subdivisions": 4}, "material": "lamp",
+             "transform": {"translate": [0, 0.25, 0]}}
+        ]
+    }"#,
+    );
+    let bvh = SceneBvh::build(&s);
+    let down = Vec3::new(0.0, -1.0, 0.0);
+    let hit = bvh.intersect(Vec3::new(0.0, 0.01, 0.0), down, 1.0).unwrap();
+    let it = gi_core::trace::Interaction::new(&s, &hit, down);
+    let expected = 0.5 * 5.0 * (0.2f64 / 0.25).powi(2);
+    for selection in [Selection::Power, Selection::Bvh] {
+        let lights = DirectLight::with_selection(&s, selection);
+        let mut rng = Rng::new(1, 2, 3);
+        let n = 400_000;
+        let sum: f64 = (0..n)
+            .map(|_| {
+                lights
+                    .emitter_light(&s, &bvh, &it, Vec3::Y, &mut rng, false)
+                    .x as f64
+            })
+            .sum();
+        let m = sum / n as f64;
+        eprintln!("{selection:?}: {m:.4} vs {expected:.4}");
+        assert!(
+            (m / expected - 1.0).abs() < 0.02,
+            "{selection:?}: {m} vs {expected}"
+        );
+    }
+}
+
 /// What the area-lit box's two spheres are made of.
 #[derive(Clone, Copy, PartialEq, Eq)]
 enum Spheres {

@@ -114,17 +114,13 @@ pub struct Renderer {
     accum: Option<progressive::Accumulation>,
 }
 
-/// The CPU methods and `bidir` light a scene with its environment light; the other methods
-/// refuse rather than render the scene without it.
+/// The CPU methods and `bidir` light a scene with its environment light, `ispm` its
+/// indirect light (its photons leave the sky too; [`unrendered_lights`] warns of the
+/// direct light); `direct` refuses rather than render the scene without it.
 fn check_environment(scene: &Scene, method: Method) -> Result<()> {
-    if scene.environment.is_none()
-        || matches!(method, Method::Path | Method::Photon | Method::Gather)
-    {
-        // `photon` and `gather` emit photons from the sky too and see it directly.
-        return Ok(());
-    }
-    if method == Method::Bidir {
-        // Seen through the ray bundles (§6); without bundles it would be missing.
+    if scene.environment.is_none() || method != Method::Direct {
+        // `photon`, `gather` and `ispm` emit photons from the sky too; `bidir` sees it
+        // through the ray bundles (§6).
         return Ok(());
     }
     let how = "its GPU passes have no environment light yet";
@@ -132,7 +128,7 @@ fn check_environment(scene: &Scene, method: Method) -> Result<()> {
         "method",
         format!(
             "method `{}` cannot render a scene with an environment light ({how}); \
-             use method `path` or `bidir`",
+             use method `path`, `photon`, `gather` or `bidir`",
             method.name()
         ),
     ))
@@ -159,9 +155,21 @@ fn unrendered_lights(scene: &Scene, method: Method) -> Vec<String> {
         ));
     }
     if directional && method.uses_gpu() {
+        let indirect = if method == Method::Ispm {
+            " (their indirect light is rendered)"
+        } else {
+            ""
+        };
         out.push(format!(
             "method `{name}` does not render directional lights on the GPU yet: their direct \
-             light is missing; use method `path`, `photon` or `gather`"
+             light is missing{indirect}; use method `path`, `photon` or `gather`"
+        ));
+    }
+    if scene.environment.is_some() && method == Method::Ispm {
+        out.push(format!(
+            "method `{name}` does not render the environment light on the GPU yet: its direct \
+             light and the sky seen are missing (its indirect light is rendered); use method \
+             `path`, `photon` or `gather`"
         ));
     }
     out

@@ -297,7 +297,7 @@ impl LightBvh {
             let ia = self.nodes[a].bounds.importance(p, n);
             let ib = self.nodes[b].bounds.importance(p, n);
             let total = ia + ib;
-            if !(total > 0.0) {
+            if total.is_nan() || total <= 0.0 {
                 return None;
             }
             let pa = ia / total;
@@ -329,7 +329,7 @@ impl LightBvh {
             let ia = self.nodes[a].bounds.importance(p, n);
             let ib = self.nodes[b].bounds.importance(p, n);
             let total = ia + ib;
-            if !(total > 0.0) {
+            if total.is_nan() || total <= 0.0 {
                 return 0.0;
             }
             if trail >> level & 1 == 0 {
@@ -369,7 +369,7 @@ fn split(lights: &[LightBounds], items: &mut [u32], depth: u32) -> usize {
     if depth < MEDIAN_DEPTH {
         for axis in 0..3 {
             let (lo, hi) = (clo[axis], chi[axis]);
-            if !(hi > lo) {
+            if hi.is_nan() || lo.is_nan() || hi <= lo {
                 continue;
             }
             let bucket =

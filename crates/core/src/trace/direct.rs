@@ -142,12 +142,19 @@ impl DirectLight {
         if f == Vec3::ZERO {
             return Vec3::ZERO;
         }
+        // The shadow ray runs from off the shading surface to off the emitter's side facing
+        // it, along its own direction: along `wi` from the moved origin it would end beside
+        // the target, behind the emitter's surface where the two offsets cancel (an emitter
+        // facing the point), and find the emitter itself.
         let origin = it.spawn(wi);
-        // The emitter's side facing the shading point, off its surface.
         let side = s.normal * s.normal.dot(-wi).signum();
         let target = s.point + side * crate::scene::emitters::offset(s.point);
-        let dist = (target - origin).length();
-        if bvh.occluded(origin, wi, dist * (1.0 - 1e-4)) {
+        let to_target = target - origin;
+        let dist = to_target.length();
+        if dist.is_nan()
+            || dist <= 0.0
+            || bvh.occluded(origin, to_target / dist, dist * (1.0 - 1e-4))
+        {
             return Vec3::ZERO;
         }
         let pdf = s.pdf_area * d2 / cos_l;
@@ -170,7 +177,7 @@ impl DirectLight {
         let to = point - from.position;
         let d2 = to.length_squared();
         let cos = ng.dot(to).abs() / d2.sqrt();
-        if !(cos > 0.0) {
+        if cos.is_nan() || cos <= 0.0 {
             return 1.0;
         }
         power_heuristic(from.pdf, pdf_area * d2 / cos)

@@ -317,7 +317,7 @@ impl Trace<'_> {
 pub(super) fn photon_budgets(scene: &Scene, photons: u64) -> (u64, u64) {
     let total = Sources::of(scene).power().element_sum() as f64;
     let cpu = non_local_sources(scene).power().element_sum() as f64;
-    if !(total > 0.0) {
+    if total.is_nan() || total <= 0.0 {
         return (photons, 0);
     }
     let cpu = (photons as f64 * cpu / total).round() as u64;
