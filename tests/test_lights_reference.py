@@ -14,10 +14,10 @@ what renders what stays visible; `docs/bench/lights.md` has every method's ratio
 at converged settings.
 
 The settings keep the file to about a minute on two cores. `path`'s image mean has a
-standard error (measured over six seeds) of 0.53% in the Cornell box at 256 samples per
-pixel (its small area light is found by the paths' own rays; next-event estimation of
-emitters is being added), hence 1024 there (0.27%: the 1% bound is 3.7 standard errors),
-and of 0.09% and below 0.01% in the room and under the sun and sky at 256. The 3% of the
+standard error (measured over six seeds) of 0.36% in the Cornell box at 256 samples per
+pixel (next-event estimation of its small area light; 0.53% when only the paths' own rays
+found it), hence 512 there (about 0.26%: the 1% bound is 3.9 standard errors), and of
+0.09% and below 0.01% in the room and under the sun and sky at 256. The 3% of the
 other methods is the issue's bound for their bias at 200k photons or 16 samples. `photon`
 takes its direct light from the photons, whose k-nearest-neighbour estimate darkens the
 edges of the sun-lit boxes; under the sun and sky the photons enter through the bounding
@@ -50,7 +50,7 @@ SETTINGS = {
 }
 TOLERANCE = {"path": 0.01}  # the others: 0.03
 MORE = {  # see the module doc
-    ("cornell-box", "path"): {"spp": 1024},
+    ("cornell-box", "path"): {"spp": 512},
     ("sun-sky", "photon"): {"photons": 600_000},
 }
 
