@@ -378,24 +378,12 @@ pub(super) fn frame(
     let t = Instant::now();
     let per_light = options.vpls_per_light;
     let vpls = sample_vpls(&texels, scene.lights.len(), per_light, frame.seed);
-    let (mut raws, mut matrices) = vpl_records(scene, &vpls, per_light, state.vpls.size);
-    let vpl_count = raws.len() as u32;
+    let mut records = vpl_records(scene, &vpls, per_light, state.vpls.size);
+    let vpl_count = records.0.len() as u32;
     let vpl_seconds = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let paths = subpaths::subpaths(
-        scene,
-        bvh,
-        &vpls,
-        (per_light, options.bundles),
-        options.max_depth,
-        pair_offset(frame),
-        (vpl_count, state.vpls.capacity - vpl_count),
-        state.vpls.size,
-        frame.seed,
-    );
-    stats.light_paths = paths.placed as u64;
-    raws.extend(paths.raws);
-    matrices.extend(paths.matrices);
+    let placed = subpaths::append(scene, bvh, &vpls, options, frame, &state.vpls, &mut records);
+    let (raws, matrices) = records;
     let subpath_seconds = t.elapsed().as_secs_f64();
     let t = Instant::now();
     state.vpls.upload(&ctx, &raws, &matrices);
@@ -455,6 +443,7 @@ pub(super) fn frame(
     timer.collect(&ctx)?;
 
     stats.vpls = vpls.len() as u64;
+    stats.light_paths = placed as u64;
     stats.bundles = options.bundles as u64;
     stats.bundle_fragments = fragments;
     stats.bundle_overflow = overflow;
@@ -462,10 +451,8 @@ pub(super) fn frame(
         ("upload".into(), upload),
         ("rsm readback".into(), rsm_readback),
         ("vpl sampling".into(), vpl_seconds),
+        ("light subpaths".into(), subpath_seconds),
     ];
-    if options.max_depth >= 4 {
-        stages.push(("light subpaths".into(), subpath_seconds));
-    }
     if specular.is_some() {
         stages.push(("specular paths".into(), specular_seconds));
     }

@@ -12,9 +12,9 @@
 //!
 //! Throughput: a subpath starts from its VPL's flux α1 (the flux the lighting pass uses,
 //! shading cosine included) and carries α_{j+1} = α_j · f(y_j)·|ns·ω|/p(ω) (the BSDF
-//! sample's weight), with Russian roulette after every bounce (continue with probability
-//! q = min(0.95, max channel of the weight), α /= q): unbiased, and the subpaths end after
-//! about 1/(1 − albedo) vertices whatever `max_depth` is. A vertex's record carries α_j
+//! sample's weight), with Russian roulette after the first [`RR_FREE`] vertices (continue
+//! with probability q = min(0.95, max channel of the weight), α /= q): unbiased, and the
+//! subpaths end after about RR_FREE + 1/(1 − albedo) vertices whatever `max_depth` is. A vertex's record carries α_j
 //! times |ns·ω_in|/|ng·ω_in| (≤ 10), as the RSM's VPLs do (their flux has the geometric
 //! cosine, the path tracer the shading one).
 //!
@@ -25,7 +25,9 @@
 //! of slots ([`EXTRA_PER_SUBPATH`] per subpath on average beyond the first vertex); when it
 //! runs out the highest orders are dropped first.
 
-use super::vpls::Vpl;
+use super::super::options::BidirOptions;
+use super::super::FrameParams;
+use super::vpls::{Vpl, VplMaps};
 use crate::bsdf::Material;
 use crate::raster::vpl::{cube_views, VplRaw};
 use crate::sampling::{Frame, Rng};
@@ -35,10 +37,13 @@ use crate::trace::{Interaction, SceneBvh};
 use bytemuck::Zeroable;
 use glam::{Mat4, Vec3};
 
-/// Slots per subpath, on average, for its vertices after the first (y3, y4, …). With
-/// Russian roulette at the albedo a subpath has 1/(1 − ρ) − 1 of them on average (ρ = 0.5:
-/// 1, ρ = 0.8: 4).
+/// Slots per subpath, on average, for its vertices after the first (y3, y4, …): y3 and y4,
+/// then Russian roulette at the albedo ρ leaves about ρ/(1 − ρ) more (ρ = 0.5: 1, ρ = 0.67:
+/// 2).
 pub(super) const EXTRA_PER_SUBPATH: u32 = 4;
+
+/// Vertices of a subpath traced without Russian roulette (y2 … y4).
+const RR_FREE: u32 = 3;
 
 /// A vertex y_j (j ≥ 2) of a light subpath.
 #[derive(Clone, Copy, Debug)]
@@ -55,7 +60,7 @@ struct Vertex {
 }
 
 /// The subpaths' VPL records, to be appended after the RSM's VPLs.
-pub(super) struct Subpaths {
+struct Subpaths {
     pub raws: Vec<VplRaw>,
     pub matrices: Vec<Mat4>,
     /// Subpaths with at least one vertex.
@@ -118,8 +123,15 @@ fn trace(scene: &Scene, bvh: &SceneBvh, v: &Vpl, max_len: u32, rng: &mut Rng) ->
         if same_side == matches!(bs.lobe, crate::bsdf::Lobe::GlassRefract) {
             break;
         }
-        let q = bs.weight.max_element().min(0.95);
-        if !(q > 0.0) || rng.next_f32() >= q {
+        // Roulette only past the first RR_FREE vertices: every subpath reaches y2 … y4
+        // (depths 4–6), whose light would otherwise vary with how many of the frame's few
+        // subpaths survive.
+        let q = if (out.len() as u32) < RR_FREE {
+            1.0
+        } else {
+            bs.weight.max_element().min(0.95)
+        };
+        if !(q > 0.0) || (q < 1.0 && rng.next_f32() >= q) {
             break;
         }
         alpha *= bs.weight / q;
@@ -153,14 +165,42 @@ fn trace(scene: &Scene, bvh: &SceneBvh, v: &Vpl, max_len: u32, rng: &mut Rng) ->
     out
 }
 
-/// The subpaths of the frame, one per (light, bundle) from the VPL the bundle is paired
-/// with, as records for slots `first`, `first + 1`, … (`slots` of them): the first vertex
-/// of subpath (light j, bundle b) in slot `first + j·n2 + b`, each record's `light_dist2`
-/// holding the slot of the subpath's next vertex (0: none; the field is unused beyond the
-/// RSM's VPLs). Later vertices are placed order by order, so that a full budget drops the
-/// highest orders.
+/// Appends to the RSM's VPL `records` (n1 per light) the frame's light subpaths, one per
+/// (light, bundle) from the VPL the bundle is paired with, filling the rest of `maps`'
+/// capacity; returns how many subpaths have a vertex. See [`subpaths`].
+pub(super) fn append(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    vpls: &[Vpl],
+    options: &BidirOptions,
+    frame: &FrameParams,
+    maps: &VplMaps,
+    records: &mut (Vec<VplRaw>, Vec<Mat4>),
+) -> usize {
+    let first = records.0.len() as u32;
+    let out = subpaths(
+        scene,
+        bvh,
+        vpls,
+        (options.vpls_per_light, options.bundles),
+        options.max_depth,
+        super::pair_offset(frame),
+        (first, maps.capacity.saturating_sub(first)),
+        maps.size,
+        frame.seed,
+    );
+    records.0.extend(out.raws);
+    records.1.extend(out.matrices);
+    out.placed
+}
+
+/// The subpaths as records for slots `first`, `first + 1`, … (`slots` of them): the first
+/// vertex of subpath (light j, bundle b) in slot `first + j·n2 + b`, each record's
+/// `light_dist2` holding the slot of the subpath's next vertex (0: none; the field is
+/// unused beyond the RSM's VPLs). Later vertices are placed order by order, so that a full
+/// budget drops the highest orders.
 #[allow(clippy::too_many_arguments)]
-pub(super) fn subpaths(
+fn subpaths(
     scene: &Scene,
     bvh: &SceneBvh,
     vpls: &[Vpl],
