@@ -18,8 +18,6 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
-
 import gi
 
 sys.path.insert(0, str(Path(__file__).parent))

@@ -505,11 +505,13 @@ fn bidir_mean(scene: &Scene, s: &gi_core::RenderOptions, frames: u64) -> (DVec3,
 /// 32 bundles, the mean of 8 frames (seeds 1–8).
 ///
 /// Measured image means: furnace −0.9%, cornell −1.6% (red; −0.6% green and blue),
-/// cornell-anim −3.2% (red; −2.4…−2.8% others). The deficit grows with depth on the
-/// Cornell boxes (cornell-anim: −0.8% at depth 2, −1.4…−1.8% at 3, −2.1…−2.5% at 4) and
-/// shrinks only a little with a 3× smaller clamp of ‖x2 − y‖ (depth 7: −1.8…−2.4%), so it
-/// is not the clamp alone; its cause is open (issue 29). Tolerances: 2% (the issue's) for
-/// the furnace and cornell, 4% for cornell-anim, which does not meet the issue's 2% yet.
+/// cornell-anim −3.2% (red; −2.4…−2.8% others). Over 16 frames (32×32, path 1024 spp)
+/// cornell-anim is −1.9 ± 0.4% at depth 3 (today's two-bounce term: before the light
+/// subpaths), −2.2 ± 0.5% at depth 4 and −2.4 ± 0.8% at depth 7: the depth-4 term of the
+/// light subpaths alone is −9 ± 6% (red), so most of the deficit is the two-bounce term's
+/// (its clamp and the bundles' corner fragments); a 3× smaller clamp leaves −1.8…−2.4% at
+/// depth 7. Tolerances: 2% (the issue's) for the furnace and cornell, 4% for cornell-anim,
+/// which does not meet the issue's 2% yet.
 #[test]
 fn any_depth_matches_path_tracer() {
     let mut failures = Vec::new();

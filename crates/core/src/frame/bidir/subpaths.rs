@@ -19,8 +19,9 @@
 //! cosine, the path tracer the shading one).
 //!
 //! Bias: the connection x2 ↔ y_j has ‖x2 − y_j‖² clamped from below as the two-bounce term
-//! (`TWO_BOUNCE_MIN_DIST`), which drops the light of pairs closer than the clamp (measured
-//! within ±2% of `path` at depth 7, `docs/bench/bidir_depth.md`); vertices on purely
+//! (`TWO_BOUNCE_MIN_DIST`), which drops the light of pairs closer than the clamp (image
+//! means at depth 7: furnace −0.9%, cornell −1.6%, cornell-anim −2.4%, most of it the
+//! two-bounce term's; `docs/bench/bidir-depth.md`); vertices on purely
 //! specular surfaces are passed through, not connected. The records live in a fixed budget
 //! of slots ([`EXTRA_PER_SUBPATH`] per subpath on average beyond the first vertex); when it
 //! runs out the highest orders are dropped first.
@@ -131,7 +132,7 @@ fn trace(scene: &Scene, bvh: &SceneBvh, v: &Vpl, max_len: u32, rng: &mut Rng) ->
         } else {
             bs.weight.max_element().min(0.95)
         };
-        if !(q > 0.0) || (q < 1.0 && rng.next_f32() >= q) {
+        if q.is_nan() || q <= 0.0 || (q < 1.0 && rng.next_f32() >= q) {
             break;
         }
         alpha *= bs.weight / q;
