@@ -179,16 +179,7 @@ fn unrendered_lights(scene: &Scene, method: Method) -> Vec<String> {
 /// (they become `gi.RenderWarning`s).
 fn transport_omissions(scene: &Scene, options: &RenderOptions) -> Vec<String> {
     let mut out = Vec::new();
-    if let MethodOptions::Bidir(o) = &options.method {
-        if o.max_depth > 3 {
-            out.push(format!(
-                "method `bidir` computes one- and two-bounce indirect light only: max_depth {} \
-                 asks for {} more bounce(s), which are missing (use max_depth 3, or method \
-                 `ispm` or `path` for more)",
-                o.max_depth,
-                o.max_depth - 3
-            ));
-        }
+    if let MethodOptions::Bidir(_) = &options.method {
         if scene.has_delta_materials() {
             out.push(
                 "method `bidir` traces mirrors and glass seen by the camera with direct light \
