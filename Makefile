@@ -14,8 +14,8 @@ lint: setup
 	python3 scripts/check_layers.py
 	cargo fmt --all -- --check
 	cargo clippy --workspace --all-targets -- -D warnings
-	$(BIN)/ruff check python tests
-	$(BIN)/ruff format --check python tests
+	$(BIN)/ruff check python tests scripts
+	$(BIN)/ruff format --check python tests scripts
 
 test: lint
 	cargo test --workspace

@@ -106,7 +106,7 @@ def frame_cases() -> Iterator[tuple[str, dict[str, np.ndarray]]]:
             yield f"frames.{method}.{len(extra)}.{f}", images(r.render(aovs=True, extras=True))
     for method in ["ispm", "gather", "path", "direct", "bidir"]:
         r = gi.Renderer(scene, method, size=SIZE, progressive=True, **METHOD_SETTINGS[method])
-        for f in range(3):
+        for _ in range(3):
             result = r.render(aovs=True, extras=True)
         yield f"progressive.{method}", images(result)
 

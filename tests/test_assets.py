@@ -266,10 +266,12 @@ def test_unrendered_features_warn_once_naming_file_and_field(tmp_path):
         tmp_path,
         "lamp.gltf",
         [
-            # BLEND is rendered as a mask; the texture names no image.
+            # BLEND is rendered as a mask; the texture names no image. Emission is read
+            # (tests/test_lights_import.py), occlusion maps are not.
             {"name": "glow", "emissiveFactor": [1, 0.5, 0], "alphaMode": "BLEND",
-             "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}},
-            {"name": "glow2", "emissiveFactor": [1, 0.5, 0]},
+             "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}},
+             "occlusionTexture": {"index": 0}},
+            {"name": "glow2", "emissiveFactor": [1, 0.5, 0], "occlusionTexture": {"index": 0}},
         ],
         extra_attrs=True,
     )  # fmt: skip
@@ -278,10 +280,10 @@ def test_unrendered_features_warn_once_naming_file_and_field(tmp_path):
     fields = sorted(w.message.field for w in record)
     assert fields == sorted(
         [
-            "materials[0].emissiveFactor",
+            "materials[0].occlusionTexture",
             "materials[0].alphaMode",
             "materials[0].pbrMetallicRoughness.baseColorTexture",
-            "materials[1].emissiveFactor",
+            "materials[1].occlusionTexture",
             "meshes[0].primitives[0].attributes.COLOR_0",
             "meshes[0].primitives[0].attributes.TANGENT",
             "meshes[1].primitives[0].attributes.COLOR_0",
@@ -289,9 +291,10 @@ def test_unrendered_features_warn_once_naming_file_and_field(tmp_path):
         ]
     )
     assert all(w.message.file == str(path) for w in record)
+    assert dict(load_gltf(path).materials)["lamp.gltf:glow2"]["emission"] == [1, 0.5, 0]
 
 
-def test_obj_emission_texture_and_vertex_colours_warn(tmp_path):
+def test_obj_emission_is_read_textures_and_vertex_colours_warn(tmp_path):
     (tmp_path / "lamp.mtl").write_text(
         "newmtl shade\nKd 0.8 0.8 0.8\nKe 4 4 4\nmap_Kd wood.png\n"
         "newmtl plain\nKd 0.2 0.2 0.2\nKs 0.5 0.5 0.5\nNs 100\n"
@@ -306,11 +309,12 @@ def test_obj_emission_texture_and_vertex_colours_warn(tmp_path):
         scene = gi.load_scene(viewing_scene(tmp_path, "lamp.obj"))
     fields = sorted(w.message.field for w in record)
     assert fields == [
-        "lamp.mtl: newmtl shade: Ke",
         "lamp.mtl: newmtl shade: map_Kd",
         "v (vertex colours)",
     ]
     assert sorted(scene.material_names) == ["grey", "lamp.obj:plain", "lamp.obj:shade"]
+    shade = gi.Renderer(scene, "path", size=(4, 4)).describe("material", "lamp.obj:shade")
+    assert shade["emission"] == [4, 4, 4]
 
 
 def test_ply_vertex_colours_warn(tmp_path):
@@ -360,7 +364,7 @@ def test_gltf_requiring_an_unread_extension_is_a_scene_error(tmp_path):
 
 
 def test_cli_prints_asset_warnings(tmp_path):
-    path = write_gltf(tmp_path, "lamp.gltf", [{"name": "glow", "emissiveFactor": [1, 1, 1]}])
+    path = write_gltf(tmp_path, "lamp.gltf", [{"name": "ao", "occlusionTexture": {"index": 0}}])
     scene = viewing_scene(tmp_path, "lamp.gltf")
     out = tmp_path / "o.png"
     p = subprocess.run(
@@ -370,8 +374,8 @@ def test_cli_prints_asset_warnings(tmp_path):
     )  # fmt: skip
     assert p.returncode == 0, p.stderr
     assert p.stderr == (
-        f"gi: warning: {path}: materials[0].emissiveFactor: "
-        "emission is not supported; the surface is not a light\n"
+        f"gi: warning: {path}: materials[0].occlusionTexture: "
+        "this texture is not supported; it is ignored\n"
     )
 
 

@@ -166,7 +166,7 @@ def test_volume_shape_option(tmp_path):
 def test_estimator_option(tmp_path):
     out = tmp_path / "t.exr"
     args = ["render", "cornell", "-o", str(out), "--spp", "1", "--size", "16x16"]
-    p = run(*args, "--photons", "5000", "--estimator", "tiled")
+    p = run(*args, "--photons", "5000", "--estimator", "tiled", "-v")
     assert p.returncode == 0, p.stderr
     assert "estimator tiled: chosen in the settings" in p.stderr
     assert gi.read_image(out).mean() > 0
@@ -177,7 +177,7 @@ def test_estimator_option(tmp_path):
 def test_first_bounce_option(tmp_path):
     out = tmp_path / "t.exr"
     args = ["render", "cornell", "-o", str(out), "--spp", "1", "--size", "16x16"]
-    p = run(*args, "--photons", "5000", "--first-bounce", "raster")
+    p = run(*args, "--photons", "5000", "--first-bounce", "raster", "--verbose")
     assert p.returncode == 0, p.stderr
     assert "first bounce raster: chosen in the settings" in p.stderr
     assert gi.read_image(out).mean() > 0

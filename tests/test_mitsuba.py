@@ -129,7 +129,7 @@ def test_gi_render_reads_mitsuba_xml(tmp_path, cornell_desc):
 
 
 SENSOR = """<sensor type="perspective"><float name="fov" value="40"/>
-<transform name="to_world"><lookat origin="0, 1, 4" target="0, 1, 0"/></transform>
+<transform name="to_world"><lookat origin="0, 1, 4" target="0, 1, 0" up="0, 1, 0"/></transform>
 <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="16"/></film>
 </sensor>"""
 
@@ -146,11 +146,12 @@ def write(tmp_path, body):
         ('<bsdf type="roughdielectric" id="g"/>', '<bsdf type="roughdielectric">', 6),
         ('<shape type="serialized"/>', '<shape type="serialized">', 6),
         (
-            '<shape type="cube">\n<emitter type="area"/></shape>',
-            '<emitter type="area">',
+            '<shape type="cube">\n<emitter type="point"/></shape>',
+            '<emitter type="point">',
             7,
         ),
-        ('<emitter type="directional"/>', '<emitter type="directional">', 6),
+        ('<emitter type="area"/>', '<emitter type="area">', 6),
+        ('<emitter type="sunsky"/>', '<emitter type="sunsky">', 6),
         ('<shape type="cube"><ref id="missing"/></shape>', "<ref>", 6),
         (
             '<shape type="sphere"><float name="radius" value="$r"/></shape>',

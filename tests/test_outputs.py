@@ -21,7 +21,7 @@ def ispm_result():
 def test_exr_holds_beauty_and_named_aov_layers_equal_to_the_arrays(tmp_path, ispm_result):
     r = ispm_result
     out = tmp_path / "frame.exr"
-    wanted = ["albedo", "normal", "position", "depth", "caustics", "direct", "indirect"]
+    wanted = ["albedo", "normal", "position", "depth", "direct", "indirect"]
     assert gi.save_result(out, r, wanted) == [out]
     assert sorted(os.listdir(tmp_path)) == ["frame.exr"]  # one file, no temporary left
 
@@ -34,7 +34,6 @@ def test_exr_holds_beauty_and_named_aov_layers_equal_to_the_arrays(tmp_path, isp
         "normal": ["N.X", "N.Y", "N.Z"],
         "position": ["P.X", "P.Y", "P.Z"],
         "depth": ["Z"],
-        "caustics": ["caustics.R", "caustics.G", "caustics.B"],
         "direct": ["direct.R", "direct.G", "direct.B"],
         "indirect": ["indirect.R", "indirect.G", "indirect.B"],
     }

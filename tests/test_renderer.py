@@ -17,14 +17,16 @@ def cornell() -> gi.Scene:
 def test_frame_equals_one_shot(cornell: gi.Scene, method: str) -> None:
     """A renderer's frame after an update and its undo equals gi.render of the scene (every
     method is deterministic for a seed)."""
-    r = gi.Renderer(cornell, method, **gi.method_options(method, **SMALL))
+    # bidir computes three bounces at most (and warns past them).
+    small = {**SMALL, "max_depth": 3} if method == "bidir" else SMALL
+    r = gi.Renderer(cornell, method, **gi.method_options(method, **small))
     r.render()
     light = r.describe("light", 0)
     r.update(lights={0: {"intensity": [1.0, 1.0, 1.0]}})
     r.render()
     r.update(lights={0: light})
     frame = r.render(aovs=True, extras=True)
-    one_shot = gi.render(cornell, method, **gi.method_options(method, **SMALL))
+    one_shot = gi.render(cornell, method, **gi.method_options(method, **small))
     np.testing.assert_array_equal(frame.radiance, one_shot.radiance)
     np.testing.assert_array_equal(frame.albedo, one_shot.albedo)
     assert sorted(frame.extra) == sorted(one_shot.extra)
@@ -88,7 +90,7 @@ def test_resize(cornell: gi.Scene) -> None:
         ({"lights": {0: {"intensity": [1, "x", 1]}}}, "lights[0].intensity"),
         ({"lights": {5: {"intensity": [1, 1, 1]}}}, "lights[5]"),
         ({"camera": {"fov": 500}}, "camera.fov"),
-        ({"objects": {"nope": {"translate": [0, 0, 0]}}}, "object"),
+        ({"objects": {"nope": {"translate": [0, 0, 0]}}}, "objects"),
         ({"objects": {0: {"scale": 0}}}, "objects[0].transform.scale"),
         ({"materials": {"nope": {"roughness": 0.5}}}, "materials.nope"),
     ],

@@ -11,10 +11,11 @@ import json
 import math
 import sys
 import time
-from collections.abc import Callable, Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence, Sized
 from typing import IO, TYPE_CHECKING, Any
 
-from gi._gi import RenderCancelled, Scene, SettingError
+from gi._checks import setting_error
+from gi._gi import RenderCancelled, Scene
 
 if TYPE_CHECKING:
     from gi.render import Renderer, RenderResult
@@ -40,36 +41,47 @@ def animation_updates(scene: Scene, time: float) -> dict[str, Any]:
     return out
 
 
+#: Most frames one sequence renders (a bound against a mistyped fps or frame range, which
+#: would otherwise be checked, and rendered, for ever).
+MAX_FRAMES = 1_000_000
+
+
 def default_frames(scene: Scene, fps: float) -> range:
     """The frames of the whole animation at ``fps``: ``range(round(duration · fps))``."""
     duration = scene.animation_duration
     if duration is None:
-        raise SettingError(
-            "invalid setting `frames`: the scene has no animation; give the frames to render"
+        raise setting_error("frames", "the scene has no animation; give the frames to render")
+    count = duration * check_fps(fps)
+    if not count <= MAX_FRAMES:
+        raise setting_error(
+            "fps",
+            f"{fps:g} fps makes {count:g} frames of the {duration:g} s animation; a sequence"
+            f" has at most {MAX_FRAMES}",
         )
-    return range(max(1, round(duration * fps)))
+    return range(max(1, round(count)))
 
 
 def check_fps(fps: float) -> float:
     try:
         value = float(fps)
-    except (TypeError, ValueError):
-        raise SettingError(f"invalid setting `fps`: must be a number, got {fps!r}") from None
+    except (TypeError, ValueError, OverflowError):
+        raise setting_error("fps", f"must be a finite number > 0, got {fps!r}") from None
     if not (math.isfinite(value) and value > 0):
-        raise SettingError(f"invalid setting `fps`: must be positive and finite, got {fps!r}")
+        raise setting_error("fps", f"must be a finite number > 0, got {fps!r}")
     return value
 
 
 def check_frames(frames: Iterable[int]) -> list[int]:
+    size = len(frames) if isinstance(frames, Sized) else 0
+    if size > MAX_FRAMES:
+        raise setting_error("frames", f"{size} frames; a sequence has at most {MAX_FRAMES}")
     out = []
     for n in frames:
         if isinstance(n, bool) or not isinstance(n, int) or n < 0:
-            raise SettingError(
-                f"invalid setting `frames`: frame numbers are non-negative integers, got {n!r}"
-            )
+            raise setting_error("frames", f"frame numbers are integers >= 0, got {n!r}")
         out.append(n)
     if not out:
-        raise SettingError("invalid setting `frames`: no frames to render")
+        raise setting_error("frames", "no frames to render")
     return out
 
 

@@ -47,6 +47,7 @@ from pathlib import Path
 from typing import Any
 
 import gi
+from gi._checks import named_error
 from gi.aovs import check_aovs
 from gi.display import check_tonemap
 from gi.io import check_output_path, check_writable, planned_files, save_result
@@ -143,13 +144,13 @@ def _interpolate(
 
 def _check_camera(keys: Any) -> list[dict[str, Any]]:
     if not isinstance(keys, list) or not keys:
-        raise ValueError("camera: expected a list of keyframes")
+        raise named_error("job", "camera: expected a list of keyframes")
     for i, k in enumerate(keys):
         if not isinstance(k, dict) or not isinstance(k.get("frame"), int):
-            raise ValueError(f"camera[{i}]: each keyframe needs an integer 'frame'")
+            raise named_error("job", f"camera[{i}]: each keyframe needs an integer 'frame'")
         unknown = set(k) - {"frame", *CAMERA_FIELDS}
         if unknown:
-            raise ValueError(f"camera[{i}]: unknown field {sorted(unknown)[0]!r}")
+            raise named_error("job", f"camera[{i}]: unknown field {sorted(unknown)[0]!r}")
     return keys
 
 
@@ -161,10 +162,12 @@ def plan(job: dict[str, Any], base_dir: str | Path = ".") -> list[Frame]:
     """
     base = Path(base_dir)
     if not isinstance(job, dict):
-        raise ValueError("a job is a JSON object")
+        raise named_error("job", "a job is a JSON object")
     unknown = set(job) - JOB_KEYS
     if unknown:
-        raise ValueError(f"unknown job field {sorted(unknown)[0]!r} (known: {sorted(JOB_KEYS)})")
+        raise named_error(
+            "job", f"unknown job field {sorted(unknown)[0]!r} (known: {sorted(JOB_KEYS)})"
+        )
     frames_field = job.get("frames", [0, 1])
     if (
         not isinstance(frames_field, list)
@@ -172,13 +175,13 @@ def plan(job: dict[str, Any], base_dir: str | Path = ".") -> list[Frame]:
         or not all(isinstance(v, int) for v in frames_field)
         or frames_field[1] <= frames_field[0]
     ):
-        raise ValueError("frames: expected [start, end) with end > start")
+        raise named_error("job", "frames: expected [start, end) with end > start")
     sweep = job.get("sweep", [{}])
     if not isinstance(sweep, list) or not sweep:
-        raise ValueError("sweep: expected a non-empty list of overrides")
+        raise named_error("job", "sweep: expected a non-empty list of overrides")
     outputs = job.get("outputs", [job["output"]] if "output" in job else [])
     if not outputs or not all(isinstance(o, str) for o in outputs):
-        raise ValueError("output: give an output pattern ('output' or 'outputs')")
+        raise named_error("job", "output: give an output pattern ('output' or 'outputs')")
     check_tonemap(job.get("tonemap", "clip"))
     keywords = _render_keywords()
     methods = gi.methods()
@@ -189,20 +192,20 @@ def plan(job: dict[str, Any], base_dir: str | Path = ".") -> list[Frame]:
     cameras: dict[str, dict[str, Any]] = {}
     for variant, entry in enumerate(sweep):
         if not isinstance(entry, dict) or set(entry) - SWEEP_KEYS:
-            raise ValueError(
-                f"sweep[{variant}]: expected an object with fields {sorted(SWEEP_KEYS)}"
+            raise named_error(
+                "job", f"sweep[{variant}]: expected an object with fields {sorted(SWEEP_KEYS)}"
             )
         scene = str(entry.get("scene", job.get("scene", "cornell")))
         method = str(entry.get("method", job.get("method", "path")))
         if method not in methods:
-            raise ValueError(
-                f"sweep[{variant}]: unknown method {method!r} (use {', '.join(methods)})"
+            raise named_error(
+                "job", f"sweep[{variant}]: unknown method {method!r} (use {', '.join(methods)})"
             )
         settings = {**job.get("settings", {}), **entry.get("settings", {})}
         bad = set(settings) - keywords
         if bad:
-            raise ValueError(
-                f"settings: unknown {sorted(bad)[0]!r} (gi.render takes {sorted(keywords)})"
+            raise named_error(
+                "job", f"settings: unknown {sorted(bad)[0]!r} (gi.render takes {sorted(keywords)})"
             )
         if "size" in settings:
             settings["size"] = tuple(settings["size"])
@@ -229,15 +232,16 @@ def plan(job: dict[str, Any], base_dir: str | Path = ".") -> list[Frame]:
             try:
                 outs = [str(base / o.format(**names)) for o in outputs]
             except (KeyError, IndexError, ValueError) as e:
-                raise ValueError(f"output pattern: {e} (use {sorted(names)})") from None
+                raise named_error("job", f"output pattern: {e} (use {sorted(names)})") from None
             for o in outs:
                 for p in planned_files(o, aovs):
                     check_output_path(p)
                     key = p.resolve()
                     if key in planned:
-                        raise ValueError(
+                        raise named_error(
+                            "job",
                             f"{p} would be written by two frames: put {{index}} or {{frame}}"
-                            " in the output pattern"
+                            " in the output pattern",
                         )
                     planned.add(key)
             seed = int(settings.get("seed", 0)) + f
@@ -316,7 +320,7 @@ def render_batch(
         try:
             job = json.loads(path.read_text(encoding="utf-8"))
         except (OSError, json.JSONDecodeError) as e:
-            raise ValueError(f"cannot read job {path}: {e}") from e
+            raise named_error("job", f"cannot read job {path}: {e}") from e
         base_dir = path.parent if base_dir is None else base_dir
     assert isinstance(job, dict)
     base = Path(base_dir if base_dir is not None else ".")

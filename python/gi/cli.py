@@ -9,24 +9,41 @@ import signal
 import sys
 import time
 import warnings
+from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 
 import gi
 from gi import denoising
-from gi._checks import exposure_setting
+from gi._checks import U64_MAX, exposure_setting, int_setting, named_error
 from gi.animation import default_frames
-from gi.aovs import aov_names, check_aovs
+from gi.aovs import BASE, aov_names, check_aovs
 from gi.display import TONEMAPS
 from gi.io import (
     FLOAT_FORMATS,
     SRGB_FORMATS,
-    check_output_path,
+    check_format,
+    check_writable,
     planned_files,
     save_result,
     to_srgb8,
 )
 from gi.video import VIDEO_FORMATS, VideoWriter
+
+#: What each method is, in one line (`gi methods`; the README's table says more).
+METHOD_SUMMARIES = {
+    "path": "CPU reference: path tracing with next-event estimation and light tracing for"
+    " caustics; unbiased, the ground truth",
+    "photon": "classic photon mapping (Jensen): a kd-tree of photons, k-nearest-neighbour"
+    " estimate; the baseline",
+    "gather": "photon differentials: each shading point gathers the photon footprints that"
+    " contain it (Fabianowski & Dingliana 2009)",
+    "direct": "GPU direct light only: G-buffer, shadow maps, supersampled at edges",
+    "ispm": "image space photon mapping (McGuire & Luebke 2009): GPU direct light, CPU"
+    " photon trace, photon volumes splatted on the GPU",
+    "bidir": "bidirectional path tracing by rasterization (Tokuyoshi & Ogaki 2012): virtual"
+    " point lights and ray bundles combined by MIS",
+}
 
 
 def _size(text: str) -> tuple[int, int]:
@@ -177,6 +194,12 @@ def _parser() -> argparse.ArgumentParser:
         " --denoise adds noisy. EXR: layers of the output file; other formats: NAME.AOV.EXT",
     )
     r.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
+    r.add_argument(
+        "-v",
+        "--verbose",
+        action="store_true",
+        help="also say which estimator and first-bounce search ispm chose, and why",
+    )
     v = sub.add_parser("view", help="interactive viewer in the browser (pip install 'gi[view]')")
     v.add_argument("scene", help="built-in scene name, JSON scene file or Mitsuba 3 XML")
     v.add_argument("--method", default="ispm", help="rendering method (see `gi methods`)")
@@ -202,7 +225,7 @@ def _parser() -> argparse.ArgumentParser:
     )
     v.add_argument("--no-browser", action="store_true", help="don't open the page in a browser")
     sub.add_parser("scenes", help="list the built-in scenes")
-    sub.add_parser("methods", help="list the rendering methods")
+    sub.add_parser("methods", help="list the rendering methods, one line each")
     f = sub.add_parser(
         "footprints", help="photon-differential footprint radii per path kind (Table 3)"
     )
@@ -223,33 +246,15 @@ def _parser() -> argparse.ArgumentParser:
     return p
 
 
-def _check_outputs(args: argparse.Namespace) -> list[str]:
-    """Checks outputs, formats and AOV names before rendering; returns the AOVs to write."""
-    exposure_setting(args.exposure)
-    if args.denoise and not denoising.available():
-        raise gi.SettingError(denoising.INSTALL_HINT)
-    if args.method not in gi.methods():
-        raise gi.SettingError(f"unknown method {args.method!r} (use {', '.join(gi.methods())})")
-    names = aov_names(args.method, args.denoise)
-    wanted = names[1:] if "all" in args.aov else list(dict.fromkeys(args.aov))
-    check_aovs(args.method, wanted, args.denoise)
-    targets: list[Path] = []
-    for out in args.output:
-        targets += planned_files(out, wanted)
-    seen: set[Path] = set()
-    for t in targets:
-        check_output_path(t)
-        if t.resolve() in seen:
-            raise ValueError(f"{t} would be written twice")
-        seen.add(t.resolve())
-    return wanted
-
-
 @dataclass(frozen=True)
 class _Output:
     path: str
     video: bool
     numbered: bool
+
+    def at(self, frame: int) -> str:
+        """The image file of ``frame`` (the path itself for a still)."""
+        return self.path % frame if self.numbered else self.path.replace("%%", "%")
 
 
 def _frame_number_count(path: str) -> int:
@@ -258,11 +263,13 @@ def _frame_number_count(path: str) -> int:
     count = 0
     for m in re.finditer(r"%(%|\d*d)?", path):
         if m.group(1) is None:
-            raise ValueError(
-                f"output {path!r}: a frame-number pattern takes %d or %04d (and %% for a %)"
-            )
+            raise _output_error(path, "a frame-number pattern takes %d or %04d (and %% for a %)")
         count += m.group(1) != "%"
     return count
+
+
+def _output_error(path: str, reason: str) -> gi.SettingError:
+    return named_error("output", f"output {path!r}: {reason}")
 
 
 def _outputs(paths: list[str]) -> list[_Output]:
@@ -272,33 +279,108 @@ def _outputs(paths: list[str]) -> list[_Output]:
         suffix = Path(p).suffix.lower()
         numbers = _frame_number_count(p)
         if numbers > 1:
-            raise ValueError(f"output {p!r}: more than one frame number")
+            raise _output_error(p, "more than one frame number")
         if suffix in VIDEO_FORMATS:
             if numbers:
-                raise ValueError(f"output {p!r}: a video takes no frame number")
+                raise _output_error(p, "a video takes no frame number")
             out.append(_Output(p, True, False))
         elif suffix in FLOAT_FORMATS | SRGB_FORMATS:
             out.append(_Output(p, False, numbers == 1))
         else:
             images = ", ".join(sorted(FLOAT_FORMATS | SRGB_FORMATS))
             videos = ", ".join(sorted(VIDEO_FORMATS))
-            raise ValueError(
-                f"unsupported output format {suffix!r} of {p!r} (images: {images}; video: {videos})"
+            raise _output_error(
+                p, f"unsupported output format {suffix!r} (images: {images}; video: {videos})"
             )
     return out
 
 
+def _is_sequence(args: argparse.Namespace, outputs: list[_Output]) -> bool:
+    return args.frames is not None or any(o.video or o.numbered for o in outputs)
+
+
+def _check_outputs(args: argparse.Namespace, outputs: list[_Output]) -> list[str]:
+    """Checks the method, display settings, AOV names and outputs before the scene is
+    loaded or anything rendered; returns the AOVs to write. For a sequence the files of its
+    first frame are checked here, those of every frame once the frames are known
+    (:func:`_check_files`)."""
+    exposure_setting(args.exposure)
+    if args.denoise and not denoising.available():
+        raise named_error("denoise", denoising.INSTALL_HINT)
+    if args.method not in gi.methods():
+        raise named_error(
+            "method", f"unknown method {args.method!r} (use {', '.join(gi.methods())})"
+        )
+    progressive = args.progressive or args.time is not None or args.passes is not None
+    sequence = _is_sequence(args, outputs)
+    if progressive:
+        if sequence:
+            raise named_error(
+                "progressive",
+                "--progressive renders one still image: not with --frames, an image"
+                " sequence or a video",
+            )
+        if not args.progressive:
+            raise named_error("progressive", "--time and --passes need --progressive")
+        if args.time is None and args.passes is None:
+            raise named_error("progressive", "--progressive needs --time SECONDS or --passes N")
+        if args.passes is not None and args.passes < 1:
+            raise named_error("passes", f"--passes must be at least 1, got {args.passes}")
+    names = aov_names(args.method, args.denoise)
+    wanted = names[1:] if "all" in args.aov else list(dict.fromkeys(args.aov))
+    check_aovs(args.method, wanted, args.denoise)
+    if sequence:
+        for o in outputs:
+            if not o.video and not o.numbered:
+                raise _output_error(
+                    o.path,
+                    "an image sequence needs a frame number in its name, e.g. out/frame_%04d.exr",
+                )
+        if wanted and all(o.video for o in outputs):
+            raise named_error("aov", "--aov needs an image-sequence output (videos hold none)")
+    _check_files(outputs, wanted, [args.frames[0] if args.frames is not None else 0])
+    return wanted
+
+
+def _check_files(outputs: list[_Output], aovs: list[str], frames: Iterable[int]) -> None:
+    """Every file the outputs write for ``frames``: a known format, in a directory that can
+    be written (each tried once), and written once."""
+    seen: set[Path] = set()
+    directories: set[Path] = set()
+    planned = [(o, [Path(o.path)]) for o in outputs if o.video]
+    for n in frames:
+        planned += [(o, planned_files(o.at(n), aovs)) for o in outputs if not o.video]
+    for o, targets in planned:
+        for t in targets:
+            if not o.video:
+                check_format(t)
+            key = t.absolute()
+            if key in seen:
+                raise _output_error(o.path, f"{t} would be written twice")
+            seen.add(key)
+            if key.parent not in directories:
+                check_writable(t)
+                directories.add(key.parent)
+
+
 def _load(source: str) -> gi.Scene:
-    """Loads a scene, printing what its files hold that gi does not render."""
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", gi.AssetWarning)
-        scene = gi.load_scene(source)
-    for w in caught:
-        if issubclass(w.category, gi.AssetWarning):
-            print(f"gi: warning: {w.message}", file=sys.stderr)
-        else:
-            warnings.showwarning(w.message, w.category, w.filename, w.lineno)
-    return scene
+    """Loads a scene; what its files hold that gi does not render is printed as it is found
+    (:func:`_show_warning`), so also when loading then fails."""
+    return gi.load_scene(source)
+
+
+#: Warnings printed as ``gi: warning: ...`` (each time, not once per place).
+_GI_WARNINGS = (gi.AssetWarning, gi.SceneWarning, gi.RenderWarning)
+
+
+def _show_warning(message, category, filename, lineno, file=None, line=None):  # type: ignore[no-untyped-def]
+    if issubclass(category, _GI_WARNINGS):
+        print(f"gi: warning: {message}", file=sys.stderr)
+    else:
+        _default_showwarning(message, category, filename, lineno, file, line)
+
+
+_default_showwarning = warnings.showwarning
 
 
 def _settings(args: argparse.Namespace) -> dict[str, object]:
@@ -315,10 +397,10 @@ def _settings(args: argparse.Namespace) -> dict[str, object]:
 
 def _render(args: argparse.Namespace) -> int:
     outputs = _outputs(args.output)
-    if args.frames is not None or any(o.video or o.numbered for o in outputs):
-        return _render_sequence(args, outputs)
-    aovs = _check_outputs(args)
-    if args.progressive or args.time is not None or args.passes is not None:
+    aovs = _check_outputs(args, outputs)
+    if _is_sequence(args, outputs):
+        return _render_sequence(args, outputs, aovs)
+    if args.progressive:
         return _render_progressive(args, aovs)
     scene = _load(args.scene)
     result = gi.render(
@@ -336,22 +418,22 @@ def _render(args: argparse.Namespace) -> int:
         stages = ", ".join(f"{n} {t:.2f}s" for n, t in s.stages)
         files = ", ".join(map(str, written))
         print(f"wrote {files} ({s.method}, {s.total_seconds:.2f}s: {stages})", file=sys.stderr)
-        if s.estimator:
-            print(f"estimator {s.estimator}: {s.estimator_reason}", file=sys.stderr)
-        if s.first_bounce:
-            print(f"first bounce {s.first_bounce}: {s.first_bounce_reason}", file=sys.stderr)
+        _print_choices(args, result)
     return 0
+
+
+def _print_choices(args: argparse.Namespace, result: gi.RenderResult) -> None:
+    """``-v``: what ispm's automatic choices chose, and why."""
+    s = result.stats
+    if args.verbose and s.estimator:
+        print(f"estimator {s.estimator}: {s.estimator_reason}", file=sys.stderr)
+    if args.verbose and s.first_bounce:
+        print(f"first bounce {s.first_bounce}: {s.first_bounce_reason}", file=sys.stderr)
 
 
 def _render_progressive(args: argparse.Namespace, aovs: list[str]) -> int:
     """``--progressive``: passes until ``--time`` or ``--passes``; Ctrl-C keeps the passes
     done so far and writes them."""
-    if not args.progressive:
-        raise ValueError("--time and --passes need --progressive")
-    if args.time is None and args.passes is None:
-        raise ValueError("--progressive needs --time SECONDS or --passes N")
-    if args.passes is not None and args.passes < 1:
-        raise ValueError("--passes must be at least 1")
     scene = _load(args.scene)
     options = {**_settings(args), "progressive": True}
     renderer = gi.Renderer(scene, args.method, **options)
@@ -368,7 +450,7 @@ def _render_progressive(args: argparse.Namespace, aovs: list[str]) -> int:
             passes=args.passes,
             seconds=args.time,
             aovs=True,
-            extras=any(a not in gi.RenderResult.BASE for a in aovs),
+            extras=any(a not in BASE for a in aovs),
             progress=not args.quiet,
         )
     finally:
@@ -383,9 +465,10 @@ def _render_progressive(args: argparse.Namespace, aovs: list[str]) -> int:
         why = "interrupted, " if interrupted else ""
         print(
             f"wrote {files} ({result.stats.method}, progressive: {why}{result.stats.passes}"
-            " passes)",
+            f" passes, {result.stats.total_seconds:.1f}s)",
             file=sys.stderr,
         )
+        _print_choices(args, result)
     return 0
 
 
@@ -413,47 +496,44 @@ def _batch(args: argparse.Namespace) -> int:
     return 0 if summary["failed"] == 0 else 1
 
 
-def _render_sequence(args: argparse.Namespace, outputs: list[_Output]) -> int:
-    """Renders frames of the scene's animation to image sequences and videos."""
-    for o in outputs:
-        if not o.video and not o.numbered:
-            raise ValueError(
-                f"output {o.path!r}: an image sequence needs a frame number in its name,"
-                " e.g. out/frame_%04d.exr"
-            )
-    if args.aov and not any(not o.video for o in outputs):
-        raise ValueError("--aov needs an image-sequence output")
+def _render_sequence(args: argparse.Namespace, outputs: list[_Output], aovs: list[str]) -> int:
+    """Renders frames of the scene's animation to image sequences and videos: each frame's
+    images are written like a still's (:func:`gi.save_result`), after every file of every
+    frame was checked."""
     scene = _load(args.scene)
     if args.frames is None and scene.animation_duration is None:
-        raise ValueError(f"{args.scene} has no animation: give the frames (--frames START:END)")
+        raise named_error(
+            "frames", f"{args.scene} has no animation: give the frames (--frames START:END)"
+        )
     frames = args.frames if args.frames is not None else default_frames(scene, args.fps)
+    _check_files(outputs, aovs, frames)
     renderer = gi.Renderer(scene, args.method, **_settings(args))
-    base = set(gi.RenderResult.BASE) - {"radiance"}
+    videos = [o for o in outputs if o.video]
+    w, h = renderer.size
+    if videos and VideoWriter.padded_size(w, h) != (w, h):
+        pw, ph = VideoWriter.padded_size(w, h)
+        print(
+            f"gi: warning: {', '.join(o.path for o in videos)}: H.264 (yuv420p) needs even"
+            f" sizes: the {w}x{h} frames are padded to {pw}x{ph} by repeating the last"
+            " column or row (give an even --size to avoid it)",
+            file=sys.stderr,
+        )
     sequence = renderer.render_animation(
         frames,
         args.fps,
-        aovs=args.denoise or any(a in base for a in args.aov),
-        extras=any(a not in base for a in args.aov),
+        aovs=args.denoise or any(a in BASE for a in aovs),
+        extras=any(a not in BASE and a != "noisy" for a in aovs),
         progress=not args.quiet,
     )
-    writers = [VideoWriter(o.path, args.fps) for o in outputs if o.video]
+    writers = [VideoWriter(o.path, args.fps) for o in videos]
     start = time.monotonic()
     try:
         for n, result in sequence:
             if args.denoise:
                 result = gi.denoise(result)
-            missing = [name for name in args.aov if name not in result.aov_names()]
-            if missing:
-                available = ", ".join(result.aov_names())
-                raise ValueError(f"no image {missing[0]!r} (available: {available})")
             for o in outputs:
-                if o.video:
-                    continue
-                path = Path(o.path % n)
-                gi.save_image(path, result.radiance, exposure=args.exposure, tonemap=args.tonemap)
-                for name in args.aov:
-                    aov_path = path.with_name(f"{path.stem}.{name}{path.suffix}")
-                    gi.save_image(aov_path, result.aov(name), exposure=0.0)
+                if not o.video:
+                    save_result(o.at(n), result, aovs, tonemap=args.tonemap, exposure=args.exposure)
             frame = to_srgb8(result.radiance, args.exposure, args.tonemap)
             for w in writers:
                 w.write(frame)
@@ -495,7 +575,12 @@ def _view(args: argparse.Namespace) -> int:
 
 def _footprints(args: argparse.Namespace) -> int:
     qs = [1.0, 5.0, 25.0, 50.0, 75.0, 95.0, 99.0]
-    rows = gi.footprint_radii(_load(args.scene), args.photons, args.seed, args.smoothing, qs)
+    # footprint_radii takes unsigned integers and checks the ranges of photons and
+    # smoothing: values outside them are passed as ones it refuses with its range.
+    photons = min(max(args.photons, 0), U64_MAX)
+    smoothing = args.smoothing if math.isfinite(args.smoothing) else 0.0
+    seed = int_setting("seed", args.seed, U64_MAX)
+    rows = gi.footprint_radii(_load(args.scene), photons, seed, smoothing, qs)
     print(f"footprint radius (m) by percentile, {args.photons} photons, s = {args.smoothing}")
     print(f"{'kind':8} {'photons':>9} " + " ".join(f"{f'p{q:g}':>8}" for q in qs))
     for kind, (count, radii) in rows.items():
@@ -503,53 +588,47 @@ def _footprints(args: argparse.Namespace) -> int:
     return 0
 
 
-def _render_warnings_printed(show):  # type: ignore[no-untyped-def]
-    """``warnings.showwarning`` that prints a :class:`gi.RenderWarning` as
-    ``gi: warning: ...`` and hands the others to ``show``."""
-
-    def showwarning(message, category, filename, lineno, file=None, line=None):  # type: ignore[no-untyped-def]
-        if issubclass(category, gi.RenderWarning):
-            print(f"gi: warning: {message}", file=sys.stderr)
-        else:
-            show(message, category, filename, lineno, file, line)
-
-    return showwarning
-
-
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
-    try:
-        if args.command == "scenes":
-            for name, desc in gi.builtin_scenes():
-                print(f"{name:15} {desc}")
-            return 0
-        if args.command == "footprints":
-            return _footprints(args)
-        if args.command == "batch":
-            return _batch(args)
-        if args.command == "info":
-            print(f"gi {gi.__version__}")
-            print(gi.adapter_report(args.adapter))
-            return 0
-        if args.command == "view":
-            return _view(args)
-        if args.command == "methods":
-            print("\n".join(gi.methods()))
-            return 0
-        with warnings.catch_warnings():
-            # Options the method ignores: a line on stderr, the render goes on.
-            warnings.simplefilter("always", gi.RenderWarning)
-            warnings.showwarning = _render_warnings_printed(warnings.showwarning)
-            return _render(args)
-    except gi.GiError as e:
-        print(f"gi: error: {e}", file=sys.stderr)
-        return 2
-    except (OSError, ValueError) as e:
-        print(f"gi: error: {e}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print("\ngi: interrupted", file=sys.stderr)
-        return 130
+    with warnings.catch_warnings():
+        for category in _GI_WARNINGS:
+            warnings.simplefilter("always", category)
+        warnings.showwarning = _show_warning
+        try:
+            return run(args)
+        except (gi.GiError, OSError, ValueError) as e:
+            # OSError: what the operating system refused outside gi's own checks; ValueError:
+            # the viewer's (every render and output error is a gi.GiError, tests/
+            # test_typed_errors.py).
+            print(f"gi: error: {e}", file=sys.stderr)
+            return 2
+        except KeyboardInterrupt:
+            print("\ngi: interrupted", file=sys.stderr)
+            return 130
+
+
+def run(args: argparse.Namespace) -> int:
+    """Runs a parsed command; errors are raised (:class:`gi.GiError` for every input error
+    gi checks), :func:`main` prints them."""
+    if args.command == "scenes":
+        for name, desc in gi.builtin_scenes():
+            print(f"{name:15} {desc}")
+        return 0
+    if args.command == "footprints":
+        return _footprints(args)
+    if args.command == "batch":
+        return _batch(args)
+    if args.command == "info":
+        print(f"gi {gi.__version__}")
+        print(gi.adapter_report(args.adapter))
+        return 0
+    if args.command == "view":
+        return _view(args)
+    if args.command == "methods":
+        for name in gi.methods():
+            print(f"{name:8} {METHOD_SUMMARIES.get(name, '')}".rstrip())
+        return 0
+    return _render(args)
 
 
 if __name__ == "__main__":

@@ -120,6 +120,18 @@ def denoise(result: RenderResult) -> RenderResult:
     the AOV ``noisy`` and the time taken is the stage ``denoise`` in ``stats``. For ``ispm``
     (results with the ``direct``, ``specular`` and ``indirect`` AOVs) the indirect light is
     first filtered at the photon scale (`filter_indirect`) and recomposed."""
+    from gi._checks import setting_error
+    from gi.render import RenderResult
+
+    if not isinstance(result, RenderResult):
+        raise setting_error("result", f"expected a gi.RenderResult, got {result!r}")
+    for name in ("albedo", "normal"):
+        if getattr(result, name).size == 0:
+            raise setting_error(
+                "aovs",
+                "denoising is guided by the albedo and normal AOVs, which this result lacks:"
+                f" render with aovs=True ({result!r})",
+            )
     t = time.perf_counter()
     radiance = result.radiance
     parts = ("direct", "specular", "indirect")

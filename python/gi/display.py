@@ -22,6 +22,8 @@ import zlib
 
 import numpy as np
 
+from gi._checks import exposure_setting, setting_error
+
 TONEMAPS = ("clip", "filmic", "agx", "aces")
 
 # OCIO names in the built-in default config (ACES CG config, OCIO >= 2.2).
@@ -53,9 +55,12 @@ _AGX_SIGMOID = (15.5, -40.14, 31.96, -6.868, 0.4298, 0.1191, -0.00232)
 
 
 def check_tonemap(name: str) -> str:
-    """Returns ``name`` if it is a known tone mapper, else raises ``ValueError``."""
-    if name not in TONEMAPS:
-        raise ValueError(f"unknown tonemap {name!r} (use one of: {', '.join(TONEMAPS)})")
+    """Returns ``name`` if it is a known tone mapper, else raises :class:`gi.SettingError`
+    (also a ``ValueError``)."""
+    if not isinstance(name, str) or name not in TONEMAPS:
+        raise setting_error(
+            "tonemap", f"unknown tonemap {name!r} (use one of: {', '.join(TONEMAPS)})"
+        )
     return name
 
 
@@ -102,6 +107,7 @@ def aces(linear: np.ndarray) -> np.ndarray:
 def to_display(linear: np.ndarray, tonemap: str = "clip", exposure: float = 0.0) -> np.ndarray:
     """Linear radiance (H×W×3) → display-encoded sRGB float in [0, 1]."""
     check_tonemap(tonemap)
+    exposure = exposure_setting(exposure)
     x = np.nan_to_num(np.asarray(linear, dtype=np.float32), nan=0.0, posinf=0.0, neginf=0.0)
     x = np.maximum(x, 0.0) * np.float32(2.0**exposure)
     if x.ndim == 2 or x.shape[-1] != 3:

@@ -3,8 +3,18 @@
 gi reads glTF itself rather than through trimesh so that material factors keep their exact
 float values (trimesh stores ``baseColorFactor`` as 8-bit), missing factors get the glTF
 defaults, and features gi does not render (emission, vertex colours, occlusion maps) are
-reported by name instead of dropped. Base colour, metallic-roughness and normal textures
-(``TEXCOORD_0``, repeat wrap) and alpha masks are read into a :class:`gi.textures.TextureSet`.
+reported by name instead of dropped. Base colour, metallic-roughness, normal and emissive
+textures (``TEXCOORD_0``, repeat wrap) and alpha masks are read into a
+:class:`gi.textures.TextureSet`.
+
+Lights (``KHR_lights_punctual``) come out in the file's world space as gi light descriptions.
+The extension gives point and spot lights in candela (lm/sr) and directional lights in lux
+(lm/m²); gi's are radiometric (W/sr, W/m², per linear RGB channel), so both are divided by
+683 lm/W (:data:`LUMENS_PER_WATT`), the luminous efficacy that defines the candela (SI) and
+the factor Blender's glTF exporter multiplies by: Blender → glTF → gi gives back the W/sr and
+W/m² the exporter started from. Emission (``emissiveFactor`` × ``emissiveTexture`` ×
+``KHR_materials_emissive_strength``) has no unit in glTF; it is taken as radiance
+(W·sr⁻¹·m⁻²), which is what Blender's exporter writes (emission colour × strength).
 """
 
 from __future__ import annotations
@@ -24,12 +34,23 @@ from gi.textures import TextureError, TextureSet, resample
 _DTYPES = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32}
 _DTYPES[5126] = np.float32
 _COMPONENTS = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT4": 16}
-_UNSUPPORTED_TEXTURES = ("occlusionTexture", "emissiveTexture")
+_UNSUPPORTED_TEXTURES = ("occlusionTexture",)
 _REPEAT = 10497
+# Material extensions gi reads.
+_MATERIAL_EXTENSIONS = (
+    "KHR_materials_transmission",
+    "KHR_materials_ior",
+    "KHR_materials_emissive_strength",
+)
+# Luminous efficacy (lm/W) from KHR_lights_punctual's photometric units to gi's radiometric
+# ones: 683 lm/W defines the candela (SI Brochure, 9th ed., 2019, K_cd) and is Blender's
+# glTF exporter's PBR_WATTS_TO_LUMENS.
+LUMENS_PER_WATT = 683.0
 
 
-# Required extensions gi can read a file with (textures and emission are reported anyway).
+# Required extensions gi can read a file with (what it leaves out is reported).
 _READABLE = {
+    "KHR_lights_punctual",
     "KHR_materials_transmission",
     "KHR_materials_ior",
     "KHR_materials_emissive_strength",
@@ -58,6 +79,7 @@ class GltfMesh:
     materials: list[tuple[str, dict[str, Any]]]  # (name, gi material description)
     warnings: dict[str, str] = field(default_factory=dict)  # JSON path -> what is ignored
     uvs: np.ndarray | None = None  # float64 (N, 2), TEXCOORD_0 (v down), zero where none
+    lights: list[dict[str, Any]] = field(default_factory=list)  # gi lights, world space
 
 
 def _read_document(path: Path) -> tuple[dict[str, Any], bytes | None]:
@@ -149,7 +171,7 @@ class _Reader:
         uri = img.get("uri")
         if uri is not None and not uri.startswith("data:"):
             return textures.add(self.path.parent / urllib.parse.unquote(uri), colour)
-        key = f"{self.path}#image{i}"
+        key = f"{textures.name(self.path)}#image{i}"
         if (key if colour else f"{key}#linear") in textures.arrays:
             return key if colour else f"{key}#linear"
         if uri is not None:
@@ -296,8 +318,7 @@ def _material(
     for name in _UNSUPPORTED_TEXTURES:
         if name in mat:
             warn[f"{where}.{name}"] = "this texture is not supported; it is ignored"
-    if any(float(c) > 0 for c in mat.get("emissiveFactor", [0, 0, 0])):
-        warn[f"{where}.emissiveFactor"] = "emission is not supported; the surface is not a light"
+    _emission(desc, mat, where, warn, reader, textures)
     mode = mat.get("alphaMode", "OPAQUE")
     if mode != "OPAQUE":
         cutoff = float(mat.get("alphaCutoff", 0.5)) if mode == "MASK" else 0.5
@@ -319,9 +340,81 @@ def _material(
             )
             desc["alpha_cutoff"] = 0.5
     for name in ext:
-        if name not in ("KHR_materials_transmission", "KHR_materials_ior"):
+        if name not in _MATERIAL_EXTENSIONS:
             warn[f"{where}.extensions.{name}"] = "this material extension is ignored"
     return desc
+
+
+def _emission(
+    desc: dict[str, Any],
+    mat: dict[str, Any],
+    where: str,
+    warn: dict[str, str],
+    reader: _Reader | None,
+    textures: TextureSet | None,
+) -> None:
+    """glTF emission onto the material: ``emission`` = ``emissiveFactor`` × the
+    ``KHR_materials_emissive_strength`` (radiance, W·sr⁻¹·m⁻²), ``emission_texture`` =
+    ``emissiveTexture`` (sRGB); a ``doubleSided`` material emits from both faces."""
+    factor = np.asarray(mat.get("emissiveFactor", [0, 0, 0]), dtype=np.float64)[:3]
+    strength = mat.get("extensions", {}).get("KHR_materials_emissive_strength", {})
+    emission = np.maximum(factor, 0.0) * max(float(strength.get("emissiveStrength", 1.0)), 0.0)
+    if not emission.max() > 0:
+        return  # glTF's default factor is black: an emissive texture alone emits nothing
+    desc["emission"] = emission.tolist()
+    if mat.get("doubleSided", False):
+        desc["two_sided"] = True
+    if "emissiveTexture" in mat:
+        info = mat["emissiveTexture"]
+        tex = _texture(reader, textures, info, f"{where}.emissiveTexture", True, warn)
+        if tex:
+            desc["emission_texture"] = tex
+
+
+def _light(
+    doc: dict[str, Any], ni: int, world: np.ndarray, warn: dict[str, str]
+) -> dict[str, Any] | None:
+    """The ``KHR_lights_punctual`` light of node ``ni`` (world transform ``world``) as a gi
+    light: positions from the node's origin, directions along its -z axis; intensities
+    divided by :data:`LUMENS_PER_WATT` (candela → W/sr, lux → W/m²) times ``color``."""
+    where = f"nodes[{ni}].extensions.KHR_lights_punctual"
+    try:
+        index = doc["nodes"][ni]["extensions"]["KHR_lights_punctual"]["light"]
+        light = doc["extensions"]["KHR_lights_punctual"]["lights"][index]
+        kind = light["type"]
+    except (KeyError, IndexError, TypeError):
+        warn[where] = "names no light of the file's KHR_lights_punctual lights; ignored"
+        return None
+    lw = f"extensions.KHR_lights_punctual.lights[{index}]"
+    color = np.maximum(np.asarray(light.get("color", [1, 1, 1]), dtype=np.float64)[:3], 0.0)
+    value = (color * max(float(light.get("intensity", 1.0)), 0.0) / LUMENS_PER_WATT).tolist()
+    direction = world[:3, :3] @ np.array([0.0, 0.0, -1.0])
+    with np.errstate(all="ignore"):
+        direction = (direction / np.linalg.norm(direction)).tolist()
+    position = world[:3, 3].tolist()
+    if kind in ("point", "spot") and "range" in light:
+        warn[f"{lw}.range"] = "ranges are ignored: the light falls off as 1/d² without a cutoff"
+    if kind == "point":
+        return {"type": "point", "position": position, "intensity": value}
+    if kind == "directional":
+        return {"type": "directional", "direction": direction, "irradiance": value}
+    if kind != "spot":
+        warn[f"{lw}.type"] = f"unknown light type {kind!r}; ignored"
+        return None
+    spot = light.get("spot", {})
+    outer = np.degrees(float(spot.get("outerConeAngle", np.pi / 4)))
+    inner = np.degrees(float(spot.get("innerConeAngle", 0.0)))
+    if outer >= 89.9:
+        warn[f"{lw}.spot.outerConeAngle"] = "gi's spot lights reach at most 89.9°; clamped"
+        outer = 89.9
+    return {
+        "type": "spot",
+        "position": position,
+        "direction": direction,
+        "intensity": value,
+        "inner_angle": float(min(max(inner, 0.0), outer)),
+        "outer_angle": float(outer),
+    }
 
 
 def _bake_metallic(
@@ -388,6 +481,7 @@ def load_gltf(path: Path, textures: TextureSet | None = None) -> GltfMesh:
         roots = [i for i in range(len(nodes)) if i not in children]
 
     verts, faces, normals, face_mats, uvs = [], [], [], [], []
+    lights: list[dict[str, Any]] = []
     used: dict[int, int] = {}  # glTF material index -> our index
     materials: list[tuple[str, dict[str, Any]]] = []
     names: set[str] = set()
@@ -401,9 +495,9 @@ def load_gltf(path: Path, textures: TextureSet | None = None) -> GltfMesh:
         world = parent @ _node_matrix(node)
         stack.extend((c, world, depth + 1) for c in reversed(node.get("children", [])))
         if "KHR_lights_punctual" in node.get("extensions", {}):
-            warn[f"nodes[{ni}].extensions.KHR_lights_punctual"] = (
-                "lights in mesh files are ignored; give them in the scene's `lights`"
-            )
+            light = _light(doc, ni, world, warn)
+            if light is not None:
+                lights.append(light)
         if "mesh" not in node:
             continue
         lin = world[:3, :3]
@@ -474,7 +568,8 @@ def load_gltf(path: Path, textures: TextureSet | None = None) -> GltfMesh:
                 materials.append((name, desc))
             face_mats.append(np.full(len(tri), used[mi], np.int64))
     if not faces:
-        return GltfMesh(np.zeros((0, 3)), np.zeros((0, 3), np.int64), None, np.zeros(0), [], warn)
+        none = np.zeros((0, 3))
+        return GltfMesh(none, none.astype(np.int64), None, np.zeros(0), [], warn, None, lights)
     any_normals = any(n is not None for n in normals)
     face_materials = np.concatenate(face_mats)
     if materials and (face_materials < 0).any():
@@ -499,4 +594,5 @@ def load_gltf(path: Path, textures: TextureSet | None = None) -> GltfMesh:
         materials=materials,
         warnings=warn,
         uvs=np.concatenate(uvs),
+        lights=lights,
     )

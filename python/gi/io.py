@@ -2,21 +2,30 @@
 
 ``.exr`` keeps float radiance and holds every requested AOV as named layers in one file;
 ``.hdr``/``.pfm``/``.tif`` keep float values, one image per file; ``.png``/``.jpg`` are
-8-bit sRGB through a display transform (see :mod:`gi.display`). Files are written to a
-temporary name beside the target and renamed into place, so a failed write leaves no
-partial file.
+8-bit sRGB through a display transform (see :mod:`gi.display`). Every argument is checked
+before anything is written; the files of one call are written to temporary names beside
+their targets and renamed into place only once all of them are written, so a failed write
+leaves no partial file and no partial set of files.
+
+Errors are typed: :class:`gi.SettingError` (also a ``ValueError``) for a bad argument (an
+unknown format, tone mapper or AOV, an image shape a format cannot hold), naming it and
+what it allows; :class:`gi.OutputError` (also an ``OSError``) for a file that cannot be
+written.
 """
 
 from __future__ import annotations
 
 import os
+import tempfile
 from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from gi import _checks, display
+from gi._checks import OutputError, named_error
 
 if TYPE_CHECKING:
     from gi.render import RenderResult
@@ -27,6 +36,16 @@ LAYERED_FORMATS = {".exr"}
 FLOAT_FORMATS = {".exr", ".hdr", ".pfm", ".tif", ".tiff"}
 #: Suffixes written as 8-bit sRGB through a display transform.
 SRGB_FORMATS = {".png", ".jpg", ".jpeg"}
+#: Channel counts a format holds, where it does not hold any (OpenImageIO's writers). An
+#: image of one channel is written as grey RGB where one channel is not held (``.hdr``);
+#: other counts a format does not hold are refused before anything is written.
+FORMAT_CHANNELS = {
+    ".hdr": (3,),
+    ".pfm": (1, 3),
+    ".png": (1, 2, 3, 4),
+    ".jpg": (1, 3),
+    ".jpeg": (1, 3),
+}
 
 
 def _oiio():  # type: ignore[no-untyped-def]
@@ -54,75 +73,171 @@ def channel_names(aov: str, channels: int) -> list[str]:
     return [f"{aov}.{c}" for c in "RGB"][:channels]
 
 
-def check_output_path(path: str | Path) -> Path:
-    """Checks that ``path`` has a supported extension and can be written, without writing.
+def _as_path(path: Any, setting: str = "path") -> Path:
+    if isinstance(path, (str, os.PathLike)):
+        try:
+            out = Path(path)
+        except TypeError:
+            pass
+        else:
+            if "\0" not in str(out):
+                return out
+    raise named_error(setting, f"invalid setting `{setting}`: expected a file path, got {path!r}")
 
-    Raises ``ValueError`` for an unknown format and ``OSError`` for a path that is a
-    directory or lies in a directory that cannot be created or written.
-    """
-    path = Path(path)
-    suffix = path.suffix.lower()
-    if suffix not in FLOAT_FORMATS | SRGB_FORMATS:
+
+def check_format(path: str | Path) -> Path:
+    """``path`` if its extension is an image format gi writes, else :class:`gi.SettingError`
+    (also a ``ValueError``) naming the formats."""
+    path = _as_path(path)
+    if path.suffix.lower() not in FLOAT_FORMATS | SRGB_FORMATS:
         known = ", ".join(sorted(FLOAT_FORMATS | SRGB_FORMATS))
-        raise ValueError(f"unsupported image format {path.suffix!r} for {path} (use {known})")
-    return check_writable(path)
-
-
-def check_writable(path: str | Path) -> Path:
-    """Raises ``OSError`` if ``path`` is a directory or lies in a directory that cannot be
-    created or written; writes nothing."""
-    path = Path(path)
-    if path.is_dir():
-        raise OSError(f"cannot write {path}: it is a directory")
-    parent = path.absolute().parent
-    while not parent.exists():
-        parent = parent.parent
-    if not parent.is_dir():
-        raise OSError(f"cannot write {path}: {parent} is not a directory")
-    if not os.access(parent, os.W_OK | os.X_OK):
-        raise OSError(f"cannot write {path}: {parent} is not writable")
+        raise named_error(
+            "path", f"unsupported image format {path.suffix!r} for {path} (use {known})"
+        )
     return path
 
 
-def _write(
-    path: Path,
-    data: np.ndarray,
-    fmt: str,
-    names: list[str] | None = None,
-    attributes: Mapping[str, str | int | float] | None = None,
-) -> None:
-    """Writes H×W×C ``data`` atomically (temporary file, then rename)."""
+def check_output_path(path: str | Path) -> Path:
+    """Checks that ``path`` has a supported extension and can be written, without writing.
+
+    Raises :class:`gi.SettingError` (also a ``ValueError``) for an unknown format and
+    :class:`gi.OutputError` (also an ``OSError``) for a path that is a directory or lies in
+    a directory that cannot be created or written.
+    """
+    return check_writable(check_format(path))
+
+
+def check_writable(path: str | Path) -> Path:
+    """Raises :class:`gi.OutputError` if ``path`` is a directory or lies in a directory that
+    cannot be created or written. Whether a directory can be written is tried, not read from
+    its permission bits (which a root user passes even on ``/proc``): a probe file is made
+    in the nearest existing directory and removed at once."""
+    path = _as_path(path)
+    try:
+        if path.is_dir():
+            raise OutputError(path, "it is a directory")
+        parent = path.absolute().parent
+        while not parent.exists():
+            parent = parent.parent
+    except (OSError, ValueError) as e:  # a name too long, a NUL byte
+        if isinstance(e, OutputError):
+            raise
+        raise OutputError(path, str(e)) from e
+    if not parent.is_dir():
+        raise OutputError(path, f"{parent} is not a directory")
+    try:
+        fd, probe = tempfile.mkstemp(prefix=".gi-probe-", dir=parent)
+    except OSError as e:
+        raise OutputError(path, f"{parent} is not writable ({e.strerror or e})") from e
+    os.close(fd)
+    os.unlink(probe)
+    return path
+
+
+@dataclass
+class _Planned:
+    """One file of a write: H×W×C ``data`` in OpenImageIO pixel format ``fmt``."""
+
+    path: Path
+    data: np.ndarray
+    fmt: str
+    names: list[str] | None = None
+    attributes: Mapping[str, str | int | float] = field(default_factory=dict)
+
+
+def _fit_channels(path: Path, img: np.ndarray, what: str) -> np.ndarray:
+    """``img`` (H×W×C) with channels ``path``'s format holds: one channel becomes grey RGB
+    where the format holds no single channel; other counts it does not hold are refused."""
+    held = FORMAT_CHANNELS.get(path.suffix.lower())
+    c = img.shape[2]
+    if held is None or c in held:
+        return img
+    if c == 1 and 3 in held:
+        return np.repeat(img, 3, axis=2)
+    counts = " or ".join(map(str, held))
+    raise named_error(
+        "image",
+        f"{what} for {path}: a {path.suffix} file holds {counts} channels, the image has {c}"
+        " (use .exr or .tif for any number of channels)",
+    )
+
+
+def _write_tmp(p: _Planned) -> Path:
+    """Writes ``p`` to a hidden temporary file beside its target and reads it back."""
     oiio = _oiio()
-    h, w, c = data.shape
-    path.parent.mkdir(parents=True, exist_ok=True)
-    out = oiio.ImageOutput.create(str(path))
+    h, w, c = p.data.shape
+    try:
+        p.path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise OutputError(p.path, f"cannot make its directory ({e.strerror or e})") from e
+    out = oiio.ImageOutput.create(str(p.path))
     if out is None:
-        raise OSError(f"cannot create {path}: {oiio.geterror()}")
-    spec = oiio.ImageSpec(w, h, c, fmt)
-    if names is not None:
-        spec.channelnames = tuple(names)
-    for key, value in (attributes or {}).items():
+        raise OutputError(p.path, oiio.geterror() or "no writer for this format")
+    spec = oiio.ImageSpec(w, h, c, p.fmt)
+    if p.names is not None:
+        spec.channelnames = tuple(p.names)
+    for key, value in p.attributes.items():
         spec.attribute(key, value)
-    tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp{path.suffix}")
+    tmp = p.path.with_name(f".{p.path.stem}.{os.getpid()}.tmp{p.path.suffix}")
     try:
         try:
-            ok = out.open(str(tmp), spec) and out.write_image(np.ascontiguousarray(data))
+            ok = out.open(str(tmp), spec) and out.write_image(np.ascontiguousarray(p.data))
             if not ok:
-                raise OSError(f"cannot write {path}: {out.geterror()}")
+                raise OutputError(p.path, out.geterror() or "the writer failed")
         finally:
             closed = out.close()
         if not closed:
-            raise OSError(f"cannot write {path}: {out.geterror() or 'closing failed'}")
+            raise OutputError(p.path, out.geterror() or "closing failed")
         # Read back in full: libpng reports no error for a short write (disk full, a
         # file-size limit), which would otherwise replace a good file with a truncated one.
         try:
             read_image(tmp)
         except OSError as e:
-            raise OSError(f"cannot write {path}: the written file does not read back ({e})") from e
-        os.replace(tmp, path)
+            raise OutputError(p.path, f"the written file does not read back ({e})") from e
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise
+    return tmp
+
+
+def _write_all(planned: list[_Planned]) -> list[Path]:
+    """Writes every planned file, or none: each goes to a temporary file first, and they are
+    renamed into place only when all of them were written and read back."""
+    written: list[tuple[Path, Path]] = []
+    try:
+        for p in planned:
+            written.append((_write_tmp(p), p.path))
+        for tmp, target in written:
+            try:
+                os.replace(tmp, target)
+            except OSError as e:
+                raise OutputError(target, e.strerror or str(e)) from e
+    except BaseException:
+        for tmp, _ in written:
+            tmp.unlink(missing_ok=True)
+        raise
+    return [p.path for p in planned]
+
+
+def _image_array(image: Any, what: str) -> np.ndarray:
+    """``image`` as float32 H×W×C (H×W: one channel), else :class:`gi.SettingError`."""
+    try:
+        arr = np.asarray(image)
+    except (TypeError, ValueError) as e:  # ragged nested lists
+        raise named_error("image", f"{what}: expected a float array (H×W or H×W×C): {e}") from e
+    if arr.dtype.kind not in "biuf":
+        raise named_error(
+            "image", f"{what}: expected real numbers (H×W or H×W×C), got dtype {arr.dtype}"
+        )
+    with np.errstate(over="ignore"):  # float64 beyond float32's range: infinity, as stored
+        img = arr.astype(np.float32)
+    if img.ndim == 2:
+        img = img[:, :, None]
+    if img.ndim != 3 or 0 in img.shape:
+        raise named_error(
+            "image", f"{what}: expected a non-empty H×W or H×W×C array, got shape {img.shape}"
+        )
+    return img
 
 
 def save_image(
@@ -132,20 +247,21 @@ def save_image(
 
     ``.exr`` (and ``.hdr``/``.pfm``/``.tif``) store linear float values as they are;
     ``.png``/``.jpg`` store 8-bit sRGB through ``tonemap`` (see :mod:`gi.display`) after
-    ``exposure`` stops.
+    ``exposure`` stops. One channel (a depth image) is written as grey RGB to formats that
+    hold no single channel (``.hdr``); a channel count a format cannot hold is refused.
     """
-    path = check_output_path(path)
+    path = check_format(path)
     display.check_tonemap(tonemap)
     exposure = _checks.exposure_setting(exposure)
-    img = np.asarray(image, dtype=np.float32)
-    if img.ndim == 2:
-        img = img[:, :, None]
-    if img.ndim != 3:
-        raise ValueError(f"image must be H×W or H×W×C, got shape {img.shape}")
+    img = _fit_channels(path, _image_array(image, "image"), "image")
+    check_writable(path)
+    _write_all([_plan_image(path, img, exposure, tonemap)])
+
+
+def _plan_image(path: Path, img: np.ndarray, exposure: float, tonemap: str) -> _Planned:
     if path.suffix.lower() in FLOAT_FORMATS:
-        _write(path, img, "float")
-    else:
-        _write(path, display.to_srgb8(img, exposure, tonemap), "uint8")
+        return _Planned(path, img, "float")
+    return _Planned(path, display.to_srgb8(img, exposure, tonemap), "uint8")
 
 
 def save_layers(
@@ -158,26 +274,34 @@ def save_layers(
     ``layers`` maps AOV names to H×W×3 or H×W arrays of one size; channels are named by
     :func:`channel_names`. ``attributes`` become EXR header attributes.
     """
-    path = check_output_path(path)
+    path = check_format(path)
+    planned = _plan_layers(path, layers, attributes or {})
+    check_writable(path)
+    _write_all([planned])
+    return planned.names or []
+
+
+def _plan_layers(
+    path: Path, layers: Mapping[str, np.ndarray], attributes: Mapping[str, str | int | float]
+) -> _Planned:
     if path.suffix.lower() not in LAYERED_FORMATS:
-        raise ValueError(f"layers need an .exr file, not {path.suffix!r}")
+        raise named_error("path", f"layers need an .exr file, not {path.suffix!r} ({path})")
     planes: list[np.ndarray] = []
     names: list[str] = []
     shape: tuple[int, ...] | None = None
     for aov, image in layers.items():
-        img = np.asarray(image, dtype=np.float32)
-        if img.ndim == 2:
-            img = img[:, :, None]
+        img = _image_array(image, f"layer {aov!r}")
         if shape is None:
             shape = img.shape[:2]
-        if img.ndim != 3 or img.shape[:2] != shape:
-            raise ValueError(f"layer {aov!r} has shape {img.shape}, expected {shape}×C")
+        if img.shape[:2] != shape:
+            raise named_error(
+                "layers", f"layer {aov!r} has shape {img.shape}, expected {shape}×C like the first"
+            )
         planes.append(img)
         names += channel_names(aov, img.shape[2])
     if not planes:
-        raise ValueError("no layers to write")
-    _write(path, np.concatenate(planes, axis=2), "float", names, attributes)
-    return names
+        raise named_error("layers", "no layers to write")
+    return _Planned(path, np.concatenate(planes, axis=2), "float", names, attributes)
 
 
 def aov_path(output: str | Path, aov: str) -> Path:
@@ -205,45 +329,68 @@ def save_result(
 
     ``.exr``: one file, the beauty as ``R, G, B`` and each AOV as named channels
     (``albedo.R…``, ``N.X…``, ``P.X…``, ``Z``, ``direct.R…``), plus the method, samples
-    and render time as header attributes. Other formats: the beauty in ``path`` and each
-    AOV in ``NAME.AOV.EXT``; 8-bit formats map AOVs to a visible range
-    (:func:`gi.display.aov_display`). Returns the files written.
+    per pixel (of all passes, for a progressive result), passes and render time as header
+    attributes. Other formats: the beauty in ``path`` and each AOV in ``NAME.AOV.EXT``;
+    8-bit formats map AOVs to a visible range (:func:`gi.display.aov_display`), ``.hdr``
+    writes the one-channel depth as grey RGB. Everything is checked before anything is
+    written, and either every file is written or none. Returns the files written.
     """
-    from gi import __version__
+    planned = plan_result(path, result, aovs, tonemap, exposure)
+    for p in {p.path.absolute().parent: p for p in planned}.values():
+        check_writable(p.path)
+    return _write_all(planned)
 
-    path = check_output_path(path)
+
+def plan_result(
+    path: str | Path,
+    result: RenderResult,
+    aovs: Iterable[str] = (),
+    tonemap: str = "clip",
+    exposure: float = 0.0,
+) -> list[_Planned]:
+    """The files :func:`save_result` writes, converted and checked, without writing."""
+    from gi import __version__
+    from gi.render import RenderResult
+
+    path = check_format(path)
+    if not isinstance(result, RenderResult):
+        raise named_error(
+            "result", f"invalid setting `result`: expected a gi.RenderResult, got {result!r}"
+        )
     display.check_tonemap(tonemap)
     exposure = _checks.exposure_setting(exposure)
-    aovs = list(aovs)
-    names = result.aov_names()
-    for a in aovs:
-        if a not in names:
-            raise ValueError(f"no AOV {a!r} (available: {', '.join(names)})")
+    if isinstance(aovs, str):
+        aovs = [aovs]
+    try:
+        aovs = list(dict.fromkeys(aovs))
+    except TypeError:
+        raise named_error(
+            "aovs", f"invalid setting `aovs`: expected AOV names, got {aovs!r}"
+        ) from None
+    images = {a: result.aov(a) for a in aovs if a != "radiance"}
     suffix = path.suffix.lower()
     if suffix in LAYERED_FORMATS:
-        layers = {"radiance": result.radiance}
-        layers.update({a: result.aov(a) for a in aovs if a != "radiance"})
         s = result.stats
         attributes = {
             "Software": f"gi {__version__}",
             "gi:method": s.method,
-            "gi:samples_per_pixel": int(s.samples_per_pixel),
+            "gi:samples_per_pixel": int(s.samples_per_pixel) * max(int(s.passes), 1),
+            "gi:passes": int(s.passes),
             "gi:render_seconds": float(s.total_seconds),
         }
-        save_layers(path, layers, attributes)
-        return [path]
-    written = [path]
-    save_image(path, result.radiance, exposure=exposure, tonemap=tonemap)
-    for a in aovs:
+        return [_plan_layers(path, {"radiance": result.radiance, **images}, attributes)]
+    beauty = _fit_channels(path, _image_array(result.radiance, "radiance"), "radiance")
+    planned = [_plan_image(path, beauty, exposure, tonemap)]
+    for a, image in images.items():
         target = aov_path(path, a)
+        img = _fit_channels(target, _image_array(image, a), a)
         if suffix in FLOAT_FORMATS:
-            save_image(target, result.aov(a))
+            planned.append(_Planned(target, img, "float"))
         else:
-            shown = display.aov_display(a, result.aov(a), result.depth, tonemap, exposure)
-            img = shown if shown.ndim == 3 else shown[:, :, None]
-            _write(check_output_path(target), display.quantize8(img), "uint8")
-        written.append(target)
-    return written
+            shown = display.aov_display(a, image, result.depth, tonemap, exposure)
+            shown = shown if shown.ndim == 3 else shown[:, :, None]
+            planned.append(_Planned(target, display.quantize8(shown), "uint8"))
+    return planned
 
 
 def read_image(path: str | Path) -> np.ndarray:

@@ -4,8 +4,10 @@ PLY and STL by trimesh, MTL materials by :func:`parse_mtl`.
 Normals are taken only where a file stores them; the core shades the rest flat (or as the
 object's ``smooth`` asks), so no normals are computed here and trimesh never needs scipy.
 Texture maps are read into a :class:`gi.textures.TextureSet` (see ``docs/scene-format.md``);
-what a file holds that gi does not render (emission, vertex colours, some maps) is reported
-once per file and field as an :class:`AssetWarning`.
+what a file holds that gi does not render (vertex colours, some maps) is reported once per
+file and field as an :class:`AssetWarning`. Emission (MTL ``Ke``/``map_Ke``, glTF's emissive
+factor, texture and strength) becomes the materials' ``emission``; glTF punctual lights are
+returned for the scene to place (:func:`load_mesh`'s ``lights``).
 """
 
 from __future__ import annotations
@@ -26,8 +28,8 @@ MeshEntry = tuple[Any, Any, Any, "str | None", Any, Any]
 
 
 class AssetWarning(UserWarning):
-    """A mesh or scene file holds something gi does not render (textures, emission, vertex
-    colours...); ``file`` and ``field`` say what."""
+    """A mesh or scene file holds something gi does not render (some texture maps, vertex
+    colours, light ranges...); ``file`` and ``field`` say what."""
 
     def __init__(self, file: str, field: str, reason: str):
         super().__init__(f"{file}: {field}: {reason}")
@@ -37,7 +39,10 @@ class AssetWarning(UserWarning):
 
 
 def scene_error(file: str, field: str, reason: str) -> SceneError:
-    err = SceneError(f"{file}: {field}: {reason}")
+    """A :class:`gi.SceneError` with ``file``, ``field`` and ``reason``; a field that names
+    no field (``(file)``, ``(root)``: the whole file) is left out of the message."""
+    where = f"{file}: " if field in ("(file)", "(root)") else f"{file}: {field}: "
+    err = SceneError(f"{where}{reason}")
     err.file = file  # type: ignore[attr-defined]
     err.field = field  # type: ignore[attr-defined]
     err.reason = reason  # type: ignore[attr-defined]
@@ -56,7 +61,7 @@ def _unit_rows(n: np.ndarray) -> np.ndarray:
     return np.nan_to_num(n, nan=0.0, posinf=0.0, neginf=0.0)
 
 
-# MTL texture maps gi reads (key -> role); others (map_Ka, map_Ke, disp, decal, refl) are
+# MTL texture maps gi reads (key -> role); others (map_Ka, disp, decal, refl) are
 # reported. `bump`/`map_bump` hold a height map or a normal map (told apart by content).
 _MTL_MAPS = {
     "map_kd": "diffuse",
@@ -64,6 +69,7 @@ _MTL_MAPS = {
     "map_ns": "shininess",
     "map_pr": "roughness",
     "map_d": "alpha",
+    "map_ke": "emission",
     "map_bump": "bump",
     "bump": "bump",
     "norm": "normal",
@@ -90,8 +96,9 @@ def _map_file(args: list[str]) -> tuple[str, float]:
 
 def parse_mtl(path: Path, notes: dict[str, str]) -> dict[str, dict[str, Any]]:
     """An MTL file's materials as uber-BSDF descriptions, keyed by name; texture maps as
-    ``_maps`` (role -> (file, bump multiplier)). Unsupported fields (some maps, emission
-    ``Ke``, dissolve ``d``/``Tr`` without a map) are added to ``notes``."""
+    ``_maps`` (role -> (file, bump multiplier)). ``Ke`` is the emitted radiance
+    (W·sr⁻¹·m⁻², from both faces: MTL has no front face for emission). Unsupported fields
+    (some maps, dissolve ``d``/``Tr`` without a map) are added to ``notes``."""
     out: dict[str, dict[str, Any]] = {}
     try:
         lines = path.read_text(encoding="utf-8", errors="replace").splitlines()
@@ -134,13 +141,19 @@ def parse_mtl(path: Path, notes: dict[str, str]) -> dict[str, dict[str, Any]]:
         elif key == "pr":
             cur["roughness"] = min(max(vals[0], 0.0), 1.0)
             cur["_pr"] = True
-        elif key == "ke" and max(vals) > 0:
-            notes[where] = "emission is not supported; the surface is not a light"
+        elif key == "ke":
+            cur["_ke"] = [max(v, 0.0) for v in (vals * 3)[:3]]
         elif key in ("d", "tr") and (vals[0] < 1.0 if key == "d" else vals[0] > 0.0):
             notes[where] = "dissolve (transparency) is not supported; the surface is opaque"
         elif key.startswith("map_") or key in _MTL_TEXTURES:
             notes[where] = "this texture map is not supported; it is ignored"
     for desc in out.values():
+        ke = desc.pop("_ke", None)
+        if ke is None and "emission" in desc.get("_maps", {}):
+            ke = [1.0, 1.0, 1.0]  # map_Ke alone: the map is the radiance
+        if ke is not None and max(ke) > 0:
+            desc["emission"] = ke
+            desc["two_sided"] = True
         ns = desc.pop("_ns", None)
         if max(desc.get("specular", [0.0])) > 0:
             desc.setdefault("roughness", ns if ns is not None else 0.0)
@@ -166,6 +179,8 @@ def apply_mtl_maps(
         try:
             if role == "diffuse":
                 out["diffuse_texture"] = textures.add(file, True)
+            elif role == "emission" and "emission" in out:
+                out["emission_texture"] = textures.add(file, True)
             elif role == "specular" and has_spec:
                 out["specular_texture"] = textures.add(file, True)
             elif role == "shininess" and has_spec:
@@ -217,10 +232,16 @@ def _obj_colours(path: Path) -> bool:
 
 
 def load_mesh(
-    path: Path, scene_file: str, field: str, textures: TextureSet | None = None
+    path: Path,
+    scene_file: str,
+    field: str,
+    textures: TextureSet | None = None,
+    lights: list[dict[str, Any]] | None = None,
 ) -> MeshEntry:
     """Loads a mesh file into the arrays the core takes (see ``Scene.from_json``); the
-    textures its materials use go into ``textures``.
+    textures its materials use go into ``textures``, the lights it holds (glTF
+    ``KHR_lights_punctual``, in the file's coordinates) into ``lights`` (without a list
+    they are reported as ignored).
 
     Every failure is a typed error: :class:`gi.SceneError` naming the scene's field (a
     malformed file trimesh or numpy choke on included), :class:`gi.OutOfMemoryError`."""
@@ -233,14 +254,26 @@ def load_mesh(
     try:
         textures = TextureSet() if textures is None else textures
         if path.suffix.lower() in (".gltf", ".glb"):
-            return _load_gltf(path, scene_file, field, textures)
+            return _load_gltf(path, scene_file, field, textures, lights)
         return _load_trimesh(path, scene_file, field, textures)
     except GiError:
         raise
     except MemoryError as e:
         raise OutOfMemoryError(f"{scene_file}: {field}: mesh {path} is too large: {e}") from e
     except Exception as e:  # content the loaders accepted but numpy could not convert
-        raise scene_error(scene_file, field, f"cannot convert mesh {path}: {e!r}") from e
+        raise scene_error(scene_file, field, load_failure(path, e)) from e
+
+
+def load_failure(path: Path, e: BaseException) -> str:
+    """What a mesh reader's exception means to the user: the file is unreadable, truncated
+    or malformed (the reader's own words follow in brackets)."""
+    if isinstance(e, OSError) and not isinstance(e, GiError):
+        return f"cannot read mesh file {path}: {e.strerror or e}"
+    kind = path.suffix.lstrip(".").upper() or "mesh"
+    return (
+        f"{path} is not a valid {kind} file: it is truncated or malformed (the reader"
+        f" stopped with {type(e).__name__}: {e})"
+    )
 
 
 def _entry(
@@ -283,7 +316,13 @@ def _entry(
     )
 
 
-def _load_gltf(path: Path, scene_file: str, field: str, textures: TextureSet) -> MeshEntry:
+def _load_gltf(
+    path: Path,
+    scene_file: str,
+    field: str,
+    textures: TextureSet,
+    lights: list[dict[str, Any]] | None,
+) -> MeshEntry:
     from gi.gltf import GltfError, load_gltf
 
     try:
@@ -292,6 +331,10 @@ def _load_gltf(path: Path, scene_file: str, field: str, textures: TextureSet) ->
         raise scene_error(scene_file, field, f"{path}: {e.field}: {e.reason}") from e
     except (OSError, ValueError, KeyError, IndexError, TypeError) as e:
         raise scene_error(scene_file, field, f"cannot load glTF {path}: {e!r}") from e
+    if lights is not None:
+        lights.extend(m.lights)
+    elif m.lights:
+        m.warnings["extensions.KHR_lights_punctual"] = "lights are read in gi scene files only"
     report(path, m.warnings)
     return _entry(
         path,
@@ -312,7 +355,7 @@ def _load_trimesh(path: Path, scene_file: str, field: str, textures: TextureSet)
     try:
         loaded = trimesh.load(str(path), force="scene", process=False)
     except Exception as e:  # trimesh raises many types for bad files
-        raise scene_error(scene_file, field, f"cannot load mesh {path}: {e}") from e
+        raise scene_error(scene_file, field, load_failure(path, e)) from e
     notes: dict[str, str] = {}
     mtl: dict[str, dict[str, Any]] = {}
     is_obj = path.suffix.lower() == ".obj"

@@ -67,6 +67,18 @@ CONDUCTOR_F0 = {
 _IGNORED = {"integrator", "sampler", "rfilter"}  # render settings: gi.render chooses these
 
 
+def coordinate_system(n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Two unit vectors completing the unit vector ``n`` to an orthonormal basis, as Mitsuba
+    3's ``coordinate_system`` builds them (Duff et al. 2017, "Building an orthonormal basis,
+    revisited"): what its ``<lookat>`` takes as ``up`` when none is given."""
+    sign = math.copysign(1.0, n[2])
+    a = -1.0 / (sign + n[2])
+    b = n[0] * n[1] * a
+    s = np.array([1.0 + sign * n[0] * n[0] * a, sign * b, -sign * n[0]])
+    t = np.array([b, sign + n[1] * n[1] * a, -n[1]])
+    return s, t
+
+
 @dataclass
 class Element:
     """One XML element with the line it starts on."""
@@ -120,7 +132,7 @@ class _Translator:
         self.lights: list[dict[str, Any]] = []
         self.camera: dict[str, Any] | None = None
         self.notes: dict[str, str] = {}
-        self.textures = TextureSet()
+        self.textures = TextureSet(path.parent)
         self.environment: dict[str, Any] | None = None
         self.env_images: dict[str, np.ndarray] = {}
 
@@ -327,11 +339,14 @@ class _Translator:
         elif op.tag == "lookat":
             origin = np.array(self.numbers(op, self.attr(op, "origin"), 3))
             target = np.array(self.numbers(op, self.attr(op, "target"), 3))
-            up = np.array(self.numbers(op, self.attr(op, "up", "0, 1, 0"), 3))
+            up = np.array(self.numbers(op, self.attr(op, "up", "0, 0, 0"), 3))
             d = target - origin
             if np.linalg.norm(d) == 0:
                 raise self.error(op, "origin and target must differ")
             d /= np.linalg.norm(d)
+            if not up.any():
+                # No `up` (or a zero one): Mitsuba 3 takes one perpendicular to the view.
+                up = coordinate_system(d)[0]
             left = np.cross(up, d)
             if np.linalg.norm(left) < 1e-9:
                 raise self.error(op, "up must not be parallel to the viewing direction")
@@ -390,10 +405,12 @@ class _Translator:
                 fp = self.props(c)
                 width = int(self.float(c, fp, "width", width))
                 height = int(self.float(c, fp, "height", height))
-            elif c.tag not in ("sampler", "float", "string", "transform", "boolean"):
+            elif c.tag not in ("sampler", "float", "integer", "string", "transform", "boolean"):
                 raise self.error(c, "unsupported element in a sensor")
         for key in props:
-            if key not in ("fov", "fov_axis", "to_world", "near_clip", "far_clip"):
+            # `focus_distance` only matters to `thinlens`; `perspective` is a pinhole too.
+            known = ("fov", "fov_axis", "to_world", "near_clip", "far_clip", "focus_distance")
+            if key not in known:
                 self.notes[props[key].label] = "ignored (gi's camera is a pinhole)"
         fov = self.float(el, props, "fov", 39.3077)  # Mitsuba's default: 35 mm equivalent
         axis = self.string(props, "fov_axis", "x").lower()
@@ -542,19 +559,21 @@ class _Translator:
         if self.boolean(props, "flip_normals", False):
             f = f[:, [0, 2, 1]]
             n = None if n is None else -n
-        material = None
+        material, emitter = None, None
         for c in el.children:
-            if c.tag == "bsdf":
-                material = self.bsdf(c)
-            elif c.tag == "ref":
-                target = self.resolve(c)
-                if target.tag != "bsdf":
-                    raise self.error(c, f"refers to a <{target.tag}>, not a <bsdf>")
+            target = self.resolve(c) if c.tag == "ref" else c
+            if target.tag == "bsdf":
                 material = self.bsdf(target)
-            elif c.tag == "emitter":
-                raise self.error(c, "area lights are not supported (gi has point and spot)")
+            elif target.tag == "emitter":
+                if target.attrs.get("type") != "area":
+                    raise self.error(target, "a shape's emitter must be an `area` emitter")
+                emitter = target
+            elif c.tag == "ref":
+                raise self.error(c, f"refers to a <{target.tag}>, not a <bsdf> or <emitter>")
         if material is None:  # Mitsuba's default BSDF
             material = self.bsdf(Element("bsdf", {"type": "diffuse"}, el.line))
+        if emitter is not None:
+            material = self.area_emitter(el, emitter, material)
         lin = xf[:3, :3]
         det = np.linalg.det(lin)
         if abs(det) < 1e-30:
@@ -582,10 +601,56 @@ class _Translator:
             obj["smooth"] = smooth
         self.objects.append(obj)
 
+    def area_emitter(self, shape: Element, el: Element, material: str) -> str:
+        """An `area` emitter on a shape: its BSDF's material with `emission` (`radiance`, a
+        colour or a bitmap), one-sided (the shape's normal side) as Mitsuba's. Each emitting
+        shape gets its own material, named after the shape's id or line."""
+        props = self.props(el)
+        self.note_unknown(props, {"radiance"})
+        desc = dict(self.materials[material])
+        p = props.get("radiance")
+        if p is not None and p.tag in ("texture", "ref"):
+            tex = self.resolve(p) if p.tag == "ref" else p
+            desc["emission_texture"], desc["emission"] = self.emission_bitmap(tex)
+        else:
+            desc["emission"] = self.color(props, "radiance", 1.0).tolist()
+        name = shape.attrs.get("id") or f"emitter@line{el.line}"
+        while name in self.materials:
+            name += "'"
+        self.materials[name] = desc
+        return name
+
+    def emission_bitmap(self, tex: Element) -> tuple[str, list[float]]:
+        """A bitmap `radiance`: the texture scaled to [0, 1] (gi's textures are) and the
+        scale as the emission."""
+        props = self.props(tex)
+        if tex.tag != "texture" or tex.attrs.get("type") != "bitmap":
+            raise self.error(tex, "only bitmap textures are supported")
+        file = self.path.parent / self.string(props, "filename", "")
+        raw = self.boolean(props, "raw", False)
+        try:
+            key = self.textures.add(file, not raw)
+        except (TextureError, OSError) as e:
+            raise self.error(tex, str(e)) from e
+        img = self.textures.arrays[key]
+        peak = float(img[..., :3].max()) if img.size else 0.0
+        if peak > 1.0:
+            scaled = img.copy()
+            scaled[..., :3] /= peak
+            key = self.textures.add_array(f"{key}#emission", scaled)
+        wrap = self.string(props, "wrap_mode", "repeat")
+        if wrap != "repeat":
+            self.notes[tex.label] = f"wrap_mode {wrap!r} is not supported; it repeats"
+        return key, [max(peak, 1.0)] * 3
+
     def emitter(self, el: Element) -> None:
         kind = el.attrs.get("type")
         if kind in ("envmap", "constant"):
             return self.env_emitter(el, kind)
+        if kind == "directional":
+            return self.directional(el)
+        if kind == "area":
+            raise self.error(el, "an area emitter belongs inside a <shape>")
         props = self.props(el)
         known = {"intensity", "to_world", "position", "cutoff_angle", "beam_width"}
         self.note_unknown(props, known)
@@ -611,8 +676,29 @@ class _Translator:
             )
         else:
             raise self.error(
-                el, "unsupported emitter (gi has point, spot, envmap and constant emitters)"
+                el,
+                "unsupported emitter (gi reads point, spot, directional, envmap, constant and "
+                "area emitters)",
             )
+
+    def directional(self, el: Element) -> None:
+        """`directional`: `irradiance` (W/m²) travelling along `direction`, or along
+        `to_world`'s +z."""
+        props = self.props(el)
+        self.note_unknown(props, {"irradiance", "direction", "to_world"})
+        if "direction" in props:
+            d = self.vec3(props["direction"])
+        else:
+            d = self.transform(props.get("to_world"))[:3, 2]
+        if not np.linalg.norm(d) > 0:
+            raise self.error(el, "the direction must be non-zero")
+        self.lights.append(
+            {
+                "type": "directional",
+                "direction": (d / np.linalg.norm(d)).tolist(),
+                "irradiance": self.color(props, "irradiance", 1.0).tolist(),
+            }
+        )
 
     def env_emitter(self, el: Element, kind: str) -> None:
         """`envmap` (an equirectangular image, `scale`, a rotation about +y) or `constant`

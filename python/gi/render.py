@@ -2,21 +2,25 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
+import numbers
+import os
 import sys
 import time
 import warnings
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from gi import _checks, _gi
-from gi._gi import RenderStats, RenderWarning, Scene, SettingError
+from gi import _checks, _gi, aovs
+from gi._gi import RenderStats, RenderWarning, Scene, SceneError, SettingError
 from gi.progress import ProgressBar
+from gi.scene import TEXTURE_FIELDS
 
 ProgressCallback = Callable[[str, float], "bool | None"]
 
@@ -40,27 +44,51 @@ class RenderResult:
     stats: RenderStats
     extra: dict[str, np.ndarray] = field(default_factory=dict)
 
-    BASE = ("radiance", "albedo", "normal", "position", "depth", "caustics")
+    BASE = aovs.BASE
 
     def aov_names(self) -> list[str]:
-        """Names :meth:`aov` accepts: the base images, then the method's own (``extra``;
-        method ``ispm``: direct, indirect, photons)."""
-        return [*self.BASE, *self.extra]
+        """Names :meth:`aov` accepts: the base images that were read back (all of them with
+        ``aovs=True``; ``caustics`` for method ``path`` only), then the method's own
+        (``extra``; method ``ispm``: direct, specular, indirect, photons)."""
+        base = aovs.base_names(self.stats.method)
+        return [n for n in base if getattr(self, n).size > 0 or n == "radiance"] + [*self.extra]
 
     def aov(self, name: str) -> np.ndarray:
-        """An image by name (see :meth:`aov_names`)."""
-        if name in self.BASE:
-            return getattr(self, name)  # type: ignore[no-any-return]
-        if name in self.extra:
-            return self.extra[name]
-        raise KeyError(f"no image {name!r} (available: {', '.join(self.aov_names())})")
+        """An image by name (see :meth:`aov_names`); else :class:`gi.SettingError` (also a
+        ``KeyError``) saying why it is missing: not read back (``aovs=True``,
+        ``extras=True``), not rendered by the method, or unknown."""
+        if isinstance(name, str) and name in self.aov_names():
+            return getattr(self, name) if name in self.BASE else self.extra[name]  # type: ignore[no-any-return]
+        raise _checks.AovError(self._why_missing(name))
+
+    def _why_missing(self, name: object) -> str:
+        method = self.stats.method
+        available = ", ".join(self.aov_names())
+        if not isinstance(name, str):
+            return f"AOV names are strings, got {name!r} (available: {available})"
+        if name in aovs.base_names(method):
+            return (
+                f"{name!r} was not read back: render with aovs=True (gi.Renderer.render,"
+                f" render_progressive; available: {available})"
+            )
+        if name in aovs.METHOD_EXTRA.get(method, ()):
+            return (
+                f"{name!r} was not read back: render with extras=True (gi.Renderer.render,"
+                f" render_progressive; available: {available})"
+            )
+        if name in self.BASE or name in aovs.DENOISE_EXTRA:
+            return aovs.why_not(method, name) + f" (this result has: {available})"
+        return f"no image {name!r} (available: {available})"
 
     def __repr__(self) -> str:
         h, w = self.radiance.shape[:2]
         s = self.stats
+        samples = f"{s.samples_per_pixel} spp"
+        if s.passes > 1:
+            samples = f"{s.passes} passes of {s.samples_per_pixel} spp"
         return (
-            f"<RenderResult {s.method} {w}x{h}, {s.samples_per_pixel} spp,"
-            f" {s.total_seconds:.2f} s; aovs: {', '.join(self.aov_names())}>"
+            f"<RenderResult {s.method} {w}x{h}, {samples}, {s.total_seconds:.2f} s;"
+            f" aovs: {', '.join(self.aov_names())}>"
         )
 
     def display(self, tonemap: str = "clip", exposure: float = 0.0) -> np.ndarray:
@@ -84,7 +112,9 @@ def _options(options: dict[str, Any]) -> dict[str, Any]:
         try:
             options["width"], options["height"] = size
         except (TypeError, ValueError):
-            raise _checks.setting_error("size", f"expected (width, height), got {size!r}") from None
+            raise _checks.setting_error(
+                "size", f"expected (width, height), each in 1..=16384, got {size!r}"
+            ) from None
     return options
 
 
@@ -103,6 +133,42 @@ def options_table(method: str | None = None) -> list[dict[str, Any]]:
             "method", f"unknown method {method!r} (available: {', '.join(_gi.methods())})"
         )
     return [row for row in rows if method in row["methods"]]
+
+
+def _scene(scene: Any) -> Scene:
+    """``scene``, or the scene a built-in name or file names (:func:`gi.load_scene`)."""
+    if isinstance(scene, Scene):
+        return scene
+    if isinstance(scene, (str, os.PathLike)):
+        from gi.scene import load_scene
+
+        return load_scene(scene)
+    raise _checks.setting_error(
+        "scene",
+        f"expected a gi.Scene, a built-in scene name or a scene file, got {scene!r}",
+    )
+
+
+def _warn_if_black(scene: Scene) -> None:
+    """A :class:`gi.SceneWarning` for a scene that renders black: no light source with power
+    (lights, emitting surfaces, an environment), or nothing to see."""
+    from gi.scene import SceneWarning
+
+    if max(scene.total_power) <= 0.0:
+        reason = (
+            "the scene has no light source with power (lights, emitting surfaces or an"
+            " environment): the image is black"
+        )
+        warnings.warn(SceneWarning(scene.source, "lights", reason), stacklevel=_caller_level())
+    if scene.triangle_count == 0 and not scene.has_environment:
+        reason = "the scene has no objects: there is nothing to see and the image is black"
+        warnings.warn(SceneWarning(scene.source, "objects", reason), stacklevel=_caller_level())
+
+
+def _flag(name: str, value: Any) -> bool:
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    raise _checks.setting_error(name, f"must be True or False, got {value!r}")
 
 
 def _progress(progress: bool | ProgressCallback) -> ProgressCallback | None:
@@ -149,13 +215,29 @@ class Renderer:
     images are those of the last pass.
     """
 
-    def __init__(self, scene: Scene, method: str = "ispm", **options: Any) -> None:
+    def __init__(
+        self, scene: Scene | str | os.PathLike[str], method: str = "ispm", **options: Any
+    ) -> None:
+        scene = _scene(scene)
         if not isinstance(method, str):
-            raise _checks.setting_error("method", f"must be a string, got {method!r}")
+            methods = ", ".join(_gi.methods())
+            raise _checks.setting_error("method", f"must be one of {methods}; got {method!r}")
         self._native = _gi.Renderer(scene, method, _options(options))
         self._scene = scene
+        self._pass_seconds = 0.0
         for message in self._native.warnings:
             warnings.warn(message, RenderWarning, stacklevel=_caller_level())
+        _warn_if_black(scene)
+
+    def __repr__(self) -> str:
+        w, h = self.size
+        mode = ""
+        if self._native.progressive:
+            mode = f", progressive ({self.passes} passes)"
+        return (
+            f"<gi.Renderer {self.method} {w}x{h} of {self._scene.source!r}{mode},"
+            f" {self.frame_index} frames rendered>"
+        )
 
     @property
     def method(self) -> str:
@@ -188,10 +270,57 @@ class Renderer:
 
     def describe(self, target: str, key: int | str | None = None) -> dict[str, Any]:
         """The current ``"camera"``, ``"light"`` (key: index) or ``"material"`` (key: name)
-        in the scene format; ``"object"`` (key: index or name) as ``{"name", "matrix"
-        (4×4 rows, what :meth:`update` takes), "triangles": [start, end]}`` (its range of
-        ``Scene.mesh_arrays()``' triangles)."""
-        return json.loads(self._native.describe(target, key))  # type: ignore[no-any-return]
+        in the scene format, what :meth:`update` takes; ``"object"`` (key: index or name) as
+        ``{"name", "transform", "matrix", "triangles"}``: its ``transform`` in the scene
+        format (``translate``/``rotate``/``scale``; ``None`` for a matrix with shear, which
+        they cannot describe) and ``matrix`` (4×4 rows), either of which :meth:`update`
+        takes, and ``triangles`` ``[start, end]``, its range of ``Scene.mesh_arrays()``'
+        triangles."""
+        targets = ("camera", "light", "object", "material")
+        if not isinstance(target, str) or target not in targets:
+            raise _checks.setting_error(
+                "target", f"must be one of {', '.join(targets)}; got {target!r}"
+            )
+        if target == "object":
+            key = self._object_index(key, "describe")
+        elif target == "light":
+            key = self._light_index(0 if key is None else key, "describe")
+        elif target == "material" and not (
+            isinstance(key, str) and key in self._scene.material_names
+        ):
+            names = ", ".join(self._scene.material_names)
+            raise _checks.setting_error("key", f"must be a material's name ({names}), got {key!r}")
+        desc = json.loads(self._native.describe(target, key))
+        if target == "material":
+            desc = _texture_names_out(desc)
+        return desc  # type: ignore[no-any-return]
+
+    def _light_index(self, key: Any, field: str) -> int:
+        """``key`` as a light's index; else a :class:`gi.SceneError` for ``field`` of an
+        update (``lights[i]`` for an index out of range), or a :class:`gi.SettingError`
+        for ``key`` of :meth:`describe`."""
+        n = self._scene.light_count
+        integer = not isinstance(key, bool) and isinstance(key, numbers.Integral)
+        if not integer or not 0 <= key < n:
+            lights = f"0..={n - 1}" if n else "none: the scene has no lights"
+            if integer and field == "lights":
+                field = f"lights[{key}]"
+            raise _key_error(field, f"must be a light's index ({lights}), got {key!r}")
+        return int(key)
+
+    def _object_index(self, key: Any, field: str) -> int | str:
+        """``key`` as an object's name or index (see :meth:`_light_index`)."""
+        names = self.object_names
+        if isinstance(key, str):
+            if key not in names:
+                named = ", ".join(repr(n) for n in names if n is not None) or "none"
+                raise _key_error(field, f"no object named {key!r} (named objects: {named})")
+            return key
+        n = len(names)
+        if isinstance(key, bool) or not isinstance(key, numbers.Integral) or not 0 <= key < n:
+            indices = f"0..={n - 1}" if n else "none: the scene has no objects"
+            raise _key_error(field, f"must be an object's name or index ({indices}), got {key!r}")
+        return int(key)
 
     def update(
         self,
@@ -203,23 +332,71 @@ class Renderer:
     ) -> None:
         """Changes the scene before the next frame, in the scene format's terms.
 
-        ``camera`` and each ``lights[i]`` / ``materials[name]`` give the fields that change
-        (``{"position": [0, 1, 3]}``); ``objects[name or index]`` gives the object's whole
-        transform (``translate``/``rotate``/``scale`` as in the scene file, or
-        ``{"matrix": 4×4 rows}``). Invalid values raise :class:`gi.SceneError` and change
-        nothing.
+        ``camera`` and each ``lights[i]``, ``objects[name or index]`` and
+        ``materials[name]`` give the fields that change (``{"position": [0, 1, 3]}``); the
+        others keep their current values (see :meth:`describe`). An object's fields are its
+        transform's: ``translate``/``rotate``/``scale`` as in the scene file, or
+        ``{"matrix": 4×4 rows}`` for the whole transform. A light given another ``type``
+        keeps the fields both types have (a spot turned point light its position and
+        intensity). The camera's ``width``/``height`` belong to the
+        renderer (:meth:`resize`). Material textures are named as in the scene file (the
+        file name relative to it) and must be among the textures the scene loaded. Values
+        may be numpy arrays and scalars. Invalid values raise :class:`gi.SceneError` naming
+        the field and what it allows.
         """
+        groups = {"lights": lights, "objects": objects, "materials": materials}
+        if camera is not None and not isinstance(camera, Mapping):
+            raise _update_error("camera", f"must be a dict of camera fields, got {camera!r}")
+        for group, value in groups.items():
+            if value is not None and not isinstance(value, Mapping):
+                what = {"lights": "a light's index", "objects": "an object's index or name"}
+                key = what.get(group, "a material's name")
+                raise _update_error(
+                    group, f"must be a dict from {key} to its fields, got {value!r}"
+                )
         if camera is not None:
-            self._native.update("camera", None, json.dumps(camera))
+            self._native.update("camera", None, _json("camera", camera))
         for i, light in (lights or {}).items():
-            self._native.update("light", i, json.dumps(light))
+            i = self._light_index(i, "lights")
+            self._native.update("light", i, _json(f"lights[{i}]", light))
         for key, transform in (objects or {}).items():
-            self._native.update("object", key, json.dumps(_jsonable(transform)))
+            key = self._object_index(key, "objects")
+            i = self.object_names.index(key) if isinstance(key, str) else key
+            self._native.update("object", key, _json(f"objects[{i}].transform", transform))
         for name, material in (materials or {}).items():
-            self._native.update("material", name, json.dumps(material))
+            if not isinstance(name, str):
+                names = ", ".join(self._scene.material_names)
+                raise _update_error("materials", f"a material's name ({names}), got {name!r}")
+            material = self._texture_names_in(name, material)
+            self._native.update("material", name, _json(f"materials.{name}", material))
+
+    def _texture_names_in(self, name: str, material: Any) -> Any:
+        """A material update's texture names (as in the scene file) as the scene loaded
+        them: data maps (roughness, normal, alpha) carry the suffix ``#linear``."""
+        if not isinstance(material, Mapping):
+            return material
+        loaded = self._scene.texture_names
+        out = dict(material)
+        for key, colour in TEXTURE_FIELDS.items():
+            value = out.get(key)
+            if not isinstance(value, str):
+                continue
+            candidates = [value] if colour else [f"{value}#linear", value]
+            found = next((c for c in candidates if c in loaded), None)
+            if found is None:
+                shown = sorted({t.removesuffix("#linear") for t in loaded})
+                raise _update_error(
+                    f"materials.{name}.{key}",
+                    f"no texture {value!r} was loaded (loaded: {', '.join(shown) or 'none'});"
+                    " an update can use the textures the scene loaded, named as in the scene"
+                    " file",
+                )
+            out[key] = found
+        return out
 
     def resize(self, width: int, height: int) -> None:
-        """Changes the image size (render targets are rebuilt at the next frame)."""
+        """Changes the image size, each side in 1..=16384 pixels (render targets are rebuilt
+        at the next frame)."""
         self._native.resize(width, height)
 
     def render(
@@ -232,9 +409,24 @@ class Renderer:
     ) -> RenderResult:
         """Renders one frame. Only the radiance is read back unless ``aovs`` (albedo,
         normal, position, depth) or ``extras`` (the method's own images) are asked for;
-        images not asked for are empty arrays. ``seed`` overrides the frame's random seed."""
-        out = self._native.render(aovs=aovs, extras=extras, seed=seed, progress=_progress(progress))
-        return _result(out)
+        images not asked for are empty arrays, left out of ``aov_names()``. ``seed`` (in
+        0..=2**64-1) overrides the frame's random seed. A progressive renderer's result is
+        the mean of its passes: ``stats.passes`` counts them and ``stats.total_seconds`` is
+        their time together (the stages are the last pass's, and ``earlier passes``)."""
+        report = _progress(progress)
+        out = self._native.render(
+            aovs=_flag("aovs", aovs), extras=_flag("extras", extras), seed=seed, progress=report
+        )
+        result = _result(out)
+        if self._native.progressive:
+            if result.stats.passes <= 1:
+                self._pass_seconds = 0.0
+            earlier = self._pass_seconds
+            self._pass_seconds += result.stats.total_seconds
+            if earlier > 0.0:
+                stats = result.stats.with_stage("earlier passes", earlier)
+                result = dataclasses.replace(result, stats=stats)
+        return result
 
     def render_progressive(
         self,
@@ -263,12 +455,21 @@ class Renderer:
             )
         if passes is None and seconds is None:
             raise _checks.setting_error("passes", "give passes=N or seconds=S")
-        if passes is not None and (not isinstance(passes, int) or passes < 1):
-            raise _checks.setting_error("passes", f"must be a positive integer, got {passes!r}")
-        if seconds is not None and not (
-            isinstance(seconds, (int, float)) and math.isfinite(seconds) and seconds > 0
+        if passes is not None and (
+            isinstance(passes, bool) or not isinstance(passes, numbers.Integral) or passes < 1
         ):
-            raise _checks.setting_error("seconds", f"must be a positive number, got {seconds!r}")
+            raise _checks.setting_error("passes", f"must be an integer >= 1, got {passes!r}")
+        if seconds is not None and not (
+            not isinstance(seconds, bool)
+            and isinstance(seconds, numbers.Real)
+            and math.isfinite(seconds)
+            and seconds > 0
+        ):
+            raise _checks.setting_error("seconds", f"must be a finite number > 0, got {seconds!r}")
+        _flag("aovs", aovs)
+        _flag("extras", extras)
+        if on_pass is not None and not callable(on_pass):
+            raise _checks.setting_error("on_pass", f"must be a callable or None, got {on_pass!r}")
         report = _progress(progress)
         start = time.monotonic()
         result: RenderResult | None = None
@@ -292,8 +493,7 @@ class Renderer:
 
         try:
             while result is None or done_fraction() < 1.0:
-                out = self._native.render(aovs=aovs, extras=extras, seed=None, progress=within_pass)
-                result = _result(out)
+                result = self.render(aovs=aovs, extras=extras, progress=within_pass)
                 done = result.stats.passes
                 stop = report is not None and report("passes", done_fraction()) is False
                 if (on_pass is not None and on_pass(result) is False) or stop:
@@ -354,13 +554,55 @@ class Renderer:
         )
 
 
-def _jsonable(value: Any) -> Any:
-    """numpy arrays (a 4×4 matrix) as nested lists."""
-    if isinstance(value, dict):
-        return {k: _jsonable(v) for k, v in value.items()}
+def _texture_names_out(desc: dict[str, Any]) -> dict[str, Any]:
+    """A material description's texture names as the scene file gives them."""
+    for key in TEXTURE_FIELDS:
+        if isinstance(desc.get(key), str):
+            desc[key] = desc[key].removesuffix("#linear")
+    return desc
+
+
+def _update_error(field: str, reason: str) -> SceneError:
+    from gi.meshes import scene_error
+
+    return scene_error("scene update", field, reason)
+
+
+def _key_error(field: str, reason: str) -> SceneError | SettingError:
+    """An update's key (``field``: ``lights``, ``objects``), or :meth:`Renderer.describe`'s
+    (``field``: ``describe``) that names nothing in the scene."""
+    if field == "describe":
+        return _checks.setting_error("key", reason)
+    return _update_error(field, reason)
+
+
+def _jsonable(value: Any, field: str) -> Any:
+    """``value`` with numpy arrays and scalars as lists and numbers, checked for what JSON
+    cannot hold (NaN, infinities, objects): :class:`gi.SceneError` naming the field."""
     if isinstance(value, np.ndarray):
-        return value.tolist()
-    return value
+        value = value.tolist()
+    elif isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, Mapping):
+        out = {}
+        for k, v in value.items():
+            if not isinstance(k, str):
+                raise _update_error(field, f"field names are strings, got {k!r}")
+            out[k] = _jsonable(v, f"{field}.{k}")
+        return out
+    if isinstance(value, (list, tuple)):
+        return [_jsonable(v, f"{field}[{i}]") for i, v in enumerate(value)]
+    if isinstance(value, float) and not math.isfinite(value):
+        raise _update_error(field, f"must be a finite number, got {value}")
+    if value is None or isinstance(value, (str, bool, int, float)):
+        return value
+    raise _update_error(field, f"expected a number, string, list or dict, got {value!r}")
+
+
+def _json(field: str, value: Any) -> str:
+    if not isinstance(value, Mapping):
+        raise _update_error(field, f"must be a dict of the fields that change, got {value!r}")
+    return json.dumps(_jsonable(value, field), allow_nan=False)
 
 
 def method_options(method: str, **options: Any) -> dict[str, Any]:
@@ -372,14 +614,15 @@ def method_options(method: str, **options: Any) -> dict[str, Any]:
 
 
 def render(
-    scene: Scene,
+    scene: Scene | str | os.PathLike[str],
     method: str = "path",
     *,
     progress: bool | ProgressCallback = False,
     denoise: bool = False,
     **options: Any,
 ) -> RenderResult:
-    """Renders ``scene`` with ``method`` (see :func:`gi.methods`): one frame of a
+    """Renders ``scene`` (a :class:`gi.Scene`, or a built-in name or scene file for
+    :func:`gi.load_scene`) with ``method`` (see :func:`gi.methods`): one frame of a
     :class:`Renderer` with every image read back.
 
     ``options`` are the method's render options (listed below, and by
@@ -392,7 +635,7 @@ def render(
     guided by the albedo and normal AOVs (:func:`gi.denoise`); the noisy radiance is kept
     as the AOV ``noisy``.
     """
-    if denoise:
+    if _flag("denoise", denoise):
         from gi.denoising import INSTALL_HINT, available
 
         if not available():

@@ -8,6 +8,7 @@ as stored. Materials refer to textures by the names :meth:`TextureSet.add` retur
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
@@ -57,16 +58,28 @@ def to_rgba(img: np.ndarray, srgb: bool) -> np.ndarray:
 
 
 class TextureSet:
-    """The textures of one scene, each image read once per role."""
+    """The textures of one scene, each image read once per role. A texture is named by its
+    file's path relative to ``base_dir`` (the scene file's directory), in ``/`` form, as the
+    scene format names it (``textures/checker.png``) however the scene's own path was
+    spelled; data maps (roughness, normals, coverage) add ``#linear``."""
 
-    def __init__(self) -> None:
+    def __init__(self, base_dir: Path | None = None) -> None:
+        self.base_dir = base_dir
         self.arrays: dict[str, np.ndarray] = {}
         self._channels: dict[str, int] = {}
+
+    def name(self, path: Path) -> str:
+        """The name of the file ``path``: relative to ``base_dir`` (without one: as given)."""
+        if self.base_dir is None:
+            return str(path)
+        rel = os.path.relpath(os.path.abspath(path), os.path.abspath(self.base_dir))
+        return Path(rel).as_posix()
 
     def add(self, path: Path, colour: bool) -> str:
         """Reads ``path`` (once) as a colour map (sRGB-decoded if stored as integers) or a
         data map; returns its name. Raises :class:`TextureError`."""
-        key = f"{path}" if colour else f"{path}#linear"
+        name = self.name(path)
+        key = name if colour else f"{name}#linear"
         if key not in self.arrays:
             try:
                 img, integer = read_image(path)

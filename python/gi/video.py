@@ -10,6 +10,8 @@ from typing import Any
 
 import numpy as np
 
+from gi._checks import OutputError, named_error
+
 #: File suffixes written as video.
 VIDEO_FORMATS = {".mp4", ".mov", ".mkv"}
 
@@ -29,7 +31,9 @@ class VideoWriter:
         self.path = Path(path)
         if self.path.suffix.lower() not in VIDEO_FORMATS:
             formats = ", ".join(sorted(VIDEO_FORMATS))
-            raise ValueError(f"unsupported video format {self.path.suffix!r} (use {formats})")
+            raise named_error(
+                "output", f"unsupported video format {self.path.suffix!r} (use {formats})"
+            )
         self.fps = Fraction(fps).limit_denominator(1001)
         self.quality = quality
         self.tmp = self.path.with_name(f".{self.path.stem}.partial{self.path.suffix}")
@@ -41,42 +45,54 @@ class VideoWriter:
         """Appends one frame."""
         frame = np.asarray(rgb8)
         if frame.dtype != np.uint8 or frame.ndim != 3 or frame.shape[2] != 3:
-            raise ValueError(f"frames must be (H, W, 3) uint8, got {frame.shape} {frame.dtype}")
-        h, w = frame.shape[:2]
-        if self._gen is None:
-            import imageio_ffmpeg  # type: ignore[import-untyped]
-
-            self.path.parent.mkdir(parents=True, exist_ok=True)
-            self._size = (w, h)
-            padded = (w + w % 2, h + h % 2)
-            self._gen = imageio_ffmpeg.write_frames(
-                str(self.tmp),
-                padded,
-                fps=self.fps,
-                codec="libx264",
-                quality=self.quality,
-                macro_block_size=2,
-                ffmpeg_log_level="error",
+            raise named_error(
+                "frame", f"frames must be (H, W, 3) uint8, got {frame.shape} {frame.dtype}"
             )
-            self._gen.send(None)
-        elif (w, h) != self._size:
-            raise ValueError(f"frame size {w}x{h} differs from the video's {self._size}")
+        h, w = frame.shape[:2]
+        if self._gen is not None and (w, h) != self._size:
+            raise named_error("frame", f"frame size {w}x{h} differs from the video's {self._size}")
         if w % 2 or h % 2:
             frame = np.pad(frame, ((0, h % 2), (0, w % 2), (0, 0)), mode="edge")
-        self._gen.send(np.ascontiguousarray(frame))
+        try:
+            if self._gen is None:
+                import imageio_ffmpeg  # type: ignore[import-untyped]
+
+                self.path.parent.mkdir(parents=True, exist_ok=True)
+                self._size = (w, h)
+                self._gen = imageio_ffmpeg.write_frames(
+                    str(self.tmp),
+                    self.padded_size(w, h),
+                    fps=self.fps,
+                    codec="libx264",
+                    quality=self.quality,
+                    macro_block_size=2,
+                    ffmpeg_log_level="error",
+                )
+                self._gen.send(None)
+            self._gen.send(np.ascontiguousarray(frame))
+        except (OSError, RuntimeError) as e:  # ffmpeg could not start or write
+            raise OutputError(self.path, f"encoding failed ({e})") from e
         self.frames += 1
+
+    @staticmethod
+    def padded_size(width: int, height: int) -> tuple[int, int]:
+        """The size of the video of ``width``×``height`` frames (even, for yuv420p)."""
+        return width + width % 2, height + height % 2
 
     def close(self) -> None:
         """Finishes the video and moves it to ``path``."""
         if self._gen is None:
-            raise ValueError(f"{self.path}: no frames were written")
+            raise named_error("frame", f"{self.path}: no frames were written")
         gen, self._gen = self._gen, None
         try:
             gen.close()
+            os.replace(self.tmp, self.path)
+        except (OSError, RuntimeError) as e:
+            self.tmp.unlink(missing_ok=True)
+            raise OutputError(self.path, f"encoding failed ({e})") from e
         except BaseException:
             self.tmp.unlink(missing_ok=True)
             raise
-        os.replace(self.tmp, self.path)
 
     def abort(self) -> None:
         """Stops encoding and deletes the partial file."""

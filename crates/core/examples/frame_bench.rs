@@ -5,7 +5,8 @@
 //! same run, as a markdown table.
 //!
 //! `cargo run -p gi-core --profile test --example frame_bench [-- --runs N --quick --scene NAME
-//! --size WxH --ispm-only --estimator NAME --photons N ... --spp N --shadow-map-size N]`
+//! --size WxH --ispm-only --estimator NAME --photons N ... --spp N --shadow-map-size N
+//! --stages --no-one-shot --table-only --method bidir]`
 //!
 //! Scenes `cornell`, `cornell-glass` and the ~246k-triangle `dense-cornell`, at 640×480 and
 //! 1280×720, 20k / 50k / 200k photons (or each `--photons`), 16 direct samples per pixel
@@ -28,6 +29,14 @@
 //! Also: the direct light alone with every pixel supersampled against edge-adaptive
 //! supersampling (method `direct`), and CPU BVH rebuild against a refit of the same tree
 //! after moving one object.
+//!
+//! For real GPUs, whose timestamp queries do place each pass: `--stages` adds a last column,
+//! the engine frames' own stages (median per stage name: GPU timestamp sums, and the CPU
+//! stages and waits by their names) after the estimator and first bounce that ran;
+//! `--no-one-shot` leaves out the one-shot frames (`–` in their columns); `--table-only` the
+//! tables after the first. `--method bidir` times method `bidir` instead (its defaults, the
+//! direct light's options above, the light moving): engine frame, still frame and its stages
+//! per scene and size (`scripts/gpu_check.sh` runs these).
 mod common;
 
 use gi_core::estimate::Estimator;
@@ -76,6 +85,16 @@ fn nudge(scene: &Scene, t: f32) -> SceneUpdate {
             inner_angle,
             outer_angle,
         },
+        // A distant light turns instead.
+        LightDesc::Directional {
+            direction,
+            irradiance,
+            angular_diameter,
+        } => LightDesc::Directional {
+            direction: [direction[0] + t, direction[1], direction[2]],
+            irradiance,
+            angular_diameter,
+        },
     };
     SceneUpdate::Light { index: 0, light }
 }
@@ -100,14 +119,17 @@ fn moving_light(
     Ok((median(wall), frames))
 }
 
+/// The frames of [`moving_light_serial`]: the two medians, taken under the same load, and the
+/// serial and the engine's own frames.
+type SerialRun = (f64, f64, Vec<RenderOutput>, Vec<RenderOutput>);
+
 /// As [`moving_light`], with the same frame rendered serially after each frame (a second
-/// renderer, [`FrameDesc::serial`]): the two medians, taken under the same load, and the
-/// serial frames.
+/// renderer, [`FrameDesc::serial`]).
 fn moving_light_serial(
     scene: &Scene,
     settings: &gi_core::RenderOptions,
     runs: usize,
-) -> Result<(f64, f64, Vec<RenderOutput>), Box<dyn std::error::Error>> {
+) -> Result<SerialRun, Box<dyn std::error::Error>> {
     let serial = FrameDesc {
         serial: true,
         ..Default::default()
@@ -116,20 +138,72 @@ fn moving_light_serial(
     let mut o = Renderer::new(scene, settings)?;
     r.render(&FrameDesc::default(), &Silent)?;
     o.render(&serial, &Silent)?;
-    let mut frames = Vec::new();
+    let (mut frames, mut engine) = (Vec::new(), Vec::new());
     let (mut wall, mut serial_wall) = (Vec::new(), Vec::new());
     for i in 0..runs {
         let u = nudge(scene, 0.01 * (i + 1) as f32);
         r.update(&u)?;
         o.update(&u)?;
         let t = Instant::now();
-        r.render(&FrameDesc::default(), &Silent)?;
+        engine.push(r.render(&FrameDesc::default(), &Silent)?);
         wall.push(t.elapsed().as_secs_f64());
         let t = Instant::now();
         frames.push(o.render(&serial, &Silent)?);
         serial_wall.push(t.elapsed().as_secs_f64());
     }
-    Ok((median(wall), median(serial_wall), frames))
+    Ok((median(wall), median(serial_wall), frames, engine))
+}
+
+/// The stages of `frames`, median per stage name in the order first seen, as
+/// "name 1.23, name 4.56" (milliseconds).
+fn stage_list(frames: &[RenderOutput]) -> String {
+    let mut names: Vec<&str> = Vec::new();
+    for (n, _) in frames.iter().flat_map(|o| &o.stats.stages) {
+        if !names.contains(&n.as_str()) {
+            names.push(n);
+        }
+    }
+    names
+        .iter()
+        .map(|n| {
+            let ms = median(frames.iter().map(|o| stage(o, &[n])).collect()) * 1e3;
+            format!("{n} {ms:.2}")
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// Method `bidir` per scene and size (`--method bidir`): the engine frame with the light
+/// moving, a still frame, and the engine frames' stages.
+fn bidir_table(
+    scenes: &[(&str, Scene)],
+    sizes: &[(u32, u32)],
+    runs: usize,
+    d: DirectOptions,
+) -> Result<(), Box<dyn std::error::Error>> {
+    println!(
+        "| scene | size | engine frame (ms) | still frame (ms) | stages of the engine frame (ms) |"
+    );
+    println!("|---|---|---|---|---|");
+    for (name, scene) in scenes {
+        for &(w, h) in sizes {
+            let settings = gi_core::options!(Bidir, width: w, height: h, spp: d.spp,
+                shadow_map_size: d.shadow_map_size);
+            let (frame, frames) = moving_light(scene, &settings, runs)?;
+            let mut r = Renderer::new(scene, &settings)?;
+            r.render(&FrameDesc::default(), &Silent)?;
+            let t = Instant::now();
+            r.render(&FrameDesc::default(), &Silent)?;
+            let still = t.elapsed().as_secs_f64();
+            println!(
+                "| {name} | {w}×{h} | {:.1} | {:.1} | {} |",
+                frame * 1e3,
+                still * 1e3,
+                stage_list(&frames)
+            );
+        }
+    }
+    Ok(())
 }
 
 /// The direct light's settings of the `ispm` tables: sub-pixel samples (`--spp`, 16) and
@@ -173,7 +247,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args = common::Args::get();
     let runs = args.runs(3)?;
     let quick = args.quick();
-    let ispm_only = std::env::args().any(|a| a == "--ispm-only");
+    let flag = |f: &str| std::env::args().any(|a| a == f);
+    let (ispm_only, table_only) = (flag("--ispm-only"), flag("--table-only"));
+    let (stages, one_shot) = (flag("--stages"), !flag("--no-one-shot"));
+    let method = args.value("--method").unwrap_or("ispm");
+    if !matches!(method, "ispm" | "bidir") {
+        return Err(format!("--method {method}: ispm or bidir").into());
+    }
     let estimator: Estimator = args.value("--estimator").unwrap_or("auto").parse()?;
     let direct = DirectOptions::get(&args)?;
     common::print_adapter()?;
@@ -214,30 +294,51 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     } else {
         &[20_000, 50_000, 200_000]
     };
+    if method == "bidir" {
+        return bidir_table(&scenes, &sizes, runs, direct);
+    }
+    let (stage_head, stage_rule) = if stages {
+        (
+            " estimator/first bounce: stages of the engine frame (ms) |",
+            "---|",
+        )
+    } else {
+        ("", "")
+    };
     println!(
         "| scene | size | photons | one-shot frame (ms) | engine frame (ms) | speed-up | \
          serial frame (ms) | CPU photon trace (ms) | CPU specular paths (ms) | splat (ms) | \
          direct light (ms) | bounce maps (ms) | upsampling (ms) | rest (ms) | \
          share of all but splat and photon trace | share of all but splat and CPU traces | \
-         still frame (ms) |"
+         still frame (ms) |{stage_head}"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|{stage_rule}");
     for (name, scene) in &scenes {
         for &(w, h) in &sizes {
             for &photons in budgets {
                 let settings = ispm_settings(w, h, photons, estimator, direct);
                 // One-shot: a new renderer per frame, every image read back.
-                render(scene, &settings, &Silent)?;
-                let mut wall = Vec::new();
-                for _ in 0..runs {
-                    let t = Instant::now();
+                let mut old = f64::NAN;
+                if one_shot {
                     render(scene, &settings, &Silent)?;
-                    wall.push(t.elapsed().as_secs_f64());
+                    let mut wall = Vec::new();
+                    for _ in 0..runs {
+                        let t = Instant::now();
+                        render(scene, &settings, &Silent)?;
+                        wall.push(t.elapsed().as_secs_f64());
+                    }
+                    old = median(wall);
                 }
-                let old = median(wall);
                 // Engine: one renderer, the light moving, radiance only; the same frames
                 // rendered serially in between split it into stages.
-                let (frame, serial, frames) = moving_light_serial(scene, &settings, runs)?;
+                let (frame, serial, frames, engine) = moving_light_serial(scene, &settings, runs)?;
+                let stage_cell = if stages {
+                    let s = &engine[0].stats;
+                    let list = stage_list(&engine);
+                    format!(" {}/{}: {list} |", s.estimator, s.first_bounce)
+                } else {
+                    String::new()
+                };
                 let m = |names: &[&str]| median(frames.iter().map(|o| stage(o, names)).collect());
                 let trace = m(&["bounce trace", "cpu trace", "boundary compensation"]);
                 let specular = m(&["specular paths"]);
@@ -252,12 +353,22 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 let t = Instant::now();
                 r.render(&FrameDesc::default(), &Silent)?;
                 let still = t.elapsed().as_secs_f64();
-                let ms = |x: f64| format!("{:.0}", x * 1e3);
+                let ms = |x: f64| {
+                    if x.is_nan() {
+                        "–".to_string()
+                    } else {
+                        format!("{:.0}", x * 1e3)
+                    }
+                };
+                let speed_up = if one_shot {
+                    format!("{:.2}×", old / frame)
+                } else {
+                    "–".to_string()
+                };
                 println!(
-                    "| {name} | {w}×{h} | {photons} | {} | {} | {:.2}× | {} | {} | {} | {} | {} | {} | {} | {} | {:.1}% | {:.1}% | {:.1} |",
+                    "| {name} | {w}×{h} | {photons} | {} | {} | {speed_up} | {} | {} | {} | {} | {} | {} | {} | {} | {:.1}% | {:.1}% | {:.1} |{stage_cell}",
                     ms(old),
                     ms(frame),
-                    old / frame,
                     ms(serial),
                     ms(trace),
                     ms(specular),
@@ -274,6 +385,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
     }
 
+    if table_only {
+        return Ok(());
+    }
+
     // The first bounce rasterized and traced, in serial frames of the same run (the cost
     // depends on the photons and the scene, not on the image size: the first size only).
     println!(
@@ -288,7 +403,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             for first_bounce in [FirstBounce::Raster, FirstBounce::Traced] {
                 let settings = ispm_settings(w, h, photons, estimator, direct)
                     .with("first_bounce", first_bounce);
-                let (_, serial, frames) = moving_light_serial(scene, &settings, runs)?;
+                let (_, serial, frames, _) = moving_light_serial(scene, &settings, runs)?;
                 let bounce = median(
                     frames
                         .iter()

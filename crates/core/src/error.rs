@@ -6,8 +6,9 @@ use thiserror::Error;
 /// to its own exception type.
 #[derive(Debug, Error)]
 pub enum Error {
-    /// A scene description is malformed: `field` is a JSON path such as `objects[2].material`.
-    #[error("{source_name}: {field}: {message}")]
+    /// A scene description is malformed: `field` is a JSON path such as `objects[2].material`
+    /// (`(root)`: the whole description, left out of the message).
+    #[error("{source_name}: {}{message}", if field == "(root)" { String::new() } else { format!("{field}: ") })]
     Scene {
         /// The scene file (or built-in name) the error was found in.
         source_name: String,

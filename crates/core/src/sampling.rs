@@ -129,9 +129,147 @@ impl Frame {
     }
 }
 
+/// Walker's alias table (Vose's construction): draws index `i` with probability
+/// `weights[i] / Σ weights` in constant time.
+#[derive(Clone, Debug, Default)]
+pub struct AliasTable {
+    /// Per bin: the probability of keeping the bin, and its alias.
+    bins: Vec<(f32, u32)>,
+    /// The normalised probability of each index.
+    probs: Vec<f32>,
+}
+
+impl AliasTable {
+    /// The table of `weights` (non-negative, finite); `None` when they sum to zero (or are
+    /// invalid).
+    pub fn new(weights: &[f32]) -> Option<AliasTable> {
+        let total: f64 = weights.iter().map(|&w| w as f64).sum();
+        if weights.is_empty()
+            || !(total > 0.0 && total.is_finite())
+            || weights.iter().any(|w| w.is_nan() || *w < 0.0)
+        {
+            return None;
+        }
+        let n = weights.len();
+        let probs: Vec<f32> = weights.iter().map(|&w| (w as f64 / total) as f32).collect();
+        let mut scaled: Vec<f64> = weights
+            .iter()
+            .map(|&w| w as f64 / total * n as f64)
+            .collect();
+        let mut bins = vec![(1.0f32, 0u32); n];
+        let (mut small, mut large): (Vec<usize>, Vec<usize>) =
+            (0..n).partition(|&i| scaled[i] < 1.0);
+        while let (Some(s), Some(&l)) = (small.pop(), large.last()) {
+            bins[s] = (scaled[s] as f32, l as u32);
+            scaled[l] -= 1.0 - scaled[s];
+            if scaled[l] < 1.0 {
+                large.pop();
+                small.push(l);
+            }
+        }
+        // What is left keeps its bin (round-off).
+        for i in small.into_iter().chain(large) {
+            bins[i] = (1.0, i as u32);
+        }
+        Some(AliasTable { bins, probs })
+    }
+
+    /// An index drawn from `u` in [0, 1), and its probability.
+    #[inline]
+    pub fn sample(&self, u: f32) -> (usize, f32) {
+        let n = self.bins.len();
+        let x = u * n as f32;
+        let i = (x as usize).min(n - 1);
+        let (keep, alias) = self.bins[i];
+        let j = if (x - i as f32) < keep {
+            i
+        } else {
+            alias as usize
+        };
+        (j, self.probs[j])
+    }
+
+    /// The probability of index `i`.
+    #[inline]
+    pub fn prob(&self, i: usize) -> f32 {
+        self.probs.get(i).copied().unwrap_or(0.0)
+    }
+
+    pub fn len(&self) -> usize {
+        self.bins.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.bins.is_empty()
+    }
+}
+
+/// A uniformly random point of a triangle, as barycentrics (b1, b2) of corners 1 and 2.
+#[inline]
+pub fn uniform_triangle(u: Vec2) -> (f32, f32) {
+    // Heitz 2019, "A low-distortion map between triangle and square".
+    if u.y > u.x {
+        let b0 = u.x * 0.5;
+        let b1 = u.y - b0;
+        (b1, 1.0 - b0 - b1)
+    } else {
+        let b1 = u.y * 0.5;
+        let b0 = u.x - b1;
+        (b1, 1.0 - b0 - b1)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Indices are drawn with their weights' probabilities (chi-square, 9 bins, 1e5 draws,
+    /// threshold 27.9 = the 99.9% quantile of χ²(8)).
+    #[test]
+    fn alias_table_draws_by_weight() {
+        let weights = [1.0f32, 0.0, 3.0, 0.5, 2.0, 7.0, 0.25, 1.0, 4.0];
+        let t = AliasTable::new(&weights).expect("table");
+        let total: f32 = weights.iter().sum();
+        let mut rng = Rng::new(5, 0, 0);
+        let n = 100_000;
+        let mut counts = [0u32; 9];
+        for _ in 0..n {
+            let (i, p) = t.sample(rng.next_f32());
+            assert!((p - weights[i] / total).abs() < 1e-6);
+            counts[i] += 1;
+        }
+        assert_eq!(counts[1], 0);
+        let chi2: f64 = weights
+            .iter()
+            .zip(counts)
+            .filter(|(w, _)| **w > 0.0)
+            .map(|(w, c)| {
+                let e = n as f64 * (*w / total) as f64;
+                (c as f64 - e).powi(2) / e
+            })
+            .sum();
+        assert!(chi2 < 27.9, "{chi2} {counts:?}");
+        assert!(AliasTable::new(&[0.0, 0.0]).is_none());
+        assert!(AliasTable::new(&[1.0, f32::NAN]).is_none());
+    }
+
+    /// Triangle samples are uniform: the mean of the barycentrics is (1/3, 1/3) and they
+    /// stay inside.
+    #[test]
+    fn triangle_samples_are_uniform() {
+        let mut rng = Rng::new(6, 0, 0);
+        let n = 200_000;
+        let (mut s1, mut s2) = (0.0f64, 0.0f64);
+        for _ in 0..n {
+            let (b1, b2) = uniform_triangle(rng.next_2d());
+            assert!(b1 >= 0.0 && b2 >= 0.0 && b1 + b2 <= 1.0 + 1e-6);
+            s1 += b1 as f64;
+            s2 += b2 as f64;
+        }
+        // Standard error of a barycentric's mean: sqrt(1/18 / n) ≈ 5e-4.
+        assert!((s1 / n as f64 - 1.0 / 3.0).abs() < 3e-3);
+        assert!((s2 / n as f64 - 1.0 / 3.0).abs() < 3e-3);
+    }
 
     #[test]
     fn rng_is_uniform_and_reproducible() {

@@ -28,7 +28,7 @@ fn emitted_estimate(scene: &gi_core::Scene, bvh: &SceneBvh, n: u64) -> [(f64, f6
     let mut sums = [[0.0f64; 2]; 2];
     for i in 0..n {
         let mut rng = Rng::new(9, 1, i);
-        let e = scene.lights[0].emit(&mut rng);
+        let e = scene.lights[0].emit(&mut rng, scene.bounds());
         let Some(hit) = bvh.intersect(e.origin, e.direction, f32::INFINITY) else {
             continue;
         };
@@ -83,7 +83,7 @@ fn traced_bounce_maps_are_unbiased() {
         );
     }
     // Not a closed room: a seventh of the light leaves through the open front.
-    let total = scene.lights[0].power().element_sum() as f64;
+    let total = scene.lights[0].power(scene.bounds()).element_sum() as f64;
     assert!(
         incident < 0.9 * total && incident > 0.7 * total,
         "{incident} of {total}"

@@ -143,6 +143,7 @@ fn footprints_scale_with_the_scene() {
                 *position *= k;
                 *intensity *= k * k;
             }
+            Light::Directional { .. } => {}
         }
     }
     let (a, b) = (

@@ -26,6 +26,32 @@ fn setting_error(py: Python<'_>, name: &'static str, message: impl Into<String>)
     )
 }
 
+/// `repr(v)`, for messages.
+fn repr(v: &Bound<'_, PyAny>) -> String {
+    v.repr()
+        .map(|r| r.to_string())
+        .unwrap_or_else(|_| "?".into())
+}
+
+/// An integer argument of any Python size as `T`; else what the message about it says:
+/// "must be {allowed}, got 1099511627776" for an integer outside `T`, "must be an integer
+/// {allowed}, got '4'" for anything else (as the option table's messages read).
+fn integer<T: TryFrom<i128>>(v: &Bound<'_, PyAny>) -> Result<T, impl Fn(&str) -> String> {
+    let int = if v.is_instance_of::<pyo3::types::PyBool>() {
+        None
+    } else {
+        v.extract::<i128>().ok()
+    };
+    let given = repr(v);
+    match int.map(T::try_from) {
+        Some(Ok(t)) => Ok(t),
+        _ => Err(move |allowed: &str| {
+            let kind = if int.is_some() { "" } else { "an integer " };
+            format!("must be {kind}{allowed}, got {given}")
+        }),
+    }
+}
+
 /// A frame as a dict of float32 arrays (radiance, albedo, normal, position, caustics:
 /// H×W×3, empty when not read back; depth: H×W), `extra` and `stats`.
 fn output_dict<'py>(py: Python<'py>, out: gi_core::RenderOutput) -> PyResult<Bound<'py, PyDict>> {
@@ -70,10 +96,13 @@ impl PyRenderer {
         let inner = crate::guard::catch("Renderer", || {
             Renderer::new(&scene.inner, &options).map_err(|e| to_py(py, e))
         })?;
+        let mut warnings = warnings;
+        warnings.extend(inner.warnings().iter().cloned());
         Ok(PyRenderer { inner, warnings })
     }
 
-    /// The options given that don't apply to the method (ignored), one message each.
+    /// The options given that don't apply to the method (ignored) and what the method leaves
+    /// out of the scene's light, one message each.
     #[getter]
     fn warnings(&self) -> Vec<String> {
         self.warnings.clone()
@@ -97,9 +126,15 @@ impl PyRenderer {
         py: Python<'py>,
         aovs: bool,
         extras: bool,
-        seed: Option<u64>,
+        seed: Option<&Bound<'py, PyAny>>,
         progress: Option<Py<PyAny>>,
     ) -> PyResult<Bound<'py, PyDict>> {
+        let seed = match seed {
+            Some(v) if !v.is_none() => Some(integer::<u64>(v).map_err(|message| {
+                setting_error(py, "seed", message(&format!("in 0..={}", u64::MAX)))
+            })?),
+            _ => None,
+        };
         let desc = FrameDesc {
             seed,
             images: Images { aovs, extras },
@@ -168,11 +203,36 @@ impl PyRenderer {
     }
 
     /// Changes the image size (targets are rebuilt at the next frame).
-    fn resize(&mut self, py: Python<'_>, width: u32, height: u32) -> PyResult<()> {
+    fn resize(
+        &mut self,
+        py: Python<'_>,
+        width: &Bound<'_, PyAny>,
+        height: &Bound<'_, PyAny>,
+    ) -> PyResult<()> {
+        // A side that is not an integer of u32 is passed as 0, which the core refuses with
+        // the range it allows; the message then says what was given.
+        let (w, bad_w) = match integer::<u32>(width) {
+            Ok(w) => (w, None),
+            Err(m) => (0, Some(m)),
+        };
+        let (h, bad_h) = match integer::<u32>(height) {
+            Ok(h) => (h, None),
+            Err(m) => (0, Some(m)),
+        };
         let inner = &mut self.inner;
-        crate::guard::catch("Renderer.resize", || {
-            inner.resize(width, height).map_err(|e| to_py(py, e))
-        })
+        let resized = crate::guard::catch("Renderer.resize", || Ok(inner.resize(w, h)))?;
+        match resized {
+            Ok(()) => Ok(()),
+            Err(gi_core::Error::Setting { name, message }) => {
+                let allowed = message.strip_prefix("must be ").unwrap_or(&message);
+                let message = match if name == "width" { &bad_w } else { &bad_h } {
+                    Some(given) => given(allowed),
+                    None => message.clone(),
+                };
+                Err(setting_error(py, name, message))
+            }
+            Err(e) => Err(to_py(py, e)),
+        }
     }
 
     /// Whether each frame is a progressive pass (option `progressive`).
@@ -253,14 +313,32 @@ impl PyRenderer {
                     Some(Ok(name)) => scene.object_index(&name),
                     _ => key.map(|k| k.extract::<usize>()).transpose()?,
                 };
-                let Some(object) = i.and_then(|i| scene.objects.get(i)) else {
-                    return Err(setting_error(py, "object", "no such object"));
+                let (Some(object), Some(described)) = (
+                    i.and_then(|i| scene.objects.get(i)),
+                    i.and_then(|i| scene.object_desc(i)),
+                ) else {
+                    let n = scene.objects.len();
+                    return Err(setting_error(
+                        py,
+                        "object",
+                        format!("no such object: give its name or index (0..{n})"),
+                    ));
                 };
-                // The transform as the rows that `update("object", ..)` takes as `matrix`,
-                // and the object's range of the scene's triangles (`Scene.mesh_arrays`).
+                // The transform in the scene format (none for a sheared matrix) and as the
+                // rows that `update("object", ..)` takes as `matrix`, and the object's range
+                // of the scene's triangles (`Scene.mesh_arrays`).
                 let rows = object.transform.transpose().to_cols_array_2d();
+                // Through text, so that its f32 values read as written (0.35, not
+                // 0.3499999940395355 as a JSON value made from the f32 would).
+                let transform: Option<serde_json::Value> = match described {
+                    Ok(desc) => serde_json::to_string(&desc)
+                        .and_then(|text| serde_json::from_str(&text))
+                        .ok(),
+                    Err(_) => None,
+                };
                 serde_json::to_string(&serde_json::json!({
                     "name": object.name,
+                    "transform": transform,
                     "matrix": rows,
                     "triangles": [object.triangles.start, object.triangles.end],
                 }))

@@ -270,6 +270,11 @@ impl PyScene {
     fn material_names(&self) -> Vec<String> {
         self.inner.material_names.clone()
     }
+    /// Names of the textures the scene loaded (what material texture fields name).
+    #[getter]
+    fn texture_names(&self) -> Vec<String> {
+        self.inner.texture_names.clone()
+    }
     /// Total emitted power of all lights, W per channel.
     #[getter]
     fn total_power(&self) -> [f32; 3] {

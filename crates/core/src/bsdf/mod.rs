@@ -40,6 +40,11 @@ pub struct Material {
     pub transmission: Vec3,
     /// Index of refraction of the glass lobe (inside over outside).
     pub ior: f32,
+    /// Radiance emitted (W·sr⁻¹·m⁻² per channel) from the front face, the side the
+    /// triangle's geometric normal faces: the surface is an area light. Zero: none.
+    pub emission: Vec3,
+    /// Whether the back face emits `emission` too.
+    pub two_sided: bool,
 }
 
 impl Default for Material {
@@ -51,6 +56,8 @@ impl Default for Material {
             fresnel: false,
             transmission: Vec3::ZERO,
             ior: 1.5,
+            emission: Vec3::ZERO,
+            two_sided: false,
         }
     }
 }
@@ -108,15 +115,30 @@ impl Material {
     pub fn has_transmission(&self) -> bool {
         self.transmission.max_element() > 0.0
     }
-    /// True when every lobe is a delta lobe (nothing for next-event estimation to evaluate).
     /// True when the material can scatter into a delta lobe (perfect mirror or smooth
     /// glass): what a rasterizer that shades the first surface cannot give.
     pub fn has_delta_lobe(&self) -> bool {
         (self.has_specular() && self.is_mirror()) || self.has_transmission()
     }
 
+    /// True when every lobe is a delta lobe (nothing for next-event estimation to evaluate).
     pub fn is_purely_specular(&self) -> bool {
         self.diffuse.max_element() <= 0.0 && (!self.has_specular() || self.is_mirror())
+    }
+
+    /// Whether the surface emits light.
+    pub fn emits(&self) -> bool {
+        self.emission.max_element() > 0.0
+    }
+
+    /// Radiance emitted towards `wo` (pointing away from the surface) by a surface of
+    /// geometric normal `ng`: `emission` on the front side (or both, when two-sided).
+    pub fn emitted(&self, ng: Vec3, wo: Vec3) -> Vec3 {
+        if self.two_sided || ng.dot(wo) > 0.0 {
+            self.emission
+        } else {
+            Vec3::ZERO
+        }
     }
 
     /// Specular Fresnel term F_s(cos).

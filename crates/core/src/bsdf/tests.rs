@@ -40,6 +40,7 @@ fn material_grid() -> Vec<Material> {
                             fresnel,
                             transmission: Vec3::splat(t),
                             ior: 1.5,
+                            ..Material::default()
                         });
                     }
                 }

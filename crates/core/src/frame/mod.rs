@@ -97,6 +97,8 @@ struct GpuState {
 pub struct Renderer {
     scene: Scene,
     options: RenderOptions,
+    /// What the renderer leaves out of the scene's light (see [`Renderer::warnings`]).
+    warnings: Vec<String>,
     bvh: Option<SceneBvh>,
     /// What changed since the last frame.
     changes: Changes,
@@ -130,10 +132,57 @@ fn check_environment(scene: &Scene, method: Method) -> Result<()> {
         "method",
         format!(
             "method `{}` cannot render a scene with an environment light ({how}); \
-             use method `path`",
+             use method `path` or `bidir`",
             method.name()
         ),
     ))
+}
+
+/// What `method` leaves out of `scene`'s light, one message each (they become
+/// `gi.RenderWarning`s): kinds of light a method does not render yet.
+fn unrendered_lights(scene: &Scene, method: Method) -> Vec<String> {
+    let mut out = Vec::new();
+    let emitters = scene.materials.iter().any(|m| m.emits());
+    let directional = scene.lights.iter().any(|l| !l.is_local());
+    let name = method.name();
+    if emitters && method != Method::Path {
+        out.push(format!(
+            "method `{name}` does not render emitting surfaces (area lights) yet: their light \
+             is missing; use method `path`"
+        ));
+    }
+    if directional && method.uses_gpu() {
+        out.push(format!(
+            "method `{name}` does not render directional lights on the GPU yet: their direct \
+             light is missing; use method `path`, `photon` or `gather`"
+        ));
+    }
+    out
+}
+
+/// Light transport `options` ask for that their method does not compute, one message each
+/// (they become `gi.RenderWarning`s).
+fn transport_omissions(scene: &Scene, options: &RenderOptions) -> Vec<String> {
+    let mut out = Vec::new();
+    if let MethodOptions::Bidir(o) = &options.method {
+        if o.max_depth > 3 {
+            out.push(format!(
+                "method `bidir` computes one- and two-bounce indirect light only: max_depth {} \
+                 asks for {} more bounce(s), which are missing (use max_depth 3, or method \
+                 `ispm` or `path` for more)",
+                o.max_depth,
+                o.max_depth - 3
+            ));
+        }
+        if scene.has_delta_materials() {
+            out.push(
+                "method `bidir` traces mirrors and glass seen by the camera with direct light \
+                 only: the indirect light seen through them is missing"
+                    .to_string(),
+            );
+        }
+    }
+    out
 }
 
 /// Most refits before the BVH is built anew (a refitted tree keeps its topology and slows
@@ -161,12 +210,15 @@ impl Renderer {
             options.common.height.unwrap_or(scene.camera.height),
         );
         options::check_image_memory(&camera, method)?;
+        let mut warnings = unrendered_lights(scene, method);
+        warnings.extend(transport_omissions(scene, options));
         Ok(Renderer {
             scene: Scene {
                 camera,
                 ..scene.clone()
             },
             options: options.clone(),
+            warnings,
             bvh: None,
             changes: Changes::default(),
             moved: Vec::new(),
@@ -186,6 +238,12 @@ impl Renderer {
 
     pub fn options(&self) -> &RenderOptions {
         &self.options
+    }
+
+    /// What the method leaves out of the scene's light, one message each (e.g. a kind of
+    /// light it does not render yet).
+    pub fn warnings(&self) -> &[String] {
+        &self.warnings
     }
 
     pub fn method(&self) -> Method {

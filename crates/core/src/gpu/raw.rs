@@ -76,6 +76,18 @@ impl Light {
                 raw.cos_inner = cos_inner;
                 raw.cos_outer = cos_outer;
             }
+            // Kind 2: not shaded by the GPU passes yet (they warn).
+            Light::Directional {
+                direction,
+                irradiance,
+                cos_half_angle,
+            } => {
+                raw.kind = 2;
+                raw.direction = direction.into();
+                raw.intensity = irradiance.into();
+                raw.cos_inner = cos_half_angle;
+                raw.cos_outer = cos_half_angle;
+            }
         }
         raw
     }

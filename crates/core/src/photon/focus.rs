@@ -85,6 +85,8 @@ impl Focus {
             .iter()
             .map(|l| {
                 let p = l.position();
+                // A distant light has no point to aim from.
+                let spheres = if l.is_local() { &spheres[..] } else { &[] };
                 let cones: Vec<Cone> = spheres
                     .iter()
                     .filter_map(|&(c, r)| {
@@ -138,6 +140,7 @@ impl Focus {
                     cos_outer,
                     ..
                 } => Frame::new(direction).to_world(uniform_cone(rng.next_2d(), cos_outer)),
+                Light::Directional { direction, .. } => direction,
             }
         };
         (d, self.pdf(light, li, d))
@@ -148,6 +151,7 @@ impl Focus {
         let cones = &self.maps[li].cones;
         let base = match *light {
             Light::Point { .. } => 1.0 / (4.0 * PI),
+            Light::Directional { .. } => 0.0,
             Light::Spot {
                 direction,
                 cos_outer,

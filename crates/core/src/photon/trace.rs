@@ -126,7 +126,10 @@ pub fn emit_and_trace_focused(
             };
             (e, 1.0 / (n_l * q.max(1e-12)))
         } else {
-            (light.emit(&mut rng), light.solid_angle() / n_l)
+            (
+                light.emit(&mut rng, scene.bounds()),
+                light.solid_angle() / n_l,
+            )
         };
         let power = e.power / (p_light * n_photons as f32);
         let ray = PhotonRay::new(e.origin, e.direction, power, 1.0, 0);

@@ -29,6 +29,8 @@ fn animatable(target: TrackTarget) -> &'static [&'static str] {
             "intensity",
             "inner_angle",
             "outer_angle",
+            "irradiance",
+            "angular_diameter",
         ],
         TrackTarget::Object => &["translate", "rotate", "scale"],
         TrackTarget::Material => &[
@@ -38,6 +40,8 @@ fn animatable(target: TrackTarget) -> &'static [&'static str] {
             "fresnel",
             "transmission",
             "ior",
+            "emission",
+            "two_sided",
         ],
     }
 }

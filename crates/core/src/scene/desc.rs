@@ -64,20 +64,40 @@ pub enum LightDesc {
         position: V3,
         direction: V3,
         intensity: V3,
-        /// Half-angle (degrees) inside which the intensity is full.
-        #[serde(default = "default_inner")]
-        inner_angle: f32,
-        /// Half-angle (degrees) beyond which there is no light.
-        #[serde(default = "default_outer")]
-        outer_angle: f32,
+        /// Half-angle (degrees) inside which the intensity is full; default 25, or 5/6 of
+        /// `outer_angle` where that is less ([`spot_angles`]).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        inner_angle: Option<f32>,
+        /// Half-angle (degrees) beyond which there is no light; default 30, or 6/5 of
+        /// `inner_angle` (at most 89) where that is more.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        outer_angle: Option<f32>,
+    },
+    /// A distant light (the sun): light travelling along `direction` with `irradiance`
+    /// (W·m⁻² per channel) on a surface facing it, from a disc of `angular_diameter`
+    /// degrees (0: parallel light, hard shadows).
+    Directional {
+        direction: V3,
+        irradiance: V3,
+        #[serde(default)]
+        angular_diameter: f32,
     },
 }
 
-fn default_inner() -> f32 {
-    25.0
-}
-fn default_outer() -> f32 {
-    30.0
+/// A spot's half-angles (inner, outer) in degrees, each given or defaulted: 25 and 30 when
+/// neither is given, and a default that fits the other one's value where 25 or 30 would
+/// not (an `outer_angle` below 30 alone gets 5/6 of it as `inner_angle`, an `inner_angle`
+/// above 30 alone gets 6/5 of it, at most 89, as `outer_angle`).
+pub fn spot_angles(inner: Option<f32>, outer: Option<f32>) -> (f32, f32) {
+    const INNER: f32 = 25.0;
+    const OUTER: f32 = 30.0;
+    match (inner, outer) {
+        (Some(i), Some(o)) => (i, o),
+        (None, Some(o)) => (INNER.min(o * INNER / OUTER), o),
+        (Some(i), None) if i > OUTER => (i, (i * OUTER / INNER).min(89.0)),
+        (Some(i), None) => (i, OUTER),
+        (None, None) => (INNER, OUTER),
+    }
 }
 
 /// The uber BSDF's parameters (see `bsdf`).
@@ -115,6 +135,24 @@ pub struct MaterialDesc {
     pub alpha_texture: Option<String>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub alpha_cutoff: Option<f32>,
+    /// Emitted radiance, W·sr⁻¹·m⁻² per channel, from the front face (the side the
+    /// triangles' winding faces): the surface is an area light.
+    #[serde(default, skip_serializing_if = "is_zero3")]
+    pub emission: V3,
+    /// RGB multiplies `emission`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub emission_texture: Option<String>,
+    /// The back face emits too.
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub two_sided: bool,
+}
+
+fn is_zero3(v: &V3) -> bool {
+    *v == [0.0; 3]
+}
+
+fn is_false(b: &bool) -> bool {
+    !*b
 }
 
 impl MaterialDesc {
@@ -127,6 +165,7 @@ impl MaterialDesc {
             normal: self.normal_texture.clone(),
             alpha: self.alpha_texture.clone(),
             alpha_cutoff: self.alpha_cutoff,
+            emission: self.emission_texture.clone(),
         }
     }
 }
@@ -140,6 +179,7 @@ pub struct TextureRefs {
     pub normal: Option<String>,
     pub alpha: Option<String>,
     pub alpha_cutoff: Option<f32>,
+    pub emission: Option<String>,
 }
 
 fn default_diffuse() -> V3 {
@@ -304,4 +344,22 @@ pub struct TrackDesc {
 pub struct KeyDesc {
     pub time: f64,
     pub value: serde_json::Map<String, serde_json::Value>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::spot_angles;
+
+    /// An angle given alone gets a default that fits it; defaults that were valid stay.
+    #[test]
+    fn spot_angle_defaults_fit_the_angle_given() {
+        assert_eq!(spot_angles(None, None), (25.0, 30.0));
+        assert_eq!(spot_angles(None, Some(45.0)), (25.0, 45.0));
+        assert_eq!(spot_angles(Some(10.0), None), (10.0, 30.0));
+        let (i, o) = spot_angles(None, Some(20.0));
+        assert!((i - 20.0 * 5.0 / 6.0).abs() < 1e-5 && o == 20.0);
+        let (i, o) = spot_angles(Some(40.0), None);
+        assert!(i == 40.0 && (o - 48.0).abs() < 1e-5);
+        assert_eq!(spot_angles(Some(85.0), None), (85.0, 89.0));
+    }
 }

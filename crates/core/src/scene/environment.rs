@@ -249,7 +249,7 @@ impl Environment {
         if env.max_radiance() > MAX_RADIANCE {
             return err(
                 "intensity",
-                "radiance times intensity must be at most 1e10 per channel (MAX_RADIANCE)",
+                "radiance times intensity must be at most 1e10 per channel",
             );
         }
         env.importance = d.importance;
@@ -356,6 +356,51 @@ impl Environment {
                 })
             }
         }
+    }
+
+    /// Radiance integrated over the sphere of directions, ∫ L(ω) dω (W·m⁻² per channel
+    /// crossing a unit disc from all sides: the irradiance a sphere's cross-section gets).
+    pub fn integral(&self) -> Vec3 {
+        match &self.source {
+            Source::Constant(c) => *c * (self.scale * 4.0 * PI),
+            Source::Image { image, .. } => {
+                let (w, h) = (image.width as usize, image.height as usize);
+                let mut sum = glam::DVec3::ZERO;
+                for (i, t) in image.texels.iter().enumerate() {
+                    let theta = std::f64::consts::PI * ((i / w) as f64 + 0.5) / h as f64;
+                    let d_omega = 2.0 * std::f64::consts::PI * std::f64::consts::PI * theta.sin()
+                        / (w * h) as f64;
+                    sum += t.as_dvec3() * d_omega;
+                }
+                sum.as_vec3() * self.scale
+            }
+        }
+    }
+
+    /// Power entering the scene's bounding sphere `bounds` (W per channel): every direction's
+    /// light through the disc facing it, πr²·∫L dω.
+    pub fn power(&self, bounds: super::light::Bounds) -> Vec3 {
+        self.integral() * (PI * bounds.radius * bounds.radius)
+    }
+
+    /// Emits one photon into the scene: a direction drawn by [`Environment::sample`], a
+    /// point on the disc of `bounds` facing it; the power is the environment's over one
+    /// photon (divide by the photon count).
+    pub fn emit(
+        &self,
+        rng: &mut crate::sampling::Rng,
+        bounds: super::light::Bounds,
+    ) -> Option<super::light::Emission> {
+        let s = self.sample(rng.next_2d())?;
+        if s.pdf.is_nan() || s.pdf <= 0.0 {
+            return None;
+        }
+        let (origin, area) = bounds.disc_point(s.wi, rng.next_2d());
+        Some(super::light::Emission {
+            origin,
+            direction: -s.wi,
+            power: s.radiance * (area / s.pdf),
+        })
     }
 
     /// Density over solid angle with which [`Environment::sample`] returns the unit world

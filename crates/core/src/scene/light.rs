@@ -1,10 +1,12 @@
-//! Point and spot lights.
+//! The analytic lights: point, spot and directional (the sun). Area lights are emissive
+//! surfaces (`scene::emitters`), the sky is the environment (`scene::environment`).
 
 use crate::sampling::{uniform_cone, uniform_sphere, Frame, Rng};
 use glam::Vec3;
 use std::f32::consts::PI;
 
-/// A light source; intensity in W/sr per channel.
+/// A light source; point and spot intensity in W/sr per channel, directional irradiance in
+/// W/m² per channel.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Light {
     /// Isotropic point light; emitted power 4π·I.
@@ -17,6 +19,21 @@ pub enum Light {
         cos_inner: f32,
         cos_outer: f32,
     },
+    /// A distant light (the sun): light travelling along the unit `direction` with
+    /// `irradiance` on a surface facing it, from a disc of directions of half-angle
+    /// acos(`cos_half_angle`) around it (1: parallel light).
+    Directional {
+        direction: Vec3,
+        irradiance: Vec3,
+        cos_half_angle: f32,
+    },
+}
+
+/// The bounding sphere of a scene: where a distant light's photons enter it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bounds {
+    pub centre: Vec3,
+    pub radius: f32,
 }
 
 /// An emitted photon: origin, direction and power (W).
@@ -28,16 +45,24 @@ pub struct Emission {
 }
 
 impl Light {
+    /// Where a point or spot light is; a directional light has no position (the origin).
     pub fn position(&self) -> Vec3 {
         match *self {
             Light::Point { position, .. } | Light::Spot { position, .. } => position,
+            Light::Directional { .. } => Vec3::ZERO,
         }
+    }
+
+    /// Whether the light is at a finite position (point, spot).
+    pub fn is_local(&self) -> bool {
+        !matches!(self, Light::Directional { .. })
     }
 
     /// Intensity on the axis (W/sr per channel).
     pub fn intensity(&self) -> Vec3 {
         match *self {
             Light::Point { intensity, .. } | Light::Spot { intensity, .. } => intensity,
+            Light::Directional { irradiance, .. } => irradiance,
         }
     }
 
@@ -51,6 +76,7 @@ impl Light {
                 cos_outer,
                 ..
             } => spot_falloff(cos, cos_inner, cos_outer),
+            Light::Directional { .. } => 1.0,
         }
     }
 
@@ -65,11 +91,13 @@ impl Light {
                 cos_outer,
                 ..
             } => intensity * spot_falloff(dir.dot(direction), cos_inner, cos_outer),
+            Light::Directional { .. } => Vec3::ZERO,
         }
     }
 
-    /// Total emitted power (W): ∫ I(ω) dω.
-    pub fn power(&self) -> Vec3 {
+    /// Total emitted power (W): ∫ I(ω) dω; for a directional light, the power that crosses
+    /// the scene's bounding sphere `bounds` (E·πr²).
+    pub fn power(&self, bounds: Bounds) -> Vec3 {
         match *self {
             Light::Point { intensity, .. } => 4.0 * PI * intensity,
             Light::Spot {
@@ -81,19 +109,46 @@ impl Light {
                 // ∫ falloff dω = 2π ∫ s(c) dc; smoothstep integrates to half its span.
                 intensity * 2.0 * PI * ((1.0 - cos_inner) + 0.5 * (cos_inner - cos_outer))
             }
+            Light::Directional { irradiance, .. } => {
+                irradiance * PI * bounds.radius * bounds.radius
+            }
         }
     }
 
-    /// Solid angle (sr) that photons are emitted into.
+    /// Solid angle (sr) that photons are emitted into (a directional light's: its disc of
+    /// directions).
     pub fn solid_angle(&self) -> f32 {
         match *self {
             Light::Point { .. } => 4.0 * PI,
             Light::Spot { cos_outer, .. } => 2.0 * PI * (1.0 - cos_outer),
+            Light::Directional { cos_half_angle, .. } => 2.0 * PI * (1.0 - cos_half_angle),
         }
     }
 
-    /// Emits one photon carrying power `power / n` on average when called `n` times.
-    pub fn emit(&self, rng: &mut Rng) -> Emission {
+    /// A direction towards the light from anywhere (a directional light: within its disc,
+    /// uniformly in solid angle) with its density (sr⁻¹; infinite for parallel light).
+    pub fn sample_towards(&self, u: glam::Vec2) -> Option<(Vec3, f32)> {
+        let Light::Directional {
+            direction,
+            cos_half_angle,
+            ..
+        } = *self
+        else {
+            return None;
+        };
+        if cos_half_angle >= 1.0 {
+            return Some((-direction, f32::INFINITY));
+        }
+        let local = uniform_cone(u, cos_half_angle);
+        Some((
+            Frame::new(-direction).to_world(local),
+            1.0 / (2.0 * PI * (1.0 - cos_half_angle)),
+        ))
+    }
+
+    /// Emits one photon carrying power `power / n` on average when called `n` times; a
+    /// directional light's enter the scene through the disc of `bounds` facing it.
+    pub fn emit(&self, rng: &mut Rng, bounds: Bounds) -> Emission {
         match *self {
             Light::Point {
                 position,
@@ -118,7 +173,39 @@ impl Light {
                     power: self.intensity_towards(dir) / pdf,
                 }
             }
+            Light::Directional {
+                irradiance,
+                direction,
+                ..
+            } => {
+                let towards = match self.sample_towards(rng.next_2d()) {
+                    Some((d, _)) => d,
+                    None => -direction,
+                };
+                let (origin, area) = bounds.disc_point(towards, rng.next_2d());
+                Emission {
+                    origin,
+                    direction: -towards,
+                    power: irradiance * area,
+                }
+            }
         }
+    }
+}
+
+impl Bounds {
+    /// A uniformly random point on the disc of the sphere facing direction `towards` (the
+    /// disc through the centre, moved out to the sphere's surface on that side), and the
+    /// disc's area: where light arriving from `towards` enters the sphere.
+    pub fn disc_point(&self, towards: Vec3, u: glam::Vec2) -> (Vec3, f32) {
+        let frame = Frame::new(towards);
+        let r = self.radius * u.x.sqrt();
+        let phi = 2.0 * PI * u.y;
+        let local = Vec3::new(r * phi.cos(), r * phi.sin(), self.radius);
+        (
+            self.centre + frame.to_world(local),
+            PI * self.radius * self.radius,
+        )
     }
 }
 
@@ -138,6 +225,41 @@ pub fn spot_falloff(cos: f32, cos_inner: f32, cos_outer: f32) -> f32 {
 mod tests {
     use super::*;
 
+    const BOUNDS: Bounds = Bounds {
+        centre: Vec3::ZERO,
+        radius: 2.0,
+    };
+
+    /// A directional light's photons carry E·πr² in total, enter the bounding sphere on the
+    /// side it faces, and travel along its direction.
+    #[test]
+    fn directional_photons_cross_the_bounding_disc() {
+        let direction = Vec3::new(0.3, -1.0, 0.2).normalize();
+        let l = Light::Directional {
+            direction,
+            irradiance: Vec3::new(1.0, 2.0, 3.0),
+            cos_half_angle: 1.0,
+        };
+        let mut rng = Rng::new(1, 0, 0);
+        let n = 10_000;
+        let mut sum = Vec3::ZERO;
+        for _ in 0..n {
+            let e = l.emit(&mut rng, BOUNDS);
+            sum += e.power / n as f32;
+            assert!((e.direction - direction).length() < 1e-6);
+            assert!((e.origin - BOUNDS.centre).dot(-direction) > 1.99);
+            // On the disc: within the radius of the axis through the centre. (Each photon
+            // carries exactly E·πr²/n: the sum differs by float round-off alone.)
+            let off = (e.origin - BOUNDS.centre).reject_from(direction);
+            assert!(off.length() <= 2.0 + 1e-4);
+        }
+        let power = l.power(BOUNDS);
+        assert!(
+            ((sum - power) / power).abs().max_element() < 1e-3,
+            "{sum} vs {power}"
+        );
+    }
+
     #[test]
     fn spot_power_matches_emission() {
         let l = Light::Spot {
@@ -151,13 +273,13 @@ mod tests {
         let n = 200_000;
         let mut sum = Vec3::ZERO;
         for _ in 0..n {
-            sum += l.emit(&mut rng).power / n as f32;
+            sum += l.emit(&mut rng, BOUNDS).power / n as f32;
         }
         // Mean of bounded samples; the falloff band's variance gives a standard error < 0.3%.
+        let power = l.power(BOUNDS);
         assert!(
-            ((sum - l.power()) / l.power()).abs().max_element() < 0.01,
-            "{sum} vs {}",
-            l.power()
+            ((sum - power) / power).abs().max_element() < 0.01,
+            "{sum} vs {power}"
         );
     }
 }

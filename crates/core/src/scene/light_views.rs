@@ -83,6 +83,8 @@ pub fn views_of(light: &Light) -> u32 {
     match light {
         Light::Point { .. } => 6,
         Light::Spot { .. } => 1,
+        // Distant lights have no perspective views.
+        Light::Directional { .. } => 0,
     }
 }
 
@@ -151,6 +153,8 @@ pub fn shadow_views(scene: &Scene, size: u32) -> (Vec<ShadowLayers>, Vec<Mat4>) 
                 matrices.push(square_perspective(t, near, far) * look_to(p, forward, up));
                 t
             }
+            // No shadow map yet: the GPU methods do not render distant lights.
+            Light::Directional { .. } => 0.0,
         };
         lights.push(ShadowLayers {
             first_layer,
@@ -183,11 +187,18 @@ pub struct LightView {
 /// to its power (a texel's power is I(ω)·A·cos³θ).
 pub fn light_views(scene: &Scene, texels: u64) -> Vec<LightView> {
     let (lo, hi) = bounds(scene);
-    let total: f32 = scene.lights.iter().map(|l| l.power().element_sum()).sum();
+    // The views see the point and spot lights (the others' photons are cast on the CPU).
+    let bounds = scene.bounds();
+    let total: f32 = scene
+        .lights
+        .iter()
+        .filter(|l| l.is_local())
+        .map(|l| l.power(bounds).element_sum())
+        .sum();
     let mut views_out = Vec::new();
     for (li, light) in scene.lights.iter().enumerate() {
-        let power = light.power().element_sum();
-        if !(power > 0.0 && total > 0.0) {
+        let power = light.power(bounds).element_sum();
+        if !(power > 0.0 && total > 0.0 && light.is_local()) {
             continue;
         }
         let p = light.position();
@@ -209,6 +220,7 @@ pub fn light_views(scene: &Scene, texels: u64) -> Vec<LightView> {
                 let (forward, up) = spot_axes(direction);
                 vec![(forward, up, t)]
             }
+            Light::Directional { .. } => continue,
         };
         let per_view = texels as f64 * (power / total) as f64 / views.len() as f64;
         let res = (per_view.sqrt().round() as u32).clamp(1, MAX_VIEW_RES);

@@ -5,21 +5,25 @@ pub mod bench;
 pub mod builtin;
 pub mod camera;
 pub mod desc;
+pub mod emitters;
 pub mod environment;
 pub mod light;
 pub mod light_views;
 pub mod primitives;
 pub mod shading;
+pub mod sources;
 pub mod surface;
 pub mod update;
 
 pub use animation::Animation;
 pub use camera::Camera;
 pub use desc::SceneDesc;
+pub use emitters::Emitters;
 pub use environment::{EnvImage, Environment};
-pub use light::Light;
+pub use light::{Bounds, Light};
 pub use primitives::TriMesh;
 pub use shading::Smoothing;
+pub use sources::{Source, Sources};
 pub use surface::{MaterialMaps, TextureMap};
 pub use update::{Changes, SceneObject, SceneUpdate};
 
@@ -94,6 +98,11 @@ pub const MAX_SCALE: f32 = 1.0e6;
 /// Largest light intensity per channel (W/sr): emitted powers, photon powers and radiance
 /// estimates stay far from f32 overflow (3.4·10³⁸) even at millimetre distances.
 pub const MAX_INTENSITY: f32 = 1.0e10;
+/// Largest emitted radiance of a surface (W·sr⁻¹·m⁻² per channel) and irradiance of a
+/// directional light (W·m⁻² per channel).
+pub const MAX_RADIANCE: f32 = 1.0e10;
+/// Widest directional light (degrees of angular diameter).
+pub const MAX_ANGULAR_DIAMETER: f32 = 90.0;
 /// Most vertices (and triangles) a scene may hold: indices are 32-bit.
 pub const MAX_VERTICES: usize = u32::MAX as usize;
 
@@ -281,10 +290,7 @@ impl Scene {
                 object_mesh(&obj.shape, meshes).map_err(|(f, m)| err(at(&f), &m))?;
             validate_mesh(&mesh).map_err(|m| err(at("shape"), &m))?;
             if scene.positions.len() + mesh.positions.len() > MAX_VERTICES {
-                return Err(err(
-                    at("shape"),
-                    "the scene would exceed 2^32 - 1 vertices (MAX_VERTICES)",
-                ));
+                return Err(err(at("shape"), "the scene would exceed 2^32 - 1 vertices"));
             }
             validate_placed(&mesh, xf).map_err(|(f, m)| err(at(&f), &m))?;
             let smoothing = smoothing(obj.smooth).map_err(|m| err(at("smooth"), m))?;
@@ -339,6 +345,9 @@ impl Scene {
                 }
             }
             scene.append(obj.name.clone(), &mesh, xf, &tri_mats, &uvs);
+            if let Some(o) = scene.objects.last_mut() {
+                o.described = Some(obj.transform.clone());
+            }
         }
         if let Some(anim) = &desc.animation {
             scene.animation = Some(Animation::from_desc(anim, desc, &scene, source_name)?);
@@ -383,6 +392,7 @@ impl Scene {
             flipped: flip,
             local_positions: mesh.positions.clone(),
             local_normals: mesh.normals.clone(),
+            described: None,
         };
         object.place(&mut self.positions, &mut self.normals);
         self.objects.push(object);
@@ -397,9 +407,31 @@ impl Scene {
         &self.materials[self.triangle_materials[t] as usize]
     }
 
-    /// Total power of all lights (W per channel).
+    /// Total power of all light sources (W per channel): lights, emitting surfaces and the
+    /// environment (distant lights and the environment through the bounding sphere).
     pub fn total_power(&self) -> Vec3 {
-        self.lights.iter().map(|l| l.power()).sum()
+        Sources::of(self).power()
+    }
+
+    /// The bounding sphere of the scene's vertices (a unit sphere at the origin without
+    /// any).
+    pub fn bounds(&self) -> Bounds {
+        let (lo, hi) = self
+            .positions
+            .iter()
+            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
+                (lo.min(*p), hi.max(*p))
+            });
+        if lo.x > hi.x {
+            return Bounds {
+                centre: Vec3::ZERO,
+                radius: 1.0,
+            };
+        }
+        Bounds {
+            centre: 0.5 * (lo + hi),
+            radius: (0.5 * (hi - lo).length()).max(1e-6),
+        }
     }
 }
 
@@ -454,7 +486,7 @@ pub(crate) fn camera_from_desc(
     }
     for (name, v) in [("position", c.position), ("look_at", c.look_at)] {
         if !within_extent(v) {
-            return Err((name.into(), "must lie within ±100000 m (MAX_EXTENT)"));
+            return Err((name.into(), "must lie within ±100000 m"));
         }
     }
     let (pos, at, up) = (
@@ -487,10 +519,7 @@ fn check_intensity(v: V3) -> std::result::Result<Vec3, FieldError> {
         return Err(("intensity".into(), "must be finite and non-negative"));
     }
     if v.iter().any(|x| *x > MAX_INTENSITY) {
-        return Err((
-            "intensity".into(),
-            "must be at most 1e10 W/sr per channel (MAX_INTENSITY)",
-        ));
+        return Err(("intensity".into(), "must be at most 1e10 W/sr per channel"));
     }
     Ok(Vec3::from(v))
 }
@@ -500,7 +529,7 @@ fn check_light_position(v: V3) -> std::result::Result<Vec3, FieldError> {
         return Err(("position".into(), "must be finite"));
     }
     if !within_extent(v) {
-        return Err(("position".into(), "must lie within ±100000 m (MAX_EXTENT)"));
+        return Err(("position".into(), "must lie within ±100000 m"));
     }
     Ok(Vec3::from(v))
 }
@@ -529,11 +558,16 @@ pub(crate) fn light_from_desc(l: &LightDesc) -> std::result::Result<Light, Field
             if !finite3(direction) || d.length() < 1e-6 {
                 return Err(("direction".into(), "must be finite and non-zero"));
             }
+            let (inner_angle, outer_angle) = desc::spot_angles(inner_angle, outer_angle);
             if !(outer_angle > 0.0 && outer_angle < 90.0) {
                 return Err(("outer_angle".into(), "must be in (0, 90) degrees"));
             }
             if !(inner_angle >= 0.0 && inner_angle <= outer_angle) {
-                return Err(("inner_angle".into(), "must be in [0, outer_angle] degrees"));
+                return Err((
+                    "inner_angle".into(),
+                    "must be in [0, outer_angle] degrees (the angle of full intensity \
+                     lies within the cone's outer angle)",
+                ));
             }
             Ok(Light::Spot {
                 position,
@@ -541,6 +575,36 @@ pub(crate) fn light_from_desc(l: &LightDesc) -> std::result::Result<Light, Field
                 intensity: check_intensity(intensity)?,
                 cos_inner: inner_angle.to_radians().cos(),
                 cos_outer: outer_angle.to_radians().cos(),
+            })
+        }
+        LightDesc::Directional {
+            direction,
+            irradiance,
+            angular_diameter,
+        } => {
+            let d = Vec3::from(direction);
+            if !finite3(direction) || d.length() < 1e-6 {
+                return Err(("direction".into(), "must be finite and non-zero"));
+            }
+            if !finite3(irradiance) || irradiance.iter().any(|x| *x < 0.0) {
+                return Err(("irradiance".into(), "must be finite and non-negative"));
+            }
+            if irradiance.iter().any(|x| *x > MAX_RADIANCE) {
+                return Err((
+                    "irradiance".into(),
+                    "must be at most 1e10 W/m² per channel (MAX_RADIANCE)",
+                ));
+            }
+            if !(0.0..MAX_ANGULAR_DIAMETER).contains(&angular_diameter) {
+                return Err((
+                    "angular_diameter".into(),
+                    "must be in [0, 90) degrees (MAX_ANGULAR_DIAMETER)",
+                ));
+            }
+            Ok(Light::Directional {
+                direction: d.normalize(),
+                irradiance: Vec3::from(irradiance),
+                cos_half_angle: (0.5 * angular_diameter).to_radians().cos(),
             })
         }
     }
@@ -568,6 +632,15 @@ pub(crate) fn material_from_desc(m: &MaterialDesc) -> std::result::Result<Materi
     if !(m.ior >= 1.0 && m.ior <= 4.0) {
         return Err(("ior".into(), "must be in [1, 4]"));
     }
+    if !finite3(m.emission) || m.emission.iter().any(|x| *x < 0.0) {
+        return Err(("emission".into(), "must be finite and non-negative"));
+    }
+    if m.emission.iter().any(|x| *x > MAX_RADIANCE) {
+        return Err((
+            "emission".into(),
+            "must be at most 1e10 W·sr⁻¹·m⁻² per channel (MAX_RADIANCE)",
+        ));
+    }
     Ok(Material {
         diffuse: m.diffuse.into(),
         specular: m.specular.into(),
@@ -575,6 +648,8 @@ pub(crate) fn material_from_desc(m: &MaterialDesc) -> std::result::Result<Materi
         fresnel: m.fresnel,
         transmission: m.transmission.into(),
         ior: m.ior,
+        emission: m.emission.into(),
+        two_sided: m.two_sided,
     })
 }
 
@@ -583,7 +658,7 @@ pub(crate) fn transform_matrix(t: &desc::TransformDesc) -> std::result::Result<M
         return Err(("translate".into(), "must be finite"));
     }
     if !within_extent(t.translate) {
-        return Err(("translate".into(), "must lie within ±100000 m (MAX_EXTENT)"));
+        return Err(("translate".into(), "must lie within ±100000 m"));
     }
     if !finite3(t.rotate) {
         return Err(("rotate".into(), "must be finite"));
@@ -598,7 +673,7 @@ pub(crate) fn transform_matrix(t: &desc::TransformDesc) -> std::result::Result<M
     if scale.abs().max_element() > MAX_SCALE || scale.abs().min_element() < 1.0 / MAX_SCALE {
         return Err((
             "scale".into(),
-            "each factor's magnitude must be in [1e-6, 1e6] (MAX_SCALE)",
+            "each factor's magnitude must be in [1e-6, 1e6]",
         ));
     }
     let [rx, ry, rz] = t.rotate.map(f32::to_radians);
@@ -616,7 +691,7 @@ fn primitive(shape: &ShapeDesc) -> std::result::Result<TriMesh, FieldError> {
         if !(v.is_finite() && v > 0.0) {
             Err((name.to_string(), "must be positive and finite"))
         } else if v > MAX_EXTENT {
-            Err((name.to_string(), "must be at most 100000 m (MAX_EXTENT)"))
+            Err((name.to_string(), "must be at most 100000 m"))
         } else {
             Ok(v)
         }
@@ -689,10 +764,7 @@ fn primitive(shape: &ShapeDesc) -> std::result::Result<TriMesh, FieldError> {
 fn validate_placed(m: &TriMesh, xf: Mat4) -> std::result::Result<(), (String, String)> {
     let outside = |p: Vec3| !(p.is_finite() && p.abs().max_element() <= MAX_EXTENT);
     if let Some(i) = m.positions.iter().position(|p| outside(*p)) {
-        return Err((
-            "shape".into(),
-            format!("vertex {i} lies outside ±100000 m (MAX_EXTENT)"),
-        ));
+        return Err(("shape".into(), format!("vertex {i} lies outside ±100000 m")));
     }
     if let Some(i) = m
         .positions
@@ -701,7 +773,7 @@ fn validate_placed(m: &TriMesh, xf: Mat4) -> std::result::Result<(), (String, St
     {
         return Err((
             "transform".into(),
-            format!("places vertex {i} outside ±100000 m (MAX_EXTENT)"),
+            format!("places vertex {i} outside ±100000 m"),
         ));
     }
     Ok(())

@@ -27,6 +27,8 @@ pub struct MaterialMaps {
     /// Alpha is the coverage; cut out below `alpha_cutoff`.
     pub alpha: Option<u32>,
     pub alpha_cutoff: f32,
+    /// RGB multiplies the emitted radiance.
+    pub emission: Option<u32>,
 }
 
 impl MaterialMaps {
@@ -43,9 +45,16 @@ impl MaterialMaps {
             match name {
                 None => Ok(None),
                 Some(n) => index.get(n).copied().map(Some).ok_or_else(|| {
+                    let mut loaded: Vec<&str> = index.keys().map(String::as_str).collect();
+                    loaded.sort_unstable();
+                    let loaded = if loaded.is_empty() {
+                        "none".to_string()
+                    } else {
+                        loaded.join(", ")
+                    };
                     (
                         field.to_string(),
-                        format!("no texture named `{n}` was loaded"),
+                        format!("no texture named `{n}` was loaded (loaded: {loaded})"),
                     )
                 }),
             }
@@ -75,6 +84,7 @@ impl MaterialMaps {
             normal: find("normal_texture", &refs.normal)?,
             alpha,
             alpha_cutoff,
+            emission: find("emission_texture", &refs.emission)?,
         })
     }
 
@@ -88,6 +98,7 @@ impl MaterialMaps {
             normal: name(self.normal),
             alpha: name(self.alpha),
             alpha_cutoff: self.alpha.map(|_| self.alpha_cutoff),
+            emission: name(self.emission),
         }
     }
 }
@@ -150,6 +161,9 @@ impl Scene {
         }
         if let Some(i) = maps.specular {
             m.specular *= self.texture(i).sample(uv, lod).xyz();
+        }
+        if let Some(i) = maps.emission {
+            m.emission *= self.texture(i).sample(uv, lod).xyz();
         }
         if let Some(i) = maps.roughness {
             // A map never turns a glossy lobe into a mirror (a delta lobe the scene-level

@@ -2,10 +2,10 @@
 //! material. Each is validated like the scene description it replaces, and reports what it
 //! invalidates ([`Changes`]) so that a renderer re-uploads and rebuilds only that.
 
-use super::desc::{CameraDesc, LightDesc, MaterialDesc};
+use super::desc::{CameraDesc, LightDesc, MaterialDesc, Scale, TransformDesc};
 use super::{camera_from_desc, light_from_desc, material_from_desc, Light, Scene, MAX_EXTENT};
 use crate::error::{Error, Result};
-use glam::{Mat3, Mat4, Vec3};
+use glam::{EulerRot, Mat3, Mat4, Vec3};
 use std::ops::Range;
 
 /// Where an update's errors say they come from.
@@ -26,6 +26,9 @@ pub struct SceneObject {
     pub flipped: bool,
     pub(crate) local_positions: Vec<glam::Vec3>,
     pub(crate) local_normals: Vec<glam::Vec3>,
+    /// The transform as the scene file described it (while `transform` is still its
+    /// matrix): [`Scene::object_desc`] gives it back exactly.
+    pub(crate) described: Option<TransformDesc>,
 }
 
 impl SceneObject {
@@ -145,7 +148,7 @@ impl Scene {
                 if placed.iter().any(outside) {
                     return Err(err(
                         field,
-                        "moves vertices outside ±100000 m (MAX_EXTENT) or to non-finite positions",
+                        "moves vertices outside ±100000 m or to non-finite positions",
                     ));
                 }
                 let obj = &mut self.objects[*object];
@@ -224,9 +227,61 @@ impl Scene {
                 position: position.into(),
                 direction: direction.into(),
                 intensity: intensity.into(),
-                inner_angle: degrees(cos_inner),
-                outer_angle: degrees(cos_outer),
+                inner_angle: Some(degrees(cos_inner)),
+                outer_angle: Some(degrees(cos_outer)),
             },
+            Light::Directional {
+                direction,
+                irradiance,
+                cos_half_angle,
+            } => LightDesc::Directional {
+                direction: direction.into(),
+                irradiance: irradiance.into(),
+                angular_diameter: 2.0 * degrees(cos_half_angle),
+            },
+        })
+    }
+
+    /// Object `index`'s transform as a description (what an object update takes): the scene
+    /// file's `translate`/`rotate`/`scale` while the object has not moved, else the current
+    /// matrix taken apart into them (rotation angles about x, then y, then z, which may
+    /// differ from the ones given but rotate alike); `Err` with the matrix's rows for a
+    /// matrix with shear, which no translate/rotate/scale describes.
+    pub fn object_desc(
+        &self,
+        index: usize,
+    ) -> Option<std::result::Result<TransformDesc, [[f32; 4]; 4]>> {
+        let obj = self.objects.get(index)?;
+        if let Some(d) = &obj.described {
+            if super::transform_matrix(d).is_ok_and(|m| m == obj.transform) {
+                return Some(Ok(d.clone()));
+            }
+        }
+        let m = obj.transform;
+        let (scale, rotation, translation) = m.to_scale_rotation_translation();
+        let (rz, ry, rx) = rotation.to_euler(EulerRot::ZYX);
+        let desc = TransformDesc {
+            translate: translation.into(),
+            rotate: [rx.to_degrees(), ry.to_degrees(), rz.to_degrees()],
+            scale: if scale.x == scale.y && scale.y == scale.z {
+                Scale::Uniform(scale.x)
+            } else {
+                Scale::PerAxis(scale.into())
+            },
+        };
+        // A sheared matrix is not a scale, a rotation and a translation.
+        let exact = super::transform_matrix(&desc).is_ok_and(|back| {
+            let tolerance = 1e-4
+                * m.abs()
+                    .to_cols_array()
+                    .iter()
+                    .fold(1.0f32, |a, &b| a.max(b));
+            back.abs_diff_eq(m, tolerance)
+        });
+        Some(if exact {
+            Ok(desc)
+        } else {
+            Err(m.transpose().to_cols_array_2d())
         })
     }
 
@@ -248,6 +303,9 @@ impl Scene {
             normal_texture: t.normal,
             alpha_texture: t.alpha,
             alpha_cutoff: t.alpha_cutoff,
+            emission: m.emission.into(),
+            emission_texture: t.emission,
+            two_sided: m.two_sided,
         })
     }
 }
@@ -391,6 +449,37 @@ mod tests {
         assert!(e.to_string().contains("colour"), "{e}");
     }
 
+    /// An update that gives a light another `type` replaces the whole light; one that
+    /// gives the same type merges as any other.
+    #[test]
+    fn light_updates_change_the_type() {
+        let mut scene = builtin::load("cornell").expect("scene");
+        let v = |s: &str| serde_json::from_str::<serde_json::Value>(s).expect("json");
+        let sun = r#"{"type": "directional", "direction": [0, -2, 0], "irradiance": [3, 3, 3]}"#;
+        let u = scene
+            .update_from_json(&UpdateTarget::Light(0), &v(sun))
+            .expect("valid");
+        scene.apply(&u).expect("valid");
+        assert!(matches!(
+            scene.lights[0],
+            Light::Directional { direction, .. } if direction == Vec3::NEG_Y
+        ));
+        let u = scene
+            .update_from_json(
+                &UpdateTarget::Light(0),
+                &v(r#"{"type": "directional", "angular_diameter": 2}"#),
+            )
+            .expect("valid");
+        scene.apply(&u).expect("valid");
+        let desc = serde_json::to_value(scene.light_desc(0).expect("light")).expect("json");
+        assert_eq!(desc["irradiance"], v("[3.0, 3.0, 3.0]"));
+        assert!((desc["angular_diameter"].as_f64().expect("f") - 2.0).abs() < 1e-3);
+        let e = scene
+            .update_from_json(&UpdateTarget::Light(0), &v(r#"{"type": "point"}"#))
+            .expect_err("a point light needs its fields");
+        assert!(e.to_string().contains("position"), "{e}");
+    }
+
     /// Updating the camera's position keeps its look-at point and up vector exactly, however
     /// often: going back to the first position gives the first camera bit for bit.
     #[test]
@@ -417,6 +506,98 @@ mod tests {
         assert_eq!(scene.camera, first);
     }
 
+    /// An object update replaces the transform fields it gives and keeps the others; the
+    /// transform reads back as the scene file gave it, then as the matrix taken apart.
+    #[test]
+    fn object_updates_merge_and_read_back() {
+        let mut scene = builtin::load("cornell").expect("scene");
+        let i = scene.objects.len() - 1; // the tall box: rotate [0, 20, 0], translate...
+        let v = |s: &str| serde_json::from_str::<serde_json::Value>(s).expect("json");
+        let file = scene.object_desc(i).expect("object").expect("no shear");
+        let u = scene
+            .update_from_json(&UpdateTarget::Object(i), &v(r#"{"rotate": [0, 45, 0]}"#))
+            .expect("valid");
+        scene.apply(&u).expect("valid");
+        let moved = scene.object_desc(i).expect("object").expect("no shear");
+        for (a, b) in moved.translate.iter().zip(file.translate) {
+            assert!((a - b).abs() < 1e-5, "{moved:?} {file:?}");
+        }
+        assert!((moved.rotate[1] - 45.0).abs() < 1e-3 && moved.rotate[0].abs() < 1e-3);
+        assert!(matches!(moved.scale, Scale::Uniform(s) if (s - 1.0).abs() < 1e-5));
+        // A sheared matrix reads back as rows and takes only whole transforms.
+        let sheared = v(r#"{"matrix": [[1,0.5,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]}"#);
+        let u = scene
+            .update_from_json(&UpdateTarget::Object(i), &sheared)
+            .expect("valid");
+        scene.apply(&u).expect("valid");
+        assert!(matches!(scene.object_desc(i), Some(Err(rows)) if rows[0][1] == 0.5));
+        let e = scene
+            .update_from_json(&UpdateTarget::Object(i), &v(r#"{"rotate": [0, 1, 0]}"#))
+            .expect_err("partial update of a sheared matrix");
+        assert!(e.to_string().contains("shear"), "{e}");
+    }
+
+    /// The camera's size is the renderer's; a light changing type keeps what both share;
+    /// a spot angle given alone moves the other where it would leave the cone.
+    #[test]
+    fn update_checks() {
+        let scene = builtin::load("cornell").expect("scene");
+        let v = |s: &str| serde_json::from_str::<serde_json::Value>(s).expect("json");
+        let (w, h) = (scene.camera.width, scene.camera.height);
+        let same = format!(r#"{{"width": {w}, "height": {h}}}"#);
+        assert!(scene
+            .update_from_json(&UpdateTarget::Camera, &v(&same))
+            .is_ok());
+        let e = scene
+            .update_from_json(&UpdateTarget::Camera, &v(r#"{"width": 48}"#))
+            .expect_err("a size change");
+        assert!(e.to_string().contains("camera.width") && e.to_string().contains("resize"));
+        let spot = v(r#"{"type": "spot", "direction": [0, -1, 0], "outer_angle": 10}"#);
+        let u = scene
+            .update_from_json(&UpdateTarget::Light(0), &spot)
+            .expect("point to spot");
+        let SceneUpdate::Light { light, .. } = &u else {
+            panic!("{u:?}")
+        };
+        let LightDesc::Spot {
+            position,
+            inner_angle,
+            outer_angle,
+            ..
+        } = light
+        else {
+            panic!("{light:?}")
+        };
+        assert_eq!(*position, <[f32; 3]>::from(scene.lights[0].position()));
+        assert_eq!((*inner_angle, *outer_angle), (None, Some(10.0)));
+        let mut scene = scene;
+        scene.apply(&u).expect("valid");
+        let back = scene
+            .update_from_json(&UpdateTarget::Light(0), &v(r#"{"type": "point"}"#))
+            .expect("spot to point");
+        assert!(matches!(
+            back,
+            SceneUpdate::Light {
+                light: LightDesc::Point { .. },
+                ..
+            }
+        ));
+        // A spot becoming the sun keeps its direction; it needs an irradiance.
+        let sun = v(r#"{"type": "directional", "irradiance": [2, 2, 2]}"#);
+        let u = scene
+            .update_from_json(&UpdateTarget::Light(0), &sun)
+            .expect("spot to directional");
+        assert!(matches!(
+            u,
+            SceneUpdate::Light { light: LightDesc::Directional { direction, .. }, .. }
+                if direction == [0.0, -1.0, 0.0]
+        ));
+        let e = scene
+            .update_from_json(&UpdateTarget::Light(0), &v(r#"{"type": "directional"}"#))
+            .expect_err("no irradiance");
+        assert!(e.to_string().contains("irradiance"), "{e}");
+    }
+
     /// The descriptions read back from a scene rebuild the same lights and materials.
     #[test]
     fn descriptions_round_trip() {
@@ -430,13 +611,35 @@ mod tests {
         }
         for (a, b) in scene.lights.iter().zip(&lights) {
             assert_eq!(a.position(), b.position());
-            assert!((a.power() - b.power()).abs().max_element() < 1e-3 * b.power().max_element());
+            assert!(
+                (a.power(scene.bounds()) - b.power(scene.bounds()))
+                    .abs()
+                    .max_element()
+                    < 1e-3 * b.power(scene.bounds()).max_element()
+            );
         }
         let camera = scene.camera;
         scene
             .apply(&SceneUpdate::Camera(scene.camera_desc()))
             .expect("valid");
         assert!((scene.camera.forward - camera.forward).length() < 1e-6);
+    }
+}
+
+/// The fields of a light of type `kind` (as [`LightDesc`] names them; none for an unknown
+/// type, which the description's parse then refuses).
+fn light_fields(kind: &str) -> &'static [&'static str] {
+    match kind {
+        "point" => &["position", "intensity"],
+        "spot" => &[
+            "position",
+            "direction",
+            "intensity",
+            "inner_angle",
+            "outer_angle",
+        ],
+        "directional" => &["direction", "irradiance", "angular_diameter"],
+        _ => &[],
     }
 }
 
@@ -455,9 +658,12 @@ pub enum UpdateTarget {
 impl Scene {
     /// An update from JSON, in the scene format's terms:
     /// - camera, lights, materials: the fields given replace the current ones (the rest
-    ///   stay), e.g. `{"position": [0, 1, 3]}` or `{"intensity": [5, 5, 5]}`;
-    /// - objects: a whole transform, `{"translate", "rotate", "scale"}` as in the scene
-    ///   format (fields left out are the identity's), or `{"matrix": 4×4 rows}`.
+    ///   stay), e.g. `{"position": [0, 1, 3]}` or `{"intensity": [5, 5, 5]}`; a light of
+    ///   another `type` keeps the fields both types have; the camera's `width` and
+    ///   `height` may only repeat the current size (it is the renderer's);
+    /// - objects: `{"translate", "rotate", "scale"}` as in the scene format, replacing
+    ///   those of the current transform ([`Scene::object_desc`]), or `{"matrix": 4×4 rows}`
+    ///   for a whole transform.
     ///
     /// Errors name the field (`SceneError` with source "scene update").
     pub fn update_from_json(
@@ -493,6 +699,24 @@ impl Scene {
         };
         Ok(match target {
             UpdateTarget::Camera => {
+                // The image size is the renderer's: an update may only repeat it (as a
+                // description read back with `camera_desc` does).
+                let (w, h) = (self.camera.width, self.camera.height);
+                for (name, size) in [("width", w), ("height", h)] {
+                    if obj
+                        .get(name)
+                        .is_some_and(|v| v.as_u64() != Some(size as u64))
+                    {
+                        return Err(Error::scene(
+                            SOURCE,
+                            format!("camera.{name}"),
+                            format!(
+                                "the image size ({w}x{h}) belongs to the renderer, not the \
+                                 camera: change it with resize(width, height)"
+                            ),
+                        ));
+                    }
+                }
                 let current = to_value(serde_json::to_value(self.camera_desc()))?;
                 SceneUpdate::Camera(typed(merged(current), "camera")?)
             }
@@ -506,10 +730,37 @@ impl Scene {
                         format!("no such light (the scene has {n})"),
                     )
                 })?;
-                let current = to_value(serde_json::to_value(desc))?;
+                let mut current = to_value(serde_json::to_value(desc))?;
+                let replaced = obj
+                    .get("type")
+                    .is_some_and(|t| Some(t) != current.get("type"));
+                if let Some(map) = current.as_object_mut() {
+                    // Another type of light keeps the fields the two types share.
+                    if let Some(new) = obj.get("type").filter(|t| Some(*t) != map.get("type")) {
+                        let shared = light_fields(new.as_str().unwrap_or_default());
+                        map.retain(|k, _| shared.contains(&k.as_str()));
+                    }
+                    // A spot's angle given alone replaces the other (its default follows
+                    // it) where the current one would no longer fit inside the cone.
+                    let angle = |v: Option<&serde_json::Value>| v.and_then(|v| v.as_f64());
+                    let (inner, outer) =
+                        (angle(obj.get("inner_angle")), angle(obj.get("outer_angle")));
+                    match (inner, outer) {
+                        (None, Some(o)) if angle(map.get("inner_angle")).is_some_and(|i| i > o) => {
+                            map.remove("inner_angle");
+                        }
+                        (Some(i), None) if angle(map.get("outer_angle")).is_some_and(|o| o < i) => {
+                            map.remove("outer_angle");
+                        }
+                        _ => {}
+                    }
+                }
                 // Lights are an internally tagged enum, whose errors carry no field path:
                 // name the first field that fails on its own.
                 let light = typed(merged(current.clone()), &prefix).map_err(|e| {
+                    if replaced {
+                        return e;
+                    }
                     for (k, v) in obj {
                         let mut one = current.clone();
                         if let Some(map) = one.as_object_mut() {
@@ -548,7 +799,35 @@ impl Scene {
                     let rows: [[f32; 4]; 4] = typed(m.clone(), &format!("{prefix}.matrix"))?;
                     Mat4::from_cols_array_2d(&rows).transpose()
                 } else {
-                    let desc: super::desc::TransformDesc = typed(json.clone(), &prefix)?;
+                    // The fields given replace those of the current transform.
+                    let current = match self.object_desc(*i) {
+                        None => {
+                            let n = self.objects.len();
+                            return Err(Error::scene(
+                                SOURCE,
+                                prefix,
+                                format!("no such object (the scene has {n})"),
+                            ));
+                        }
+                        Some(Ok(desc)) => to_value(serde_json::to_value(desc))?,
+                        // A sheared matrix: only a whole transform replaces it.
+                        Some(Err(_))
+                            if ["translate", "rotate", "scale"]
+                                .iter()
+                                .all(|k| obj.contains_key(*k)) =>
+                        {
+                            serde_json::json!({})
+                        }
+                        Some(Err(_)) => {
+                            return Err(Error::scene(
+                                SOURCE,
+                                prefix,
+                                "the object's transform is a matrix with shear: give all of \
+                                 translate, rotate and scale, or a matrix",
+                            ))
+                        }
+                    };
+                    let desc: TransformDesc = typed(merged(current), &prefix)?;
                     super::transform_matrix(&desc)
                         .map_err(|(f, m)| Error::scene(SOURCE, format!("{prefix}.{f}"), m))?
                 };

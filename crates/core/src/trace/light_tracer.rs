@@ -39,7 +39,7 @@ pub fn light_weights(scene: &Scene) -> Vec<f32> {
     scene
         .lights
         .iter()
-        .map(|l| l.power().element_sum() / 3.0)
+        .map(|l| l.power(scene.bounds()).element_sum() / 3.0)
         .collect()
 }
 
@@ -58,7 +58,7 @@ pub fn trace_path(
     let Some((li, p_light)) = choose_light(weights, rng.next_f32()) else {
         return;
     };
-    let e = scene.lights[li].emit(rng);
+    let e = scene.lights[li].emit(rng, scene.bounds());
     let mut power = e.power / (p_light * total as f32);
     let (mut o, mut d) = (e.origin, e.direction);
     let pixel_area = cam.pixel_area();

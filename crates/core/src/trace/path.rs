@@ -9,7 +9,7 @@
 use super::{Interaction, SceneBvh};
 use crate::image::Image;
 use crate::sampling::Rng;
-use crate::scene::{Environment, Scene};
+use crate::scene::{Environment, Light, Scene};
 use glam::Vec3;
 
 /// Path tracer settings.
@@ -69,6 +69,24 @@ pub fn direct_light(scene: &Scene, bvh: &SceneBvh, it: &Interaction, wo: Vec3) -
     let wo_l = it.frame.to_local(wo);
     let mut sum = Vec3::ZERO;
     for light in &scene.lights {
+        if let Light::Directional {
+            direction,
+            irradiance,
+            ..
+        } = *light
+        {
+            // Parallel light along the disc's axis.
+            let wi = -direction;
+            if wi.dot(it.ng) * wo.dot(it.ng) <= 0.0 || irradiance == Vec3::ZERO {
+                continue;
+            }
+            let wi_l = it.frame.to_local(wi);
+            let f = m.eval(wo_l, wi_l);
+            if f != Vec3::ZERO && !bvh.occluded(it.spawn(wi), wi, f32::INFINITY) {
+                sum += f * wi_l.z.abs() * irradiance;
+            }
+            continue;
+        }
         let to_light = light.position() - it.position;
         let dist2 = to_light.length_squared();
         let dist = dist2.sqrt();
@@ -196,6 +214,9 @@ pub fn radiance(
         }
         let it = Interaction::new(scene, &hit, d);
         let wo = -d;
+        // Emitting surfaces are found by the paths' own rays (next-event estimation does
+        // not sample them).
+        l += beta * it.material.emitted(it.ng, wo);
         // Next-event estimation.
         l += beta * direct_light(scene, bvh, &it, wo);
         let env_mis = env.is_some_and(|e| e.importance);

@@ -93,10 +93,7 @@ impl GpuScene {
         let needed: u32 = scene
             .lights
             .iter()
-            .map(|l| match l {
-                crate::scene::Light::Point { .. } => 6,
-                crate::scene::Light::Spot { .. } => 1,
-            })
+            .map(crate::scene::light_views::views_of)
             .sum();
         needed.max(1) == layers
     }

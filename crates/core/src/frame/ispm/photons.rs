@@ -259,8 +259,8 @@ fn first_segment(scene: &Scene, layers: &[LightView], light: usize) -> FirstSegm
         .map(|b| (b.res as f64).powi(2))
         .sum();
     let omega = match l {
-        Light::Point { .. } => l.solid_angle(),
         Light::Spot { .. } => l.solid_angle() * 4.0 / std::f32::consts::PI,
+        _ => l.solid_angle(),
     };
     FirstSegment {
         position: l.position(),

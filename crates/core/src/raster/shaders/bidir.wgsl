@@ -391,6 +391,9 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
             if bundle_one {
                 for (var j = 0u; j < arrayLength(&lights); j++) {
                     let l = lights[j];
+                    if l.kind == 2u {
+                        continue;
+                    }
                     let to_l = l.position - x2;
                     let dl2 = dot(to_l, to_l);
                     let wl = to_l / sqrt(dl2);

@@ -9,7 +9,8 @@ struct Material {
     ior: f32,
 }
 
-// kind: 0 = point, 1 = spot. Shadow layers `first_layer .. first_layer + layers` (6 for a
+// kind: 0 = point, 1 = spot, 2 = directional (not shaded by the raster passes yet).
+// Shadow layers `first_layer .. first_layer + layers` (6 for a
 // point light's cube faces, +x -x +y -y +z -z; 1 for a spot light).
 struct Light {
     position: vec3<f32>,

@@ -178,6 +178,10 @@ fn shade_pixel(g: GSample, fp: Footprint) -> vec3<f32> {
     var sum = vec3<f32>(0.0);
     for (var i = 0u; i < arrayLength(&lights); i++) {
         let l = lights[i];
+        // Kind 2 (directional): not shaded here yet.
+        if l.kind == 2u {
+            continue;
+        }
         var term = light_term(l, m, p, ns, ng);
         if taps > 1u && !flat_across(l, m, p, fp) {
             var corners = vec3<f32>(0.0);

@@ -1,0 +1,121 @@
+"""gi against Mitsuba 3 on the reference scenes of issue 28 (`docs/scenes/`): Mitsuba's own
+Cornell box (an area light), a sun and a sky, a room lit by emissive surfaces only.
+
+The references are Mitsuba 3 path-traced images, 64×64, committed beside the scenes
+(`scripts/lights_reference.py mitsuba` renders them; CI never runs Mitsuba), one per
+`max_depth` that gi's methods trace by default (64; `bidir`'s 3; 1 for `direct`, which
+renders direct light), Mitsuba's `max_depth` one more (it counts path segments, gi
+scattering events). Their means are known to better than 0.1% (`docs/scenes/references.json`:
+the standard error of each mean from 16 independent batches). Each method that renders a
+scene without a `gi.RenderWarning` (a kind of light it leaves out) must match the image
+mean of the reference of its `max_depth`: `path` within 1%, the others within 3%. A method
+that warns or refuses a scene is skipped, with the reason in the summary (`-ra`), so that
+what renders what stays visible; `docs/bench/lights.md` has every method's ratio and FLIP
+at converged settings.
+
+The settings keep the file to about a minute on two cores. `path`'s image mean has a
+standard error (measured over six seeds) of 0.53% in the Cornell box at 256 samples per
+pixel (its small area light is found by the paths' own rays; next-event estimation of
+emitters is being added), hence 1024 there (0.27%: the 1% bound is 3.7 standard errors),
+and of 0.09% and below 0.01% in the room and under the sun and sky at 256. The 3% of the
+other methods is the issue's bound for their bias at 200k photons or 16 samples.
+"""
+
+import json
+import subprocess
+import sys
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import gi
+
+ROOT = Path(__file__).resolve().parent.parent
+SCENES = ROOT / "docs" / "scenes"
+NAMES = ["cornell-box", "sun-sky", "emissive-room"]
+SIZE = 64
+SETTINGS = {
+    "path": {"spp": 256},
+    "photon": {"photons": 200_000, "spp": 16},
+    "gather": {"photons": 200_000, "spp": 16},
+    "direct": {"spp": 16},
+    "ispm": {"photons": 200_000, "spp": 16},
+    "bidir": {"spp": 16},
+}
+TOLERANCE = {"path": 0.01}  # the others: 0.03
+MORE = {("cornell-box", "path"): {"spp": 1024}}  # see the module doc
+
+
+DEPTHS = (64, 3, 1)  # the references' gi max_depth
+
+
+def reference_file(name: str, depth: int) -> Path:
+    return SCENES / name / f"reference-depth{depth}.exr"
+
+
+def test_references_are_small_and_converged():
+    meta = json.loads((SCENES / "references.json").read_text())
+    for name in NAMES:
+        for depth in DEPTHS:
+            key = f"{name}-depth{depth}"
+            img = gi.read_image(reference_file(name, depth))[..., :3]
+            assert img.shape == (SIZE, SIZE, 3) and np.isfinite(img).all()
+            assert reference_file(name, depth).stat().st_size < 80_000
+            assert img.mean() == pytest.approx(meta[key]["mean"], rel=1e-5)
+            # The reference's own noise is well below the tolerances checked against it.
+            assert meta[key]["stderr"] < 0.001 * meta[key]["mean"], key
+            assert meta[key]["max_depth"] == depth + 1
+
+
+@pytest.mark.parametrize("method", gi.methods())
+@pytest.mark.parametrize("name", NAMES)
+def test_method_matches_mitsuba(name, method):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # the scene files load without an AssetWarning
+        scene = gi.load_scene(SCENES / name / f"{name}.xml")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            settings = {**SETTINGS[method], **MORE.get((name, method), {})}
+            r = gi.Renderer(scene, method, size=(SIZE, SIZE), seed=11, **settings)
+        except gi.SettingError as e:
+            pytest.skip(f"`{method}` refuses {name}: {e}")
+    warned = [str(w.message) for w in caught if issubclass(w.category, gi.RenderWarning)]
+    if warned:
+        pytest.skip(f"`{method}` warns on {name}: {'; '.join(warned)}")
+    depth = int(r.options.get("max_depth", 1))  # `direct` renders direct light
+    if depth not in DEPTHS:
+        pytest.fail(f"no reference for max_depth {depth} (scripts/lights_reference.py)")
+    img = r.render().radiance
+    ref = gi.read_image(reference_file(name, depth))[..., :3]
+    assert np.isfinite(img).all()
+    ratio = float(img.mean() / ref.mean())
+    assert abs(ratio - 1) <= TOLERANCE.get(method, 0.03), (
+        f"{method} on {name}: image mean {img.mean():.5f}, Mitsuba's {ref.mean():.5f} at "
+        f"max_depth {depth} (ratio {ratio:.4f})"
+    )
+
+
+def test_readme_first_example(tmp_path):
+    """The README's first commands (Mitsuba's Cornell box from its XML, with `path` and the
+    default method), run as written at a smaller size and fewer samples."""
+    text = (ROOT / "README.md").read_text()
+    sh = text[text.index("## Use") :].split("```sh")[1].split("```")[0]
+    commands = [line.split("#")[0].split() for line in sh.splitlines() if line.startswith("gi ")]
+    assert len(commands) == 2
+    outputs = []
+    for cmd in commands:
+        assert cmd[:3] == ["gi", "render", "docs/scenes/cornell-box/cornell-box.xml"]
+        cmd[2] = str(ROOT / cmd[2])
+        outputs.append(tmp_path / cmd[cmd.index("-o") + 1])
+        p = subprocess.run(
+            [sys.executable, "-m", "gi.cli", *cmd[1:], "--size", "16x16", "--spp", "4", "-q"],
+            cwd=tmp_path, capture_output=True, text=True, timeout=300,
+        )  # fmt: skip
+        assert p.returncode == 0, (cmd, p.stderr)
+    for out in outputs:
+        assert gi.read_image(out).shape == (16, 16, 3)
+    # The path tracer sees the area light: the image is lit.
+    assert gi.read_image(outputs[0]).mean() > 0.01

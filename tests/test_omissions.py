@@ -1,0 +1,74 @@
+"""No silent omissions (issue 29): a method asked for light transport it does not compute, or
+given an option it ignores, says so with a `gi.RenderWarning` naming it; a method that
+computes everything it is asked for says nothing."""
+
+import json
+import warnings
+
+import pytest
+
+import gi
+
+SMALL = {"size": (8, 8), "spp": 1, "photons": 2000}
+
+
+def quiet(scene: gi.Scene, method: str, **options) -> gi.Renderer:
+    """A renderer made with every warning an error."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        return gi.Renderer(scene, method, **gi.method_options(method, **SMALL, **options))
+
+
+@pytest.mark.parametrize("method", gi.methods())
+def test_point_lights_and_defaults_warn_of_nothing(method):
+    """The built-in scenes' point lights and the defaults: every method computes what it is
+    asked for (bidir's default depth is the 3 it computes)."""
+    quiet(gi.load_scene("cornell"), method)
+
+
+@pytest.mark.parametrize("method", gi.methods())
+def test_an_option_the_method_ignores_is_named(method):
+    others = [
+        row
+        for row in gi.options_table()
+        if method not in row["methods"]
+        and row["name"] not in {r["name"] for r in gi.options_table(method)}
+    ]
+    assert others, method
+    row = others[0]
+    with pytest.warns(
+        gi.RenderWarning, match=f"`{row['name']}` does not apply to method `{method}`"
+    ):
+        gi.Renderer(gi.load_scene("cornell"), method, **{row["name"]: row["default"]})
+
+
+def test_bidir_names_the_bounces_and_the_mirrors_it_leaves_out():
+    scene = gi.load_scene("cornell")
+    quiet(scene, "bidir", max_depth=3)
+    with pytest.warns(gi.RenderWarning, match="max_depth 5 asks for 2 more bounce"):
+        gi.Renderer(scene, "bidir", max_depth=5, size=(8, 8))
+    with pytest.warns(gi.RenderWarning, match="mirrors and glass"):
+        gi.Renderer(gi.load_scene("cornell-glass"), "bidir", size=(8, 8))
+
+
+def emitting_cornell() -> gi.Scene:
+    desc = json.loads(gi.builtin_json("cornell"))
+    desc["materials"]["lamp"] = {"diffuse": [0.5, 0.5, 0.5], "emission": [5, 5, 5]}
+    desc["objects"][-1]["material"] = "lamp"
+    return gi.Scene.from_json(json.dumps(desc), "emitting-cornell")
+
+
+@pytest.mark.parametrize("method", gi.methods())
+def test_area_lights_are_rendered_or_named(method):
+    """An emitting box: `path` renders it without a word; a method that does not render area
+    lights yet says so (and still renders the rest)."""
+    scene = emitting_cornell()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        r = gi.Renderer(scene, method, **gi.method_options(method, **SMALL))
+    messages = [str(w.message) for w in caught if issubclass(w.category, gi.RenderWarning)]
+    if method == "path":
+        assert messages == []
+    for m in messages:
+        assert "emitting surfaces" in m and f"`{method}`" in m, m
+    assert r.render().radiance.max() > 0
