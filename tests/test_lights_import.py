@@ -302,7 +302,7 @@ def test_obj_mtl_emission(tmp_path):
 
 MITSUBA = """<scene version="3.0.0">
 <sensor type="perspective"><float name="fov" value="{fov}"/>
-<transform name="to_world"><lookat origin="0, 5, 0.001" target="0, 0, 0"/></transform>
+<transform name="to_world"><lookat origin="0, 5, 0.001" target="0, 0, 0" up="0, 0, -1"/></transform>
 <film type="hdrfilm"><integer name="width" value="9"/><integer name="height" value="9"/></film>
 </sensor>
 <bsdf type="diffuse" id="grey"><rgb name="reflectance" value="0.5, 0.5, 0.5"/></bsdf>

@@ -1,8 +1,9 @@
-//! BVH build rate (triangles/s) and incoherent closest-hit throughput (rays/s) on a scene
-//! of ~246k triangles. `GI_BENCH_QUICK=1` shortens the measurement for CI-sized runs.
+//! BVH build rate (triangles/s) on a scene of ~246k triangles and on coincident copies of
+//! one sphere (1.2M triangles; 164k with `GI_BENCH_QUICK`), and incoherent closest-hit
+//! throughput (rays/s). `GI_BENCH_QUICK=1` shortens the measurement for CI-sized runs.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use gi_core::scene::bench::{dense_cornell, incoherent_rays};
+use gi_core::scene::bench::{dense_cornell, incoherent_rays, sphere_copies};
 use gi_core::trace::SceneBvh;
 use rayon::prelude::*;
 use std::hint::black_box;
@@ -18,6 +19,15 @@ fn bvh(c: &mut Criterion) {
     g.bench_function(format!("build {} triangles", scene.triangles.len()), |b| {
         b.iter(|| black_box(SceneBvh::build(&scene)))
     });
+    // The degenerate input: copies of one 20k-triangle sphere at one place (quadratic in
+    // the copies before coincident triangles were told apart, docs/bench/bvh-build.md).
+    let copies = sphere_copies(if quick { 8 } else { 60 }, true);
+    g.throughput(Throughput::Elements(copies.triangles.len() as u64));
+    g.bench_function(
+        format!("build {} coincident triangles", copies.triangles.len()),
+        |b| b.iter(|| black_box(SceneBvh::build(&copies))),
+    );
+    drop(copies);
     let bvh = SceneBvh::build(&scene);
     let rays = incoherent_rays(1 << 18, 1);
     g.throughput(Throughput::Elements(rays.len() as u64));

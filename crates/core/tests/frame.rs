@@ -350,6 +350,37 @@ fn bvh_update_is_chosen_by_measurement() {
     assert_eq!(frames[2].0, expected, "{frames:?}");
 }
 
+/// `direct` rasterizes everything on the GPU: it never builds (or refits) the CPU BVH, not
+/// on its first frame and not after an object moved, and its frame after the move still
+/// equals a one-shot render of the moved scene bitwise. The methods that trace on the CPU
+/// (`ispm` here) still build it.
+#[test]
+fn direct_builds_no_cpu_bvh() {
+    let scene = builtin::load("cornell").expect("scene");
+    let bvh_stages = |o: &RenderOutput| -> Vec<String> {
+        o.stats
+            .stages
+            .iter()
+            .filter(|(n, _)| n.starts_with("bvh "))
+            .map(|(n, _)| n.clone())
+            .collect()
+    };
+    let s = settings(Method::Direct);
+    let mut r = Renderer::new(&scene, &s).expect("renderer");
+    let first = r.render(&all(), &Silent).expect("frame 0");
+    assert_eq!(bvh_stages(&first), Vec::<String>::new());
+    for u in pose(&scene, 1.0) {
+        r.update(&u).expect("update");
+    }
+    let moved = r.render(&all(), &Silent).expect("frame 1");
+    assert_eq!(bvh_stages(&moved), Vec::<String>::new());
+    let one_shot = render(&posed(&scene, 1.0), &s, &Silent).expect("one-shot");
+    assert_eq!(bvh_stages(&one_shot), Vec::<String>::new());
+    assert_eq!(moved.radiance.pixels, one_shot.radiance.pixels);
+    let ispm = render(&scene, &settings(Method::Ispm), &Silent).expect("ispm");
+    assert_eq!(bvh_stages(&ispm), vec!["bvh build".to_string()]);
+}
+
 /// Cancels at the first update of stage `at`.
 struct CancelAt(&'static str);
 impl gi_core::Progress for CancelAt {

@@ -322,7 +322,8 @@ impl Renderer {
         let t0 = Instant::now();
         let mut stages = Vec::new();
         crate::cancel::check(progress)?;
-        if self.bvh.is_none() || self.changes.geometry {
+        // Only the methods that trace rays on the CPU build (and keep updating) the BVH.
+        if self.method().uses_cpu_bvh() && (self.bvh.is_none() || self.changes.geometry) {
             stages.push(self.update_bvh()?);
         }
         if self.changes.materials {
@@ -421,7 +422,7 @@ impl Renderer {
         Ok((name.to_string(), seconds))
     }
 
-    /// The CPU BVH (built or updated at the start of every frame).
+    /// The CPU BVH (built or updated at the start of every frame of a method that uses it).
     fn cpu_bvh(&self) -> Result<&SceneBvh> {
         self.bvh.as_ref().ok_or(Error::Cancelled)
     }
@@ -468,7 +469,8 @@ impl Renderer {
         progress: &dyn Progress,
     ) -> Result<RenderOutput> {
         let gpu = self.gpu.as_mut().ok_or(Error::Cancelled)?;
-        let bvh = self.bvh.as_ref().ok_or(Error::Cancelled)?;
+        // Built by `render` for the methods that use it (not `direct`).
+        let bvh = || self.bvh.as_ref().ok_or(Error::Cancelled);
         match &self.options.method {
             MethodOptions::Ispm(options) => {
                 let invalid = ispm::Invalidation {
@@ -481,7 +483,7 @@ impl Renderer {
                     ring: &mut self.ring,
                     invalid,
                     scene: &self.scene,
-                    bvh,
+                    bvh: bvh()?,
                     options,
                     params: frame,
                     frame: self.frame_index,
@@ -491,7 +493,7 @@ impl Renderer {
                 })
             }
             MethodOptions::Bidir(options) => {
-                bidir::frame(gpu, &self.scene, bvh, options, frame, images, progress)
+                bidir::frame(gpu, &self.scene, bvh()?, options, frame, images, progress)
             }
             _ => direct::frame(gpu, &self.scene, images, progress),
         }

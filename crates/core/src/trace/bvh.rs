@@ -5,10 +5,13 @@ use crate::error::Result;
 use crate::memory;
 use crate::scene::Scene;
 use glam::{Vec3, Vec3A};
+pub use obvhs::ploc::PlocSearchDistance;
 use obvhs::{
-    bvh2::reinsertion::ReinsertionOptimizer, bvh2::Bvh2, cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh,
-    cwbvh::CwBvh, ploc::PlocBuilder, ray::Ray, triangle::Triangle, BvhBuildParams,
+    aabb::Aabb, bvh2::reinsertion::ReinsertionOptimizer, bvh2::Bvh2,
+    cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh, cwbvh::CwBvh, ploc::PlocBuilder, ray::Ray,
+    triangle::Triangle, BvhBuildParams,
 };
+use std::collections::HashMap;
 
 /// Peak memory of a BVH build per triangle (bytes): the obvhs triangles, the PLOC build's
 /// boxes, Morton codes and binary nodes (kept for refits), the compressed wide BVH and the
@@ -134,6 +137,111 @@ impl AlphaTest {
     }
 }
 
+/// How [`SceneBvh`] builds its tree: obvhs's PLOC (search distance, the depth below which it
+/// searches one neighbour only) and reinsertion (the share of nodes reinserted), plus
+/// whether coincident triangles are told apart first. The defaults were chosen by build
+/// time against trace time, `docs/bench/bvh-build.md`.
+#[derive(Clone, Copy, Debug)]
+pub struct BuildSettings {
+    pub search: PlocSearchDistance,
+    pub search_depth_threshold: usize,
+    pub reinsertion: f32,
+    /// PLOC pairs two nodes only when each is the other's cheapest neighbour, and breaks ties
+    /// toward the right: a run of identical boxes (copies of one mesh at one place) merges
+    /// one pair per pass into a chain as deep as the copies, quadratic in them (242 copies of
+    /// a 20k-triangle sphere: 33 s). With this set, coincident triangles' boxes are moved apart for the
+    /// build ([`separated_boxes`]) so that the copies pair up into a balanced subtree; the
+    /// leaves get their exact boxes back (and the tree is refitted) before it is used.
+    pub separate_coincident: bool,
+}
+
+impl BuildSettings {
+    pub const DEFAULT: BuildSettings = BuildSettings {
+        search: PlocSearchDistance::Medium,
+        search_depth_threshold: 3,
+        reinsertion: 0.05,
+        separate_coincident: true,
+    };
+}
+
+/// A fast hasher for the boxes' bit patterns (multiply–rotate per word).
+#[derive(Default)]
+struct BoxHasher(u64);
+
+impl std::hash::Hasher for BoxHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for w in bytes.chunks(4) {
+            let mut word = [0u8; 4];
+            word[..w.len()].copy_from_slice(w);
+            self.write_u32(u32::from_le_bytes(word));
+        }
+    }
+    fn write_u32(&mut self, v: u32) {
+        self.0 = (self.0 ^ v as u64)
+            .wrapping_mul(0x9E37_79B9_7F4A_7C15)
+            .rotate_left(26);
+    }
+}
+
+/// The bit pattern of a triangle's vertices: equal for coincident triangles.
+fn vertex_bits(t: &Triangle) -> [u32; 9] {
+    let (a, b, c) = (t.v0.to_array(), t.v1.to_array(), t.v2.to_array());
+    [a[0], a[1], a[2], b[0], b[1], b[2], c[0], c[1], c[2]].map(f32::to_bits)
+}
+
+/// Each triangle's box, with the boxes of coincident triangles (bitwise equal vertices) moved
+/// apart for the build: the k-th of m copies is shifted along the diagonal by k/m of half
+/// its extent, so that PLOC pairs neighbouring copies into a balanced subtree instead of
+/// absorbing them one per pass. `None` when no two triangles are coincident.
+fn separated_boxes(triangles: &[Triangle]) -> Option<Vec<Aabb>> {
+    use std::hash::Hasher;
+    // Fast path (most scenes): sorted 64-bit hashes of the triangles all differ.
+    let mut hashes: Vec<u64> = triangles
+        .iter()
+        .map(|t| {
+            let mut h = BoxHasher::default();
+            vertex_bits(t).iter().for_each(|w| h.write_u32(*w));
+            h.finish()
+        })
+        .collect();
+    hashes.sort_unstable();
+    if hashes.windows(2).all(|w| w[0] != w[1]) {
+        return None;
+    }
+    drop(hashes);
+    // Per distinct triangle: (copies, copies seen so far).
+    let mut seen: HashMap<[u32; 9], (u32, u32), std::hash::BuildHasherDefault<BoxHasher>> =
+        HashMap::with_capacity_and_hasher(triangles.len(), Default::default());
+    for t in triangles {
+        seen.entry(vertex_bits(t)).or_insert((0, 0)).0 += 1;
+    }
+    let moved = triangles
+        .iter()
+        .map(|t| {
+            let b = t.aabb();
+            let Some(e) = seen.get_mut(&vertex_bits(t)).filter(|e| e.0 > 1) else {
+                return b;
+            };
+            let rank = e.1;
+            e.1 += 1;
+            // Degenerate (point or segment) triangles still get a distinct shift.
+            let extent = (b.max - b.min)
+                .max_element()
+                .max(b.max.abs().max_element() * 1e-5)
+                .max(1e-20);
+            let shift = Vec3A::splat(extent * 0.5 * rank as f32 / e.0 as f32);
+            Aabb {
+                min: b.min + shift,
+                max: b.max + shift,
+            }
+        })
+        .collect();
+    Some(moved)
+}
+
 fn scene_triangles(scene: &Scene) -> Vec<Triangle> {
     (0..scene.triangles.len())
         .map(|t| {
@@ -150,7 +258,12 @@ fn scene_triangles(scene: &Scene) -> Vec<Triangle> {
 impl SceneBvh {
     /// Builds the BVH over every triangle of `scene` (parallel PLOC + reinsertion).
     pub fn build(scene: &Scene) -> Self {
-        let mut bvh = Self::from_triangles(&scene_triangles(scene));
+        Self::build_with(scene, &BuildSettings::DEFAULT)
+    }
+
+    /// [`SceneBvh::build`] with explicit build settings (for the build benchmark).
+    pub fn build_with(scene: &Scene, settings: &BuildSettings) -> Self {
+        let mut bvh = Self::from_triangles_with(&scene_triangles(scene), settings);
         bvh.alpha = AlphaTest::new(scene);
         bvh
     }
@@ -171,17 +284,47 @@ impl SceneBvh {
     }
 
     /// The build of obvhs's `build_cwbvh_from_tris` (medium quality, no spatial splits),
-    /// keeping the binary tree.
+    /// keeping the binary tree, with coincident triangles told apart
+    /// ([`BuildSettings::DEFAULT`]).
     pub fn from_triangles(triangles: &[Triangle]) -> Self {
+        Self::from_triangles_with(triangles, &BuildSettings::DEFAULT)
+    }
+
+    /// [`SceneBvh::from_triangles`] with explicit build settings (for the build benchmark).
+    pub fn from_triangles_with(triangles: &[Triangle], settings: &BuildSettings) -> Self {
         let p = BvhBuildParams::medium_build();
-        let mut bvh2 = PlocBuilder::with_capacity(triangles.len()).build(
-            p.ploc_search_distance,
-            triangles,
-            (0..triangles.len() as u32).collect(),
-            p.sort_precision,
-            p.search_depth_threshold,
-        );
-        ReinsertionOptimizer::default().run(&mut bvh2, p.reinsertion_batch_ratio, None);
+        let indices = (0..triangles.len() as u32).collect();
+        let separated = if settings.separate_coincident {
+            separated_boxes(triangles)
+        } else {
+            None
+        };
+        let mut bvh2 = if let Some(boxes) = &separated {
+            PlocBuilder::with_capacity(triangles.len()).build(
+                settings.search,
+                boxes,
+                indices,
+                p.sort_precision,
+                settings.search_depth_threshold,
+            )
+        } else {
+            PlocBuilder::with_capacity(triangles.len()).build(
+                settings.search,
+                triangles,
+                indices,
+                p.sort_precision,
+                settings.search_depth_threshold,
+            )
+        };
+        ReinsertionOptimizer::default().run(&mut bvh2, settings.reinsertion, None);
+        if separated.is_some() {
+            // Back to the triangles' own boxes, so that refits and queries see tight bounds.
+            for node in bvh2.nodes.iter_mut().filter(|n| n.is_leaf()) {
+                let t = bvh2.primitive_indices[node.first_index as usize];
+                node.set_aabb(triangles[t as usize].aabb());
+            }
+            bvh2.refit_all();
+        }
         Self::from_bvh2(bvh2, triangles.to_vec())
     }
 
@@ -319,6 +462,91 @@ mod tests {
             hits += a.is_some() as u32;
         }
         assert!(hits > 10_000);
+    }
+
+    /// Depth of the binary tree (a leaf alone: 1).
+    fn depth(bvh: &Bvh2) -> usize {
+        let mut deepest = 0;
+        let mut stack = vec![(0usize, 1usize)];
+        while let Some((n, d)) = stack.pop() {
+            deepest = deepest.max(d);
+            let node = &bvh.nodes[n];
+            if !node.is_leaf() {
+                stack.push((node.first_index as usize, d + 1));
+                stack.push((node.first_index as usize + 1, d + 1));
+            }
+        }
+        deepest
+    }
+
+    /// 300 coincident copies of 40 random triangles: PLOC alone pairs one copy per pass and
+    /// builds a chain (depth ≥ the copies, the quadratic build of the 242-sphere scene);
+    /// with coincident triangles told apart the tree is logarithmic (≤ 4·log2 n), its leaves
+    /// have their exact boxes, and every query finds what brute force finds (the closest
+    /// distance; any hit exactly below and none just above it).
+    #[test]
+    fn coincident_copies_build_a_shallow_exact_tree() {
+        let mut rng = Rng::new(3, 0, 0);
+        let mut p = || Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - 1.0;
+        let mesh: Vec<Triangle> = (0..40)
+            .map(|_| {
+                let c = p();
+                Triangle {
+                    v0: c,
+                    v1: c + p() * 0.3,
+                    v2: c + p() * 0.3,
+                }
+            })
+            .collect();
+        let copies = 300;
+        let tris: Vec<Triangle> = (0..copies).flat_map(|_| mesh.iter().copied()).collect();
+        let plain = SceneBvh::from_triangles_with(
+            &tris,
+            &BuildSettings {
+                separate_coincident: false,
+                ..BuildSettings::DEFAULT
+            },
+        );
+        let bvh = SceneBvh::from_triangles(&tris);
+        let log2 = (tris.len() as f64).log2().ceil() as usize;
+        assert!(depth(&plain.bvh2) >= copies, "{}", depth(&plain.bvh2));
+        assert!(
+            depth(&bvh.bvh2) <= 4 * log2,
+            "depth {} for {} triangles",
+            depth(&bvh.bvh2),
+            tris.len()
+        );
+        for node in bvh.bvh2.nodes.iter().filter(|n| n.is_leaf()) {
+            let t = bvh.bvh2.primitive_indices[node.first_index as usize] as usize;
+            assert_eq!(node.aabb(), &tris[t].aabb());
+        }
+        let mut rng = Rng::new(4, 0, 0);
+        let mut hits = 0;
+        for _ in 0..2000 {
+            let o = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 3.0 - 1.5;
+            let d = uniform_sphere(rng.next_2d());
+            let ray = Ray::new(o.into(), d.into(), 0.0, f32::INFINITY);
+            let brute = mesh
+                .iter()
+                .filter_map(|t| {
+                    Tri {
+                        v0: t.v0,
+                        e1: t.v1 - t.v0,
+                        e2: t.v2 - t.v0,
+                    }
+                    .intersect(&ray)
+                    .map(|h| h.0)
+                })
+                .min_by(f32::total_cmp);
+            let got = bvh.intersect(o, d, f32::INFINITY).map(|h| h.t);
+            assert_eq!(brute, got);
+            if let Some(t) = brute {
+                hits += 1;
+                assert!(bvh.occluded(o, d, t * 1.001));
+                assert!(!bvh.occluded(o, d, t * 0.999));
+            }
+        }
+        assert!(hits > 30, "{hits}"); // 61 with this seed: the check is not vacuous
     }
 
     /// The BVH finds exactly what a brute-force loop over all triangles finds.

@@ -78,6 +78,12 @@ impl Method {
     pub fn uses_gpu(self) -> bool {
         matches!(self, Method::Direct | Method::Ispm | Method::Bidir)
     }
+
+    /// Whether the method traces rays on the CPU (and so needs the CPU BVH): all but
+    /// `direct`, which rasterizes everything on the GPU.
+    pub fn uses_cpu_bvh(self) -> bool {
+        self != Method::Direct
+    }
 }
 
 impl FromStr for Method {
