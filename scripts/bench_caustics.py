@@ -145,8 +145,8 @@ def main() -> None:
     lines = [
         "# Caustic kernels and photon focusing, before and after",
         "",
-        "Made by `GI_REF_CACHE=/work/cache/refs .venv/bin/python scripts/bench_caustics.py"
-        " --out docs/bench/caustics.md`"
+        f"Made by `GI_REF_CACHE={os.environ.get('GI_REF_CACHE', 'target')}"
+        f" {' '.join(['.venv/bin/python', 'scripts/bench_caustics.py', *sys.argv[1:]])}`"
         f" ({args.size}; reference: `path`, the mean of parts of {args.ref_spp} spp and"
         f" {args.ref_light_paths:.3g} light paths each, parts per scene {args.ref_parts};"
         f" means over {args.seeds} seeds)"

@@ -179,13 +179,13 @@ def render_gi(name: str, method: str, settings: dict) -> dict:
         try:
             r = gi.Renderer(scene, method, size=(SIZE, SIZE), seed=7, **settings)
         except gi.SettingError as e:
-            return {"status": "refused", "why": str(e)}
+            return {"status": "refused", "why": [str(e)]}
     warned = [str(w.message) for w in caught if issubclass(w.category, gi.RenderWarning)]
     t = time.perf_counter()
     img = r.render().radiance
     return {
         "status": "warns" if warned else "renders",
-        "why": "; ".join(warned),
+        "why": warned,  # one entry per warning (a message may hold a semicolon)
         "image": img,
         "seconds": time.perf_counter() - t,
         "depth": method_depth(r),
@@ -222,7 +222,7 @@ def gi_table(args: argparse.Namespace) -> None:
             else:
                 cells = ["–", "–", "–", "–"]
             if out["status"] != "renders":
-                for why in out["why"].split("; "):
+                for why in out["why"]:
                     warned.setdefault((method, why), []).append(name)
             rows.append([name, method, out["status"], *cells])
             print(" | ".join(rows[-1]), flush=True)

@@ -388,8 +388,9 @@ def test_mitsuba_area_emitter_is_one_sided_and_reads_bitmaps(tmp_path):
 
 @pytest.mark.parametrize("method", gi.methods())
 def test_mitsuba_constant_and_envmap_load_for_every_method(tmp_path, method):
-    """The environment emitters load and either render (the methods that render an
-    environment) or are refused by the core with a `SettingError` naming the method."""
+    """The environment emitters load and render in every method (`ispm`'s photons leave the
+    sky and its GPU direct light samples it, as `direct`'s), or are refused by the core with
+    a `SettingError` naming the method."""
     oiio.ImageBuf(np.full((4, 8, 3), 0.5, np.float32)).write(str(tmp_path / "sky.exr"))
     for sky in (
         '<emitter type="constant"><rgb name="radiance" value="0.5"/></emitter>',
@@ -399,8 +400,8 @@ def test_mitsuba_constant_and_envmap_load_for_every_method(tmp_path, method):
         cube = '<shape type="cube"><ref id="grey"/></shape>'
         path.write_text(MITSUBA.format(fov=40, body=cube + sky))
         scene = gi.load_scene(path)
+        photons = {"photons": 1000} if method in ("photon", "gather", "ispm") else {}
         try:
-            photons = {"photons": 1000} if method in ("photon", "gather", "ispm") else {}
             r = gi.Renderer(scene, method, size=(8, 8), spp=1, **photons)
         except gi.SettingError as e:
             assert method in str(e) and "environment" in str(e)

@@ -22,7 +22,7 @@ def quiet(scene: gi.Scene, method: str, **options) -> gi.Renderer:
 @pytest.mark.parametrize("method", gi.methods())
 def test_point_lights_and_defaults_warn_of_nothing(method):
     """The built-in scenes' point lights and the defaults: every method computes what it is
-    asked for (bidir's default depth is the 3 it computes)."""
+    asked for."""
     quiet(gi.load_scene("cornell"), method)
 
 
@@ -42,11 +42,12 @@ def test_an_option_the_method_ignores_is_named(method):
         gi.Renderer(gi.load_scene("cornell"), method, **{row["name"]: row["default"]})
 
 
-def test_bidir_names_the_bounces_and_the_mirrors_it_leaves_out():
+def test_bidir_computes_every_depth_and_names_the_mirrors_it_leaves_out():
+    """bidir computes any max_depth (its light subpaths, issue 29): no warning at any depth;
+    the indirect light behind mirrors and glass is still named."""
     scene = gi.load_scene("cornell")
-    quiet(scene, "bidir", max_depth=3)
-    with pytest.warns(gi.RenderWarning, match="max_depth 5 asks for 2 more bounce"):
-        gi.Renderer(scene, "bidir", max_depth=5, size=(8, 8))
+    for depth in (1, 3, 5, 64):
+        quiet(scene, "bidir", max_depth=depth)
     with pytest.warns(gi.RenderWarning, match="mirrors and glass"):
         gi.Renderer(gi.load_scene("cornell-glass"), "bidir", size=(8, 8))
 
@@ -60,19 +61,17 @@ def emitting_cornell() -> gi.Scene:
 
 @pytest.mark.parametrize("method", gi.methods())
 def test_area_lights_are_rendered_or_named(method):
-    """An emitting box: `path` and `direct` (its GPU direct light) render it without a word;
-    `ispm` and `bidir` render its direct light and say that their photons or VPLs leave out
-    its indirect light; a method that does not render area lights yet says so (and still
-    renders the rest)."""
+    """An emitting box: `path`, `photon`, `gather`, `direct` and `ispm` (GPU direct light,
+    photons from the emitters) render it without a word; `bidir` renders its direct light
+    and says that its VPLs leave out its indirect light."""
     scene = emitting_cornell()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         r = gi.Renderer(scene, method, **gi.method_options(method, **SMALL))
     messages = [str(w.message) for w in caught if issubclass(w.category, gi.RenderWarning)]
-    if method in ("path", "direct"):
+    if method != "bidir":
         assert messages == []
     for m in messages:
         assert "emitting surfaces" in m and f"`{method}`" in m, m
-        if method in ("ispm", "bidir"):
-            assert "indirect light" in m, m
+        assert "indirect light" in m, m
     assert r.render().radiance.max() > 0

@@ -309,7 +309,7 @@ def test_nearly_mirror_glossy_is_finite():
         scene = gi.Scene.from_json(json.dumps(desc), "fuzz")
         for method in gi.methods():
             with warnings.catch_warnings():
-                # bidir warns of the bounces past its three; finiteness is what is tested here.
+                # Warnings of transport a method leaves out: finiteness is what is tested here.
                 warnings.simplefilter("ignore", gi.RenderWarning)
                 # A scene without lights renders black, with a warning that says so.
                 black = pytest.warns(gi.SceneWarning, match="no light source")

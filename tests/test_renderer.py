@@ -17,16 +17,14 @@ def cornell() -> gi.Scene:
 def test_frame_equals_one_shot(cornell: gi.Scene, method: str) -> None:
     """A renderer's frame after an update and its undo equals gi.render of the scene (every
     method is deterministic for a seed)."""
-    # bidir computes three bounces at most (and warns past them).
-    small = {**SMALL, "max_depth": 3} if method == "bidir" else SMALL
-    r = gi.Renderer(cornell, method, **gi.method_options(method, **small))
+    r = gi.Renderer(cornell, method, **gi.method_options(method, **SMALL))
     r.render()
     light = r.describe("light", 0)
     r.update(lights={0: {"intensity": [1.0, 1.0, 1.0]}})
     r.render()
     r.update(lights={0: light})
     frame = r.render(aovs=True, extras=True)
-    one_shot = gi.render(cornell, method, **gi.method_options(method, **small))
+    one_shot = gi.render(cornell, method, **gi.method_options(method, **SMALL))
     np.testing.assert_array_equal(frame.radiance, one_shot.radiance)
     np.testing.assert_array_equal(frame.albedo, one_shot.albedo)
     assert sorted(frame.extra) == sorted(one_shot.extra)

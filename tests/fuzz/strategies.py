@@ -82,7 +82,15 @@ def light(bad: float) -> st.SearchStrategy[dict[str, Any]]:
         },
         optional={"inner_angle": number(0.0, 40.0, bad), "outer_angle": number(41.0, 89.0, bad)},
     )
-    return st.one_of(point, spot)
+    sun = st.fixed_dictionaries(
+        {
+            "type": st.just("directional"),
+            "direction": vec3(-1.0, 1.0, bad),
+            "irradiance": intensity,
+        },
+        optional={"angular_diameter": number(0.0, 40.0, bad)},
+    )
+    return st.one_of(point, spot, sun)
 
 
 @st.composite
@@ -98,6 +106,10 @@ def material(draw: st.DrawFn, bad: float) -> dict[str, Any]:
         out["specular"] = draw(st.lists(number(0.0, 1.0, bad), min_size=3, max_size=3))
         out["roughness"] = draw(number(0.0, 1.0, bad))
         out["fresnel"] = draw(st.booleans())
+    if draw(st.integers(0, 3)) == 0:
+        # An area light: any shape emits, degenerate ones (size 0) included.
+        out["emission"] = draw(st.lists(number(0.0, 20.0, bad), min_size=3, max_size=3))
+        out["two_sided"] = draw(st.booleans())
     return out
 
 
@@ -170,12 +182,15 @@ def scene_desc(draw: st.DrawFn) -> dict[str, Any]:
             max_size=4,
         )
     )
-    return {
+    desc = {
         "camera": draw(camera(bad)),
         "lights": draw(st.lists(light(bad), max_size=3)),
         "materials": materials,
         "objects": objects,
     }
+    if draw(st.integers(0, 4)) == 0:
+        desc["environment"] = {"radiance": draw(vec3(0.0, 2.0, bad))}
+    return desc
 
 
 @st.composite

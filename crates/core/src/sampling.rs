@@ -2,6 +2,9 @@
 //!
 //! The generator is PCG32 seeded from a hash of (seed, stream, index), so every pixel sample
 //! and every light path draws from its own reproducible sequence whatever the thread schedule.
+//! A generator made by [`Rng::sobol`] instead draws its `next_f32`/`next_2d` values from a
+//! padded, Owen-scrambled Sobol sequence ([`SobolSampler`]): low-discrepancy per pixel, for
+//! the path tracer's camera and bounce dimensions.
 
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
@@ -23,11 +26,13 @@ pub fn hash3(a: u32, b: u32, c: u32) -> u32 {
     hash_u32(a ^ hash_u32(b ^ hash_u32(c)))
 }
 
-/// PCG32 (O'Neill), one stream per generator.
+/// PCG32 (O'Neill), one stream per generator; optionally a low-discrepancy sampler for the
+/// `f32` draws ([`Rng::sobol`]).
 #[derive(Clone, Debug)]
 pub struct Rng {
     state: u64,
     inc: u64,
+    sobol: Option<SobolSampler>,
 }
 
 impl Rng {
@@ -37,6 +42,7 @@ impl Rng {
         let mut rng = Rng {
             state: 0,
             inc: (splitmix64(index ^ s) << 1) | 1,
+            sobol: None,
         };
         rng.next_u32();
         rng.state = rng.state.wrapping_add(s);
@@ -55,16 +61,128 @@ impl Rng {
         xorshifted.rotate_right(rot)
     }
 
+    /// A generator whose `next_f32` and `next_2d` draw sample `index` of pixel `pixel` from
+    /// a padded Owen-scrambled Sobol sequence ([`SobolSampler`]) under `seed`; `next_u32`
+    /// stays PCG32 (the generator of [`Rng::new`] for the same arguments).
+    pub fn sobol(seed: u64, pixel: u64, index: u32) -> Self {
+        let mut rng = Rng::new(seed, pixel, index as u64);
+        rng.sobol = Some(SobolSampler::new(seed, pixel, index));
+        rng
+    }
+
+    /// Moves a low-discrepancy generator to dimension `dim` (or leaves it where it is when
+    /// it has already passed it, so that no dimension is drawn twice); the path tracer gives
+    /// each bounce its own dimensions so that bounce `k` of every sample of a pixel draws
+    /// from the same well-distributed point set. A plain PCG32 generator ignores it.
+    #[inline]
+    pub fn start_dimension(&mut self, dim: u32) {
+        if let Some(s) = &mut self.sobol {
+            s.dim = s.dim.max(dim);
+        }
+    }
+
     /// Uniform in [0, 1).
     #[inline]
     pub fn next_f32(&mut self) -> f32 {
-        (self.next_u32() >> 8) as f32 * (1.0 / 16_777_216.0)
+        if let Some(s) = &mut self.sobol {
+            return s.next_1d();
+        }
+        u32_to_unit(self.next_u32())
     }
 
     #[inline]
     pub fn next_2d(&mut self) -> Vec2 {
+        if let Some(s) = &mut self.sobol {
+            return s.next_2d();
+        }
         Vec2::new(self.next_f32(), self.next_f32())
     }
+}
+
+#[inline]
+fn u32_to_unit(x: u32) -> f32 {
+    (x >> 8) as f32 * (1.0 / 16_777_216.0)
+}
+
+/// A padded Owen-scrambled Sobol sampler (Burley 2020, "Practical Hash-based Owen
+/// Scrambling"; pbrt-v4's `PaddedSobolSampler`): every 1D or 2D draw takes the first one or
+/// two Sobol dimensions (a (0,2)-sequence) of the sample's index, the index shuffled per
+/// pixel and draw by a nested uniform scramble (so that the first 2^k samples of a pixel are
+/// an aligned block of the sequence, a (0,k,2)-net) and the point Owen-scrambled per pixel
+/// and draw. Each draw is thus uniform and independent of the other draws of the sample,
+/// while the `spp` samples of one draw are stratified: for power-of-two sample counts, every
+/// elementary interval of area 1/spp holds one point.
+#[derive(Clone, Debug)]
+pub struct SobolSampler {
+    seed: u32,
+    index: u32,
+    dim: u32,
+}
+
+impl SobolSampler {
+    pub fn new(seed: u64, pixel: u64, index: u32) -> Self {
+        let h = splitmix64(seed ^ splitmix64(pixel ^ 0x5851_f42d_4c95_7f2d));
+        SobolSampler {
+            seed: (h ^ (h >> 32)) as u32,
+            index,
+            dim: 0,
+        }
+    }
+
+    /// The shuffled index and two scrambling seeds of the next draw.
+    #[inline]
+    fn draw(&mut self) -> (u32, u32, u32) {
+        let h = hash3(self.seed, self.dim, 0x68e3_1da4);
+        let index = nested_uniform_scramble(self.index, h);
+        (index, hash_u32(h ^ 0xb529_7a4d), hash_u32(h ^ 0x1b56_c4e9))
+    }
+
+    #[inline]
+    pub fn next_1d(&mut self) -> f32 {
+        let (i, s0, _) = self.draw();
+        self.dim += 1;
+        u32_to_unit(nested_uniform_scramble(i.reverse_bits(), s0))
+    }
+
+    #[inline]
+    pub fn next_2d(&mut self) -> Vec2 {
+        let (i, s0, s1) = self.draw();
+        self.dim += 2;
+        Vec2::new(
+            u32_to_unit(nested_uniform_scramble(i.reverse_bits(), s0)),
+            u32_to_unit(nested_uniform_scramble(sobol_dim1(i), s1)),
+        )
+    }
+}
+
+/// The second dimension of the Sobol sequence (primitive polynomial x + 1, all initial
+/// direction numbers 1) at `index`, as a 32-bit binary fraction.
+#[inline]
+pub fn sobol_dim1(mut index: u32) -> u32 {
+    let mut v = 1u32 << 31;
+    let mut x = 0;
+    while index != 0 {
+        if index & 1 != 0 {
+            x ^= v;
+        }
+        index >>= 1;
+        v ^= v >> 1;
+    }
+    x
+}
+
+/// Owen scrambling of a 32-bit binary fraction: each bit flipped by a hash of `seed` and
+/// the bits above it (Burley 2020's hash-based nested uniform scramble: a Laine-Karras style
+/// permutation, in which every bit depends only on the bits below it, of the reversed bits).
+#[inline]
+pub fn nested_uniform_scramble(x: u32, seed: u32) -> u32 {
+    let mut v = x.reverse_bits();
+    v = v.wrapping_add(seed);
+    v ^= v.wrapping_mul(0x6c50_b47c);
+    v ^= v.wrapping_mul(0xb82f_1e52);
+    v ^= v.wrapping_mul(0xc7af_e638);
+    v ^= v.wrapping_mul(0x8d22_f6e6);
+    v.reverse_bits()
 }
 
 fn splitmix64(mut z: u64) -> u64 {

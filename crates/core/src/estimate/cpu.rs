@@ -69,6 +69,8 @@ pub struct CpuEstimate {
     /// the view) reuses them instead of reading the G-buffer back.
     samples: Vec<Option<ViewSample>>,
     samples_generation: Option<u64>,
+    /// The target holds zeros (the last estimate had no photons).
+    zero: bool,
 }
 
 impl CpuEstimate {
@@ -94,6 +96,7 @@ impl CpuEstimate {
             entries: 0,
             samples: Vec::new(),
             samples_generation: None,
+            zero: false,
         }
     }
 
@@ -154,6 +157,20 @@ impl CpuEstimate {
         let params = self
             .params
             .ok_or_else(|| Error::Gpu("cpu estimate without parameters".into()))?;
+        // No photons (the caustic photons' estimate of a scene without caustics): zeros,
+        // written once, without reading the G-buffer back.
+        if self.photons.is_empty() {
+            if !self.zero {
+                self.entries = 0;
+                self.write(
+                    ctx,
+                    &vec![Vec4::ZERO; self.target.low_size.iter().product::<u32>() as usize],
+                );
+                self.zero = true;
+            }
+            return Ok(None);
+        }
+        self.zero = false;
         let mut waited = None;
         if self.samples_generation != Some(generation) {
             let t = std::time::Instant::now();
@@ -202,11 +219,17 @@ impl CpuEstimate {
                 band
             })
             .collect();
-        let texels: Vec<Vec4> = rows.concat();
+        self.write(ctx, &rows.concat());
+        Ok(waited)
+    }
+
+    /// Uploads the estimate `texels` (one per low-resolution texel) to the target.
+    fn write(&self, ctx: &GpuContext, texels: &[Vec4]) {
+        let [lw, lh] = self.target.low_size;
         gpu::alloc::note_upload("cpu estimate", (texels.len() * 16) as u64);
         ctx.queue.write_texture(
             self.target.low.as_image_copy(),
-            bytemuck::cast_slice(&texels),
+            bytemuck::cast_slice(texels),
             wgpu::TexelCopyBufferLayout {
                 offset: 0,
                 bytes_per_row: Some(lw * 16),
@@ -214,7 +237,6 @@ impl CpuEstimate {
             },
             self.target.low.size(),
         );
-        Ok(waited)
     }
 
     /// The view samples of the low-resolution texels: the G-buffer pixel at the centre of

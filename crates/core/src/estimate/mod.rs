@@ -168,12 +168,36 @@ impl IndirectEstimate {
         encoder: &mut wgpu::CommandEncoder,
         timer: &mut crate::gpu::timer::Timer,
     ) {
-        let target = match self {
+        self.target().record_upsample(ctx, encoder, timer);
+    }
+
+    /// The target the estimate writes.
+    pub fn target(&self) -> &target::IndirectTarget {
+        match self {
             IndirectEstimate::Volumes(v) => &v.target,
             IndirectEstimate::Binned(b) => &b.target,
             IndirectEstimate::Cpu(c) => &c.target,
-        };
-        target.record_upsample(ctx, encoder, timer);
+        }
+    }
+
+    fn target_mut(&mut self) -> &mut target::IndirectTarget {
+        match self {
+            IndirectEstimate::Volumes(v) => &mut v.target,
+            IndirectEstimate::Binned(b) => &mut b.target,
+            IndirectEstimate::Cpu(c) => &mut c.target,
+        }
+    }
+
+    /// Has the upsampling add `full`'s estimate, made at full resolution
+    /// ([`target::IndirectTarget::set_full_resolution`]).
+    pub fn add_full_resolution(
+        &mut self,
+        ctx: &crate::gpu::GpuContext,
+        gbuf: &crate::raster::gbuffer::GBuffer,
+        full: &IndirectEstimate,
+    ) {
+        let view = full.output().1;
+        self.target_mut().set_full_resolution(ctx, gbuf, view);
     }
 
     /// Photon-list entries of the last estimate: all, and trivial accepts (binned only).
@@ -197,11 +221,7 @@ impl IndirectEstimate {
 
     /// Sets where in its pixel the eye G-buffer is sampled (progressive passes move it).
     pub fn set_sample_centre(&mut self, centre: glam::Vec2) {
-        match self {
-            IndirectEstimate::Volumes(v) => v.target.set_sample_centre(centre),
-            IndirectEstimate::Binned(b) => b.target.set_sample_centre(centre),
-            IndirectEstimate::Cpu(c) => c.target.set_sample_centre(centre),
-        }
+        self.target_mut().set_sample_centre(centre);
     }
 
     /// The estimate at full resolution.

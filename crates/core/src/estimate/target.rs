@@ -1,6 +1,8 @@
 //! The indirect-light target every estimator writes: one texel per G-buffer sample at the
 //! centre of a `subsample` × `subsample` block, and its joint bilateral upsampling to full
-//! resolution (ISPM section 5.2) when `subsample` > 1.
+//! resolution (ISPM section 5.2) when `subsample` > 1, to which the upsampling adds the light
+//! of another target estimated at full resolution where one is set
+//! ([`IndirectTarget::set_full_resolution`]: the frame's caustic photons).
 
 use super::wgsl;
 use crate::gpu::layout::{buffer_init, texture as tex, texture_entry, uniform_entry};
@@ -48,6 +50,7 @@ impl Pipelines for UpsamplePass {
                 texture_entry(3, FRAGMENT),
                 texture_entry(4, FRAGMENT),
                 texture_entry(5, FRAGMENT),
+                texture_entry(6, FRAGMENT),
             ],
         );
         let module = shaders::module(
@@ -116,9 +119,39 @@ pub(crate) fn float_target(ctx: &GpuContext, label: &str, w: u32, h: u32) -> wgp
     )
 }
 
+/// The upsampling's bind group: parameters, the G-buffer, the low-resolution estimate and
+/// the full-resolution light it adds.
+fn upsample_group(
+    ctx: &GpuContext,
+    gbuf: &GBuffer,
+    params: &wgpu::Buffer,
+    low: &wgpu::TextureView,
+    full: &wgpu::TextureView,
+) -> wgpu::BindGroup {
+    let inputs = gbuf.lighting_inputs();
+    gpu::create_bind_group(
+        &ctx.device,
+        &wgpu::BindGroupDescriptor {
+            label: Some("upsample bind group"),
+            layout: &UpsamplePass::get(ctx).layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: params.as_entire_binding(),
+                },
+                tex(1, &inputs[0]),
+                tex(2, &inputs[1]),
+                tex(3, low),
+                tex(4, &inputs[2]),
+                tex(5, &inputs[3]),
+                tex(6, full),
+            ],
+        },
+    )
+}
+
 impl IndirectTarget {
     pub fn new(ctx: &GpuContext, gbuf: &GBuffer, width: u32, height: u32, subsample: u32) -> Self {
-        let passes = UpsamplePass::get(ctx);
         let k = subsample.max(1);
         let low_size = [width.div_ceil(k), height.div_ceil(k)];
         let low = float_target(ctx, "indirect (subsampled)", low_size[0], low_size[1]);
@@ -129,28 +162,13 @@ impl IndirectTarget {
             bytemuck::bytes_of(&bytemuck::Zeroable::zeroed() as &UpsampleParamsRaw),
             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         );
-        let inputs = gbuf.lighting_inputs();
         let (full, upsample_group) = if k > 1 {
             let full = float_target(ctx, "indirect", width, height);
             let full_view = full.create_view(&Default::default());
-            let group = gpu::create_bind_group(
-                &ctx.device,
-                &wgpu::BindGroupDescriptor {
-                    label: Some("upsample bind group"),
-                    layout: &passes.layout,
-                    entries: &[
-                        wgpu::BindGroupEntry {
-                            binding: 0,
-                            resource: up_params.as_entire_binding(),
-                        },
-                        tex(1, &inputs[0]),
-                        tex(2, &inputs[1]),
-                        tex(3, &low_view),
-                        tex(4, &inputs[2]),
-                        tex(5, &inputs[3]),
-                    ],
-                },
-            );
+            // Until a full-resolution estimate is set, a 1×1 texture: nothing is added.
+            let none = float_target(ctx, "indirect at full resolution (none)", 1, 1);
+            let none = none.create_view(&Default::default());
+            let group = upsample_group(ctx, gbuf, &up_params, &low_view, &none);
             (Some((full, full_view)), Some(group))
         } else {
             (None, None)
@@ -165,6 +183,26 @@ impl IndirectTarget {
             last_eye: None,
             upsample_group,
             centre: Vec2::splat(0.5),
+        }
+    }
+
+    /// Has the upsampling add `full`, a full-resolution estimate of the same size as the
+    /// G-buffer (nothing at subsample 1, which has no upsampling: its one estimate holds
+    /// all the light).
+    pub fn set_full_resolution(
+        &mut self,
+        ctx: &GpuContext,
+        gbuf: &GBuffer,
+        full: &wgpu::TextureView,
+    ) {
+        if self.upsample_group.is_some() {
+            self.upsample_group = Some(upsample_group(
+                ctx,
+                gbuf,
+                &self.up_params,
+                &self.low_view,
+                full,
+            ));
         }
     }
 

@@ -18,7 +18,7 @@ use crate::photon::trace::Checked;
 use crate::photon::trace::DifferentialSettings;
 use crate::photon::PhotonTraceSettings;
 use crate::scene::Scene;
-use crate::trace::path::direct_light;
+use crate::trace::direct::{DirectLight, Nee};
 use crate::trace::SceneBvh;
 use std::time::Instant;
 
@@ -138,9 +138,13 @@ pub(super) fn render(
 
     let t = Instant::now();
     let samples = camera_samples(options.spp, options.max_depth, frame);
-    let (radiance, first) = render_image(scene, bvh, &samples, progress, |it, wo, _: &mut ()| {
-        direct_light(scene, bvh, it, wo) + map.radiance(it, wo)
-    })?;
+    // Direct light by next-event estimation from every source, at full weight (the camera
+    // paths end here: no BSDF ray finds the same light).
+    let lights = DirectLight::of(scene);
+    let (radiance, first) =
+        render_image(scene, bvh, &samples, progress, |it, wo, rng, _: &mut ()| {
+            lights.estimate(scene, bvh, it, wo, rng, Nee::Alone) + map.radiance(it, wo)
+        })?;
     let caustics = Image::new(radiance.width, radiance.height);
     let mut out = RenderOutput::of_cpu(radiance, first, caustics, stats);
     out.stats.samples_per_pixel = samples.spp;

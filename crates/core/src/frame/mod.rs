@@ -114,71 +114,38 @@ pub struct Renderer {
     accum: Option<progressive::Accumulation>,
 }
 
-/// `path`, `bidir`, `direct` and `ispm` light a scene with its environment light so far
-/// (`ispm` its direct light only, see [`unrendered_lights`]); the other methods refuse
-/// rather than render the scene without it.
-fn check_environment(scene: &Scene, method: Method) -> Result<()> {
-    if scene.environment.is_none() {
-        return Ok(());
-    }
-    // `bidir` sees it through the ray bundles (§6); without bundles it would be missing.
-    if matches!(
-        method,
-        Method::Path | Method::Bidir | Method::Direct | Method::Ispm
-    ) {
-        return Ok(());
-    }
-    Err(Error::setting(
-        "method",
-        format!(
-            "method `{}` cannot render a scene with an environment light (its photons are \
-             emitted by point and spot lights only); use method `path`, `bidir`, `direct` or \
-             `ispm`",
-            method.name()
-        ),
-    ))
+/// Every method lights a scene with its environment light: the CPU methods and `ispm`'s
+/// photons, `direct`'s, `ispm`'s and `bidir`'s GPU direct light (`bidir` through its ray
+/// bundles, §6). Nothing is refused any more; kept as the one place to refuse a method.
+fn check_environment(_scene: &Scene, _method: Method) -> Result<()> {
+    Ok(())
 }
 
 /// What `method` leaves out of `scene`'s light, one message each (they become
-/// `gi.RenderWarning`s): kinds of light a method does not render yet. The GPU methods render
-/// the direct light of every kind (`raster::direct`); `ispm`'s photons and `bidir`'s VPLs
-/// leave out the indirect light of emitters and directional lights (and `ispm`'s of the
-/// environment).
+/// `gi.RenderWarning`s): kinds of light a method does not render yet. The CPU methods render
+/// every light; the GPU methods the direct light of every kind (`raster::direct`), `ispm`'s
+/// photons the indirect light of every kind; `bidir`'s VPLs leave out the indirect light of
+/// emitters and directional lights.
 fn unrendered_lights(scene: &Scene, method: Method) -> Vec<String> {
     let mut out = Vec::new();
     let emitters = scene.materials.iter().any(|m| m.emits());
     let directional = scene.lights.iter().any(|l| !l.is_local());
     let name = method.name();
-    let indirect = match method {
-        Method::Ispm => Some("photons"),
-        Method::Bidir => Some("VPLs"),
-        _ => None,
-    };
-    if emitters && matches!(method, Method::Photon | Method::Gather) {
-        out.push(format!(
-            "method `{name}` does not render emitting surfaces (area lights) yet: their light \
-             is missing; use method `path`"
-        ));
+    if method != Method::Bidir {
+        return out;
     }
     let mut partly = |what: &str| {
-        if let Some(carriers) = indirect {
-            out.push(format!(
-                "method `{name}` renders the direct light of {what} but not yet their \
-                 indirect light (its {carriers} leave them out); use method `path` for it"
-            ));
-        }
+        out.push(format!(
+            "method `{name}` renders the direct light of {what} but not yet their indirect \
+             light (its VPLs leave them out); use method `path`, `photon`, `gather` or `ispm` \
+             for it"
+        ));
     };
     if emitters {
         partly("emitting surfaces (area lights)");
     }
     if directional {
         partly("directional lights");
-    }
-    if scene.environment.is_some() && method == Method::Ispm {
-        out.push(format!(
-            "method `{name}` renders the direct light of the environment but not yet its \
-             indirect light (its photons leave it out); use method `path` for it"
-        ));
     }
     out
 }
@@ -187,16 +154,7 @@ fn unrendered_lights(scene: &Scene, method: Method) -> Vec<String> {
 /// (they become `gi.RenderWarning`s).
 fn transport_omissions(scene: &Scene, options: &RenderOptions) -> Vec<String> {
     let mut out = Vec::new();
-    if let MethodOptions::Bidir(o) = &options.method {
-        if o.max_depth > 3 {
-            out.push(format!(
-                "method `bidir` computes one- and two-bounce indirect light only: max_depth {} \
-                 asks for {} more bounce(s), which are missing (use max_depth 3, or method \
-                 `ispm` or `path` for more)",
-                o.max_depth,
-                o.max_depth - 3
-            ));
-        }
+    if let MethodOptions::Bidir(_) = &options.method {
         if scene.has_delta_materials() {
             out.push(
                 "method `bidir` traces mirrors and glass seen by the camera with direct light \

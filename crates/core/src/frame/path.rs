@@ -7,6 +7,7 @@ use crate::error::Result;
 use crate::image::Image;
 use crate::sampling::Rng;
 use crate::scene::Scene;
+use crate::trace::direct::DirectLight;
 use crate::trace::light_tracer::{self, LightTraceSettings};
 use crate::trace::path::{self, PathSettings};
 use crate::trace::SceneBvh;
@@ -29,17 +30,22 @@ pub fn render(
 
     let (w, h) = (scene.camera.width, scene.camera.height);
     let spp = options.spp;
+    let sources = light_tracer::light_sources(scene);
+    let light_paths =
+        if scene.has_delta_materials() && options.max_depth >= 2 && !sources.is_empty() {
+            options
+                .light_paths
+                .unwrap_or(spp as u64 * w as u64 * h as u64)
+        } else {
+            0
+        };
     let ps = PathSettings {
         max_depth: options.max_depth,
         rr_depth: 3,
+        light_traced: light_paths > 0,
+        strategy: path::Strategy::Mis,
     };
-    let light_paths = if scene.has_delta_materials() && options.max_depth >= 2 {
-        options
-            .light_paths
-            .unwrap_or(spp as u64 * w as u64 * h as u64)
-    } else {
-        0
-    };
+    let lights = DirectLight::of(scene);
     // Progress counts camera rows and light-path chunks together.
     let light_chunks = light_paths.div_ceil(LIGHT_CHUNK);
     // The camera connections of all light paths are kept until they are summed in order:
@@ -71,10 +77,12 @@ pub fn render(
                         if s % 64 == 63 && stage.stopped() {
                             return None;
                         }
-                        let mut rng = Rng::new(frame.seed, pixel, s as u64);
+                        // Camera paths draw from a per-pixel low-discrepancy sequence.
+                        let mut rng = Rng::sobol(frame.seed, pixel, s);
                         let j = rng.next_2d();
                         let dir = cam.direction(x as f32 + j.x, y as f32 + j.y);
-                        sum += path::radiance(scene, bvh, cam.position, dir, &mut rng, &ps);
+                        let ray = (cam.position, dir);
+                        sum += path::radiance(scene, bvh, &lights, ray, &mut rng, &ps);
                     }
                     // Auxiliary images through the pixel centre are noise-free.
                     let first = if frame.first_hit_aovs {
@@ -102,7 +110,6 @@ pub fn render(
     // Light paths for caustics. Each chunk returns its camera connections, which are summed
     // in chunk order so that the image is bit-for-bit the same for a seed on any schedule.
     let t = Instant::now();
-    let weights = light_tracer::light_weights(scene);
     let lts = LightTraceSettings {
         max_depth: options.max_depth,
         rr_depth: 3,
@@ -123,7 +130,7 @@ pub fn render(
                 light_tracer::trace_path(
                     scene,
                     bvh,
-                    &weights,
+                    &sources,
                     &mut rng,
                     light_paths,
                     &lts,

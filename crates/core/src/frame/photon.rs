@@ -78,7 +78,7 @@ pub fn render(
         bvh,
         &samples,
         progress,
-        |it, wo, scratch: &mut Vec<Neighbour>| map.radiance(it, wo, &gather, scratch),
+        |it, wo, _, scratch: &mut Vec<Neighbour>| map.radiance(it, wo, &gather, scratch),
     )?;
     let caustics = Image::new(radiance.width, radiance.height);
     let mut out = RenderOutput::of_cpu(radiance, first, caustics, stats);

@@ -28,14 +28,15 @@ pub struct CameraSamples {
 const MAX_DELTA_BOUNCES: u32 = 8;
 
 /// Renders the image whose non-delta surfaces get their outgoing radiance from `estimate`
-/// `(interaction, wo, scratch)`, and the first-hit images (empty without `first_hit_aovs`);
-/// `S` is per-thread scratch space.
+/// `(interaction, wo, rng, scratch)`, and the first-hit images (empty without
+/// `first_hit_aovs`); `S` is per-thread scratch space. The camera paths see emitting
+/// surfaces, the sky and suns' discs themselves, directly and through delta lobes.
 pub fn render_image<S: Default + Send>(
     scene: &Scene,
     bvh: &SceneBvh,
     settings: &CameraSamples,
     progress: &dyn Progress,
-    estimate: impl Fn(&Interaction, Vec3, &mut S) -> Vec3 + Sync,
+    estimate: impl Fn(&Interaction, Vec3, &mut Rng, &mut S) -> Vec3 + Sync,
 ) -> Result<(Image, FirstHitImages)> {
     let cam = &scene.camera;
     let (w, h) = (cam.width, cam.height);
@@ -51,8 +52,8 @@ pub fn render_image<S: Default + Send>(
                     if stage.stopped() {
                         return None;
                     }
-                    let l = pixel_radiance(scene, bvh, settings, x, y, true, |it, wo| {
-                        estimate(it, wo, scratch)
+                    let l = pixel_radiance(scene, bvh, settings, x, y, true, |it, wo, rng| {
+                        estimate(it, wo, rng, scratch)
                     });
                     let centre = cam.direction(x as f32 + 0.5, y as f32 + 0.5);
                     let first = if settings.first_hit_aovs {
@@ -107,9 +108,15 @@ pub fn delta_image<S: Default + Send>(
                 if stage.stopped() {
                     return;
                 }
-                *px = pixel_radiance(scene, bvh, settings, x as u32, y as u32, false, |it, wo| {
-                    estimate(it, wo, scratch)
-                });
+                *px = pixel_radiance(
+                    scene,
+                    bvh,
+                    settings,
+                    x as u32,
+                    y as u32,
+                    false,
+                    |it, wo, _| estimate(it, wo, scratch),
+                );
             }
             stage.advance(1);
         });
@@ -126,7 +133,7 @@ fn pixel_radiance(
     x: u32,
     y: u32,
     estimate_first: bool,
-    mut estimate: impl FnMut(&Interaction, Vec3) -> Vec3,
+    mut estimate: impl FnMut(&Interaction, Vec3, &mut Rng) -> Vec3,
 ) -> Vec3 {
     let cam = &scene.camera;
     let max_delta = MAX_DELTA_BOUNCES.min(settings.max_depth);
@@ -154,7 +161,9 @@ fn pixel_radiance(
 /// reaches through up to `max_delta` delta scatterings (the first surface only when
 /// `estimate_first`). The estimate covers a surface's non-delta lobes; its delta lobe (if
 /// any) is followed when `Material::sample` picks it, with the sample weight accounting for
-/// that choice.
+/// that choice. With `estimate_first` (the whole image), the light the path meets is added
+/// too: emitting surfaces, and the sky and suns' discs where it leaves the scene (the
+/// specular image alone leaves them to the methods' own passes).
 #[allow(clippy::too_many_arguments)]
 fn radiance(
     scene: &Scene,
@@ -164,19 +173,25 @@ fn radiance(
     max_delta: u32,
     estimate_first: bool,
     rng: &mut Rng,
-    mut estimate: impl FnMut(&Interaction, Vec3) -> Vec3,
+    mut estimate: impl FnMut(&Interaction, Vec3, &mut Rng) -> Vec3,
 ) -> Vec3 {
     let mut l = Vec3::ZERO;
     let mut beta = Vec3::ONE;
     let (mut o, mut d) = (origin, dir);
     for depth in 0..=max_delta {
         let Some(hit) = bvh.intersect(o, d, f32::INFINITY) else {
+            if estimate_first {
+                l += beta * crate::trace::direct::escaped(scene, d, None, true);
+            }
             break;
         };
         let it = Interaction::new(scene, &hit, d);
         let wo = -d;
+        if estimate_first {
+            l += beta * it.material.emitted(it.ng, wo);
+        }
         if (depth > 0 || estimate_first) && !it.material.is_purely_specular() {
-            l += beta * estimate(&it, wo);
+            l += beta * estimate(&it, wo, rng);
         }
         if depth == 0 && !estimate_first && !it.material.has_delta_lobe() {
             break;

@@ -17,9 +17,11 @@ use crate::cancel::Progress;
 use crate::error::{Error, Result};
 use crate::memory;
 use crate::sampling::Rng;
-use crate::scene::Scene;
-use crate::trace::light_tracer::{choose_light, light_weights};
+use crate::scene::light::Emission;
+use crate::scene::sources::Spread;
+use crate::scene::{Scene, Source, Sources};
 use crate::trace::{Interaction, SceneBvh};
+use glam::Vec3;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
@@ -64,8 +66,9 @@ impl Default for PhotonTraceSettings {
     }
 }
 
-/// Emits `n_photons` photons from the scene's lights (each light chosen with probability
-/// proportional to its power, so each photon carries about total power / n) and traces them.
+/// Emits `n_photons` photons from the scene's sources (lights, emitters, environment; each
+/// chosen with probability proportional to its power, so each photon carries about total
+/// power / n) and traces them.
 pub fn emit_and_trace(
     scene: &Scene,
     bvh: &SceneBvh,
@@ -102,50 +105,121 @@ pub fn emit_and_trace_focused(
     control: &dyn TraceControl,
     focus: &Focus,
 ) -> Result<PhotonSet> {
-    let weights = light_weights(scene);
+    let sources = Sources::of(scene);
+    emit_and_trace_sources(scene, bvh, &sources, n_photons, s, seed, control, focus)
+}
+
+/// Emits `n_photons` photons from `sources` (each chosen with probability proportional to
+/// its power, so each photon carries about their total power / n) and traces them; point
+/// and spot lights aim part of theirs by `focus`.
+#[allow(clippy::too_many_arguments)]
+pub fn emit_and_trace_sources(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    sources: &Sources,
+    n_photons: u64,
+    s: &PhotonTraceSettings,
+    seed: u64,
+    control: &dyn TraceControl,
+    focus: &Focus,
+) -> Result<PhotonSet> {
     let mut set = trace_chunks(n_photons, control, |i, out| {
         let mut rng = Rng::new(seed, STREAM_EMIT, i);
-        let Some((li, p_light)) = choose_light(&weights, rng.next_f32()) else {
+        let Some((e, spread)) = emit_photon(scene, sources, n_photons, focus, &mut rng) else {
             out.absorbed += 1;
             return;
         };
-        let light = &scene.lights[li];
-        let n_l = (n_photons as f32 * p_light).max(1.0);
-        // The emission and the squared angular spacing of this light's photons there.
-        let (e, spacing2) = if focus.active(li) {
-            let (direction, q) = focus.sample(light, li, &mut rng);
-            let power = if q > 0.0 {
-                light.intensity_towards(direction) / q
-            } else {
-                glam::Vec3::ZERO
-            };
-            let e = crate::scene::light::Emission {
-                origin: light.position(),
-                direction,
-                power,
-            };
-            (e, 1.0 / (n_l * q.max(1e-12)))
-        } else {
-            (
-                light.emit(&mut rng, scene.bounds()),
-                light.solid_angle() / n_l,
-            )
-        };
-        let power = e.power / (p_light * n_photons as f32);
-        let ray = PhotonRay::new(e.origin, e.direction, power, 1.0, 0);
-        // This light's photons are spaced by √(1 / (n_l q(ω))) (√(Ω_l / n_l) unfocused)
-        // rather than the global Δ: aimed photons are denser, their footprints smaller.
+        let ray = PhotonRay::new(e.origin, e.direction, e.power, 1.0, 0);
         let diff = s
             .differentials
             .map_or(Differentials::emitted(e.direction), |ds| {
-                let spacing = spacing2.sqrt();
-                Differentials::emitted(e.direction).scaled(spacing / ds.spacing)
+                emitted_differentials(&e, spread, ds.spacing)
             });
         follow(scene, bvh, &ray, diff, None, s, &mut rng, out);
     })?;
     set.emitted = n_photons;
     finish_footprints(&mut set, s);
     Ok(set)
+}
+
+/// How one photon's neighbours lie at its emission: a point light's photons `spacing`
+/// radians apart (√(1/(n q(ω))) for a density q per steradian), or the area a photon
+/// stands for on an emitting surface or the bounding disc (see [`Spread`]).
+#[derive(Clone, Copy, Debug)]
+enum Neighbours {
+    Angular(f32),
+    /// Area per photon, the surface's normal, and whether directions spread diffusely.
+    Area(f32, Vec3, bool),
+}
+
+/// One of `n` photons from `sources`: a source drawn by power, a photon of it (aimed by
+/// `focus` for some of a point or spot light's), its power over one photon of `n`; and how
+/// the source's photons lie around it.
+fn emit_photon(
+    scene: &Scene,
+    sources: &Sources,
+    n: u64,
+    focus: &Focus,
+    rng: &mut Rng,
+) -> Option<(Emission, Neighbours)> {
+    let (source, p) = sources.choose(rng.next_f32())?;
+    // The source's share of the photons.
+    let n_s = (n as f32 * p).max(1.0);
+    let (mut e, neighbours) = match source {
+        Source::Light(li) if focus.active(li) => {
+            let light = &scene.lights[li];
+            let (direction, q) = focus.sample(light, li, rng);
+            let power = if q > 0.0 {
+                light.intensity_towards(direction) / q
+            } else {
+                Vec3::ZERO
+            };
+            let e = Emission {
+                origin: light.position(),
+                direction,
+                power,
+            };
+            (e, Neighbours::Angular((1.0 / (n_s * q.max(1e-12))).sqrt()))
+        }
+        _ => {
+            let (e, spread) = sources.emit_spread_from(scene, source, rng)?;
+            let neighbours = match spread {
+                Spread::Angular { solid_angle } => Neighbours::Angular((solid_angle / n_s).sqrt()),
+                Spread::Area {
+                    area,
+                    normal,
+                    diffuse,
+                } => Neighbours::Area(area / n_s, normal, diffuse),
+            };
+            (e, neighbours)
+        }
+    };
+    e.power /= p * n as f32;
+    Some((e, neighbours))
+}
+
+/// The differentials of an emitted photon whose neighbours lie as `neighbours`, scaled for
+/// the global spacing Δ = `spacing`: a point light's photons spread by their angular
+/// spacing (√(Ω_l/n_l) rather than Δ: aimed photons are denser, their footprints smaller);
+/// a surface's start with the area per photon across the surface, then spread as after a
+/// diffuse re-emission (area lights) or stay parallel (the sun's and the sky's, which cross
+/// the bounding disc together).
+fn emitted_differentials(e: &Emission, neighbours: Neighbours, spacing: f32) -> Differentials {
+    match neighbours {
+        Neighbours::Angular(a) => Differentials::emitted(e.direction).scaled(a / spacing),
+        Neighbours::Area(area, normal, diffuse) => {
+            let side = area.max(0.0).sqrt() / spacing;
+            let f = crate::sampling::Frame::new(normal);
+            let mut diff = Differentials {
+                dp: [f.t * side, f.b * side],
+                dd: [Vec3::ZERO; 2],
+            };
+            if diffuse {
+                diff.reemit(e.direction);
+            }
+            diff
+        }
+    }
 }
 
 /// Photon focusing for ISPM: `n` photons of light `li` aimed into its projection map

@@ -63,7 +63,9 @@ pub struct BidirParamsRaw {
     pub bundles: u32,
     /// 0: MIS, 1: VPLs only, 2: bundles only (one-bounce light).
     pub mode: u32,
-    pub two_bounce: u32,
+    /// Highest order of the light-subpath vertices paired with the bundles' hits: 0 none,
+    /// 1 the RSM's VPLs (two bounces), j > 1 also the traced subpaths' (depth j + 2).
+    pub orders: u32,
     pub min_dist2: f32,
     pub max_walk: u32,
     /// Random offset in [0, 1) of the two-bounce term's bundle-to-VPL pairing.

@@ -110,8 +110,65 @@ impl Light {
                 intensity * 2.0 * PI * ((1.0 - cos_inner) + 0.5 * (cos_inner - cos_outer))
             }
             Light::Directional { irradiance, .. } => {
-                irradiance * PI * bounds.radius * bounds.radius
+                irradiance * (PI * bounds.radius * bounds.radius * self.disc_flux_factor())
             }
+        }
+    }
+
+    /// A directional light's flux through a disc facing it over E·area: Ω/(π sin²α) =
+    /// 2/(1 + cos α) for a disc of directions of half-angle α of uniform radiance (1 for
+    /// parallel light); 1 for the other lights.
+    fn disc_flux_factor(&self) -> f32 {
+        match *self {
+            Light::Directional { cos_half_angle, .. } if cos_half_angle < 1.0 => {
+                2.0 / (1.0 + cos_half_angle.max(-1.0))
+            }
+            _ => 1.0,
+        }
+    }
+
+    /// The radiance (W·sr⁻¹·m⁻² per channel) of a directional light's disc of directions:
+    /// L = E/(π sin²α), so that a surface facing it receives the irradiance E. `None` for
+    /// parallel light (a delta in direction, reached by next-event estimation alone) and
+    /// the other lights.
+    pub fn disc_radiance(&self) -> Option<Vec3> {
+        match *self {
+            Light::Directional {
+                irradiance,
+                cos_half_angle,
+                ..
+            } if cos_half_angle < 1.0 => {
+                let c = cos_half_angle.max(-1.0);
+                Some(irradiance / (PI * (1.0 - c * c)))
+            }
+            _ => None,
+        }
+    }
+
+    /// The radiance a ray leaving the scene in unit direction `wi` finds on a directional
+    /// light's disc (zero outside it, and for the other lights).
+    pub fn disc_radiance_from(&self, wi: Vec3) -> Vec3 {
+        match (*self, self.disc_radiance()) {
+            (
+                Light::Directional {
+                    direction,
+                    cos_half_angle,
+                    ..
+                },
+                Some(l),
+            ) if wi.dot(-direction) >= cos_half_angle => l,
+            _ => Vec3::ZERO,
+        }
+    }
+
+    /// The density over solid angle of [`Light::sample_towards`] for a directional light's
+    /// disc of directions (0 for parallel light and the other lights).
+    pub fn disc_pdf(&self) -> f32 {
+        match *self {
+            Light::Directional { cos_half_angle, .. } if cos_half_angle < 1.0 => {
+                1.0 / (2.0 * PI * (1.0 - cos_half_angle))
+            }
+            _ => 0.0,
         }
     }
 
@@ -186,7 +243,7 @@ impl Light {
                 Emission {
                     origin,
                     direction: -towards,
-                    power: irradiance * area,
+                    power: irradiance * (area * self.disc_flux_factor()),
                 }
             }
         }

@@ -1,13 +1,17 @@
-//! Light tracing for the paths a path tracer cannot sample with point lights: those whose
-//! first scattering after leaving the light is a delta lobe (mirror or glass). Photons are
-//! emitted from the lights, followed through that specular bounce and beyond, and connected
-//! to the pinhole camera at every later non-delta vertex. Paths whose first bounce is
-//! non-delta end immediately: next-event estimation in the path tracer already covers them,
-//! so the two estimates add up without double counting.
+//! Light tracing for the paths a path tracer cannot sample well: those whose first
+//! scattering after leaving the source is a delta lobe (mirror or glass), impossible to
+//! reach from the camera for point lights and parallel suns and found only by chance for
+//! small emitters and a sun's disc. Photons are emitted from every source but the sky
+//! (point, spot, directional lights and emitting triangles, by power), followed through
+//! that specular bounce and beyond, and connected to the pinhole camera at every later
+//! non-delta vertex. Paths whose first bounce is non-delta end immediately: next-event
+//! estimation in the path tracer already covers them; the path tracer in turn leaves out
+//! the emitter and sun hits that these connections make (`PathSettings::light_traced`), so
+//! the two estimates add up without double counting.
 
 use super::{Interaction, SceneBvh};
 use crate::sampling::Rng;
-use crate::scene::Scene;
+use crate::scene::{Scene, Source, Sources};
 use glam::Vec3;
 
 /// Light tracer settings.
@@ -17,30 +21,10 @@ pub struct LightTraceSettings {
     pub rr_depth: u32,
 }
 
-/// Chooses a light with probability proportional to its power; returns (index, probability).
-pub fn choose_light(weights: &[f32], u: f32) -> Option<(usize, f32)> {
-    let total: f32 = weights.iter().sum();
-    if total <= 0.0 {
-        return None;
-    }
-    let mut acc = 0.0;
-    for (i, w) in weights.iter().enumerate() {
-        acc += w / total;
-        if u < acc && *w > 0.0 {
-            return Some((i, w / total));
-        }
-    }
-    let last = weights.iter().rposition(|w| *w > 0.0)?;
-    Some((last, weights[last] / total))
-}
-
-/// Power-proportional selection weights of the scene's lights (mean over channels).
-pub fn light_weights(scene: &Scene) -> Vec<f32> {
-    scene
-        .lights
-        .iter()
-        .map(|l| l.power(scene.bounds()).element_sum() / 3.0)
-        .collect()
+/// The sources light paths start from: every one but the environment, whose caustics the
+/// path tracer finds by itself (a sky is large: its rays reach it through glass often).
+pub fn light_sources(scene: &Scene) -> Sources {
+    Sources::filtered(scene, |s| s != Source::Environment)
 }
 
 /// Traces one of `total` light paths and appends its camera connections to `splats` as
@@ -48,18 +32,18 @@ pub fn light_weights(scene: &Scene) -> Vec<f32> {
 pub fn trace_path(
     scene: &Scene,
     bvh: &SceneBvh,
-    weights: &[f32],
+    sources: &Sources,
     rng: &mut Rng,
     total: u64,
     s: &LightTraceSettings,
     splats: &mut Vec<(u32, Vec3)>,
 ) {
     let cam = &scene.camera;
-    let Some((li, p_light)) = choose_light(weights, rng.next_f32()) else {
+    let Some((_, _, e)) = sources.emit(scene, rng) else {
         return;
     };
-    let e = scene.lights[li].emit(rng, scene.bounds());
-    let mut power = e.power / (p_light * total as f32);
+    let start = e.power / total as f32;
+    let mut power = start;
     let (mut o, mut d) = (e.origin, e.direction);
     let pixel_area = cam.pixel_area();
     for depth in 0..s.max_depth {
@@ -110,8 +94,7 @@ pub fn trace_path(
         }
         power *= bs.weight;
         if depth + 1 >= s.rr_depth {
-            let q = (power.max_element() / (e.power.max_element() / (p_light * total as f32)))
-                .min(0.95);
+            let q = (power.max_element() / start.max_element()).min(0.95);
             if q <= 0.0 || rng.next_f32() >= q {
                 return;
             }

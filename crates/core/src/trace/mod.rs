@@ -2,6 +2,7 @@
 //! reference path tracer and the light tracer that completes it for caustic paths.
 
 pub mod bvh;
+pub mod direct;
 pub mod interaction;
 pub mod light_tracer;
 pub mod path;

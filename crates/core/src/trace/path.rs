@@ -1,16 +1,27 @@
-//! The reference path tracer: next-event estimation to every point and spot light, BSDF
-//! importance sampling and Russian roulette. An environment light is sampled by importance
-//! and by the BSDF, the two combined by multiple importance sampling (power heuristic); rays
-//! that leave the scene (camera rays included) take the environment's radiance. A camera
-//! path can never reach a point light through a delta (mirror or glass) scattering, so paths
-//! whose first bounce from the light is specular are left to the light tracer
-//! ([`super::light_tracer`]).
+//! The reference path tracer: next-event estimation from every source
+//! ([`super::direct`]), BSDF importance sampling and Russian roulette. Emitters, suns'
+//! discs and the environment are found both by next-event estimation and by the paths' own
+//! BSDF rays (camera rays included), the two combined by multiple importance sampling
+//! (power heuristic). A camera path can never reach a point light or a parallel sun through
+//! a delta (mirror or glass) scattering, and reaches small emitters that way only by
+//! chance, so paths whose first bounce from a light, an emitter or a sun is specular are
+//! left to the light tracer ([`super::light_tracer`]) when it runs (`light_traced`); the
+//! sky's stay here.
 
+use super::direct::{escaped, BsdfVertex, DirectLight, Nee};
 use super::{Interaction, SceneBvh};
 use crate::image::Image;
 use crate::sampling::Rng;
-use crate::scene::{Environment, Light, Scene};
+use crate::scene::{Environment, Scene};
 use glam::Vec3;
+
+/// Dimensions of a low-discrepancy sample that the camera draws (the pixel jitter) before
+/// [`radiance`] draws its own.
+pub const CAMERA_DIMENSIONS: u32 = 2;
+/// Dimensions [`radiance`] sets apart for each bounce: light selection and a point on it
+/// (3), the BSDF's lobe and direction (3), Russian roulette (1); a bounce that draws more
+/// (several suns, the sky) goes on into the next bounce's, which then starts after it.
+pub const BOUNCE_DIMENSIONS: u32 = 8;
 
 /// Path tracer settings.
 #[derive(Clone, Copy, Debug)]
@@ -19,6 +30,25 @@ pub struct PathSettings {
     pub max_depth: u32,
     /// Interactions before Russian roulette may end a path.
     pub rr_depth: u32,
+    /// The light tracer ([`super::light_tracer`]) renders the paths whose first scattering
+    /// after an emitter or a sun is a delta lobe and whose first scattering seen from the
+    /// camera is not: the path tracer leaves them out.
+    pub light_traced: bool,
+    /// How emitters, suns' discs and the sky are found.
+    pub strategy: Strategy,
+}
+
+/// How the path tracer finds the light of emitters, suns' discs and the sky: both ways
+/// combined (the renderer's), or one alone (for tests: each converges to the same image).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Strategy {
+    /// Next-event estimation and BSDF rays, by multiple importance sampling.
+    #[default]
+    Mis,
+    /// Next-event estimation only (BSDF rays after a non-delta scattering count nothing).
+    Light,
+    /// BSDF rays only (next-event estimation of point, spot and parallel lights only).
+    Bsdf,
 }
 
 /// What the camera ray sees first, for the auxiliary images.
@@ -59,62 +89,19 @@ impl FirstHitImages {
     }
 }
 
-/// Light arriving at `it` from every light by direct paths, times the BSDF towards `wo`
-/// (world space, pointing away from the surface).
+/// Light arriving at `it` from the point, spot and directional lights by direct paths, times
+/// the BSDF towards `wo` (world space, pointing away from the surface): deterministic, a
+/// directional light along its axis. [`super::direct::DirectLight::estimate`] covers every
+/// source (emitters, suns' discs, the environment).
 pub fn direct_light(scene: &Scene, bvh: &SceneBvh, it: &Interaction, wo: Vec3) -> Vec3 {
-    let m = it.material;
-    if m.is_purely_specular() {
+    if it.material.is_purely_specular() {
         return Vec3::ZERO;
     }
-    let wo_l = it.frame.to_local(wo);
-    let mut sum = Vec3::ZERO;
-    for light in &scene.lights {
-        if let Light::Directional {
-            direction,
-            irradiance,
-            ..
-        } = *light
-        {
-            // Parallel light along the disc's axis.
-            let wi = -direction;
-            if wi.dot(it.ng) * wo.dot(it.ng) <= 0.0 || irradiance == Vec3::ZERO {
-                continue;
-            }
-            let wi_l = it.frame.to_local(wi);
-            let f = m.eval(wo_l, wi_l);
-            if f != Vec3::ZERO && !bvh.occluded(it.spawn(wi), wi, f32::INFINITY) {
-                sum += f * wi_l.z.abs() * irradiance;
-            }
-            continue;
-        }
-        let to_light = light.position() - it.position;
-        let dist2 = to_light.length_squared();
-        let dist = dist2.sqrt();
-        let wi = to_light / dist;
-        // Reflection only: the light must be on the viewer's side of the geometry.
-        if wi.dot(it.ng) * wo.dot(it.ng) <= 0.0 {
-            continue;
-        }
-        let li = light.intensity_towards(-wi) / dist2;
-        if li == Vec3::ZERO {
-            continue;
-        }
-        let wi_l = it.frame.to_local(wi);
-        let f = m.eval(wo_l, wi_l);
-        if f == Vec3::ZERO {
-            continue;
-        }
-        let origin = it.spawn(wi);
-        if bvh.occluded(
-            origin,
-            wi,
-            (light.position() - origin).length() * (1.0 - 1e-4),
-        ) {
-            continue;
-        }
-        sum += f * wi_l.z.abs() * li;
-    }
-    sum
+    scene
+        .lights
+        .iter()
+        .map(|light| super::direct::analytic_light(light, bvh, it, wo))
+        .sum()
 }
 
 /// Power heuristic (β = 2) weight of a strategy of density `a` against one of density `b`.
@@ -131,14 +118,15 @@ pub fn power_heuristic(a: f32, b: f32) -> f32 {
 }
 
 /// Environment light arriving at `it` from one direction sampled by importance, times the
-/// BSDF towards `wo`, weighted against BSDF sampling (the path's BSDF-sampled continuation,
-/// which may also escape to the environment) by the power heuristic.
+/// BSDF towards `wo`; with `mis`, weighted against BSDF sampling (the path's BSDF-sampled
+/// continuation, which may also escape to the environment) by the power heuristic.
 pub fn environment_light(
     env: &Environment,
     bvh: &SceneBvh,
     it: &Interaction,
     wo: Vec3,
     rng: &mut Rng,
+    mis: bool,
 ) -> Vec3 {
     let u = rng.next_2d();
     let m = it.material;
@@ -156,7 +144,11 @@ pub fn environment_light(
     if f == Vec3::ZERO || bvh.occluded(it.spawn(s.wi), s.wi, f32::INFINITY) {
         return Vec3::ZERO;
     }
-    let w = power_heuristic(s.pdf, m.pdf(wo_l, wi_l));
+    let w = if mis {
+        power_heuristic(s.pdf, m.pdf(wo_l, wi_l))
+    } else {
+        1.0
+    };
     f * wi_l.z.abs() * s.radiance * (w / s.pdf)
 }
 
@@ -184,48 +176,62 @@ pub fn first_hit(scene: &Scene, bvh: &SceneBvh, origin: Vec3, dir: Vec3) -> Firs
 pub fn radiance(
     scene: &Scene,
     bvh: &SceneBvh,
-    origin: Vec3,
-    dir: Vec3,
+    lights: &DirectLight,
+    (origin, dir): (Vec3, Vec3),
     rng: &mut Rng,
     s: &PathSettings,
 ) -> Vec3 {
     let mut l = Vec3::ZERO;
     let mut beta = Vec3::ONE;
     let (mut o, mut d) = (origin, dir);
-    let env = scene.environment.as_deref();
-    // Solid-angle density of the BSDF sample that made the current ray, when the vertex it
-    // left also sampled the environment (MIS applies); `None` for camera rays, delta
-    // scattering and environments that are not sampled by importance.
-    let mut bsdf_pdf: Option<f32> = None;
-    // With an environment, the path goes one step beyond its last interaction: a BSDF
-    // sample from the last vertex that escapes still carries direct light from the sky
-    // (so `max_depth` 1 is direct light for both sampling strategies).
-    let steps = s.max_depth + u32::from(env.is_some());
-    for depth in 0..steps {
+    // The vertex the current ray left by a non-delta BSDF sample (multiple importance
+    // sampling applies to what it hits); `None` for camera rays and delta scatterings.
+    let mut from: Option<BsdfVertex> = None;
+    // Whether the path's first scattering (at the camera's first surface) was non-delta,
+    // and whether the current ray left a delta scattering.
+    let (mut first_non_delta, mut after_delta) = (false, false);
+    // The path goes one step beyond its last scattering: a BSDF sample from the last
+    // vertex still finds emitters, suns' discs and the sky (so that `max_depth` 1 is direct
+    // light for both sampling strategies).
+    for depth in 0..=s.max_depth {
+        // A low-discrepancy generator ([`Rng::sobol`]) gives every bounce its own dimensions
+        // (after the camera's two), so that bounce `depth` of all samples of a pixel is one
+        // stratified point set.
+        rng.start_dimension(CAMERA_DIMENSIONS + depth * BOUNCE_DIMENSIONS);
+        // Light reached through a delta scattering after a non-delta first one belongs to
+        // the light tracer (its paths start at the source, scatter through that delta lobe
+        // first and connect to the camera from the first surface).
+        let light_traced = s.light_traced && after_delta && first_non_delta;
+        let pdf = from.map(|f| f.pdf);
         let Some(hit) = bvh.intersect(o, d, f32::INFINITY) else {
-            if let Some(env) = env {
-                let w = bsdf_pdf.map_or(1.0, |p| power_heuristic(p, env.pdf(d)));
-                l += beta * env.radiance(d) * w;
+            if !(s.strategy == Strategy::Light && from.is_some()) {
+                let pdf = pdf.filter(|_| s.strategy == Strategy::Mis);
+                l += beta * escaped(scene, d, pdf, !light_traced);
             }
             break;
         };
-        if depth == s.max_depth {
-            break; // a surface beyond the last interaction: only escapes count there
-        }
         let it = Interaction::new(scene, &hit, d);
         let wo = -d;
-        // Emitting surfaces are found by the paths' own rays (next-event estimation does
-        // not sample them).
-        l += beta * it.material.emitted(it.ng, wo);
-        // Next-event estimation.
-        l += beta * direct_light(scene, bvh, &it, wo);
-        let env_mis = env.is_some_and(|e| e.importance);
-        if let Some(env) = env.filter(|e| e.importance) {
-            l += beta * environment_light(env, bvh, &it, wo, rng);
+        if it.material.emits() && !light_traced {
+            let w = match (from, s.strategy) {
+                (None, _) | (Some(_), Strategy::Bsdf) => 1.0,
+                (Some(_), Strategy::Light) => 0.0,
+                (Some(f), Strategy::Mis) => {
+                    lights.emitter_weight(&f, it.triangle, it.position, it.ng)
+                }
+            };
+            l += beta * it.material.emitted(it.ng, wo) * w;
         }
-        if depth + 1 == steps {
+        if depth == s.max_depth {
             break;
         }
+        // Next-event estimation.
+        let nee = match s.strategy {
+            Strategy::Mis => Nee::Mis,
+            Strategy::Light => Nee::Alone,
+            Strategy::Bsdf => Nee::DeltaOnly,
+        };
+        l += beta * lights.estimate(scene, bvh, &it, wo, rng, nee);
         // Continue the path by sampling the BSDF.
         let wo_l = it.frame.to_local(wo);
         let Some(bs) = it.material.sample(wo_l, rng) else {
@@ -239,7 +245,16 @@ pub fn radiance(
             break;
         }
         beta *= bs.weight;
-        bsdf_pdf = (env_mis && !bs.lobe.is_delta()).then_some(bs.pdf);
+        let delta = bs.lobe.is_delta();
+        if depth == 0 {
+            first_non_delta = !delta;
+        }
+        after_delta = delta;
+        from = (!delta).then_some(BsdfVertex {
+            position: it.position,
+            normal: it.frame.n,
+            pdf: bs.pdf,
+        });
         // Possibly terminate the path with Russian roulette.
         if depth + 1 >= s.rr_depth {
             let q = beta.max_element().min(0.95);

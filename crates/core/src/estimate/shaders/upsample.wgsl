@@ -4,6 +4,8 @@
 // measured between this pixel's G-buffer sample and the one each low-res texel shaded;
 // 0 on surfaces whose BSDF has no non-delta lobe; on Lambertian surfaces the samples' light is
 // rescaled by the ratio of this pixel's albedo to theirs (texture detail at full resolution).
+// The light estimated at full resolution (`full`: the caustic photons' splat, whose detail
+// the low-resolution samples would alias) is added as it is; a 1x1 texture adds nothing.
 
 struct UpsampleParams {
     eye: vec3<f32>,
@@ -16,6 +18,16 @@ struct UpsampleParams {
 @group(0) @binding(3) var low: texture_2d<f32>;
 @group(0) @binding(4) var g_diffuse: texture_2d<f32>;
 @group(0) @binding(5) var g_specular: texture_2d<f32>;
+@group(0) @binding(6) var full: texture_2d<f32>;
+
+// This pixel's light estimated at full resolution (0 where no such estimate is bound).
+fn full_resolution(px: vec2<i32>) -> vec3<f32> {
+    let fdims = vec2<i32>(textureDimensions(full));
+    if any(fdims != vec2<i32>(textureDimensions(g_position))) {
+        return vec3<f32>(0.0);
+    }
+    return textureLoad(full, px, 0).xyz;
+}
 
 @fragment
 fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
@@ -30,8 +42,9 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
     // to a lit floor took the floor's light before).
     let diffuse = textureLoad(g_diffuse, px, 0);
     let specular = textureLoad(g_specular, px, 0);
+    let own = full_resolution(px);
     if max3(diffuse.xyz) == 0.0 && (max3(specular.xyz) == 0.0 || diffuse.w < MIRROR_ROUGHNESS) {
-        return vec4<f32>(0.0);
+        return vec4<f32>(own, 0.0);
     }
     // Lambertian pixels take their neighbours' light demodulated by the neighbours' albedo
     // and modulated by their own (the irradiance is what varies smoothly; a texture's
@@ -81,7 +94,7 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
         }
     }
     if wsum > 1e-6 {
-        return vec4<f32>(sum / wsum, 1.0);
+        return vec4<f32>(sum / wsum + own, 1.0);
     }
-    return vec4<f32>(nearest, 1.0);
+    return vec4<f32>(nearest + own, 1.0);
 }

@@ -11,9 +11,12 @@
 //! 4. Direct light (the frame of method `direct`), then at the pixel-centre G-buffer the
 //!    one-bounce light of the VPLs and of the bundles combined by MIS (§4.2) and the
 //!    two-bounce light (§4.3, when `max_depth` ≥ 3) in one pass (`bidir.wgsl`), the
-//!    composite and the readback of what was asked for.
+//!    composite and the readback of what was asked for. Light of three and more bounces
+//!    (`max_depth` ≥ 4): [`subpaths`] continues each bundle's paired VPL into a light
+//!    subpath traced on the CPU, every vertex a VPL that the bundle's hit connects to.
 
 mod bundles;
+mod subpaths;
 mod vpls;
 
 use super::direct::{assemble, normalized, readback_names};
@@ -218,6 +221,12 @@ const MAX_WALK: u32 = 4096;
 /// −3% at 20%.
 const TWO_BOUNCE_MIN_DIST: f32 = 0.1;
 
+/// The frame's random offset of the bundle-to-VPL pairing (the lighting pass's and the
+/// light subpaths').
+fn pair_offset(frame: &FrameParams) -> f32 {
+    Rng::new(frame.seed, 0xfa17, 0).next_f32()
+}
+
 /// The lighting pass's parameters for the frame's `vpls` records and `n_env` environment
 /// bundles.
 fn lighting_params(
@@ -244,10 +253,10 @@ fn lighting_params(
             BidirStrategy::Vpl => 1,
             BidirStrategy::Bundle => 2,
         },
-        two_bounce: (options.max_depth >= 3) as u32,
+        orders: options.max_depth.saturating_sub(2),
         min_dist2: min_dist * min_dist,
         max_walk: MAX_WALK,
-        pair_offset: Rng::new(frame.seed, 0xfa17, 0).next_f32(),
+        pair_offset: pair_offset(frame),
         clamp_roughness: options.roughness_clamping as u32,
         inv_view_proj: glam::Mat4::from_cols_array_2d(
             &crate::raster::camera_view(scene, glam::Vec2::splat(0.5), 0.0).view_proj,
@@ -279,7 +288,11 @@ fn state<'a>(
     }
     let ctx = g.ctx.clone();
     let layers = rsm_layers(scene, options.rsm_size);
-    let capacity = options.vpls_per_light * scene.lights.len() as u32;
+    let first = options.vpls_per_light * scene.lights.len() as u32;
+    let max_slots = ctx.device.limits().max_texture_array_layers / 6;
+    let lights = scene.lights.len() as u32;
+    let capacity =
+        first + subpaths::slots(lights, options.bundles, options.max_depth, first, max_slots);
     let size = options.vpl_shadow_map_size;
     let bundle_key = (
         options.bundles.max(1),
@@ -367,18 +380,16 @@ pub(super) fn frame(
     let t = Instant::now();
     let per_light = options.vpls_per_light;
     let vpls = sample_vpls(&texels, scene.lights.len(), per_light, frame.seed);
-    let (raws, matrices) = vpl_records(scene, &vpls, per_light, state.vpls.size);
+    let mut records = vpl_records(scene, &vpls, per_light, state.vpls.size);
+    let vpl_count = records.0.len() as u32;
     let vpl_seconds = t.elapsed().as_secs_f64();
     let t = Instant::now();
+    let placed = subpaths::append(scene, bvh, &vpls, options, frame, &state.vpls, &mut records);
+    let (raws, matrices) = records;
+    let subpath_seconds = t.elapsed().as_secs_f64();
+    let t = Instant::now();
     state.vpls.upload(&ctx, &raws, &matrices);
-    let params = lighting_params(
-        scene,
-        options,
-        frame,
-        raws.len() as u32,
-        n_env,
-        state.env_pdf_scale,
-    );
+    let params = lighting_params(scene, options, frame, vpl_count, n_env, state.env_pdf_scale);
     gpu::write_buffer(
         &ctx.queue,
         "bidir params",
@@ -434,6 +445,7 @@ pub(super) fn frame(
     timer.collect(&ctx)?;
 
     stats.vpls = vpls.len() as u64;
+    stats.light_paths = placed as u64;
     stats.bundles = options.bundles as u64;
     stats.bundle_fragments = fragments;
     stats.bundle_overflow = overflow;
@@ -441,6 +453,7 @@ pub(super) fn frame(
         ("upload".into(), upload),
         ("rsm readback".into(), rsm_readback),
         ("vpl sampling".into(), vpl_seconds),
+        ("light subpaths".into(), subpath_seconds),
     ];
     if specular.is_some() {
         stages.push(("specular paths".into(), specular_seconds));

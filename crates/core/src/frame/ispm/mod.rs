@@ -119,7 +119,8 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     // only when the frame completes: a cancelled or failed frame leaves the next one to
     // redo its work.
     let t = Instant::now();
-    let layers = light_views(scene, options.photons);
+    // The bounce maps' share of the photons: the point and spot lights' of the power.
+    let layers = light_views(scene, photons::photon_budgets(scene, options.photons).0);
     let state = ispm.get_or_insert_with(|| IspmState::new(&ctx, targets, scene, options));
     let traced_seed = state.traced_seed.take();
     let was_current = state.indirect.take_current();

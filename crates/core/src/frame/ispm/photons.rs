@@ -1,7 +1,10 @@
 //! Step 4 of an `ispm` frame: temporal reuse (Jozwowski 2002) and the CPU photon trace of
 //! the bounces after the first. The ring of the last frames' photons loses what the
 //! frame's changes made stale; each light's first-scatter rays are traced on, sized
-//! (volume radii, the caustic density bound), compensated at boundaries and pushed.
+//! (volume radii, the caustic density bound), compensated at boundaries and pushed. The
+//! sources the bounce maps cannot see (emitting surfaces, directional lights, the sky: the
+//! paper's §7 limitation) get their share of the photons by power, emitted and traced whole
+//! on the CPU, and are kept in the ring after the lights.
 
 use super::super::options::IspmOptions;
 use super::super::{FrameParams, RenderStats};
@@ -12,10 +15,12 @@ use crate::photon::focus::Focus;
 use crate::photon::lbvh::Aabb;
 use crate::photon::radius::{VolumeRadius, Z_RATIO};
 use crate::photon::ring::PhotonRing;
-use crate::photon::trace::{continue_paths_from, emit_aimed_caustics, Checked, FirstSegment};
+use crate::photon::trace::{
+    continue_paths_from, emit_aimed_caustics, emit_and_trace_sources, Checked, FirstSegment,
+};
 use crate::photon::{boundary, Photon, PhotonRay, PhotonTraceSettings};
 use crate::scene::light_views::LightView;
-use crate::scene::{Light, Scene};
+use crate::scene::{Light, Scene, Source, Sources};
 use crate::trace::SceneBvh;
 use glam::Vec3;
 use std::borrow::Cow;
@@ -142,6 +147,17 @@ impl Trace<'_> {
                 return Err(Error::Cancelled);
             }
         }
+        // The sources the bounce maps do not see, emitted and traced on the CPU.
+        for (source, n) in self.cpu_sources() {
+            let key = ring_key(self.scene, source);
+            let mut photons = self.trace_source(source, n, &pts, stats)?;
+            self.size(ring, key, &mut photons);
+            let tc = Instant::now();
+            let compensated = self.compensated(key as u32, &photons)?;
+            compensation += tc.elapsed().as_secs_f64();
+            ring.push(self.frame, key, photons, compensated);
+            crate::cancel::check(self.progress)?;
+        }
         stats
             .stages
             .push(("cpu trace".into(), t.elapsed().as_secs_f64() - compensation));
@@ -211,6 +227,53 @@ impl Trace<'_> {
         Ok(photons)
     }
 
+    /// The sources whose photons the bounce maps leave out (area lights, directional lights,
+    /// the sky), each with its share by power of the photons the maps do not take.
+    fn cpu_sources(&self) -> Vec<(Source, u64)> {
+        let (_, cpu) = photon_budgets(self.scene, self.options.photons);
+        let sources = non_local_sources(self.scene);
+        let total = sources.power().element_sum() as f64;
+        sources
+            .list
+            .iter()
+            .filter_map(|(s, p)| {
+                let n = (cpu as f64 * p.element_sum() as f64 / total).round() as u64;
+                (n > 0 && total > 0.0).then_some((*s, n))
+            })
+            .collect()
+    }
+
+    /// `n` photons of `source` emitted and traced on the CPU, stored from their second hit
+    /// on (the first is direct light) as the bounce maps' photons are.
+    fn trace_source(
+        &self,
+        source: Source,
+        n: u64,
+        pts: &PhotonTraceSettings,
+        stats: &mut RenderStats,
+    ) -> Result<Vec<Photon>> {
+        let only = Sources::filtered(self.scene, |s| s == source);
+        let key = ring_key(self.scene, source);
+        let control = Checked::new(self.progress, "cpu trace");
+        let set = emit_and_trace_sources(
+            self.scene,
+            self.bvh,
+            &only,
+            n,
+            pts,
+            self.seed(key as u32),
+            &control,
+            &Focus::default(),
+        )?;
+        stats.photons_emitted += n;
+        stats.caustic_photons += set
+            .photons
+            .iter()
+            .filter(|p| crate::photon::density::is_caustic(p))
+            .count() as u64;
+        Ok(set.photons)
+    }
+
     /// Decides the photons' volume radii, once, for the photon count the ring will hold
     /// (the splat reads `footprint_radius`), bounded by the caustic density where asked.
     fn size(&self, ring: &PhotonRing, light: usize, photons: &mut [Photon]) {
@@ -246,6 +309,36 @@ impl Trace<'_> {
         );
         crate::cancel::check(progress)?;
         Ok(compensated)
+    }
+}
+
+/// Where the frame's `photons` go: the bounce maps' texels (point and spot lights) and the
+/// photons emitted on the CPU from the other sources, split by power.
+pub(super) fn photon_budgets(scene: &Scene, photons: u64) -> (u64, u64) {
+    let total = Sources::of(scene).power().element_sum() as f64;
+    let cpu = non_local_sources(scene).power().element_sum() as f64;
+    if total.is_nan() || total <= 0.0 {
+        return (photons, 0);
+    }
+    let cpu = (photons as f64 * cpu / total).round() as u64;
+    (photons - cpu.min(photons), cpu.min(photons))
+}
+
+/// The sources that the bounce maps do not see.
+fn non_local_sources(scene: &Scene) -> Sources {
+    Sources::filtered(scene, |s| match s {
+        Source::Light(i) => !scene.lights[i].is_local(),
+        _ => true,
+    })
+}
+
+/// The ring's key of a source's photons: a light's index, the emitters and the environment
+/// after the lights.
+fn ring_key(scene: &Scene, source: Source) -> usize {
+    match source {
+        Source::Light(i) => i,
+        Source::Emitters => scene.lights.len(),
+        Source::Environment => scene.lights.len() + 1,
     }
 }
 

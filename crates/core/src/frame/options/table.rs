@@ -77,7 +77,7 @@ const ALL: &[Method] = Method::ALL;
 const GPU: &[Method] = &[Direct, Ispm, Bidir];
 const CPU_CAMERA: &[Method] = &[Path, Photon, Gather];
 const PHOTONS: &[Method] = &[Photon, Gather, Ispm];
-const DEPTH: &[Method] = &[Path, Photon, Gather, Ispm];
+const DEPTH: &[Method] = &[Path, Photon, Gather, Ispm, Bidir];
 const REFINED: &[Method] = &[Gather, Ispm];
 const PROGRESSIVE: &[Method] = &[Path, Photon, Gather, Direct, Ispm, Bidir];
 
@@ -171,14 +171,6 @@ pub const OPTIONS: &[OptionSpec] = &[
         Default::Int(64),
         DEPTH,
         "most scattering events on a path (1: direct light only)",
-    ),
-    row(
-        "max_depth",
-        int(1, 1024),
-        Default::Int(3),
-        &[Bidir],
-        "most scattering events on a path (1: direct light only; bidir computes up to 3, \
-         two indirect bounces, and warns above)",
     ),
     row(
         "light_paths",

@@ -10,7 +10,9 @@
 //   middle vertex: VPLs p1 = n1·I(ω0,j)·|ng_j·ω_j,0| / (‖x_j − x0‖²·W) (W: the light's
 //   covered flux, VPLs drawn ∝ flux), bundles p2 = n2·p_r·|ng_j·ω_j,3| / ‖x_j − x3‖²;
 // - two bounces x0 → x1 → x2 → x3 (§4.3): each bundle paired with one VPL of every light,
-//   the VPL's shadow map testing (x1, x2), ‖x1 − x2‖² clamped from below.
+//   the VPL's shadow map testing (x1, x2), ‖x1 − x2‖² clamped from below; and more bounces
+//   (issue 29): the same bundle hit x2 connected to every later vertex of a light subpath
+//   continued from that VPL on the CPU (`subpaths.rs`), each vertex a VPL of its own.
 // - roughness clamping (§5): the GGX α of the BSDF at a path vertex is raised so that the
 //   distribution's peak D(0) = 1/(πα²) stays under d̂/m (kernel radius estimation, eq. 9),
 //   with d̂ the density of samples per unit solid angle there (eqs. 13–17, from the area
@@ -53,7 +55,9 @@ struct Params {
     vpls_per_light: u32,
     bundles: u32,
     mode: u32,
-    two_bounce: u32,
+    // Highest light-subpath order paired with the bundles' hits (0: none, 1: two bounces
+    // with the RSM's VPLs, j > 1: the traced subpaths' vertices up to order j too).
+    orders: u32,
     // Lower bound of ‖x1 − x2‖² in the two-bounce term.
     min_dist2: f32,
     // Longest list walked (a guard: lists longer than this are cut).
@@ -345,7 +349,7 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
 
     // Camera subpaths through the ray bundles.
     let bundle_one = params.mode != 1u;
-    if params.bundles > 0u && (bundle_one || params.two_bounce != 0u || params.has_env != 0u) {
+    if params.bundles > 0u && (bundle_one || params.orders != 0u || params.has_env != 0u) {
         for (var b = 0u; b < params.bundles; b++) {
             let bv = bundle_views[b];
             let c = dot(ng, bv.dir);
@@ -429,7 +433,7 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
             // Two bounces: one VPL of every light lights x2, bundle b taking VPL
             // ⌊(b + u)·n1/n2⌋ (the VPLs are in stratified order over the RSM, so every part
             // of it is paired; each VPL is picked n2/n1 times in expectation).
-            if params.two_bounce != 0u && params.vpls_per_light > 0u {
+            if params.orders != 0u && params.vpls_per_light > 0u {
                 let k = min(u32((f32(b) + params.pair_offset) * n1 / n2), params.vpls_per_light - 1u);
                 // d̂ at x3 of eq. 14: the bundles' density n2·p_r.
                 let f3 = bsdf_eval(clamped(m, 1.0 / bv.inv_density, dot(ns, wo)), ns, wo, dir);
@@ -437,6 +441,16 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
                     let v = vpl_at(j * params.vpls_per_light + k);
                     let t = vpl_light(v, vpl_material(v), x2, ns2, ng2, m2, -dir, params.min_dist2);
                     sum += f3 * weight * t * n1;
+                    // Three or more bounces: the vertices y2, y3, … of the light subpath
+                    // continued from that VPL for this bundle (`subpaths.rs`), linked by
+                    // their records' `light_dist2` (0 ends the subpath).
+                    var row = params.vpl_count + j * params.bundles + b;
+                    for (var o = 2u; o <= params.orders && row != 0u; o++) {
+                        let y = vpl_at(row);
+                        let ty = vpl_light(y, vpl_material(y), x2, ns2, ng2, m2, -dir, params.min_dist2);
+                        sum += f3 * weight * ty * n1;
+                        row = u32(y.light_dist2 + 0.5);
+                    }
                 }
             }
         }

@@ -1,0 +1,310 @@
+//! Light subpaths longer than one vertex (issue 29), instant-radiosity style: from the VPL
+//! that each ray bundle is paired with (§4.3's pairing), a light subpath is continued on the
+//! CPU by BSDF sampling, and each of its later vertices y2, y3, … becomes a VPL with its own
+//! cube shadow map. The lighting pass connects a bundle's hit x2 to every vertex of its
+//! bundle's subpath, so that with the one- and two-bounce terms the path lengths are
+//! partitioned without overlap:
+//!
+//! - depth 1: direct light (the `direct` frame);
+//! - depth 2: x3 ↔ y1 (VPLs) and x3 → x2 ↔ light (bundles), combined by MIS (§4.2);
+//! - depth d ≥ 3: x3 → x2 (bundle) ↔ y_{d−2} (the VPL of order d − 2: y1 from the RSM for
+//!   d = 3, a vertex of a traced subpath for d ≥ 4).
+//!
+//! Throughput: a subpath starts from its VPL's flux α1 (the flux the lighting pass uses,
+//! shading cosine included) and carries α_{j+1} = α_j · f(y_j)·|ns·ω|/p(ω) (the BSDF
+//! sample's weight), with Russian roulette after the first [`RR_FREE`] vertices (continue
+//! with probability q = min(0.95, max channel of the weight), α /= q): unbiased, and the
+//! subpaths end after about RR_FREE + 1/(1 − albedo) vertices whatever `max_depth` is. A vertex's record carries α_j
+//! times |ns·ω_in|/|ng·ω_in| (≤ 10), as the RSM's VPLs do (their flux has the geometric
+//! cosine, the path tracer the shading one).
+//!
+//! Bias: the connection x2 ↔ y_j has ‖x2 − y_j‖² clamped from below as the two-bounce term
+//! (`TWO_BOUNCE_MIN_DIST`), which drops the light of pairs closer than the clamp (image
+//! means at depth 7: furnace −0.9%, cornell −1.6%, cornell-anim −2.4%, most of it the
+//! two-bounce term's; `docs/bench/bidir-depth.md`); vertices on purely
+//! specular surfaces are passed through, not connected. The records live in a fixed budget
+//! of slots ([`EXTRA_PER_SUBPATH`] per subpath on average beyond the first vertex); when it
+//! runs out the highest orders are dropped first.
+
+use super::super::options::BidirOptions;
+use super::super::FrameParams;
+use super::vpls::{Vpl, VplMaps};
+use crate::bsdf::Material;
+use crate::raster::vpl::{cube_views, VplRaw};
+use crate::sampling::{Frame, Rng};
+use crate::scene::light_views;
+use crate::scene::Scene;
+use crate::trace::{Interaction, SceneBvh};
+use bytemuck::Zeroable;
+use glam::{Mat4, Vec3};
+
+/// Slots per subpath, on average, for its vertices after the first (y3, y4, …): y3 and y4,
+/// then Russian roulette at the albedo ρ leaves about ρ/(1 − ρ) more (ρ = 0.5: 1, ρ = 0.67:
+/// 2).
+pub(super) const EXTRA_PER_SUBPATH: u32 = 4;
+
+/// Vertices of a subpath traced without Russian roulette (y2 … y4).
+const RR_FREE: u32 = 3;
+
+/// A vertex y_j (j ≥ 2) of a light subpath.
+#[derive(Clone, Copy, Debug)]
+struct Vertex {
+    position: Vec3,
+    /// Normals on the side the light arrives from.
+    ns: Vec3,
+    ng: Vec3,
+    /// Unit direction towards y_{j−1}.
+    to_prev: Vec3,
+    material: Material,
+    /// Flux of the record (zero on purely specular surfaces).
+    flux: Vec3,
+}
+
+/// The subpaths' VPL records, to be appended after the RSM's VPLs.
+struct Subpaths {
+    pub raws: Vec<VplRaw>,
+    pub matrices: Vec<Mat4>,
+    /// Subpaths with at least one vertex.
+    pub placed: usize,
+}
+
+/// Slots for subpath vertices: one per (light, bundle) for the first vertex y2, and
+/// [`EXTRA_PER_SUBPATH`] per subpath for the rest, as far as `max_slots` (the GPU's layer
+/// limit over 6) leaves room after the `first` slots of the RSM's VPLs. Zero when
+/// `max_depth` asks for no vertex after y1 (depth < 4) or there are no bundles.
+pub(super) fn slots(lights: u32, bundles: u32, max_depth: u32, first: u32, max_slots: u32) -> u32 {
+    if max_depth < 4 || bundles == 0 {
+        return 0;
+    }
+    let heads = lights * bundles;
+    let extra = if max_depth > 4 {
+        heads * EXTRA_PER_SUBPATH
+    } else {
+        0
+    };
+    let room = max_slots.saturating_sub(first);
+    if room < heads {
+        // No room for the subpaths: the GPU's VPL-count error follows from the caller.
+        return heads + extra;
+    }
+    heads + extra.min(room - heads)
+}
+
+/// The VPL the lighting pass pairs bundle `b` with: ⌊(b + u)·n1/n2⌋ (`bidir.wgsl`).
+pub(super) fn paired_vpl(b: u32, pair_offset: f32, n1: u32, n2: u32) -> u32 {
+    (((b as f32 + pair_offset) * n1 as f32 / n2 as f32) as u32).min(n1.saturating_sub(1))
+}
+
+/// The first vertex after `v`'s and the ones after it, up to `max_len` (orders 2 … ≤
+/// max_depth − 2), by BSDF sampling with Russian roulette.
+fn trace(scene: &Scene, bvh: &SceneBvh, v: &Vpl, max_len: u32, rng: &mut Rng) -> Vec<Vertex> {
+    let t = &v.texel;
+    let light = &scene.lights[v.light];
+    let to_light = (light.position() - t.position).normalize_or_zero();
+    let cos_g = t.ng.dot(to_light).abs().max(1e-6);
+    let ratio = (t.ns.dot(to_light).abs() / cos_g).min(10.0);
+    let mut alpha = v.flux * ratio;
+    let mut material = Material {
+        diffuse: t.diffuse,
+        specular: t.specular,
+        roughness: t.roughness,
+        fresnel: t.fresnel,
+        transmission: Vec3::ZERO,
+        ..Material::default()
+    };
+    let (mut position, mut ng, mut frame, mut w_prev) =
+        (t.position, t.ng, Frame::new(t.ns), to_light);
+    let mut out = Vec::new();
+    while (out.len() as u32) < max_len {
+        let Some(bs) = material.sample(frame.to_local(w_prev), rng) else {
+            break;
+        };
+        let wi = frame.to_world(bs.wi);
+        let same_side = wi.dot(ng) * w_prev.dot(ng) > 0.0;
+        if same_side == matches!(bs.lobe, crate::bsdf::Lobe::GlassRefract) {
+            break;
+        }
+        // Roulette only past the first RR_FREE vertices: every subpath reaches y2 … y4
+        // (depths 4–6), whose light would otherwise vary with how many of the frame's few
+        // subpaths survive.
+        let q = if (out.len() as u32) < RR_FREE {
+            1.0
+        } else {
+            bs.weight.max_element().min(0.95)
+        };
+        if q.is_nan() || q <= 0.0 || (q < 1.0 && rng.next_f32() >= q) {
+            break;
+        }
+        alpha *= bs.weight / q;
+        let eps = 1e-4 * (1.0 + position.abs().max_element());
+        let origin = position + ng * eps * wi.dot(ng).signum();
+        let Some(hit) = bvh.intersect(origin, wi, f32::INFINITY) else {
+            break;
+        };
+        let it = Interaction::new(scene, &hit, wi);
+        let flip = if it.ng.dot(wi) > 0.0 { -1.0 } else { 1.0 };
+        let (ng_f, ns_f) = (it.ng * flip, it.frame.n * flip);
+        let to_prev = -wi;
+        let cos_g = ng_f.dot(to_prev).abs().max(1e-6);
+        let ratio = (ns_f.dot(to_prev).abs() / cos_g).min(10.0);
+        let flux = if it.material.is_purely_specular() || !alpha.is_finite() {
+            Vec3::ZERO
+        } else {
+            alpha * ratio
+        };
+        out.push(Vertex {
+            position: it.position,
+            ns: ns_f,
+            ng: ng_f,
+            to_prev,
+            material: it.material,
+            flux,
+        });
+        (position, ng, frame, w_prev, material) =
+            (it.position, it.ng, it.frame, to_prev, it.material);
+    }
+    out
+}
+
+/// Appends to the RSM's VPL `records` (n1 per light) the frame's light subpaths, one per
+/// (light, bundle) from the VPL the bundle is paired with, filling the rest of `maps`'
+/// capacity; returns how many subpaths have a vertex. See [`subpaths`].
+pub(super) fn append(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    vpls: &[Vpl],
+    options: &BidirOptions,
+    frame: &FrameParams,
+    maps: &VplMaps,
+    records: &mut (Vec<VplRaw>, Vec<Mat4>),
+) -> usize {
+    let first = records.0.len() as u32;
+    let out = subpaths(
+        scene,
+        bvh,
+        vpls,
+        (options.vpls_per_light, options.bundles),
+        options.max_depth,
+        super::pair_offset(frame),
+        (first, maps.capacity.saturating_sub(first)),
+        maps.size,
+        frame.seed,
+    );
+    records.0.extend(out.raws);
+    records.1.extend(out.matrices);
+    out.placed
+}
+
+/// The subpaths as records for slots `first`, `first + 1`, … (`slots` of them): the first
+/// vertex of subpath (light j, bundle b) in slot `first + j·n2 + b`, each record's
+/// `light_dist2` holding the slot of the subpath's next vertex (0: none; the field is
+/// unused beyond the RSM's VPLs). Later vertices are placed order by order, so that a full
+/// budget drops the highest orders.
+#[allow(clippy::too_many_arguments)]
+fn subpaths(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    vpls: &[Vpl],
+    (n1, n2): (u32, u32),
+    max_depth: u32,
+    pair_offset: f32,
+    (first, slots): (u32, u32),
+    size: u32,
+    seed: u64,
+) -> Subpaths {
+    let lights = scene.lights.len();
+    let heads = lights * n2 as usize;
+    let mut out = Subpaths {
+        raws: vec![VplRaw::zeroed(); slots as usize],
+        matrices: vec![Mat4::IDENTITY; slots as usize * 6],
+        placed: 0,
+    };
+    if slots == 0 || heads > slots as usize {
+        return out;
+    }
+    let max_len = max_depth.saturating_sub(3);
+    let mut paths: Vec<Vec<Vertex>> = vec![Vec::new(); heads];
+    for light in 0..lights {
+        let own: Vec<&Vpl> = vpls.iter().filter(|v| v.light == light).collect();
+        for b in 0..n2 {
+            let k = paired_vpl(b, pair_offset, n1, n2) as usize;
+            if let Some(v) = own.get(k) {
+                let mut rng = Rng::new(seed, 0x5b9a, (light * n2 as usize + b as usize) as u64);
+                paths[light * n2 as usize + b as usize] = trace(scene, bvh, v, max_len, &mut rng);
+            }
+        }
+    }
+    // Slots: heads fixed, then order by order.
+    let mut slot_of: Vec<Vec<usize>> = paths.iter().map(|_| Vec::new()).collect();
+    let mut next = heads;
+    let longest = paths.iter().map(Vec::len).max().unwrap_or(0);
+    for order in 0..longest {
+        for (i, p) in paths.iter().enumerate() {
+            if order >= p.len() || slot_of[i].len() < order {
+                continue;
+            }
+            if order == 0 {
+                slot_of[i].push(i);
+            } else if next < slots as usize {
+                slot_of[i].push(next);
+                next += 1;
+            }
+        }
+    }
+    out.placed = slot_of.iter().filter(|s| !s.is_empty()).count();
+    let (lo, hi) = light_views::bounds(scene);
+    let diag = (hi - lo).length().max(1e-6);
+    for (p, s) in paths.iter().zip(&slot_of) {
+        for (j, &slot) in s.iter().enumerate() {
+            let v = &p[j];
+            let pos = v.position + v.ng * (1e-4 * diag);
+            let (m, texel_scale) = cube_views(pos, lo, hi, size);
+            out.matrices[slot * 6..slot * 6 + 6].copy_from_slice(&m);
+            let next = s.get(j + 1).map_or(0.0, |&n| (first as usize + n) as f32);
+            out.raws[slot] = VplRaw {
+                position: pos.into(),
+                first_layer: 0,
+                flux: v.flux.into(),
+                texel_scale,
+                to_light: v.to_prev.into(),
+                fresnel: v.material.fresnel as u32,
+                diffuse: v.material.diffuse.into(),
+                roughness: v.material.roughness,
+                specular: v.material.specular.into(),
+                pdf: 0.0,
+                ns: v.ns.into(),
+                light_flux: 0.0,
+                ng: v.ng.into(),
+                light_dist2: next,
+            };
+        }
+    }
+    for (slot, r) in out.raws.iter_mut().enumerate() {
+        r.first_layer = (first as usize + slot) as u32 * 6;
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn slots_fit_the_budget_and_the_gpu() {
+        assert_eq!(slots(1, 16, 3, 64, 1000), 0);
+        assert_eq!(slots(1, 0, 7, 64, 1000), 0);
+        assert_eq!(slots(2, 16, 4, 64, 1000), 32);
+        assert_eq!(slots(2, 16, 7, 64, 1000), 32 * (1 + EXTRA_PER_SUBPATH));
+        // The extra slots shrink to what the GPU holds.
+        assert_eq!(slots(1, 16, 64, 64, 100), 36);
+    }
+
+    #[test]
+    fn every_bundle_pairs_with_a_vpl_in_range() {
+        for (n1, n2) in [(64, 16), (8, 32), (1, 1), (5, 3)] {
+            let ks: Vec<u32> = (0..n2).map(|b| paired_vpl(b, 0.999, n1, n2)).collect();
+            assert!(ks.iter().all(|&k| k < n1), "{ks:?}");
+            assert!(ks.windows(2).all(|w| w[0] <= w[1]), "{ks:?}");
+        }
+    }
+}

@@ -1,0 +1,281 @@
+//! Next-event estimation from every kind of source: point and spot lights and parallel
+//! suns exactly (each a delta, summed), a sun with an angular diameter by one direction in
+//! its disc, the emitting triangles by one point (chosen for the shading point by
+//! [`EmitterSampler`]: power, or the light BVH's power, distance and orientation) and the
+//! environment by one direction drawn by importance. The path tracer continues its paths by
+//! BSDF sampling and finds the same emitters, sun discs and sky with its own rays: the two
+//! strategies are combined by multiple importance sampling (power heuristic), the light
+//! samples here and the BSDF rays' hits by [`DirectLight::emitter_weight`] and
+//! [`escaped`]. Methods without that continuation (`gather`, the photon methods' specular
+//! paths) take the light samples at full weight.
+
+use super::path::power_heuristic;
+use super::{Interaction, SceneBvh};
+use crate::sampling::Rng;
+use crate::scene::emitters::{EmitterSampler, Selection};
+use crate::scene::{Light, Scene};
+use glam::Vec3;
+
+/// Which light samples next-event estimation takes and how they are weighted.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Nee {
+    /// Every source, each sample at full weight: the caller's rays find no light (`gather`,
+    /// the photon methods), or count none of what they find (a path tracer sampling lights
+    /// only).
+    Alone,
+    /// Every source, the samples of emitters, suns' discs and the environment weighted
+    /// against BSDF sampling, whose rays find them too.
+    Mis,
+    /// Only the lights BSDF rays cannot find (point, spot and parallel directional lights):
+    /// a path tracer sampling the BSDF only, for the rest.
+    DeltaOnly,
+}
+
+/// What next-event estimation samples beyond the analytic lights: the emitters with their
+/// selection. Built once per frame.
+#[derive(Clone, Debug)]
+pub struct DirectLight {
+    pub emitters: EmitterSampler,
+}
+
+/// Where a BSDF-sampled ray left from, for the multiple-importance weight of an emitter it
+/// hits: the shading point and normal the light samples there were drawn for, and the BSDF
+/// sample's density over solid angle.
+#[derive(Clone, Copy, Debug)]
+pub struct BsdfVertex {
+    pub position: Vec3,
+    pub normal: Vec3,
+    pub pdf: f32,
+}
+
+impl DirectLight {
+    /// The scene's emitters with the selection that pays for their number
+    /// ([`EmitterSampler::auto`]).
+    pub fn of(scene: &Scene) -> Self {
+        DirectLight {
+            emitters: EmitterSampler::auto(scene),
+        }
+    }
+
+    /// The scene's emitters chosen by `selection`.
+    pub fn with_selection(scene: &Scene, selection: Selection) -> Self {
+        DirectLight {
+            emitters: EmitterSampler::new(scene, selection),
+        }
+    }
+
+    /// Light arriving at `it` directly from the sources `nee` says, times the BSDF towards
+    /// `wo` (world space, pointing away from the surface).
+    pub fn estimate(
+        &self,
+        scene: &Scene,
+        bvh: &SceneBvh,
+        it: &Interaction,
+        wo: Vec3,
+        rng: &mut Rng,
+        nee: Nee,
+    ) -> Vec3 {
+        if it.material.is_purely_specular() {
+            return Vec3::ZERO;
+        }
+        let mis = nee == Nee::Mis;
+        let mut sum = Vec3::ZERO;
+        for light in &scene.lights {
+            sum += match light.disc_radiance() {
+                Some(_) if nee == Nee::DeltaOnly => Vec3::ZERO,
+                Some(l) => sun_disc(light, l, bvh, it, wo, rng, mis),
+                None => analytic_light(light, bvh, it, wo),
+            };
+        }
+        if nee == Nee::DeltaOnly {
+            return sum;
+        }
+        sum += self.emitter_light(scene, bvh, it, wo, rng, mis);
+        // An environment that is not sampled by importance is left to the BSDF rays of the
+        // path tracer (`EnvironmentDesc::importance`); without them it is sampled anyway.
+        if let Some(env) = scene
+            .environment
+            .as_deref()
+            .filter(|e| e.importance || !mis)
+        {
+            sum += super::path::environment_light(env, bvh, it, wo, rng, mis);
+        }
+        sum
+    }
+
+    /// One point on the emitters, chosen for `it`: its light times the BSDF towards `wo`.
+    pub fn emitter_light(
+        &self,
+        scene: &Scene,
+        bvh: &SceneBvh,
+        it: &Interaction,
+        wo: Vec3,
+        rng: &mut Rng,
+        mis: bool,
+    ) -> Vec3 {
+        if self.emitters.is_empty() {
+            return Vec3::ZERO;
+        }
+        let (u_select, u) = (rng.next_f32(), rng.next_2d());
+        let n = it.frame.n;
+        let Some(s) = self.emitters.sample(scene, it.position, n, u_select, u) else {
+            return Vec3::ZERO;
+        };
+        let to = s.point - it.position;
+        let d2 = to.length_squared();
+        if !(d2 > 0.0 && s.pdf_area > 0.0) {
+            return Vec3::ZERO;
+        }
+        let wi = to / d2.sqrt();
+        let cos_l = s.normal.dot(-wi).abs();
+        // Reflection only: the emitter must be on the viewer's side of the geometry.
+        if cos_l <= 0.0 || wi.dot(it.ng) * wo.dot(it.ng) <= 0.0 {
+            return Vec3::ZERO;
+        }
+        let le = self.emitters.emitters.radiance(scene, &s, -wi);
+        if le == Vec3::ZERO {
+            return Vec3::ZERO;
+        }
+        let m = &it.material;
+        let (wo_l, wi_l) = (it.frame.to_local(wo), it.frame.to_local(wi));
+        let f = m.eval(wo_l, wi_l);
+        if f == Vec3::ZERO {
+            return Vec3::ZERO;
+        }
+        // The shadow ray runs from off the shading surface to off the emitter's side facing
+        // it, along its own direction: along `wi` from the moved origin it would end beside
+        // the target, behind the emitter's surface where the two offsets cancel (an emitter
+        // facing the point), and find the emitter itself.
+        let origin = it.spawn(wi);
+        let side = s.normal * s.normal.dot(-wi).signum();
+        let target = s.point + side * crate::scene::emitters::offset(s.point);
+        let to_target = target - origin;
+        let dist = to_target.length();
+        if dist.is_nan()
+            || dist <= 0.0
+            || bvh.occluded(origin, to_target / dist, dist * (1.0 - 1e-4))
+        {
+            return Vec3::ZERO;
+        }
+        let pdf = s.pdf_area * d2 / cos_l;
+        let w = if mis {
+            power_heuristic(pdf, m.pdf(wo_l, wi_l))
+        } else {
+            1.0
+        };
+        f * wi_l.z.abs() * le * (w / pdf)
+    }
+
+    /// The multiple-importance weight of emitter triangle `triangle` hit at `point` (normal
+    /// `ng`) by the BSDF sample that left `from`: the power heuristic of the sample's density
+    /// against that of [`DirectLight::emitter_light`] drawing the same point.
+    pub fn emitter_weight(&self, from: &BsdfVertex, triangle: u32, point: Vec3, ng: Vec3) -> f32 {
+        let pdf_area = self.emitters.pdf_area(from.position, from.normal, triangle);
+        if pdf_area <= 0.0 {
+            return 1.0;
+        }
+        let to = point - from.position;
+        let d2 = to.length_squared();
+        let cos = ng.dot(to).abs() / d2.sqrt();
+        if cos.is_nan() || cos <= 0.0 {
+            return 1.0;
+        }
+        power_heuristic(from.pdf, pdf_area * d2 / cos)
+    }
+}
+
+/// Light of a point, spot or parallel directional light arriving at `it`, times the BSDF
+/// towards `wo` (a directional light with a disc: along its axis).
+pub fn analytic_light(light: &Light, bvh: &SceneBvh, it: &Interaction, wo: Vec3) -> Vec3 {
+    let m = &it.material;
+    let (wi, li, dist) = match *light {
+        Light::Directional {
+            direction,
+            irradiance,
+            ..
+        } => (-direction, irradiance, f32::INFINITY),
+        _ => {
+            let to_light = light.position() - it.position;
+            let dist2 = to_light.length_squared();
+            let dist = dist2.sqrt();
+            let wi = to_light / dist;
+            (wi, light.intensity_towards(-wi) / dist2, dist)
+        }
+    };
+    // Reflection only: the light must be on the viewer's side of the geometry.
+    if wi.dot(it.ng) * wo.dot(it.ng) <= 0.0 || li == Vec3::ZERO {
+        return Vec3::ZERO;
+    }
+    let (wo_l, wi_l) = (it.frame.to_local(wo), it.frame.to_local(wi));
+    let f = m.eval(wo_l, wi_l);
+    if f == Vec3::ZERO {
+        return Vec3::ZERO;
+    }
+    let origin = it.spawn(wi);
+    let t_max = if dist.is_finite() {
+        (light.position() - origin).length() * (1.0 - 1e-4)
+    } else {
+        f32::INFINITY
+    };
+    if bvh.occluded(origin, wi, t_max) {
+        return Vec3::ZERO;
+    }
+    f * wi_l.z.abs() * li
+}
+
+/// One direction in the disc of a directional light of radiance `radiance` (uniform in
+/// solid angle): its light at `it` times the BSDF towards `wo`, weighted against BSDF
+/// sampling with `mis`.
+fn sun_disc(
+    light: &Light,
+    radiance: Vec3,
+    bvh: &SceneBvh,
+    it: &Interaction,
+    wo: Vec3,
+    rng: &mut Rng,
+    mis: bool,
+) -> Vec3 {
+    let Some((wi, pdf)) = light.sample_towards(rng.next_2d()) else {
+        return Vec3::ZERO;
+    };
+    if !(pdf > 0.0 && pdf.is_finite()) || wi.dot(it.ng) * wo.dot(it.ng) <= 0.0 {
+        return Vec3::ZERO;
+    }
+    let m = &it.material;
+    let (wo_l, wi_l) = (it.frame.to_local(wo), it.frame.to_local(wi));
+    let f = m.eval(wo_l, wi_l);
+    if f == Vec3::ZERO || bvh.occluded(it.spawn(wi), wi, f32::INFINITY) {
+        return Vec3::ZERO;
+    }
+    let w = if mis {
+        power_heuristic(pdf, m.pdf(wo_l, wi_l))
+    } else {
+        1.0
+    };
+    f * wi_l.z.abs() * radiance * (w / pdf)
+}
+
+/// Radiance a ray leaving the scene in unit direction `d` finds: the environment's and the
+/// suns' discs' (with `suns`). `bsdf_pdf`: the density of the BSDF sample that made the
+/// ray, which weighs it against next-event estimation's samples of the same sources
+/// (`None`: camera rays and delta scatterings, full weight).
+pub fn escaped(scene: &Scene, d: Vec3, bsdf_pdf: Option<f32>, suns: bool) -> Vec3 {
+    let mut l = Vec3::ZERO;
+    if let Some(env) = scene.environment.as_deref() {
+        let w = match bsdf_pdf {
+            Some(p) if env.importance => power_heuristic(p, env.pdf(d)),
+            _ => 1.0,
+        };
+        l += env.radiance(d) * w;
+    }
+    if suns {
+        for light in &scene.lights {
+            let le = light.disc_radiance_from(d);
+            if le != Vec3::ZERO {
+                let w = bsdf_pdf.map_or(1.0, |p| power_heuristic(p, light.disc_pdf()));
+                l += le * w;
+            }
+        }
+    }
+    l
+}

@@ -1,0 +1,100 @@
+"""`bidir` at any depth (issue 29): its light subpaths against the two-bounce version.
+
+Per scene, in one run on the same cores: `bidir` at `max_depth` 3 (the two-bounce version:
+the same frame as before issue 29, no light subpaths), 7 and its default (64), `ispm` and
+`path` at their defaults, each scored against a converged `path` reference (default depth
+64; cached as bench_progressive's): the image mean relative to the reference's, HDR-FLIP
+and relMSE, and the frame's wall-clock seconds (the mean of --frames frames of a warm
+renderer, seeds 1, 2, …; the error columns are those of the first frame).
+
+    GI_REF_CACHE=/work/cache/refs .venv/bin/python scripts/bench_bidir_depth.py \\
+        --out docs/bench/bidir-depth.md
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import gi
+
+sys.path.insert(0, str(Path(__file__).parent))
+from bench_progressive import cpu_name, flip, reference, relmse  # noqa: E402
+
+RUNS = [
+    ("bidir", "`bidir` max_depth 3 (two-bounce version)", dict(max_depth=3)),
+    ("bidir", "`bidir` max_depth 7", dict(max_depth=7)),
+    ("bidir", "`bidir` defaults (max_depth 64)", {}),
+    ("ispm", "`ispm` defaults", dict(adapter="cpu")),
+    ("path", "`path` defaults", {}),
+]
+
+
+def timed(scene: gi.Scene, method: str, size, frames: int, settings: dict):
+    """(first frame's radiance, mean seconds per frame, stats of the last) of a warm
+    renderer."""
+    r = gi.Renderer(scene, method, size=size, seed=1, **settings)
+    first = r.render().radiance
+    seconds = 0.0
+    stats = None
+    for seed in range(2, frames + 2):
+        t = time.perf_counter()
+        out = r.render(seed=seed)
+        seconds += time.perf_counter() - t
+        stats = out.stats
+    return first, seconds / frames, stats
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--scenes", default="cornell,furnace")
+    ap.add_argument("--size", type=int, default=64)
+    ap.add_argument("--ref-spp", type=int, default=4096)
+    ap.add_argument("--frames", type=int, default=2)
+    ap.add_argument("--out", type=Path)
+    a = ap.parse_args()
+    size = (a.size, a.size)
+    lines = [
+        "# `bidir` at any depth (issue 29)",
+        "",
+        f"Command: `GI_REF_CACHE=/work/cache/refs .venv/bin/python scripts/bench_bidir_depth.py"
+        f" --scenes {a.scenes} --size {a.size} --ref-spp {a.ref_spp} --frames {a.frames}`"
+        f" · {a.size}×{a.size} · reference: `path` at {a.ref_spp} spp (max_depth 64) ·"
+        f" wall-clock seconds per frame of a warm renderer (mean of {a.frames}) on"
+        f" {cpu_name()}, 2 cores shared with other work, lavapipe for the GPU passes ·"
+        " mean: the image mean over the reference's (mean of RGB) · FLIP and relMSE of the"
+        " first frame.",
+        "",
+    ]
+    for name in a.scenes.split(","):
+        scene = gi.load_scene(name)
+        ref, ref_s = reference(name, size, a.ref_spp, 7)
+        lines += [
+            f"## {name}",
+            "",
+            f"Reference: {ref_s:.0f} s.",
+            "",
+            "| method | frame (s) | mean / reference | FLIP | relMSE | light subpaths |",
+            "|---|---|---|---|---|---|",
+        ]
+        for method, label, settings in RUNS:
+            img, seconds, stats = timed(scene, method, size, a.frames, settings)
+            ratio = float(img.mean() / ref.mean())
+            subpaths = stats.light_paths if method == "bidir" else "–"
+            row = (
+                f"| {label} | {seconds:.3f} | {ratio:.4f} | {flip(ref, img):.4f} |"
+                f" {relmse(img, ref):.4f} | {subpaths} |"
+            )
+            print(name, row, flush=True)
+            lines.append(row)
+        lines.append("")
+    text = "\n".join(lines)
+    if a.out:
+        a.out.write_text(text)
+    print(text)
+
+
+if __name__ == "__main__":
+    main()
