@@ -220,7 +220,8 @@ impl Indirect {
     fn memory(&self) -> Vec<(String, u64)> {
         let mut parts = self.estimate.memory();
         if let Some(c) = &self.caustics {
-            let caustic = c.memory().into_iter();
+            // Buffers not yet allocated (a frame without caustic photons) are left out.
+            let caustic = c.memory().into_iter().filter(|(_, b)| *b > 0);
             parts.extend(caustic.map(|(n, b)| (format!("caustics: {n}"), b)));
         }
         parts
