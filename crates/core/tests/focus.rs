@@ -143,8 +143,14 @@ fn ispm_focusing_multiplies_caustic_photons_and_keeps_the_image_mean() {
     );
     // Focused: within 1.5% of the reference (measured +0.8%, the photon-volume splat's own
     // bias; the Monte Carlo error of this comparison is about 0.3%). Unfocused, the few
-    // bounce-map caustic photons get wide density-bounded kernels and the mean is ~19%
-    // high at this size: focusing must not be worse.
+    // bounce-map caustic photons got wide density-bounded kernels and the mean was ~19%
+    // high at this size; since caustic kernels are at least a pixel wide and splatted at
+    // full resolution (issue 29) it is +0.7% (focused +0.9%). Focusing must not be worse
+    // beyond the noise of the two means' difference (~0.45%, two independent 0.3% errors):
+    // 1% of the reference.
     assert!((m1 / reference - 1.0).abs() < 0.015, "{m1} vs {reference}");
-    assert!((m1 - reference).abs() <= (m0 - reference).abs());
+    assert!(
+        (m1 - reference).abs() <= (m0 - reference).abs() + 0.01 * reference,
+        "focused {m1}, plain {m0}, path {reference}"
+    );
 }
