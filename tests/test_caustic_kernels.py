@@ -40,8 +40,10 @@ def test_caustic_kernels_and_focusing_lower_the_firefly_share_against_path():
     # bound, and 0.25 of each light's photons aimed at the spheres). Measured at 48x48,
     # seeds 0-2, before photon focusing for ispm existed: firefly share 0.053 without the
     # bound, 0.035 with it (a second reference of another seed scores 0.008).
-    # With focusing: 0.054 before, 0.036 after. Bound: the mean after under 0.045 and
-    # under 0.8x the mean before (measured 0.67x).
+    # With focusing: 0.054 before, 0.036 after. Since caustic photons' kernels are at least
+    # a pixel wide (issue 29, in both variants) isolated photons no longer make one-pixel
+    # dots: "before" measures 0.038, "after" 0.036. Bound: the mean after under 0.045 (as
+    # before the floor) and below the mean before (the bound and focusing must still help).
     scene = gi.load_scene("cornell-glass")
     ref = gi.render(scene, "path", size=(48, 48), spp=256, light_paths=16_000_000, seed=99).radiance
     variants = {
@@ -62,7 +64,7 @@ def test_caustic_kernels_and_focusing_lower_the_firefly_share_against_path():
     }
     print(shares)
     assert shares["after"] < 0.045
-    assert shares["after"] < 0.8 * shares["before"]
+    assert shares["after"] < shares["before"]
 
 
 def test_density_bound_removes_isolated_caustic_dots():

@@ -451,11 +451,13 @@ def test_readme_material_update_changes_the_image(cornell):
     assert np.abs(r.render().radiance - before).max() > 0.01
 
 
-def test_environment_light_error_names_both_methods(cornell_desc, write_scene):
+def test_environment_light_renders_in_gather(cornell_desc, write_scene):
+    # Once refused by every method but `path` and `bidir` (a SettingError naming them);
+    # issue 28: every method renders the environment, and what it adds is light.
+    plain = gi.render(gi.load_scene(write_scene(cornell_desc)), "gather", size=(8, 8), seed=1)
     cornell_desc["environment"] = {"radiance": [0.6, 0.7, 1.0]}
-    scene = gi.load_scene(write_scene(cornell_desc))
-    with pytest.raises(gi.SettingError, match="use method `path` or `bidir`"):
-        gi.Renderer(scene, "gather", size=(4, 4))
+    lit = gi.render(gi.load_scene(write_scene(cornell_desc)), "gather", size=(8, 8), seed=1)
+    assert lit.radiance.mean() > plain.radiance.mean()
 
 
 def test_ispm_choices_print_with_verbose_only(tmp_path):
