@@ -90,8 +90,6 @@ def test_method_matches_mitsuba(name, method):
         except gi.SettingError as e:
             pytest.skip(f"`{method}` refuses {name}: {e}")
     warned = [str(w.message) for w in caught if issubclass(w.category, gi.RenderWarning)]
-    if warned:
-        pytest.skip(f"`{method}` warns on {name}: {'; '.join(warned)}")
     depth = int(r.options.get("max_depth", 1))  # `direct` renders direct light
     if depth not in DEPTHS:
         pytest.fail(f"no reference for max_depth {depth} (scripts/lights_reference.py)")
@@ -99,6 +97,17 @@ def test_method_matches_mitsuba(name, method):
     ref = gi.read_image(reference_file(name, depth))[..., :3]
     assert np.isfinite(img).all()
     ratio = float(img.mean() / ref.mean())
+    if warned:
+        # The one known gap: `bidir`'s VPLs come from point and spot lights only, so the
+        # indirect light of emitters and suns is missing (it says so). Then its image is the
+        # direct light (within 3%) plus what its bundles add (the sky's), and below the
+        # reference: the warning is true. Measured: 0.745, 0.951, 0.692 of the reference
+        # against direct-only 0.741, 0.953, 0.704.
+        assert method == "bidir", warned
+        assert all("its VPLs leave them out" in w for w in warned), warned
+        direct = gi.read_image(reference_file(name, 1))[..., :3].mean() / ref.mean()
+        assert 0.97 * direct <= ratio < 0.99, (name, ratio, direct)
+        return
     assert abs(ratio - 1) <= TOLERANCE.get(method, 0.03), (
         f"{method} on {name}: image mean {img.mean():.5f}, Mitsuba's {ref.mean():.5f} at "
         f"max_depth {depth} (ratio {ratio:.4f})"
