@@ -241,7 +241,7 @@ def write_table(rows: list, warned: dict, meta: dict, args: argparse.Namespace) 
         f"Mitsuba 3 ({first['mitsuba']}, `{first['variant']}`, path tracer) and by gi in each",
         f"method at {SIZE}×{SIZE}, each method against the reference of the `max_depth` it",
         "traces by default (*depth*, scattering events; Mitsuba's `max_depth` is one more:",
-        "64 for all paths, 3 for `bidir`'s two indirect bounces, 1 for `direct`: emission seen",
+        "64 for all paths (3: `bidir`'s old two-bounce default), 1 for `direct`: emission seen",
         "by the camera and light that reaches a surface straight from a source). *ratio*: gi's",
         "image mean over the reference's (1 is right); *FLIP*: mean HDR-FLIP against the",
         "reference (flip-evaluator, 67 ppd; 0 is identical; it includes the noise of gi's",
