@@ -127,6 +127,27 @@ pub struct ShadowPass {
 }
 
 impl ShadowPass {
+    /// The bind group of a set of shadow-map layers: `views` holds one view record per
+    /// layer (read at a dynamic offset).
+    pub fn view_group(
+        &self,
+        device: &wgpu::Device,
+        label: &str,
+        views: &wgpu::Buffer,
+    ) -> wgpu::BindGroup {
+        crate::gpu::create_bind_group(
+            device,
+            &wgpu::BindGroupDescriptor {
+                label: Some(label),
+                layout: &self.layout,
+                entries: &[wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: crate::gpu::layout::view_binding(views),
+                }],
+            },
+        )
+    }
+
     pub fn new(device: &wgpu::Device, textures: &wgpu::BindGroupLayout) -> Self {
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("shadow bind group layout"),

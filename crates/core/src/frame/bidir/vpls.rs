@@ -3,7 +3,7 @@
 
 use super::super::gpu::GpuScene;
 use crate::error::{Error, Result};
-use crate::gpu::layout::{buffer_init, view_binding, VIEW_SIZE};
+use crate::gpu::layout::{buffer_init, VIEW_SIZE};
 use crate::gpu::raw::ViewRaw;
 use crate::gpu::timer::Timer;
 use crate::gpu::{self, GpuContext, Pipelines};
@@ -187,17 +187,7 @@ impl VplMaps {
             &vec![0u8; n_layers as usize * VIEW_SIZE as usize],
             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         );
-        let view_group = gpu::create_bind_group(
-            device,
-            &wgpu::BindGroupDescriptor {
-                label: Some("vpl shadow bind group"),
-                layout: &ShadowPass::get(ctx).layout,
-                entries: &[wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: view_binding(&views),
-                }],
-            },
-        );
+        let view_group = ShadowPass::get(ctx).view_group(device, "vpl shadow bind group", &views);
         let (layer_views, array) = shadow::layered_maps(device, "vpl shadow maps", size, n_layers);
         Ok(VplMaps {
             capacity,

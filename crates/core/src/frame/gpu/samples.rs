@@ -17,7 +17,7 @@ use crate::raster::direct::{
     DirectParamsRaw, SampledLightRaw, MAX_POLYGONS, POLYGON_TEXELS, SAMPLE_TEXELS,
 };
 use crate::raster::shadow::{self, CullUnits, ShadowPass};
-use crate::raster::{buffer_init, view_binding, Geometry, VIEW_SIZE};
+use crate::raster::{buffer_init, Geometry, VIEW_SIZE};
 use crate::scene::emitters::Emitters;
 use crate::scene::light_views::{self, orthographic_view, CUBE_FACES};
 use crate::scene::{Environment, Scene};
@@ -199,17 +199,8 @@ impl LightSamples {
             &vec![0u8; layers as usize * VIEW_SIZE as usize],
             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         );
-        let view_group = gpu::create_bind_group(
-            device,
-            &wgpu::BindGroupDescriptor {
-                label: Some("sampled light shadow bind group"),
-                layout: &ShadowPass::get(ctx).layout,
-                entries: &[wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: view_binding(&views),
-                }],
-            },
-        );
+        let view_group =
+            ShadowPass::get(ctx).view_group(device, "sampled light shadow bind group", &views);
         let (layer_views, array) =
             shadow::layered_maps(device, "sampled light shadow maps", counts.size, layers);
         let (env, irradiance) = env_tables(ctx, scene.environment.as_deref());

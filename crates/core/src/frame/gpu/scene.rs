@@ -9,7 +9,7 @@ use crate::gpu::Pipelines;
 use crate::gpu::{self, GpuContext};
 use crate::raster::shadow::ShadowPass;
 use crate::raster::textures::TexturesLayout;
-use crate::raster::{self, buffer_init, shadow, view_binding, Geometry, VIEW_SIZE};
+use crate::raster::{self, buffer_init, shadow, Geometry, VIEW_SIZE};
 use crate::scene::Scene;
 
 /// How a frame draws its light samples: the sampled lights' seed, and for progressive passes
@@ -84,17 +84,8 @@ impl GpuScene {
         );
         let (shadow_layers, shadow_array) =
             shadow::layered_maps(&ctx.device, "shadow maps", shadow_map_size, layers);
-        let shadow_group = gpu::create_bind_group(
-            &ctx.device,
-            &wgpu::BindGroupDescriptor {
-                label: Some("shadow bind group"),
-                layout: &ShadowPass::get(ctx).layout,
-                entries: &[wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: view_binding(&shadow_views),
-                }],
-            },
-        );
+        let shadow_group =
+            ShadowPass::get(ctx).view_group(&ctx.device, "shadow bind group", &shadow_views);
         Ok(GpuScene {
             geometry: Geometry::upload(ctx, scene),
             materials: storage_init(ctx, "materials", bytemuck::cast_slice(&materials)),
