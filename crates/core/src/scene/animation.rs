@@ -550,7 +550,7 @@ mod tests {
             posed.apply(&u).expect("valid");
         }
         let r = posed.objects[tall].vertices.clone();
-        let local = posed.objects[tall].local_positions[0];
+        let local = posed.meshes[posed.objects[tall].mesh as usize].positions[0];
         assert!(
             (posed.positions[r.start as usize] - expect.transform_point3(local)).length() < 1e-5
         );

@@ -220,6 +220,9 @@ pub enum SmoothDesc {
 pub enum ShapeDesc {
     /// A triangle mesh file (OBJ/MTL, PLY, glTF/GLB, STL), relative to the scene file.
     Mesh { file: String },
+    /// Another instance of the object called `object` (its mesh, stored once; its smoothing
+    /// and material unless this object gives its own).
+    Instance { object: String },
     /// A rectangle in the xz plane centred on the origin, normal +y.
     Quad { size: [f32; 2] },
     /// An axis-aligned box centred on the origin.

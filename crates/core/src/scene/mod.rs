@@ -54,7 +54,10 @@ pub struct MeshData {
     pub uvs: Vec<[Vec2; 3]>,
 }
 
-/// A renderable scene. Triangles are stored flat in world space.
+/// A renderable scene: unique meshes in their local frames ([`Scene::meshes`]), objects that
+/// place them (instances: mesh, transform, material; [`Scene::objects`]), and the derived
+/// world-space flat arrays (`positions`, `triangles`, …) that consumers not yet ported to
+/// instances read. The CPU tracers use the meshes and transforms through the two-level BVH.
 #[derive(Clone, Debug)]
 pub struct Scene {
     pub camera: Camera,
@@ -73,9 +76,12 @@ pub struct Scene {
     pub triangles: Vec<[u32; 3]>,
     /// Material index per triangle.
     pub triangle_materials: Vec<u32>,
-    /// The objects of the description, in order: their vertex and triangle ranges and the
-    /// local geometry a new transform is applied to (`SceneUpdate::Transform`).
+    /// The objects of the description, in order: their mesh, transform, and vertex and
+    /// triangle ranges of the flat arrays.
     pub objects: Vec<SceneObject>,
+    /// The unique meshes (shaded, in their local frames), each stored once however many
+    /// objects place it.
+    pub meshes: Vec<Arc<TriMesh>>,
     /// The description's keyframed tracks, if any (see [`animation`]).
     pub animation: Option<Animation>,
     /// Light from infinitely far away (see [`environment`]); shared, as images are large.
@@ -109,6 +115,41 @@ pub const MAX_VERTICES: usize = u32::MAX as usize;
 
 fn within_extent(v: V3) -> bool {
     v.iter().all(|x| x.is_finite() && x.abs() <= MAX_EXTENT)
+}
+
+/// The shape, smoothing and material of object `i`, following `instance` shapes to the
+/// object they name (the instance's own `smooth` and `material` win where given); errors as
+/// (field, message) for a missing or self-referencing object and for a cycle of instances.
+fn resolve_instance(
+    objects: &[desc::ObjectDesc],
+    i: usize,
+) -> std::result::Result<(&ShapeDesc, Option<SmoothDesc>, Option<&String>), (String, String)> {
+    let (mut at, mut smooth, mut material) = (i, objects[i].smooth, objects[i].material.as_ref());
+    for _ in 0..=objects.len() {
+        let ShapeDesc::Instance { object } = &objects[at].shape else {
+            return Ok((&objects[at].shape, smooth, material));
+        };
+        let field = "shape.object".to_string();
+        let Some(j) = objects
+            .iter()
+            .position(|o| o.name.as_deref() == Some(object.as_str()))
+        else {
+            return Err((field, format!("no object named `{object}`")));
+        };
+        if j == i {
+            return Err((
+                field,
+                format!("`{object}` is this object (an instance of itself)"),
+            ));
+        }
+        at = j;
+        smooth = smooth.or(objects[j].smooth);
+        material = material.or(objects[j].material.as_ref());
+    }
+    Err((
+        "shape.object".into(),
+        "instances refer to each other in a cycle".into(),
+    ))
 }
 
 /// An object's mesh before placement, the mesh file's data when it is one, and its texture
@@ -279,25 +320,43 @@ impl Scene {
             triangles: Vec::new(),
             triangle_materials: Vec::new(),
             objects: Vec::new(),
+            meshes: Vec::new(),
             animation: None,
             environment: None,
             camera_source: desc.camera.clone(),
         };
+        // Unique meshes by (resolved shape, smoothing): objects with equal keys share one.
+        let mut unique: HashMap<String, (u32, Arc<Vec<[Vec2; 3]>>, Option<&MeshData>)> =
+            HashMap::new();
         for (i, obj) in desc.objects.iter().enumerate() {
             let at = |f: &str| format!("objects[{i}].{f}");
             let xf = transform_matrix(&obj.transform)
                 .map_err(|(f, m)| err(at(&format!("transform.{f}")), m))?;
-            let (mesh, file_materials, uvs) =
-                object_mesh(&obj.shape, meshes).map_err(|(f, m)| err(at(&f), &m))?;
-            validate_mesh(&mesh).map_err(|m| err(at("shape"), &m))?;
+            let (shape, smooth, material) =
+                resolve_instance(&desc.objects, i).map_err(|(f, m)| err(at(&f), &m))?;
+            let key = serde_json::to_string(&(shape, smooth)).unwrap_or_default();
+            let (mesh_index, uvs, file_materials) = match unique.get(&key) {
+                Some(found) => found.clone(),
+                None => {
+                    let (mesh, file_materials, uvs) =
+                        object_mesh(shape, meshes).map_err(|(f, m)| err(at(&f), &m))?;
+                    validate_mesh(&mesh).map_err(|m| err(at("shape"), &m))?;
+                    let smoothing = smoothing(smooth).map_err(|m| err(at("smooth"), m))?;
+                    scene
+                        .meshes
+                        .push(Arc::new(shading::shade(&mesh, smoothing)));
+                    let found = (scene.meshes.len() as u32 - 1, Arc::new(uvs), file_materials);
+                    unique.insert(key, found.clone());
+                    found
+                }
+            };
+            let mesh = scene.meshes[mesh_index as usize].clone();
             if scene.positions.len() + mesh.positions.len() > MAX_VERTICES {
                 return Err(err(at("shape"), "the scene would exceed 2^32 - 1 vertices"));
             }
             validate_placed(&mesh, xf).map_err(|(f, m)| err(at(&f), &m))?;
-            let smoothing = smoothing(obj.smooth).map_err(|m| err(at("smooth"), m))?;
-            let mesh = shading::shade(&mesh, smoothing);
             // Per-triangle materials: the object's own, else those of the file.
-            let tri_mats: Vec<u32> = match (&obj.material, file_materials) {
+            let tri_mats: Vec<u32> = match (material, file_materials) {
                 (Some(name), _) => {
                     let id = *index_of.get(name).ok_or_else(|| {
                         err(at("material"), &format!("no material named `{name}`"))
@@ -345,7 +404,7 @@ impl Scene {
                     return Err(err(at("name"), "another object has this name"));
                 }
             }
-            scene.append(obj.name.clone(), &mesh, xf, &tri_mats, &uvs);
+            scene.append(obj.name.clone(), mesh_index, xf, &tri_mats, &uvs);
             if let Some(o) = scene.objects.last_mut() {
                 o.described = Some(obj.transform.clone());
             }
@@ -359,11 +418,12 @@ impl Scene {
     fn append(
         &mut self,
         name: Option<String>,
-        mesh: &TriMesh,
+        mesh_index: u32,
         xf: Mat4,
         tri_materials: &[u32],
         uvs: &[[Vec2; 3]],
     ) {
+        let mesh = self.meshes[mesh_index as usize].clone();
         let base = self.positions.len() as u32;
         let first_triangle = self.triangles.len() as u32;
         let flip = Mat3::from_mat4(xf).determinant() < 0.0;
@@ -391,12 +451,16 @@ impl Scene {
             triangles: first_triangle..self.triangles.len() as u32,
             transform: xf,
             flipped: flip,
-            local_positions: mesh.positions.clone(),
-            local_normals: mesh.normals.clone(),
+            mesh: mesh_index,
             described: None,
         };
-        object.place(&mut self.positions, &mut self.normals);
+        object.place(&mesh, &mut self.positions, &mut self.normals);
         self.objects.push(object);
+    }
+
+    /// Triangles of the unique meshes (each counted once however many objects place it).
+    pub fn unique_triangle_count(&self) -> usize {
+        self.meshes.iter().map(|m| m.indices.len()).sum()
     }
 
     /// The three corners of triangle `t`.
@@ -705,7 +769,9 @@ fn primitive(shape: &ShapeDesc) -> std::result::Result<TriMesh, FieldError> {
         }
     };
     Ok(match *shape {
-        ShapeDesc::Mesh { .. } => unreachable!("mesh files are resolved by the caller"),
+        ShapeDesc::Mesh { .. } | ShapeDesc::Instance { .. } => {
+            unreachable!("mesh files and instances are resolved by the caller")
+        }
         ShapeDesc::Quad { size } => {
             primitives::quad([positive("size", size[0])?, positive("size", size[1])?])
         }

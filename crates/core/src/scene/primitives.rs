@@ -278,7 +278,7 @@ pub fn uvs(shape: &ShapeDesc, m: &TriMesh) -> Vec<[Vec2; 3]> {
                         p.map(|q| Vec2::new(angular(q), 1.0 - q.y / height))
                     }
                 }
-                ShapeDesc::Mesh { .. } => [Vec2::ZERO; 3],
+                ShapeDesc::Mesh { .. } | ShapeDesc::Instance { .. } => [Vec2::ZERO; 3],
             };
             // Across the seam of angular coordinates, keep the triangle on one side.
             // A pole's longitude is arbitrary: take the mean of the other corners'.

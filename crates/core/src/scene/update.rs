@@ -11,8 +11,9 @@ use std::ops::Range;
 /// Where an update's errors say they come from.
 const SOURCE: &str = "scene update";
 
-/// One object of the description: its slice of the scene's flat arrays and the local
-/// geometry that its transform places there.
+/// One object of the description, an instance: the unique mesh it places
+/// ([`Scene::meshes`]), its transform, and its slice of the scene's flat arrays (the derived
+/// world-space view that consumers not yet ported to instances read).
 #[derive(Clone, Debug)]
 pub struct SceneObject {
     pub name: Option<String>,
@@ -24,23 +25,30 @@ pub struct SceneObject {
     pub transform: Mat4,
     /// Whether the triangles are stored with flipped winding (a mirroring transform).
     pub flipped: bool,
-    pub(crate) local_positions: Vec<glam::Vec3>,
-    pub(crate) local_normals: Vec<glam::Vec3>,
+    /// Index of the object's mesh in [`Scene::meshes`] (shared by every object that names
+    /// the same file or built-in shape with the same options, or refers to it as an
+    /// instance).
+    pub mesh: u32,
     /// The transform as the scene file described it (while `transform` is still its
     /// matrix): [`Scene::object_desc`] gives it back exactly.
     pub(crate) described: Option<TransformDesc>,
 }
 
 impl SceneObject {
-    /// Writes the transformed local geometry into the scene's arrays.
-    pub(crate) fn place(&self, positions: &mut [Vec3], normals: &mut [Vec3]) {
+    /// Writes the object's mesh, transformed, into the scene's flat arrays.
+    pub(crate) fn place(
+        &self,
+        mesh: &super::TriMesh,
+        positions: &mut [Vec3],
+        normals: &mut [Vec3],
+    ) {
         let r = self.vertices.start as usize..self.vertices.end as usize;
         let xf = self.transform;
         let normal_xf = Mat3::from_mat4(xf).inverse().transpose();
-        for (dst, p) in positions[r.clone()].iter_mut().zip(&self.local_positions) {
+        for (dst, p) in positions[r.clone()].iter_mut().zip(&mesh.positions) {
             *dst = xf.transform_point3(*p);
         }
-        for (dst, n) in normals[r].iter_mut().zip(&self.local_normals) {
+        for (dst, n) in normals[r].iter_mut().zip(&mesh.normals) {
             *dst = (normal_xf * *n).normalize_or_zero();
         }
     }
@@ -139,8 +147,9 @@ impl Scene {
                     return Err(err(field, "must be finite and invertible"));
                 }
                 let obj = &self.objects[*object];
-                let placed: Vec<Vec3> = obj
-                    .local_positions
+                let mesh = self.meshes[obj.mesh as usize].clone();
+                let placed: Vec<Vec3> = mesh
+                    .positions
                     .iter()
                     .map(|p| transform.transform_point3(*p))
                     .collect();
@@ -162,7 +171,7 @@ impl Scene {
                     }
                 }
                 let obj = &self.objects[*object];
-                obj.place(&mut self.positions, &mut self.normals);
+                obj.place(&mesh, &mut self.positions, &mut self.normals);
                 Ok(Changes {
                     geometry: true,
                     ..Default::default()

@@ -4,7 +4,7 @@
 use crate::error::Result;
 use crate::memory;
 use crate::scene::Scene;
-use glam::{Vec3, Vec3A};
+use glam::{Affine3A, Vec3, Vec3A};
 pub use obvhs::ploc::PlocSearchDistance;
 use obvhs::{
     aabb::Aabb, bvh2::reinsertion::ReinsertionOptimizer, bvh2::Bvh2,
@@ -12,6 +12,7 @@ use obvhs::{
     triangle::Triangle, BvhBuildParams,
 };
 use std::collections::HashMap;
+use std::sync::Arc;
 
 /// Peak memory of a BVH build per triangle (bytes): the obvhs triangles, the PLOC build's
 /// boxes, Morton codes and binary nodes (kept for refits), the compressed wide BVH and the
@@ -71,15 +72,13 @@ fn make_ray(origin: Vec3, dir: Vec3, tmax: f32) -> Ray {
     Ray::new(origin.into(), (dir + Vec3::ZERO).into(), 0.0, tmax)
 }
 
-/// The scene's triangles in BVH order, and the BVH: a compressed wide BVH for queries,
-/// converted from the binary tree that PLOC builds, which is kept so that moving objects
-/// can [`SceneBvh::refit`] it instead of building anew.
-pub struct SceneBvh {
+/// One mesh's triangles in BVH order, and the BVH: a compressed wide BVH for queries,
+/// converted from the binary tree that PLOC builds, which is kept so that a moved mesh can
+/// be refitted ([`MeshBvh::refit`]) instead of built anew. The bottom level of [`SceneBvh`].
+pub struct MeshBvh {
     bvh: CwBvh,
-    /// Alpha masks of the scene's materials (none: every hit counts).
-    alpha: Option<AlphaTest>,
     tris: Vec<Tri>,
-    /// Scene triangle index of each BVH-ordered triangle.
+    /// Mesh triangle index of each BVH-ordered triangle.
     ids: Vec<u32>,
     bvh2: Bvh2,
     triangles: Vec<Triangle>,
@@ -242,47 +241,7 @@ fn separated_boxes(triangles: &[Triangle]) -> Option<Vec<Aabb>> {
     Some(moved)
 }
 
-fn scene_triangles(scene: &Scene) -> Vec<Triangle> {
-    (0..scene.triangles.len())
-        .map(|t| {
-            let [a, b, c] = scene.triangle(t);
-            Triangle {
-                v0: a.into(),
-                v1: b.into(),
-                v2: c.into(),
-            }
-        })
-        .collect()
-}
-
-impl SceneBvh {
-    /// Builds the BVH over every triangle of `scene` (parallel PLOC + reinsertion).
-    pub fn build(scene: &Scene) -> Self {
-        Self::build_with(scene, &BuildSettings::DEFAULT)
-    }
-
-    /// [`SceneBvh::build`] with explicit build settings (for the build benchmark).
-    pub fn build_with(scene: &Scene, settings: &BuildSettings) -> Self {
-        let mut bvh = Self::from_triangles_with(&scene_triangles(scene), settings);
-        bvh.alpha = AlphaTest::new(scene);
-        bvh
-    }
-
-    /// Re-reads the alpha masks of the scene's materials (after a material update).
-    pub fn update_alpha(&mut self, scene: &Scene) {
-        self.alpha = AlphaTest::new(scene);
-    }
-
-    /// [`SceneBvh::build`] after checking that the build fits in memory.
-    pub fn try_build(scene: &Scene) -> Result<Self> {
-        let n = scene.triangles.len() as u64;
-        memory::check(
-            || format!("the BVH over {n} triangles"),
-            n.saturating_mul(BUILD_BYTES_PER_TRIANGLE),
-        )?;
-        Ok(Self::build(scene))
-    }
-
+impl MeshBvh {
     /// The build of obvhs's `build_cwbvh_from_tris` (medium quality, no spatial splits),
     /// keeping the binary tree, with coincident triangles told apart
     /// ([`BuildSettings::DEFAULT`]).
@@ -290,7 +249,7 @@ impl SceneBvh {
         Self::from_triangles_with(triangles, &BuildSettings::DEFAULT)
     }
 
-    /// [`SceneBvh::from_triangles`] with explicit build settings (for the build benchmark).
+    /// [`MeshBvh::from_triangles`] with explicit build settings (for the build benchmark).
     pub fn from_triangles_with(triangles: &[Triangle], settings: &BuildSettings) -> Self {
         let p = BvhBuildParams::medium_build();
         let indices = (0..triangles.len() as u32).collect();
@@ -343,9 +302,8 @@ impl SceneBvh {
                 }
             })
             .collect();
-        SceneBvh {
+        MeshBvh {
             bvh,
-            alpha: None,
             tris,
             ids,
             bvh2,
@@ -353,56 +311,323 @@ impl SceneBvh {
         }
     }
 
-    /// Updates the tree after scene triangles `moved` changed position: their leaf boxes,
-    /// then every parent (the topology stays, so quality drops as objects travel), then the
-    /// wide BVH again.
-    pub fn refit(self, scene: &Scene, moved: &[std::ops::Range<usize>]) -> Self {
-        let SceneBvh {
+    /// Updates the tree after triangles `moved` (indices into the mesh) changed to
+    /// `triangles`: their leaf boxes, then every parent (the topology stays, so quality drops
+    /// as they travel), then the wide BVH again.
+    pub fn refit(self, triangles: &[Triangle], moved: &[std::ops::Range<usize>]) -> Self {
+        let MeshBvh {
             mut bvh2,
-            mut triangles,
+            triangles: mut mine,
             ..
         } = self;
         bvh2.init_primitives_to_nodes_if_uninit();
         for range in moved {
             for t in range.clone() {
-                let [a, b, c] = scene.triangle(t);
-                let tri = Triangle {
-                    v0: a.into(),
-                    v1: b.into(),
-                    v2: c.into(),
-                };
                 let node = bvh2.primitives_to_nodes[t] as usize;
-                bvh2.nodes[node].set_aabb(obvhs::Boundable::aabb(&tri));
-                triangles[t] = tri;
+                bvh2.nodes[node].set_aabb(obvhs::Boundable::aabb(&triangles[t]));
+                mine[t] = triangles[t];
             }
         }
         bvh2.refit_all();
-        let mut bvh = Self::from_bvh2(bvh2, triangles);
-        bvh.alpha = AlphaTest::new(scene);
-        bvh
+        Self::from_bvh2(bvh2, mine)
     }
 
-    /// Closest hit along `origin + t·dir`, t in (0, tmax).
+    /// The box around every triangle (empty without any).
+    fn bounds(&self) -> Aabb {
+        self.bvh2.nodes.first().map_or(Aabb::empty(), |n| *n.aabb())
+    }
+
+    /// Closest hit of `ray` whose (mesh triangle, u, v) `keep` accepts: (mesh triangle, t, u,
+    /// v).
     #[inline]
-    pub fn intersect(&self, origin: Vec3, dir: Vec3, tmax: f32) -> Option<Hit> {
-        let ray = make_ray(origin, dir, tmax);
-        let mut best: Option<(u32, f32, f32, f32)> = None;
+    fn closest(
+        &self,
+        ray: Ray,
+        keep: impl Fn(u32, f32, f32) -> bool,
+    ) -> Option<(u32, f32, f32, f32)> {
+        let mut best = None;
         let mut hit = obvhs::ray::RayHit::none();
         self.bvh
             .ray_traverse(ray, &mut hit, |r, id| match self.tris[id].intersect(r) {
-                Some((t, u, v)) if !self.cut_out(id, u, v) => {
-                    best = Some((id as u32, t, u, v));
+                Some((t, u, v)) if keep(self.ids[id], u, v) => {
+                    best = Some((self.ids[id], t, u, v));
                     t
                 }
                 _ => f32::INFINITY,
             });
         // The traversal only reports hits closer than the running tmax, so the last one
         // recorded is the closest.
-        best.map(|(id, t, u, v)| Hit {
-            t,
-            triangle: self.ids[id as usize],
-            u,
-            v,
+        best
+    }
+
+    /// Distance of some hit of `ray` that `keep` accepts (infinity: none).
+    #[inline]
+    fn any(&self, ray: Ray, keep: impl Fn(u32, f32, f32) -> bool) -> f32 {
+        let mut found = f32::INFINITY;
+        self.bvh
+            .ray_traverse_miss(ray, |r, id| match self.tris[id].intersect(r) {
+                Some((t, u, v)) if keep(self.ids[id], u, v) => {
+                    found = t;
+                    t
+                }
+                _ => f32::INFINITY,
+            });
+        found
+    }
+
+    /// Closest hit along `origin + t·dir`, t in (0, tmax): (mesh triangle, t, u, v).
+    pub fn intersect(&self, origin: Vec3, dir: Vec3, tmax: f32) -> Option<(u32, f32, f32, f32)> {
+        self.closest(make_ray(origin, dir, tmax), |_, _, _| true)
+    }
+
+    /// True when anything blocks the open segment (0, tmax) of the ray.
+    pub fn occluded(&self, origin: Vec3, dir: Vec3, tmax: f32) -> bool {
+        self.any(make_ray(origin, dir, tmax), |_, _, _| true) < f32::INFINITY
+    }
+}
+
+/// Bytes per instance of a [`SceneBvh`] build: the instance record, its box, and the top
+/// level's PLOC and wide nodes (a few per instance), with headroom.
+const BUILD_BYTES_PER_INSTANCE: u64 = 512;
+
+/// One object placed in the top level: its mesh's BVH, the world -> mesh transform, and
+/// where its triangles start in the scene's flat numbering.
+#[derive(Clone, Copy, Debug)]
+struct Instance {
+    to_local: Affine3A,
+    mesh: u32,
+    first_triangle: u32,
+    /// The flat arrays store a mirrored object's triangles with corners 1 and 2 swapped, so
+    /// its barycentrics swap too.
+    flipped: bool,
+}
+
+/// The two-level BVH of a scene: one [`MeshBvh`] per unique mesh (in its local frame, built
+/// once and shared, [`Scene::meshes`]) and a top level over the objects (instances). Moving
+/// objects ([`SceneBvh::refit`]) rebuilds the top level only: O(instances), never the
+/// triangles. Hits name the scene's flat triangle index, with barycentrics in its corner
+/// order, so that the flat view and the instances agree.
+pub struct SceneBvh {
+    meshes: Vec<Arc<MeshBvh>>,
+    instances: Vec<Instance>,
+    /// The top level over instance boxes (BVH order -> instance in `order`).
+    top: CwBvh,
+    order: Vec<u32>,
+    /// Alpha masks of the scene's materials (none: every hit counts).
+    alpha: Option<AlphaTest>,
+}
+
+fn mesh_triangles(mesh: &crate::scene::TriMesh) -> Vec<Triangle> {
+    mesh.indices
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| Vec3A::from(mesh.positions[i as usize]));
+            Triangle {
+                v0: a,
+                v1: b,
+                v2: c,
+            }
+        })
+        .collect()
+}
+
+/// Each object of `scene` as an instance of its mesh.
+fn scene_instances(scene: &Scene) -> Vec<Instance> {
+    scene
+        .objects
+        .iter()
+        .map(|o| Instance {
+            to_local: Affine3A::from_mat4(o.transform).inverse(),
+            mesh: o.mesh,
+            first_triangle: o.triangles.start,
+            flipped: o.flipped,
+        })
+        .collect()
+}
+
+/// The box of `b` placed by `xf` (its eight corners transformed).
+fn placed_box(b: &Aabb, xf: &Affine3A) -> Aabb {
+    if !b.valid() {
+        return *b;
+    }
+    let mut out = Aabb::empty();
+    for i in 0..8 {
+        let c = Vec3A::new(
+            if i & 1 == 0 { b.min.x } else { b.max.x },
+            if i & 2 == 0 { b.min.y } else { b.max.y },
+            if i & 4 == 0 { b.min.z } else { b.max.z },
+        );
+        out.extend(xf.transform_point3a(c));
+    }
+    out
+}
+
+/// The top level over `instances`: (wide BVH, instance of each BVH-ordered leaf).
+fn build_top(meshes: &[Arc<MeshBvh>], instances: &[Instance]) -> (CwBvh, Vec<u32>) {
+    let boxes: Vec<Aabb> = instances
+        .iter()
+        .map(|i| placed_box(&meshes[i.mesh as usize].bounds(), &i.to_local.inverse()))
+        .collect();
+    let p = BvhBuildParams::medium_build();
+    let mut bvh2 = PlocBuilder::with_capacity(boxes.len()).build(
+        BuildSettings::DEFAULT.search,
+        &boxes,
+        (0..boxes.len() as u32).collect(),
+        p.sort_precision,
+        BuildSettings::DEFAULT.search_depth_threshold,
+    );
+    ReinsertionOptimizer::default().run(&mut bvh2, BuildSettings::DEFAULT.reinsertion, None);
+    let top = bvh2_to_cwbvh(&bvh2, 1, true, false);
+    let order = top.primitive_indices.clone();
+    (top, order)
+}
+
+impl SceneBvh {
+    /// Builds the BVH of every unique mesh of `scene` and the top level over its objects.
+    pub fn build(scene: &Scene) -> Self {
+        Self::build_with(scene, &BuildSettings::DEFAULT)
+    }
+
+    /// [`SceneBvh::build`] with explicit build settings for the meshes (for the build
+    /// benchmark).
+    pub fn build_with(scene: &Scene, settings: &BuildSettings) -> Self {
+        let meshes = scene
+            .meshes
+            .iter()
+            .map(|m| Arc::new(MeshBvh::from_triangles_with(&mesh_triangles(m), settings)))
+            .collect();
+        Self::from_parts(meshes, scene_instances(scene), AlphaTest::new(scene))
+    }
+
+    fn from_parts(
+        meshes: Vec<Arc<MeshBvh>>,
+        instances: Vec<Instance>,
+        alpha: Option<AlphaTest>,
+    ) -> Self {
+        let (top, order) = build_top(&meshes, &instances);
+        SceneBvh {
+            meshes,
+            instances,
+            top,
+            order,
+            alpha,
+        }
+    }
+
+    /// Re-reads the alpha masks of the scene's materials (after a material update).
+    pub fn update_alpha(&mut self, scene: &Scene) {
+        self.alpha = AlphaTest::new(scene);
+    }
+
+    /// [`SceneBvh::build`] after checking that the build fits in memory: the unique
+    /// triangles and the instances.
+    pub fn try_build(scene: &Scene) -> Result<Self> {
+        memory::check(
+            || {
+                format!(
+                    "the BVH over {} unique triangles and {} instances",
+                    scene.unique_triangle_count(),
+                    scene.objects.len()
+                )
+            },
+            Self::estimate_bytes(scene.unique_triangle_count(), scene.objects.len()),
+        )?;
+        Ok(Self::build(scene))
+    }
+
+    /// Peak bytes of a build over `triangles` unique triangles placed by `instances` objects.
+    pub fn estimate_bytes(triangles: usize, instances: usize) -> u64 {
+        (triangles as u64)
+            .saturating_mul(BUILD_BYTES_PER_TRIANGLE)
+            .saturating_add((instances as u64).saturating_mul(BUILD_BYTES_PER_INSTANCE))
+    }
+
+    /// One mesh of `triangles` in world space (no scene): for tests and benchmarks.
+    pub fn from_triangles(triangles: &[Triangle]) -> Self {
+        Self::from_triangles_with(triangles, &BuildSettings::DEFAULT)
+    }
+
+    /// [`SceneBvh::from_triangles`] with explicit build settings.
+    pub fn from_triangles_with(triangles: &[Triangle], settings: &BuildSettings) -> Self {
+        let mesh = Arc::new(MeshBvh::from_triangles_with(triangles, settings));
+        let instance = Instance {
+            to_local: Affine3A::IDENTITY,
+            mesh: 0,
+            first_triangle: 0,
+            flipped: false,
+        };
+        Self::from_parts(vec![mesh], vec![instance], None)
+    }
+
+    /// Updates the BVH after objects moved (their new transforms are read from `scene`):
+    /// the top level only, O(instances); the meshes' BVHs are kept. `moved` (flat triangle
+    /// ranges) is not needed by the two-level BVH and kept for the callers.
+    pub fn refit(self, scene: &Scene, _moved: &[std::ops::Range<usize>]) -> Self {
+        Self::from_parts(self.meshes, scene_instances(scene), AlphaTest::new(scene))
+    }
+
+    /// [`SceneBvh::refit`] without re-reading the alpha masks (for the update benchmark).
+    pub fn update_instances(&mut self, scene: &Scene) {
+        self.instances = scene_instances(scene);
+        let (top, order) = build_top(&self.meshes, &self.instances);
+        self.top = top;
+        self.order = order;
+    }
+
+    /// Unique meshes and instances in the BVH.
+    pub fn counts(&self) -> (usize, usize) {
+        (self.meshes.len(), self.instances.len())
+    }
+
+    /// The ray in instance `i`'s mesh frame (same parameter t: the direction is not
+    /// renormalised).
+    #[inline(always)]
+    fn local_ray(&self, i: &Instance, origin: Vec3A, dir: Vec3A, tmax: f32) -> Ray {
+        make_ray(
+            i.to_local.transform_point3a(origin).into(),
+            i.to_local.transform_vector3a(dir).into(),
+            tmax,
+        )
+    }
+
+    /// Whether the hit (u, v) (mesh corner order) on mesh triangle `t` of instance `i` is
+    /// cut out by an alpha mask.
+    #[inline]
+    fn cut_out(&self, i: &Instance, t: u32, u: f32, v: f32) -> bool {
+        self.alpha.as_ref().is_some_and(|a| {
+            let (u, v) = if i.flipped { (v, u) } else { (u, v) };
+            a.cut(i.first_triangle + t, u, v)
+        })
+    }
+
+    /// Closest hit along `origin + t·dir`, t in (0, tmax).
+    #[inline]
+    pub fn intersect(&self, origin: Vec3, dir: Vec3, tmax: f32) -> Option<Hit> {
+        let ray = make_ray(origin, dir, tmax);
+        let (o, d) = (Vec3A::from(origin), Vec3A::from(dir));
+        let mut best: Option<(u32, u32, f32, f32, f32)> = None;
+        let mut hit = obvhs::ray::RayHit::none();
+        self.top.ray_traverse(ray, &mut hit, |r, k| {
+            let which = self.order[k];
+            let i = &self.instances[which as usize];
+            let local = self.local_ray(i, o, d, r.tmax);
+            match self.meshes[i.mesh as usize].closest(local, |t, u, v| !self.cut_out(i, t, u, v)) {
+                Some((t_mesh, t, u, v)) => {
+                    best = Some((which, t_mesh, t, u, v));
+                    t
+                }
+                None => f32::INFINITY,
+            }
+        });
+        best.map(|(which, t_mesh, t, u, v)| {
+            let i = &self.instances[which as usize];
+            let (u, v) = if i.flipped { (v, u) } else { (u, v) };
+            Hit {
+                t,
+                triangle: i.first_triangle + t_mesh,
+                u,
+                v,
+            }
         })
     }
 
@@ -410,20 +635,12 @@ impl SceneBvh {
     #[inline]
     pub fn occluded(&self, origin: Vec3, dir: Vec3, tmax: f32) -> bool {
         let ray = make_ray(origin, dir, tmax);
-        !self
-            .bvh
-            .ray_traverse_miss(ray, |r, id| match self.tris[id].intersect(r) {
-                Some((t, u, v)) if !self.cut_out(id, u, v) => t,
-                _ => f32::INFINITY,
-            })
-    }
-
-    /// Whether the hit (u, v) on BVH-ordered triangle `id` is cut out by an alpha mask.
-    #[inline]
-    fn cut_out(&self, id: usize, u: f32, v: f32) -> bool {
-        self.alpha
-            .as_ref()
-            .is_some_and(|a| a.cut(self.ids[id], u, v))
+        let (o, d) = (Vec3A::from(origin), Vec3A::from(dir));
+        !self.top.ray_traverse_miss(ray, |r, k| {
+            let i = &self.instances[self.order[k] as usize];
+            let local = self.local_ray(i, o, d, r.tmax);
+            self.meshes[i.mesh as usize].any(local, |t, u, v| !self.cut_out(i, t, u, v))
+        })
     }
 }
 
@@ -500,14 +717,14 @@ mod tests {
             .collect();
         let copies = 300;
         let tris: Vec<Triangle> = (0..copies).flat_map(|_| mesh.iter().copied()).collect();
-        let plain = SceneBvh::from_triangles_with(
+        let plain = MeshBvh::from_triangles_with(
             &tris,
             &BuildSettings {
                 separate_coincident: false,
                 ..BuildSettings::DEFAULT
             },
         );
-        let bvh = SceneBvh::from_triangles(&tris);
+        let bvh = MeshBvh::from_triangles(&tris);
         let log2 = (tris.len() as f64).log2().ceil() as usize;
         assert!(depth(&plain.bvh2) >= copies, "{}", depth(&plain.bvh2));
         assert!(
@@ -538,7 +755,7 @@ mod tests {
                     .map(|h| h.0)
                 })
                 .min_by(f32::total_cmp);
-            let got = bvh.intersect(o, d, f32::INFINITY).map(|h| h.t);
+            let got = bvh.intersect(o, d, f32::INFINITY).map(|h| h.1);
             assert_eq!(brute, got);
             if let Some(t) = brute {
                 hits += 1;
