@@ -7,6 +7,7 @@ pub mod camera;
 pub mod desc;
 pub mod emitters;
 pub mod environment;
+pub mod instances;
 pub mod light;
 pub mod light_bvh;
 pub mod light_views;
@@ -120,27 +121,29 @@ fn within_extent(v: V3) -> bool {
 /// The shape, smoothing and material of object `i`, following `instance` shapes to the
 /// object they name (the instance's own `smooth` and `material` win where given); errors as
 /// (field, message) for a missing or self-referencing object and for a cycle of instances.
-fn resolve_instance(
-    objects: &[desc::ObjectDesc],
+fn resolve_instance<'a>(
+    objects: &'a [desc::ObjectDesc],
+    names: &HashMap<&str, usize>,
     i: usize,
-) -> std::result::Result<(&ShapeDesc, Option<SmoothDesc>, Option<&String>), (String, String)> {
+) -> std::result::Result<(&'a ShapeDesc, Option<SmoothDesc>, Option<&'a String>), (String, String)>
+{
     let (mut at, mut smooth, mut material) = (i, objects[i].smooth, objects[i].material.as_ref());
-    for _ in 0..=objects.len() {
+    for step in 0..=objects.len() {
         let ShapeDesc::Instance { object } = &objects[at].shape else {
             return Ok((&objects[at].shape, smooth, material));
         };
         let field = "shape.object".to_string();
-        let Some(j) = objects
-            .iter()
-            .position(|o| o.name.as_deref() == Some(object.as_str()))
-        else {
+        let Some(&j) = names.get(object.as_str()) else {
             return Err((field, format!("no object named `{object}`")));
         };
-        if j == i {
+        if j == i && step == 0 {
             return Err((
                 field,
                 format!("`{object}` is this object (an instance of itself)"),
             ));
+        }
+        if j == i {
+            return Err((field, "instances refer to each other in a cycle".into()));
         }
         at = j;
         smooth = smooth.or(objects[j].smooth);
@@ -328,12 +331,19 @@ impl Scene {
         // Unique meshes by (resolved shape, smoothing): objects with equal keys share one.
         let mut unique: HashMap<String, (u32, Arc<Vec<[Vec2; 3]>>, Option<&MeshData>)> =
             HashMap::new();
+        // Object names (the first of equal ones: a repeated name is an error below).
+        let mut names: HashMap<&str, usize> = HashMap::new();
+        for (i, o) in desc.objects.iter().enumerate() {
+            if let Some(n) = &o.name {
+                names.entry(n.as_str()).or_insert(i);
+            }
+        }
         for (i, obj) in desc.objects.iter().enumerate() {
             let at = |f: &str| format!("objects[{i}].{f}");
             let xf = transform_matrix(&obj.transform)
                 .map_err(|(f, m)| err(at(&format!("transform.{f}")), m))?;
             let (shape, smooth, material) =
-                resolve_instance(&desc.objects, i).map_err(|(f, m)| err(at(&f), &m))?;
+                resolve_instance(&desc.objects, &names, i).map_err(|(f, m)| err(at(&f), &m))?;
             let key = serde_json::to_string(&(shape, smooth)).unwrap_or_default();
             let (mesh_index, uvs, file_materials) = match unique.get(&key) {
                 Some(found) => found.clone(),
@@ -396,11 +406,7 @@ impl Scene {
                 }
             };
             if let Some(name) = &obj.name {
-                if scene
-                    .objects
-                    .iter()
-                    .any(|o| o.name.as_deref() == Some(name))
-                {
+                if names.get(name.as_str()) != Some(&i) {
                     return Err(err(at("name"), "another object has this name"));
                 }
             }

@@ -1,0 +1,54 @@
+//! Other forms of a scene with instances, for tests and measurements: every object with its
+//! own copy of its mesh ([`Scene::unshared`]) and every object baked into world-space
+//! triangles ([`Scene::flattened`]).
+
+use super::{Scene, TriMesh};
+use glam::Mat4;
+use std::sync::Arc;
+
+impl Scene {
+    /// The same scene with every object given its own copy of its mesh (nothing shared):
+    /// what loading it without instancing gives.
+    pub fn unshared(&self) -> Scene {
+        let mut s = self.clone();
+        s.meshes = s
+            .objects
+            .iter()
+            .map(|o| Arc::new((*self.meshes[o.mesh as usize]).clone()))
+            .collect();
+        for (i, o) in s.objects.iter_mut().enumerate() {
+            o.mesh = i as u32;
+        }
+        s
+    }
+
+    /// The same scene with every object's mesh replaced by its world-space triangles (the
+    /// flat arrays) under the identity transform: the scene flattened into triangles. The
+    /// flat arrays, and so everything drawn from them, are unchanged.
+    pub fn flattened(&self) -> Scene {
+        let mut s = self.clone();
+        s.meshes = s
+            .objects
+            .iter()
+            .map(|o| {
+                let v = o.vertices.start as usize..o.vertices.end as usize;
+                let t = o.triangles.start as usize..o.triangles.end as usize;
+                Arc::new(TriMesh {
+                    positions: self.positions[v.clone()].to_vec(),
+                    normals: self.normals[v].to_vec(),
+                    indices: self.triangles[t]
+                        .iter()
+                        .map(|c| c.map(|i| i - o.vertices.start))
+                        .collect(),
+                })
+            })
+            .collect();
+        for (i, o) in s.objects.iter_mut().enumerate() {
+            o.mesh = i as u32;
+            o.transform = Mat4::IDENTITY;
+            o.flipped = false;
+            o.described = None;
+        }
+        s
+    }
+}
