@@ -126,8 +126,13 @@ fn footprints_scale_with_the_scene() {
     let scene = builtin::load("cornell").unwrap();
     let k = 100.0f32;
     let mut big = scene.clone();
-    for p in &mut big.positions {
-        *p *= k;
+    // Every object scaled about the origin (objects are instances: their meshes stay, the
+    // transforms and the flat view change).
+    for object in 0..big.objects.len() {
+        let transform =
+            glam::Mat4::from_scale(glam::Vec3::splat(k)) * big.objects[object].transform;
+        big.apply(&gi_core::scene::SceneUpdate::Transform { object, transform })
+            .expect("a valid scale");
     }
     for l in &mut big.lights {
         match l {

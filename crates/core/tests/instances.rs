@@ -90,8 +90,14 @@ fn equal_shapes_and_instances_share_one_mesh() {
     // The instance without a material takes the referenced object's.
     let white = s.material_names.iter().position(|n| n == "white").unwrap() as u32;
     let glass = s.material_names.iter().position(|n| n == "glass").unwrap() as u32;
-    assert_eq!(s.triangle_materials[balls[2].triangles.start as usize], white);
-    assert_eq!(s.triangle_materials[balls[3].triangles.start as usize], glass);
+    assert_eq!(
+        s.triangle_materials[balls[2].triangles.start as usize],
+        white
+    );
+    assert_eq!(
+        s.triangle_materials[balls[3].triangles.start as usize],
+        glass
+    );
     let copied = s.unshared();
     assert_eq!(copied.meshes.len(), s.objects.len());
     assert_eq!(copied.triangles, s.triangles);
@@ -242,7 +248,10 @@ fn bad_instances_are_errors_naming_the_field() {
             .to_string()
     };
     let inst = |of: &str| serde_json::json!({"type": "instance", "object": of});
-    let n = instanced_json()["objects"].as_array().expect("objects").len();
+    let n = instanced_json()["objects"]
+        .as_array()
+        .expect("objects")
+        .len();
     let missing = with(vec![serde_json::json!({"shape": inst("nowhere")})]);
     assert!(
         missing.contains(&format!("objects[{n}].shape.object")) && missing.contains("nowhere"),

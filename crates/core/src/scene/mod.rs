@@ -31,6 +31,7 @@ pub use update::{Changes, SceneObject, SceneUpdate};
 
 use crate::bsdf::Material;
 use crate::error::{Error, Result};
+use crate::memory;
 use crate::texture::Texture;
 use desc::{LightDesc, MaterialDesc, Scale, ShapeDesc, SmoothDesc, V3};
 use glam::{EulerRot, Mat3, Mat4, Quat, Vec2, Vec3};
@@ -71,12 +72,12 @@ pub struct Scene {
     pub textures: Vec<Arc<Texture>>,
     pub texture_names: Vec<String>,
     /// Texture coordinates per triangle corner (same order as `triangles`).
-    pub uvs: Vec<[Vec2; 3]>,
-    pub positions: Vec<Vec3>,
-    pub normals: Vec<Vec3>,
-    pub triangles: Vec<[u32; 3]>,
+    pub uvs: Arc<Vec<[Vec2; 3]>>,
+    pub positions: Arc<Vec<Vec3>>,
+    pub normals: Arc<Vec<Vec3>>,
+    pub triangles: Arc<Vec<[u32; 3]>>,
     /// Material index per triangle.
-    pub triangle_materials: Vec<u32>,
+    pub triangle_materials: Arc<Vec<u32>>,
     /// The objects of the description, in order: their mesh, transform, and vertex and
     /// triangle ranges of the flat arrays.
     pub objects: Vec<SceneObject>,
@@ -118,15 +119,125 @@ fn within_extent(v: V3) -> bool {
     v.iter().all(|x| x.is_finite() && x.abs() <= MAX_EXTENT)
 }
 
+/// An object resolved to its unique mesh: transform, mesh index, texture coordinates per
+/// triangle corner, the mesh file's data, and the material it names.
+type Resolved<'a> = (
+    Mat4,
+    u32,
+    Arc<Vec<[Vec2; 3]>>,
+    Option<&'a MeshData>,
+    Option<&'a String>,
+);
+
+/// Every object of `desc` resolved to a unique mesh (pushed to `unique_meshes` the first
+/// time its key, the resolved shape and smoothing, is seen), with its transform checked and
+/// its vertices placed within [`MAX_EXTENT`]; and the objects' names.
+fn resolve_objects<'a>(
+    desc: &'a SceneDesc,
+    meshes: &'a HashMap<String, MeshData>,
+    unique_meshes: &mut Vec<Arc<TriMesh>>,
+    source_name: &str,
+) -> Result<(Vec<Resolved<'a>>, HashMap<&'a str, usize>)> {
+    let err = |field: String, msg: &str| Error::scene(source_name, field, msg);
+    // Unique meshes by (resolved shape, smoothing): objects with equal keys share one.
+    type Found<'a> = (u32, Arc<Vec<[Vec2; 3]>>, Option<&'a MeshData>);
+    let mut unique: HashMap<String, Found> = HashMap::new();
+    // Object names (the first of equal ones: a repeated name is an error later).
+    let mut names: HashMap<&str, usize> = HashMap::new();
+    for (i, o) in desc.objects.iter().enumerate() {
+        if let Some(n) = &o.name {
+            names.entry(n.as_str()).or_insert(i);
+        }
+    }
+    let mut out = Vec::with_capacity(desc.objects.len());
+    for (i, obj) in desc.objects.iter().enumerate() {
+        let at = |f: &str| format!("objects[{i}].{f}");
+        let xf = transform_matrix(&obj.transform)
+            .map_err(|(f, m)| err(at(&format!("transform.{f}")), m))?;
+        let (shape, smooth, material) =
+            resolve_instance(&desc.objects, &names, i).map_err(|(f, m)| err(at(&f), &m))?;
+        let key = serde_json::to_string(&(shape, smooth)).unwrap_or_default();
+        let (mesh_index, uvs, file_materials) = match unique.get(&key) {
+            Some(found) => found.clone(),
+            None => {
+                let (mesh, file_materials, uvs) =
+                    object_mesh(shape, meshes).map_err(|(f, m)| err(at(&f), &m))?;
+                validate_mesh(&mesh).map_err(|m| err(at("shape"), &m))?;
+                let smoothing = smoothing(smooth).map_err(|m| err(at("smooth"), m))?;
+                unique_meshes.push(Arc::new(shading::shade(&mesh, smoothing)));
+                let found = (
+                    unique_meshes.len() as u32 - 1,
+                    Arc::new(uvs),
+                    file_materials,
+                );
+                unique.insert(key, found.clone());
+                found
+            }
+        };
+        validate_placed(&unique_meshes[mesh_index as usize], xf)
+            .map_err(|(f, m)| err(at(&f), &m))?;
+        out.push((xf, mesh_index, uvs, file_materials, material));
+    }
+    Ok((out, names))
+}
+
+/// Bytes of the flat view per vertex (position, normal) and per triangle (corners, texture
+/// coordinates, material).
+const FLAT_BYTES_PER_VERTEX: u64 = 24;
+const FLAT_BYTES_PER_TRIANGLE: u64 = 12 + 24 + 4;
+/// Bytes per object beyond its flat arrays (its record and the description's).
+const BYTES_PER_OBJECT: u64 = 256;
+
+impl Scene {
+    /// Checks that the flat view of `resolved` objects fits (2^32 - 1 vertices, memory) and
+    /// reserves it, before anything is placed: millions of instances are refused by the
+    /// estimate, not by the allocator.
+    fn reserve_flat(&mut self, resolved: &[Resolved]) -> Result<()> {
+        let (mut vertices, mut triangles) = (0u64, 0u64);
+        for r in resolved {
+            let m = &self.meshes[r.1 as usize];
+            vertices += m.positions.len() as u64;
+            triangles += m.indices.len() as u64;
+        }
+        if vertices > MAX_VERTICES as u64 {
+            return Err(Error::scene(
+                "scene",
+                "objects",
+                format!("the scene would hold {vertices} vertices (at most 2^32 - 1)"),
+            ));
+        }
+        let n = resolved.len();
+        memory::check(
+            || format!("the scene's flat view ({n} objects, {triangles} triangles)"),
+            Self::flat_bytes(vertices, triangles, n as u64),
+        )?;
+        Arc::make_mut(&mut self.positions).reserve_exact(vertices as usize);
+        Arc::make_mut(&mut self.normals).reserve_exact(vertices as usize);
+        Arc::make_mut(&mut self.triangles).reserve_exact(triangles as usize);
+        Arc::make_mut(&mut self.uvs).reserve_exact(triangles as usize);
+        Arc::make_mut(&mut self.triangle_materials).reserve_exact(triangles as usize);
+        self.objects.reserve_exact(n);
+        Ok(())
+    }
+
+    /// Estimated bytes of the flat view of `vertices` and `triangles` placed by `objects`.
+    pub fn flat_bytes(vertices: u64, triangles: u64, objects: u64) -> u64 {
+        vertices
+            .saturating_mul(FLAT_BYTES_PER_VERTEX)
+            .saturating_add(triangles.saturating_mul(FLAT_BYTES_PER_TRIANGLE))
+            .saturating_add(objects.saturating_mul(BYTES_PER_OBJECT))
+    }
+}
+
 /// The shape, smoothing and material of object `i`, following `instance` shapes to the
 /// object they name (the instance's own `smooth` and `material` win where given); errors as
 /// (field, message) for a missing or self-referencing object and for a cycle of instances.
+type InstanceOf<'a> = (&'a ShapeDesc, Option<SmoothDesc>, Option<&'a String>);
 fn resolve_instance<'a>(
     objects: &'a [desc::ObjectDesc],
     names: &HashMap<&str, usize>,
     i: usize,
-) -> std::result::Result<(&'a ShapeDesc, Option<SmoothDesc>, Option<&'a String>), (String, String)>
-{
+) -> std::result::Result<InstanceOf<'a>, (String, String)> {
     let (mut at, mut smooth, mut material) = (i, objects[i].smooth, objects[i].material.as_ref());
     for step in 0..=objects.len() {
         let ShapeDesc::Instance { object } = &objects[at].shape else {
@@ -317,11 +428,11 @@ impl Scene {
             material_maps,
             textures: texture_names.iter().map(|n| textures[n].clone()).collect(),
             texture_names,
-            uvs: Vec::new(),
-            positions: Vec::new(),
-            normals: Vec::new(),
-            triangles: Vec::new(),
-            triangle_materials: Vec::new(),
+            uvs: Default::default(),
+            positions: Default::default(),
+            normals: Default::default(),
+            triangles: Default::default(),
+            triangle_materials: Default::default(),
             objects: Vec::new(),
             meshes: Vec::new(),
             animation: None,
@@ -329,42 +440,13 @@ impl Scene {
             camera_source: desc.camera.clone(),
         };
         // Unique meshes by (resolved shape, smoothing): objects with equal keys share one.
-        let mut unique: HashMap<String, (u32, Arc<Vec<[Vec2; 3]>>, Option<&MeshData>)> =
-            HashMap::new();
-        // Object names (the first of equal ones: a repeated name is an error below).
-        let mut names: HashMap<&str, usize> = HashMap::new();
-        for (i, o) in desc.objects.iter().enumerate() {
-            if let Some(n) = &o.name {
-                names.entry(n.as_str()).or_insert(i);
-            }
-        }
-        for (i, obj) in desc.objects.iter().enumerate() {
+        let (resolved, names) = resolve_objects(desc, meshes, &mut scene.meshes, source_name)?;
+        scene.reserve_flat(&resolved)?;
+        for (i, (obj, (xf, mesh_index, uvs, file_materials, material))) in
+            desc.objects.iter().zip(resolved).enumerate()
+        {
             let at = |f: &str| format!("objects[{i}].{f}");
-            let xf = transform_matrix(&obj.transform)
-                .map_err(|(f, m)| err(at(&format!("transform.{f}")), m))?;
-            let (shape, smooth, material) =
-                resolve_instance(&desc.objects, &names, i).map_err(|(f, m)| err(at(&f), &m))?;
-            let key = serde_json::to_string(&(shape, smooth)).unwrap_or_default();
-            let (mesh_index, uvs, file_materials) = match unique.get(&key) {
-                Some(found) => found.clone(),
-                None => {
-                    let (mesh, file_materials, uvs) =
-                        object_mesh(shape, meshes).map_err(|(f, m)| err(at(&f), &m))?;
-                    validate_mesh(&mesh).map_err(|m| err(at("shape"), &m))?;
-                    let smoothing = smoothing(smooth).map_err(|m| err(at("smooth"), m))?;
-                    scene
-                        .meshes
-                        .push(Arc::new(shading::shade(&mesh, smoothing)));
-                    let found = (scene.meshes.len() as u32 - 1, Arc::new(uvs), file_materials);
-                    unique.insert(key, found.clone());
-                    found
-                }
-            };
             let mesh = scene.meshes[mesh_index as usize].clone();
-            if scene.positions.len() + mesh.positions.len() > MAX_VERTICES {
-                return Err(err(at("shape"), "the scene would exceed 2^32 - 1 vertices"));
-            }
-            validate_placed(&mesh, xf).map_err(|(f, m)| err(at(&f), &m))?;
             // Per-triangle materials: the object's own, else those of the file.
             let tri_mats: Vec<u32> = match (material, file_materials) {
                 (Some(name), _) => {
@@ -433,11 +515,11 @@ impl Scene {
         let base = self.positions.len() as u32;
         let first_triangle = self.triangles.len() as u32;
         let flip = Mat3::from_mat4(xf).determinant() < 0.0;
-        self.positions
-            .resize(self.positions.len() + mesh.positions.len(), Vec3::ZERO);
-        self.normals
-            .resize(self.normals.len() + mesh.normals.len(), Vec3::ZERO);
-        self.triangles.extend(mesh.indices.iter().map(|t| {
+        let positions = Arc::make_mut(&mut self.positions);
+        positions.resize(positions.len() + mesh.positions.len(), Vec3::ZERO);
+        let normals = Arc::make_mut(&mut self.normals);
+        normals.resize(normals.len() + mesh.normals.len(), Vec3::ZERO);
+        Arc::make_mut(&mut self.triangles).extend(mesh.indices.iter().map(|t| {
             let t = t.map(|i| i + base);
             if flip {
                 [t[0], t[2], t[1]]
@@ -445,12 +527,15 @@ impl Scene {
                 t
             }
         }));
-        self.triangle_materials.extend_from_slice(tri_materials);
+        Arc::make_mut(&mut self.triangle_materials).extend_from_slice(tri_materials);
         // Corners in the order of the (possibly flipped) triangles.
-        self.uvs.extend(
-            uvs.iter()
-                .map(|c| if flip { [c[0], c[2], c[1]] } else { *c }),
-        );
+        Arc::make_mut(&mut self.uvs).extend(uvs.iter().map(|c| {
+            if flip {
+                [c[0], c[2], c[1]]
+            } else {
+                *c
+            }
+        }));
         let object = SceneObject {
             name,
             vertices: base..base + mesh.positions.len() as u32,
@@ -460,7 +545,11 @@ impl Scene {
             mesh: mesh_index,
             described: None,
         };
-        object.place(&mesh, &mut self.positions, &mut self.normals);
+        object.place(
+            &mesh,
+            Arc::make_mut(&mut self.positions).as_mut_slice(),
+            Arc::make_mut(&mut self.normals).as_mut_slice(),
+        );
         self.objects.push(object);
     }
 

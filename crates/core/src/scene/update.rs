@@ -166,12 +166,16 @@ impl Scene {
                 if flip != obj.flipped {
                     obj.flipped = flip;
                     let r = obj.triangles.start as usize..obj.triangles.end as usize;
-                    for t in &mut self.triangles[r] {
+                    for t in &mut std::sync::Arc::make_mut(&mut self.triangles)[r] {
                         t.swap(1, 2);
                     }
                 }
                 let obj = &self.objects[*object];
-                obj.place(&mesh, &mut self.positions, &mut self.normals);
+                obj.place(
+                    &mesh,
+                    std::sync::Arc::make_mut(&mut self.positions).as_mut_slice(),
+                    std::sync::Arc::make_mut(&mut self.normals).as_mut_slice(),
+                );
                 Ok(Changes {
                     geometry: true,
                     ..Default::default()
@@ -350,7 +354,7 @@ mod tests {
                 transform: original,
             })
             .expect("valid");
-        for (a, b) in scene.positions.iter().zip(&before.positions) {
+        for (a, b) in scene.positions.iter().zip(before.positions.iter()) {
             assert!((*a - *b).length() < 1e-5);
         }
         assert_eq!(scene.triangles, before.triangles);

@@ -91,7 +91,7 @@ struct AlphaTest {
     mask_of: Vec<u32>,
     /// Coverage texture and cutoff per masked material.
     masks: Vec<(std::sync::Arc<crate::texture::Texture>, f32)>,
-    uvs: Vec<[glam::Vec2; 3]>,
+    uvs: Arc<Vec<[glam::Vec2; 3]>>,
 }
 
 impl AlphaTest {
@@ -118,7 +118,7 @@ impl AlphaTest {
                 .map(|&m| per_material[m as usize])
                 .collect(),
             masks,
-            uvs: scene.uvs.clone(),
+            uvs: scene.uvs.clone(), // shared, not copied
         })
     }
 
@@ -239,6 +239,21 @@ fn separated_boxes(triangles: &[Triangle]) -> Option<Vec<Aabb>> {
         })
         .collect();
     Some(moved)
+}
+
+/// The scene's flat triangles in world space (one mesh of every object's copy): for the
+/// flat-BVH benchmarks.
+pub fn flat_triangles(scene: &Scene) -> Vec<Triangle> {
+    (0..scene.triangles.len())
+        .map(|t| {
+            let [a, b, c] = scene.triangle(t);
+            Triangle {
+                v0: a.into(),
+                v1: b.into(),
+                v2: c.into(),
+            }
+        })
+        .collect()
 }
 
 impl MeshBvh {
@@ -445,6 +460,18 @@ fn scene_instances(scene: &Scene) -> Vec<Instance> {
         .collect()
 }
 
+/// Instance boxes with equal ones moved apart as [`separated_boxes`] does for triangles
+/// (`None` when all differ).
+fn separated_instance_boxes(boxes: &[Aabb]) -> Option<Vec<Aabb>> {
+    let as_triangle = |b: &Aabb| Triangle {
+        v0: b.min,
+        v1: b.max,
+        v2: b.min,
+    };
+    let tris: Vec<Triangle> = boxes.iter().map(as_triangle).collect();
+    separated_boxes(&tris)
+}
+
 /// The box of `b` placed by `xf` (its eight corners transformed).
 fn placed_box(b: &Aabb, xf: &Affine3A) -> Aabb {
     if !b.valid() {
@@ -469,14 +496,24 @@ fn build_top(meshes: &[Arc<MeshBvh>], instances: &[Instance]) -> (CwBvh, Vec<u32
         .map(|i| placed_box(&meshes[i.mesh as usize].bounds(), &i.to_local.inverse()))
         .collect();
     let p = BvhBuildParams::medium_build();
+    // Coincident instances (equal boxes) would chain as coincident triangles do: told apart
+    // for the build, then given their exact boxes back.
+    let separated = separated_instance_boxes(&boxes);
     let mut bvh2 = PlocBuilder::with_capacity(boxes.len()).build(
         BuildSettings::DEFAULT.search,
-        &boxes,
+        separated.as_deref().unwrap_or(&boxes),
         (0..boxes.len() as u32).collect(),
         p.sort_precision,
         BuildSettings::DEFAULT.search_depth_threshold,
     );
     ReinsertionOptimizer::default().run(&mut bvh2, BuildSettings::DEFAULT.reinsertion, None);
+    if separated.is_some() {
+        for node in bvh2.nodes.iter_mut().filter(|n| n.is_leaf()) {
+            let i = bvh2.primitive_indices[node.first_index as usize];
+            node.set_aabb(boxes[i as usize]);
+        }
+        bvh2.refit_all();
+    }
     let top = bvh2_to_cwbvh(&bvh2, 1, true, false);
     let order = top.primitive_indices.clone();
     (top, order)
