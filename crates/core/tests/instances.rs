@@ -300,3 +300,33 @@ fn bad_instances_are_errors_naming_the_field() {
         .to_string();
     assert!(e.contains(&format!("objects[{object}].transform")), "{e}");
 }
+
+/// Many instances of a large mesh: the flat view they would need is refused before it is
+/// allocated — past 2^32 - 1 vertices by the vertex limit, below it by the memory estimate
+/// (200,000 spheres of 20,480 triangles: ~4·10⁹ triangles, ~200 GB) — as typed errors.
+#[test]
+fn millions_of_triangles_of_instances_are_refused_before_allocating() {
+    let scene_of = |copies: usize| {
+        let mut v = instanced_json();
+        let objects = v["objects"].as_array_mut().expect("objects");
+        objects.push(serde_json::json!({"name": "big",
+            "shape": {"type": "sphere", "radius": 0.01, "subdivisions": 5}, "material": "white"}));
+        let inst = serde_json::json!({"shape": {"type": "instance", "object": "big"}});
+        objects.extend(std::iter::repeat_n(inst, copies));
+        Scene::from_json(&v.to_string(), "many", &HashMap::new())
+    };
+    match scene_of(200_000) {
+        Err(gi_core::Error::OutOfMemory { what, needed, .. }) => {
+            assert!(what.contains("flat view"), "{what}");
+            assert!(needed > 100 << 30, "{needed}");
+        }
+        other => panic!(
+            "expected OutOfMemory, got {:?}",
+            other.map(|s| s.objects.len())
+        ),
+    }
+    let e = scene_of(500_000)
+        .expect_err("too many vertices")
+        .to_string();
+    assert!(e.contains("objects") && e.contains("vertices"), "{e}");
+}

@@ -150,6 +150,7 @@ fn resolve_objects<'a>(
         }
     }
     let mut out = Vec::with_capacity(desc.objects.len());
+    let mut bounds: HashMap<u32, (Vec3, Vec3)> = HashMap::new();
     for (i, obj) in desc.objects.iter().enumerate() {
         let at = |f: &str| format!("objects[{i}].{f}");
         let xf = transform_matrix(&obj.transform)
@@ -174,8 +175,14 @@ fn resolve_objects<'a>(
                 found
             }
         };
-        validate_placed(&unique_meshes[mesh_index as usize], xf)
-            .map_err(|(f, m)| err(at(&f), &m))?;
+        let mesh = &unique_meshes[mesh_index as usize];
+        // O(1) per instance when its mesh's box lands within range (the usual case).
+        let (lo, hi) = *bounds
+            .entry(mesh_index)
+            .or_insert_with(|| mesh_bounds(mesh));
+        if !box_within_extent(lo, hi, xf) {
+            validate_placed(mesh, xf).map_err(|(f, m)| err(at(&f), &m))?;
+        }
         out.push((xf, mesh_index, uvs, file_materials, material));
     }
     Ok((out, names))
@@ -918,6 +925,37 @@ fn primitive(shape: &ShapeDesc) -> std::result::Result<TriMesh, FieldError> {
                 segs(segments)?,
             )
         }
+    })
+}
+
+/// The box of a mesh's vertices (non-finite when a vertex is).
+fn mesh_bounds(m: &TriMesh) -> (Vec3, Vec3) {
+    m.positions
+        .iter()
+        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
+            if p.is_finite() {
+                (lo.min(*p), hi.max(*p))
+            } else {
+                (Vec3::NAN, Vec3::NAN)
+            }
+        })
+}
+
+/// Whether every corner of the box (lo, hi), placed by `xf`, is finite and within
+/// [`MAX_EXTENT`]: then so is every vertex inside it (an affine map keeps points inside
+/// the corners' hull).
+fn box_within_extent(lo: Vec3, hi: Vec3, xf: Mat4) -> bool {
+    if !(lo.is_finite() && hi.is_finite()) {
+        return false;
+    }
+    (0..8).all(|i| {
+        let c = Vec3::new(
+            if i & 1 == 0 { lo.x } else { hi.x },
+            if i & 2 == 0 { lo.y } else { hi.y },
+            if i & 4 == 0 { lo.z } else { hi.z },
+        );
+        let p = xf.transform_point3(c);
+        p.is_finite() && p.abs().max_element() <= MAX_EXTENT
     })
 }
 
