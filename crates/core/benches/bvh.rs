@@ -17,8 +17,8 @@ fn bvh(c: &mut Criterion) {
     let mut g = c.benchmark_group("bvh");
     g.sample_size(10)
         .measurement_time(Duration::from_secs(if quick { 2 } else { 10 }));
-    g.throughput(Throughput::Elements(scene.triangles.len() as u64));
-    g.bench_function(format!("build {} triangles", scene.triangles.len()), |b| {
+    g.throughput(Throughput::Elements(scene.triangle_count() as u64));
+    g.bench_function(format!("build {} triangles", scene.triangle_count()), |b| {
         b.iter(|| black_box(SceneBvh::build(&scene)))
     });
     // The degenerate input: copies of one 20k-triangle sphere at one place, flattened into

@@ -110,7 +110,7 @@ fn main() {
     println!("|---|---:|---|---:|---:|---:|---:|---:|");
     for (scene_name, make) in &scenes {
         let scene = make();
-        let n = scene.triangles.len();
+        let n = scene.triangle_count();
         for name in &names {
             let s = settings(name);
             let big = n > 1_000_000;

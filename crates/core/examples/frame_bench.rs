@@ -673,7 +673,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let (rebuild, refit) = gi_core::trace::bvh::rebuild_vs_refit(scene, runs.max(3));
         println!(
             "| {name} | {} | {:.1} | {:.1} |",
-            scene.triangles.len(),
+            scene.triangle_count(),
             rebuild * 1e3,
             refit * 1e3
         );

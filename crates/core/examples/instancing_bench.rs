@@ -59,7 +59,7 @@ fn main() {
                     let out = render(&scene, &options, &Silent).expect("render");
                     let total = t.elapsed().as_secs_f64();
                     assert!(out.radiance.pixels.iter().all(|p| p.is_finite()));
-                    tris = (scene.triangles.len(), scene.unique_triangle_count());
+                    tris = (scene.triangle_count(), scene.unique_triangle_count());
                     rows.push((total, load));
                 }
                 rows.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -177,7 +177,7 @@ fn trace_table() {
             "| {name} | {} | {} | {} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} |",
             scene.objects.len(),
             scene.meshes.len(),
-            scene.triangles.len(),
+            scene.triangle_count(),
             c_flat / 1e6,
             c_two / 1e6,
             c_two / c_flat,

@@ -91,7 +91,7 @@ fn main() {
         for (label, t_ispm, e_ispm) in results {
             let prefix = format!(
                 "| {name} | {} | {label} | {t_ispm:.2} | {e_ispm:.4} |",
-                scene.triangles.len()
+                scene.triangle_count()
             );
             match equal_error(&curve, e_ispm) {
                 Some((spp_eq, t_eq)) => {

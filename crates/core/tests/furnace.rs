@@ -60,7 +60,7 @@ fn emitting_furnace_radiance_is_l_over_one_minus_rho() {
     let scene = Scene::from_json(&v.to_string(), "emitting-furnace", &HashMap::new()).unwrap();
     assert_eq!(
         gi_core::scene::Emitters::of(&scene).len(),
-        scene.triangles.len()
+        scene.triangle_count()
     );
     let settings = gi_core::options!(Path, spp: 32, width: 48, height: 48, seed: 3);
     let out = render(&scene, &settings, &gi_core::Silent).unwrap();

@@ -79,28 +79,28 @@ fn equal_shapes_and_instances_share_one_mesh() {
         .iter()
         .map(|o| s.meshes[o.mesh as usize].indices.len())
         .sum();
-    assert_eq!(s.triangles.len(), placed);
+    assert_eq!(s.triangle_count(), placed);
     // Each mesh is used: stored once however many objects place it.
     let mut used: Vec<u32> = s.objects.iter().map(|o| o.mesh).collect();
     used.sort();
     used.dedup();
     assert_eq!(used.len(), s.meshes.len());
     let ball_triangles = s.meshes[balls[0].mesh as usize].indices.len();
-    assert!(s.unique_triangle_count() + 3 * ball_triangles <= s.triangles.len());
+    assert!(s.unique_triangle_count() + 3 * ball_triangles <= s.triangle_count());
     // The instance without a material takes the referenced object's.
     let white = s.material_names.iter().position(|n| n == "white").unwrap() as u32;
     let glass = s.material_names.iter().position(|n| n == "glass").unwrap() as u32;
     assert_eq!(
-        s.triangle_materials[balls[2].triangles.start as usize],
+        s.triangle_material(balls[2].triangles.start as usize),
         white
     );
     assert_eq!(
-        s.triangle_materials[balls[3].triangles.start as usize],
+        s.triangle_material(balls[3].triangles.start as usize),
         glass
     );
     let copied = s.unshared();
     assert_eq!(copied.meshes.len(), s.objects.len());
-    assert_eq!(copied.triangles, s.triangles);
+    assert_eq!(copied.flat(), s.flat());
 }
 
 /// Every method renders the instanced scene exactly (bitwise: radiance, albedo, depth) as
@@ -136,7 +136,7 @@ fn instanced_equals_unshared_bitwise() {
 fn instanced_matches_flattened_within_rounding() {
     let s = instanced();
     let flat = s.flattened();
-    assert_eq!(flat.positions, s.positions);
+    assert_eq!(flat.flat().positions, s.flat().positions);
     for &method in Method::ALL {
         let o = settings(method);
         let a = render(&s, &o, &Silent).expect("instanced");
@@ -329,4 +329,47 @@ fn millions_of_triangles_of_instances_are_refused_before_allocating() {
         .expect_err("too many vertices")
         .to_string();
     assert!(e.contains("objects") && e.contains("vertices"), "{e}");
+}
+
+/// The CPU methods trace meshes and transforms: rendering the instanced scene with `path`,
+/// `photon` or `gather` never builds the flat world-space view (the GPU methods do, to draw
+/// it). A flat view built before an object moved is updated in place to what a fresh build
+/// of the moved scene holds (positions, normals, winding of a now mirrored object, texture
+/// coordinates, materials).
+#[test]
+fn cpu_methods_never_build_the_flat_view() {
+    let scene = instanced();
+    assert!(!scene.flat_is_built());
+    for method in [Method::Path, Method::Photon, Method::Gather] {
+        let mut r = Renderer::new(&scene, &settings(method)).expect("renderer");
+        r.render(&frame(), &Silent).expect("frame");
+        assert!(!r.scene().flat_is_built(), "{}", method.name());
+    }
+    let mut r = Renderer::new(&scene, &settings(Method::Direct)).expect("renderer");
+    r.render(&frame(), &Silent).expect("frame");
+    assert!(r.scene().flat_is_built());
+
+    let mut built = instanced();
+    let _ = built.flat();
+    let object = built.objects.len() - 4;
+    let update = SceneUpdate::Transform {
+        object,
+        transform: Mat4::from_translation(Vec3::new(0.1, 0.5, 0.0))
+            * Mat4::from_scale(Vec3::new(-1.0, 1.0, 1.0)),
+    };
+    built.apply(&update).expect("move");
+    assert!(built.flat_is_built() && built.objects[object].flipped);
+    let mut fresh = instanced();
+    fresh.apply(&update).expect("move");
+    assert!(!fresh.flat_is_built());
+    assert_eq!(built.flat(), fresh.flat());
+    // The accessors agree with the flat view.
+    let f = fresh.flat();
+    for t in (0..fresh.triangle_count()).step_by(7) {
+        let (p, n) = fresh.corners(t);
+        assert_eq!(p, f.triangles[t].map(|i| f.positions[i as usize]));
+        assert_eq!(n, f.triangles[t].map(|i| f.normals[i as usize]));
+        assert_eq!(fresh.corner_uvs(t), f.uvs[t]);
+        assert_eq!(fresh.triangle_material(t), f.triangle_materials[t]);
+    }
 }

@@ -255,7 +255,7 @@ impl PyScene {
     }
     #[getter]
     fn triangle_count(&self) -> usize {
-        self.inner.triangles.len()
+        self.inner.triangle_count()
     }
     #[getter]
     fn light_count(&self) -> usize {
@@ -325,9 +325,19 @@ impl PyScene {
         py: Python<'py>,
     ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
         use numpy::{IntoPyArray, PyArrayMethods};
-        let v: Vec<f32> = bytemuck::cast_slice(&self.inner.positions).to_vec();
-        let f: Vec<u32> = self.inner.triangles.iter().flatten().copied().collect();
-        let (nv, nf) = (self.inner.positions.len(), self.inner.triangles.len());
+        let v: Vec<f32> = bytemuck::cast_slice(&self.inner.flat().positions).to_vec();
+        let f: Vec<u32> = self
+            .inner
+            .flat()
+            .triangles
+            .iter()
+            .flatten()
+            .copied()
+            .collect();
+        let (nv, nf) = (
+            self.inner.flat().positions.len(),
+            self.inner.flat().triangles.len(),
+        );
         Ok((
             v.into_pyarray(py).reshape([nv, 3])?.into_any(),
             f.into_pyarray(py).reshape([nf, 3])?.into_any(),
@@ -388,7 +398,7 @@ impl PyScene {
         format!(
             "Scene(source={:?}, triangles={}, lights={}, size={}x{})",
             self.source,
-            self.inner.triangles.len(),
+            self.inner.triangle_count(),
             self.inner.lights.len(),
             self.inner.camera.width,
             self.inner.camera.height

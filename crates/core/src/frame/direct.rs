@@ -54,7 +54,7 @@ pub(super) fn frame(
     let readback = t.elapsed().as_secs_f64();
     g.timer.collect(&ctx)?;
     let mut stats = RenderStats {
-        triangles: scene.triangles.len() as u64,
+        triangles: scene.triangle_count() as u64,
         samples_per_pixel: g.targets.spp(),
         ..Default::default()
     };

@@ -570,12 +570,10 @@ impl Renderer {
 
 /// World bounds of an object's vertices.
 fn object_bounds(scene: &Scene, o: &crate::scene::SceneObject) -> Aabb {
-    scene.positions[o.vertices.start as usize..o.vertices.end as usize]
-        .iter()
-        .fold(Aabb::EMPTY, |b, p| Aabb {
-            min: b.min.min(*p),
-            max: b.max.max(*p),
-        })
+    scene.object_vertices(o).fold(Aabb::EMPTY, |b, p| Aabb {
+        min: b.min.min(p),
+        max: b.max.max(p),
+    })
 }
 
 /// Drops the images the frame did not ask for (they may have been computed anyway by the

@@ -80,7 +80,7 @@ impl RenderStats {
     /// The statistics of a frame of `scene` before its first stage.
     pub fn of(scene: &Scene) -> RenderStats {
         RenderStats {
-            triangles: scene.triangles.len() as u64,
+            triangles: scene.triangle_count() as u64,
             ..Default::default()
         }
     }

@@ -88,14 +88,15 @@ pub fn delta_footprint(scene: &Scene) -> Vec<bool> {
     let mut mask = vec![false; w * h];
     let t = cam.tan_half_fov();
     let (sx, sy) = (0.5 * w as f32 / (t * cam.aspect()), 0.5 * h as f32 / t);
-    for (i, tri) in scene.triangles.iter().enumerate() {
+    for i in 0..scene.triangle_count() {
         if !delta_capable(scene, i) {
             continue;
         }
+        let tri = scene.triangle(i);
         let (mut lo, mut hi) = (glam::Vec2::INFINITY, glam::Vec2::NEG_INFINITY);
         let mut behind = false;
-        for &v in tri {
-            let d = scene.positions[v as usize] - cam.position;
+        for v in tri {
+            let d = v - cam.position;
             let z = d.dot(cam.forward);
             if z <= 1e-6 {
                 behind = true;
@@ -133,7 +134,7 @@ fn delta_capable(scene: &Scene, i: usize) -> bool {
     let m = scene.material_of(i);
     let mapped = scene
         .material_maps
-        .get(scene.triangle_materials[i] as usize)
+        .get(scene.triangle_material(i) as usize)
         .is_some_and(|maps| !maps.is_empty());
     m.has_delta_lobe() || (mapped && m.has_specular())
 }
@@ -144,7 +145,7 @@ fn object_of(scene: &Scene, t: u32) -> u64 {
     let i = scene.objects.partition_point(|o| o.triangles.end <= t);
     match scene.objects.get(i) {
         Some(o) if o.triangles.contains(&t) => i as u64,
-        _ => (scene.objects.len() + scene.triangle_materials[t as usize] as usize) as u64,
+        _ => (scene.objects.len() + scene.triangle_material(t as usize) as usize) as u64,
     }
 }
 

@@ -48,12 +48,11 @@ fn specular_spheres(scene: &Scene) -> Vec<(Vec3, f32)> {
         .objects
         .iter()
         .filter(|o| {
-            scene.triangle_materials[o.triangles.start as usize..o.triangles.end as usize]
-                .iter()
-                .any(|&m| scene.materials[m as usize].has_delta_lobe())
+            (o.triangles.start as usize..o.triangles.end as usize)
+                .any(|t| scene.materials[scene.triangle_material(t) as usize].has_delta_lobe())
         })
         .filter_map(|o| {
-            let ps = &scene.positions[o.vertices.start as usize..o.vertices.end as usize];
+            let ps: Vec<Vec3> = scene.object_vertices(o).collect();
             if ps.is_empty() {
                 return None;
             }

@@ -151,7 +151,7 @@ pub const T_AUTO_SCALE: f64 = 0.08;
 
 /// Total surface area of the scene's triangles (m²).
 pub fn scene_area(scene: &crate::Scene) -> f64 {
-    (0..scene.triangles.len())
+    (0..scene.triangle_count())
         .map(|t| {
             let [a, b, c] = scene.triangle(t);
             0.5 * (b - a).cross(c - a).length() as f64

@@ -10,7 +10,7 @@ pub const Z_RATIO: f32 = 0.5;
 
 /// Radius (m) of a photon volume of path density 1: `kernel_scale`·√(scene area / photons).
 pub fn base_radius(scene: &Scene, photons: u64, kernel_scale: f32) -> f32 {
-    let area: f64 = (0..scene.triangles.len())
+    let area: f64 = (0..scene.triangle_count())
         .map(|t| {
             let [a, b, c] = scene.triangle(t);
             0.5 * (b - a).cross(c - a).length() as f64

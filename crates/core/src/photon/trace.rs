@@ -685,17 +685,7 @@ fn scatter_differentials(
 
 /// Derivative of the interpolated (unit) vertex normal at `hit` along the surface offset `dp`.
 fn normal_derivative(scene: &Scene, hit: &crate::trace::Hit, dp: glam::Vec3) -> glam::Vec3 {
-    let t = scene.triangles[hit.triangle as usize].map(|i| i as usize);
-    let (p0, p1, p2) = (
-        scene.positions[t[0]],
-        scene.positions[t[1]],
-        scene.positions[t[2]],
-    );
-    let (n0, n1, n2) = (
-        scene.normals[t[0]],
-        scene.normals[t[1]],
-        scene.normals[t[2]],
-    );
+    let ([p0, p1, p2], [n0, n1, n2]) = scene.corners(hit.triangle as usize);
     let (e1, e2) = (p1 - p0, p2 - p0);
     // Barycentric derivatives: dp = du·e1 + dv·e2, solved by least squares.
     let (a, b, c) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));

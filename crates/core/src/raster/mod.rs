@@ -100,25 +100,26 @@ pub(crate) fn camera_view(scene: &Scene, jitter: Vec2, weight: f32) -> ViewRaw {
 
 /// The scene's triangles as a non-indexed vertex list.
 fn vertices(scene: &Scene) -> Vec<VertexRaw> {
-    vertices_of(scene, 0..scene.triangles.len())
+    vertices_of(scene, 0..scene.triangle_count())
 }
 
 /// Triangles `range` of the scene as a non-indexed vertex list (three vertices each, at
 /// offset `3·range.start` of the full list).
 pub(crate) fn vertices_of(scene: &Scene, range: std::ops::Range<usize>) -> Vec<VertexRaw> {
     let mut out = Vec::with_capacity(range.len() * 3);
+    let flat = scene.flat();
     for t in range {
-        let tri = &scene.triangles[t];
+        let tri = &flat.triangles[t];
         let [p0, p1, p2] = scene.triangle(t);
         let ng = (p1 - p0).cross(p2 - p0).normalize_or_zero();
         let tangent = scene.tangent_of(t).unwrap_or(glam::Vec4::ZERO);
         for (c, &i) in tri.iter().enumerate() {
             out.push(VertexRaw {
-                position: scene.positions[i as usize].into(),
-                normal: scene.normals[i as usize].into(),
+                position: flat.positions[i as usize].into(),
+                normal: flat.normals[i as usize].into(),
                 geometric_normal: ng.into(),
-                material: scene.triangle_materials[t],
-                uv: scene.uvs[t][c].into(),
+                material: flat.triangle_materials[t],
+                uv: flat.uvs[t][c].into(),
                 tangent: tangent.into(),
             });
         }
@@ -145,7 +146,7 @@ pub(crate) fn samples_per_submit(w: u32, h: u32) -> u32 {
 
 /// Fails with a GPU error when the scene's vertex buffer exceeds the adapter's limits.
 pub(crate) fn check_scene_buffers(ctx: &GpuContext, scene: &Scene) -> Result<()> {
-    let bytes = scene.triangles.len() as u64 * 3 * std::mem::size_of::<VertexRaw>() as u64;
+    let bytes = scene.triangle_count() as u64 * 3 * std::mem::size_of::<VertexRaw>() as u64;
     ctx.check_buffer("scene vertices", bytes)
 }
 

@@ -330,14 +330,15 @@ pub struct CullUnits {
 
 impl CullUnits {
     pub fn of(scene: &Scene) -> Self {
-        let n = scene.triangles.len() as u32;
+        let flat = scene.flat();
+        let n = flat.triangles.len() as u32;
         let units = (0..n.div_ceil(CULL_TRIANGLES))
             .map(|u| {
                 let t = u * CULL_TRIANGLES..((u + 1) * CULL_TRIANGLES).min(n);
-                let (lo, hi) = scene.triangles[t.start as usize..t.end as usize]
+                let (lo, hi) = flat.triangles[t.start as usize..t.end as usize]
                     .iter()
                     .flatten()
-                    .map(|&v| scene.positions[v as usize])
+                    .map(|&v| flat.positions[v as usize])
                     .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
                         (lo.min(p), hi.max(p))
                     });
@@ -431,7 +432,7 @@ mod tests {
             .flatten()
             .map(|r| ((r.end - r.start) / 3) as u64)
             .sum();
-        let n = scene.triangles.len() as u64;
+        let n = scene.flat().triangles.len() as u64;
         assert!(drawn < 2 * n, "{drawn} of 6 x {n}");
         // Every triangle is drawn into some face.
         let mut seen = vec![false; n as usize];

@@ -552,7 +552,8 @@ mod tests {
         let r = posed.objects[tall].vertices.clone();
         let local = posed.meshes[posed.objects[tall].mesh as usize].positions[0];
         assert!(
-            (posed.positions[r.start as usize] - expect.transform_point3(local)).length() < 1e-5
+            (posed.flat().positions[r.start as usize] - expect.transform_point3(local)).length()
+                < 1e-5
         );
         // A scene without an animation has none.
         let still = builtin::load("cornell").expect("scene");

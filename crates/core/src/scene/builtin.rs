@@ -70,7 +70,10 @@ mod tests {
     fn every_builtin_loads() {
         for (name, _, _) in super::BUILTINS {
             let s = super::load(name).unwrap();
-            assert!(!s.triangles.is_empty() && !s.lights.is_empty(), "{name}");
+            assert!(
+                !s.flat().triangles.is_empty() && !s.lights.is_empty(),
+                "{name}"
+            );
         }
         assert!(super::load("nope").is_err());
     }

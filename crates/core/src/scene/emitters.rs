@@ -84,9 +84,9 @@ impl Emitters {
         if !scene.materials.iter().any(|m| m.emits()) {
             return e;
         }
-        e.slot = vec![u32::MAX; scene.triangles.len()];
+        e.slot = vec![u32::MAX; scene.triangle_count()];
         let mut weights = Vec::new();
-        for t in 0..scene.triangles.len() {
+        for t in 0..scene.triangle_count() {
             if !scene.material_of(t).emits() {
                 continue;
             }
@@ -136,7 +136,7 @@ impl Emitters {
         let (b1, b2) = uniform_triangle(u);
         let point = a * (1.0 - b1 - b2) + b * b1 + c * b2;
         let normal = (b - a).cross(c - a).normalize_or_zero();
-        let [t0, t1, t2] = scene.uvs[t];
+        let [t0, t1, t2] = scene.corner_uvs(t);
         EmitterSample {
             triangle: t as u32,
             point,

@@ -16,9 +16,15 @@ impl Scene {
             .iter()
             .map(|o| Arc::new((*self.meshes[o.mesh as usize]).clone()))
             .collect();
+        s.mesh_uvs = s
+            .objects
+            .iter()
+            .map(|o| Arc::new((*self.mesh_uvs[o.mesh as usize]).clone()))
+            .collect();
         for (i, o) in s.objects.iter_mut().enumerate() {
             o.mesh = i as u32;
         }
+        s.flat = Default::default();
         s
     }
 
@@ -27,6 +33,7 @@ impl Scene {
     /// flat arrays, and so everything drawn from them, are unchanged.
     pub fn flattened(&self) -> Scene {
         let mut s = self.clone();
+        let flat = self.flat();
         s.meshes = s
             .objects
             .iter()
@@ -34,13 +41,20 @@ impl Scene {
                 let v = o.vertices.start as usize..o.vertices.end as usize;
                 let t = o.triangles.start as usize..o.triangles.end as usize;
                 Arc::new(TriMesh {
-                    positions: self.positions[v.clone()].to_vec(),
-                    normals: self.normals[v].to_vec(),
-                    indices: self.triangles[t]
+                    positions: flat.positions[v.clone()].to_vec(),
+                    normals: flat.normals[v].to_vec(),
+                    indices: flat.triangles[t.clone()]
                         .iter()
                         .map(|c| c.map(|i| i - o.vertices.start))
                         .collect(),
                 })
+            })
+            .collect();
+        s.mesh_uvs = s
+            .objects
+            .iter()
+            .map(|o| {
+                Arc::new(flat.uvs[o.triangles.start as usize..o.triangles.end as usize].to_vec())
             })
             .collect();
         for (i, o) in s.objects.iter_mut().enumerate() {
@@ -49,6 +63,7 @@ impl Scene {
             o.flipped = false;
             o.described = None;
         }
+        s.flat = Default::default();
         s
     }
 }

@@ -102,10 +102,12 @@ pub fn distant_direction(light: &Light, u: Option<Vec2>) -> Vec3 {
 
 /// Axis-aligned bounds of the scene's vertices.
 pub fn bounds(scene: &Scene) -> (Vec3, Vec3) {
-    scene.positions.iter().fold(
-        (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
-        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
-    )
+    let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+    scene.for_each_vertex(|p| {
+        lo = lo.min(p);
+        hi = hi.max(p);
+    });
+    (lo, hi)
 }
 
 /// The eight corners of the box `lo..hi`.

@@ -7,6 +7,7 @@ pub mod camera;
 pub mod desc;
 pub mod emitters;
 pub mod environment;
+pub mod flat;
 pub mod instances;
 pub mod light;
 pub mod light_bvh;
@@ -22,6 +23,7 @@ pub use camera::Camera;
 pub use desc::SceneDesc;
 pub use emitters::{EmitterSampler, Emitters};
 pub use environment::{EnvImage, Environment};
+pub use flat::Flat;
 pub use light::{Bounds, Light};
 pub use primitives::TriMesh;
 pub use shading::Smoothing;
@@ -58,8 +60,8 @@ pub struct MeshData {
 
 /// A renderable scene: unique meshes in their local frames ([`Scene::meshes`]), objects that
 /// place them (instances: mesh, transform, material; [`Scene::objects`]), and the derived
-/// world-space flat arrays (`positions`, `triangles`, …) that consumers not yet ported to
-/// instances read. The CPU tracers use the meshes and transforms through the two-level BVH.
+/// world-space flat view ([`Scene::flat`]), built on first use for the consumers that still
+/// read flat arrays (the GPU passes). The CPU tracers read meshes and transforms.
 #[derive(Clone, Debug)]
 pub struct Scene {
     pub camera: Camera,
@@ -71,19 +73,16 @@ pub struct Scene {
     /// Textures, referenced by index from `material_maps`, and their names.
     pub textures: Vec<Arc<Texture>>,
     pub texture_names: Vec<String>,
-    /// Texture coordinates per triangle corner (same order as `triangles`).
-    pub uvs: Arc<Vec<[Vec2; 3]>>,
-    pub positions: Arc<Vec<Vec3>>,
-    pub normals: Arc<Vec<Vec3>>,
-    pub triangles: Arc<Vec<[u32; 3]>>,
-    /// Material index per triangle.
-    pub triangle_materials: Arc<Vec<u32>>,
     /// The objects of the description, in order: their mesh, transform, and vertex and
     /// triangle ranges of the flat arrays.
     pub objects: Vec<SceneObject>,
     /// The unique meshes (shaded, in their local frames), each stored once however many
     /// objects place it.
     pub meshes: Vec<Arc<TriMesh>>,
+    /// Texture coordinates per triangle corner of each unique mesh (same order as `meshes`).
+    pub mesh_uvs: Vec<Arc<Vec<[Vec2; 3]>>>,
+    /// The flat world-space view, built on first use ([`Scene::flat`]).
+    pub(crate) flat: std::sync::OnceLock<Arc<Flat>>,
     /// The description's keyframed tracks, if any (see [`animation`]).
     pub animation: Option<Animation>,
     /// Light from infinitely far away (see [`environment`]); shared, as images are large.
@@ -136,6 +135,7 @@ fn resolve_objects<'a>(
     desc: &'a SceneDesc,
     meshes: &'a HashMap<String, MeshData>,
     unique_meshes: &mut Vec<Arc<TriMesh>>,
+    unique_uvs: &mut Vec<Arc<Vec<[Vec2; 3]>>>,
     source_name: &str,
 ) -> Result<(Vec<Resolved<'a>>, HashMap<&'a str, usize>)> {
     let err = |field: String, msg: &str| Error::scene(source_name, field, msg);
@@ -166,11 +166,9 @@ fn resolve_objects<'a>(
                 validate_mesh(&mesh).map_err(|m| err(at("shape"), &m))?;
                 let smoothing = smoothing(smooth).map_err(|m| err(at("smooth"), m))?;
                 unique_meshes.push(Arc::new(shading::shade(&mesh, smoothing)));
-                let found = (
-                    unique_meshes.len() as u32 - 1,
-                    Arc::new(uvs),
-                    file_materials,
-                );
+                let uvs = Arc::new(uvs);
+                unique_uvs.push(uvs.clone());
+                let found = (unique_meshes.len() as u32 - 1, uvs, file_materials);
                 unique.insert(key, found.clone());
                 found
             }
@@ -196,10 +194,10 @@ const FLAT_BYTES_PER_TRIANGLE: u64 = 12 + 24 + 4;
 const BYTES_PER_OBJECT: u64 = 256;
 
 impl Scene {
-    /// Checks that the flat view of `resolved` objects fits (2^32 - 1 vertices, memory) and
-    /// reserves it, before anything is placed: millions of instances are refused by the
-    /// estimate, not by the allocator.
-    fn reserve_flat(&mut self, resolved: &[Resolved]) -> Result<()> {
+    /// Checks that the flat view of `resolved` objects would fit (2^32 - 1 vertices,
+    /// memory), before any object is placed: millions of instances are refused by the
+    /// estimate, not by the allocator when the flat view is built.
+    fn check_flat(&self, resolved: &[Resolved]) -> Result<()> {
         let (mut vertices, mut triangles) = (0u64, 0u64);
         for r in resolved {
             let m = &self.meshes[r.1 as usize];
@@ -218,12 +216,6 @@ impl Scene {
             || format!("the scene's flat view ({n} objects, {triangles} triangles)"),
             Self::flat_bytes(vertices, triangles, n as u64),
         )?;
-        Arc::make_mut(&mut self.positions).reserve_exact(vertices as usize);
-        Arc::make_mut(&mut self.normals).reserve_exact(vertices as usize);
-        Arc::make_mut(&mut self.triangles).reserve_exact(triangles as usize);
-        Arc::make_mut(&mut self.uvs).reserve_exact(triangles as usize);
-        Arc::make_mut(&mut self.triangle_materials).reserve_exact(triangles as usize);
-        self.objects.reserve_exact(n);
         Ok(())
     }
 
@@ -435,32 +427,38 @@ impl Scene {
             material_maps,
             textures: texture_names.iter().map(|n| textures[n].clone()).collect(),
             texture_names,
-            uvs: Default::default(),
-            positions: Default::default(),
-            normals: Default::default(),
-            triangles: Default::default(),
-            triangle_materials: Default::default(),
             objects: Vec::new(),
             meshes: Vec::new(),
+            mesh_uvs: Vec::new(),
+            flat: Default::default(),
             animation: None,
             environment: None,
             camera_source: desc.camera.clone(),
         };
         // Unique meshes by (resolved shape, smoothing): objects with equal keys share one.
-        let (resolved, names) = resolve_objects(desc, meshes, &mut scene.meshes, source_name)?;
-        scene.reserve_flat(&resolved)?;
-        for (i, (obj, (xf, mesh_index, uvs, file_materials, material))) in
+        let (resolved, names) = resolve_objects(
+            desc,
+            meshes,
+            &mut scene.meshes,
+            &mut scene.mesh_uvs,
+            source_name,
+        )?;
+        scene.check_flat(&resolved)?;
+        scene.objects.reserve_exact(resolved.len());
+        // The file's per-face materials, shared by the objects that place one mesh.
+        let mut face_of: HashMap<u32, Arc<Vec<u32>>> = HashMap::new();
+        for (i, (obj, (xf, mesh_index, _uvs, file_materials, material))) in
             desc.objects.iter().zip(resolved).enumerate()
         {
             let at = |f: &str| format!("objects[{i}].{f}");
             let mesh = scene.meshes[mesh_index as usize].clone();
             // Per-triangle materials: the object's own, else those of the file.
-            let tri_mats: Vec<u32> = match (material, file_materials) {
+            let (base, faces) = match (material, file_materials) {
                 (Some(name), _) => {
                     let id = *index_of.get(name).ok_or_else(|| {
                         err(at("material"), &format!("no material named `{name}`"))
                     })?;
-                    vec![id; mesh.indices.len()]
+                    (id, None)
                 }
                 (None, Some(data)) if !data.materials.is_empty() => {
                     let base = scene.materials.len() as u32;
@@ -485,7 +483,10 @@ impl Scene {
                             "per-face materials do not match the mesh",
                         ));
                     }
-                    data.face_materials.iter().map(|f| base + f).collect()
+                    let faces = face_of
+                        .entry(mesh_index)
+                        .or_insert_with(|| Arc::new(data.face_materials.clone()));
+                    (base, Some(faces.clone()))
                 }
                 (None, _) => {
                     return Err(err(
@@ -499,7 +500,7 @@ impl Scene {
                     return Err(err(at("name"), "another object has this name"));
                 }
             }
-            scene.append(obj.name.clone(), mesh_index, xf, &tri_mats, &uvs);
+            scene.push_object(obj.name.clone(), mesh_index, xf, base, faces);
             if let Some(o) = scene.objects.last_mut() {
                 o.described = Some(obj.transform.clone());
             }
@@ -510,54 +511,39 @@ impl Scene {
         Ok(scene)
     }
 
-    fn append(
+    /// Appends an object placing mesh `mesh_index` by `xf`, with material `material` (plus
+    /// the file's per-face indices when given).
+    fn push_object(
         &mut self,
         name: Option<String>,
         mesh_index: u32,
         xf: Mat4,
-        tri_materials: &[u32],
-        uvs: &[[Vec2; 3]],
+        material: u32,
+        face_materials: Option<Arc<Vec<u32>>>,
     ) {
-        let mesh = self.meshes[mesh_index as usize].clone();
-        let base = self.positions.len() as u32;
-        let first_triangle = self.triangles.len() as u32;
-        let flip = Mat3::from_mat4(xf).determinant() < 0.0;
-        let positions = Arc::make_mut(&mut self.positions);
-        positions.resize(positions.len() + mesh.positions.len(), Vec3::ZERO);
-        let normals = Arc::make_mut(&mut self.normals);
-        normals.resize(normals.len() + mesh.normals.len(), Vec3::ZERO);
-        Arc::make_mut(&mut self.triangles).extend(mesh.indices.iter().map(|t| {
-            let t = t.map(|i| i + base);
-            if flip {
-                [t[0], t[2], t[1]]
-            } else {
-                t
-            }
-        }));
-        Arc::make_mut(&mut self.triangle_materials).extend_from_slice(tri_materials);
-        // Corners in the order of the (possibly flipped) triangles.
-        Arc::make_mut(&mut self.uvs).extend(uvs.iter().map(|c| {
-            if flip {
-                [c[0], c[2], c[1]]
-            } else {
-                *c
-            }
-        }));
-        let object = SceneObject {
+        let mesh = &self.meshes[mesh_index as usize];
+        let (v, t) = (self.vertex_count() as u32, self.triangle_count() as u32);
+        self.objects.push(SceneObject {
             name,
-            vertices: base..base + mesh.positions.len() as u32,
-            triangles: first_triangle..self.triangles.len() as u32,
+            vertices: v..v + mesh.positions.len() as u32,
+            triangles: t..t + mesh.indices.len() as u32,
             transform: xf,
-            flipped: flip,
+            flipped: Mat3::from_mat4(xf).determinant() < 0.0,
             mesh: mesh_index,
+            material,
+            face_materials,
             described: None,
-        };
-        object.place(
-            &mesh,
-            Arc::make_mut(&mut self.positions).as_mut_slice(),
-            Arc::make_mut(&mut self.normals).as_mut_slice(),
-        );
-        self.objects.push(object);
+        });
+    }
+
+    /// The box of every placed vertex (empty: lo > hi), without the flat view.
+    pub fn vertex_box(&self) -> (Vec3, Vec3) {
+        let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+        self.for_each_vertex(|p| {
+            lo = lo.min(p);
+            hi = hi.max(p);
+        });
+        (lo, hi)
     }
 
     /// Triangles of the unique meshes (each counted once however many objects place it).
@@ -567,11 +553,11 @@ impl Scene {
 
     /// The three corners of triangle `t`.
     pub fn triangle(&self, t: usize) -> [Vec3; 3] {
-        self.triangles[t].map(|i| self.positions[i as usize])
+        self.corners(t).0
     }
 
     pub fn material_of(&self, t: usize) -> &Material {
-        &self.materials[self.triangle_materials[t] as usize]
+        &self.materials[self.triangle_material(t) as usize]
     }
 
     /// Total power of all light sources (W per channel): lights, emitting surfaces and the
@@ -583,12 +569,7 @@ impl Scene {
     /// The bounding sphere of the scene's vertices (a unit sphere at the origin without
     /// any).
     pub fn bounds(&self) -> Bounds {
-        let (lo, hi) = self
-            .positions
-            .iter()
-            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
-                (lo.min(*p), hi.max(*p))
-            });
+        let (lo, hi) = self.vertex_box();
         if lo.x > hi.x {
             return Bounds {
                 centre: Vec3::ZERO,

@@ -137,7 +137,7 @@ pub fn perturb_normal(ns: Vec3, tangent: Vec4, texel: Vec3) -> Vec3 {
 impl Scene {
     /// Texture coordinates at barycentrics (u, v) of triangle `t` (relative to corners 1, 2).
     pub fn uv_at(&self, t: usize, u: f32, v: f32) -> Vec2 {
-        let c = &self.uvs[t];
+        let c = self.corner_uvs(t);
         c[0] * (1.0 - u - v) + c[1] * u + c[2] * v
     }
 
@@ -147,7 +147,7 @@ impl Scene {
 
     /// The textures of triangle `t`'s material.
     pub fn maps_of(&self, t: usize) -> &MaterialMaps {
-        &self.material_maps[self.triangle_materials[t] as usize]
+        &self.material_maps[self.triangle_material(t) as usize]
     }
 
     /// Triangle `t`'s material at texture coordinates `uv` (level of detail `lod`).
@@ -190,12 +190,7 @@ impl Scene {
     /// Length of the diagonal of the scene's bounding box (m); 1 for a scene without
     /// vertices.
     pub fn diagonal(&self) -> f32 {
-        let (lo, hi) = self
-            .positions
-            .iter()
-            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
-                (lo.min(*p), hi.max(*p))
-            });
+        let (lo, hi) = self.vertex_box();
         if lo.x > hi.x {
             return 1.0;
         }
@@ -216,7 +211,7 @@ impl Scene {
 
     /// Tangent frame of triangle `t` for normal mapping.
     pub fn tangent_of(&self, t: usize) -> Option<Vec4> {
-        triangle_tangent(self.triangle(t), self.uvs[t])
+        triangle_tangent(self.triangle(t), self.corner_uvs(t))
     }
 
     /// The scene's textures keyed by name, for resolving descriptions.

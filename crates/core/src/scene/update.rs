@@ -29,6 +29,11 @@ pub struct SceneObject {
     /// the same file or built-in shape with the same options, or refers to it as an
     /// instance).
     pub mesh: u32,
+    /// The object's material; with `face_materials`, the first of the file's materials.
+    pub material: u32,
+    /// The mesh file's material per triangle (offsets from `material`), if the object
+    /// takes its materials from the file.
+    pub face_materials: Option<std::sync::Arc<Vec<u32>>>,
     /// The transform as the scene file described it (while `transform` is still its
     /// matrix): [`Scene::object_desc`] gives it back exactly.
     pub(crate) described: Option<TransformDesc>,
@@ -163,19 +168,9 @@ impl Scene {
                 let obj = &mut self.objects[*object];
                 obj.transform = *transform;
                 let flip = det < 0.0;
-                if flip != obj.flipped {
-                    obj.flipped = flip;
-                    let r = obj.triangles.start as usize..obj.triangles.end as usize;
-                    for t in &mut std::sync::Arc::make_mut(&mut self.triangles)[r] {
-                        t.swap(1, 2);
-                    }
-                }
-                let obj = &self.objects[*object];
-                obj.place(
-                    &mesh,
-                    std::sync::Arc::make_mut(&mut self.positions).as_mut_slice(),
-                    std::sync::Arc::make_mut(&mut self.normals).as_mut_slice(),
-                );
+                let flipped = flip != obj.flipped;
+                obj.flipped = flip;
+                self.moved_in_flat(*object, flipped);
                 Ok(Changes {
                     geometry: true,
                     ..Default::default()
@@ -345,8 +340,8 @@ mod tests {
             .expect("valid");
         assert!(c.geometry && !c.camera);
         let r = scene.objects[i].vertices.clone();
-        let p = scene.positions[r.start as usize];
-        let q = before.positions[r.start as usize];
+        let p = scene.flat().positions[r.start as usize];
+        let q = before.flat().positions[r.start as usize];
         assert!((p - q - Vec3::new(0.1, 0.0, -0.2)).length() < 1e-5);
         scene
             .apply(&SceneUpdate::Transform {
@@ -354,10 +349,15 @@ mod tests {
                 transform: original,
             })
             .expect("valid");
-        for (a, b) in scene.positions.iter().zip(before.positions.iter()) {
+        for (a, b) in scene
+            .flat()
+            .positions
+            .iter()
+            .zip(before.flat().positions.iter())
+        {
             assert!((*a - *b).length() < 1e-5);
         }
-        assert_eq!(scene.triangles, before.triangles);
+        assert_eq!(scene.flat().triangles, before.flat().triangles);
     }
 
     /// A mirroring transform flips the winding so the geometric normal keeps pointing out.
@@ -381,15 +381,15 @@ mod tests {
             .expect("valid");
         // The mirrored face's normal is the original one mirrored in the object's x axis,
         // still outward: its dot with the vertex normal is positive.
-        let [a, _, _] = scene.triangles[t];
+        let [a, _, _] = scene.flat().triangles[t];
         let n1 = normal(&scene);
-        assert!(n1.dot(scene.normals[a as usize]) > 0.0, "{n0} {n1}");
+        assert!(n1.dot(scene.flat().normals[a as usize]) > 0.0, "{n0} {n1}");
     }
 
     #[test]
     fn invalid_updates_leave_the_scene_unchanged() {
         let mut scene = builtin::load("cornell").expect("scene");
-        let before = scene.positions.clone();
+        let before = scene.flat().positions.clone();
         let bad = [
             SceneUpdate::Transform {
                 object: 0,
@@ -415,7 +415,7 @@ mod tests {
             let e = scene.apply(u).expect_err("must be rejected");
             assert!(matches!(e, Error::Scene { .. }), "{e}");
         }
-        assert_eq!(scene.positions, before);
+        assert_eq!(scene.flat().positions, before);
     }
 
     /// JSON updates merge into the current description and name the field on error.

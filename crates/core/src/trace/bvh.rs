@@ -87,12 +87,18 @@ pub struct MeshBvh {
 /// The any-hit test of alpha-masked materials: a hit where the mask's coverage is below the
 /// cutoff is skipped, as the GPU passes discard those fragments.
 struct AlphaTest {
-    /// Per scene triangle: index into `masks`, or `u32::MAX` when opaque.
-    mask_of: Vec<u32>,
+    /// Per material: index into `masks`, or `u32::MAX` when opaque.
+    per_material: Vec<u32>,
     /// Coverage texture and cutoff per masked material.
     masks: Vec<(std::sync::Arc<crate::texture::Texture>, f32)>,
-    uvs: Arc<Vec<[glam::Vec2; 3]>>,
+    /// Per object (instance): material, the file's per-face materials, its mesh's texture
+    /// coordinates (shared), and whether it is mirrored.
+    objects: Vec<ObjectAlpha>,
 }
+
+/// An object's material, the file's per-face materials, its mesh's texture coordinates and
+/// whether it is mirrored.
+type ObjectAlpha = (u32, Option<Arc<Vec<u32>>>, Arc<Vec<[glam::Vec2; 3]>>, bool);
 
 impl AlphaTest {
     fn new(scene: &Scene) -> Option<AlphaTest> {
@@ -112,25 +118,41 @@ impl AlphaTest {
             })
             .collect();
         Some(AlphaTest {
-            mask_of: scene
-                .triangle_materials
-                .iter()
-                .map(|&m| per_material[m as usize])
-                .collect(),
+            per_material,
             masks,
-            uvs: scene.uvs.clone(), // shared, not copied
+            objects: scene
+                .objects
+                .iter()
+                .map(|o| {
+                    (
+                        o.material,
+                        o.face_materials.clone(),
+                        scene.mesh_uvs[o.mesh as usize].clone(),
+                        o.flipped,
+                    )
+                })
+                .collect(),
         })
     }
 
-    /// Whether the hit at barycentrics (u, v) of scene triangle `t` is cut out.
+    /// Whether the hit at barycentrics (u, v) (mesh corner order) of mesh triangle `t` of
+    /// object `object` is cut out; the texture coordinates are interpolated in the flat
+    /// corner order, as [`Scene::uv_at`] does.
     #[inline]
-    fn cut(&self, t: u32, u: f32, v: f32) -> bool {
-        let m = self.mask_of[t as usize];
+    fn cut(&self, object: u32, t: u32, u: f32, v: f32) -> bool {
+        let (base, faces, uvs, flipped) = &self.objects[object as usize];
+        let material = faces.as_ref().map_or(*base, |f| base + f[t as usize]);
+        let m = self.per_material[material as usize];
         if m == u32::MAX {
             return false;
         }
         let (tex, cutoff) = &self.masks[m as usize];
-        let c = &self.uvs[t as usize];
+        let c = uvs[t as usize];
+        let (c, u, v) = if *flipped {
+            ([c[0], c[2], c[1]], v, u)
+        } else {
+            (c, u, v)
+        };
         let uv = c[0] * (1.0 - u - v) + c[1] * u + c[2] * v;
         tex.sample(uv, 0.0).w < *cutoff
     }
@@ -244,7 +266,7 @@ fn separated_boxes(triangles: &[Triangle]) -> Option<Vec<Aabb>> {
 /// The scene's flat triangles in world space (one mesh of every object's copy): for the
 /// flat-BVH benchmarks.
 pub fn flat_triangles(scene: &Scene) -> Vec<Triangle> {
-    (0..scene.triangles.len())
+    (0..scene.triangle_count())
         .map(|t| {
             let [a, b, c] = scene.triangle(t);
             Triangle {
@@ -627,14 +649,11 @@ impl SceneBvh {
         )
     }
 
-    /// Whether the hit (u, v) (mesh corner order) on mesh triangle `t` of instance `i` is
-    /// cut out by an alpha mask.
+    /// Whether the hit (u, v) (mesh corner order) on mesh triangle `t` of instance
+    /// `which` is cut out by an alpha mask.
     #[inline]
-    fn cut_out(&self, i: &Instance, t: u32, u: f32, v: f32) -> bool {
-        self.alpha.as_ref().is_some_and(|a| {
-            let (u, v) = if i.flipped { (v, u) } else { (u, v) };
-            a.cut(i.first_triangle + t, u, v)
-        })
+    fn cut_out(&self, which: u32, t: u32, u: f32, v: f32) -> bool {
+        self.alpha.as_ref().is_some_and(|a| a.cut(which, t, u, v))
     }
 
     /// Closest hit along `origin + t·dir`, t in (0, tmax).
@@ -648,7 +667,9 @@ impl SceneBvh {
             let which = self.order[k];
             let i = &self.instances[which as usize];
             let local = self.local_ray(i, o, d, r.tmax);
-            match self.meshes[i.mesh as usize].closest(local, |t, u, v| !self.cut_out(i, t, u, v)) {
+            match self.meshes[i.mesh as usize]
+                .closest(local, |t, u, v| !self.cut_out(which, t, u, v))
+            {
                 Some((t_mesh, t, u, v)) => {
                     best = Some((which, t_mesh, t, u, v));
                     t
@@ -674,9 +695,10 @@ impl SceneBvh {
         let ray = make_ray(origin, dir, tmax);
         let (o, d) = (Vec3A::from(origin), Vec3A::from(dir));
         !self.top.ray_traverse_miss(ray, |r, k| {
-            let i = &self.instances[self.order[k] as usize];
+            let which = self.order[k];
+            let i = &self.instances[which as usize];
             let local = self.local_ray(i, o, d, r.tmax);
-            self.meshes[i.mesh as usize].any(local, |t, u, v| !self.cut_out(i, t, u, v))
+            self.meshes[i.mesh as usize].any(local, |t, u, v| !self.cut_out(which, t, u, v))
         })
     }
 }
@@ -808,7 +830,7 @@ mod tests {
     fn matches_brute_force() {
         let scene = crate::scene::builtin::load("cornell-glass").unwrap();
         let bvh = SceneBvh::build(&scene);
-        let tris: Vec<Tri> = (0..scene.triangles.len())
+        let tris: Vec<Tri> = (0..scene.flat().triangles.len())
             .map(|t| {
                 let [a, b, c] = scene.triangle(t);
                 Tri {

@@ -47,17 +47,10 @@ impl Interaction {
     /// The position, geometric and shading normals and texture coordinates of a hit.
     fn surface(scene: &Scene, hit: &Hit, dir: Vec3) -> (Vec3, Vec3, Vec3, Vec2) {
         let t = hit.triangle as usize;
-        let [i0, i1, i2] = scene.triangles[t].map(|i| i as usize);
-        let (p0, p1, p2) = (
-            scene.positions[i0],
-            scene.positions[i1],
-            scene.positions[i2],
-        );
+        let ([p0, p1, p2], [n0, n1, n2]) = scene.corners(t);
         let ng = (p1 - p0).cross(p2 - p0).normalize_or_zero();
         let w = 1.0 - hit.u - hit.v;
-        let mut ns =
-            (scene.normals[i0] * w + scene.normals[i1] * hit.u + scene.normals[i2] * hit.v)
-                .normalize_or_zero();
+        let mut ns = (n0 * w + n1 * hit.u + n2 * hit.v).normalize_or_zero();
         if ns == Vec3::ZERO || !ns.is_finite() {
             ns = ng;
         } else if ns.dot(ng) < 0.0 {

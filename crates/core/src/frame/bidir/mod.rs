@@ -327,7 +327,7 @@ pub(super) fn frame(
     let ctx = g.ctx.clone();
     g.timer.reset();
     let mut stats = RenderStats {
-        triangles: scene.triangles.len() as u64,
+        triangles: scene.triangle_count() as u64,
         samples_per_pixel: g.targets.spp(),
         ..Default::default()
     };

@@ -110,7 +110,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     let (ctx, serial) = (ctx.clone(), *serial);
     timer.reset();
     let mut stats = RenderStats {
-        triangles: scene.triangles.len() as u64,
+        triangles: scene.triangle_count() as u64,
         samples_per_pixel: targets.spp(),
         ..Default::default()
     };

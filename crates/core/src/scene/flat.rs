@@ -1,0 +1,166 @@
+//! The scene's flat world-space view, derived from its meshes and objects on first use:
+//! every object's copy of its mesh placed by its transform, for the consumers that still
+//! read flat arrays (the GPU upload and passes). The CPU tracers read meshes and transforms
+//! through the accessors here ([`Scene::corners`], [`Scene::triangle_material`],
+//! [`Scene::corner_uvs`]), which give bitwise the values the flat view holds.
+
+use super::{Scene, SceneObject};
+use glam::{Mat3, Vec2, Vec3};
+use std::sync::Arc;
+
+/// Every object's triangles in world space, in object order (object `o` owns
+/// `o.vertices` and `o.triangles` of these arrays).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Flat {
+    pub positions: Vec<Vec3>,
+    pub normals: Vec<Vec3>,
+    /// Corners (indices into `positions`), with corners 1 and 2 swapped for mirrored objects
+    /// so that the winding stays outward.
+    pub triangles: Vec<[u32; 3]>,
+    /// Material index per triangle.
+    pub triangle_materials: Vec<u32>,
+    /// Texture coordinates per triangle corner (same order as `triangles`).
+    pub uvs: Vec<[Vec2; 3]>,
+}
+
+/// The matrix that places an object's normals (inverse transpose of its linear part).
+fn normal_matrix(o: &SceneObject) -> Mat3 {
+    Mat3::from_mat4(o.transform).inverse().transpose()
+}
+
+impl Scene {
+    /// The flat view, built on first use (shared by clones made after that).
+    pub fn flat(&self) -> &Flat {
+        self.flat.get_or_init(|| Arc::new(self.build_flat()))
+    }
+
+    /// Whether the flat view has been built (for tests: the CPU tracers never build it).
+    pub fn flat_is_built(&self) -> bool {
+        self.flat.get().is_some()
+    }
+
+    fn build_flat(&self) -> Flat {
+        let (v, t) = (self.vertex_count(), self.triangle_count());
+        let mut f = Flat {
+            positions: vec![Vec3::ZERO; v],
+            normals: vec![Vec3::ZERO; v],
+            triangles: vec![[0; 3]; t],
+            triangle_materials: vec![0; t],
+            uvs: vec![[Vec2::ZERO; 3]; t],
+        };
+        for o in 0..self.objects.len() {
+            self.write_object(&mut f, o, true);
+        }
+        f
+    }
+
+    /// Writes object `o` into the flat view: its vertices, and with `triangles` its
+    /// triangles, materials and texture coordinates.
+    pub(crate) fn write_object(&self, f: &mut Flat, o: usize, triangles: bool) {
+        let obj = &self.objects[o];
+        let mesh = &self.meshes[obj.mesh as usize];
+        obj.place(mesh, &mut f.positions, &mut f.normals);
+        if !triangles {
+            return;
+        }
+        let first = obj.triangles.start as usize;
+        for local in 0..mesh.indices.len() {
+            let t = first + local;
+            let c = mesh.indices[local].map(|i| i + obj.vertices.start);
+            f.triangles[t] = if obj.flipped { [c[0], c[2], c[1]] } else { c };
+            f.triangle_materials[t] = self.triangle_material(t);
+            f.uvs[t] = self.corner_uvs(t);
+        }
+    }
+
+    /// Updates the flat view, if built, after object `o` moved (`flipped`: its winding
+    /// changed too).
+    pub(crate) fn moved_in_flat(&mut self, o: usize, flipped: bool) {
+        let Some(mut flat) = self.flat.take() else {
+            return;
+        };
+        self.write_object(Arc::make_mut(&mut flat), o, flipped);
+        let _ = self.flat.set(flat);
+    }
+
+    /// Vertices of the flat view (every object's copy).
+    pub fn vertex_count(&self) -> usize {
+        self.objects.last().map_or(0, |o| o.vertices.end as usize)
+    }
+
+    /// Triangles of the flat view (every object's copy); flat triangle indices number them.
+    pub fn triangle_count(&self) -> usize {
+        self.objects.last().map_or(0, |o| o.triangles.end as usize)
+    }
+
+    /// The object that owns flat triangle `t`.
+    #[inline]
+    pub fn object_of(&self, t: usize) -> &SceneObject {
+        let i = self
+            .objects
+            .partition_point(|o| (o.triangles.end as usize) <= t);
+        &self.objects[i]
+    }
+
+    /// The mesh corner indices of flat triangle `t` in its flat order, and its object.
+    #[inline]
+    fn mesh_corners(&self, t: usize) -> ([usize; 3], &SceneObject) {
+        let o = self.object_of(t);
+        let c = self.meshes[o.mesh as usize].indices[t - o.triangles.start as usize];
+        let c = if o.flipped { [c[0], c[2], c[1]] } else { c };
+        (c.map(|i| i as usize), o)
+    }
+
+    /// World-space corners and shading normals of flat triangle `t` (bitwise those of the
+    /// flat view).
+    #[inline]
+    pub fn corners(&self, t: usize) -> ([Vec3; 3], [Vec3; 3]) {
+        let (c, o) = self.mesh_corners(t);
+        let mesh = &self.meshes[o.mesh as usize];
+        let nx = normal_matrix(o);
+        (
+            c.map(|i| o.transform.transform_point3(mesh.positions[i])),
+            c.map(|i| (nx * mesh.normals[i]).normalize_or_zero()),
+        )
+    }
+
+    /// The material index of flat triangle `t`.
+    #[inline]
+    pub fn triangle_material(&self, t: usize) -> u32 {
+        let o = self.object_of(t);
+        match &o.face_materials {
+            Some(f) => o.material + f[t - o.triangles.start as usize],
+            None => o.material,
+        }
+    }
+
+    /// Texture coordinates of flat triangle `t`'s corners (in its flat order).
+    #[inline]
+    pub fn corner_uvs(&self, t: usize) -> [Vec2; 3] {
+        let o = self.object_of(t);
+        let c = self.mesh_uvs[o.mesh as usize][t - o.triangles.start as usize];
+        if o.flipped {
+            [c[0], c[2], c[1]]
+        } else {
+            c
+        }
+    }
+
+    /// Object `o`'s placed vertices (bitwise those of the flat view), without building it.
+    pub fn object_vertices(&self, o: &SceneObject) -> impl Iterator<Item = Vec3> + '_ {
+        let xf = o.transform;
+        self.meshes[o.mesh as usize]
+            .positions
+            .iter()
+            .map(move |p| xf.transform_point3(*p))
+    }
+
+    /// Every placed vertex of every object, in flat order, without building the flat view.
+    pub fn for_each_vertex(&self, mut f: impl FnMut(Vec3)) {
+        for o in &self.objects {
+            for p in &self.meshes[o.mesh as usize].positions {
+                f(o.transform.transform_point3(*p));
+            }
+        }
+    }
+}
