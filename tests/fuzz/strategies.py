@@ -182,6 +182,14 @@ def scene_desc(draw: st.DrawFn) -> dict[str, Any]:
             max_size=4,
         )
     )
+    # Instances: objects named o0, o1, ... and some shapes replaced by a reference to one of
+    # those names (or a missing one): chains, self-references and cycles included.
+    for i, obj in enumerate(objects):
+        if draw(st.integers(0, 2)) == 0:
+            obj["name"] = f"o{i}"
+        if draw(st.integers(0, 3)) == 0:
+            target = draw(st.sampled_from([f"o{j}" for j in range(len(objects))] + ["nowhere"]))
+            obj["shape"] = {"type": "instance", "object": target}
     desc = {
         "camera": draw(camera(bad)),
         "lights": draw(st.lists(light(bad), max_size=3)),
