@@ -18,10 +18,11 @@ SCRIPT = textwrap.dedent(
     import gi
     method, case = sys.argv[1], sys.argv[2]
     if case == "big-scene":
-        # 26 spheres of 327,680 triangles: 8.5M triangles, as in the issue.
+        # 26 spheres of 327,680 triangles: 8.5M triangles, as in the issue. Radii differ so
+        # that the spheres are 26 unique meshes (equal ones would be instances of one).
         desc = json.loads(gi.builtin_json("cornell"))
         desc["objects"] += [
-            {"shape": {"type": "sphere", "radius": 0.05, "subdivisions": 7},
+            {"shape": {"type": "sphere", "radius": 0.05 + 1e-4 * i, "subdivisions": 7},
              "transform": {"translate": [-0.9 + 0.07 * i, 0.5, 0]}, "material": "white"}
             for i in range(26)
         ]
