@@ -363,8 +363,25 @@ fn cpu_methods_never_build_the_flat_view() {
     fresh.apply(&update).expect("move");
     assert!(!fresh.flat_is_built());
     assert_eq!(built.flat(), fresh.flat());
-    // The accessors agree with the flat view.
+    // The accessors agree with the flat view, and the box of the placed vertices (two
+    // corners per scaled-and-translated object) is the flat positions' box exactly.
     let f = fresh.flat();
+    let (lo, hi) = f
+        .positions
+        .iter()
+        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
+            (lo.min(*p), hi.max(*p))
+        });
+    assert_eq!(fresh.vertex_box(), (lo, hi));
+    let grid = gi_core::scene::bench::sphere_copies(9, false);
+    let (lo, hi) = grid
+        .flat()
+        .positions
+        .iter()
+        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
+            (lo.min(*p), hi.max(*p))
+        });
+    assert_eq!(grid.vertex_box(), (lo, hi));
     for t in (0..fresh.triangle_count()).step_by(7) {
         let (p, n) = fresh.corners(t);
         assert_eq!(p, f.triangles[t].map(|i| f.positions[i as usize]));

@@ -151,12 +151,12 @@ pub const T_AUTO_SCALE: f64 = 0.08;
 
 /// Total surface area of the scene's triangles (m²).
 pub fn scene_area(scene: &crate::Scene) -> f64 {
-    (0..scene.triangle_count())
-        .map(|t| {
-            let [a, b, c] = scene.triangle(t);
-            0.5 * (b - a).cross(c - a).length() as f64
-        })
-        .sum()
+    let mut area = 0.0f64;
+    scene.for_each_triangle(
+        |_| false,
+        |_, [a, b, c]| area += 0.5 * (b - a).cross(c - a).length() as f64,
+    );
+    area
 }
 
 /// Footprint radii per path kind (the paper's Table 3): for each kind present, the photon

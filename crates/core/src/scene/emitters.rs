@@ -86,11 +86,17 @@ impl Emitters {
         }
         e.slot = vec![u32::MAX; scene.triangle_count()];
         let mut weights = Vec::new();
-        for t in 0..scene.triangle_count() {
-            if !scene.material_of(t).emits() {
-                continue;
+        // Objects of one non-emitting material are skipped whole.
+        let dark = |o: &crate::scene::SceneObject| {
+            o.face_materials.is_none() && !scene.materials[o.material as usize].emits()
+        };
+        let mut found = Vec::new();
+        scene.for_each_triangle(dark, |t, corners| {
+            if scene.material_of(t).emits() {
+                found.push((t, corners));
             }
-            let [a, b, c] = scene.triangle(t);
+        });
+        for (t, [a, b, c]) in found {
             let area = 0.5 * (b - a).cross(c - a).length();
             if !(area > 0.0 && area.is_finite()) {
                 continue;

@@ -155,6 +155,31 @@ impl Scene {
             .map(move |p| xf.transform_point3(*p))
     }
 
+    /// Every flat triangle's index and world-space corners, object by object (no lookup per
+    /// triangle), skipping the objects `skip` rejects; without building the flat view.
+    pub fn for_each_triangle(
+        &self,
+        skip: impl Fn(&SceneObject) -> bool,
+        mut f: impl FnMut(usize, [Vec3; 3]),
+    ) {
+        let mut placed = Vec::new();
+        for o in &self.objects {
+            if skip(o) {
+                continue;
+            }
+            placed.clear();
+            placed.extend(self.object_vertices(o));
+            let mesh = &self.meshes[o.mesh as usize];
+            for (local, c) in mesh.indices.iter().enumerate() {
+                let c = if o.flipped { [c[0], c[2], c[1]] } else { *c };
+                f(
+                    o.triangles.start as usize + local,
+                    c.map(|i| placed[i as usize]),
+                );
+            }
+        }
+    }
+
     /// Every placed vertex of every object, in flat order, without building the flat view.
     pub fn for_each_vertex(&self, mut f: impl FnMut(Vec3)) {
         for o in &self.objects {

@@ -102,11 +102,10 @@ pub fn distant_direction(light: &Light, u: Option<Vec2>) -> Vec3 {
 
 /// Axis-aligned bounds of the scene's vertices.
 pub fn bounds(scene: &Scene) -> (Vec3, Vec3) {
-    let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
-    scene.for_each_vertex(|p| {
-        lo = lo.min(p);
-        hi = hi.max(p);
-    });
+    let (lo, hi) = scene.vertex_box();
+    if lo.x > hi.x {
+        return (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+    }
     (lo, hi)
 }
 

@@ -537,12 +537,38 @@ impl Scene {
     }
 
     /// The box of every placed vertex (empty: lo > hi), without the flat view.
+    ///
+    /// An object whose transform only scales and translates (no rotation) contributes its
+    /// mesh's box placed by two corners: each placed coordinate is then a monotone function
+    /// of one local coordinate (`s·x + 0·y + 0·z + t`, rounded), so the result is the
+    /// per-vertex box exactly, in O(unique vertices + objects).
     pub fn vertex_box(&self) -> (Vec3, Vec3) {
+        let mut boxes: Vec<Option<(Vec3, Vec3)>> = vec![None; self.meshes.len()];
         let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
-        self.for_each_vertex(|p| {
-            lo = lo.min(p);
-            hi = hi.max(p);
-        });
+        for o in &self.objects {
+            let m = o.transform;
+            let diagonal = [
+                m.x_axis.y, m.x_axis.z, m.y_axis.x, m.y_axis.z, m.z_axis.x, m.z_axis.y,
+            ]
+            .iter()
+            .all(|&v| v == 0.0)
+                && m.x_axis.w == 0.0
+                && m.y_axis.w == 0.0
+                && m.z_axis.w == 0.0
+                && m.w_axis.w == 1.0;
+            let mesh = &self.meshes[o.mesh as usize];
+            let (mlo, mhi) = *boxes[o.mesh as usize].get_or_insert_with(|| mesh_bounds(mesh));
+            if diagonal && mlo.is_finite() && mhi.is_finite() {
+                let (a, b) = (m.transform_point3(mlo), m.transform_point3(mhi));
+                lo = lo.min(a.min(b));
+                hi = hi.max(a.max(b));
+            } else {
+                for p in self.object_vertices(o) {
+                    lo = lo.min(p);
+                    hi = hi.max(p);
+                }
+            }
+        }
         (lo, hi)
     }
 
