@@ -32,5 +32,8 @@ def test_small_scale_scenes_load_and_render(tmp_path):
     for name, tris in [("forest.json", forest_tris), ("terrain.json", terrain_tris)]:
         scene = gi.load_scene(str(tmp_path / name))
         assert scene.triangle_count == tris
+        # The trees that name one file are instances of one mesh: the ground and 2 trees.
+        unique = 2 + 2 * 96 if name == "forest.json" else tris
+        assert scene.unique_triangle_count == unique
         r = gi.render(scene, "path", spp=1, size=(16, 12))
         assert np.isfinite(r.radiance).all() and r.radiance.mean() > 0

@@ -257,6 +257,12 @@ impl PyScene {
     fn triangle_count(&self) -> usize {
         self.inner.triangle_count()
     }
+    /// Triangles of the unique meshes: each mesh counted once however many objects place
+    /// it (the same file or built-in shape with the same options, or an `instance` shape).
+    #[getter]
+    fn unique_triangle_count(&self) -> usize {
+        self.inner.unique_triangle_count()
+    }
     #[getter]
     fn light_count(&self) -> usize {
         self.inner.lights.len()
