@@ -123,7 +123,38 @@ fn main() {
             );
         }
         "trace" => trace_table(),
-        _ => eprintln!("modes: time [copies...] | update N | memory N instanced|flattened | trace"),
+        "refit" => {
+            // The frame benchmark's BVH table (docs/bench/frame.md): a full build against
+            // the update after the last object moved (now the top level only).
+            println!("| scene | triangles | objects | rebuild (ms) | update after a move (ms) |");
+            println!("|---|---:|---:|---:|---:|");
+            let mut scenes: Vec<(String, gi_core::Scene)> = ["cornell", "cornell-glass"]
+                .iter()
+                .map(|n| {
+                    (
+                        n.to_string(),
+                        gi_core::scene::builtin::load(n).expect("built-in"),
+                    )
+                })
+                .collect();
+            scenes.push((
+                "dense-cornell".into(),
+                gi_core::scene::bench::dense_cornell(),
+            ));
+            for (name, scene) in scenes {
+                let (rebuild, refit) = gi_core::trace::bvh::rebuild_vs_refit(&scene, 5);
+                println!(
+                    "| {name} | {} | {} | {:.2} | {:.3} |",
+                    scene.triangle_count(),
+                    scene.objects.len(),
+                    1e3 * rebuild,
+                    1e3 * refit
+                );
+            }
+        }
+        _ => eprintln!(
+            "modes: time [copies...] | update N | memory N instanced|flattened | trace | refit"
+        ),
     }
 }
 
