@@ -144,8 +144,22 @@ pub(crate) fn samples_per_submit(w: u32, h: u32) -> u32 {
     ((1u64 << 18) / pixels).clamp(1, SAMPLES_PER_SUBMIT as u64) as u32
 }
 
-/// Fails with a GPU error when the scene's vertex buffer exceeds the adapter's limits.
+/// Fails with `OutOfMemory` when the scene's flat view (every instance's copy, built for
+/// the GPU passes) would not fit, and with a GPU error when its vertex buffer exceeds the
+/// adapter's limits; before either is built.
 pub(crate) fn check_scene_buffers(ctx: &GpuContext, scene: &Scene) -> Result<()> {
+    if !scene.flat_is_built() {
+        crate::memory::check(
+            || {
+                format!(
+                    "the scene's flat view for the GPU passes ({} objects, {} triangles)",
+                    scene.objects.len(),
+                    scene.triangle_count()
+                )
+            },
+            scene.flat_estimate(),
+        )?;
+    }
     let bytes = scene.triangle_count() as u64 * 3 * std::mem::size_of::<VertexRaw>() as u64;
     ctx.check_buffer("scene vertices", bytes)
 }

@@ -190,13 +190,13 @@ fn resolve_objects<'a>(
 /// coordinates, material).
 const FLAT_BYTES_PER_VERTEX: u64 = 24;
 const FLAT_BYTES_PER_TRIANGLE: u64 = 12 + 24 + 4;
-/// Bytes per object beyond its flat arrays (its record and the description's).
+/// Bytes per object (its record and the description's).
 const BYTES_PER_OBJECT: u64 = 256;
 
 impl Scene {
-    /// Checks that the flat view of `resolved` objects would fit (2^32 - 1 vertices,
-    /// memory), before any object is placed: millions of instances are refused by the
-    /// estimate, not by the allocator when the flat view is built.
+    /// Checks that `resolved` objects fit: at most 2^32 - 1 placed vertices and triangles
+    /// (the flat numbering is 32-bit), and memory for the object records; before any
+    /// object is pushed. (The flat view's memory is checked where it is built.)
     fn check_flat(&self, resolved: &[Resolved]) -> Result<()> {
         let (mut vertices, mut triangles) = (0u64, 0u64);
         for r in resolved {
@@ -204,27 +204,29 @@ impl Scene {
             vertices += m.positions.len() as u64;
             triangles += m.indices.len() as u64;
         }
-        if vertices > MAX_VERTICES as u64 {
+        if vertices > MAX_VERTICES as u64 || triangles > MAX_VERTICES as u64 {
             return Err(Error::scene(
                 "scene",
                 "objects",
-                format!("the scene would hold {vertices} vertices (at most 2^32 - 1)"),
+                format!(
+                    "the scene would hold {vertices} vertices and {triangles} triangles \
+                     (at most 2^32 - 1 each)"
+                ),
             ));
         }
-        let n = resolved.len();
+        let n = resolved.len() as u64;
         memory::check(
-            || format!("the scene's flat view ({n} objects, {triangles} triangles)"),
-            Self::flat_bytes(vertices, triangles, n as u64),
-        )?;
-        Ok(())
+            || format!("the scene's {n} objects"),
+            n.saturating_mul(BYTES_PER_OBJECT),
+        )
     }
 
-    /// Estimated bytes of the flat view of `vertices` and `triangles` placed by `objects`.
-    pub fn flat_bytes(vertices: u64, triangles: u64, objects: u64) -> u64 {
-        vertices
+    /// Estimated bytes of the flat view (built for the GPU passes on their first frame,
+    /// checked there before it is built: [`Scene::flat`]).
+    pub fn flat_estimate(&self) -> u64 {
+        (self.vertex_count() as u64)
             .saturating_mul(FLAT_BYTES_PER_VERTEX)
-            .saturating_add(triangles.saturating_mul(FLAT_BYTES_PER_TRIANGLE))
-            .saturating_add(objects.saturating_mul(BYTES_PER_OBJECT))
+            .saturating_add((self.triangle_count() as u64).saturating_mul(FLAT_BYTES_PER_TRIANGLE))
     }
 }
 
