@@ -83,7 +83,10 @@ pub struct BidirParamsRaw {
     pub bundles_uniform: f32,
     /// 1 / ∫ lum(L_env) dω when bundles are drawn from the environment.
     pub env_pdf_scale: f32,
-    pub _pad1: [f32; 2],
+    /// Lower bound of ‖x3 − y1‖² for the one-bounce light of VPLs without a bundle
+    /// strategy (negative `pdf`: the VPLs of area lights, the sun and the sky).
+    pub alone_min_dist2: f32,
+    pub _pad1: f32,
 }
 
 /// Extra field of view of a VPL's cube faces, in shadow texels on each side (as the lights').
