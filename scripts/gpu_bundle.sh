@@ -134,10 +134,13 @@ fi
 # --- The check's scripts, tests/ for pytest (with the files it reads), the smoke lists.
 cp scripts/gpu_check.sh scripts/gpu_images.py scripts/gpu_summary.py scripts/gpu_pytest_plugin.py .gpu/
 rm -rf .gpu/pytests && mkdir -p .gpu/pytests/docs .gpu/pytests/scripts
-cp -r tests pyproject.toml .gpu/pytests/
-cp -r docs/examples .gpu/pytests/docs/
-cp scripts/gpu_summary.py scripts/gpu_pytest_plugin.py .gpu/pytests/scripts/ # test_gpu_check.py
+# What the tests read beside tests/: the README (its examples run), docs/examples and
+# docs/scenes (Mitsuba scenes and references), the scripts some tests run (0.8 MB in all).
+cp -r tests pyproject.toml README.md .gpu/pytests/
+cp -r docs/examples docs/scenes .gpu/pytests/docs/
+cp scripts/*.py scripts/*.sh .gpu/pytests/scripts/
 find .gpu/pytests -name __pycache__ -prune -exec rm -rf {} +
+rm -rf .gpu/probes && cp -r scripts/gpu_probes .gpu/probes
 echo "$SMOKE_TESTS" >.gpu/smoke_tests.txt
 echo "$SMOKE_PYTEST" >.gpu/smoke_pytest.txt
 echo "$SMOKE_IMAGES" >.gpu/smoke_images.txt

@@ -131,10 +131,11 @@ def test_callback_cancels_within_half_a_second(method, settings, stage):
     asked = []
 
     def progress(name, fraction):
-        # Cancel once the stage has run for a while (0.3 s), mid-way through it.
+        # Cancel once the stage has run for a while (0.3 s) or is a quarter done (a machine
+        # with many cores traces the photons in less than 0.3 s), mid-way through it.
         if name == stage:
             asked.append(time.monotonic())
-            if asked[-1] - asked[0] > 0.3:
+            if asked[-1] - asked[0] > 0.3 or 0.25 <= fraction < 1.0:
                 return False
         return True
 

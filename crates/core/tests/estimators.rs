@@ -126,10 +126,20 @@ fn binned_estimators_give_the_same_image_as_volumes() {
                 out.stats.trivial_accepts,
             );
             assert_eq!(lit_pixels(t), lit, "{name}: {e} lights other pixels");
-            assert!(d < 1e-4, "{name}: {e} differs from volumes by {d}");
+            // The GPU estimators run the same WGSL kernel: 1e-4 of the max pixel (summation
+            // order). The CPU estimator evaluates it in Rust: on a GPU whose pow/exp are the
+            // hardware's approximations (NVIDIA: ~2⁻²² relative, amplified by a glossy
+            // exponent) it differs more (H100: 1.9e-4 on spot-glossy; lavapipe, whose
+            // math is LLVM's as the CPU's, < 1e-4): 1e-3, far below any real difference.
+            let tol = if estimator == Estimator::Cpu {
+                1e-3
+            } else {
+                1e-4
+            };
+            assert!(d < tol, "{name}: {e} differs from volumes by {d}");
             // The composite adds the same indirect light: the radiance agrees as closely.
             let dr = max_difference(&out.radiance, &volumes.radiance, rad_scale);
-            assert!(dr < 1e-4, "{name}: {e} radiance differs by {dr}");
+            assert!(dr < tol, "{name}: {e} radiance differs by {dr}");
             // Wide kernels over the box's diffuse walls: the hierarchy must accept whole
             // nodes, or it is only a finer tiling.
             if estimator == Estimator::Cluster && name != "spot-glossy" && kernel_scale >= 1.0 {

@@ -73,13 +73,14 @@ impl ShadowViews {
 }
 
 /// A `layers`-deep array of `size`² shadow maps: the texture's views per layer (render
-/// targets) and over the whole array (for lookups).
+/// targets) and over the whole array (for lookups), and the texture (its layers can be
+/// copied out, for tests).
 pub fn layered_maps(
     device: &wgpu::Device,
     label: &str,
     size: u32,
     layers: u32,
-) -> (Vec<wgpu::TextureView>, wgpu::TextureView) {
+) -> (Vec<wgpu::TextureView>, wgpu::TextureView, wgpu::Texture) {
     let maps = crate::gpu::create_texture(
         device,
         &wgpu::TextureDescriptor {
@@ -93,7 +94,9 @@ pub fn layered_maps(
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
             format: FORMAT,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::COPY_SRC,
             view_formats: &[],
         },
     );
@@ -113,7 +116,7 @@ pub fn layered_maps(
         dimension: Some(wgpu::TextureViewDimension::D2Array),
         ..Default::default()
     });
-    (layer_views, array)
+    (layer_views, array, maps)
 }
 
 /// Pipeline of the shadow pass (depth only).

@@ -188,7 +188,8 @@ impl VplMaps {
             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         );
         let view_group = ShadowPass::get(ctx).view_group(device, "vpl shadow bind group", &views);
-        let (layer_views, array) = shadow::layered_maps(device, "vpl shadow maps", size, n_layers);
+        let (layer_views, array, _) =
+            shadow::layered_maps(device, "vpl shadow maps", size, n_layers);
         Ok(VplMaps {
             capacity,
             size,

@@ -72,6 +72,8 @@ pub(crate) struct LightSamples {
     view_group: wgpu::BindGroup,
     layer_views: Vec<wgpu::TextureView>,
     pub array: wgpu::TextureView,
+    #[cfg_attr(not(test), allow(dead_code))]
+    maps: wgpu::Texture,
     pub env_view: wgpu::TextureView,
     pub irradiance_view: wgpu::TextureView,
     pub params: wgpu::Buffer,
@@ -201,7 +203,7 @@ impl LightSamples {
         );
         let view_group =
             ShadowPass::get(ctx).view_group(device, "sampled light shadow bind group", &views);
-        let (layer_views, array) =
+        let (layer_views, array, maps) =
             shadow::layered_maps(device, "sampled light shadow maps", counts.size, layers);
         let (env, irradiance) = env_tables(ctx, scene.environment.as_deref());
         let rows = if counts.area > 0 {
@@ -228,6 +230,7 @@ impl LightSamples {
             view_group,
             layer_views,
             array,
+            maps,
             env_view: view(&env),
             irradiance_view: view(&irradiance),
             params,
@@ -319,9 +322,15 @@ impl LightSamples {
             });
         }
         let area = records.len() as u32;
+        let area_points = records.len();
         if let Some(env) = scene.environment.as_deref().filter(|_| c.sky > 0) {
             let grow = 1.0 + 2.0 * MARGIN_TEXELS / c.size as f32;
             for d in env.directions(c.sky, seed) {
+                // The direct pass computes this layer as 6 × points + k (direct_shade.wgsl).
+                debug_assert_eq!(
+                    self.clip.len(),
+                    6 * area_points + records.len() - area_points
+                );
                 let (m, side, _) = orthographic_view(-d.towards, scene.bounds(), grow);
                 records.push(SampledLightRaw::Sky {
                     towards: d.towards,
@@ -441,6 +450,126 @@ fn params_of(scene: &Scene, c: SampleCounts, area: u32, sky: u32) -> DirectParam
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::gpu::timer::Timer;
+    use std::collections::HashMap;
+
+    /// Every sky direction's shadow layer holds the depth of the scene seen along its own
+    /// direction: a floor alone (a 6×6 quad at y = −0.5) under a constant sky, four
+    /// directions, each layer's texels against the floor plane's depth along that layer's
+    /// view (ray through the texel centre, ndc z where it meets the plane; 1 where it misses
+    /// the quad). At or behind it by at most the slope-scaled depth bias on 98% of the
+    /// texels (the quad's edge texels are partly covered). On an H100 the sky's layers after the first were falsely shadowed
+    /// (docs/gpu-check.md): this tells which layer holds what, and prints for each layer
+    /// the view whose depth it matches best.
+    #[test]
+    fn sky_layers_hold_the_depth_of_their_own_view() {
+        let json = r#"{"camera": {"position": [0, 0.8, 3], "look_at": [0, -0.1, 0], "fov": 40, "width": 8, "height": 8},
+          "materials": {"m": {"diffuse": [0.5, 0.5, 0.5]}},
+          "objects": [{"shape": {"type": "quad", "size": [6, 6]}, "transform": {"translate": [0, -0.5, 0]}, "material": "m"}],
+          "environment": {"radiance": [1, 1, 1]}}"#;
+        let scene = Scene::from_json(json, "floor", &HashMap::new()).expect("scene");
+        let ctx = crate::gpu::context(None).expect("a GPU adapter");
+        for (sky, size) in [(4, 64), (16, 256)] {
+            check_sky_layers(&ctx, &scene, sky, size);
+        }
+    }
+
+    fn check_sky_layers(ctx: &GpuContext, scene: &Scene, sky: u32, size: u32) {
+        let counts = SampleCounts {
+            area: 0,
+            sky,
+            size,
+            background: false,
+        };
+        let mut samples = LightSamples::new(ctx, scene, counts).expect("samples");
+        assert!(samples.prepare(ctx, scene, (1, 1.0, true)));
+        let geometry = Geometry::upload(ctx, scene);
+        let cull = CullUnits::of(scene);
+        let mut timer = Timer::new(ctx, sky);
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        samples.record_shadows(ctx, &mut encoder, &mut timer, (&geometry, &cull, None));
+        let layers = samples.clip.len() as u32;
+        let row = (size * 4).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+        let buffer = crate::gpu::readback_buffer(
+            &ctx.device,
+            "sky layers",
+            row as u64 * size as u64 * layers as u64,
+        );
+        encoder.copy_texture_to_buffer(
+            samples.maps.as_image_copy(),
+            wgpu::TexelCopyBufferInfo {
+                buffer: &buffer,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(row),
+                    rows_per_image: Some(size),
+                },
+            },
+            wgpu::Extent3d {
+                width: size,
+                height: size,
+                depth_or_array_layers: layers,
+            },
+        );
+        ctx.queue.submit([encoder.finish()]);
+        let bytes = ctx.read_buffer(&buffer).expect("readback");
+        let stored = |k: u32, x: u32, y: u32| -> f32 {
+            let at = (k * size + y) as usize * row as usize + x as usize * 4;
+            f32::from_le_bytes(bytes[at..at + 4].try_into().expect("4 bytes"))
+        };
+        // The floor's depth along view `m` through texel (x, y) (1: the ray misses it).
+        let expected = |m: &Mat4, x: u32, y: u32| -> f32 {
+            let ndc = glam::Vec2::new(
+                (x as f32 + 0.5) / size as f32 * 2.0 - 1.0,
+                1.0 - (y as f32 + 0.5) / size as f32 * 2.0,
+            );
+            let inv = m.inverse();
+            let a = inv.project_point3(ndc.extend(0.0));
+            let b = inv.project_point3(ndc.extend(1.0));
+            let t = (-0.5 - a.y) / (b.y - a.y);
+            let p = a + (b - a) * t;
+            if !(0.0..=1.0).contains(&t) || p.x.abs() > 3.0 || p.z.abs() > 3.0 {
+                1.0
+            } else {
+                t
+            }
+        };
+        // Stored at or behind the plane by at most the slope-scaled bias (2 × the depth's
+        // change per texel, plus its constant part).
+        let agree = |k: u32, m: &Mat4| -> f64 {
+            let mut n = 0;
+            for y in 0..size {
+                for x in 0..size {
+                    let e = expected(m, x, y);
+                    let slope = (expected(m, x + 1, y) - e)
+                        .abs()
+                        .max((expected(m, x, y + 1) - e).abs());
+                    let d = stored(k, x, y) - e;
+                    n += (d > -1e-4 && d < 2.5 * slope + 1e-4) as u32;
+                }
+            }
+            n as f64 / (size * size) as f64
+        };
+        let mut worst = 1.0f64;
+        for k in 0..layers {
+            let own = agree(k, &samples.clip[k as usize]);
+            let best = (0..layers)
+                .map(|j| (j, agree(k, &samples.clip[j as usize])))
+                .max_by(|a, b| a.1.total_cmp(&b.1))
+                .expect("a layer");
+            eprintln!(
+                "{sky} directions, {size}²: sky layer {k}: {:.1}% of texels hold its own view's depth; best match: view {} ({:.1}%)",
+                100.0 * own,
+                best.0,
+                100.0 * best.1
+            );
+            worst = worst.min(own);
+        }
+        assert!(
+            worst > 0.98,
+            "{sky} directions: a sky layer holds another depth ({worst})"
+        );
+    }
 
     /// A one-sided emitter facing down (−y) renders the five faces that see below it and
     /// skips +y, as one tilted a little; one facing a cube corner needs all six.

@@ -82,7 +82,7 @@ impl GpuScene {
             bytemuck::cast_slice(&shadow::ShadowPass::views(&shadows)),
             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         );
-        let (shadow_layers, shadow_array) =
+        let (shadow_layers, shadow_array, _) =
             shadow::layered_maps(&ctx.device, "shadow maps", shadow_map_size, layers);
         let shadow_group =
             ShadowPass::get(ctx).view_group(&ctx.device, "shadow bind group", &shadow_views);

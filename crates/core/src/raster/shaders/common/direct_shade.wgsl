@@ -596,7 +596,12 @@ fn sampled_light(p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, wo: ve
         if max3(fd + fs) <= 0.0 {
             continue;
         }
-        let layer = u32(t0.w + 0.5);
+        // The sky's layers follow the emitter points' six each, in order (`samples.rs`).
+        // Computed from the loop index, not read from the record: on an NVIDIA H100 the
+        // record's layer (a value the same for every pixel, loaded from a texture) passed to
+        // `shadow_tap` looked up the wrong map from the second direction on (18-29% dark;
+        // docs/gpu-check.md), while the index-derived one is right on every adapter.
+        let layer = 6u * direct_params.area_count + (i - direct_params.area_count);
         let q = p + ng * (t1.w * (1.0 - cos_g) + 0.5 * t1.w);
         let v = shadow_tap(sample_maps, shadow_sampler, sample_view(layer), layer, q);
         lit += fd * v;
