@@ -745,3 +745,30 @@ fn emitting_furnace_matches_analytic() {
     }
     assert!(failures.is_empty(), "{failures:?}");
 }
+
+/// `max_depth` 1 asks for direct light alone: `bidir` then adds no indirect light (it used
+/// to add the one-bounce light whatever the depth). On `cornell` (a point light, no sky:
+/// the direct light is the GPU direct pass that `direct` runs too) its image equals
+/// `direct`'s with the same options to float rounding (1e-5 of the mean), while at depth 2
+/// the one-bounce light adds at least 10% (the box's colour bleeding; measured 41%).
+#[test]
+fn max_depth_one_is_direct_light_only() {
+    let scene = load("cornell");
+    let depth = |d: i64| bidir_settings(32).with("max_depth", d);
+    let one = mean(&run(&scene, &depth(1)).radiance);
+    let two = mean(&run(&scene, &depth(2)).radiance);
+    let direct = mean(
+        &run(
+            &scene,
+            &gi_core::options!(Direct, spp: 1, width: 32, height: 32, seed: 3),
+        )
+        .radiance,
+    );
+    eprintln!("bidir depth 1 {one:.5}, depth 2 {two:.5}, direct {direct:.5}");
+    let d = (one - direct).abs().max_element() / direct.element_sum();
+    assert!(d < 1e-5, "depth 1 differs from direct by {d}");
+    assert!(
+        two.element_sum() > 1.1 * one.element_sum(),
+        "{two} vs {one}"
+    );
+}

@@ -9,7 +9,8 @@
 //!    sphere and together stratified, the scene rasterized along each into per-pixel
 //!    fragment lists.
 //! 4. Direct light (the frame of method `direct`), then at the pixel-centre G-buffer the
-//!    one-bounce light of the VPLs and of the bundles combined by MIS (§4.2) and the
+//!    one-bounce light of the VPLs and of the bundles combined by MIS (§4.2, when `max_depth`
+//!    ≥ 2: at 1 the frame is the direct light alone) and the
 //!    two-bounce light (§4.3, when `max_depth` ≥ 3) in one pass (`bidir.wgsl`), the
 //!    composite and the readback of what was asked for. Light of three and more bounces
 //!    (`max_depth` ≥ 4): [`subpaths`] continues each bundle's paired VPL into a light
@@ -254,7 +255,7 @@ fn lighting_params(
             BidirStrategy::Vpl => 1,
             BidirStrategy::Bundle => 2,
         },
-        orders: options.max_depth.saturating_sub(2),
+        bounces: options.max_depth.saturating_sub(1),
         min_dist2: min_dist * min_dist,
         max_walk: MAX_WALK,
         pair_offset: pair_offset(frame),

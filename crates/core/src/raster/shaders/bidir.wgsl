@@ -62,9 +62,9 @@ struct Params {
     vpls_per_light: u32,
     bundles: u32,
     mode: u32,
-    // Highest light-subpath order paired with the bundles' hits (0: none, 1: two bounces
-    // with the RSM's VPLs, j > 1: the traced subpaths' vertices up to order j too).
-    orders: u32,
+    // Indirect bounces (`max_depth` − 1): 0 none, 1 one bounce, 2 also two bounces with
+    // the RSM's VPLs, j > 2 also the traced subpaths' vertices up to order j − 1.
+    bounces: u32,
     // Lower bound of ‖x1 − x2‖² in the two-bounce term.
     min_dist2: f32,
     // Longest list walked (a guard: lists longer than this are cut).
@@ -332,7 +332,8 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
     var sum = vec3<f32>(0.0);
 
     // One bounce through the VPLs (in mode 2 only those without a bundle strategy).
-    for (var i = 0u; i < params.vpl_count; i++) {
+    let vpl_one = select(0u, params.vpl_count, params.bounces >= 1u);
+    for (var i = 0u; i < vpl_one; i++) {
         let v = vpl_at(i);
         let alone = v.pdf < 0.0;
         if params.mode == 2u && !alone {
@@ -360,8 +361,8 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
     }
 
     // Camera subpaths through the ray bundles.
-    let bundle_one = params.mode != 1u;
-    if params.bundles > 0u && (bundle_one || params.orders != 0u || params.has_env != 0u) {
+    let bundle_one = params.mode != 1u && params.bounces >= 1u;
+    if params.bundles > 0u && (bundle_one || params.bounces >= 2u || params.has_env != 0u) {
         for (var b = 0u; b < params.bundles; b++) {
             let bv = bundle_views[b];
             let c = dot(ng, bv.dir);
@@ -445,7 +446,7 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
             // Two bounces: one VPL of every light lights x2, bundle b taking VPL
             // ⌊(b + u)·n1/n2⌋ (the VPLs are in stratified order over the RSM, so every part
             // of it is paired; each VPL is picked n2/n1 times in expectation).
-            if params.orders != 0u && params.vpls_per_light > 0u {
+            if params.bounces >= 2u && params.vpls_per_light > 0u {
                 let k = min(u32((f32(b) + params.pair_offset) * n1 / n2), params.vpls_per_light - 1u);
                 // d̂ at x3 of eq. 14: the bundles' density n2·p_r.
                 let f3 = bsdf_eval(clamped(m, 1.0 / bv.inv_density, dot(ns, wo)), ns, wo, dir);
@@ -457,7 +458,7 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
                     // continued from that VPL for this bundle (`subpaths.rs`), linked by
                     // their records' `light_dist2` (0 ends the subpath).
                     var row = params.vpl_count + j * params.bundles + b;
-                    for (var o = 2u; o <= params.orders && row != 0u; o++) {
+                    for (var o = 2u; o < params.bounces && row != 0u; o++) {
                         let y = vpl_at(row);
                         let ty = vpl_light(y, vpl_material(y), x2, ns2, ng2, m2, -dir, params.min_dist2);
                         sum += f3 * weight * ty * n1;
