@@ -221,6 +221,8 @@ if has c; then
   for p in "${photon_list[@]}"; do pargs+=(--photons "$p"); done
   jobs=()
   for s in "${size_list[@]}"; do
+    # The direct light per kind of light (issue 28: area, sun and sky against a point light).
+    jobs+=("lights-$s|--lights --size $s")
     jobs+=("ispm-tiled-$s|--estimator tiled --size $s --stages --table-only")
     jobs+=("bidir-$s|--method bidir --size $s")
     for e in volumes cluster directional cpu; do

@@ -3,15 +3,14 @@ Cornell box (an area light), a sun and a sky, a room lit by emissive surfaces on
 
 The references are Mitsuba 3 path-traced images, 64×64, committed beside the scenes
 (`scripts/lights_reference.py mitsuba` renders them; CI never runs Mitsuba), one per
-`max_depth` that gi's methods trace by default (64; `bidir`'s 3; 1 for `direct`, which
-renders direct light), Mitsuba's `max_depth` one more (it counts path segments, gi
-scattering events). Their means are known to better than 0.1% (`docs/scenes/references.json`:
-the standard error of each mean from 16 independent batches). Each method that renders a
-scene without a `gi.RenderWarning` (a kind of light it leaves out) must match the image
-mean of the reference of its `max_depth`: `path` within 1%, the others within 3%. A method
-that warns or refuses a scene is skipped, with the reason in the summary (`-ra`), so that
-what renders what stays visible; `docs/bench/lights.md` has every method's ratio and FLIP
-at converged settings.
+`max_depth` that gi's methods trace by default (64; 3, `bidir`'s old two-bounce default;
+1 for `direct`, which renders direct light), Mitsuba's `max_depth` one more (it counts
+path segments, gi scattering events). Their means are known to better than 0.1%
+(`docs/scenes/references.json`: the standard error of each mean from 16 independent
+batches). Every method renders every scene without a `gi.RenderWarning` (a kind of light
+left out) or a refusal, and must match the image mean of the reference of its `max_depth`:
+`path` within 1%, `bidir` within 5%, the others within 3%; `docs/bench/lights.md` has every
+method's ratio and FLIP at converged settings.
 
 The settings keep the file to about a minute on two cores. `path`'s image mean has a
 standard error (measured over six seeds) of 0.36% in the Cornell box at 256 samples per
@@ -23,6 +22,17 @@ takes its direct light from the photons, whose k-nearest-neighbour estimate dark
 edges of the sun-lit boxes; under the sun and sky the photons enter through the bounding
 disc of a 10 m ground plate, of which the camera sees a small part, and 200k of them leave
 the image 3.7% dark, 600k 1.7% (1M: 1.3%), hence 600k there.
+
+`bidir`'s indirect light of area lights, the sun and the sky comes from VPLs at the first
+hits of 64 photons a frame (`frame/bidir/emitted.rs`): one frame's image mean varies by
+several percent (sun and sky, where 26 of 64 photons hit the plate and a few the houses:
+the indirect light of single frames was 20–85% of the reference's), so its image is the
+mean of 16 progressive passes (new VPLs and bundles each). Measured over seeds 11–13:
+0.976–0.990 (Cornell box), 0.981–1.001 (sun and sky), 0.963–0.975 (emissive room), below
+1 by the two-bounce term's clamp of ‖x2 − y1‖ (10% of the scene's diagonal; 3% gives
+0.985–0.998 and 0.974–0.987, at more noise), the deficit that `bidir` has with point
+lights too (`crates/core/tests/bidir.rs::any_depth_matches_path_tracer`, 5% there);
+hence 5%.
 """
 
 import json
@@ -46,9 +56,10 @@ SETTINGS = {
     "gather": {"photons": 200_000, "spp": 16},
     "direct": {"spp": 16},
     "ispm": {"photons": 200_000, "spp": 16},
-    "bidir": {"spp": 16},
+    "bidir": {"spp": 16, "progressive": True},
 }
-TOLERANCE = {"path": 0.01}  # the others: 0.03
+PASSES = {"bidir": 16}  # progressive passes averaged (see the module doc)
+TOLERANCE = {"path": 0.01, "bidir": 0.05}  # the others: 0.03
 MORE = {  # see the module doc
     ("cornell-box", "path"): {"spp": 512},
     ("sun-sky", "photon"): {"photons": 600_000},
@@ -91,21 +102,14 @@ def test_method_matches_mitsuba(name, method):
     depth = int(r.options.get("max_depth", 1))  # `direct` renders direct light
     if depth not in DEPTHS:
         pytest.fail(f"no reference for max_depth {depth} (scripts/lights_reference.py)")
-    img = r.render().radiance
+    passes = PASSES.get(method)
+    img = (r.render_progressive(passes=passes) if passes else r.render()).radiance
     ref = gi.read_image(reference_file(name, depth))[..., :3]
     assert np.isfinite(img).all()
     ratio = float(img.mean() / ref.mean())
-    if warned:
-        # The one known gap: `bidir`'s VPLs come from point and spot lights only, so the
-        # indirect light of emitters and suns is missing (it says so). Then its image is the
-        # direct light (within 3%) plus what its bundles add (the sky's), and below the
-        # reference: the warning is true. Measured: 0.745, 0.951, 0.692 of the reference
-        # against direct-only 0.741, 0.953, 0.704.
-        assert method == "bidir", warned
-        assert all("its VPLs leave them out" in w for w in warned), warned
-        direct = gi.read_image(reference_file(name, 1))[..., :3].mean() / ref.mean()
-        assert 0.97 * direct <= ratio < 0.99, (name, ratio, direct)
-        return
+    # Every method renders every kind of light (the last gap, `bidir`'s VPLs of area lights
+    # and suns, is closed): a warning fails.
+    assert not warned, (method, name, warned)
     assert abs(ratio - 1) <= TOLERANCE.get(method, 0.03), (
         f"{method} on {name}: image mean {img.mean():.5f}, Mitsuba's {ref.mean():.5f} at "
         f"max_depth {depth} (ratio {ratio:.4f})"

@@ -60,18 +60,14 @@ def emitting_cornell() -> gi.Scene:
 
 
 @pytest.mark.parametrize("method", gi.methods())
-def test_area_lights_are_rendered_or_named(method):
-    """An emitting box: `path`, `photon`, `gather`, `direct` and `ispm` (GPU direct light,
-    photons from the emitters) render it without a word; `bidir` renders its direct light
-    and says that its VPLs leave out its indirect light."""
+def test_area_lights_are_rendered_without_a_warning(method):
+    """An emitting box: every method renders it without a word (`path`, `photon`, `gather`,
+    `direct`, `ispm` since the lights foundation; `bidir` since its VPLs come from the
+    emitters too, `frame/bidir/emitted.rs`)."""
     scene = emitting_cornell()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         r = gi.Renderer(scene, method, **gi.method_options(method, **SMALL))
     messages = [str(w.message) for w in caught if issubclass(w.category, gi.RenderWarning)]
-    if method != "bidir":
-        assert messages == []
-    for m in messages:
-        assert "emitting surfaces" in m and f"`{method}`" in m, m
-        assert "indirect light" in m, m
+    assert messages == []
     assert r.render().radiance.max() > 0

@@ -121,35 +121,6 @@ fn check_environment(_scene: &Scene, _method: Method) -> Result<()> {
     Ok(())
 }
 
-/// What `method` leaves out of `scene`'s light, one message each (they become
-/// `gi.RenderWarning`s): kinds of light a method does not render yet. The CPU methods render
-/// every light; the GPU methods the direct light of every kind (`raster::direct`), `ispm`'s
-/// photons the indirect light of every kind; `bidir`'s VPLs leave out the indirect light of
-/// emitters and directional lights.
-fn unrendered_lights(scene: &Scene, method: Method) -> Vec<String> {
-    let mut out = Vec::new();
-    let emitters = scene.materials.iter().any(|m| m.emits());
-    let directional = scene.lights.iter().any(|l| !l.is_local());
-    let name = method.name();
-    if method != Method::Bidir {
-        return out;
-    }
-    let mut partly = |what: &str| {
-        out.push(format!(
-            "method `{name}` renders the direct light of {what} but not yet their indirect \
-             light (its VPLs leave them out); use method `path`, `photon`, `gather` or `ispm` \
-             for it"
-        ));
-    };
-    if emitters {
-        partly("emitting surfaces (area lights)");
-    }
-    if directional {
-        partly("directional lights");
-    }
-    out
-}
-
 /// Light transport `options` ask for that their method does not compute, one message each
 /// (they become `gi.RenderWarning`s).
 fn transport_omissions(scene: &Scene, options: &RenderOptions) -> Vec<String> {
@@ -191,8 +162,7 @@ impl Renderer {
             options.common.height.unwrap_or(scene.camera.height),
         );
         options::check_image_memory(&camera, method)?;
-        let mut warnings = unrendered_lights(scene, method);
-        warnings.extend(transport_omissions(scene, options));
+        let warnings = transport_omissions(scene, options);
         Ok(Renderer {
             scene: Scene {
                 camera,

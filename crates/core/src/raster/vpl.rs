@@ -63,9 +63,11 @@ pub struct BidirParamsRaw {
     pub bundles: u32,
     /// 0: MIS, 1: VPLs only, 2: bundles only (one-bounce light).
     pub mode: u32,
-    /// Highest order of the light-subpath vertices paired with the bundles' hits: 0 none,
-    /// 1 the RSM's VPLs (two bounces), j > 1 also the traced subpaths' (depth j + 2).
-    pub orders: u32,
+    /// Indirect bounces to render (`max_depth` − 1): 0 none (direct light only), 1 the
+    /// one-bounce light (VPLs and bundles' hits lit by the lights), 2 also the two-bounce
+    /// light (bundles' hits lit by the RSM's VPLs), j > 2 also the traced subpaths'
+    /// vertices up to order j − 1.
+    pub bounces: u32,
     pub min_dist2: f32,
     pub max_walk: u32,
     /// Random offset in [0, 1) of the two-bounce term's bundle-to-VPL pairing.
@@ -83,7 +85,10 @@ pub struct BidirParamsRaw {
     pub bundles_uniform: f32,
     /// 1 / ∫ lum(L_env) dω when bundles are drawn from the environment.
     pub env_pdf_scale: f32,
-    pub _pad1: [f32; 2],
+    /// Lower bound of ‖x3 − y1‖² for the one-bounce light of VPLs without a bundle
+    /// strategy (negative `pdf`: the VPLs of area lights, the sun and the sky).
+    pub alone_min_dist2: f32,
+    pub _pad1: f32,
 }
 
 /// Extra field of view of a VPL's cube faces, in shadow texels on each side (as the lights').

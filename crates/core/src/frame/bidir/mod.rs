@@ -9,13 +9,15 @@
 //!    sphere and together stratified, the scene rasterized along each into per-pixel
 //!    fragment lists.
 //! 4. Direct light (the frame of method `direct`), then at the pixel-centre G-buffer the
-//!    one-bounce light of the VPLs and of the bundles combined by MIS (§4.2) and the
+//!    one-bounce light of the VPLs and of the bundles combined by MIS (§4.2, when `max_depth`
+//!    ≥ 2: at 1 the frame is the direct light alone) and the
 //!    two-bounce light (§4.3, when `max_depth` ≥ 3) in one pass (`bidir.wgsl`), the
 //!    composite and the readback of what was asked for. Light of three and more bounces
 //!    (`max_depth` ≥ 4): [`subpaths`] continues each bundle's paired VPL into a light
 //!    subpath traced on the CPU, every vertex a VPL that the bundle's hit connects to.
 
 mod bundles;
+mod emitted;
 mod subpaths;
 mod vpls;
 
@@ -32,7 +34,7 @@ use crate::photon::specular::specular_paths_direct;
 use crate::raster::bundles::{BundleBuffers, BundlePass};
 use crate::raster::direct::DirectPass;
 use crate::raster::rsm::{RsmPass, RsmTargets};
-use crate::raster::vpl::{BidirParamsRaw, VplPass, TARGET};
+use crate::raster::vpl::{BidirParamsRaw, VplPass, VplRaw, TARGET};
 use crate::sampling::Rng;
 use crate::scene::light_views::{self, light_views, LightView};
 use crate::scene::Scene;
@@ -253,7 +255,7 @@ fn lighting_params(
             BidirStrategy::Vpl => 1,
             BidirStrategy::Bundle => 2,
         },
-        orders: options.max_depth.saturating_sub(2),
+        bounces: options.max_depth.saturating_sub(1),
         min_dist2: min_dist * min_dist,
         max_walk: MAX_WALK,
         pair_offset: pair_offset(frame),
@@ -269,8 +271,91 @@ fn lighting_params(
         bundles_env: n_env as f32,
         bundles_uniform: (options.bundles - n_env) as f32,
         env_pdf_scale,
-        _pad1: [0.0; 2],
+        alone_min_dist2: (emitted::ALONE_MIN_DIST * (hi - lo).length()).powi(2),
+        _pad1: 0.0,
     }
+}
+
+/// Groups of `vpls_per_light` VPL slots: one per light, and one more for the sources the
+/// RSM does not see ([`emitted`]) when the scene has any.
+fn vpl_groups(scene: &Scene) -> u32 {
+    let others = scene.lights.iter().any(|l| !l.is_local())
+        || scene.environment.is_some()
+        || scene.materials.iter().any(|m| m.emits());
+    scene.lights.len() as u32 + others as u32
+}
+
+/// A frame's VPL records (the first VPLs', then the light subpaths' vertices) and their
+/// cube faces.
+struct FrameVpls {
+    raws: Vec<VplRaw>,
+    matrices: Vec<glam::Mat4>,
+    /// The first VPLs' records (`vpl_groups` × `vpls_per_light`), and those that carry light.
+    count: u32,
+    lit: usize,
+    /// Light subpaths with a vertex.
+    placed: usize,
+    /// Seconds to draw the first VPLs and to trace the subpaths.
+    seconds: (f64, f64),
+}
+
+type Records = (Vec<VplRaw>, Vec<glam::Mat4>);
+
+fn frame_vpls(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    options: &BidirOptions,
+    frame: &FrameParams,
+    texels: &[crate::raster::rsm::RsmTexel],
+    maps: &VplMaps,
+) -> FrameVpls {
+    let t = Instant::now();
+    let (mut records, groups) = first_vpls(scene, bvh, options, frame.seed, texels, maps);
+    let lit = records.0.iter().filter(|r| r.flux != [0.0; 3]).count();
+    let count = records.0.len() as u32;
+    let first = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let placed = subpaths::append(scene, bvh, &groups, options, frame, maps, &mut records);
+    FrameVpls {
+        raws: records.0,
+        matrices: records.1,
+        count,
+        lit,
+        placed,
+        seconds: (first, t.elapsed().as_secs_f64()),
+    }
+}
+
+/// The frame's first VPLs y1 and their records, group by group (`vpl_groups`): drawn from
+/// the RSM `texels` for each light, then from the photons of the other sources.
+fn first_vpls(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    options: &BidirOptions,
+    seed: u64,
+    texels: &[crate::raster::rsm::RsmTexel],
+    maps: &VplMaps,
+) -> (Records, Vec<Vec<Option<subpaths::Head>>>) {
+    let per_light = options.vpls_per_light;
+    let vpls = sample_vpls(texels, scene.lights.len(), per_light, seed);
+    let mut records = vpl_records(scene, &vpls, per_light, maps.size);
+    let mut groups: Vec<Vec<Option<subpaths::Head>>> = (0..scene.lights.len())
+        .map(|l| {
+            vpls.iter()
+                .filter(|v| v.light == l)
+                .map(|v| Some(subpaths::Head::of_rsm(scene, v)))
+                .collect()
+        })
+        .collect();
+    if vpl_groups(scene) > scene.lights.len() as u32 {
+        let heads = match emitted::sources(scene) {
+            Some(sources) => emitted::heads(scene, bvh, &sources, per_light, seed),
+            None => vec![None; per_light as usize],
+        };
+        emitted::append_records(scene, &heads, maps, &mut records);
+        groups.push(heads);
+    }
+    (records, groups)
 }
 
 /// The frame's state: kept when it fits the options and the scene's lights, else made anew
@@ -288,9 +373,9 @@ fn state<'a>(
     }
     let ctx = g.ctx.clone();
     let layers = rsm_layers(scene, options.rsm_size);
-    let first = options.vpls_per_light * scene.lights.len() as u32;
+    let lights = vpl_groups(scene);
+    let first = options.vpls_per_light * lights;
     let max_slots = ctx.device.limits().max_texture_array_layers / 6;
-    let lights = scene.lights.len() as u32;
     let capacity =
         first + subpaths::slots(lights, options.bundles, options.max_depth, first, max_slots);
     let size = options.vpl_shadow_map_size;
@@ -377,16 +462,9 @@ pub(super) fn frame(
     crate::cancel::check(progress)?;
 
     // 2. VPLs and their shadow maps.
-    let t = Instant::now();
-    let per_light = options.vpls_per_light;
-    let vpls = sample_vpls(&texels, scene.lights.len(), per_light, frame.seed);
-    let mut records = vpl_records(scene, &vpls, per_light, state.vpls.size);
-    let vpl_count = records.0.len() as u32;
-    let vpl_seconds = t.elapsed().as_secs_f64();
-    let t = Instant::now();
-    let placed = subpaths::append(scene, bvh, &vpls, options, frame, &state.vpls, &mut records);
-    let (raws, matrices) = records;
-    let subpath_seconds = t.elapsed().as_secs_f64();
+    let v = frame_vpls(scene, bvh, options, frame, &texels, &state.vpls);
+    let (raws, matrices, vpl_count, lit, placed) = (v.raws, v.matrices, v.count, v.lit, v.placed);
+    let (vpl_seconds, subpath_seconds) = v.seconds;
     let t = Instant::now();
     state.vpls.upload(&ctx, &raws, &matrices);
     let params = lighting_params(scene, options, frame, vpl_count, n_env, state.env_pdf_scale);
@@ -405,7 +483,7 @@ pub(super) fn frame(
         });
     state
         .vpls
-        .record_shadows(&ctx, &mut encoder, gs, &raws, &matrices, vpls.len(), timer);
+        .record_shadows(&ctx, &mut encoder, gs, &raws, &matrices, lit, timer);
 
     // 3. Ray bundles.
     let bundle_pass = BundlePass::get(&ctx);
@@ -444,7 +522,7 @@ pub(super) fn frame(
     let readback = t.elapsed().as_secs_f64();
     timer.collect(&ctx)?;
 
-    stats.vpls = vpls.len() as u64;
+    stats.vpls = lit as u64;
     stats.light_paths = placed as u64;
     stats.bundles = options.bundles as u64;
     stats.bundle_fragments = fragments;

@@ -95,25 +95,54 @@ pub(super) fn paired_vpl(b: u32, pair_offset: f32, n1: u32, n2: u32) -> u32 {
     (((b as f32 + pair_offset) * n1 as f32 / n2 as f32) as u32).min(n1.saturating_sub(1))
 }
 
-/// The first vertex after `v`'s and the ones after it, up to `max_len` (orders 2 … ≤
+/// The first vertex of a light subpath (y1): an RSM VPL, or the first hit of a photon
+/// emitted by a source the RSM does not see ([`super::emitted`]).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Head {
+    pub position: Vec3,
+    /// Geometric and shading normals (any side).
+    pub ng: Vec3,
+    pub ns: Vec3,
+    /// Unit direction towards where the light came from (ω1,0).
+    pub to_light: Vec3,
+    pub material: Material,
+    /// α1: the VPL's flux, shading-cosine corrected as its record.
+    pub alpha: Vec3,
+}
+
+impl Head {
+    /// The head of RSM VPL `v` (its light a point or spot light).
+    pub fn of_rsm(scene: &Scene, v: &Vpl) -> Head {
+        let t = &v.texel;
+        let light = &scene.lights[v.light];
+        let to_light = (light.position() - t.position).normalize_or_zero();
+        let cos_g = t.ng.dot(to_light).abs().max(1e-6);
+        let ratio = (t.ns.dot(to_light).abs() / cos_g).min(10.0);
+        Head {
+            position: t.position,
+            ng: t.ng,
+            ns: t.ns,
+            to_light,
+            material: Material {
+                diffuse: t.diffuse,
+                specular: t.specular,
+                roughness: t.roughness,
+                fresnel: t.fresnel,
+                transmission: Vec3::ZERO,
+                ..Material::default()
+            },
+            alpha: v.flux * ratio,
+        }
+    }
+}
+
+/// The first vertex after `h`'s and the ones after it, up to `max_len` (orders 2 … ≤
 /// max_depth − 2), by BSDF sampling with Russian roulette.
-fn trace(scene: &Scene, bvh: &SceneBvh, v: &Vpl, max_len: u32, rng: &mut Rng) -> Vec<Vertex> {
-    let t = &v.texel;
-    let light = &scene.lights[v.light];
-    let to_light = (light.position() - t.position).normalize_or_zero();
-    let cos_g = t.ng.dot(to_light).abs().max(1e-6);
-    let ratio = (t.ns.dot(to_light).abs() / cos_g).min(10.0);
-    let mut alpha = v.flux * ratio;
-    let mut material = Material {
-        diffuse: t.diffuse,
-        specular: t.specular,
-        roughness: t.roughness,
-        fresnel: t.fresnel,
-        transmission: Vec3::ZERO,
-        ..Material::default()
-    };
+fn trace(scene: &Scene, bvh: &SceneBvh, h: &Head, max_len: u32, rng: &mut Rng) -> Vec<Vertex> {
+    let mut alpha = h.alpha;
+    let mut material = h.material;
     let (mut position, mut ng, mut frame, mut w_prev) =
-        (t.position, t.ng, Frame::new(t.ns), to_light);
+        (h.position, h.ng, Frame::new(h.ns), h.to_light);
     let mut out = Vec::new();
     while (out.len() as u32) < max_len {
         let Some(bs) = material.sample(frame.to_local(w_prev), rng) else {
@@ -172,7 +201,7 @@ fn trace(scene: &Scene, bvh: &SceneBvh, v: &Vpl, max_len: u32, rng: &mut Rng) ->
 pub(super) fn append(
     scene: &Scene,
     bvh: &SceneBvh,
-    vpls: &[Vpl],
+    groups: &[Vec<Option<Head>>],
     options: &BidirOptions,
     frame: &FrameParams,
     maps: &VplMaps,
@@ -182,7 +211,7 @@ pub(super) fn append(
     let out = subpaths(
         scene,
         bvh,
-        vpls,
+        groups,
         (options.vpls_per_light, options.bundles),
         options.max_depth,
         super::pair_offset(frame),
@@ -204,7 +233,7 @@ pub(super) fn append(
 fn subpaths(
     scene: &Scene,
     bvh: &SceneBvh,
-    vpls: &[Vpl],
+    groups: &[Vec<Option<Head>>],
     (n1, n2): (u32, u32),
     max_depth: u32,
     pair_offset: f32,
@@ -212,7 +241,7 @@ fn subpaths(
     size: u32,
     seed: u64,
 ) -> Subpaths {
-    let lights = scene.lights.len();
+    let lights = groups.len();
     let heads = lights * n2 as usize;
     let mut out = Subpaths {
         raws: vec![VplRaw::zeroed(); slots as usize],
@@ -224,11 +253,10 @@ fn subpaths(
     }
     let max_len = max_depth.saturating_sub(3);
     let mut paths: Vec<Vec<Vertex>> = vec![Vec::new(); heads];
-    for light in 0..lights {
-        let own: Vec<&Vpl> = vpls.iter().filter(|v| v.light == light).collect();
+    for (light, own) in groups.iter().enumerate() {
         for b in 0..n2 {
             let k = paired_vpl(b, pair_offset, n1, n2) as usize;
-            if let Some(v) = own.get(k) {
+            if let Some(Some(v)) = own.get(k) {
                 let mut rng = Rng::new(seed, 0x5b9a, (light * n2 as usize + b as usize) as u64);
                 paths[light * n2 as usize + b as usize] = trace(scene, bvh, v, max_len, &mut rng);
             }

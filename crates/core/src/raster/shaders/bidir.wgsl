@@ -19,12 +19,17 @@
 //   density A = n1·p1 + n2·p2 of the middle vertex: d = A·dist²/cos towards either end)
 //   and m = 16 (the paper's m').
 // - environment light (§6): a bundle direction with no fragment along it sees the
-//   environment: f3·|n3·ω|·L_env(ω)/D(ω) (its direct light; its indirect light is not
-//   traced). With an image environment (and its `importance`), part of the bundles are
+//   environment: f3·|n3·ω|·L_env(ω)/D(ω) (its direct light; its indirect light comes from
+//   the VPLs of `emitted.rs`). With an image environment (and its `importance`), part of the bundles are
 //   drawn by the sky's luminance (§3.3); D, the density of all the frame's bundle
 //   directions (a multi-sample balance heuristic over the two ways of drawing them),
 //   replaces n2·p_r everywhere.
-// `mode`: 0 MIS, 1 VPLs only, 2 bundles only (for the one-bounce light).
+// - area lights, the sun and the sky (issue 28): their VPLs (`emitted.rs`, one more group of
+//   `vpls_per_light` after the lights') are the first hits of photons emitted on the CPU;
+//   their one-bounce light is theirs alone (no bundle strategy), their later bounces as
+//   every group's.
+// `mode`: 0 MIS, 1 VPLs only, 2 bundles only (for the one-bounce light of point and spot
+// lights).
 
 struct Vpl {
     position: vec3<f32>,
@@ -38,7 +43,9 @@ struct Vpl {
     diffuse: vec3<f32>,
     roughness: f32,
     specular: vec3<f32>,
-    // Area density of this VPL's point per VPL draw (I(ω)·cos / (d²·W)).
+    // Area density of this VPL's point per VPL draw (I(ω)·cos / (d²·W)); negative for the
+    // VPLs of area lights, the sun and the sky (`emitted.rs`), whose one-bounce light has no
+    // bundle strategy (MIS weight 1, ‖x3 − y1‖² clamped at `alone_min_dist2`).
     pdf: f32,
     ns: vec3<f32>,
     // The covered flux W (sum of channels) of the VPL's light.
@@ -55,9 +62,9 @@ struct Params {
     vpls_per_light: u32,
     bundles: u32,
     mode: u32,
-    // Highest light-subpath order paired with the bundles' hits (0: none, 1: two bounces
-    // with the RSM's VPLs, j > 1: the traced subpaths' vertices up to order j too).
-    orders: u32,
+    // Indirect bounces (`max_depth` − 1): 0 none, 1 one bounce, 2 also two bounces with
+    // the RSM's VPLs, j > 2 also the traced subpaths' vertices up to order j − 1.
+    bounces: u32,
     // Lower bound of ‖x1 − x2‖² in the two-bounce term.
     min_dist2: f32,
     // Longest list walked (a guard: lists longer than this are cut).
@@ -77,7 +84,9 @@ struct Params {
     bundles_env: f32,
     bundles_uniform: f32,
     env_pdf_scale: f32,
-    _pad1: vec2<f32>,
+    // Lower bound of ‖x3 − y1‖² for the one-bounce light of VPLs without a bundle strategy.
+    alone_min_dist2: f32,
+    _pad1: f32,
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
@@ -322,34 +331,38 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
     let n2 = f32(params.bundles);
     var sum = vec3<f32>(0.0);
 
-    // One bounce through the VPLs.
-    if params.mode != 2u {
-        for (var i = 0u; i < params.vpl_count; i++) {
-            let v = vpl_at(i);
-            let to_vpl = v.position - p;
-            let d2 = dot(to_vpl, to_vpl);
-            let cos13 = abs(dot(to_vpl, v.ng)) / sqrt(d2);
-            // Area densities of x1: drawn as a VPL, and as a bundle hit from x3.
-            let p1 = n1 * v.pdf;
-            let p2 = bundle_density(to_vpl / sqrt(d2)) * cos13 / d2;
-            let area = p1 + select(p2, 0.0, params.mode == 1u);
-            let d13 = area * d2 / max(cos13, 1e-6);
-            let d10 = area * v.light_dist2 / max(abs(dot(v.ng, v.to_light)), 1e-6);
-            let m1 = clamped(vpl_material(v), combine(d10, d13), cos13);
-            var t = vpl_light(v, m1, p, ns, ng, clamped(m, d13, dot(ns, wo)), wo, 0.0);
-            if max3(t) <= 0.0 {
-                continue;
-            }
-            if params.mode == 0u && params.bundles > 0u {
-                t *= p1 / (p1 + p2);
-            }
-            sum += t;
+    // One bounce through the VPLs (in mode 2 only those without a bundle strategy).
+    let vpl_one = select(0u, params.vpl_count, params.bounces >= 1u);
+    for (var i = 0u; i < vpl_one; i++) {
+        let v = vpl_at(i);
+        let alone = v.pdf < 0.0;
+        if params.mode == 2u && !alone {
+            continue;
         }
+        let to_vpl = v.position - p;
+        let d2 = dot(to_vpl, to_vpl);
+        let cos13 = abs(dot(to_vpl, v.ng)) / sqrt(d2);
+        // Area densities of x1: drawn as a VPL, and as a bundle hit from x3.
+        let p1 = n1 * max(v.pdf, 0.0);
+        let p2 = bundle_density(to_vpl / sqrt(d2)) * cos13 / d2;
+        let area = p1 + select(p2, 0.0, params.mode == 1u);
+        let d13 = area * d2 / max(cos13, 1e-6);
+        let d10 = area * v.light_dist2 / max(abs(dot(v.ng, v.to_light)), 1e-6);
+        let m1 = clamped(vpl_material(v), combine(d10, d13), cos13);
+        let min_d2 = select(0.0, params.alone_min_dist2, alone);
+        var t = vpl_light(v, m1, p, ns, ng, clamped(m, d13, dot(ns, wo)), wo, min_d2);
+        if max3(t) <= 0.0 {
+            continue;
+        }
+        if params.mode == 0u && params.bundles > 0u && !alone {
+            t *= p1 / (p1 + p2);
+        }
+        sum += t;
     }
 
     // Camera subpaths through the ray bundles.
-    let bundle_one = params.mode != 1u;
-    if params.bundles > 0u && (bundle_one || params.orders != 0u || params.has_env != 0u) {
+    let bundle_one = params.mode != 1u && params.bounces >= 1u;
+    if params.bundles > 0u && (bundle_one || params.bounces >= 2u || params.has_env != 0u) {
         for (var b = 0u; b < params.bundles; b++) {
             let bv = bundle_views[b];
             let c = dot(ng, bv.dir);
@@ -433,7 +446,7 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
             // Two bounces: one VPL of every light lights x2, bundle b taking VPL
             // ⌊(b + u)·n1/n2⌋ (the VPLs are in stratified order over the RSM, so every part
             // of it is paired; each VPL is picked n2/n1 times in expectation).
-            if params.orders != 0u && params.vpls_per_light > 0u {
+            if params.bounces >= 2u && params.vpls_per_light > 0u {
                 let k = min(u32((f32(b) + params.pair_offset) * n1 / n2), params.vpls_per_light - 1u);
                 // d̂ at x3 of eq. 14: the bundles' density n2·p_r.
                 let f3 = bsdf_eval(clamped(m, 1.0 / bv.inv_density, dot(ns, wo)), ns, wo, dir);
@@ -445,7 +458,7 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
                     // continued from that VPL for this bundle (`subpaths.rs`), linked by
                     // their records' `light_dist2` (0 ends the subpath).
                     var row = params.vpl_count + j * params.bundles + b;
-                    for (var o = 2u; o <= params.orders && row != 0u; o++) {
+                    for (var o = 2u; o < params.bounces && row != 0u; o++) {
                         let y = vpl_at(row);
                         let ty = vpl_light(y, vpl_material(y), x2, ns2, ng2, m2, -dir, params.min_dist2);
                         sum += f3 * weight * ty * n1;

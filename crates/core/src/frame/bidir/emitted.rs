@@ -1,0 +1,134 @@
+//! VPLs of the sources that the reflective shadow maps do not see (issue 28): emitting
+//! surfaces (area lights), directional lights (the sun) and the environment (the sky).
+//! Their photons are emitted on the CPU by power (`scene::sources::Sources`, as photon
+//! tracing emits them) and each one's first hit y1 becomes a VPL, in one more group of
+//! `vpls_per_light` slots after the lights' (the lighting pass and the light subpaths treat
+//! the group as one more light: the two-bounce term pairs its VPLs with the bundles, and
+//! [`super::subpaths`] continues them).
+//!
+//! What is counted where (no path counted twice): the source's own vertex y0 (a point on an
+//! emitter, or a direction of the sun or the sky) is never a VPL, so its emitted radiance
+//! reaches the camera only through the direct light (the `direct` frame's sampled emitter
+//! points, the sun's shadow map, the sky through the bundles) and the G-buffer; a VPL at y1
+//! carries only the light y1 reflects, also when y1 lies on an emitter. The one-bounce
+//! light x3 ↔ y1 ↔ y0 has no bundle strategy (a bundle hit x2 is lit by point and spot
+//! lights only), so these VPLs take it alone (MIS weight 1, marked by a negative `pdf` in
+//! their records) with ‖x3 − y1‖² clamped from below at [`ALONE_MIN_DIST`] of the scene's
+//! diagonal (the 1/d² spike of VPLs next to x3, which the bundles remove for the RSM's
+//! VPLs).
+
+use super::subpaths::Head;
+use super::vpls::VplMaps;
+use crate::raster::vpl::{cube_views, VplRaw};
+use crate::sampling::Rng;
+use crate::scene::light_views;
+use crate::scene::sources::{Source, Sources};
+use crate::scene::Scene;
+use crate::trace::{Interaction, SceneBvh};
+use bytemuck::Zeroable;
+use glam::{Mat4, Vec3};
+
+/// The lower bound of ‖x3 − y1‖ for the one-bounce light of these VPLs, as a fraction of
+/// the scene's bounding diagonal. Measured on the emitting cube of `tests/bidir.rs` (the
+/// one-bounce light, 8 frames): −2.6% at 0 and at 1%, −3.8% at 2%; the sun scene's depth-2
+/// mean −0.5% at 0.5%, −0.6% at 2%.
+pub(super) const ALONE_MIN_DIST: f32 = 0.01;
+
+/// The sources that the RSM does not see (all but point and spot lights), or `None` when
+/// the scene has none that emit.
+pub(super) fn sources(scene: &Scene) -> Option<Sources> {
+    let s = Sources::filtered(scene, |s| match s {
+        Source::Light(i) => !scene.lights[i].is_local(),
+        _ => true,
+    });
+    (!s.is_empty()).then_some(s)
+}
+
+/// `n` photons of `sources`, the source of photon k drawn by power with u = (k + ξ)/n
+/// (stratified over the sources' shares), each photon carrying its source's power over n;
+/// the first hit of each, or `None` where it leaves the scene or carries nothing.
+pub(super) fn heads(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    sources: &Sources,
+    n: u32,
+    seed: u64,
+) -> Vec<Option<Head>> {
+    (0..n)
+        .map(|k| {
+            let mut rng = Rng::new(seed, 0xe3d1, k as u64);
+            let (source, p) = sources.choose((k as f32 + rng.next_f32()) / n as f32)?;
+            let e = sources.emit_from(scene, source, &mut rng)?;
+            let power = e.power / (p * n as f32);
+            if !(power.is_finite() && power.max_element() > 0.0) {
+                return None;
+            }
+            let hit = bvh.intersect(e.origin, e.direction, f32::INFINITY)?;
+            let it = Interaction::new(scene, &hit, e.direction);
+            let to_light = -e.direction;
+            let cos_g = it.ng.dot(to_light).abs().max(1e-6);
+            let ratio = (it.frame.n.dot(to_light).abs() / cos_g).min(10.0);
+            Some(Head {
+                position: it.position,
+                ng: it.ng,
+                ns: it.frame.n,
+                to_light,
+                material: it.material,
+                alpha: power * ratio,
+            })
+        })
+        .collect()
+}
+
+/// The records of `heads` (one slot each, from slot `first`), appended to the VPL records:
+/// on the side the light arrives from, zero flux on purely specular surfaces (the subpath
+/// still continues from them), `pdf` −1 (no bundle strategy: MIS weight 1).
+pub(super) fn append_records(
+    scene: &Scene,
+    heads: &[Option<Head>],
+    maps: &VplMaps,
+    records: &mut (Vec<VplRaw>, Vec<Mat4>),
+) {
+    let (lo, hi) = light_views::bounds(scene);
+    let diag = (hi - lo).length().max(1e-6);
+    for h in heads {
+        let slot = records.0.len();
+        let mut raw = VplRaw::zeroed();
+        let mut m = [Mat4::IDENTITY; 6];
+        if let Some(h) = h {
+            let flip = if h.ng.dot(h.to_light) < 0.0 {
+                -1.0
+            } else {
+                1.0
+            };
+            let (ng, ns) = (h.ng * flip, h.ns * flip);
+            let p = h.position + ng * (1e-4 * diag);
+            let texel_scale;
+            (m, texel_scale) = cube_views(p, lo, hi, maps.size);
+            let flux = if h.material.is_purely_specular() {
+                Vec3::ZERO
+            } else {
+                h.alpha
+            };
+            raw = VplRaw {
+                position: p.into(),
+                first_layer: 0,
+                flux: flux.into(),
+                texel_scale,
+                to_light: h.to_light.into(),
+                fresnel: h.material.fresnel as u32,
+                diffuse: h.material.diffuse.into(),
+                roughness: h.material.roughness,
+                specular: h.material.specular.into(),
+                pdf: -1.0,
+                ns: ns.into(),
+                light_flux: 0.0,
+                ng: ng.into(),
+                light_dist2: 0.0,
+            };
+        }
+        raw.first_layer = slot as u32 * 6;
+        records.0.push(raw);
+        records.1.extend_from_slice(&m);
+    }
+}
