@@ -2,7 +2,9 @@
 //! every object's copy of its mesh placed by its transform, for the consumers that still
 //! read flat arrays (the GPU upload and passes). The CPU tracers read meshes and transforms
 //! through the accessors here ([`Scene::corners`], [`Scene::triangle_material`],
-//! [`Scene::corner_uvs`]), which give bitwise the values the flat view holds.
+//! [`Scene::corner_uvs`]), which give bitwise the values the flat view holds, and read them
+//! from it where it is built (a GPU method built it, or the scene is small enough to be
+//! traced baked, `trace::bvh::BAKE_TRIANGLES`).
 
 use super::{Scene, SceneObject};
 use glam::{Mat3, Vec2, Vec3};
@@ -25,7 +27,7 @@ pub struct Flat {
 
 /// The matrix that places an object's normals (inverse transpose of its linear part).
 fn normal_matrix(o: &SceneObject) -> Mat3 {
-    Mat3::from_mat4(o.transform).inverse().transpose()
+    o.normal_matrix
 }
 
 impl Scene {
@@ -115,6 +117,10 @@ impl Scene {
     /// flat view).
     #[inline]
     pub fn corners(&self, t: usize) -> ([Vec3; 3], [Vec3; 3]) {
+        if let Some(f) = self.flat.get() {
+            let c = f.triangles[t].map(|i| i as usize);
+            return (c.map(|i| f.positions[i]), c.map(|i| f.normals[i]));
+        }
         let (c, o) = self.mesh_corners(t);
         let mesh = &self.meshes[o.mesh as usize];
         let nx = normal_matrix(o);
@@ -127,6 +133,9 @@ impl Scene {
     /// The material index of flat triangle `t`.
     #[inline]
     pub fn triangle_material(&self, t: usize) -> u32 {
+        if let Some(f) = self.flat.get() {
+            return f.triangle_materials[t];
+        }
         let o = self.object_of(t);
         match &o.face_materials {
             Some(f) => o.material + f[t - o.triangles.start as usize],
@@ -137,6 +146,9 @@ impl Scene {
     /// Texture coordinates of flat triangle `t`'s corners (in its flat order).
     #[inline]
     pub fn corner_uvs(&self, t: usize) -> [Vec2; 3] {
+        if let Some(f) = self.flat.get() {
+            return f.uvs[t];
+        }
         let o = self.object_of(t);
         let c = self.mesh_uvs[o.mesh as usize][t - o.triangles.start as usize];
         if o.flipped {

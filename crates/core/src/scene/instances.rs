@@ -59,7 +59,7 @@ impl Scene {
             .collect();
         for (i, o) in s.objects.iter_mut().enumerate() {
             o.mesh = i as u32;
-            o.transform = Mat4::IDENTITY;
+            o.set_transform(Mat4::IDENTITY);
             o.flipped = false;
             o.described = None;
         }

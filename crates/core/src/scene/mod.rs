@@ -530,6 +530,7 @@ impl Scene {
             vertices: v..v + mesh.positions.len() as u32,
             triangles: t..t + mesh.indices.len() as u32,
             transform: xf,
+            normal_matrix: update::normal_matrix_of(xf),
             flipped: Mat3::from_mat4(xf).determinant() < 0.0,
             mesh: mesh_index,
             material,

@@ -21,8 +21,12 @@ pub struct SceneObject {
     pub vertices: Range<u32>,
     /// Range of `Scene::triangles` / `Scene::triangle_materials`.
     pub triangles: Range<u32>,
-    /// Object -> world.
+    /// Object -> world (changed by [`SceneObject::set_transform`], which keeps
+    /// `normal_matrix` with it).
     pub transform: Mat4,
+    /// The inverse transpose of `transform`'s linear part (normals object -> world), kept
+    /// so that every surface interaction need not invert it.
+    pub(crate) normal_matrix: Mat3,
     /// Whether the triangles are stored with flipped winding (a mirroring transform).
     pub flipped: bool,
     /// Index of the object's mesh in [`Scene::meshes`] (shared by every object that names
@@ -39,7 +43,18 @@ pub struct SceneObject {
     pub(crate) described: Option<TransformDesc>,
 }
 
+/// The matrix that takes object normals to world normals under `transform`.
+pub(crate) fn normal_matrix_of(transform: Mat4) -> Mat3 {
+    Mat3::from_mat4(transform).inverse().transpose()
+}
+
 impl SceneObject {
+    /// Places the object by `transform` (object -> world).
+    pub(crate) fn set_transform(&mut self, transform: Mat4) {
+        self.transform = transform;
+        self.normal_matrix = normal_matrix_of(transform);
+    }
+
     /// Writes the object's mesh, transformed, into the scene's flat arrays.
     pub(crate) fn place(
         &self,
@@ -166,7 +181,7 @@ impl Scene {
                     ));
                 }
                 let obj = &mut self.objects[*object];
-                obj.transform = *transform;
+                obj.set_transform(*transform);
                 let flip = det < 0.0;
                 let flipped = flip != obj.flipped;
                 obj.flipped = flip;

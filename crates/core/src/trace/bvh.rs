@@ -423,6 +423,35 @@ impl MeshBvh {
     }
 }
 
+/// Scenes of at most this many placed triangles (and no alpha masks) are traced as one
+/// world-space mesh, as before instancing: on such scenes the top level and the ray's
+/// transform into each instance's frame cost more than they save (`path` on the 30-triangle
+/// Cornell box of `docs/bench/path-vs-mitsuba.md`; section 6 of `docs/bench/instancing.md`).
+/// Moving an object refits the baked mesh, O(triangles) over at most this many.
+pub const BAKE_TRIANGLES: usize = 4096;
+
+/// Whether `scene` is traced as one baked world-space mesh ([`BAKE_TRIANGLES`]).
+fn bakes(scene: &Scene) -> bool {
+    scene.triangle_count() <= BAKE_TRIANGLES && AlphaTest::new(scene).is_none()
+}
+
+/// Every placed triangle of `scene` in world space and flat order (corners as the flat view
+/// stores them, bitwise), without building the flat view.
+fn world_triangles(scene: &Scene) -> Vec<Triangle> {
+    let mut out = vec![Triangle::default(); scene.triangle_count()];
+    scene.for_each_triangle(
+        |_| false,
+        |t, [a, b, c]| {
+            out[t] = Triangle {
+                v0: a.into(),
+                v1: b.into(),
+                v2: c.into(),
+            }
+        },
+    );
+    out
+}
+
 /// Bytes per instance of a [`SceneBvh`] build: the instance record, its box, and the top
 /// level's PLOC and wide nodes (a few per instance), with headroom.
 const BUILD_BYTES_PER_INSTANCE: u64 = 512;
@@ -439,6 +468,14 @@ struct Instance {
     flipped: bool,
 }
 
+/// A mesh placed as it is (world space), its triangles numbered from 0.
+const IDENTITY_INSTANCE: Instance = Instance {
+    to_local: Affine3A::IDENTITY,
+    mesh: 0,
+    first_triangle: 0,
+    flipped: false,
+};
+
 /// The two-level BVH of a scene: one [`MeshBvh`] per unique mesh (in its local frame, built
 /// once and shared, [`Scene::meshes`]) and a top level over the objects (instances). Moving
 /// objects ([`SceneBvh::refit`]) rebuilds the top level only: O(instances), never the
@@ -452,6 +489,9 @@ pub struct SceneBvh {
     order: Vec<u32>,
     /// Alpha masks of the scene's materials (none: every hit counts).
     alpha: Option<AlphaTest>,
+    /// One world-space mesh of the whole scene in flat triangle order ([`BAKE_TRIANGLES`]):
+    /// rays go to it directly.
+    baked: bool,
 }
 
 fn mesh_triangles(mesh: &crate::scene::TriMesh) -> Vec<Triangle> {
@@ -550,6 +590,15 @@ impl SceneBvh {
     /// [`SceneBvh::build`] with explicit build settings for the meshes (for the build
     /// benchmark).
     pub fn build_with(scene: &Scene, settings: &BuildSettings) -> Self {
+        if bakes(scene) {
+            // Small: its flat view costs little, and the surface interactions then read
+            // corners from it instead of placing them per hit.
+            let _ = scene.flat();
+            return Self::baked(MeshBvh::from_triangles_with(
+                &world_triangles(scene),
+                settings,
+            ));
+        }
         let meshes = scene
             .meshes
             .iter()
@@ -570,11 +619,24 @@ impl SceneBvh {
             top,
             order,
             alpha,
+            baked: false,
         }
+    }
+
+    /// The scene baked into `mesh` (world space, flat order): one identity instance.
+    fn baked(mesh: MeshBvh) -> Self {
+        let mut b = Self::from_parts(vec![Arc::new(mesh)], vec![IDENTITY_INSTANCE], None);
+        b.baked = true;
+        b
     }
 
     /// Re-reads the alpha masks of the scene's materials (after a material update).
     pub fn update_alpha(&mut self, scene: &Scene) {
+        if self.baked != bakes(scene) {
+            // Masks appeared in a baked scene (or went from a small one): built again.
+            *self = Self::build(scene);
+            return;
+        }
         self.alpha = AlphaTest::new(scene);
     }
 
@@ -608,25 +670,33 @@ impl SceneBvh {
 
     /// [`SceneBvh::from_triangles`] with explicit build settings.
     pub fn from_triangles_with(triangles: &[Triangle], settings: &BuildSettings) -> Self {
-        let mesh = Arc::new(MeshBvh::from_triangles_with(triangles, settings));
-        let instance = Instance {
-            to_local: Affine3A::IDENTITY,
-            mesh: 0,
-            first_triangle: 0,
-            flipped: false,
-        };
-        Self::from_parts(vec![mesh], vec![instance], None)
+        Self::baked(MeshBvh::from_triangles_with(triangles, settings))
     }
 
     /// Updates the BVH after objects moved (their new transforms are read from `scene`):
     /// the top level only, O(instances); the meshes' BVHs are kept. `moved` (flat triangle
     /// ranges) is not needed by the two-level BVH and kept for the callers.
-    pub fn refit(self, scene: &Scene, _moved: &[std::ops::Range<usize>]) -> Self {
+    pub fn refit(self, scene: &Scene, moved: &[std::ops::Range<usize>]) -> Self {
+        if self.baked && bakes(scene) {
+            let tris = world_triangles(scene);
+            let mesh = self.meshes.into_iter().next().map(Arc::try_unwrap);
+            return Self::baked(match mesh {
+                Some(Ok(mesh)) => mesh.refit(&tris, moved),
+                _ => MeshBvh::from_triangles(&tris),
+            });
+        }
+        if self.baked || bakes(scene) {
+            return Self::build(scene);
+        }
         Self::from_parts(self.meshes, scene_instances(scene), AlphaTest::new(scene))
     }
 
     /// [`SceneBvh::refit`] without re-reading the alpha masks (for the update benchmark).
     pub fn update_instances(&mut self, scene: &Scene) {
+        if self.baked || bakes(scene) {
+            *self = Self::build(scene);
+            return;
+        }
         self.instances = scene_instances(scene);
         let (top, order) = build_top(&self.meshes, &self.instances);
         self.top = top;
@@ -660,6 +730,11 @@ impl SceneBvh {
     #[inline]
     pub fn intersect(&self, origin: Vec3, dir: Vec3, tmax: f32) -> Option<Hit> {
         let ray = make_ray(origin, dir, tmax);
+        if self.baked {
+            return self.meshes[0]
+                .closest(ray, |_, _, _| true)
+                .map(|(triangle, t, u, v)| Hit { t, triangle, u, v });
+        }
         let (o, d) = (Vec3A::from(origin), Vec3A::from(dir));
         let mut best: Option<(u32, u32, f32, f32, f32)> = None;
         let mut hit = obvhs::ray::RayHit::none();
@@ -693,6 +768,9 @@ impl SceneBvh {
     #[inline]
     pub fn occluded(&self, origin: Vec3, dir: Vec3, tmax: f32) -> bool {
         let ray = make_ray(origin, dir, tmax);
+        if self.baked {
+            return self.meshes[0].any(ray, |_, _, _| true) < f32::INFINITY;
+        }
         let (o, d) = (Vec3A::from(origin), Vec3A::from(dir));
         !self.top.ray_traverse_miss(ray, |r, k| {
             let which = self.order[k];
