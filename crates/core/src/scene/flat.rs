@@ -96,7 +96,7 @@ impl Scene {
     }
 
     /// The object that owns flat triangle `t`.
-    #[inline]
+    #[inline(always)]
     pub fn object_of(&self, t: usize) -> &SceneObject {
         let i = self
             .objects
@@ -115,7 +115,7 @@ impl Scene {
 
     /// World-space corners and shading normals of flat triangle `t` (bitwise those of the
     /// flat view).
-    #[inline]
+    #[inline(always)]
     pub fn corners(&self, t: usize) -> ([Vec3; 3], [Vec3; 3]) {
         if let Some(f) = self.flat.get() {
             let c = f.triangles[t].map(|i| i as usize);
@@ -131,7 +131,7 @@ impl Scene {
     }
 
     /// The material index of flat triangle `t`.
-    #[inline]
+    #[inline(always)]
     pub fn triangle_material(&self, t: usize) -> u32 {
         if let Some(f) = self.flat.get() {
             return f.triangle_materials[t];
@@ -144,7 +144,7 @@ impl Scene {
     }
 
     /// Texture coordinates of flat triangle `t`'s corners (in its flat order).
-    #[inline]
+    #[inline(always)]
     pub fn corner_uvs(&self, t: usize) -> [Vec2; 3] {
         if let Some(f) = self.flat.get() {
             return f.uvs[t];
