@@ -432,7 +432,7 @@ pub const BAKE_TRIANGLES: usize = 4096;
 
 /// Whether `scene` is traced as one baked world-space mesh ([`BAKE_TRIANGLES`]).
 fn bakes(scene: &Scene) -> bool {
-    scene.triangle_count() <= BAKE_TRIANGLES && AlphaTest::new(scene).is_none()
+    scene.triangle_count() <= BAKE_TRIANGLES && !scene.has_alpha_masks()
 }
 
 /// Every placed triangle of `scene` in world space and flat order (corners as the flat view
