@@ -1,10 +1,13 @@
-"""Scene loading: built-in names, gi's JSON scene files, or Mitsuba 3 XML scenes.
+"""Scene loading: built-in names, gi's JSON scene files, Mitsuba 3 XML scenes, or a glTF
+file's default scene.
 
 The JSON format is documented in ``docs/scene-format.md``; the Rust core validates every
 field. Mesh files named by a scene are resolved relative to it and read by
 :mod:`gi.meshes` (OBJ with MTL, PLY, glTF/GLB, STL), environment images by
 :mod:`gi.environment` (OpenImageIO). Mitsuba scenes are translated by
-:mod:`gi.mitsuba` (``docs/mitsuba.md``).
+:mod:`gi.mitsuba` (``docs/mitsuba.md``). A ``.gltf``/``.glb`` file loaded as a scene keeps
+its nodes that share a mesh as instances of one mesh (:func:`load_gltf_scene`); named as a
+mesh file by a JSON scene it is one mesh of world-space triangles (:func:`gi.gltf.load_gltf`).
 """
 
 from __future__ import annotations
@@ -18,7 +21,7 @@ import numpy as np
 
 from gi._gi import Scene, builtin_scenes
 from gi.environment import load_environment
-from gi.meshes import MeshEntry, load_mesh
+from gi.meshes import MeshEntry, load_mesh, report
 from gi.meshes import scene_error as _scene_error
 from gi.textures import TextureError, TextureSet
 
@@ -46,8 +49,9 @@ TEXTURE_FIELDS = {
 
 
 def load_scene(source: str | Path) -> Scene:
-    """Loads a built-in scene by name (see :func:`gi.builtin_scenes`), a JSON scene file or a
-    Mitsuba 3 XML scene (``.xml``).
+    """Loads a built-in scene by name (see :func:`gi.builtin_scenes`), a JSON scene file, a
+    Mitsuba 3 XML scene (``.xml``) or a glTF file's default scene (``.gltf``, ``.glb``:
+    :func:`load_gltf_scene`).
 
     Raises :class:`gi.SceneError` (with ``file``, ``field`` and ``reason`` attributes) for a
     missing or malformed file, an unknown field or element, a missing or unreadable mesh,
@@ -70,6 +74,8 @@ def load_scene(source: str | Path) -> Scene:
         from gi.mitsuba import load_mitsuba
 
         return load_mitsuba(path)
+    if path.suffix.lower() in (".gltf", ".glb"):
+        return load_gltf_scene(path)
     try:
         text = path.read_text(encoding="utf-8")
         desc = json.loads(text)
@@ -187,3 +193,121 @@ def _place_light(light: dict[str, Any], matrix: np.ndarray) -> dict[str, Any]:
         with np.errstate(all="ignore"):
             out["direction"] = np.nan_to_num(d / np.linalg.norm(d)).tolist()
     return out
+
+
+def load_gltf_scene(path: str | Path) -> Scene:
+    """A glTF file's default scene (see :func:`gltf_scene_description`)."""
+    path = Path(path)
+    desc, meshes, textures = gltf_scene_description(path)
+    return Scene.from_json(json.dumps(desc), str(path), meshes, {}, textures=textures.arrays)
+
+
+def gltf_scene_description(
+    path: Path,
+) -> tuple[dict[str, Any], dict[str, MeshEntry], TextureSet]:
+    """A glTF file's default scene as a gi scene description, its mesh arrays and textures.
+
+    Each primitive of a glTF mesh becomes one gi mesh in the mesh's own frame (keyed
+    ``file#meshes[m].primitives[p]``), and each node that uses the mesh one object per
+    primitive placed by the node's world matrix (a ``matrix`` transform, named
+    ``nodes[n]`` or ``nodes[n].primitives[p]``): nodes that share a glTF mesh share its gi
+    meshes. Materials (with textures and emission), ``KHR_lights_punctual`` lights and the
+    warnings are those of :func:`gi.gltf.load_gltf`; a primitive without a material gets
+    glTF's default one. The camera is the default scene's first perspective camera (its
+    ``aspectRatio`` sets the width against a height of 512 pixels); without one, a 40°
+    camera on +z looks at the centre of the scene's box from where the box fits."""
+    from gi.gltf import DEFAULT_MATERIAL_NAME, GltfError, default_material, read_gltf
+    from gi.meshes import _entry, _unit_rows, load_failure
+
+    file = str(path)
+    textures = TextureSet(path.parent)
+    try:
+        g = read_gltf(path, textures)
+    except GltfError as e:
+        raise _scene_error(file, e.field, e.reason) from e
+    except (OSError, ValueError, KeyError, IndexError, TypeError) as e:
+        raise _scene_error(file, "(file)", load_failure(path, e)) from e
+    report(path, g.warnings)
+    materials = {name: desc for name, desc in g.materials}
+    default = f"{path.name}:{DEFAULT_MATERIAL_NAME}"
+    meshes: dict[str, MeshEntry] = {}
+    objects: list[dict[str, Any]] = []
+    lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
+    for inst in g.instances:
+        _check_node_matrix(file, inst.node, inst.matrix)
+        prims = g.meshes[inst.mesh]
+        for prim in prims:
+            key = f"{path.name}#meshes[{inst.mesh}].primitives[{prim.index}]"
+            if key not in meshes:
+                normals = None if prim.normals is None else _unit_rows(prim.normals)
+                meshes[key] = _entry(
+                    path, file, key, prim.vertices, prim.faces, normals, [], None, prim.uvs
+                )
+            if prim.material < 0:
+                materials.setdefault(default, default_material())
+            name = f"nodes[{inst.node}]"
+            objects.append(
+                {
+                    "name": name if len(prims) == 1 else f"{name}.primitives[{prim.index}]",
+                    "shape": {"type": "mesh", "file": key},
+                    "material": default if prim.material < 0 else g.materials[prim.material][0],
+                    "transform": {"matrix": inst.matrix[:3].tolist()},
+                }
+            )
+            placed = prim.vertices @ inst.matrix[:3, :3].T + inst.matrix[:3, 3]
+            lo, hi = np.minimum(lo, placed.min(axis=0)), np.maximum(hi, placed.max(axis=0))
+    # A node reached twice (one node the child of two) would name two objects alike.
+    seen: set[str] = set()
+    for obj in objects:
+        if obj["name"] in seen:
+            del obj["name"]
+        else:
+            seen.add(obj["name"])
+    desc: dict[str, Any] = {
+        "camera": _gltf_camera(g.camera, lo, hi),
+        "lights": g.lights,
+        "materials": materials,
+        "objects": objects,
+    }
+    return desc, meshes, textures
+
+
+def _check_node_matrix(file: str, node: int, m: np.ndarray) -> None:
+    """A node's world matrix checked as the core checks a ``matrix`` transform, so that the
+    error names the node: translation within ±100000 m, each axis's scale in [1e-6, 1e6],
+    invertible (|det| at least 1e-6 of the product of the axes' scales)."""
+    lin = m[:3, :3]
+    lengths = np.linalg.norm(lin, axis=0)
+    where = f"nodes[{node}]"
+    if not np.isfinite(m).all() or np.abs(m[:3, 3]).max() > 1e5:
+        raise _scene_error(file, where, "the world transform moves beyond ±100000 m")
+    if lengths.min() < 1e-6 or lengths.max() > 1e6:
+        raise _scene_error(
+            file, where, "the world transform scales an axis by less than 1e-6 or more than 1e6"
+        )
+    if not abs(np.linalg.det(lin)) >= 1e-6 * lengths.prod():
+        raise _scene_error(file, where, "the world transform is singular")
+
+
+def _gltf_camera(cam: Any, lo: np.ndarray, hi: np.ndarray) -> dict[str, Any]:
+    """The scene's camera from a glTF camera, else one framing the box ``lo``..``hi``."""
+    if cam is not None:
+        width = 512 if cam.aspect is None else max(1, round(512 * cam.aspect))
+        return {
+            "position": cam.position,
+            "look_at": cam.look_at,
+            "up": cam.up,
+            "fov": min(max(cam.yfov, 1.0), 179.0),
+            "width": width,
+            "height": 512,
+        }
+    if not (lo <= hi).all():
+        lo, hi = np.zeros(3), np.zeros(3)
+    centre = (lo + hi) / 2
+    radius = max(float(np.linalg.norm(hi - lo)) / 2, 1e-3)
+    distance = radius / math.sin(math.radians(20.0))
+    return {
+        "position": (centre + [0.0, 0.0, distance]).tolist(),
+        "look_at": centre.tolist(),
+        "fov": 40.0,
+    }

@@ -831,6 +831,15 @@ pub(crate) fn material_from_desc(m: &MaterialDesc) -> std::result::Result<Materi
 }
 
 pub(crate) fn transform_matrix(t: &desc::TransformDesc) -> std::result::Result<Mat4, FieldError> {
+    if let Some(rows) = &t.matrix {
+        if !t.is_trs_default() {
+            return Err((
+                "matrix".into(),
+                "excludes translate/rotate/scale (give one or the other)",
+            ));
+        }
+        return matrix_from_rows(rows).map_err(|(f, m)| (format!("matrix{f}"), m));
+    }
     if !finite3(t.translate) {
         return Err(("translate".into(), "must be finite"));
     }
@@ -861,6 +870,59 @@ pub(crate) fn transform_matrix(t: &desc::TransformDesc) -> std::result::Result<M
         rot,
         t.translate.into(),
     ))
+}
+
+/// An affine transform from 3 or 4 rows of 4 numbers (row-major; the translation in the last
+/// column; a 4th row must be `[0, 0, 0, 1]`): finite, its translation within
+/// [`MAX_EXTENT`], each axis's image (column) of length in [1/`MAX_SCALE`, `MAX_SCALE`],
+/// and invertible by a margin: |det| at least 1e-6 of the product of the columns' lengths
+/// (1 for orthogonal axes; Hadamard's bound), so that no axis collapses onto the others.
+/// Errors name the part at fault relative to the matrix (`""`, `"[3]"`).
+pub(crate) fn matrix_from_rows(rows: &[Vec<f32>]) -> std::result::Result<Mat4, FieldError> {
+    if rows.len() != 3 && rows.len() != 4 {
+        return Err((String::new(), "must be 3 or 4 rows of 4 numbers"));
+    }
+    if let Some(r) = rows.iter().position(|row| row.len() != 4) {
+        return Err((format!("[{r}]"), "must hold 4 numbers"));
+    }
+    if rows.iter().flatten().any(|v| !v.is_finite()) {
+        return Err((String::new(), "must be finite"));
+    }
+    if rows.len() == 4 && rows[3] != [0.0, 0.0, 0.0, 1.0] {
+        return Err(("[3]".into(), "must be [0, 0, 0, 1] (transforms are affine)"));
+    }
+    let mut m = Mat4::IDENTITY;
+    for (r, row) in rows.iter().take(3).enumerate() {
+        for (c, &v) in row.iter().enumerate() {
+            m.col_mut(c)[r] = v;
+        }
+    }
+    if !within_extent([m.w_axis.x, m.w_axis.y, m.w_axis.z]) {
+        return Err((String::new(), "its translation must lie within ±100000 m"));
+    }
+    let lin = Mat3::from_mat4(m);
+    let lengths = [
+        lin.x_axis.length(),
+        lin.y_axis.length(),
+        lin.z_axis.length(),
+    ];
+    if lengths
+        .iter()
+        .any(|&l| !(l.is_finite() && (1.0 / MAX_SCALE..=MAX_SCALE).contains(&l)))
+    {
+        return Err((
+            String::new(),
+            "each column's length (an axis's scale) must be in [1e-6, 1e6]",
+        ));
+    }
+    let det = lin.determinant();
+    if !(det.is_finite() && det.abs() >= 1e-6 * lengths.iter().product::<f32>()) {
+        return Err((
+            String::new(),
+            "must be invertible (its columns are parallel or coplanar: singular)",
+        ));
+    }
+    Ok(m)
 }
 
 fn primitive(shape: &ShapeDesc) -> std::result::Result<TriMesh, FieldError> {
