@@ -280,7 +280,9 @@ def _check_node_matrix(file: str, node: int, m: np.ndarray) -> None:
     lengths = np.linalg.norm(lin, axis=0)
     where = f"nodes[{node}]"
     if not np.isfinite(m).all() or np.abs(m[:3, 3]).max() > 1e5:
-        raise _scene_error(file, where, "the world transform moves beyond ±100000 m")
+        raise _scene_error(
+            file, where, "the world transform is not finite or moves beyond ±100000 m"
+        )
     if lengths.min() < 1e-6 or lengths.max() > 1e6:
         raise _scene_error(
             file, where, "the world transform scales an axis by less than 1e-6 or more than 1e6"
