@@ -460,3 +460,32 @@ def test_renderer_update_takes_a_matrix(cornell_desc, write_scene):
     assert np.allclose(r.describe("object", "box")["matrix"], [*rows, [0, 0, 0, 1]])
     with pytest.raises(gi.SceneError, match=r"objects\[\d+\]\.transform\.matrix"):
         r.update(objects={"box": {"matrix": [[0, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0]]}})
+
+
+def test_mesh_file_lights_are_placed_by_a_matrix_transform(tmp_path):
+    """A glTF mesh file's light follows its object's ``matrix`` as it follows a
+    translate/rotate/scale: the point light 2 m above the file's plane, the object scaled
+    by 2 (rows of the matrix) and raised by 1 m, lands at y = 5."""
+    from test_lights_import import looking_down, plane_gltf
+
+    node = {"translation": [0, 2, 0], "extensions": {"KHR_lights_punctual": {"light": 0}}}
+    mesh = plane_gltf(tmp_path, [{"type": "point", "intensity": 683}], [node])
+    rows = [[2, 0, 0, 0], [0, 2, 0, 1], [0, 0, 2, 0]]
+    scene = gi.load_scene(looking_down(tmp_path, mesh, transform={"matrix": rows}))
+    r = gi.Renderer(scene, "path", spp=1, max_depth=1)
+    assert r.describe("light", 0)["position"] == pytest.approx([0, 5, 0])
+
+
+def test_gi_render_reads_a_gltf_scene(tmp_path):
+    import subprocess
+    import sys
+
+    path, _, _ = shared_mesh_gltf(tmp_path)
+    out = tmp_path / "g.png"
+    p = subprocess.run(
+        [sys.executable, "-m", "gi.cli", "render", str(path), "-o", str(out), "--spp", "1",
+         "--size", "16x12", "-q"],
+        capture_output=True, text=True, timeout=300,
+    )  # fmt: skip
+    assert p.returncode == 0 and p.stderr == "", p.stderr
+    assert gi.read_image(out).shape == (12, 16, 3)

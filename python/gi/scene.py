@@ -160,9 +160,19 @@ def _load_meshes(
 
 def _object_matrix(transform: Any) -> np.ndarray | None:
     """An object's transform as the core builds it (scale, rotate about x, y, z in degrees,
-    translate); None if it is malformed."""
+    translate; or its ``matrix`` rows); None if it is malformed."""
     if transform is None:
         return np.eye(4)
+    if isinstance(transform, dict) and "matrix" in transform:
+        try:
+            rows = np.asarray(transform["matrix"], dtype=np.float64)
+        except (TypeError, ValueError):
+            return None
+        if rows.shape not in ((3, 4), (4, 4)) or not np.isfinite(rows).all():
+            return None
+        m = np.eye(4)
+        m[:3] = rows[:3]
+        return m
     try:
         t = np.asarray(transform.get("translate", [0, 0, 0]), dtype=np.float64).reshape(3)
         rx, ry, rz = (math.radians(float(a)) for a in transform.get("rotate", [0, 0, 0]))
