@@ -604,6 +604,12 @@ class _Translator:
             def build() -> tuple[Any, Any, Any, Any]:
                 return (*_cube(), None)
 
+        elif kind == "disk":
+            key = "disk"
+
+            def build() -> tuple[Any, Any, Any, Any]:
+                return (*_disk(), None)
+
         elif kind == "sphere":
             key = "sphere"
             r = self.float(el, props, "radius", 1.0)
@@ -619,7 +625,9 @@ class _Translator:
                 return n, np.asarray(ico.faces, np.int64), n, None
 
         else:
-            raise self.error(el, "unsupported shape (gi reads obj, ply, rectangle, cube, sphere)")
+            raise self.error(
+                el, "unsupported shape (gi reads obj, ply, rectangle, cube, disk, sphere)"
+            )
         known = {"filename", "face_normals", "flip_normals", "to_world", "center", "radius", "bsdf"}
         self.note_unknown(props, known)
         flip = self.boolean(props, "flip_normals", False)
@@ -852,6 +860,20 @@ def _cube() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
                 normals.append(n)
             faces += [[base, base + 1, base + 2], [base, base + 2, base + 3]]
     return np.array(verts), np.array(faces), np.array(normals)
+
+
+DISK_SEGMENTS = 128
+
+
+def _disk() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Mitsuba's disk: radius 1 in the xy plane facing +z, as a fan of
+    :data:`DISK_SEGMENTS` triangles (area π·(1 − 4·10⁻⁴))."""
+    phi = np.linspace(0.0, 2.0 * np.pi, DISK_SEGMENTS, endpoint=False)
+    ring = np.stack([np.cos(phi), np.sin(phi), np.zeros_like(phi)], axis=1)
+    verts = np.concatenate([np.zeros((1, 3)), ring])
+    i = np.arange(DISK_SEGMENTS)
+    faces = np.stack([np.zeros_like(i), 1 + i, 1 + (i + 1) % DISK_SEGMENTS], axis=1)
+    return verts, faces, np.tile([0.0, 0.0, 1.0], (len(verts), 1))
 
 
 def load_mitsuba(path: Path) -> Scene:
