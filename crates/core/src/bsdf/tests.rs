@@ -393,8 +393,14 @@ fn lambertian_short_path_equals_the_general_one() {
             ..Default::default()
         };
         assert!(m.is_lambertian());
-        let wo = dir(r.next_f32() * 2.0 - 1.0, r.next_f32() * std::f32::consts::TAU);
-        let wi = dir(r.next_f32() * 2.0 - 1.0, r.next_f32() * std::f32::consts::TAU);
+        let wo = dir(
+            r.next_f32() * 2.0 - 1.0,
+            r.next_f32() * std::f32::consts::TAU,
+        );
+        let wi = dir(
+            r.next_f32() * 2.0 - 1.0,
+            r.next_f32() * std::f32::consts::TAU,
+        );
         if wo.z * wi.z > 0.0 {
             assert_eq!(m.eval(wo, wi), m.eval_general(wo, wi));
             assert_eq!(m.pdf(wo, wi), m.pdf_general(wo, wi));
