@@ -493,3 +493,84 @@ def test_gi_render_reads_a_gltf_scene(tmp_path):
     )  # fmt: skip
     assert p.returncode == 0 and p.stderr == "", p.stderr
     assert gi.read_image(out).shape == (12, 16, 3)
+
+
+def test_gltf_gpu_instancing_places_the_mesh_as_child_nodes_would(tmp_path):
+    """``EXT_mesh_gpu_instancing`` (required here): a node's TRANSLATION/ROTATION/SCALE
+    accessors place its mesh three times, as three child nodes with the same (float32)
+    values would: the same world matrices (bitwise), one mesh, and bitwise equal images."""
+    path, mesh_tris, floor_tris = shared_mesh_gltf(tmp_path, copies=1)
+    doc = json.loads(path.read_text())
+    t = np.array([[1.5, 0.3, 0.5], [-0.4, 0.3, 1.2], [0.2, 1.2, -1.5]], np.float32)
+    half = np.array([0.3, 0.9, -1.2], np.float32) / 2
+    q = np.zeros((3, 4), np.float32)
+    q[:, 1], q[:, 3] = np.sin(half), np.cos(half)
+    s = np.array([[1, 1, 1], [0.5, 0.7, 0.5], [-1, 1, 1]], np.float32)
+    blob = base64.b64decode(doc["buffers"][0]["uri"].split(",", 1)[1])
+    attrs = {}
+    for name, arr, kind in (
+        ("TRANSLATION", t, "VEC3"),
+        ("ROTATION", q, "VEC4"),
+        ("SCALE", s, "VEC3"),
+    ):
+        attrs[name], blob = _accessor(doc, blob, arr, kind, 5126)
+    doc["buffers"][0] = {"byteLength": len(blob), "uri": "data:application/octet-stream;base64,"
+                         + base64.b64encode(blob).decode()}  # fmt: skip
+    instanced = json.loads(json.dumps(doc))
+    node = {"mesh": 0, "translation": [0.1, 0, 0]}
+    instanced["nodes"].append(
+        {**node, "extensions": {"EXT_mesh_gpu_instancing": {"attributes": attrs}}}
+    )
+    instanced["extensionsUsed"] += ["EXT_mesh_gpu_instancing"]
+    instanced["extensionsRequired"] = ["EXT_mesh_gpu_instancing"]
+    instanced["scenes"][0]["nodes"].append(len(instanced["nodes"]) - 1)
+    first = len(doc["nodes"]) + 1
+    children = [
+        {"mesh": 0, "translation": a.tolist(), "rotation": b.tolist(), "scale": c.tolist()}
+        for a, b, c in zip(t, q, s, strict=True)
+    ]
+    doc["nodes"] += [{"translation": [0.1, 0, 0], "children": [first, first + 1, first + 2]}]
+    doc["nodes"] += children
+    doc["scenes"][0]["nodes"].append(first - 1)
+    from gi.scene import gltf_scene_description
+
+    scenes = []
+    for name, d in (("inst.gltf", instanced), ("nodes.gltf", doc)):
+        (tmp_path / name).write_text(json.dumps(d))
+        desc = gltf_scene_description(tmp_path / name)[0]
+        scenes.append((gi.load_scene(tmp_path / name), desc))
+    (a, da), (b, db) = scenes
+    ma = [o["transform"]["matrix"] for o in da["objects"]]
+    mb = [o["transform"]["matrix"] for o in db["objects"]]
+    assert ma == mb
+    names = [o["name"] for o in da["objects"]]
+    assert f"nodes[{first - 1}].instances[2].primitives[1]" in names, names
+    assert a.unique_triangle_count == b.unique_triangle_count == mesh_tris + floor_tris
+    assert a.triangle_count == b.triangle_count == 4 * mesh_tris + floor_tris
+    ra, rb = gi.render(a, "direct", width=W, height=H), gi.render(b, "direct", width=W, height=H)
+    assert np.array_equal(ra.radiance, rb.radiance)
+
+
+@pytest.mark.parametrize(
+    "counts, scale, field, says",
+    [
+        ((3, 2), 1.0, ".extensions.EXT_mesh_gpu_instancing.attributes", "one count"),
+        ((3, 3), 0.0, "", "singular"),
+    ],
+)
+def test_bad_gltf_gpu_instancing_is_an_error_naming_the_node(tmp_path, counts, scale, field, says):
+    path, _, _ = shared_mesh_gltf(tmp_path, copies=1)
+    doc = json.loads(path.read_text())
+    blob = base64.b64decode(doc["buffers"][0]["uri"].split(",", 1)[1])
+    t, blob = _accessor(doc, blob, np.zeros((counts[0], 3), np.float32), "VEC3", 5126)
+    s, blob = _accessor(doc, blob, np.full((counts[1], 3), scale, np.float32), "VEC3", 5126)
+    doc["buffers"][0] = {"byteLength": len(blob), "uri": "data:application/octet-stream;base64,"
+                         + base64.b64encode(blob).decode()}  # fmt: skip
+    ext = {"EXT_mesh_gpu_instancing": {"attributes": {"TRANSLATION": t, "SCALE": s}}}
+    doc["nodes"].append({"mesh": 0, "extensions": ext})
+    doc["scenes"][0]["nodes"].append(len(doc["nodes"]) - 1)
+    path.write_text(json.dumps(doc))
+    with pytest.raises(gi.SceneError) as e:
+        gi.load_scene(path)
+    assert e.value.field == f"nodes[{len(doc['nodes']) - 1}]{field}", e.value
+    assert says in e.value.reason, e.value.reason

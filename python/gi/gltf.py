@@ -56,6 +56,7 @@ _READABLE = {
     "KHR_materials_emissive_strength",
     "KHR_texture_transform",
     "KHR_mesh_quantization",
+    "EXT_mesh_gpu_instancing",
 }
 
 
@@ -191,6 +192,56 @@ class _Reader:
             name = textures.add(file, colour)
             arr = textures.arrays.pop(name)
         return textures.add_array(key if colour else f"{key}#linear", arr)
+
+
+def _trs_matrices(t: np.ndarray, q: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """(n, 4, 4) matrices T · R(q) · diag(s) from (n, 3) translations, (n, 4) unit
+    quaternions (x, y, z, w) and (n, 3) scales, as :func:`_node_matrix` builds one."""
+    x, y, z, w = q.T
+    r = np.stack(
+        [
+            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], -1),
+            np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], -1),
+            np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], -1),
+        ],
+        axis=1,
+    )
+    m = np.broadcast_to(np.eye(4), (len(t), 4, 4)).copy()
+    m[:, :3, :3] = r * s[:, None, :]  # R · diag(s)
+    m[:, :3, 3] = t
+    return m
+
+
+def _gpu_instances(
+    reader: _Reader, node: dict[str, Any], ni: int, warn: dict[str, str]
+) -> np.ndarray | None:
+    """The node's ``EXT_mesh_gpu_instancing`` placements as (n, 4, 4) matrices in the
+    node's frame (TRANSLATION, ROTATION, SCALE accessors; missing ones are identity), or
+    None without the extension."""
+    ext = node.get("extensions", {}).get("EXT_mesh_gpu_instancing")
+    if ext is None:
+        return None
+    where = f"nodes[{ni}].extensions.EXT_mesh_gpu_instancing.attributes"
+    attrs = ext.get("attributes", {}) if isinstance(ext, dict) else {}
+    known = {"TRANSLATION": 3, "ROTATION": 4, "SCALE": 3}
+    arrays = {}
+    for name, width in known.items():
+        if name in attrs:
+            a = reader.accessor(attrs[name]).astype(np.float64)
+            if a.ndim != 2 or a.shape[1] != width:
+                raise GltfError(f"{where}.{name}", f"must be VEC{width}")
+            arrays[name] = a
+    for name in attrs:
+        if name not in known and not name.startswith("_"):
+            warn[f"{where}.{name}"] = "this instance attribute is ignored"
+    counts = {len(a) for a in arrays.values()}
+    if len(counts) != 1:
+        raise GltfError(where, "needs TRANSLATION, ROTATION or SCALE, all of one count")
+    n = counts.pop()
+    t = arrays.get("TRANSLATION", np.zeros((n, 3)))
+    q = arrays.get("ROTATION", np.tile([0.0, 0.0, 0.0, 1.0], (n, 1)))
+    s = arrays.get("SCALE", np.ones((n, 3)))
+    return _trs_matrices(t, q, s)
 
 
 def _node_matrix(node: dict[str, Any]) -> np.ndarray:
@@ -478,6 +529,7 @@ class GltfInstance:
     node: int
     mesh: int
     matrix: np.ndarray  # float64 (4, 4), mesh -> world
+    instance: int | None = None  # the node's EXT_mesh_gpu_instancing placement, if any
 
 
 @dataclass
@@ -655,15 +707,21 @@ def read_gltf(path: Path, textures: TextureSet | None = None) -> GltfScene:
             out.camera = _camera(doc, ni, world, warn)
         if "mesh" not in node:
             continue
-        lin = world[:3, :3]
+        placements = _gpu_instances(r.reader, node, ni, warn)
+        worlds = world[None] if placements is None else world @ placements
         with np.errstate(all="ignore"):
-            det = np.linalg.det(lin) if np.isfinite(lin).all() else np.nan
-        if not (np.isfinite(det) and abs(det) > 1e-30):
+            lin = worlds[:, :3, :3]
+            finite = np.isfinite(lin).all(axis=(1, 2))
+            det = np.where(finite, np.linalg.det(np.where(finite[:, None, None], lin, 0)), np.nan)
+        if not (np.isfinite(det) & (np.abs(det) > 1e-30)).all():
             raise GltfError(
                 f"nodes[{ni}]", "the world transform is singular or not finite (e.g. a zero scale)"
             )
         r.mesh(node["mesh"])
-        out.instances.append(GltfInstance(ni, node["mesh"], world))
+        for k, w in enumerate(worlds):
+            out.instances.append(
+                GltfInstance(ni, node["mesh"], w, None if placements is None else k)
+            )
     out.meshes = r.meshes
     return out
 

@@ -220,7 +220,8 @@ def gltf_scene_description(
     Each primitive of a glTF mesh becomes one gi mesh in the mesh's own frame (keyed
     ``file#meshes[m].primitives[p]``), and each node that uses the mesh one object per
     primitive placed by the node's world matrix (a ``matrix`` transform, named
-    ``nodes[n]`` or ``nodes[n].primitives[p]``): nodes that share a glTF mesh share its gi
+    ``nodes[n]`` or ``nodes[n].primitives[p]``; ``nodes[n].instances[k]`` first for the
+    placements of ``EXT_mesh_gpu_instancing``): nodes that share a glTF mesh share its gi
     meshes. Materials (with textures and emission), ``KHR_lights_punctual`` lights and the
     warnings are those of :func:`gi.gltf.load_gltf`; a primitive without a material gets
     glTF's default one. The camera is the default scene's first perspective camera (its
@@ -256,6 +257,8 @@ def gltf_scene_description(
             if prim.material < 0:
                 materials.setdefault(default, default_material())
             name = f"nodes[{inst.node}]"
+            if inst.instance is not None:
+                name += f".instances[{inst.instance}]"
             objects.append(
                 {
                     "name": name if len(prims) == 1 else f"{name}.primitives[{prim.index}]",
