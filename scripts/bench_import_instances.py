@@ -2,9 +2,11 @@
 one sphere mesh on N nodes (loaded as a scene: N instances of one mesh; named as a mesh file
 by a JSON scene: flattened into N copies) and a Mitsuba scene of one PLY sphere used by N
 shapes (instances; and the same scene with the old importer's behaviour emulated by one PLY
-file per shape, baked into world space). Prints a Markdown table.
+file per shape, baked into world space); and a glTF node placing the sphere M times by
+``EXT_mesh_gpu_instancing``. Prints a Markdown table.
 
     .venv/bin/python scripts/bench_import_instances.py [--copies 100] [--subdivisions 5]
+        [--gpu-instances 100000]
 """
 
 from __future__ import annotations
@@ -36,10 +38,13 @@ def grid(copies: int) -> list[np.ndarray]:
 LIGHT_Y = 6.0
 
 
-def gltf(dir: Path, v, f, n, copies: int) -> Path:
+def gltf(dir: Path, v, f, n, copies: int, gpu_instances: int = 0) -> Path:
     blob = b""
     views, accessors = [], []
-    for arr, kind, ctype in ((v, "VEC3", 5126), (n, "VEC3", 5126), (f.ravel(), "SCALAR", 5125)):
+    arrays = [(v, "VEC3", 5126), (n, "VEC3", 5126), (f.ravel(), "SCALAR", 5125)]
+    if gpu_instances:
+        arrays.append((np.array(grid(gpu_instances)), "VEC3", 5126))
+    for arr, kind, ctype in arrays:
         data = np.ascontiguousarray(arr, np.float32 if ctype == 5126 else np.uint32).tobytes()
         views.append({"buffer": 0, "byteOffset": len(blob), "byteLength": len(data)})
         blob += data
@@ -47,6 +52,9 @@ def gltf(dir: Path, v, f, n, copies: int) -> Path:
         acc["count"] = len(arr)
         accessors.append(acc)
     nodes = [{"mesh": 0, "translation": t.tolist()} for t in grid(copies)]
+    if gpu_instances:
+        ext = {"EXT_mesh_gpu_instancing": {"attributes": {"TRANSLATION": 3}}}
+        nodes = [{"mesh": 0, "extensions": ext}]
     nodes.append(
         {"extensions": {"KHR_lights_punctual": {"light": 0}}, "translation": [0, LIGHT_Y, 0]}
     )
@@ -65,7 +73,7 @@ def gltf(dir: Path, v, f, n, copies: int) -> Path:
         "extensions": {"KHR_lights_punctual": {"lights": [{"type": "point",
                                                            "intensity": 683 * 40}]}},
     }  # fmt: skip
-    path = dir / "spheres.gltf"
+    path = dir / ("gpu.gltf" if gpu_instances else "spheres.gltf")
     path.write_text(json.dumps(doc))
     return path
 
@@ -121,6 +129,7 @@ def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--copies", type=int, default=100)
     p.add_argument("--subdivisions", type=int, default=5)
+    p.add_argument("--gpu-instances", type=int, default=100_000)
     args = p.parse_args()
     v, f, n = sphere(args.subdivisions)
     with tempfile.TemporaryDirectory() as tmp:
@@ -144,6 +153,10 @@ def main() -> None:
             (
                 "Mitsuba, one baked PLY per shape (flattened)",
                 mitsuba(d, v, f, n, args.copies, True),
+            ),
+            (
+                f"glTF EXT_mesh_gpu_instancing, {args.gpu_instances:,} placements",
+                gltf(d, v, f, n, 0, args.gpu_instances),
             ),
         ]
         print(f"{args.copies} spheres of {len(f)} triangles; `path` 64×64, 4 spp\n")

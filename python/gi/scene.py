@@ -244,11 +244,18 @@ def gltf_scene_description(
     meshes: dict[str, MeshEntry] = {}
     objects: list[dict[str, Any]] = []
     lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
-    for inst in g.instances:
-        _check_node_matrix(file, inst.node, inst.matrix)
+    mats = np.array([inst.matrix for inst in g.instances]).reshape(-1, 4, 4)
+    _check_node_matrices(file, [inst.node for inst in g.instances], mats)
+    rows = mats[:, :3].tolist()
+    keys = {
+        (mi, p.index): f"{path.name}#meshes[{mi}].primitives[{p.index}]"
+        for mi, prims in g.meshes.items()
+        for p in prims
+    }
+    for inst, m in zip(g.instances, rows, strict=True):
         prims = g.meshes[inst.mesh]
         for prim in prims:
-            key = f"{path.name}#meshes[{inst.mesh}].primitives[{prim.index}]"
+            key = keys[inst.mesh, prim.index]
             if key not in meshes:
                 normals = None if prim.normals is None else _unit_rows(prim.normals)
                 meshes[key] = _entry(
@@ -264,11 +271,22 @@ def gltf_scene_description(
                     "name": name if len(prims) == 1 else f"{name}.primitives[{prim.index}]",
                     "shape": {"type": "mesh", "file": key},
                     "material": default if prim.material < 0 else g.materials[prim.material][0],
-                    "transform": {"matrix": inst.matrix[:3].tolist()},
+                    "transform": {"matrix": m},
                 }
             )
-            placed = prim.vertices @ inst.matrix[:3, :3].T + inst.matrix[:3, 3]
-            lo, hi = np.minimum(lo, placed.min(axis=0)), np.maximum(hi, placed.max(axis=0))
+    # The box of every mesh's box corners placed (a box around the placed vertices, for the
+    # framing camera): O(1) per instance.
+    mesh_ids = np.array([inst.mesh for inst in g.instances])
+    for mi, prims in g.meshes.items():
+        if not prims:
+            continue
+        v = np.concatenate([p.vertices for p in prims])
+        a, b = v.min(axis=0), v.max(axis=0)
+        corners = np.array([[(a, b)[k >> i & 1][i] for i in range(3)] for k in range(8)])
+        sel = mats[mesh_ids == mi]
+        placed = np.einsum("kj,nij->nki", corners, sel[:, :3, :3]) + sel[:, None, :3, 3]
+        lo = np.minimum(lo, placed.min(axis=(0, 1)))
+        hi = np.maximum(hi, placed.max(axis=(0, 1)))
     # A node reached twice (one node the child of two) would name two objects alike.
     seen: set[str] = set()
     for obj in objects:
@@ -285,23 +303,24 @@ def gltf_scene_description(
     return desc, meshes, textures
 
 
-def _check_node_matrix(file: str, node: int, m: np.ndarray) -> None:
-    """A node's world matrix checked as the core checks a ``matrix`` transform, so that the
-    error names the node: translation within ±100000 m, each axis's scale in [1e-6, 1e6],
-    invertible (|det| at least 1e-6 of the product of the axes' scales)."""
-    lin = m[:3, :3]
-    lengths = np.linalg.norm(lin, axis=0)
-    where = f"nodes[{node}]"
-    if not np.isfinite(m).all() or np.abs(m[:3, 3]).max() > 1e5:
-        raise _scene_error(
-            file, where, "the world transform is not finite or moves beyond ±100000 m"
-        )
-    if lengths.min() < 1e-6 or lengths.max() > 1e6:
-        raise _scene_error(
-            file, where, "the world transform scales an axis by less than 1e-6 or more than 1e6"
-        )
-    if not abs(np.linalg.det(lin)) >= 1e-6 * lengths.prod():
-        raise _scene_error(file, where, "the world transform is singular")
+def _check_node_matrices(file: str, nodes: list[int], m: np.ndarray) -> None:
+    """Nodes' world matrices (n, 4, 4) checked as the core checks a ``matrix`` transform,
+    so that the error names the node: translation within ±100000 m, each axis's scale in
+    [1e-6, 1e6], invertible (|det| at least 1e-6 of the product of the axes' scales)."""
+    with np.errstate(all="ignore"):
+        finite = np.isfinite(m).all(axis=(1, 2))
+        lin = np.where(finite[:, None, None], m[:, :3, :3], 0.0)
+        lengths = np.linalg.norm(lin, axis=1)
+        far = ~finite | (np.abs(m[:, :3, 3]) > 1e5).any(axis=1)
+        scaled = (lengths.min(axis=1) < 1e-6) | (lengths.max(axis=1) > 1e6)
+        singular = ~(np.abs(np.linalg.det(lin)) >= 1e-6 * lengths.prod(axis=1))
+    for bad, reason in (
+        (far, "the world transform is not finite or moves beyond ±100000 m"),
+        (scaled, "the world transform scales an axis by less than 1e-6 or more than 1e6"),
+        (singular, "the world transform is singular"),
+    ):
+        if bad.any():
+            raise _scene_error(file, f"nodes[{nodes[int(np.argmax(bad))]}]", reason)
 
 
 def _gltf_camera(cam: Any, lo: np.ndarray, hi: np.ndarray) -> dict[str, Any]:
