@@ -449,6 +449,8 @@ impl Scene {
         scene.objects.reserve_exact(resolved.len());
         // The file's per-face materials, shared by the objects that place one mesh.
         let mut face_of: HashMap<u32, Arc<Vec<u32>>> = HashMap::new();
+        // Where each mesh file's materials start (pushed once, shared by its objects).
+        let mut file_bases: HashMap<*const MeshData, u32> = HashMap::new();
         for (i, (obj, (xf, mesh_index, _uvs, file_materials, material))) in
             desc.objects.iter().zip(resolved).enumerate()
         {
@@ -463,17 +465,9 @@ impl Scene {
                     (id, None)
                 }
                 (None, Some(data)) if !data.materials.is_empty() => {
-                    let base = scene.materials.len() as u32;
-                    for (i, (name, m)) in data.materials.iter().enumerate() {
-                        let refs = data.material_textures.get(i).cloned().unwrap_or_default();
-                        let maps =
-                            MaterialMaps::resolve(&refs, &texture_index).map_err(|(f, msg)| {
-                                err(at(&format!("shape.file: materials.{name}.{f}")), &msg)
-                            })?;
-                        scene.materials.push(*m);
-                        scene.material_names.push(name.clone());
-                        scene.material_maps.push(maps);
-                    }
+                    let base = scene
+                        .file_materials(data, &mut file_bases, &texture_index)
+                        .map_err(|(f, msg)| err(at(&f), &msg))?;
                     if data.face_materials.len() != mesh.indices.len()
                         || data
                             .face_materials
@@ -511,6 +505,33 @@ impl Scene {
             scene.animation = Some(Animation::from_desc(anim, desc, &scene, source_name)?);
         }
         Ok(scene)
+    }
+
+    /// The index in `materials` of a mesh file's first material, its materials pushed the
+    /// first time an object takes them (`bases`, by the file's data): the objects that place
+    /// one file share its materials (one `FILE:NAME` entry each, whatever the number of
+    /// objects). Errors name the field under the object.
+    fn file_materials(
+        &mut self,
+        data: &MeshData,
+        bases: &mut HashMap<*const MeshData, u32>,
+        texture_index: &HashMap<String, u32>,
+    ) -> std::result::Result<u32, (String, String)> {
+        let key: *const MeshData = data;
+        if let Some(&base) = bases.get(&key) {
+            return Ok(base);
+        }
+        let base = self.materials.len() as u32;
+        for (i, (name, m)) in data.materials.iter().enumerate() {
+            let refs = data.material_textures.get(i).cloned().unwrap_or_default();
+            let maps = MaterialMaps::resolve(&refs, texture_index)
+                .map_err(|(f, msg)| (format!("shape.file: materials.{name}.{f}"), msg))?;
+            self.materials.push(*m);
+            self.material_names.push(name.clone());
+            self.material_maps.push(maps);
+        }
+        bases.insert(key, base);
+        Ok(base)
     }
 
     /// Appends an object placing mesh `mesh_index` by `xf`, with material `material` (plus
