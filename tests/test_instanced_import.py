@@ -182,6 +182,11 @@ def test_gltf_scene_keeps_the_mesh_file_reading(tmp_path):
 
     with pytest.warns(gi.AssetWarning, match="occlusionTexture"):
         scene = gi.load_scene(path)
+    # A warning the caller makes an error stays that warning (not a SceneError).
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(gi.AssetWarning):
+            gi.load_scene(path)
     assert scene.width == scene.height == 512
     flat, inst = load_gltf(path), read_gltf(path)
     assert flat.materials == inst.materials and flat.lights == inst.lights

@@ -3,11 +3,11 @@ scene description (see ``docs/mitsuba.md`` for the subset and the BSDF mapping).
 
 Every shape becomes an object: an instance of a mesh in its local frame, placed by a
 ``matrix`` transform, so that shapes that load the same file with the same options, equal
-built-in shapes (``rectangle``, ``cube``, ``sphere``), and the shapes of a ``<shapegroup>``
-placed by ``<shape type="instance">`` share one mesh. BSDFs become uber-BSDF materials. An element
-gi cannot render is a :class:`gi.SceneError` whose ``field`` names the element and its line
-(``<bsdf type="roughdielectric"> (line 12)``); a property it ignores is an
-:class:`gi.AssetWarning`.
+built-in shapes (``rectangle``, ``cube``, ``disk``, ``sphere``), and the shapes of a
+``<shapegroup>`` placed by ``<shape type="instance">`` share one mesh. BSDFs become
+uber-BSDF materials. An element gi cannot render is a :class:`gi.SceneError` whose
+``field`` names the element and its line (``<bsdf type="roughdielectric"> (line 12)``); a
+property it ignores is an :class:`gi.AssetWarning`.
 """
 
 from __future__ import annotations

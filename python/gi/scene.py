@@ -226,18 +226,36 @@ def gltf_scene_description(
     warnings are those of :func:`gi.gltf.load_gltf`; a primitive without a material gets
     glTF's default one. The camera is the default scene's first perspective camera (its
     ``aspectRatio`` sets the width against a height of 512 pixels); without one, a 40°
-    camera on +z looks at the centre of the scene's box from where the box fits."""
-    from gi.gltf import DEFAULT_MATERIAL_NAME, GltfError, default_material, read_gltf
-    from gi.meshes import _entry, _unit_rows, load_failure
+    camera on +z looks at the centre of the scene's box from where the box fits.
+
+    Every failure is typed: :class:`gi.SceneError` naming the file's field (``nodes[3]``)
+    or the file, :class:`gi.OutOfMemoryError`."""
+    from gi._gi import GiError, OutOfMemoryError
+    from gi.gltf import GltfError
+    from gi.meshes import load_failure
+
+    file = str(path)
+    try:
+        return _gltf_scene_description(path)
+    except (GiError, Warning):  # a warning the caller turned into an error stays one
+        raise
+    except GltfError as e:
+        raise _scene_error(file, e.field, e.reason) from e
+    except MemoryError as e:
+        raise OutOfMemoryError(f"{file}: the glTF scene is too large: {e}") from e
+    except Exception as e:  # content the reader accepted but numpy could not convert
+        raise _scene_error(file, "(file)", load_failure(path, e)) from e
+
+
+def _gltf_scene_description(
+    path: Path,
+) -> tuple[dict[str, Any], dict[str, MeshEntry], TextureSet]:
+    from gi.gltf import DEFAULT_MATERIAL_NAME, default_material, read_gltf
+    from gi.meshes import _entry, _unit_rows
 
     file = str(path)
     textures = TextureSet(path.parent)
-    try:
-        g = read_gltf(path, textures)
-    except GltfError as e:
-        raise _scene_error(file, e.field, e.reason) from e
-    except (OSError, ValueError, KeyError, IndexError, TypeError) as e:
-        raise _scene_error(file, "(file)", load_failure(path, e)) from e
+    g = read_gltf(path, textures)
     report(path, g.warnings)
     materials = {name: desc for name, desc in g.materials}
     default = f"{path.name}:{DEFAULT_MATERIAL_NAME}"
