@@ -27,6 +27,13 @@ use gi_core::{render, Image, Scene, Silent};
 
 const REGIONS: [&str; 4] = ["all", "corners", "near walls", "far field"];
 
+/// Per-frame region means.
+type Frames<'a> = &'a [[f64; 4]];
+
+/// A table row: label, the frames of the image, those of the image subtracted, and the
+/// term's index in `path`'s depths (0 direct, 1–3 the bounce terms, 4 all).
+type Row<'a> = (&'a str, Frames<'a>, Option<Frames<'a>>, usize);
+
 /// Region of each pixel (1 corners, 2 near walls, 3 far field; 0 background).
 fn regions(scene: &Scene, position: &Image, normal: &Image, depth: &[f32]) -> Vec<usize> {
     let bvh = MeshBvh::from_triangles(&flat_triangles(scene));
@@ -190,7 +197,7 @@ fn main() {
         println!("| term | region | path | bidir | bidir / path | share of depth 7 |");
         println!("|---|---|---|---|---|---|");
         let total = &path[3];
-        let rows: [(&str, &[[f64; 4]], Option<&[[f64; 4]]>, usize); 7] = [
+        let rows: [Row; 7] = [
             ("direct (depth 1)", &mis[0], None, 0),
             ("one bounce (MIS)", &mis[1], Some(&mis[0]), 1),
             ("one bounce, VPLs only", &vpl, Some(&mis[0]), 1),
