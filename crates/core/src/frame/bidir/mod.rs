@@ -11,10 +11,12 @@
 //! 4. Direct light (the frame of method `direct`), then at the pixel-centre G-buffer the
 //!    one-bounce light of the VPLs and of the bundles combined by MIS (§4.2, when `max_depth`
 //!    ≥ 2: at 1 the frame is the direct light alone) and the
-//!    two-bounce light (§4.3, when `max_depth` ≥ 3) in one pass (`bidir.wgsl`), the
-//!    composite and the readback of what was asked for. Light of three and more bounces
-//!    (`max_depth` ≥ 4): [`subpaths`] continues each bundle's paired VPL into a light
-//!    subpath traced on the CPU, every vertex a VPL that the bundle's hit connects to.
+//!    light of two and more bounces (§4.3, when `max_depth` ≥ 3) in one pass
+//!    (`bidir.wgsl`), the composite and the readback of what was asked for. [`subpaths`]
+//!    continues each bundle's paired VPL into a light subpath traced on the CPU, every
+//!    vertex a VPL; a path of two and more bounces is drawn both by the bundle's hit
+//!    connecting to a subpath vertex and by a subpath vertex lighting the pixel, the two
+//!    combined by MIS.
 
 mod bundles;
 mod emitted;
