@@ -380,3 +380,61 @@ fn lambertian_shortcut_equals_eval() {
     }
     assert!(accepted > 0 && rejected > 0, "{accepted} / {rejected}");
 }
+
+/// The short path of Lambertian materials gives bit for bit what the general `sample`,
+/// `eval` and `pdf` give (so images do not change), over albedos, directions on both sides
+/// and Sobol draws; and only materials with a diffuse lobe alone take it.
+#[test]
+fn lambertian_short_path_equals_the_general_one() {
+    let mut r = Rng::new(11, 12, 13);
+    for k in 0..2000u32 {
+        let m = Material {
+            diffuse: Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()) + Vec3::splat(1e-3),
+            ..Default::default()
+        };
+        assert!(m.is_lambertian());
+        let wo = dir(
+            r.next_f32() * 2.0 - 1.0,
+            r.next_f32() * std::f32::consts::TAU,
+        );
+        let wi = dir(
+            r.next_f32() * 2.0 - 1.0,
+            r.next_f32() * std::f32::consts::TAU,
+        );
+        if wo.z * wi.z > 0.0 {
+            assert_eq!(m.eval(wo, wi), m.eval_general(wo, wi));
+            assert_eq!(m.pdf(wo, wi), m.pdf_general(wo, wi));
+        }
+        let sign = if wo.z < 0.0 { -1.0 } else { 1.0 };
+        let (mut a, mut b) = (
+            Rng::sobol(5, k as u64, k % 64),
+            Rng::sobol(5, k as u64, k % 64),
+        );
+        let (x, y) = (m.sample(wo, &mut a), m.sample_general(wo, sign, &mut b));
+        let (x, y) = (x.unwrap(), y.unwrap());
+        assert_eq!(
+            (x.wi, x.weight, x.pdf, x.lobe),
+            (y.wi, y.weight, y.pdf, y.lobe)
+        );
+        assert_eq!(a.next_f32(), b.next_f32(), "the same number of draws");
+    }
+    let not = [
+        Material {
+            specular: Vec3::splat(0.1),
+            ..Default::default()
+        },
+        Material {
+            fresnel: true,
+            ..Default::default()
+        },
+        Material {
+            transmission: Vec3::splat(0.5),
+            ..Default::default()
+        },
+        Material {
+            diffuse: Vec3::ZERO,
+            ..Default::default()
+        },
+    ];
+    assert!(not.iter().all(|m| !m.is_lambertian()));
+}
