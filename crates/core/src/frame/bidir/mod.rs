@@ -298,6 +298,8 @@ struct FrameVpls {
     lit: usize,
     /// Light subpaths with a vertex.
     placed: usize,
+    /// Records of subpath vertices after the first VPLs' (the slots up to the last used).
+    used: u32,
     /// Seconds to draw the first VPLs and to trace the subpaths.
     seconds: (f64, f64),
 }
@@ -318,13 +320,14 @@ fn frame_vpls(
     let count = records.0.len() as u32;
     let first = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let placed = subpaths::append(scene, bvh, &groups, options, frame, maps, &mut records);
+    let (placed, used) = subpaths::append(scene, bvh, &groups, options, frame, maps, &mut records);
     FrameVpls {
         raws: records.0,
         matrices: records.1,
         count,
         lit,
         placed,
+        used: used as u32,
         seconds: (first, t.elapsed().as_secs_f64()),
     }
 }
@@ -470,7 +473,7 @@ pub(super) fn frame(
     let (vpl_seconds, subpath_seconds) = v.seconds;
     let t = Instant::now();
     state.vpls.upload(&ctx, &raws, &matrices);
-    let counts = (vpl_count, raws.len() as u32 - vpl_count);
+    let counts = (vpl_count, v.used);
     let params = lighting_params(scene, options, frame, counts, n_env, state.env_pdf_scale);
     gpu::write_buffer(
         &ctx.queue,

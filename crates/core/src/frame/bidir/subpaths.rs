@@ -101,6 +101,9 @@ struct Subpaths {
     pub matrices: Vec<Mat4>,
     /// Subpaths with at least one vertex.
     pub placed: usize,
+    /// Slots up to the last one holding a vertex (the lighting pass's strategy-B loop runs
+    /// over these alone).
+    pub used: usize,
 }
 
 /// Slots for subpath vertices: one per (light, bundle) for the first vertex y2, and
@@ -245,7 +248,8 @@ fn trace(scene: &Scene, bvh: &SceneBvh, h: &Head, max_len: u32, rng: &mut Rng) -
 
 /// Appends to the RSM's VPL `records` (n1 per light) the frame's light subpaths, one per
 /// (light, bundle) from the VPL the bundle is paired with, filling the rest of `maps`'
-/// capacity; returns how many subpaths have a vertex. See [`subpaths`].
+/// capacity; returns how many subpaths have a vertex and how many slots from the first
+/// hold the vertices. See [`subpaths`].
 pub(super) fn append(
     scene: &Scene,
     bvh: &SceneBvh,
@@ -254,7 +258,7 @@ pub(super) fn append(
     frame: &FrameParams,
     maps: &VplMaps,
     records: &mut (Vec<VplRaw>, Vec<Mat4>),
-) -> usize {
+) -> (usize, usize) {
     let first = records.0.len() as u32;
     let out = subpaths(
         scene,
@@ -269,7 +273,7 @@ pub(super) fn append(
     );
     records.0.extend(out.raws);
     records.1.extend(out.matrices);
-    out.placed
+    (out.placed, out.used)
 }
 
 /// The subpaths as records for slots `first`, `first + 1`, … (`slots` of them): the first
@@ -295,6 +299,7 @@ fn subpaths(
         raws: vec![VplRaw::zeroed(); slots as usize],
         matrices: vec![Mat4::IDENTITY; slots as usize * 6],
         placed: 0,
+        used: 0,
     };
     if slots == 0 || heads > slots as usize {
         return out;
@@ -328,6 +333,7 @@ fn subpaths(
         }
     }
     out.placed = slot_of.iter().filter(|s| !s.is_empty()).count();
+    out.used = if out.placed == 0 { 0 } else { next };
     let (lo, hi) = light_views::bounds(scene);
     let diag = (hi - lo).length().max(1e-6);
     for (p, s) in paths.iter().zip(&slot_of) {

@@ -381,10 +381,11 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
     let tiny_d2 = params.min_dist2 * 1e-6;
     if mis && params.bundles > 0u && params.bounces >= 2u {
         for (var i = params.vpl_count; i < params.vpl_count + params.sub_count; i++) {
-            let v = vpl_at(i);
-            if max3(v.flux) <= 0.0 {
+            // The flux first (one texel): empty slots and specular vertices cost no more.
+            if max3(textureLoad(vpl_tex, vec2<u32>(1u, i), 0).xyz) <= 0.0 {
                 continue;
             }
+            let v = vpl_at(i);
             let to_v = v.position - p;
             let d2 = max(dot(to_v, to_v), 1e-20);
             let cos_v = abs(dot(to_v, v.ng)) / sqrt(d2);
