@@ -6,7 +6,8 @@
 //! `cargo run -p gi-core --profile test --example bidir_breakdown -- --frames 16 --spp 1024`
 //!
 //! Options: `--scenes a,b` (`cornell,cornell-anim`), `--size N` (32), `--frames N` (`bidir`
-//! frames, seeds 1…N, 16), `--spp N` (`path`, 1024), `--bundles N` (32).
+//! frames, seeds 1…N, 16), `--spp N` (`path`, 1024), `--bundles N` (32), `--set KEY=N`
+//! (repeatable: an integer setting of `bidir`, e.g. `shadow_map_size=2048`).
 //!
 //! - Regions, from each pixel-centre point x and its normal: the nearest other surface over
 //!   64 stratified cosine-hemisphere rays (the CPU BVH), as a fraction of the scene's bounding
@@ -152,8 +153,12 @@ fn main() {
     );
     for name in scenes.split(',') {
         let scene = builtin::load(name).expect("built-in scene");
-        let base = gi_core::options!(Bidir, spp: 1, width: size, height: size, seed: 1)
+        let mut base = gi_core::options!(Bidir, spp: 1, width: size, height: size, seed: 1)
             .with("bundles", bundles);
+        for kv in args.values("--set") {
+            let (k, v) = kv.split_once('=').expect("--set KEY=N");
+            base = base.with(k, v.parse::<i64>().expect("an integer"));
+        }
         let probe = render(&scene, &base, &Silent).expect("bidir");
         let region = regions(&scene, &probe.position, &probe.normal, &probe.depth);
         let counts: Vec<usize> = (0..4)
