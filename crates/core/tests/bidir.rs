@@ -437,6 +437,8 @@ fn bad_settings_are_setting_errors() {
         bad(|o| o.vpls_per_light = 0),
         bad(|o| o.vpl_shadow_map_size = 8),
         bad(|o| o.rsm_size = 0),
+        // 4 GiB of fragment lists: more than any GPU binds (lavapipe: 128 MiB).
+        bad(|o| o.bundle_memory_mb = 4096),
     ] {
         let e = render(&scene, &s, &Silent).err();
         assert!(matches!(e, Some(gi_core::Error::Setting { .. })), "{e:?}");
