@@ -115,22 +115,23 @@ fn block_error(a: &gi_core::image::Image, b: &gi_core::image::Image) -> DVec3 {
 
 /// Cornell box, 48×48, against the path tracer limited to the same depth (1024 spp):
 /// `max_depth` 2 (direct + one bounce) and 3 (+ the two-bounce term), MIS of 64 VPLs and 32
-/// bundles. Criteria: image mean per channel within 3% (measured 0.1–0.3% at depth 2,
-/// 0.2–0.5% at depth 3); mean relative 8×8-block error ≤ 6% (measured 2.4–3.0% at depth 2,
-/// 3.9–5.3% at depth 3, where the clamped two-bounce term of 32 bundle–VPL pairs is the
-/// noisiest part; the reference's own block noise is ~1% at 1024 spp).
+/// bundles. Criteria: the mean image of 4 frames (seeds 1–4) per channel within 3%
+/// (measured 0.2–0.7% at depth 2, 0.3–0.5% at depth 3; a single frame's mean varies by
+/// 1.5–1.9% at depth 3 over seeds 1–8, before and after issue 29's MIS of the two-bounce
+/// light, so one frame was a coin toss against 3%: seed 3 gave −2.0% red after it, 0.5%
+/// before); mean relative 8×8-block error of the seed-3 frame ≤ 6% (measured 2.3–2.7% at
+/// depth 2, 3.6–4.6% at depth 3, where the two-bounce light of 32 bundle–subpath pairs is
+/// the noisiest part; the reference's own block noise is ~1% at 1024 spp).
 #[test]
 fn cornell_matches_path_tracer() {
     let scene = load("cornell");
     let size = 48;
     for depth in [2, 3] {
-        let bidir = run(
-            &scene,
-            &bidir_settings(size)
-                .with("spp", 4)
-                .with("bundles", 32)
-                .with("max_depth", depth),
-        );
+        let settings = bidir_settings(size)
+            .with("spp", 4)
+            .with("bundles", 32)
+            .with("max_depth", depth);
+        let bidir = run(&scene, &settings);
         let path = run(
             &scene,
             &bidir_settings(size)
@@ -138,7 +139,7 @@ fn cornell_matches_path_tracer() {
                 .with("spp", 1024)
                 .with("max_depth", depth),
         );
-        let (a, b) = (mean(&bidir.radiance), mean(&path.radiance));
+        let (a, b) = (bidir_mean(&scene, &settings, 4).0, mean(&path.radiance));
         let rel = rel_err(a, b);
         let block_err = block_error(&bidir.radiance, &path.radiance);
         eprintln!(
