@@ -269,6 +269,12 @@ def test_renderer_updates_are_bounded_too():
         r.update(
             objects={0: {"matrix": [[1e30, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]}}
         )
+    # A matrix's scale has the limits of `scale` (checked before it places anything).
+    assert e.value.field == "objects[0].transform.matrix" and "[1e-6, 1e6]" in e.value.reason
+    with pytest.raises(gi.SceneError) as e:
+        r.update(
+            objects={0: {"matrix": [[1e6, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]}}
+        )
     assert e.value.field == "objects[0].transform" and "outside" in e.value.reason
     with pytest.raises(gi.SceneError) as e:
         r.update(lights={0: {"intensity": [1e38, 1e38, 1e38]}})

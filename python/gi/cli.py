@@ -141,7 +141,8 @@ def _parser() -> argparse.ArgumentParser:
     sub = p.add_subparsers(dest="command", required=True)
     r = sub.add_parser("render", help="render a scene to an image")
     r.add_argument(
-        "scene", help="built-in scene name (see `gi scenes`), JSON scene file or Mitsuba 3 XML"
+        "scene",
+        help="built-in scene name (see `gi scenes`), JSON scene file, Mitsuba 3 XML or glTF",
     )
     r.add_argument(
         "-o",
@@ -201,7 +202,7 @@ def _parser() -> argparse.ArgumentParser:
         help="also say which estimator and first-bounce search ispm chose, and why",
     )
     v = sub.add_parser("view", help="interactive viewer in the browser (pip install 'gi[view]')")
-    v.add_argument("scene", help="built-in scene name, JSON scene file or Mitsuba 3 XML")
+    v.add_argument("scene", help="built-in scene name, JSON scene file, Mitsuba 3 XML or glTF")
     v.add_argument("--method", default="ispm", help="rendering method (see `gi methods`)")
     v.add_argument(
         "--size",

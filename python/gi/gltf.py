@@ -56,6 +56,7 @@ _READABLE = {
     "KHR_materials_emissive_strength",
     "KHR_texture_transform",
     "KHR_mesh_quantization",
+    "EXT_mesh_gpu_instancing",
 }
 
 
@@ -191,6 +192,56 @@ class _Reader:
             name = textures.add(file, colour)
             arr = textures.arrays.pop(name)
         return textures.add_array(key if colour else f"{key}#linear", arr)
+
+
+def _trs_matrices(t: np.ndarray, q: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """(n, 4, 4) matrices T · R(q) · diag(s) from (n, 3) translations, (n, 4) unit
+    quaternions (x, y, z, w) and (n, 3) scales, as :func:`_node_matrix` builds one."""
+    x, y, z, w = q.T
+    r = np.stack(
+        [
+            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], -1),
+            np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], -1),
+            np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], -1),
+        ],
+        axis=1,
+    )
+    m = np.broadcast_to(np.eye(4), (len(t), 4, 4)).copy()
+    m[:, :3, :3] = r * s[:, None, :]  # R · diag(s)
+    m[:, :3, 3] = t
+    return m
+
+
+def _gpu_instances(
+    reader: _Reader, node: dict[str, Any], ni: int, warn: dict[str, str]
+) -> np.ndarray | None:
+    """The node's ``EXT_mesh_gpu_instancing`` placements as (n, 4, 4) matrices in the
+    node's frame (TRANSLATION, ROTATION, SCALE accessors; missing ones are identity), or
+    None without the extension."""
+    ext = node.get("extensions", {}).get("EXT_mesh_gpu_instancing")
+    if ext is None:
+        return None
+    where = f"nodes[{ni}].extensions.EXT_mesh_gpu_instancing.attributes"
+    attrs = ext.get("attributes", {}) if isinstance(ext, dict) else {}
+    known = {"TRANSLATION": 3, "ROTATION": 4, "SCALE": 3}
+    arrays = {}
+    for name, width in known.items():
+        if name in attrs:
+            a = reader.accessor(attrs[name]).astype(np.float64)
+            if a.ndim != 2 or a.shape[1] != width:
+                raise GltfError(f"{where}.{name}", f"must be VEC{width}")
+            arrays[name] = a
+    for name in attrs:
+        if name not in known and not name.startswith("_"):
+            warn[f"{where}.{name}"] = "this instance attribute is ignored"
+    counts = {len(a) for a in arrays.values()}
+    if len(counts) != 1:
+        raise GltfError(where, "needs TRANSLATION, ROTATION or SCALE, all of one count")
+    n = counts.pop()
+    t = arrays.get("TRANSLATION", np.zeros((n, 3)))
+    q = arrays.get("ROTATION", np.tile([0.0, 0.0, 0.0, 1.0], (n, 1)))
+    s = arrays.get("SCALE", np.ones((n, 3)))
+    return _trs_matrices(t, q, s)
 
 
 def _node_matrix(node: dict[str, Any]) -> np.ndarray:
@@ -459,59 +510,101 @@ def _bake_metallic(
         desc["transmission"] = [trans] * 3
 
 
-def load_gltf(path: Path, textures: TextureSet | None = None) -> GltfMesh:
-    """Reads the default scene of a glTF file into world-space triangles; its textures go
-    into `textures` (without one, textures are reported and not read)."""
-    if textures is None:
-        textures = TextureSet()
-    doc, glb_bin = _read_document(path)
-    unsupported = [e for e in doc.get("extensionsRequired", []) if e not in _READABLE]
-    if unsupported:
-        raise GltfError("extensionsRequired", f"unsupported extension {unsupported[0]}")
-    reader = _Reader(path, doc, glb_bin)
-    warn: dict[str, str] = {}
-    if doc.get("animations"):
-        warn["animations"] = "animations are ignored (the rest pose is used)"
-    nodes = doc.get("nodes", [])
-    scenes = doc.get("scenes", [])
-    if scenes:
-        roots = scenes[doc.get("scene", 0)].get("nodes", [])
-    else:
-        children = {c for n in nodes for c in n.get("children", [])}
-        roots = [i for i in range(len(nodes)) if i not in children]
+@dataclass
+class GltfPrimitive:
+    """One mesh primitive's triangles in the mesh's own frame."""
 
-    verts, faces, normals, face_mats, uvs = [], [], [], [], []
-    lights: list[dict[str, Any]] = []
-    used: dict[int, int] = {}  # glTF material index -> our index
-    materials: list[tuple[str, dict[str, Any]]] = []
-    names: set[str] = set()
-    offset = 0
-    stack = [(r, np.eye(4), 0) for r in reversed(roots)]
-    while stack:
-        ni, parent, depth = stack.pop()
-        if depth > 256:
-            raise GltfError(f"nodes[{ni}]", "node hierarchy is cyclic or deeper than 256")
-        node = nodes[ni]
-        world = parent @ _node_matrix(node)
-        stack.extend((c, world, depth + 1) for c in reversed(node.get("children", [])))
-        if "KHR_lights_punctual" in node.get("extensions", {}):
-            light = _light(doc, ni, world, warn)
-            if light is not None:
-                lights.append(light)
-        if "mesh" not in node:
-            continue
-        lin = world[:3, :3]
-        with np.errstate(all="ignore"):
-            det = np.linalg.det(lin) if np.isfinite(lin).all() else np.nan
-        if not (np.isfinite(det) and abs(det) > 1e-30):
-            raise GltfError(
-                f"nodes[{ni}]", "the world transform is singular or not finite (e.g. a zero scale)"
-            )
-        mirrored = det < 0
-        with np.errstate(all="ignore"):
-            normal_xf = np.linalg.inv(lin).T
-        for pi, prim in enumerate(doc["meshes"][node["mesh"]]["primitives"]):
-            where = f"meshes[{node['mesh']}].primitives[{pi}]"
+    vertices: np.ndarray  # float64 (N, 3)
+    faces: np.ndarray  # int64 (M, 3), counter-clockwise = front
+    normals: np.ndarray | None  # float64 (N, 3) as stored (not normalised), None: none
+    uvs: np.ndarray  # float64 (N, 2), TEXCOORD_0 (v down), zero where none
+    material: int  # index into `GltfScene.materials`, -1: none
+    index: int = 0  # the primitive's index in its glTF mesh
+
+
+@dataclass
+class GltfInstance:
+    """A node that places a mesh: the glTF mesh index and the node's world matrix."""
+
+    node: int
+    mesh: int
+    matrix: np.ndarray  # float64 (4, 4), mesh -> world
+    instance: int | None = None  # the node's EXT_mesh_gpu_instancing placement, if any
+
+
+@dataclass
+class GltfCamera:
+    """The first perspective camera of the default scene, in world space."""
+
+    node: int
+    position: list[float]
+    look_at: list[float]
+    up: list[float]
+    yfov: float  # degrees
+    aspect: float | None
+
+
+@dataclass
+class GltfScene:
+    """The default scene of a glTF file as meshes in their own frames and the nodes that
+    place them (nodes that share a mesh share its primitives)."""
+
+    meshes: dict[int, list[GltfPrimitive]]  # glTF mesh index -> its surface primitives
+    instances: list[GltfInstance]
+    materials: list[tuple[str, dict[str, Any]]]  # (name, gi material description)
+    warnings: dict[str, str] = field(default_factory=dict)  # JSON path -> what is ignored
+    lights: list[dict[str, Any]] = field(default_factory=list)  # gi lights, world space
+    camera: GltfCamera | None = None
+
+
+# glTF's default material (no `material` on a primitive): white, metallic 1, roughness 1.
+DEFAULT_MATERIAL_NAME = "(glTF default)"
+
+
+def default_material() -> dict[str, Any]:
+    """The gi description of glTF's default material."""
+    return _material({"materials": [{"name": DEFAULT_MATERIAL_NAME}]}, 0, {})
+
+
+class _SceneReader:
+    """Reads meshes (once each, in the order nodes first use them) and materials (once
+    each, in the order primitives first use them)."""
+
+    def __init__(self, path: Path, textures: TextureSet):
+        self.path, self.textures = path, textures
+        doc, glb_bin = _read_document(path)
+        unsupported = [e for e in doc.get("extensionsRequired", []) if e not in _READABLE]
+        if unsupported:
+            raise GltfError("extensionsRequired", f"unsupported extension {unsupported[0]}")
+        self.doc = doc
+        self.reader = _Reader(path, doc, glb_bin)
+        self.warn: dict[str, str] = {}
+        self.used: dict[int, int] = {}  # glTF material index -> our index
+        self.materials: list[tuple[str, dict[str, Any]]] = []
+        self.names: set[str] = set()
+        self.meshes: dict[int, list[GltfPrimitive]] = {}
+
+    def material(self, mi: int) -> int:
+        if mi not in self.used:
+            doc = self.doc
+            desc = _material(doc, mi, self.warn, self.reader, self.textures)
+            base = f"{self.path.name}:{doc['materials'][mi].get('name') or f'material{mi}'}"
+            name = base if base not in self.names else f"{base}#{mi}"
+            self.names.add(name)
+            self.used[mi] = len(self.materials)
+            self.materials.append((name, desc))
+        return self.used[mi]
+
+    def mesh(self, mi: int) -> list[GltfPrimitive]:
+        if mi not in self.meshes:
+            self.meshes[mi] = [p for p in self._primitives(mi) if p is not None]
+        return self.meshes[mi]
+
+    def _primitives(self, mi: int) -> list[GltfPrimitive | None]:
+        out: list[GltfPrimitive | None] = []
+        warn, reader = self.warn, self.reader
+        for pi, prim in enumerate(self.doc["meshes"][mi]["primitives"]):
+            where = f"meshes[{mi}].primitives[{pi}]"
             attrs = prim.get("attributes", {})
             if "POSITION" not in attrs:
                 continue
@@ -528,21 +621,14 @@ def load_gltf(path: Path, textures: TextureSet | None = None) -> GltfMesh:
                 continue
             if tri.min() < 0 or tri.max() >= len(p):
                 raise GltfError(f"{where}.indices", "index out of range")
-            if mirrored:  # a mirroring transform turns the winding inside out
-                tri = tri[:, [0, 2, 1]]
-            verts.append(p @ world[:3, :3].T + world[:3, 3])
+            normals = None
             if "NORMAL" in attrs:
-                n = reader.accessor(attrs["NORMAL"]).astype(np.float64)[:, :3] @ normal_xf.T
-                with np.errstate(all="ignore"):
-                    n /= np.linalg.norm(n, axis=1, keepdims=True)
-                normals.append(np.nan_to_num(n, nan=0.0, posinf=0.0, neginf=0.0))
-            else:
-                normals.append(None)
+                normals = reader.accessor(attrs["NORMAL"]).astype(np.float64)[:, :3]
             if "TEXCOORD_0" in attrs:
                 uv = reader.accessor(attrs["TEXCOORD_0"]).astype(np.float64)[:, :2]
-                uvs.append(np.nan_to_num(uv) if len(uv) == len(p) else np.zeros((len(p), 2)))
+                uv = np.nan_to_num(uv) if len(uv) == len(p) else np.zeros((len(p), 2))
             else:
-                uvs.append(np.zeros((len(p), 2)))
+                uv = np.zeros((len(p), 2))
             if prim.get("targets"):
                 warn[f"{where}.targets"] = "morph targets are ignored (the base shape is used)"
             if "TANGENT" in attrs:
@@ -553,20 +639,123 @@ def load_gltf(path: Path, textures: TextureSet | None = None) -> GltfMesh:
             for a in attrs:
                 if a.startswith("COLOR_"):
                     warn[f"{where}.attributes.{a}"] = "vertex colours are not supported"
+            mat = prim.get("material")
+            material = -1 if mat is None else self.material(mat)
+            out.append(GltfPrimitive(p, tri, normals, uv, material, pi))
+        return out
+
+
+def _camera(
+    doc: dict[str, Any], ni: int, world: np.ndarray, warn: dict[str, str]
+) -> GltfCamera | None:
+    """Node ``ni``'s camera (world transform ``world``; it looks down its -z axis, +y up),
+    or None (with a warning) for an orthographic or malformed one."""
+    where = f"nodes[{ni}].camera"
+    try:
+        cam = doc["cameras"][doc["nodes"][ni]["camera"]]
+        kind = cam["type"]
+    except (KeyError, IndexError, TypeError):
+        warn[where] = "names no camera of the file; ignored"
+        return None
+    if kind != "perspective":
+        warn[where] = f"{kind} cameras are not supported; ignored"
+        return None
+    persp = cam.get("perspective", {})
+    position = world[:3, 3]
+    forward = world[:3, :3] @ np.array([0.0, 0.0, -1.0])
+    up = world[:3, :3] @ np.array([0.0, 1.0, 0.0])
+    aspect = persp.get("aspectRatio")
+    return GltfCamera(
+        node=ni,
+        position=position.tolist(),
+        look_at=(position + forward).tolist(),
+        up=up.tolist(),
+        yfov=float(np.degrees(float(persp.get("yfov", np.radians(40.0))))),
+        aspect=None if aspect is None else float(aspect),
+    )
+
+
+def read_gltf(path: Path, textures: TextureSet | None = None) -> GltfScene:
+    """Reads the default scene of a glTF file as its meshes, each in its own frame and read
+    once, and the nodes that place them (world matrices); its textures go into `textures`
+    (without one, textures are reported and not read)."""
+    r = _SceneReader(path, TextureSet() if textures is None else textures)
+    doc, warn = r.doc, r.warn
+    if doc.get("animations"):
+        warn["animations"] = "animations are ignored (the rest pose is used)"
+    nodes = doc.get("nodes", [])
+    scenes = doc.get("scenes", [])
+    if scenes:
+        roots = scenes[doc.get("scene", 0)].get("nodes", [])
+    else:
+        children = {c for n in nodes for c in n.get("children", [])}
+        roots = [i for i in range(len(nodes)) if i not in children]
+    out = GltfScene({}, [], r.materials, warn)
+    stack = [(root, np.eye(4), 0) for root in reversed(roots)]
+    while stack:
+        ni, parent, depth = stack.pop()
+        if depth > 256:
+            raise GltfError(f"nodes[{ni}]", "node hierarchy is cyclic or deeper than 256")
+        node = nodes[ni]
+        world = parent @ _node_matrix(node)
+        stack.extend((c, world, depth + 1) for c in reversed(node.get("children", [])))
+        if "KHR_lights_punctual" in node.get("extensions", {}):
+            light = _light(doc, ni, world, warn)
+            if light is not None:
+                out.lights.append(light)
+        if "camera" in node and out.camera is None:
+            out.camera = _camera(doc, ni, world, warn)
+        if "mesh" not in node:
+            continue
+        placements = _gpu_instances(r.reader, node, ni, warn)
+        worlds = world[None] if placements is None else world @ placements
+        with np.errstate(all="ignore"):
+            lin = worlds[:, :3, :3]
+            finite = np.isfinite(lin).all(axis=(1, 2))
+            det = np.where(finite, np.linalg.det(np.where(finite[:, None, None], lin, 0)), np.nan)
+        if not (np.isfinite(det) & (np.abs(det) > 1e-30)).all():
+            raise GltfError(
+                f"nodes[{ni}]", "the world transform is singular or not finite (e.g. a zero scale)"
+            )
+        r.mesh(node["mesh"])
+        for k, w in enumerate(worlds):
+            out.instances.append(
+                GltfInstance(ni, node["mesh"], w, None if placements is None else k)
+            )
+    out.meshes = r.meshes
+    return out
+
+
+def load_gltf(path: Path, textures: TextureSet | None = None) -> GltfMesh:
+    """Reads the default scene of a glTF file into world-space triangles (every node's
+    copy of its mesh; :func:`read_gltf` keeps shared meshes shared); its textures go into
+    `textures` (without one, textures are reported and not read)."""
+    scene = read_gltf(path, textures)
+    verts, faces, normals, face_mats, uvs = [], [], [], [], []
+    offset = 0
+    for inst in scene.instances:
+        world = inst.matrix
+        lin = world[:3, :3]
+        mirrored = np.linalg.det(lin) < 0
+        with np.errstate(all="ignore"):
+            normal_xf = np.linalg.inv(lin).T
+        for prim in scene.meshes[inst.mesh]:
+            p, tri = prim.vertices, prim.faces
+            if mirrored:  # a mirroring transform turns the winding inside out
+                tri = tri[:, [0, 2, 1]]
+            verts.append(p @ world[:3, :3].T + world[:3, 3])
+            if prim.normals is not None:
+                n = prim.normals @ normal_xf.T
+                with np.errstate(all="ignore"):
+                    n /= np.linalg.norm(n, axis=1, keepdims=True)
+                normals.append(np.nan_to_num(n, nan=0.0, posinf=0.0, neginf=0.0))
+            else:
+                normals.append(None)
+            uvs.append(prim.uvs)
             faces.append(tri + offset)
             offset += len(p)
-            mi = prim.get("material")
-            if mi is None:
-                face_mats.append(np.full(len(tri), -1, np.int64))
-                continue
-            if mi not in used:
-                desc = _material(doc, mi, warn, reader, textures)
-                base = f"{path.name}:{doc['materials'][mi].get('name') or f'material{mi}'}"
-                name = base if base not in names else f"{base}#{mi}"
-                names.add(name)
-                used[mi] = len(materials)
-                materials.append((name, desc))
-            face_mats.append(np.full(len(tri), used[mi], np.int64))
+            face_mats.append(np.full(len(tri), prim.material, np.int64))
+    warn, lights, materials = scene.warnings, scene.lights, list(scene.materials)
     if not faces:
         none = np.zeros((0, 3))
         return GltfMesh(none, none.astype(np.int64), None, np.zeros(0), [], warn, None, lights)
@@ -574,8 +763,7 @@ def load_gltf(path: Path, textures: TextureSet | None = None) -> GltfMesh:
     face_materials = np.concatenate(face_mats)
     if materials and (face_materials < 0).any():
         # Primitives without a material get glTF's default one (white, metallic 1, rough 1).
-        doc.setdefault("materials", []).append({"name": "(glTF default)"})
-        materials.append((f"{path.name}:(glTF default)", _material(doc, -1, warn)))
+        materials.append((f"{path.name}:{DEFAULT_MATERIAL_NAME}", default_material()))
         face_materials[face_materials < 0] = len(materials) - 1
     return GltfMesh(
         vertices=np.concatenate(verts),

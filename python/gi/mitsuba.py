@@ -1,10 +1,13 @@
 """Mitsuba 3 XML scenes: the subset that common benchmark scenes use, translated into gi's
 scene description (see ``docs/mitsuba.md`` for the subset and the BSDF mapping).
 
-Every shape becomes a world-space mesh object; BSDFs become uber-BSDF materials. An element
-gi cannot render is a :class:`gi.SceneError` whose ``field`` names the element and its line
-(``<bsdf type="roughdielectric"> (line 12)``); a property it ignores is an
-:class:`gi.AssetWarning`.
+Every shape becomes an object: an instance of a mesh in its local frame, placed by a
+``matrix`` transform, so that shapes that load the same file with the same options, equal
+built-in shapes (``rectangle``, ``cube``, ``disk``, ``sphere``), and the shapes of a
+``<shapegroup>`` placed by ``<shape type="instance">`` share one mesh. BSDFs become
+uber-BSDF materials. An element gi cannot render is a :class:`gi.SceneError` whose
+``field`` names the element and its line (``<bsdf type="roughdielectric"> (line 12)``); a
+property it ignores is an :class:`gi.AssetWarning`.
 """
 
 from __future__ import annotations
@@ -128,6 +131,8 @@ class _Translator:
         self.materials: dict[str, dict[str, Any]] = {}
         self.material_of: dict[int, str] = {}  # id(bsdf element) -> material name
         self.meshes: dict[str, MeshEntry] = {}
+        # Mesh files read so far (shape kind and file name -> vertices, faces, normals, UVs).
+        self.files: dict[str, tuple[Any, Any, Any, Any]] = {}
         self.objects: list[dict[str, Any]] = []
         self.lights: list[dict[str, Any]] = []
         self.camera: dict[str, Any] | None = None
@@ -384,6 +389,8 @@ class _Translator:
                 continue  # read where a BSDF uses it
             elif el.tag == "shape":
                 self.shape(el)
+            elif el.tag == "shapegroup":
+                self.check_group(el)  # placed where an instance refers to it
             elif el.tag == "emitter":
                 self.emitter(el)
             else:
@@ -516,49 +523,18 @@ class _Translator:
         self.material_of[id(el)] = name
         return name
 
-    def shape(self, el: Element) -> None:
+    def shape(self, el: Element, parent: np.ndarray | None = None) -> None:
+        """A shape as an object: its mesh (shared by equal shapes) placed by ``to_world``
+        (after ``parent``, the instance's transform, for a shape of a shapegroup)."""
         kind = el.attrs.get("type")
+        if kind == "instance":
+            self.instance(el)
+            return
         props = self.props(el)
         xf = self.transform(props.get("to_world"))
-        smooth: bool | None = None
-        if kind in ("obj", "ply"):
-            file = self.string(props, "filename", "")
-            field = f"{el.label} filename"
-            v, f, n, _m, _fm, uv = load_mesh(
-                self.path.parent / file, self.file, field, self.textures
-            )
-            v, f = np.asarray(v, np.float64), np.asarray(f, np.int64)
-            n = None if n is None else np.asarray(n, np.float64)
-            # Like Mitsuba: `face_normals` shades flat; a file without normals, smooth.
-            if self.boolean(props, "face_normals", False):
-                smooth = False
-            elif n is None:
-                smooth = True
-        elif kind == "rectangle":
-            v = np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], np.float64)
-            f = np.array([[0, 1, 2], [0, 2, 3]])
-            n = np.tile([0.0, 0.0, 1.0], (4, 1))
-            # The image upright seen from +z (v runs down the image).
-            uv = np.stack([(v[:, 0] + 1) / 2, (1 - v[:, 1]) / 2], axis=1)
-        elif kind == "cube":
-            v, f, n = _cube()
-            uv = None
-        elif kind == "sphere":
-            import trimesh
-
-            ico = trimesh.creation.icosphere(subdivisions=4)
-            r = self.float(el, props, "radius", 1.0)
-            c = self.vec3(props["center"]) if "center" in props else np.zeros(3)
-            n = np.asarray(ico.vertices, np.float64)
-            v, f = n * r + c, np.asarray(ico.faces, np.int64)
-            uv = None
-        else:
-            raise self.error(el, "unsupported shape (gi reads obj, ply, rectangle, cube, sphere)")
-        known = {"filename", "face_normals", "flip_normals", "to_world", "center", "radius", "bsdf"}
-        self.note_unknown(props, known)
-        if self.boolean(props, "flip_normals", False):
-            f = f[:, [0, 2, 1]]
-            n = None if n is None else -n
+        if parent is not None:
+            xf = parent @ xf
+        key, smooth, local = self.shape_mesh(el, kind, props)
         material, emitter = None, None
         for c in el.children:
             target = self.resolve(c) if c.tag == "ref" else c
@@ -574,32 +550,157 @@ class _Translator:
             material = self.bsdf(Element("bsdf", {"type": "diffuse"}, el.line))
         if emitter is not None:
             material = self.area_emitter(el, emitter, material)
-        lin = xf[:3, :3]
-        det = np.linalg.det(lin)
-        if abs(det) < 1e-30:
-            raise self.error(props["to_world"], "the transform is singular")
-        if det < 0:  # a mirroring transform turns the winding inside out
-            f = f[:, [0, 2, 1]]
-        v = v @ lin.T + xf[:3, 3]
-        if n is not None:
-            n = n @ np.linalg.inv(lin)  # (M⁻ᵀ n) as rows
-            with np.errstate(all="ignore"):
-                n = np.nan_to_num(n / np.linalg.norm(n, axis=1, keepdims=True))
-        key = f"{kind}@line{el.line}"
-        while key in self.meshes:
-            key += "'"
-        self.meshes[key] = (
-            np.ascontiguousarray(v, np.float32),
-            np.ascontiguousarray(f, np.uint32),
-            None if n is None else np.ascontiguousarray(n, np.float32),
-            None,
-            None,
-            None if uv is None else np.ascontiguousarray(uv, np.float32),
-        )
-        obj: dict[str, Any] = {"shape": {"type": "mesh", "file": key}, "material": material}
+        m = xf @ local
+        self.check_matrix(props.get("to_world", el), m)
+        obj: dict[str, Any] = {
+            "shape": {"type": "mesh", "file": key},
+            "material": material,
+            "transform": {"matrix": m[:3].tolist()},
+        }
         if smooth is not None:
             obj["smooth"] = smooth
         self.objects.append(obj)
+
+    def shape_mesh(
+        self, el: Element, kind: str | None, props: dict[str, Element]
+    ) -> tuple[str, bool | None, np.ndarray]:
+        """The key of a shape's mesh in ``self.meshes`` (added the first time: a file with
+        its options, or a built-in shape in its local frame), its smoothing, and the matrix
+        that places the built-in's parameters (a sphere's ``center`` and ``radius``)."""
+        smooth: bool | None = None
+        local = np.eye(4)
+        build: Any
+        if kind in ("obj", "ply"):
+            file = self.string(props, "filename", "")
+            key = f"{kind}:{file}"
+            if key not in self.files:
+                field = f"{el.label} filename"
+                v, f, n, _m, _fm, uv = load_mesh(
+                    self.path.parent / file, self.file, field, self.textures
+                )
+                self.files[key] = (v, f, n, uv)
+            v, f, n, uv = self.files[key]
+            # Like Mitsuba: `face_normals` shades flat; a file without normals, smooth.
+            if self.boolean(props, "face_normals", False):
+                smooth = False
+            elif n is None:
+                smooth = True
+
+            def build() -> tuple[Any, Any, Any, Any]:
+                return v, f, n, uv
+
+        elif kind == "rectangle":
+            key = "rectangle"
+
+            def build() -> tuple[Any, Any, Any, Any]:
+                v = np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], np.float64)
+                # The image upright seen from +z (v runs down the image).
+                uv = np.stack([(v[:, 0] + 1) / 2, (1 - v[:, 1]) / 2], axis=1)
+                return v, np.array([[0, 1, 2], [0, 2, 3]]), np.tile([0.0, 0.0, 1.0], (4, 1)), uv
+
+        elif kind == "cube":
+            key = "cube"
+
+            def build() -> tuple[Any, Any, Any, Any]:
+                return (*_cube(), None)
+
+        elif kind == "disk":
+            key = "disk"
+
+            def build() -> tuple[Any, Any, Any, Any]:
+                return (*_disk(), None)
+
+        elif kind == "sphere":
+            key = "sphere"
+            r = self.float(el, props, "radius", 1.0)
+            c = self.vec3(props["center"]) if "center" in props else np.zeros(3)
+            local[:3, :3] *= r
+            local[:3, 3] = c
+
+            def build() -> tuple[Any, Any, Any, Any]:
+                import trimesh
+
+                ico = trimesh.creation.icosphere(subdivisions=4)
+                n = np.asarray(ico.vertices, np.float64)
+                return n, np.asarray(ico.faces, np.int64), n, None
+
+        else:
+            raise self.error(
+                el, "unsupported shape (gi reads obj, ply, rectangle, cube, disk, sphere)"
+            )
+        known = {"filename", "face_normals", "flip_normals", "to_world", "center", "radius", "bsdf"}
+        self.note_unknown(props, known)
+        flip = self.boolean(props, "flip_normals", False)
+        if flip:
+            key += " (flip_normals)"
+        if key not in self.meshes:
+            v, f, n, uv = build()
+            f = np.asarray(f, np.int64)
+            if flip:
+                f = f[:, [0, 2, 1]]
+                n = None if n is None else -np.asarray(n)
+            self.meshes[key] = (
+                np.ascontiguousarray(v, np.float32),
+                np.ascontiguousarray(f, np.uint32),
+                None if n is None else np.ascontiguousarray(n, np.float32),
+                None,
+                None,
+                None if uv is None else np.ascontiguousarray(uv, np.float32),
+            )
+        return key, smooth, local
+
+    def check_matrix(self, el: Element, m: np.ndarray) -> None:
+        """A shape's placement checked as the core checks a ``matrix`` transform, so that
+        the error names the Mitsuba element: finite, translation within ±100000 m, each
+        axis's scale in [1e-6, 1e6], and invertible (|det| at least 1e-6 of the product of
+        the axes' scales)."""
+        lin = m[:3, :3]
+        if not np.isfinite(m).all():
+            raise self.error(el, "the transform is not finite")
+        if np.abs(m[:3, 3]).max() > 1e5:
+            raise self.error(el, "the transform moves the shape beyond ±100000 m")
+        lengths = np.linalg.norm(lin, axis=0)
+        if lengths.min() < 1e-6 or lengths.max() > 1e6:
+            raise self.error(el, "the transform scales an axis by less than 1e-6 or more than 1e6")
+        if not abs(np.linalg.det(lin)) >= 1e-6 * lengths.prod():
+            raise self.error(el, "the transform is singular")
+
+    def check_group(self, group: Element) -> None:
+        """A ``<shapegroup>`` holds shapes only: no instances (Mitsuba has no nested
+        instancing; one of its own group would recurse) and no other shapegroup."""
+        if "id" not in group.attrs:
+            raise self.error(group, "a shapegroup needs an `id` for instances to refer to")
+        for c in group.children:
+            if c.tag == "shapegroup":
+                raise self.error(c, "shapegroups cannot be nested")
+            if c.tag != "shape":
+                raise self.error(c, "a shapegroup holds shapes only")
+            if c.attrs.get("type") == "instance":
+                refs = [r.attrs.get("id") for r in c.children if r.tag == "ref"]
+                if group.attrs["id"] in refs:
+                    raise self.error(c, "an instance of its own shapegroup (recursive)")
+                raise self.error(c, "a shapegroup cannot hold instances (nested instancing)")
+
+    def instance(self, el: Element) -> None:
+        """``<shape type="instance">``: the shapes of the ``<shapegroup>`` it refers to,
+        each placed by the instance's ``to_world`` after its own."""
+        props = self.props(el)
+        groups = []
+        for c in el.children:
+            if c.tag == "ref":
+                target = self.resolve(c)
+                if target.tag != "shapegroup":
+                    raise self.error(c, f"refers to a <{target.tag}>, not a <shapegroup>")
+                groups.append(target)
+            elif c.tag not in ("transform",):
+                raise self.error(c, "an instance holds a <ref> to a shapegroup and `to_world`")
+        if len(groups) != 1:
+            raise self.error(el, "an instance refers to one <shapegroup> (<ref id=...>)")
+        self.note_unknown(props, {"to_world"} | {r.attrs.get("name", "") for r in groups})
+        xf = self.transform(props.get("to_world"))
+        self.check_group(groups[0])
+        for shape in groups[0].children:
+            self.shape(shape, xf)
 
     def area_emitter(self, shape: Element, el: Element, material: str) -> str:
         """An `area` emitter on a shape: its BSDF's material with `emission` (`radiance`, a
@@ -759,6 +860,20 @@ def _cube() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
                 normals.append(n)
             faces += [[base, base + 1, base + 2], [base, base + 2, base + 3]]
     return np.array(verts), np.array(faces), np.array(normals)
+
+
+DISK_SEGMENTS = 128
+
+
+def _disk() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Mitsuba's disk: radius 1 in the xy plane facing +z, as a fan of
+    :data:`DISK_SEGMENTS` triangles (area π·(1 − 4·10⁻⁴))."""
+    phi = np.linspace(0.0, 2.0 * np.pi, DISK_SEGMENTS, endpoint=False)
+    ring = np.stack([np.cos(phi), np.sin(phi), np.zeros_like(phi)], axis=1)
+    verts = np.concatenate([np.zeros((1, 3)), ring])
+    i = np.arange(DISK_SEGMENTS)
+    faces = np.stack([np.zeros_like(i), 1 + i, 1 + (i + 1) % DISK_SEGMENTS], axis=1)
+    return verts, faces, np.tile([0.0, 0.0, 1.0], (len(verts), 1))
 
 
 def load_mitsuba(path: Path) -> Scene:

@@ -1,10 +1,13 @@
-"""Scene loading: built-in names, gi's JSON scene files, or Mitsuba 3 XML scenes.
+"""Scene loading: built-in names, gi's JSON scene files, Mitsuba 3 XML scenes, or a glTF
+file's default scene.
 
 The JSON format is documented in ``docs/scene-format.md``; the Rust core validates every
 field. Mesh files named by a scene are resolved relative to it and read by
 :mod:`gi.meshes` (OBJ with MTL, PLY, glTF/GLB, STL), environment images by
 :mod:`gi.environment` (OpenImageIO). Mitsuba scenes are translated by
-:mod:`gi.mitsuba` (``docs/mitsuba.md``).
+:mod:`gi.mitsuba` (``docs/mitsuba.md``). A ``.gltf``/``.glb`` file loaded as a scene keeps
+its nodes that share a mesh as instances of one mesh (:func:`load_gltf_scene`); named as a
+mesh file by a JSON scene it is one mesh of world-space triangles (:func:`gi.gltf.load_gltf`).
 """
 
 from __future__ import annotations
@@ -18,7 +21,7 @@ import numpy as np
 
 from gi._gi import Scene, builtin_scenes
 from gi.environment import load_environment
-from gi.meshes import MeshEntry, load_mesh
+from gi.meshes import MeshEntry, load_mesh, report
 from gi.meshes import scene_error as _scene_error
 from gi.textures import TextureError, TextureSet
 
@@ -46,8 +49,9 @@ TEXTURE_FIELDS = {
 
 
 def load_scene(source: str | Path) -> Scene:
-    """Loads a built-in scene by name (see :func:`gi.builtin_scenes`), a JSON scene file or a
-    Mitsuba 3 XML scene (``.xml``).
+    """Loads a built-in scene by name (see :func:`gi.builtin_scenes`), a JSON scene file, a
+    Mitsuba 3 XML scene (``.xml``) or a glTF file's default scene (``.gltf``, ``.glb``:
+    :func:`load_gltf_scene`).
 
     Raises :class:`gi.SceneError` (with ``file``, ``field`` and ``reason`` attributes) for a
     missing or malformed file, an unknown field or element, a missing or unreadable mesh,
@@ -70,6 +74,8 @@ def load_scene(source: str | Path) -> Scene:
         from gi.mitsuba import load_mitsuba
 
         return load_mitsuba(path)
+    if path.suffix.lower() in (".gltf", ".glb"):
+        return load_gltf_scene(path)
     try:
         text = path.read_text(encoding="utf-8")
         desc = json.loads(text)
@@ -154,9 +160,19 @@ def _load_meshes(
 
 def _object_matrix(transform: Any) -> np.ndarray | None:
     """An object's transform as the core builds it (scale, rotate about x, y, z in degrees,
-    translate); None if it is malformed."""
+    translate; or its ``matrix`` rows); None if it is malformed."""
     if transform is None:
         return np.eye(4)
+    if isinstance(transform, dict) and "matrix" in transform:
+        try:
+            rows = np.asarray(transform["matrix"], dtype=np.float64)
+        except (TypeError, ValueError):
+            return None
+        if rows.shape not in ((3, 4), (4, 4)) or not np.isfinite(rows).all():
+            return None
+        m = np.eye(4)
+        m[:3] = rows[:3]
+        return m
     try:
         t = np.asarray(transform.get("translate", [0, 0, 0]), dtype=np.float64).reshape(3)
         rx, ry, rz = (math.radians(float(a)) for a in transform.get("rotate", [0, 0, 0]))
@@ -187,3 +203,163 @@ def _place_light(light: dict[str, Any], matrix: np.ndarray) -> dict[str, Any]:
         with np.errstate(all="ignore"):
             out["direction"] = np.nan_to_num(d / np.linalg.norm(d)).tolist()
     return out
+
+
+def load_gltf_scene(path: str | Path) -> Scene:
+    """A glTF file's default scene (see :func:`gltf_scene_description`)."""
+    path = Path(path)
+    desc, meshes, textures = gltf_scene_description(path)
+    return Scene.from_json(json.dumps(desc), str(path), meshes, {}, textures=textures.arrays)
+
+
+def gltf_scene_description(
+    path: Path,
+) -> tuple[dict[str, Any], dict[str, MeshEntry], TextureSet]:
+    """A glTF file's default scene as a gi scene description, its mesh arrays and textures.
+
+    Each primitive of a glTF mesh becomes one gi mesh in the mesh's own frame (keyed
+    ``file#meshes[m].primitives[p]``), and each node that uses the mesh one object per
+    primitive placed by the node's world matrix (a ``matrix`` transform, named
+    ``nodes[n]`` or ``nodes[n].primitives[p]``; ``nodes[n].instances[k]`` first for the
+    placements of ``EXT_mesh_gpu_instancing``): nodes that share a glTF mesh share its gi
+    meshes. Materials (with textures and emission), ``KHR_lights_punctual`` lights and the
+    warnings are those of :func:`gi.gltf.load_gltf`; a primitive without a material gets
+    glTF's default one. The camera is the default scene's first perspective camera (its
+    ``aspectRatio`` sets the width against a height of 512 pixels); without one, a 40°
+    camera on +z looks at the centre of the scene's box from where the box fits.
+
+    Every failure is typed: :class:`gi.SceneError` naming the file's field (``nodes[3]``)
+    or the file, :class:`gi.OutOfMemoryError`."""
+    from gi._gi import GiError, OutOfMemoryError
+    from gi.gltf import GltfError
+    from gi.meshes import load_failure
+
+    file = str(path)
+    try:
+        return _gltf_scene_description(path)
+    except (GiError, Warning):  # a warning the caller turned into an error stays one
+        raise
+    except GltfError as e:
+        raise _scene_error(file, e.field, e.reason) from e
+    except MemoryError as e:
+        raise OutOfMemoryError(f"{file}: the glTF scene is too large: {e}") from e
+    except Exception as e:  # content the reader accepted but numpy could not convert
+        raise _scene_error(file, "(file)", load_failure(path, e)) from e
+
+
+def _gltf_scene_description(
+    path: Path,
+) -> tuple[dict[str, Any], dict[str, MeshEntry], TextureSet]:
+    from gi.gltf import DEFAULT_MATERIAL_NAME, default_material, read_gltf
+    from gi.meshes import _entry, _unit_rows
+
+    file = str(path)
+    textures = TextureSet(path.parent)
+    g = read_gltf(path, textures)
+    report(path, g.warnings)
+    materials = {name: desc for name, desc in g.materials}
+    default = f"{path.name}:{DEFAULT_MATERIAL_NAME}"
+    meshes: dict[str, MeshEntry] = {}
+    objects: list[dict[str, Any]] = []
+    lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
+    mats = np.array([inst.matrix for inst in g.instances]).reshape(-1, 4, 4)
+    _check_node_matrices(file, [inst.node for inst in g.instances], mats)
+    rows = mats[:, :3].tolist()
+    keys = {
+        (mi, p.index): f"{path.name}#meshes[{mi}].primitives[{p.index}]"
+        for mi, prims in g.meshes.items()
+        for p in prims
+    }
+    for inst, m in zip(g.instances, rows, strict=True):
+        prims = g.meshes[inst.mesh]
+        for prim in prims:
+            key = keys[inst.mesh, prim.index]
+            if key not in meshes:
+                normals = None if prim.normals is None else _unit_rows(prim.normals)
+                meshes[key] = _entry(
+                    path, file, key, prim.vertices, prim.faces, normals, [], None, prim.uvs
+                )
+            if prim.material < 0:
+                materials.setdefault(default, default_material())
+            name = f"nodes[{inst.node}]"
+            if inst.instance is not None:
+                name += f".instances[{inst.instance}]"
+            objects.append(
+                {
+                    "name": name if len(prims) == 1 else f"{name}.primitives[{prim.index}]",
+                    "shape": {"type": "mesh", "file": key},
+                    "material": default if prim.material < 0 else g.materials[prim.material][0],
+                    "transform": {"matrix": m},
+                }
+            )
+    # The box of every mesh's box corners placed (a box around the placed vertices, for the
+    # framing camera): O(1) per instance.
+    mesh_ids = np.array([inst.mesh for inst in g.instances])
+    for mi, prims in g.meshes.items():
+        if not prims:
+            continue
+        v = np.concatenate([p.vertices for p in prims])
+        a, b = v.min(axis=0), v.max(axis=0)
+        corners = np.array([[(a, b)[k >> i & 1][i] for i in range(3)] for k in range(8)])
+        sel = mats[mesh_ids == mi]
+        placed = np.einsum("kj,nij->nki", corners, sel[:, :3, :3]) + sel[:, None, :3, 3]
+        lo = np.minimum(lo, placed.min(axis=(0, 1)))
+        hi = np.maximum(hi, placed.max(axis=(0, 1)))
+    # A node reached twice (one node the child of two) would name two objects alike.
+    seen: set[str] = set()
+    for obj in objects:
+        if obj["name"] in seen:
+            del obj["name"]
+        else:
+            seen.add(obj["name"])
+    desc: dict[str, Any] = {
+        "camera": _gltf_camera(g.camera, lo, hi),
+        "lights": g.lights,
+        "materials": materials,
+        "objects": objects,
+    }
+    return desc, meshes, textures
+
+
+def _check_node_matrices(file: str, nodes: list[int], m: np.ndarray) -> None:
+    """Nodes' world matrices (n, 4, 4) checked as the core checks a ``matrix`` transform,
+    so that the error names the node: translation within ±100000 m, each axis's scale in
+    [1e-6, 1e6], invertible (|det| at least 1e-6 of the product of the axes' scales)."""
+    with np.errstate(all="ignore"):
+        finite = np.isfinite(m).all(axis=(1, 2))
+        lin = np.where(finite[:, None, None], m[:, :3, :3], 0.0)
+        lengths = np.linalg.norm(lin, axis=1)
+        far = ~finite | (np.abs(m[:, :3, 3]) > 1e5).any(axis=1)
+        scaled = (lengths.min(axis=1) < 1e-6) | (lengths.max(axis=1) > 1e6)
+        singular = ~(np.abs(np.linalg.det(lin)) >= 1e-6 * lengths.prod(axis=1))
+    for bad, reason in (
+        (far, "the world transform is not finite or moves beyond ±100000 m"),
+        (scaled, "the world transform scales an axis by less than 1e-6 or more than 1e6"),
+        (singular, "the world transform is singular"),
+    ):
+        if bad.any():
+            raise _scene_error(file, f"nodes[{nodes[int(np.argmax(bad))]}]", reason)
+
+
+def _gltf_camera(cam: Any, lo: np.ndarray, hi: np.ndarray) -> dict[str, Any]:
+    """The scene's camera from a glTF camera, else one framing the box ``lo``..``hi``."""
+    if cam is not None:
+        width = 512 if cam.aspect is None else max(1, round(512 * cam.aspect))
+        return {
+            "position": cam.position,
+            "look_at": cam.look_at,
+            "up": cam.up,
+            "fov": min(max(cam.yfov, 1.0), 179.0),
+            "width": width,
+            "height": 512,
+        }
+    if not (lo <= hi).all():
+        lo, hi = np.zeros(3), np.zeros(3)
+    centre = (lo + hi) / 2
+    radius = max(float(np.linalg.norm(hi - lo)) / 2, 1e-3)
+    distance = radius / math.sin(math.radians(20.0))
+    return {
+        "position": (centre + [0.0, 0.0, distance]).tolist(),
+        "look_at": centre.tolist(),
+        "fov": 40.0,
+    }

@@ -114,7 +114,7 @@ def material(draw: st.DrawFn, bad: float) -> dict[str, Any]:
 
 
 def transform(bad: float = 0.2) -> st.SearchStrategy[dict[str, Any]]:
-    return st.fixed_dictionaries(
+    trs = st.fixed_dictionaries(
         {},
         optional={
             "translate": vec3(-2.0, 2.0, bad),
@@ -122,6 +122,27 @@ def transform(bad: float = 0.2) -> st.SearchStrategy[dict[str, Any]]:
             "scale": st.one_of(number(0.05, 3.0, bad), vec3(0.05, 3.0, bad)),
         },
     )
+    return st.one_of(trs, trs, trs, matrix_transform(bad))
+
+
+@st.composite
+def matrix_transform(draw: st.DrawFn, bad: float) -> dict[str, Any]:
+    """A general affine ``matrix`` transform: 3 rows of 4 (sometimes a 4th row), a share
+    of them singular (two equal columns), mirrored, non-finite or misshapen, or given with
+    translate/rotate/scale (which it excludes)."""
+    rows = [draw(st.lists(number(-2.0, 2.0, bad), min_size=4, max_size=4)) for _ in range(3)]
+    kind = draw(st.sampled_from(["plain"] * 6 + ["singular", "fourth", "misshapen", "both"]))
+    if kind == "singular":
+        for r in rows:
+            r[1] = r[0]
+    elif kind == "fourth":
+        rows.append(draw(st.sampled_from([[0, 0, 0, 1], [0, 0, 0, 1], [0, 0, 1, 1], [0, 0, 0]])))
+    elif kind == "misshapen":
+        rows = draw(st.sampled_from([rows[:2], [r[:3] for r in rows], [], [[1.0] * 4] * 5]))
+    out: dict[str, Any] = {"matrix": rows}
+    if kind == "both":
+        out["translate"] = draw(vec3(-2.0, 2.0, bad))
+    return out
 
 
 def shape(bad: float) -> st.SearchStrategy[dict[str, Any]]:
@@ -267,7 +288,14 @@ def mesh_file(draw: st.DrawFn, directory: Path) -> Path:
         scene = trimesh.Scene()
         mesh = trimesh.Trimesh(np.nan_to_num(v), f % len(v), process=False)
         scale = draw(st.sampled_from([1.0, 1.0, 0.0, 1e-20, 1e20, 1e38]))
-        scene.add_geometry(mesh, transform=np.diag([scale, 1.0, 1.0, 1.0]))
+        scene.add_geometry(mesh, geom_name="m", transform=np.diag([scale, 1.0, 1.0, 1.0]))
+        # More nodes sharing the mesh (instances when the file is loaded as a scene), some
+        # mirrored or sheared.
+        for i in range(draw(st.integers(0, 3))):
+            m = np.eye(4)
+            m[0, :] = [draw(st.sampled_from([1.0, -1.0, 0.5, 0.0])), draw(number(-1, 1)), 0, i]
+            scene.graph.update(frame_to=f"copy{i}", frame_from=scene.graph.base_frame,
+                               matrix=m, geometry="m")  # fmt: skip
         data, suffix = scene.export(file_type="glb"), ".glb"
     else:
         mesh = trimesh.Trimesh(v, f % len(v), process=False)

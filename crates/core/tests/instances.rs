@@ -400,3 +400,66 @@ fn cpu_methods_never_build_the_flat_view() {
         assert_eq!(fresh.triangle_material(t), f.triangle_materials[t]);
     }
 }
+
+/// A mesh file that carries its materials, placed by three objects (two of one smoothing,
+/// one of another: two unique meshes): its materials are in the scene once, shared by the
+/// three, each triangle keeping its file material; a second file's materials come after.
+#[test]
+fn a_mesh_file_placed_by_several_objects_has_its_materials_once() {
+    use gi_core::bsdf::Material;
+    use gi_core::scene::{MeshData, TriMesh};
+    let quad = TriMesh {
+        positions: vec![
+            Vec3::new(-1.0, 0.0, -1.0),
+            Vec3::new(1.0, 0.0, -1.0),
+            Vec3::new(1.0, 0.0, 1.0),
+            Vec3::new(-1.0, 0.0, 1.0),
+        ],
+        normals: vec![],
+        indices: vec![[0, 2, 1], [0, 3, 2]],
+    };
+    let tinted = |r: f32| Material {
+        diffuse: Vec3::new(r, 0.2, 0.2),
+        ..Default::default()
+    };
+    let file = |names: [&str; 2]| MeshData {
+        mesh: quad.clone(),
+        materials: vec![
+            (names[0].to_string(), tinted(0.3)),
+            (names[1].to_string(), tinted(0.6)),
+        ],
+        face_materials: vec![0, 1],
+        ..Default::default()
+    };
+    let meshes = HashMap::from([
+        ("a.obj".to_string(), file(["a.obj:red", "a.obj:pink"])),
+        ("b.obj".to_string(), file(["b.obj:red", "b.obj:pink"])),
+    ]);
+    let mesh = |f: &str| serde_json::json!({"type": "mesh", "file": f});
+    let desc = serde_json::json!({
+        "camera": {"position": [0, 3, 3], "look_at": [0, 0, 0]},
+        "materials": {"grey": {}},
+        "objects": [
+            {"shape": mesh("a.obj")},
+            {"shape": mesh("a.obj"), "transform": {"translate": [3, 0, 0]}},
+            {"shape": mesh("b.obj")},
+            {"shape": mesh("a.obj"), "smooth": true, "transform": {"translate": [-3, 0, 0]}},
+        ]
+    });
+    let s = Scene::from_json(&desc.to_string(), "files", &meshes).expect("scene");
+    assert_eq!(
+        s.material_names,
+        ["grey", "a.obj:red", "a.obj:pink", "b.obj:red", "b.obj:pink"]
+    );
+    assert_eq!(s.meshes.len(), 3, "a.obj twice (two smoothings) and b.obj");
+    let a: Vec<u32> = [0usize, 1, 3]
+        .iter()
+        .map(|&o| s.objects[o].material)
+        .collect();
+    assert_eq!(a, [1, 1, 1]);
+    assert_eq!(s.objects[2].material, 3);
+    for t in 0..s.triangle_count() {
+        let want = if (4..6).contains(&t) { 3 } else { 1 } + (t as u32 % 2);
+        assert_eq!(s.triangle_material(t), want, "triangle {t}");
+    }
+}

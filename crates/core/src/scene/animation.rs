@@ -32,7 +32,7 @@ fn animatable(target: TrackTarget) -> &'static [&'static str] {
             "irradiance",
             "angular_diameter",
         ],
-        TrackTarget::Object => &["translate", "rotate", "scale"],
+        TrackTarget::Object => &["translate", "rotate", "scale", "matrix"],
         TrackTarget::Material => &[
             "diffuse",
             "specular",
@@ -113,6 +113,18 @@ impl Track {
             })
             .collect()
     }
+}
+
+/// The fields of an object's transform that a `matrix` excludes.
+const TRS: [&str; 3] = ["translate", "rotate", "scale"];
+
+/// `fields` laid over a target's description `rest`: a `matrix` replaces the whole
+/// transform (translate/rotate/scale at rest are dropped).
+fn overlay(rest: &mut Map<String, Value>, fields: Map<String, Value>) {
+    if fields.contains_key("matrix") {
+        rest.retain(|k, _| !TRS.contains(&k.as_str()));
+    }
+    rest.extend(fields);
 }
 
 /// JSON of a description (never fails for the description types).
@@ -231,7 +243,7 @@ impl Animation {
     pub fn values_at(&self, t: f64) -> Vec<(UpdateTarget, Value)> {
         let mut out = self.targets.clone();
         for track in &self.tracks {
-            out[track.target].1.extend(track.sample(t));
+            overlay(&mut out[track.target].1, track.sample(t));
         }
         out.into_iter()
             .map(|(target, m)| (target, Value::Object(m)))
@@ -340,7 +352,7 @@ impl Animation {
                 }
                 // The key's value on the description at rest must be a valid description.
                 let mut full = out.targets[ti].1.clone();
-                full.extend(key.value.clone());
+                overlay(&mut full, key.value.clone());
                 let value_at = format!("{at}{kat}.value");
                 scene
                     .update_from_json(&target, &Value::Object(full))
@@ -348,12 +360,8 @@ impl Animation {
                     .map_err(|e| reroot(e, &target, source, &value_at))?;
             }
             for f in first {
-                if let Some((_, _, j)) = animated.iter().find(|(t, g, _)| *t == ti && g == f) {
-                    return Err(err(
-                        &format!(".keys[0].value.{f}"),
-                        format!("already animated by animation.tracks[{j}]"),
-                    ));
-                }
+                let clash = already_animated(&animated, ti, f);
+                clash.map_or(Ok(()), |m| Err(err(&format!(".keys[0].value.{f}"), m)))?;
                 animated.push((ti, f.clone(), i));
             }
             out.tracks.push(Track {
@@ -381,6 +389,21 @@ impl Animation {
         };
         Ok(out)
     }
+}
+
+/// Why field `f` of target `ti` cannot be animated by another track, given the (target,
+/// field, track) triples `animated` so far: the field is animated already, or a `matrix`
+/// and translate/rotate/scale would describe one transform two ways.
+fn already_animated(animated: &[(usize, String, usize)], ti: usize, f: &str) -> Option<String> {
+    if let Some((_, _, j)) = animated.iter().find(|(t, g, _)| *t == ti && g == f) {
+        return Some(format!("already animated by animation.tracks[{j}]"));
+    }
+    let is_trs = |g: &str| TRS.contains(&g);
+    let excludes = |g: &str| (f == "matrix" && is_trs(g)) || (is_trs(f) && g == "matrix");
+    let (_, g, j) = animated.iter().find(|(t, g, _)| *t == ti && excludes(g))?;
+    Some(format!(
+        "`matrix` excludes translate/rotate/scale (animation.tracks[{j}] animates `{g}`)"
+    ))
 }
 
 /// A track's error: the field under `animation.tracks[i]` (`.index`) and the message.
@@ -445,7 +468,19 @@ fn resolve_target(
                     return Err((".name", "an object track needs the object's `name`".into()))
                 }
             };
-            Ok((UpdateTarget::Object(i), to_map(&desc.objects[i].transform)))
+            // An object described by a matrix: at rest, the matrix taken apart into
+            // translate/rotate/scale where it has no shear (so that a `translate` track
+            // moves it), else the matrix itself.
+            let rest = match scene.object_desc(i) {
+                Some(Ok(d)) if desc.objects[i].transform.matrix.is_some() => to_map(&d),
+                Some(Err(rows)) => {
+                    let mut m = Map::new();
+                    m.insert("matrix".into(), serde_json::json!(rows));
+                    m
+                }
+                _ => to_map(&desc.objects[i].transform),
+            };
+            Ok((UpdateTarget::Object(i), rest))
         }
         TrackTarget::Material => {
             if track.index.is_some() {
@@ -541,6 +576,7 @@ mod tests {
             translate: [-0.5, 0.6, -0.05],
             rotate: [0.0, 35.0, 0.0],
             scale: crate::scene::desc::Scale::Uniform(1.0),
+            matrix: None,
         })
         .expect("valid");
         assert!(transform.abs_diff_eq(expect, 1e-6), "{transform} {expect}");
@@ -683,7 +719,7 @@ mod tests {
             (
                 json!({"tracks": [{"target": "object", "name": "tall box", "keys": [key(0.0, json!({"matrix": [[1, 0, 0, 0]]}))]}]}),
                 "animation.tracks[0].keys[0].value.matrix",
-                "cannot be animated",
+                "3 or 4 rows of 4 numbers",
             ),
             (
                 light(vec![

@@ -259,7 +259,8 @@ fn default_segments() -> u32 {
     128
 }
 
-/// Scale, then rotate (degrees about x, then y, then z), then translate.
+/// Scale, then rotate (degrees about x, then y, then z), then translate; or a general
+/// affine `matrix` (which excludes the other three).
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct TransformDesc {
@@ -269,6 +270,10 @@ pub struct TransformDesc {
     pub rotate: V3,
     #[serde(default = "default_scale")]
     pub scale: Scale,
+    /// Object -> world as 3 or 4 rows of 4 numbers (row-major, the translation in the last
+    /// column; a 4th row must be `[0, 0, 0, 1]`), checked by `scene::matrix_from_rows`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub matrix: Option<Vec<Vec<f32>>>,
 }
 
 impl Default for TransformDesc {
@@ -277,7 +282,20 @@ impl Default for TransformDesc {
             translate: [0.0; 3],
             rotate: [0.0; 3],
             scale: default_scale(),
+            matrix: None,
         }
+    }
+}
+
+impl TransformDesc {
+    /// Whether translate, rotate and scale all hold their defaults (no move).
+    pub fn is_trs_default(&self) -> bool {
+        self.translate == [0.0; 3]
+            && self.rotate == [0.0; 3]
+            && match self.scale {
+                Scale::Uniform(s) => s == 1.0,
+                Scale::PerAxis(s) => s == [1.0; 3],
+            }
     }
 }
 

@@ -449,6 +449,8 @@ impl Scene {
         scene.objects.reserve_exact(resolved.len());
         // The file's per-face materials, shared by the objects that place one mesh.
         let mut face_of: HashMap<u32, Arc<Vec<u32>>> = HashMap::new();
+        // Where each mesh file's materials start (pushed once, shared by its objects).
+        let mut file_bases: HashMap<*const MeshData, u32> = HashMap::new();
         for (i, (obj, (xf, mesh_index, _uvs, file_materials, material))) in
             desc.objects.iter().zip(resolved).enumerate()
         {
@@ -463,17 +465,9 @@ impl Scene {
                     (id, None)
                 }
                 (None, Some(data)) if !data.materials.is_empty() => {
-                    let base = scene.materials.len() as u32;
-                    for (i, (name, m)) in data.materials.iter().enumerate() {
-                        let refs = data.material_textures.get(i).cloned().unwrap_or_default();
-                        let maps =
-                            MaterialMaps::resolve(&refs, &texture_index).map_err(|(f, msg)| {
-                                err(at(&format!("shape.file: materials.{name}.{f}")), &msg)
-                            })?;
-                        scene.materials.push(*m);
-                        scene.material_names.push(name.clone());
-                        scene.material_maps.push(maps);
-                    }
+                    let base = scene
+                        .file_materials(data, &mut file_bases, &texture_index)
+                        .map_err(|(f, msg)| err(at(&f), &msg))?;
                     if data.face_materials.len() != mesh.indices.len()
                         || data
                             .face_materials
@@ -511,6 +505,33 @@ impl Scene {
             scene.animation = Some(Animation::from_desc(anim, desc, &scene, source_name)?);
         }
         Ok(scene)
+    }
+
+    /// The index in `materials` of a mesh file's first material, its materials pushed the
+    /// first time an object takes them (`bases`, by the file's data): the objects that place
+    /// one file share its materials (one `FILE:NAME` entry each, whatever the number of
+    /// objects). Errors name the field under the object.
+    fn file_materials(
+        &mut self,
+        data: &MeshData,
+        bases: &mut HashMap<*const MeshData, u32>,
+        texture_index: &HashMap<String, u32>,
+    ) -> std::result::Result<u32, (String, String)> {
+        let key: *const MeshData = data;
+        if let Some(&base) = bases.get(&key) {
+            return Ok(base);
+        }
+        let base = self.materials.len() as u32;
+        for (i, (name, m)) in data.materials.iter().enumerate() {
+            let refs = data.material_textures.get(i).cloned().unwrap_or_default();
+            let maps = MaterialMaps::resolve(&refs, texture_index)
+                .map_err(|(f, msg)| (format!("shape.file: materials.{name}.{f}"), msg))?;
+            self.materials.push(*m);
+            self.material_names.push(name.clone());
+            self.material_maps.push(maps);
+        }
+        bases.insert(key, base);
+        Ok(base)
     }
 
     /// Appends an object placing mesh `mesh_index` by `xf`, with material `material` (plus
@@ -831,6 +852,15 @@ pub(crate) fn material_from_desc(m: &MaterialDesc) -> std::result::Result<Materi
 }
 
 pub(crate) fn transform_matrix(t: &desc::TransformDesc) -> std::result::Result<Mat4, FieldError> {
+    if let Some(rows) = &t.matrix {
+        if !t.is_trs_default() {
+            return Err((
+                "matrix".into(),
+                "excludes translate/rotate/scale (give one or the other)",
+            ));
+        }
+        return matrix_from_rows(rows).map_err(|(f, m)| (format!("matrix{f}"), m));
+    }
     if !finite3(t.translate) {
         return Err(("translate".into(), "must be finite"));
     }
@@ -861,6 +891,59 @@ pub(crate) fn transform_matrix(t: &desc::TransformDesc) -> std::result::Result<M
         rot,
         t.translate.into(),
     ))
+}
+
+/// An affine transform from 3 or 4 rows of 4 numbers (row-major; the translation in the last
+/// column; a 4th row must be `[0, 0, 0, 1]`): finite, its translation within
+/// [`MAX_EXTENT`], each axis's image (column) of length in [1/`MAX_SCALE`, `MAX_SCALE`],
+/// and invertible by a margin: |det| at least 1e-6 of the product of the columns' lengths
+/// (1 for orthogonal axes; Hadamard's bound), so that no axis collapses onto the others.
+/// Errors name the part at fault relative to the matrix (`""`, `"[3]"`).
+pub(crate) fn matrix_from_rows(rows: &[Vec<f32>]) -> std::result::Result<Mat4, FieldError> {
+    if rows.len() != 3 && rows.len() != 4 {
+        return Err((String::new(), "must be 3 or 4 rows of 4 numbers"));
+    }
+    if let Some(r) = rows.iter().position(|row| row.len() != 4) {
+        return Err((format!("[{r}]"), "must hold 4 numbers"));
+    }
+    if rows.iter().flatten().any(|v| !v.is_finite()) {
+        return Err((String::new(), "must be finite"));
+    }
+    if rows.len() == 4 && rows[3] != [0.0, 0.0, 0.0, 1.0] {
+        return Err(("[3]".into(), "must be [0, 0, 0, 1] (transforms are affine)"));
+    }
+    let mut m = Mat4::IDENTITY;
+    for (r, row) in rows.iter().take(3).enumerate() {
+        for (c, &v) in row.iter().enumerate() {
+            m.col_mut(c)[r] = v;
+        }
+    }
+    if !within_extent([m.w_axis.x, m.w_axis.y, m.w_axis.z]) {
+        return Err((String::new(), "its translation must lie within ±100000 m"));
+    }
+    let lin = Mat3::from_mat4(m);
+    let lengths = [
+        lin.x_axis.length(),
+        lin.y_axis.length(),
+        lin.z_axis.length(),
+    ];
+    if lengths
+        .iter()
+        .any(|&l| !(l.is_finite() && (1.0 / MAX_SCALE..=MAX_SCALE).contains(&l)))
+    {
+        return Err((
+            String::new(),
+            "each column's length (an axis's scale) must be in [1e-6, 1e6]",
+        ));
+    }
+    let det = lin.determinant();
+    if !(det.is_finite() && det.abs() >= 1e-6 * lengths.iter().product::<f32>()) {
+        return Err((
+            String::new(),
+            "must be invertible (its columns are parallel or coplanar: singular)",
+        ));
+    }
+    Ok(m)
 }
 
 fn primitive(shape: &ShapeDesc) -> std::result::Result<TriMesh, FieldError> {

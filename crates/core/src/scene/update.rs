@@ -275,7 +275,9 @@ impl Scene {
         index: usize,
     ) -> Option<std::result::Result<TransformDesc, [[f32; 4]; 4]>> {
         let obj = self.objects.get(index)?;
-        if let Some(d) = &obj.described {
+        // A described `matrix` is given back taken apart like a moved object's, so that
+        // partial updates (`translate` alone) apply to it.
+        if let Some(d) = obj.described.as_ref().filter(|d| d.matrix.is_none()) {
             if super::transform_matrix(d).is_ok_and(|m| m == obj.transform) {
                 return Some(Ok(d.clone()));
             }
@@ -291,6 +293,7 @@ impl Scene {
             } else {
                 Scale::PerAxis(scale.into())
             },
+            matrix: None,
         };
         // A sheared matrix is not a scale, a rotation and a translation.
         let exact = super::transform_matrix(&desc).is_ok_and(|back| {
@@ -824,8 +827,10 @@ impl Scene {
                             "`matrix` excludes translate/rotate/scale",
                         ));
                     }
-                    let rows: [[f32; 4]; 4] = typed(m.clone(), &format!("{prefix}.matrix"))?;
-                    Mat4::from_cols_array_2d(&rows).transpose()
+                    let field = format!("{prefix}.matrix");
+                    let rows: Vec<Vec<f32>> = typed(m.clone(), &field)?;
+                    super::matrix_from_rows(&rows)
+                        .map_err(|(f, m)| Error::scene(SOURCE, format!("{field}{f}"), m))?
                 } else {
                     // The fields given replace those of the current transform.
                     let current = match self.object_desc(*i) {
