@@ -1,10 +1,10 @@
 """`bidir` at any depth (issue 29): its frame time and error at depths 3, 7 and 64.
 
 Per scene, in one run on the same cores: `bidir` at `max_depth` 3 (two bounces), 7 and its
-default (64), `ispm` and `path` at their defaults, each scored against a converged `path` reference (default depth
-64; cached as bench_progressive's): the image mean relative to the reference's, HDR-FLIP
-and relMSE, and the frame's wall-clock seconds (the mean of --frames frames of a warm
-renderer, seeds 1, 2, …; the error columns are those of the first frame).
+default (64), `ispm` and `path` at their defaults, each scored against a converged `path`
+reference (default depth 64; cached as bench_progressive's): the image mean relative to the
+reference's, HDR-FLIP and relMSE, and the frame's wall-clock seconds (the mean of --frames
+frames of a warm renderer, seeds 1, 2, …; the error columns are those of the first frame).
 
     GI_REF_CACHE=/work/cache/refs .venv/bin/python scripts/bench_bidir_depth.py \\
         --out docs/bench/bidir-depth.md
