@@ -26,9 +26,10 @@
 //! cosine, the path tracer the shading one).
 //!
 //! Bias: in the single-strategy modes (`bidir_strategy` vpl or bundle) only A runs, with the
-//! clamp; vertices on purely specular surfaces are passed through, not connected. The records live in a fixed budget
-//! of slots ([`EXTRA_PER_SUBPATH`] per subpath on average beyond the first vertex); when it
-//! runs out the highest orders are dropped first.
+//! clamp; vertices on purely specular surfaces are passed through, not connected. The
+//! records live in a fixed budget of slots ([`EXTRA_PER_SUBPATH`] per subpath on average
+//! beyond the first vertex); when it runs out the highest orders are dropped first (and A's
+//! weights still count on B for them: a small loss at those orders).
 
 use super::super::options::BidirOptions;
 use super::super::FrameParams;
