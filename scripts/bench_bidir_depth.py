@@ -1,14 +1,16 @@
-"""`bidir` at any depth (issue 29): its light subpaths against the two-bounce version.
+"""`bidir` at any depth (issue 29): its frame time and error at depths 3, 7 and 64.
 
-Per scene, in one run on the same cores: `bidir` at `max_depth` 3 (the two-bounce version:
-the same frame as before issue 29, no light subpaths), 7 and its default (64), `ispm` and
-`path` at their defaults, each scored against a converged `path` reference (default depth
-64; cached as bench_progressive's): the image mean relative to the reference's, HDR-FLIP
-and relMSE, and the frame's wall-clock seconds (the mean of --frames frames of a warm
-renderer, seeds 1, 2, …; the error columns are those of the first frame).
+Per scene, in one run on the same cores: `bidir` at `max_depth` 3 (two bounces), 7 and its
+default (64), `ispm` and `path` at their defaults, each scored against a converged `path`
+reference (default depth 64; cached as bench_progressive's): the image mean relative to the
+reference's, HDR-FLIP and relMSE, and the frame's wall-clock seconds (the mean of --frames
+frames of a warm renderer, seeds 1, 2, …; the error columns are those of the first frame).
 
     GI_REF_CACHE=/work/cache/refs .venv/bin/python scripts/bench_bidir_depth.py \\
         --out docs/bench/bidir-depth.md
+
+`--tag before --bidir-only` (run with an older build's interpreter) gives rows to set beside
+a newer build's: `docs/bench/bidir-depth.md` has main's and issue 29's MIS change so.
 """
 
 from __future__ import annotations
@@ -24,7 +26,7 @@ sys.path.insert(0, str(Path(__file__).parent))
 from bench_progressive import cpu_name, flip, reference, relmse  # noqa: E402
 
 RUNS = [
-    ("bidir", "`bidir` max_depth 3 (two-bounce version)", dict(max_depth=3)),
+    ("bidir", "`bidir` max_depth 3", dict(max_depth=3)),
     ("bidir", "`bidir` max_depth 7", dict(max_depth=7)),
     ("bidir", "`bidir` defaults (max_depth 64)", {}),
     ("ispm", "`ispm` defaults", dict(adapter="cpu")),
@@ -54,6 +56,8 @@ def main() -> None:
     ap.add_argument("--ref-spp", type=int, default=4096)
     ap.add_argument("--frames", type=int, default=2)
     ap.add_argument("--out", type=Path)
+    ap.add_argument("--tag", default="", help="appended to the `bidir` rows' labels")
+    ap.add_argument("--bidir-only", action="store_true", help="no `ispm` and `path` rows")
     a = ap.parse_args()
     size = (a.size, a.size)
     lines = [
@@ -80,6 +84,10 @@ def main() -> None:
             "|---|---|---|---|---|---|",
         ]
         for method, label, settings in RUNS:
+            if a.bidir_only and method != "bidir":
+                continue
+            if method == "bidir" and a.tag:
+                label = f"{label} ({a.tag})"
             img, seconds, stats = timed(scene, method, size, a.frames, settings)
             ratio = float(img.mean() / ref.mean())
             subpaths = stats.light_paths if method == "bidir" else "–"

@@ -172,6 +172,28 @@ impl BundleBuffers {
         let head_bytes = bundles as u64 * res as u64 * res as u64 * 4;
         let capacity = (memory / NODE_BYTES).clamp(1, u32::MAX as u64) as u32;
         let node_bytes = capacity as u64 * NODE_BYTES;
+        // Each list is one storage binding: past the GPU's binding size the bind group would
+        // fail validation (an untyped GPU error) where the setting is what is wrong.
+        let max_bind = device.limits().max_storage_buffer_binding_size;
+        if node_bytes > max_bind {
+            return Err(Error::setting(
+                "bundle_memory_mb",
+                format!(
+                    "the GPU binds at most {} of fragment lists",
+                    crate::error::human(max_bind)
+                ),
+            ));
+        }
+        if head_bytes > max_bind {
+            return Err(Error::setting(
+                "bundle_resolution",
+                format!(
+                    "{bundles} bundles of {res}² need {} of list heads; the GPU binds at most {}",
+                    crate::error::human(head_bytes),
+                    crate::error::human(max_bind)
+                ),
+            ));
+        }
         ctx.check_buffer("bundle head pointers", head_bytes)?;
         ctx.check_buffer("bundle fragments", node_bytes)?;
         crate::memory::check(

@@ -61,13 +61,16 @@ pub struct BidirParamsRaw {
     pub vpl_count: u32,
     pub vpls_per_light: u32,
     pub bundles: u32,
-    /// 0: MIS, 1: VPLs only, 2: bundles only (one-bounce light).
+    /// 0: MIS, 1: VPLs only, 2: bundles only (one-bounce light; the two strategies of the
+    /// longer paths combined by MIS in mode 0, the bundles' connections clamped alone
+    /// otherwise).
     pub mode: u32,
     /// Indirect bounces to render (`max_depth` − 1): 0 none (direct light only), 1 the
     /// one-bounce light (VPLs and bundles' hits lit by the lights), 2 also the two-bounce
     /// light (bundles' hits lit by the RSM's VPLs), j > 2 also the traced subpaths'
     /// vertices up to order j − 1.
     pub bounces: u32,
+    /// Lower bound of ‖x2 − y‖² of the bundles' connections in modes 1 and 2.
     pub min_dist2: f32,
     pub max_walk: u32,
     /// Random offset in [0, 1) of the two-bounce term's bundle-to-VPL pairing.
@@ -88,7 +91,10 @@ pub struct BidirParamsRaw {
     /// Lower bound of ‖x3 − y1‖² for the one-bounce light of VPLs without a bundle
     /// strategy (negative `pdf`: the VPLs of area lights, the sun and the sky).
     pub alone_min_dist2: f32,
-    pub _pad1: f32,
+    /// Records of the light subpaths' vertices (after the `vpl_count` first VPLs): the VPLs
+    /// of strategy B of the three-and-more-bounce light, MIS-weighted against the bundles'
+    /// connections (`frame::bidir::subpaths`).
+    pub sub_count: u32,
 }
 
 /// Extra field of view of a VPL's cube faces, in shadow texels on each side (as the lights').

@@ -11,10 +11,12 @@
 //! 4. Direct light (the frame of method `direct`), then at the pixel-centre G-buffer the
 //!    one-bounce light of the VPLs and of the bundles combined by MIS (§4.2, when `max_depth`
 //!    ≥ 2: at 1 the frame is the direct light alone) and the
-//!    two-bounce light (§4.3, when `max_depth` ≥ 3) in one pass (`bidir.wgsl`), the
-//!    composite and the readback of what was asked for. Light of three and more bounces
-//!    (`max_depth` ≥ 4): [`subpaths`] continues each bundle's paired VPL into a light
-//!    subpath traced on the CPU, every vertex a VPL that the bundle's hit connects to.
+//!    light of two and more bounces (§4.3, when `max_depth` ≥ 3) in one pass
+//!    (`bidir.wgsl`), the composite and the readback of what was asked for. [`subpaths`]
+//!    continues each bundle's paired VPL into a light subpath traced on the CPU, every
+//!    vertex a VPL; a path of two and more bounces is drawn both by the bundle's hit
+//!    connecting to a subpath vertex and by a subpath vertex lighting the pixel, the two
+//!    combined by MIS.
 
 mod bundles;
 mod emitted;
@@ -220,7 +222,8 @@ const MAX_WALK: u32 = 4096;
 /// diagonal (§4.3 clamps it; the paper gives no value). Measured on `cornell` at 80×60,
 /// depth 3, 64 VPLs / 16 bundles, two seeds: RMSE against `path` 0.154/0.061 at 2%,
 /// 0.060/0.061 at 5%, 0.046/0.053 at 10%, 0.038/0.046 at 20%; image mean −1…+2% at 10%,
-/// −3% at 20%.
+/// −3% at 20%. Only the single-strategy modes (`bidir_strategy` vpl or bundle) clamp: with
+/// MIS (the default) strategy B of `subpaths` takes over where the pair is close.
 const TWO_BOUNCE_MIN_DIST: f32 = 0.1;
 
 /// The frame's random offset of the bundle-to-VPL pairing (the lighting pass's and the
@@ -229,13 +232,13 @@ fn pair_offset(frame: &FrameParams) -> f32 {
     Rng::new(frame.seed, 0xfa17, 0).next_f32()
 }
 
-/// The lighting pass's parameters for the frame's `vpls` records and `n_env` environment
-/// bundles.
+/// The lighting pass's parameters for the frame's records (`vpl_count` first VPLs, then
+/// `sub_count` subpath vertices) and `n_env` environment bundles.
 fn lighting_params(
     scene: &Scene,
     options: &BidirOptions,
     frame: &FrameParams,
-    vpl_count: u32,
+    (vpl_count, sub_count): (u32, u32),
     n_env: u32,
     env_pdf_scale: f32,
 ) -> BidirParamsRaw {
@@ -272,7 +275,7 @@ fn lighting_params(
         bundles_uniform: (options.bundles - n_env) as f32,
         env_pdf_scale,
         alone_min_dist2: (emitted::ALONE_MIN_DIST * (hi - lo).length()).powi(2),
-        _pad1: 0.0,
+        sub_count,
     }
 }
 
@@ -295,6 +298,8 @@ struct FrameVpls {
     lit: usize,
     /// Light subpaths with a vertex.
     placed: usize,
+    /// Records of subpath vertices after the first VPLs' (the slots up to the last used).
+    used: u32,
     /// Seconds to draw the first VPLs and to trace the subpaths.
     seconds: (f64, f64),
 }
@@ -315,13 +320,14 @@ fn frame_vpls(
     let count = records.0.len() as u32;
     let first = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let placed = subpaths::append(scene, bvh, &groups, options, frame, maps, &mut records);
+    let (placed, used) = subpaths::append(scene, bvh, &groups, options, frame, maps, &mut records);
     FrameVpls {
         raws: records.0,
         matrices: records.1,
         count,
         lit,
         placed,
+        used: used as u32,
         seconds: (first, t.elapsed().as_secs_f64()),
     }
 }
@@ -467,7 +473,8 @@ pub(super) fn frame(
     let (vpl_seconds, subpath_seconds) = v.seconds;
     let t = Instant::now();
     state.vpls.upload(&ctx, &raws, &matrices);
-    let params = lighting_params(scene, options, frame, vpl_count, n_env, state.env_pdf_scale);
+    let counts = (vpl_count, v.used);
+    let params = lighting_params(scene, options, frame, counts, n_env, state.env_pdf_scale);
     gpu::write_buffer(
         &ctx.queue,
         "bidir params",

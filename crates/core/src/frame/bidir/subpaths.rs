@@ -1,14 +1,21 @@
 //! Light subpaths longer than one vertex (issue 29), instant-radiosity style: from the VPL
 //! that each ray bundle is paired with (§4.3's pairing), a light subpath is continued on the
 //! CPU by BSDF sampling, and each of its later vertices y2, y3, … becomes a VPL with its own
-//! cube shadow map. The lighting pass connects a bundle's hit x2 to every vertex of its
-//! bundle's subpath, so that with the one- and two-bounce terms the path lengths are
-//! partitioned without overlap:
+//! cube shadow map. Each path length has two strategies, combined by MIS as the one-bounce
+//! light's (§4.2):
 //!
 //! - depth 1: direct light (the `direct` frame);
 //! - depth 2: x3 ↔ y1 (VPLs) and x3 → x2 ↔ light (bundles), combined by MIS (§4.2);
-//! - depth d ≥ 3: x3 → x2 (bundle) ↔ y_{d−2} (the VPL of order d − 2: y1 from the RSM for
-//!   d = 3, a vertex of a traced subpath for d ≥ 4).
+//! - depth d ≥ 3: (A) x3 → x2 (bundle) ↔ y_{d−2} (the VPL of order d − 2: y1 from the RSM
+//!   for d = 3, a vertex of a traced subpath for d ≥ 4), the lighting pass connecting a
+//!   bundle's hit to every vertex of its bundle's subpath; (B) x3 ↔ y_{d−1}, every subpath
+//!   vertex a VPL at the pixel. They differ in how the vertex next to x3 is drawn: from x3 by
+//!   the bundles (area density D(ω)·|ng·ω|/d², D the bundles' density of directions) or from
+//!   y_{d−2} by the subpath (n2 subpaths a light, `mis_density` each); balance heuristic on
+//!   those. Where x2 and y_{d−2} are close (1/d² in A) B's density grows as fast, so A needs
+//!   no clamp (it had one, ‖x2 − y‖ ≥ 10% of the diagonal, that dropped 11% of the
+//!   two-bounce light on `cornell-anim`; `docs/bench/bidir-breakdown.md`), and the same
+//!   holds for B where x3 and y_{d−1} are close.
 //!
 //! Throughput: a subpath starts from its VPL's flux α1 (the flux the lighting pass uses,
 //! shading cosine included) and carries α_{j+1} = α_j · f(y_j)·|ns·ω|/p(ω) (the BSDF
@@ -18,13 +25,11 @@
 //! times |ns·ω_in|/|ng·ω_in| (≤ 10), as the RSM's VPLs do (their flux has the geometric
 //! cosine, the path tracer the shading one).
 //!
-//! Bias: the connection x2 ↔ y_j has ‖x2 − y_j‖² clamped from below as the two-bounce term
-//! (`TWO_BOUNCE_MIN_DIST`), which drops the light of pairs closer than the clamp (image
-//! means at depth 7: furnace −0.9%, cornell −1.6%, cornell-anim −2.4%, most of it the
-//! two-bounce term's; `docs/bench/bidir-depth.md`); vertices on purely
-//! specular surfaces are passed through, not connected. The records live in a fixed budget
-//! of slots ([`EXTRA_PER_SUBPATH`] per subpath on average beyond the first vertex); when it
-//! runs out the highest orders are dropped first.
+//! Bias: in the single-strategy modes (`bidir_strategy` vpl or bundle) only A runs, with the
+//! clamp; vertices on purely specular surfaces are passed through, not connected. The
+//! records live in a fixed budget of slots ([`EXTRA_PER_SUBPATH`] per subpath on average
+//! beyond the first vertex); when it runs out the highest orders are dropped first (and A's
+//! weights still count on B for them: a small loss at those orders).
 
 use super::super::options::BidirOptions;
 use super::super::FrameParams;
@@ -58,6 +63,37 @@ struct Vertex {
     material: Material,
     /// Flux of the record (zero on purely specular surfaces).
     flux: Vec3,
+    /// Area density of this vertex per subpath as its predecessor's (MIS) sampling gives it:
+    /// q_prev · |ns_prev·ω|/π · |ng·ω| / d² (`mis_density`); 1e30 after a purely specular
+    /// vertex (only the light subpath reaches it).
+    density: f32,
+    /// The roulette's continuation probability at this vertex as the MIS weights take it
+    /// (`mis_continuation`).
+    continuation: f32,
+}
+
+/// The continuation probability the MIS weights give a vertex of order `order` (the
+/// subpath's y_order): 1 for the vertices traced from without roulette (y1 … y3), else the
+/// roulette's q of a diffuse sample there, min(0.95, max albedo). The lighting pass takes the
+/// same value (1 for y1, the record's otherwise for later vertices), so that the weights of
+/// the two strategies sum to one.
+fn mis_continuation(order: u32, m: &Material) -> f32 {
+    if order <= RR_FREE {
+        1.0
+    } else {
+        (m.diffuse + m.specular).max_element().clamp(0.0, 0.95)
+    }
+}
+
+/// The area density the MIS weights give a vertex `position` (geometric normal `ng`) drawn
+/// from `prev` (shading normal `ns_prev`, continuation `q`): a cosine density at `prev`,
+/// whatever its BSDF (`bidir.wgsl` takes the same: the weights then sum to one; only their
+/// variance depends on how close this is to the sampling).
+pub(super) fn mis_density(prev: Vec3, ns_prev: Vec3, q: f32, position: Vec3, ng: Vec3) -> f32 {
+    let d = position - prev;
+    let d2 = d.length_squared().max(1e-12);
+    let w = d / d2.sqrt();
+    q * ns_prev.dot(w).abs() / std::f32::consts::PI * ng.dot(w).abs() / d2
 }
 
 /// The subpaths' VPL records, to be appended after the RSM's VPLs.
@@ -66,18 +102,22 @@ struct Subpaths {
     pub matrices: Vec<Mat4>,
     /// Subpaths with at least one vertex.
     pub placed: usize,
+    /// Slots up to the last one holding a vertex (the lighting pass's strategy-B loop runs
+    /// over these alone).
+    pub used: usize,
 }
 
 /// Slots for subpath vertices: one per (light, bundle) for the first vertex y2, and
 /// [`EXTRA_PER_SUBPATH`] per subpath for the rest, as far as `max_slots` (the GPU's layer
 /// limit over 6) leaves room after the `first` slots of the RSM's VPLs. Zero when
-/// `max_depth` asks for no vertex after y1 (depth < 4) or there are no bundles.
+/// `max_depth` asks for no vertex after y1 (depth < 3: strategy B of depth d takes y_{d−1})
+/// or there are no bundles.
 pub(super) fn slots(lights: u32, bundles: u32, max_depth: u32, first: u32, max_slots: u32) -> u32 {
-    if max_depth < 4 || bundles == 0 {
+    if max_depth < 3 || bundles == 0 {
         return 0;
     }
     let heads = lights * bundles;
-    let extra = if max_depth > 4 {
+    let extra = if max_depth > 3 {
         heads * EXTRA_PER_SUBPATH
     } else {
         0
@@ -137,13 +177,16 @@ impl Head {
 }
 
 /// The first vertex after `h`'s and the ones after it, up to `max_len` (orders 2 … ≤
-/// max_depth − 2), by BSDF sampling with Russian roulette.
+/// max_depth − 1), by BSDF sampling with Russian roulette.
 fn trace(scene: &Scene, bvh: &SceneBvh, h: &Head, max_len: u32, rng: &mut Rng) -> Vec<Vertex> {
     let mut alpha = h.alpha;
     let mut material = h.material;
     let (mut position, mut ng, mut frame, mut w_prev) =
         (h.position, h.ng, Frame::new(h.ns), h.to_light);
     let mut out = Vec::new();
+    // MIS: the predecessor's continuation and whether it was purely specular.
+    let (mut q_mis, mut ns_prev, mut specular_prev) =
+        (1.0f32, h.ns, h.material.is_purely_specular());
     while (out.len() as u32) < max_len {
         let Some(bs) = material.sample(frame.to_local(w_prev), rng) else {
             break;
@@ -181,6 +224,12 @@ fn trace(scene: &Scene, bvh: &SceneBvh, h: &Head, max_len: u32, rng: &mut Rng) -
         } else {
             alpha * ratio
         };
+        let density = if specular_prev {
+            1e30
+        } else {
+            mis_density(position, ns_prev, q_mis, it.position, ng_f)
+        };
+        let continuation = mis_continuation(out.len() as u32 + 2, &it.material);
         out.push(Vertex {
             position: it.position,
             ns: ns_f,
@@ -188,7 +237,10 @@ fn trace(scene: &Scene, bvh: &SceneBvh, h: &Head, max_len: u32, rng: &mut Rng) -
             to_prev,
             material: it.material,
             flux,
+            density,
+            continuation,
         });
+        (q_mis, ns_prev, specular_prev) = (continuation, ns_f, it.material.is_purely_specular());
         (position, ng, frame, w_prev, material) =
             (it.position, it.ng, it.frame, to_prev, it.material);
     }
@@ -197,7 +249,8 @@ fn trace(scene: &Scene, bvh: &SceneBvh, h: &Head, max_len: u32, rng: &mut Rng) -
 
 /// Appends to the RSM's VPL `records` (n1 per light) the frame's light subpaths, one per
 /// (light, bundle) from the VPL the bundle is paired with, filling the rest of `maps`'
-/// capacity; returns how many subpaths have a vertex. See [`subpaths`].
+/// capacity; returns how many subpaths have a vertex and how many slots from the first
+/// hold the vertices. See [`subpaths`].
 pub(super) fn append(
     scene: &Scene,
     bvh: &SceneBvh,
@@ -206,7 +259,7 @@ pub(super) fn append(
     frame: &FrameParams,
     maps: &VplMaps,
     records: &mut (Vec<VplRaw>, Vec<Mat4>),
-) -> usize {
+) -> (usize, usize) {
     let first = records.0.len() as u32;
     let out = subpaths(
         scene,
@@ -221,7 +274,7 @@ pub(super) fn append(
     );
     records.0.extend(out.raws);
     records.1.extend(out.matrices);
-    out.placed
+    (out.placed, out.used)
 }
 
 /// The subpaths as records for slots `first`, `first + 1`, … (`slots` of them): the first
@@ -247,11 +300,12 @@ fn subpaths(
         raws: vec![VplRaw::zeroed(); slots as usize],
         matrices: vec![Mat4::IDENTITY; slots as usize * 6],
         placed: 0,
+        used: 0,
     };
     if slots == 0 || heads > slots as usize {
         return out;
     }
-    let max_len = max_depth.saturating_sub(3);
+    let max_len = max_depth.saturating_sub(2);
     let mut paths: Vec<Vec<Vertex>> = vec![Vec::new(); heads];
     for (light, own) in groups.iter().enumerate() {
         for b in 0..n2 {
@@ -280,6 +334,7 @@ fn subpaths(
         }
     }
     out.placed = slot_of.iter().filter(|s| !s.is_empty()).count();
+    out.used = if out.placed == 0 { 0 } else { next };
     let (lo, hi) = light_views::bounds(scene);
     let diag = (hi - lo).length().max(1e-6);
     for (p, s) in paths.iter().zip(&slot_of) {
@@ -299,9 +354,9 @@ fn subpaths(
                 diffuse: v.material.diffuse.into(),
                 roughness: v.material.roughness,
                 specular: v.material.specular.into(),
-                pdf: 0.0,
+                pdf: v.density,
                 ns: v.ns.into(),
-                light_flux: 0.0,
+                light_flux: v.continuation,
                 ng: v.ng.into(),
                 light_dist2: next,
             };
@@ -319,9 +374,9 @@ mod tests {
 
     #[test]
     fn slots_fit_the_budget_and_the_gpu() {
-        assert_eq!(slots(1, 16, 3, 64, 1000), 0);
+        assert_eq!(slots(1, 16, 2, 64, 1000), 0);
         assert_eq!(slots(1, 0, 7, 64, 1000), 0);
-        assert_eq!(slots(2, 16, 4, 64, 1000), 32);
+        assert_eq!(slots(2, 16, 3, 64, 1000), 32);
         assert_eq!(slots(2, 16, 7, 64, 1000), 32 * (1 + EXTRA_PER_SUBPATH));
         // The extra slots shrink to what the GPU holds.
         assert_eq!(slots(1, 16, 64, 64, 100), 36);

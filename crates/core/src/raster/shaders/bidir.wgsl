@@ -10,9 +10,13 @@
 //   middle vertex: VPLs p1 = n1·I(ω0,j)·|ng_j·ω_j,0| / (‖x_j − x0‖²·W) (W: the light's
 //   covered flux, VPLs drawn ∝ flux), bundles p2 = n2·p_r·|ng_j·ω_j,3| / ‖x_j − x3‖²;
 // - two bounces x0 → x1 → x2 → x3 (§4.3): each bundle paired with one VPL of every light,
-//   the VPL's shadow map testing (x1, x2), ‖x1 − x2‖² clamped from below; and more bounces
-//   (issue 29): the same bundle hit x2 connected to every later vertex of a light subpath
-//   continued from that VPL on the CPU (`subpaths.rs`), each vertex a VPL of its own.
+//   the VPL's shadow map testing (x1, x2); and more bounces (issue 29): the same bundle hit
+//   x2 connected to every later vertex of a light subpath continued from that VPL on the
+//   CPU (`subpaths.rs`), each vertex a VPL of its own (strategy A). Strategy B of the same
+//   path lengths: every subpath vertex y_j (j ≥ 2) lights x3 as a VPL. A and B combined by
+//   MIS (balance heuristic on the area density of the vertex next to x3: D(ω)·cos/d² from
+//   the bundles, n2·`mis_density` from the subpaths, `b_density`), so that no pair needs a
+//   clamp; in modes 1 and 2 A alone, ‖x2 − y‖² clamped from below.
 // - roughness clamping (§5): the GGX α of the BSDF at a path vertex is raised so that the
 //   distribution's peak D(0) = 1/(πα²) stays under d̂/m (kernel radius estimation, eq. 9),
 //   with d̂ the density of samples per unit solid angle there (eqs. 13–17, from the area
@@ -86,7 +90,8 @@ struct Params {
     env_pdf_scale: f32,
     // Lower bound of ‖x3 − y1‖² for the one-bounce light of VPLs without a bundle strategy.
     alone_min_dist2: f32,
-    _pad1: f32,
+    // Records of the light subpaths' vertices after the `vpl_count` first VPLs.
+    sub_count: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
@@ -202,6 +207,16 @@ fn clamped(m_in: Material, dhat: f32, cos_o: f32) -> Material {
     let alpha_min = sqrt(weight / (PI * dhat));
     m.roughness = max(m.roughness, sqrt(min(alpha_min, 1.0)));
     return m;
+}
+
+// Strategy B's area density (all n2 subpaths of a light) of the vertex x next to x3 when
+// the subpath draws it from `y` (continuation `q`): n2·q·|ns_y·ω|/π·|ng·ω|/d², as
+// `subpaths::mis_density` stores it in the records of the subpaths' vertices.
+fn b_density(y: Vpl, q: f32, x: vec3<f32>, ng: vec3<f32>) -> f32 {
+    let d = x - y.position;
+    let d2 = max(dot(d, d), 1e-20);
+    let w = d / sqrt(d2);
+    return f32(params.bundles) * q * abs(dot(y.ns, w)) / PI * abs(dot(ng, w)) / d2;
 }
 
 // d̂ of eq. 13 from the two solid-angle densities.
@@ -360,6 +375,29 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
         sum += t;
     }
 
+    // Three and more bounces, strategy B: the light subpaths' vertices y_j (j ≥ 2) as VPLs
+    // at x3; n2 subpaths a light, each carrying n2/n1 of its VPL's share (weight n1/n2).
+    let mis = params.mode == 0u;
+    let tiny_d2 = params.min_dist2 * 1e-6;
+    if mis && params.bundles > 0u && params.bounces >= 2u {
+        for (var i = params.vpl_count; i < params.vpl_count + params.sub_count; i++) {
+            // The flux first (one texel): empty slots and specular vertices cost no more.
+            if max3(textureLoad(vpl_tex, vec2<u32>(1u, i), 0).xyz) <= 0.0 {
+                continue;
+            }
+            let v = vpl_at(i);
+            let to_v = v.position - p;
+            let d2 = max(dot(to_v, to_v), 1e-20);
+            let cos_v = abs(dot(to_v, v.ng)) / sqrt(d2);
+            let pa = bundle_density(to_v / sqrt(d2)) * cos_v / d2;
+            let pb = n2 * v.pdf;
+            let d3 = (pa + pb) * d2 / max(cos_v, 1e-6);
+            let mv = clamped(vpl_material(v), d3, cos_v);
+            let t = vpl_light(v, mv, p, ns, ng, clamped(m, d3, dot(ns, wo)), wo, tiny_d2);
+            sum += t * (n1 / n2) * (pb / (pa + pb));
+        }
+    }
+
     // Camera subpaths through the ray bundles.
     let bundle_one = params.mode != 1u && params.bounces >= 1u;
     if params.bundles > 0u && (bundle_one || params.bounces >= 2u || params.has_env != 0u) {
@@ -450,17 +488,28 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
                 let k = min(u32((f32(b) + params.pair_offset) * n1 / n2), params.vpls_per_light - 1u);
                 // d̂ at x3 of eq. 14: the bundles' density n2·p_r.
                 let f3 = bsdf_eval(clamped(m, 1.0 / bv.inv_density, dot(ns, wo)), ns, wo, dir);
+                // Strategy A's area density of x2 (MIS against B; no clamp with MIS).
+                let pa = max(cos23, 0.0) / (bv.inv_density * d23_2);
+                let min_d2 = select(params.min_dist2, tiny_d2, mis);
                 for (var j = 0u; j * params.vpls_per_light < params.vpl_count; j++) {
                     let v = vpl_at(j * params.vpls_per_light + k);
-                    let t = vpl_light(v, vpl_material(v), x2, ns2, ng2, m2, -dir, params.min_dist2);
+                    var t = vpl_light(v, vpl_material(v), x2, ns2, ng2, m2, -dir, min_d2);
+                    if mis && max3(t) > 0.0 {
+                        // y1 continues without roulette (q = 1).
+                        t *= pa / (pa + b_density(v, 1.0, x2, ng2));
+                    }
                     sum += f3 * weight * t * n1;
                     // Three or more bounces: the vertices y2, y3, … of the light subpath
                     // continued from that VPL for this bundle (`subpaths.rs`), linked by
-                    // their records' `light_dist2` (0 ends the subpath).
+                    // their records' `light_dist2` (0 ends the subpath; `light_flux` holds
+                    // the vertex's continuation for the MIS weight).
                     var row = params.vpl_count + j * params.bundles + b;
                     for (var o = 2u; o < params.bounces && row != 0u; o++) {
                         let y = vpl_at(row);
-                        let ty = vpl_light(y, vpl_material(y), x2, ns2, ng2, m2, -dir, params.min_dist2);
+                        var ty = vpl_light(y, vpl_material(y), x2, ns2, ng2, m2, -dir, min_d2);
+                        if mis && max3(ty) > 0.0 {
+                            ty *= pa / (pa + b_density(y, y.light_flux, x2, ng2));
+                        }
                         sum += f3 * weight * ty * n1;
                         row = u32(y.light_dist2 + 0.5);
                     }
