@@ -224,6 +224,7 @@ if has c; then
     # The direct light per kind of light (issue 28: area, sun and sky against a point light).
     jobs+=("lights-$s|--lights --size $s")
     jobs+=("ispm-tiled-$s|--estimator tiled --size $s --stages --table-only")
+    jobs+=("instancing-$s|--instancing --size $s") # issue 33: instanced vs flattened, culling
     jobs+=("bidir-$s|--method bidir --size $s")
     for e in volumes cluster directional cpu; do
       jobs+=("ispm-$e-$s|--estimator $e --size $s --stages --table-only --no-one-shot")

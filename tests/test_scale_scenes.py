@@ -1,5 +1,6 @@
 """scripts/scale_scenes.py at its test size: both scenes load with the triangle counts the
-script reports, the forest's trees share their mesh files, and both render finite images."""
+script reports, the forest's trees share their mesh files, and both render finite images; a
+scene of billions of instanced triangles loads, and its world-space copy is refused by estimate."""
 
 import json
 import subprocess
@@ -7,6 +8,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 import gi
 
@@ -37,3 +39,33 @@ def test_small_scale_scenes_load_and_render(tmp_path):
         assert scene.unique_triangle_count == unique
         r = gi.render(scene, "path", spp=1, size=(16, 12))
         assert np.isfinite(r.radiance).all() and r.radiance.mean() > 0
+
+
+def test_world_space_copy_of_billions_of_instances_is_refused():
+    """200,000 instances of one 20,480-triangle sphere (4.1e9 placed triangles) load as one
+    mesh, and the GPU methods draw them instanced; their world-space copy
+    (``Scene.mesh_arrays``, ~190 GB) is refused by its estimate with a typed error before
+    anything is allocated."""
+    desc = json.loads(gi.builtin_json("cornell"))
+    desc["objects"].append(
+        {
+            "name": "big",
+            "shape": {"type": "sphere", "radius": 0.004, "subdivisions": 5},
+            "transform": {"translate": [0, 0.01, 0]},
+            "material": "white",
+        }
+    )
+    side = 448
+    desc["objects"] += [
+        {
+            "shape": {"type": "instance", "object": "big"},
+            "transform": {
+                "translate": [-0.9 + 1.8 * (i % side) / side, 0.01, -0.9 + 1.8 * (i // side) / side]
+            },
+        }
+        for i in range(200_000)
+    ]
+    scene = gi.Scene.from_json(json.dumps(desc), "many")
+    assert scene.unique_triangle_count < 30_000
+    with pytest.raises(gi.OutOfMemoryError, match="world-space triangles"):
+        scene.mesh_arrays()

@@ -38,6 +38,10 @@
 //! direct light's options above, the light moving): engine frame, still frame and its stages
 //! per scene and size (`scripts/gpu_check.sh` runs these).
 //!
+//! `--instancing`: the GPU instancing table instead (`common/instancing.rs`: instanced
+//! against flattened geometry, triangles per pass before and after culling, GPU geometry
+//! bytes, `ispm` frame and its stages; `docs/bench/instancing.md` section 7).
+//!
 //! `--lights` times instead the direct light of each kind of light (method `direct`, default
 //! options, 640×480 or `--size`) in the same run: a point light against an area light
 //! (`area_samples` points), the sun (parallel-ish and with a 5° disc) and the sky
@@ -434,6 +438,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if std::env::args().any(|a| a == "--lights") {
         common::print_adapter()?;
         return lights_table(&args, runs);
+    }
+    if std::env::args().any(|a| a == "--instancing") {
+        common::print_adapter()?;
+        return common::instancing::table(&args, runs);
     }
     let quick = args.quick();
     let flag = |f: &str| std::env::args().any(|a| a == f);

@@ -331,6 +331,22 @@ impl PyScene {
         py: Python<'py>,
     ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
         use numpy::{IntoPyArray, PyArrayMethods};
+        // The flat view is every object's placed copy: refused by its estimate (with the
+        // two arrays copied out of it) before it is built.
+        if !self.inner.flat_is_built() {
+            let s = &self.inner;
+            gi_core::memory::check(
+                || {
+                    format!(
+                        "the scene's world-space triangles ({} objects, {} triangles)",
+                        s.objects.len(),
+                        s.triangle_count()
+                    )
+                },
+                s.flat_estimate().saturating_mul(2),
+            )
+            .map_err(|e| to_py(py, e))?;
+        }
         let v: Vec<f32> = bytemuck::cast_slice(&self.inner.flat().positions).to_vec();
         let f: Vec<u32> = self
             .inner

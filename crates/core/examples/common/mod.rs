@@ -53,3 +53,5 @@ pub fn print_adapter() -> Result<(), Box<dyn Error>> {
     );
     Ok(())
 }
+
+pub mod instancing;

@@ -27,7 +27,7 @@ pub(super) fn frame(
         g.targets.bind_composite(&ctx, None);
     }
     let t = Instant::now();
-    g.targets.write_eye(&ctx, scene);
+    g.targets.write_eye(&ctx, scene, &g.scene.cull);
     let upload = t.elapsed().as_secs_f64();
 
     let mut encoder = ctx

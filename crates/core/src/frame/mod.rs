@@ -501,12 +501,7 @@ impl Renderer {
         let c = self.changes;
         if c.geometry {
             for (object, _) in &self.moved {
-                let o = &scene.objects[*object];
-                g.scene.write_triangles(
-                    ctx,
-                    scene,
-                    o.triangles.start as usize..o.triangles.end as usize,
-                );
+                g.scene.write_instance(ctx, scene, *object);
             }
             g.scene.geometry_moved(scene);
         }

@@ -142,6 +142,20 @@ pub struct VertexRaw {
     pub tangent: [f32; 4],
 }
 
+/// One placed object (instance) of the instanced vertex buffer, read per instance by the
+/// passes that rasterize the scene (`InstanceIn` of `scene_vertex.wgsl`): object -> world
+/// (columns), the normal matrix (inverse transpose of its linear part, columns; `normal[0][3]`
+/// is -1 for a mirroring transform, whose tangent handedness flips, else 1) and the material
+/// added to the vertex's (its file's per-face offset, or 0).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct InstanceRaw {
+    pub model: [[f32; 4]; 4],
+    pub normal: [[f32; 4]; 3],
+    pub material: u32,
+    pub _pad: [u32; 3],
+}
+
 /// `BounceView` of `bounce.wgsl`, padded to 256 bytes for dynamic offsets.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]

@@ -100,7 +100,8 @@ pub fn render_bounce_map(
 ) -> Result<BounceMap> {
     let ctx = gpu::context(adapter)?;
     ctx.scoped("bounce map", || {
-        let geometry = Geometry::upload(&ctx, scene);
+        let cull = super::shadow::CullUnits::of(scene);
+        let geometry = Geometry::upload(&ctx, scene, &cull);
         let materials: Vec<_> = scene.materials.iter().map(|m| m.to_raw()).collect();
         let materials = buffer_init(
             &ctx,
@@ -126,7 +127,7 @@ pub fn render_bounce_map(
             &mut encoder,
             &layers,
             &geometry,
-            &super::shadow::CullUnits::of(scene),
+            &cull,
             (&textures.group, Variant::of(scene)),
             &mut timer,
         );

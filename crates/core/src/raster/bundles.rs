@@ -330,8 +330,7 @@ impl BundleBuffers {
             rp.set_pipeline(&pass.pipelines[textures.1 as usize]);
             rp.set_bind_group(0, &self.group, &[(i as u64 * VIEW_BYTES) as u32]);
             rp.set_bind_group(1, textures.0, &[]);
-            rp.set_vertex_buffer(0, geometry.vertices.slice(..));
-            rp.draw(0..geometry.count, 0..1);
+            geometry.draw(&mut rp, None);
         }
         encoder.copy_buffer_to_buffer(&self.counter, 0, &self.counter_readback, 0, 4);
     }

@@ -16,7 +16,7 @@
 //! - depth `Depth32Float`: visibility only; view depth is derived from `position`.
 
 use super::wgsl;
-use crate::gpu::raw::VertexRaw;
+use crate::gpu::raw::{InstanceRaw, VertexRaw};
 use crate::gpu::shaders;
 
 pub const POSITION: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
@@ -36,7 +36,8 @@ const TARGETS: [(&str, wgpu::TextureFormat); 6] = [
     ("gbuffer emission", EMISSION),
 ];
 
-/// Vertex layout of [`VertexRaw`], shared with the shadow pass (which reads location 0 only).
+/// Vertex layout of [`VertexRaw`] (buffer slot 0, per vertex), shared with the shadow pass
+/// (which reads location 0 only, or 0, 3, 4 with alpha masks).
 pub const VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 6] = wgpu::vertex_attr_array![
     0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Uint32, 4 => Float32x2, 5 => Float32x4
 ];
@@ -46,6 +47,22 @@ pub fn vertex_layout() -> wgpu::VertexBufferLayout<'static> {
         array_stride: std::mem::size_of::<VertexRaw>() as u64,
         step_mode: wgpu::VertexStepMode::Vertex,
         attributes: &VERTEX_ATTRIBUTES,
+    }
+}
+
+/// Instance layout of [`InstanceRaw`] (buffer slot 1, per instance): object -> world columns
+/// (6..9), normal-matrix columns (10..12), material (13). The shadow pass reads 6..9 (and 13
+/// with alpha masks).
+pub const INSTANCE_ATTRIBUTES: [wgpu::VertexAttribute; 8] = wgpu::vertex_attr_array![
+    6 => Float32x4, 7 => Float32x4, 8 => Float32x4, 9 => Float32x4,
+    10 => Float32x4, 11 => Float32x4, 12 => Float32x4, 13 => Uint32
+];
+
+pub fn instance_layout() -> wgpu::VertexBufferLayout<'static> {
+    wgpu::VertexBufferLayout {
+        array_stride: std::mem::size_of::<InstanceRaw>() as u64,
+        step_mode: wgpu::VertexStepMode::Instance,
+        attributes: &INSTANCE_ATTRIBUTES,
     }
 }
 
@@ -140,7 +157,7 @@ pub fn scene_pipelines(
                     module,
                     entry_point: Some("vs_main"),
                     compilation_options: Default::default(),
-                    buffers: &[Some(vertex_layout())],
+                    buffers: &[Some(vertex_layout()), Some(instance_layout())],
                 },
                 primitive: wgpu::PrimitiveState::default(),
                 depth_stencil: Some(wgpu::DepthStencilState {
@@ -217,7 +234,7 @@ impl GBufferPass {
     }
 
     /// Records the pass: clears the G-buffer and draws the geometry seen from the view at
-    /// `view_offset` in the bind group's view buffer.
+    /// `view_offset` in the bind group's view buffer (`draws`, culled to it; all with `None`).
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
@@ -225,7 +242,7 @@ impl GBufferPass {
         target: &GBuffer,
         bind_group: &wgpu::BindGroup,
         view_offset: u32,
-        geometry: &super::Geometry,
+        (geometry, draws): (&super::Geometry, Option<&[super::Draw]>),
         textures: (&wgpu::BindGroup, super::textures::Variant),
         timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) {
@@ -263,8 +280,7 @@ impl GBufferPass {
         pass.set_pipeline(&self.pipelines[textures.1 as usize]);
         pass.set_bind_group(0, bind_group, &[view_offset]);
         pass.set_bind_group(1, textures.0, &[]);
-        pass.set_vertex_buffer(0, geometry.vertices.slice(..));
-        pass.draw(0..geometry.count, 0..1);
+        geometry.draw(&mut pass, draws);
     }
 }
 

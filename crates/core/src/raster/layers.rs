@@ -159,10 +159,7 @@ impl LayerTargets {
             pass.set_scissor_rect(0, 0, layer.res, layer.res);
             pass.set_bind_group(0, group, &[(i as u64 * view_size) as u32]);
             pass.set_bind_group(1, textures, &[]);
-            pass.set_vertex_buffer(0, geometry.vertices.slice(..));
-            for r in &draws[i] {
-                pass.draw(r.clone(), 0..1);
-            }
+            geometry.draw(&mut pass, Some(&draws[i]));
         }
         let size = wgpu::Extent3d {
             width: self.max_res,

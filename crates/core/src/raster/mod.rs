@@ -7,6 +7,7 @@ pub mod composite;
 pub mod direct;
 pub mod edges;
 pub mod gbuffer;
+pub mod instances;
 pub mod layers;
 pub mod rsm;
 pub mod shadow;
@@ -18,33 +19,13 @@ use crate::error::Result;
 pub(crate) use crate::gpu::layout::{
     buffer_init, storage_entry, view_binding, view_entry, VIEW_SIZE,
 };
-use crate::gpu::raw::{VertexRaw, ViewRaw};
+use crate::gpu::raw::ViewRaw;
 use crate::gpu::GpuContext;
 use crate::scene::light_views;
 use crate::scene::Scene;
 use glam::{Mat4, Vec2, Vec3};
 
-/// The scene's triangles on the GPU: a non-indexed list of [`VertexRaw`].
-pub struct Geometry {
-    pub vertices: wgpu::Buffer,
-    pub count: u32,
-}
-
-impl Geometry {
-    /// Uploads the scene's triangles.
-    pub fn upload(ctx: &GpuContext, scene: &Scene) -> Self {
-        let verts = vertices(scene);
-        Geometry {
-            vertices: buffer_init(
-                ctx,
-                "scene vertices",
-                bytemuck::cast_slice(&verts),
-                wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
-            ),
-            count: verts.len() as u32,
-        }
-    }
-}
+pub use instances::{CullUnits, Draw, Geometry};
 
 /// Eye samples per submission (bounds the timestamp queries of one submission).
 pub(crate) const SAMPLES_PER_SUBMIT: u32 = 256;
@@ -98,33 +79,13 @@ pub(crate) fn camera_view(scene: &Scene, jitter: Vec2, weight: f32) -> ViewRaw {
     )
 }
 
-/// The scene's triangles as a non-indexed vertex list.
-fn vertices(scene: &Scene) -> Vec<VertexRaw> {
-    vertices_of(scene, 0..scene.triangle_count())
-}
-
-/// Triangles `range` of the scene as a non-indexed vertex list (three vertices each, at
-/// offset `3·range.start` of the full list).
-pub(crate) fn vertices_of(scene: &Scene, range: std::ops::Range<usize>) -> Vec<VertexRaw> {
-    let mut out = Vec::with_capacity(range.len() * 3);
-    let flat = scene.flat();
-    for t in range {
-        let tri = &flat.triangles[t];
-        let [p0, p1, p2] = scene.triangle(t);
-        let ng = (p1 - p0).cross(p2 - p0).normalize_or_zero();
-        let tangent = scene.tangent_of(t).unwrap_or(glam::Vec4::ZERO);
-        for (c, &i) in tri.iter().enumerate() {
-            out.push(VertexRaw {
-                position: flat.positions[i as usize].into(),
-                normal: flat.normals[i as usize].into(),
-                geometric_normal: ng.into(),
-                material: flat.triangle_materials[t],
-                uv: flat.uvs[t][c].into(),
-                tangent: tangent.into(),
-            });
-        }
-    }
-    out
+/// The camera's world -> clip transform for culling the eye passes: a sample's jitter
+/// shifts the image by under a pixel (|Δndc| < 1 / width), so the centre view narrowed by
+/// w / (w + 2) (h / (h + 2)) holds every jittered sample's frustum.
+pub fn eye_cull_view(scene: &Scene) -> Mat4 {
+    let centre = Mat4::from_cols_array_2d(&camera_view(scene, Vec2::splat(0.5), 1.0).view_proj);
+    let (w, h) = (scene.camera.width as f32, scene.camera.height as f32);
+    Mat4::from_scale(Vec3::new(w / (w + 2.0), h / (h + 2.0), 1.0)) * centre
 }
 
 /// Decodes `oct_encode` of `types.wgsl`.
@@ -144,24 +105,11 @@ pub(crate) fn samples_per_submit(w: u32, h: u32) -> u32 {
     ((1u64 << 18) / pixels).clamp(1, SAMPLES_PER_SUBMIT as u64) as u32
 }
 
-/// Fails with `OutOfMemory` when the scene's flat view (every instance's copy, built for
-/// the GPU passes) would not fit, and with a GPU error when its vertex buffer exceeds the
+/// Fails with `OutOfMemory` when the scene's instanced GPU geometry (unique meshes plus
+/// one record per object) would not fit, and with a GPU error when its buffers exceed the
 /// adapter's limits; before either is built.
 pub(crate) fn check_scene_buffers(ctx: &GpuContext, scene: &Scene) -> Result<()> {
-    if !scene.flat_is_built() {
-        crate::memory::check(
-            || {
-                format!(
-                    "the scene's flat view for the GPU passes ({} objects, {} triangles)",
-                    scene.objects.len(),
-                    scene.triangle_count()
-                )
-            },
-            scene.flat_estimate(),
-        )?;
-    }
-    let bytes = scene.triangle_count() as u64 * 3 * std::mem::size_of::<VertexRaw>() as u64;
-    ctx.check_buffer("scene vertices", bytes)
+    instances::check_buffers(ctx, scene)
 }
 
 #[cfg(test)]

@@ -4,6 +4,8 @@
 //! Acne is fought twice: slope-scaled depth bias when rendering, and a normal offset of
 //! about one texel at lookup (`direct.wgsl`); edges are softened by PCF there.
 
+pub use super::instances::CullUnits;
+use super::instances::Draw;
 use super::wgsl;
 use crate::gpu::raw::{LightRaw, ViewRaw};
 use crate::gpu::shaders;
@@ -11,7 +13,6 @@ use crate::sampling::Rng;
 use crate::scene::light_views::{distant_direction, shadow_views};
 use crate::scene::Scene;
 use glam::{Mat4, Vec3};
-use std::ops::Range;
 
 pub const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
@@ -174,6 +175,14 @@ impl ShadowPass {
         );
         let attributes = super::gbuffer::VERTEX_ATTRIBUTES;
         let masked_attributes = [attributes[0], attributes[3], attributes[4]];
+        let instance = super::gbuffer::INSTANCE_ATTRIBUTES;
+        let masked_instance = [
+            instance[0],
+            instance[1],
+            instance[2],
+            instance[3],
+            instance[7],
+        ];
         let masked = crate::gpu::create_render_pipeline(
             device,
             &wgpu::RenderPipelineDescriptor {
@@ -183,10 +192,16 @@ impl ShadowPass {
                     module: &masked_module,
                     entry_point: Some("vs_main"),
                     compilation_options: Default::default(),
-                    buffers: &[Some(wgpu::VertexBufferLayout {
-                        attributes: &masked_attributes,
-                        ..super::gbuffer::vertex_layout()
-                    })],
+                    buffers: &[
+                        Some(wgpu::VertexBufferLayout {
+                            attributes: &masked_attributes,
+                            ..super::gbuffer::vertex_layout()
+                        }),
+                        Some(wgpu::VertexBufferLayout {
+                            attributes: &masked_instance,
+                            ..super::gbuffer::instance_layout()
+                        }),
+                    ],
                 },
                 primitive: wgpu::PrimitiveState::default(),
                 depth_stencil: Some(wgpu::DepthStencilState {
@@ -216,10 +231,16 @@ impl ShadowPass {
                     module: &module,
                     entry_point: Some("vs_main"),
                     compilation_options: Default::default(),
-                    buffers: &[Some(wgpu::VertexBufferLayout {
-                        attributes: &super::gbuffer::VERTEX_ATTRIBUTES[..1],
-                        ..super::gbuffer::vertex_layout()
-                    })],
+                    buffers: &[
+                        Some(wgpu::VertexBufferLayout {
+                            attributes: &super::gbuffer::VERTEX_ATTRIBUTES[..1],
+                            ..super::gbuffer::vertex_layout()
+                        }),
+                        Some(wgpu::VertexBufferLayout {
+                            attributes: &super::gbuffer::INSTANCE_ATTRIBUTES[..4],
+                            ..super::gbuffer::instance_layout()
+                        }),
+                    ],
                 },
                 primitive: wgpu::PrimitiveState::default(),
                 depth_stencil: Some(wgpu::DepthStencilState {
@@ -260,7 +281,7 @@ impl ShadowPass {
         bind_group: &wgpu::BindGroup,
         view_offset: u32,
         geometry: &super::Geometry,
-        draws: Option<&[Range<u32>]>,
+        draws: Option<&[Draw]>,
         masks: Option<&wgpu::BindGroup>,
         timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) {
@@ -287,15 +308,7 @@ impl ShadowPass {
             None => pass.set_pipeline(&self.pipeline),
         }
         pass.set_bind_group(0, bind_group, &[view_offset]);
-        pass.set_vertex_buffer(0, geometry.vertices.slice(..));
-        match draws {
-            Some(ranges) => {
-                for r in ranges {
-                    pass.draw(r.clone(), 0..1);
-                }
-            }
-            None => pass.draw(0..geometry.count, 0..1),
-        }
+        geometry.draw(&mut pass, draws);
     }
 }
 
@@ -303,78 +316,7 @@ impl ShadowPass {
 /// 0..1): false only when all eight corners lie outside one clip plane, so every triangle
 /// inside the box is clipped away entirely and drawing it changes nothing.
 pub fn box_in_view(m: &Mat4, lo: Vec3, hi: Vec3) -> bool {
-    let corners: [glam::Vec4; 8] = std::array::from_fn(|i| {
-        let c = Vec3::new(
-            if i & 1 == 0 { lo.x } else { hi.x },
-            if i & 2 == 0 { lo.y } else { hi.y },
-            if i & 4 == 0 { lo.z } else { hi.z },
-        );
-        *m * c.extend(1.0)
-    });
-    let outside = |f: &dyn Fn(&glam::Vec4) -> bool| corners.iter().all(f);
-    !(outside(&|c| c.x < -c.w)
-        || outside(&|c| c.x > c.w)
-        || outside(&|c| c.y < -c.w)
-        || outside(&|c| c.y > c.w)
-        || outside(&|c| c.z < 0.0)
-        || outside(&|c| c.z > c.w))
-}
-
-/// Triangles per culling unit of the shadow passes: small enough that a unit of a large
-/// mesh usually lies in one cube face, large enough that a scene has few units.
-const CULL_TRIANGLES: u32 = 1024;
-
-/// The culling units of a scene's geometry for the light-view passes: runs of
-/// [`CULL_TRIANGLES`] triangles with their bounds. They depend on the vertex positions only:
-/// the frame engine keeps them in its GPU scene and rebuilds them when geometry moves.
-pub struct CullUnits {
-    units: Vec<(Range<u32>, Vec3, Vec3)>,
-}
-
-impl CullUnits {
-    pub fn of(scene: &Scene) -> Self {
-        let flat = scene.flat();
-        let n = flat.triangles.len() as u32;
-        let units = (0..n.div_ceil(CULL_TRIANGLES))
-            .map(|u| {
-                let t = u * CULL_TRIANGLES..((u + 1) * CULL_TRIANGLES).min(n);
-                let (lo, hi) = flat.triangles[t.start as usize..t.end as usize]
-                    .iter()
-                    .flatten()
-                    .map(|&v| flat.positions[v as usize])
-                    .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
-                        (lo.min(p), hi.max(p))
-                    });
-                (t, lo, hi)
-            })
-            .collect();
-        CullUnits { units }
-    }
-
-    /// Per layer (clip matrices `layers`), the vertex ranges to draw (three vertices per
-    /// triangle, in scene order): the units whose bounds reach into the layer's view,
-    /// adjacent ranges merged. A point light's six cube faces each see a part of the
-    /// scene: on `dense-cornell` (three 82k-triangle spheres below the light) a triangle is
-    /// drawn into about 1.75 faces instead of six.
-    pub fn draws(&self, layers: &[Mat4]) -> Vec<Vec<Range<u32>>> {
-        layers
-            .iter()
-            .map(|m| {
-                let mut draws: Vec<Range<u32>> = Vec::new();
-                for (t, lo, hi) in &self.units {
-                    if !box_in_view(m, *lo, *hi) {
-                        continue;
-                    }
-                    let v = 3 * t.start..3 * t.end;
-                    match draws.last_mut() {
-                        Some(last) if last.end == v.start => last.end = v.end,
-                        _ => draws.push(v),
-                    }
-                }
-                draws
-            })
-            .collect()
-    }
+    super::instances::clip_box(m, lo, hi) != super::instances::Clip::Outside
 }
 
 impl crate::gpu::Pipelines for ShadowPass {
@@ -432,15 +374,24 @@ mod tests {
         assert_eq!(draws.len(), 6);
         let drawn: u64 = draws
             .iter()
-            .flatten()
-            .map(|r| ((r.end - r.start) / 3) as u64)
+            .map(|d| super::super::instances::triangles_drawn(d))
             .sum();
-        let n = scene.flat().triangles.len() as u64;
+        let n = scene.triangle_count() as u64;
         assert!(drawn < 2 * n, "{drawn} of 6 x {n}");
         // Every triangle is drawn into some face.
+        let cull = CullUnits::of(&scene);
         let mut seen = vec![false; n as usize];
-        for r in draws.iter().flatten() {
-            seen[(r.start / 3) as usize..(r.end / 3) as usize].fill(true);
+        for d in draws.iter().flatten() {
+            let mesh = cull
+                .meshes()
+                .iter()
+                .find(|m| m.vertices.contains(&d.vertices.start))
+                .expect("a mesh's vertices");
+            for i in d.instances.clone() {
+                let first = scene.objects[i as usize].triangles.start;
+                let t = |v: u32| (first + (v - mesh.vertices.start) / 3) as usize;
+                seen[t(d.vertices.start)..t(d.vertices.end)].fill(true);
+            }
         }
         assert!(seen.iter().all(|&s| s), "a triangle is drawn into no face");
         eprintln!("dense-cornell: {drawn} triangles drawn into 6 faces, {n} in the scene");

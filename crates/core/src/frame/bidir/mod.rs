@@ -432,7 +432,7 @@ pub(super) fn frame(
     } = g;
     let state = bidir.as_mut().ok_or(Error::Cancelled)?;
     let t = Instant::now();
-    targets.write_eye(&ctx, scene);
+    targets.write_eye(&ctx, scene, &gs.cull);
     let n_env = state.write_views(&ctx, scene, options.bundles, frame.seed);
     let mut upload = t.elapsed().as_secs_f64();
 

@@ -483,8 +483,8 @@ mod tests {
         };
         let mut samples = LightSamples::new(ctx, scene, counts).expect("samples");
         assert!(samples.prepare(ctx, scene, (1, 1.0, true)));
-        let geometry = Geometry::upload(ctx, scene);
         let cull = CullUnits::of(scene);
+        let geometry = Geometry::upload(ctx, scene, &cull);
         let mut timer = Timer::new(ctx, sky);
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
         samples.record_shadows(ctx, &mut encoder, &mut timer, (&geometry, &cull, None));

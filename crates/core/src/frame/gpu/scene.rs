@@ -1,4 +1,4 @@
-//! The scene's GPU-resident data: vertices, materials, textures, lights and their shadow
+//! The scene's GPU-resident data: meshes and instances, materials, textures, lights and their shadow
 //! maps, the sampled lights of the direct pass ([`super::samples`]), uploaded once and then
 //! only what changed.
 
@@ -46,8 +46,9 @@ pub(crate) struct GpuScene {
     pub shadows_stale: bool,
     /// World -> clip per shadow layer (CPU copies, for culling the shadow passes).
     shadow_clip: Vec<glam::Mat4>,
-    /// The geometry's culling units for the light-view passes (shadow, bounce, RSM, VPL
-    /// maps), rebuilt when geometry moves.
+    /// The geometry's culling data for the eye and light-view passes (G-buffer, shadow,
+    /// bounce, RSM, VPL maps): the meshes' clusters and the objects' transforms, re-read
+    /// when objects move.
     pub cull: shadow::CullUnits,
     /// Points drawn on the emitters and directions drawn from the sky.
     pub samples: LightSamples,
@@ -86,8 +87,9 @@ impl GpuScene {
             shadow::layered_maps(&ctx.device, "shadow maps", shadow_map_size, layers);
         let shadow_group =
             ShadowPass::get(ctx).view_group(&ctx.device, "shadow bind group", &shadow_views);
+        let cull = shadow::CullUnits::of(scene);
         Ok(GpuScene {
-            geometry: Geometry::upload(ctx, scene),
+            geometry: Geometry::upload(ctx, scene, &cull),
             materials: storage_init(ctx, "materials", bytemuck::cast_slice(&materials)),
             textures,
             masked: scene.has_alpha_masks(),
@@ -101,7 +103,7 @@ impl GpuScene {
             layers,
             shadows_stale: true,
             shadow_clip: shadows.matrices,
-            cull: shadow::CullUnits::of(scene),
+            cull,
             samples,
             shadow_map_size,
             lights_jitter: None,
@@ -119,17 +121,9 @@ impl GpuScene {
         needed.max(1) == self.layers && SampleCounts::of(scene, counts) == self.samples.counts
     }
 
-    /// Uploads the vertices of scene triangles `range`.
-    pub fn write_triangles(&self, ctx: &GpuContext, scene: &Scene, range: std::ops::Range<usize>) {
-        let verts = raster::vertices_of(scene, range.clone());
-        let offset = (range.start * 3 * std::mem::size_of::<crate::gpu::raw::VertexRaw>()) as u64;
-        gpu::write_buffer(
-            &ctx.queue,
-            "scene vertices",
-            &self.geometry.vertices,
-            offset,
-            bytemuck::cast_slice(&verts),
-        );
+    /// Rewrites object `o`'s instance record (it moved; its mesh stays).
+    pub fn write_instance(&self, ctx: &GpuContext, scene: &Scene, o: usize) {
+        self.geometry.write_instance(ctx, scene, o);
     }
 
     pub fn write_materials(&mut self, ctx: &GpuContext, scene: &Scene) {
@@ -196,9 +190,10 @@ impl GpuScene {
         self.masked.then_some(&self.textures.group)
     }
 
-    /// The geometry moved: its culling units and the sampled lights' shadows with it.
+    /// The geometry moved: the objects' transforms for culling, and the sampled lights'
+    /// shadows with them.
     pub fn geometry_moved(&mut self, scene: &Scene) {
-        self.cull = shadow::CullUnits::of(scene);
+        self.cull.moved(scene);
         self.samples.invalidate(true);
     }
 

@@ -39,6 +39,10 @@ pub(crate) struct Targets {
     eye: wgpu::Buffer,
     /// The jittered sample views of the current camera (all `spp`).
     sample_views: Vec<ViewRaw>,
+    /// The draws of the objects (clusters) that reach into any of the eye views (culled
+    /// against the camera's frustum widened by a pixel each side, which holds every
+    /// jittered sample's), written with the views.
+    eye_draws: Vec<raster::Draw>,
     /// Offset (mod 1) of every sub-pixel sample position, the pixel centre's included: a
     /// new one per progressive pass (`frame::progressive`), zero otherwise.
     sample_offset: Vec2,
@@ -271,6 +275,7 @@ impl Targets {
             spp,
             eye,
             sample_views: Vec::new(),
+            eye_draws: Vec::new(),
             sample_offset: Vec2::ZERO,
             eye_current: false,
             direct_current: false,
@@ -363,10 +368,14 @@ impl Targets {
 
     /// Writes the eye views of the current camera (the pixel centre, then the first batch of
     /// jittered samples) if the camera changed.
-    pub fn write_eye(&mut self, ctx: &GpuContext, scene: &Scene) {
+    pub fn write_eye(&mut self, ctx: &GpuContext, scene: &Scene, cull: &raster::CullUnits) {
         if self.eye_current {
             return;
         }
+        self.eye_draws = cull
+            .draws(&[raster::eye_cull_view(scene)])
+            .pop()
+            .unwrap_or_default();
         let spp = self.spp;
         let o = self.sample_offset;
         let shift = |j: Vec2| (j + o).fract();
@@ -418,7 +427,7 @@ impl Targets {
                 target,
                 &self.gbuffer_group,
                 offset,
-                &gs.geometry,
+                (&gs.geometry, Some(&self.eye_draws)),
                 (&gs.textures.group, gs.variant),
                 ts,
             );
@@ -506,7 +515,7 @@ impl Targets {
             &self.gbuf,
             &self.gbuffer_group,
             0,
-            &gs.geometry,
+            (&gs.geometry, Some(&self.eye_draws)),
             (&gs.textures.group, gs.variant),
             ts,
         );

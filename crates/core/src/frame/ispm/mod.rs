@@ -129,7 +129,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     let reuse = ring.frames() == 1 && !changes.lighting() && traced_seed == Some(params.seed);
     let first_hits = &mut state.first_hits;
     first_hits.prepare(&ctx, scene, &gs.materials, &layers, params.seed, reuse)?;
-    targets.write_eye(&ctx, scene);
+    targets.write_eye(&ctx, scene, &gs.cull);
     stage(&mut stats, "upload", t);
 
     // 1. Bounce maps, submitted first with their readback copies.

@@ -10,8 +10,8 @@
 @group(0) @binding(4) var<storage, read_write> counter: atomic<u32>;
 
 @vertex
-fn vs_main(v: VertexIn) -> VertexOut {
-    return scene_vertex(v, bundle.view_proj);
+fn vs_main(v: VertexIn, i: InstanceIn) -> VertexOut {
+    return scene_vertex(v, i, bundle.view_proj);
 }
 
 @fragment

@@ -5,8 +5,8 @@
 @group(0) @binding(1) var<storage, read> materials: array<Material>;
 
 @vertex
-fn vs_main(v: VertexIn) -> VertexOut {
-    return scene_vertex(v, view.view_proj);
+fn vs_main(v: VertexIn, i: InstanceIn) -> VertexOut {
+    return scene_vertex(v, i, view.view_proj);
 }
 
 struct GBufferOut {

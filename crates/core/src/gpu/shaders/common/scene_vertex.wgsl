@@ -1,6 +1,8 @@
-// The scene's vertices as the passes that rasterize it read them (`gpu::raw::VertexRaw`),
-// and what they carry to the fragment stage: world position, shading and geometric normal,
-// material, texture coordinates and tangent.
+// The scene's vertices as the passes that rasterize it read them: the unique meshes'
+// vertices in their own frames (`gpu::raw::VertexRaw`, per vertex) placed by the object's
+// instance record (`gpu::raw::InstanceRaw`, per instance), and what they carry to the
+// fragment stage: world position, shading and geometric normal, material, texture
+// coordinates and tangent.
 
 struct VertexIn {
     @location(0) position: vec3<f32>,
@@ -9,6 +11,21 @@ struct VertexIn {
     @location(3) material: u32,
     @location(4) uv: vec2<f32>,
     @location(5) tangent: vec4<f32>,
+}
+
+struct InstanceIn {
+    // Object -> world, by columns.
+    @location(6) model0: vec4<f32>,
+    @location(7) model1: vec4<f32>,
+    @location(8) model2: vec4<f32>,
+    @location(9) model3: vec4<f32>,
+    // Normal matrix (inverse transpose of the linear part), by columns; normal0.w is -1 for
+    // a mirroring transform (the tangent's handedness flips), else 1.
+    @location(10) normal0: vec4<f32>,
+    @location(11) normal1: vec4<f32>,
+    @location(12) normal2: vec4<f32>,
+    // Added to the vertex's material (its file's per-face offset, or 0).
+    @location(13) material: u32,
 }
 
 struct VertexOut {
@@ -21,15 +38,29 @@ struct VertexOut {
     @location(5) @interpolate(flat) tangent: vec4<f32>,
 }
 
-// Vertex `v` projected by `view_proj` (world -> clip), its attributes carried along.
-fn scene_vertex(v: VertexIn, view_proj: mat4x4<f32>) -> VertexOut {
+fn normalize_or_zero(v: vec3<f32>) -> vec3<f32> {
+    let l = length(v);
+    if l > 0.0 {
+        return v / l;
+    }
+    return vec3<f32>(0.0);
+}
+
+// Vertex `v` placed by instance `i` (as `Scene::flat` places it on the CPU: the position by
+// the object's transform, normals by the normal matrix, renormalized; the tangent by the
+// linear part) and projected by `view_proj` (world -> clip), its attributes carried along.
+fn scene_vertex(v: VertexIn, i: InstanceIn, view_proj: mat4x4<f32>) -> VertexOut {
+    let model = mat4x4<f32>(i.model0, i.model1, i.model2, i.model3);
+    let nm = mat3x3<f32>(i.normal0.xyz, i.normal1.xyz, i.normal2.xyz);
+    let world = (model * vec4<f32>(v.position, 1.0)).xyz;
     var o: VertexOut;
-    o.clip = view_proj * vec4<f32>(v.position, 1.0);
-    o.world = v.position;
-    o.normal = v.normal;
-    o.geometric_normal = v.geometric_normal;
-    o.material = v.material;
+    o.clip = view_proj * vec4<f32>(world, 1.0);
+    o.world = world;
+    o.normal = normalize_or_zero(nm * v.normal);
+    o.geometric_normal = normalize_or_zero(nm * v.geometric_normal);
+    o.material = v.material + i.material;
     o.uv = v.uv;
-    o.tangent = v.tangent;
+    let linear = mat3x3<f32>(i.model0.xyz, i.model1.xyz, i.model2.xyz);
+    o.tangent = vec4<f32>(normalize_or_zero(linear * v.tangent.xyz), v.tangent.w * i.normal0.w);
     return o;
 }

@@ -22,8 +22,8 @@ struct BounceView {
 @group(0) @binding(0) var<uniform> view: BounceView;
 
 @vertex
-fn vs_main(v: VertexIn) -> VertexOut {
-    return scene_vertex(v, view.view_proj);
+fn vs_main(v: VertexIn, i: InstanceIn) -> VertexOut {
+    return scene_vertex(v, i, view.view_proj);
 }
 
 fn falloff(cos_t: f32) -> f32 {
