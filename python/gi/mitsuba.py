@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from gi._gi import Scene, SceneError
+from gi._placement import first_bad_placement
 from gi.meshes import MeshEntry, load_mesh, report, scene_error
 from gi.textures import TextureError, TextureSet
 
@@ -651,19 +652,10 @@ class _Translator:
 
     def check_matrix(self, el: Element, m: np.ndarray) -> None:
         """A shape's placement checked as the core checks a ``matrix`` transform, so that
-        the error names the Mitsuba element: finite, translation within ±100000 m, each
-        axis's scale in [1e-6, 1e6], and invertible (|det| at least 1e-6 of the product of
-        the axes' scales)."""
-        lin = m[:3, :3]
-        if not np.isfinite(m).all():
-            raise self.error(el, "the transform is not finite")
-        if np.abs(m[:3, 3]).max() > 1e5:
-            raise self.error(el, "the transform moves the shape beyond ±100000 m")
-        lengths = np.linalg.norm(lin, axis=0)
-        if lengths.min() < 1e-6 or lengths.max() > 1e6:
-            raise self.error(el, "the transform scales an axis by less than 1e-6 or more than 1e6")
-        if not abs(np.linalg.det(lin)) >= 1e-6 * lengths.prod():
-            raise self.error(el, "the transform is singular")
+        the error names the Mitsuba element."""
+        bad = first_bad_placement(m[None])
+        if bad is not None:
+            raise self.error(el, f"the transform {bad[1]}")
 
     def check_group(self, group: Element) -> None:
         """A ``<shapegroup>`` holds shapes only: no instances (Mitsuba has no nested

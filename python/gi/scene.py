@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from gi._gi import Scene, builtin_scenes
+from gi._placement import first_bad_placement
 from gi.environment import load_environment
 from gi.meshes import MeshEntry, load_mesh, report
 from gi.meshes import scene_error as _scene_error
@@ -323,22 +324,10 @@ def _gltf_scene_description(
 
 def _check_node_matrices(file: str, nodes: list[int], m: np.ndarray) -> None:
     """Nodes' world matrices (n, 4, 4) checked as the core checks a ``matrix`` transform,
-    so that the error names the node: translation within ±100000 m, each axis's scale in
-    [1e-6, 1e6], invertible (|det| at least 1e-6 of the product of the axes' scales)."""
-    with np.errstate(all="ignore"):
-        finite = np.isfinite(m).all(axis=(1, 2))
-        lin = np.where(finite[:, None, None], m[:, :3, :3], 0.0)
-        lengths = np.linalg.norm(lin, axis=1)
-        far = ~finite | (np.abs(m[:, :3, 3]) > 1e5).any(axis=1)
-        scaled = (lengths.min(axis=1) < 1e-6) | (lengths.max(axis=1) > 1e6)
-        singular = ~(np.abs(np.linalg.det(lin)) >= 1e-6 * lengths.prod(axis=1))
-    for bad, reason in (
-        (far, "the world transform is not finite or moves beyond ±100000 m"),
-        (scaled, "the world transform scales an axis by less than 1e-6 or more than 1e6"),
-        (singular, "the world transform is singular"),
-    ):
-        if bad.any():
-            raise _scene_error(file, f"nodes[{nodes[int(np.argmax(bad))]}]", reason)
+    so that the error names the node."""
+    bad = first_bad_placement(m)
+    if bad is not None:
+        raise _scene_error(file, f"nodes[{nodes[bad[0]]}]", f"the world transform {bad[1]}")
 
 
 def _gltf_camera(cam: Any, lo: np.ndarray, hi: np.ndarray) -> dict[str, Any]:

@@ -12,6 +12,7 @@
 
 mod common;
 
+use common::median;
 use gi_core::estimate::Estimator;
 use gi_core::frame::{FrameDesc, Renderer};
 use gi_core::scene::{builtin, SceneUpdate};
@@ -24,11 +25,6 @@ const ESTIMATORS: [Estimator; 4] = [
     Estimator::Cluster,
     Estimator::Directional,
 ];
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
 
 fn stage(out: &RenderOutput, names: &[&str]) -> f64 {
     out.stats

@@ -51,19 +51,14 @@
 //! the direct light), with the GPU-timestamp stages of each.
 mod common;
 
+use common::{median, nudge};
 use gi_core::estimate::Estimator;
 use gi_core::frame::options::FirstBounce;
 use gi_core::frame::{FrameDesc, Renderer};
-use gi_core::scene::desc::LightDesc;
 use gi_core::scene::{bench::dense_cornell, builtin, SceneUpdate};
 use gi_core::Silent;
 use gi_core::{render, RenderOutput, Scene};
 use std::time::Instant;
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
 
 fn stage(out: &RenderOutput, names: &[&str]) -> f64 {
     out.stats
@@ -72,43 +67,6 @@ fn stage(out: &RenderOutput, names: &[&str]) -> f64 {
         .filter(|(n, _)| names.contains(&n.as_str()))
         .map(|(_, s)| s)
         .sum()
-}
-
-/// Light 0 nudged by `t` (metres along x).
-fn nudge(scene: &Scene, t: f32) -> SceneUpdate {
-    let light = match scene.light_desc(0).expect("a light") {
-        LightDesc::Point {
-            position,
-            intensity,
-        } => LightDesc::Point {
-            position: [position[0] + t, position[1], position[2]],
-            intensity,
-        },
-        LightDesc::Spot {
-            position,
-            direction,
-            intensity,
-            inner_angle,
-            outer_angle,
-        } => LightDesc::Spot {
-            position: [position[0] + t, position[1], position[2]],
-            direction,
-            intensity,
-            inner_angle,
-            outer_angle,
-        },
-        // A distant light turns instead.
-        LightDesc::Directional {
-            direction,
-            irradiance,
-            angular_diameter,
-        } => LightDesc::Directional {
-            direction: [direction[0] + t, direction[1], direction[2]],
-            irradiance,
-            angular_diameter,
-        },
-    };
-    SceneUpdate::Light { index: 0, light }
 }
 
 /// Median wall-clock seconds of `runs` frames of `settings` on one renderer, the light

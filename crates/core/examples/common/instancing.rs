@@ -16,35 +16,15 @@
 //! (default: 640x480, 3 runs, 50k photons, all three scenes, the flattened 400-sphere grid
 //! not rendered: ~1.6 GB of vertices, minutes a frame on lavapipe)
 
+use super::{median, nudge};
 use gi_core::frame::{FrameDesc, Renderer};
 use gi_core::raster::instances::{buffer_bytes, triangles_drawn};
 use gi_core::raster::{eye_cull_view, shadow::ShadowViews, CullUnits};
 use gi_core::scene::bench::{dense_cornell, sphere_copies};
-use gi_core::scene::desc::LightDesc;
 use gi_core::scene::light_views::light_views;
-use gi_core::{RenderOutput, Scene, SceneUpdate, Silent};
+use gi_core::{RenderOutput, Scene, Silent};
 use glam::Mat4;
 use std::time::Instant;
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
-
-/// The point light 0 nudged by `t` along x.
-fn nudge(scene: &Scene, t: f32) -> SceneUpdate {
-    let light = match scene.light_desc(0).expect("a light") {
-        LightDesc::Point {
-            position,
-            intensity,
-        } => LightDesc::Point {
-            position: [position[0] + t, position[1], position[2]],
-            intensity,
-        },
-        other => other,
-    };
-    SceneUpdate::Light { index: 0, light }
-}
 
 /// "drawn / unculled" triangles of `views` (millions).
 fn pass_triangles(cull: &CullUnits, views: &[Mat4]) -> String {

@@ -2,6 +2,9 @@
 // Each example uses a part of it.
 #![allow(dead_code)]
 
+use gi_core::scene::desc::LightDesc;
+use gi_core::scene::SceneUpdate;
+use gi_core::Scene;
 use std::error::Error;
 
 /// The command line: `--runs N`, `--quick`, `--FLAG VALUE`.
@@ -52,6 +55,49 @@ pub fn print_adapter() -> Result<(), Box<dyn Error>> {
         report.lines().take(4).collect::<Vec<_>>().join("; ")
     );
     Ok(())
+}
+
+/// The median of timings (the upper one of an even count).
+pub fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// Light 0 nudged by `t` (metres along x).
+pub fn nudge(scene: &Scene, t: f32) -> SceneUpdate {
+    let light = match scene.light_desc(0).expect("a light") {
+        LightDesc::Point {
+            position,
+            intensity,
+        } => LightDesc::Point {
+            position: [position[0] + t, position[1], position[2]],
+            intensity,
+        },
+        LightDesc::Spot {
+            position,
+            direction,
+            intensity,
+            inner_angle,
+            outer_angle,
+        } => LightDesc::Spot {
+            position: [position[0] + t, position[1], position[2]],
+            direction,
+            intensity,
+            inner_angle,
+            outer_angle,
+        },
+        // A distant light turns instead.
+        LightDesc::Directional {
+            direction,
+            irradiance,
+            angular_diameter,
+        } => LightDesc::Directional {
+            direction: [direction[0] + t, direction[1], direction[2]],
+            irradiance,
+            angular_diameter,
+        },
+    };
+    SceneUpdate::Light { index: 0, light }
 }
 
 pub mod instancing;

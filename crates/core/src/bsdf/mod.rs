@@ -115,10 +115,7 @@ impl Material {
     /// probabilities are exactly [0, 1, 0] and the Fresnel coupling exactly 1; tested).
     #[inline]
     pub fn is_lambertian(&self) -> bool {
-        !self.has_specular()
-            && !self.fresnel
-            && !self.has_transmission()
-            && self.diffuse.max_element() > 0.0
+        self.lambertian().is_some() && !self.has_transmission() && self.diffuse.max_element() > 0.0
     }
 
     /// [`Material::sample`] for [`Material::is_lambertian`] materials: the same draws (the
