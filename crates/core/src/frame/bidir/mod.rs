@@ -20,6 +20,7 @@
 
 mod bundles;
 mod emitted;
+mod specular_paths;
 mod subpaths;
 mod vpls;
 
@@ -574,8 +575,10 @@ fn output(
     out
 }
 
-/// Step 5: the light through mirrors and glass seen by the camera (next-event estimation
-/// where the paths land) written to the specular target; the target cleared once when the
+/// Step 5: the light of the paths through mirrors and glass that the GPU passes leave out
+/// ([`specular_paths`]: next-event estimation where the camera's paths through them land, the
+/// light tracer's caustics, the camera paths through a delta lobe continued by the path
+/// tracer) written to the specular target; the target cleared once when the
 /// scene no longer has them.
 #[allow(clippy::too_many_arguments)]
 fn specular(
@@ -591,7 +594,21 @@ fn specular(
     if scene.has_delta_materials() {
         let samples = super::photon::camera_samples(options.direct.spp, options.max_depth, frame);
         let sampling = options.specular_sampling;
-        let img = specular_paths_direct(scene, bvh, &samples, sampling, progress)?;
+        let mut img = specular_paths_direct(scene, bvh, &samples, sampling, progress)?;
+        let (w, h) = (targets.width as u64, targets.height as u64);
+        let spp = options.direct.spp.max(1);
+        let paths = (w * h * spp as u64).max(specular_paths::MIN_LIGHT_PATHS);
+        let caustics = specular_paths::caustics(scene, bvh, paths, options.max_depth, frame.seed);
+        let camera = (spp, frame.seed, options.max_depth);
+        let through = specular_paths::delta_camera_paths(scene, bvh, camera, progress)?;
+        for ((p, c), t) in img
+            .pixels
+            .iter_mut()
+            .zip(&caustics.pixels)
+            .zip(&through.pixels)
+        {
+            *p += *c + *t;
+        }
         targets.write_specular(ctx, &img);
         state.specular_written = true;
         return Ok(Some(img));
