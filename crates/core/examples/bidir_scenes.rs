@@ -10,7 +10,8 @@
 //!
 //! Options: `--scenes a,b` (every built-in scene and `dense-cornell`), `--size N` (32),
 //! `--frames N` (`bidir` frames, seeds 1…N, 16), `--spp N` (`path`, 1024), `--bundles N`
-//! (`bidir`, 32), `--depth N` (7), `--stages 1` (the first `bidir` frame's stages to stderr).
+//! (`bidir`, 32), `--depth N` (7), `--stages 1` (the first `bidir` frame's stages to stderr), `--set KEY=N`
+//! (repeatable: an integer setting of `bidir`).
 
 mod common;
 
@@ -96,9 +97,13 @@ fn main() {
         let t = Instant::now();
         let b: Vec<f64> = (1..=frames as u64)
             .map(|seed| {
-                let o = gi_core::options!(Bidir, spp: 1, width: size, height: size, seed: seed)
+                let mut o = gi_core::options!(Bidir, spp: 1, width: size, height: size, seed: seed)
                     .with("bundles", bundles)
                     .with("max_depth", depth);
+                for kv in args.values("--set") {
+                    let (k, v) = kv.split_once('=').expect("--set KEY=N");
+                    o = o.with(k, v.parse::<i64>().expect("an integer"));
+                }
                 let out = render(&scene, &o, &Silent).expect("bidir");
                 if stages && seed == 1 {
                     eprintln!("{name}: {:?}", out.stats.stages);
