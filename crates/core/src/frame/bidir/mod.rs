@@ -514,7 +514,8 @@ pub(super) fn frame(
     // 5. Mirrors and glass seen by the camera, traced on the CPU while the GPU works on the
     // lights (uploaded before the composite runs: queue writes precede the submission).
     let t = Instant::now();
-    let specular = specular(&ctx, targets, state, scene, bvh, options, frame, progress)?;
+    let (specular, cpu_split) =
+        specular(&ctx, targets, state, scene, bvh, options, frame, progress)?;
     let specular_seconds = t.elapsed().as_secs_f64();
     let names = readback_names(images, true);
     targets.record_readback(&ctx, &mut encoder, &names, Some(&state.indirect));
@@ -542,7 +543,11 @@ pub(super) fn frame(
         ("light subpaths".into(), subpath_seconds),
     ];
     if specular.is_some() {
-        stages.push(("specular paths".into(), specular_seconds));
+        let (light, camera) = cpu_split;
+        let nee = (specular_seconds - light - camera).max(0.0);
+        stages.push(("specular paths".into(), nee));
+        stages.push(("caustic light paths".into(), light));
+        stages.push(("delta camera paths".into(), camera));
     }
     stages.append(&mut timer.totals);
     stages.push(("readback".into(), readback));
@@ -579,7 +584,8 @@ fn output(
 /// ([`specular_paths`]: next-event estimation where the camera's paths through them land, the
 /// light tracer's caustics, the camera paths through a delta lobe continued by the path
 /// tracer) written to the specular target; the target cleared once when the
-/// scene no longer has them.
+/// scene no longer has them. Also the seconds of the light tracer and of the camera paths
+/// (stages of their own, apart from "specular paths").
 #[allow(clippy::too_many_arguments)]
 fn specular(
     ctx: &GpuContext,
@@ -590,17 +596,23 @@ fn specular(
     options: &BidirOptions,
     frame: &FrameParams,
     progress: &dyn Progress,
-) -> Result<Option<Image>> {
+) -> Result<(Option<Image>, (f64, f64))> {
     if scene.has_delta_materials() {
         let samples = super::photon::camera_samples(options.direct.spp, options.max_depth, frame);
         let sampling = options.specular_sampling;
         let mut img = specular_paths_direct(scene, bvh, &samples, sampling, progress)?;
+        // One light path and one camera sample a pixel (`spp` is the direct light's, 16 at
+        // silhouettes and edges by default: so many over the whole image would cost
+        // seconds a frame on the CPU at 512²).
         let (w, h) = (targets.width as u64, targets.height as u64);
-        let spp = options.direct.spp.max(1);
-        let paths = (w * h * spp as u64).max(specular_paths::MIN_LIGHT_PATHS);
+        let paths = (w * h).max(specular_paths::MIN_LIGHT_PATHS);
+        let t = Instant::now();
         let caustics = specular_paths::caustics(scene, bvh, paths, options.max_depth, frame.seed);
-        let camera = (spp, frame.seed, options.max_depth);
+        let light_seconds = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let camera = (1, frame.seed, options.max_depth);
         let through = specular_paths::delta_camera_paths(scene, bvh, camera, progress)?;
+        let camera_seconds = t.elapsed().as_secs_f64();
         for ((p, c), t) in img
             .pixels
             .iter_mut()
@@ -611,11 +623,11 @@ fn specular(
         }
         targets.write_specular(ctx, &img);
         state.specular_written = true;
-        return Ok(Some(img));
+        return Ok((Some(img), (light_seconds, camera_seconds)));
     }
     if state.specular_written {
         targets.write_specular(ctx, &Image::new(targets.width, targets.height));
         state.specular_written = false;
     }
-    Ok(None)
+    Ok((None, (0.0, 0.0)))
 }

@@ -34,9 +34,10 @@ use crate::trace::{Interaction, SceneBvh};
 use glam::Vec3;
 use rayon::prelude::*;
 
-/// Fewest light paths a frame traces for [`caustics`] (one per camera sample beyond that,
-/// as `path`): at 32×32 one per pixel leaves about 30 paths a frame on `caustic-ring`'s
-/// mirror ring. Paths whose first bounce is not a delta lobe end after one ray.
+/// Fewest light paths a frame traces for [`caustics`] (one per pixel beyond that, as
+/// `path` at 1 spp): at 32×32 one per pixel would leave about 30 paths a frame on
+/// `caustic-ring`'s mirror ring. Paths whose first bounce is not a delta lobe end after one
+/// ray.
 pub(super) const MIN_LIGHT_PATHS: u64 = 1 << 16;
 
 /// The sources of [`caustics`]: the point and spot lights (those whose light subpaths the
