@@ -27,6 +27,19 @@ fn mean(img: &Image) -> f64 {
         / img.pixels.len() as f64
 }
 
+/// Relative MSE of `img` against `reference`: mean of (a − b)² / (b² + 0.01), RGB averaged.
+fn relmse(img: &Image, reference: &Image) -> f64 {
+    img.pixels
+        .iter()
+        .zip(&reference.pixels)
+        .map(|(a, b)| {
+            let (a, b) = (a.as_dvec3(), b.as_dvec3());
+            ((a - b) * (a - b) / (b * b + 0.01)).element_sum() / 3.0
+        })
+        .sum::<f64>()
+        / img.pixels.len() as f64
+}
+
 /// The image mean over the pixels whose first surface (through the pixel centre) has a
 /// delta lobe, times their share of the pixels.
 fn delta_share(scene: &Scene, img: &Image) -> f64 {
@@ -70,13 +83,14 @@ fn main() {
          {depth}` · {size}×{size} · max_depth {depth} · `bidir` {bundles} bundles, other \
          settings default, seeds 1…{frames} · `path` {spp} spp, seed 99 · means of RGB · \
          light-traced: `path` − `path` with light_paths 0 · through delta: the pixels whose \
-         first surface is a mirror or glass (their sum over all pixels).\n"
+         first surface is a mirror or glass (their sum over all pixels) · relMSE: of the \
+         first `bidir` frame against `path`, (a − b)²/(b² + 0.01).\n"
     );
     println!(
         "| scene | path | light-traced | through delta | bidir (± se) | bidir / path | \
-         bidir frame (s) |"
+         bidir frame (s) | relMSE (seed 1) |"
     );
-    println!("|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|");
     for name in scenes.split(',') {
         let scene = if name == "dense-cornell" {
             bench::dense_cornell()
@@ -95,6 +109,7 @@ fn main() {
         let traced = p - mean(&none);
         let through = delta_share(&cam_scene, &full);
         let t = Instant::now();
+        let mut rel_mse = 0.0;
         let b: Vec<f64> = (1..=frames as u64)
             .map(|seed| {
                 let mut o = gi_core::options!(Bidir, spp: 1, width: size, height: size, seed: seed)
@@ -108,6 +123,9 @@ fn main() {
                 if stages && seed == 1 {
                     eprintln!("{name}: {:?}", out.stats.stages);
                 }
+                if seed == 1 {
+                    rel_mse = relmse(&out.radiance, &full);
+                }
                 mean(&out.radiance)
             })
             .collect();
@@ -117,7 +135,7 @@ fn main() {
         let se = (b.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0).max(1.0) / n).sqrt();
         println!(
             "| {name} | {p:.5} | {traced:.5} | {through:.5} | {m:.5} ± {se:.5} | {:.4} ± {:.4} \
-             | {secs:.2} |",
+             | {secs:.2} | {rel_mse:.4} |",
             m / p,
             se / p
         );
