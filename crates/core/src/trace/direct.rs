@@ -36,6 +36,9 @@ pub enum Nee {
 #[derive(Clone, Debug)]
 pub struct DirectLight {
     pub emitters: EmitterSampler,
+    /// Whether a ray can find light by hitting it (an emitter, a sun's disc or the
+    /// environment): without, the path tracer's last BSDF ray is not traced.
+    pub found_by_rays: bool,
 }
 
 /// Where a BSDF-sampled ray left from, for the multiple-importance weight of an emitter it
@@ -52,15 +55,21 @@ impl DirectLight {
     /// The scene's emitters with the selection that pays for their number
     /// ([`EmitterSampler::auto`]).
     pub fn of(scene: &Scene) -> Self {
-        DirectLight {
-            emitters: EmitterSampler::auto(scene),
-        }
+        Self::from_emitters(scene, EmitterSampler::auto(scene))
     }
 
     /// The scene's emitters chosen by `selection`.
     pub fn with_selection(scene: &Scene, selection: Selection) -> Self {
+        Self::from_emitters(scene, EmitterSampler::new(scene, selection))
+    }
+
+    fn from_emitters(scene: &Scene, emitters: EmitterSampler) -> Self {
+        let found_by_rays = scene.materials.iter().any(|m| m.emits())
+            || scene.environment.is_some()
+            || scene.lights.iter().any(|l| l.disc_radiance().is_some());
         DirectLight {
-            emitters: EmitterSampler::new(scene, selection),
+            emitters,
+            found_by_rays,
         }
     }
 
