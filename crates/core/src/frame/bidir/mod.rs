@@ -17,6 +17,8 @@
 //!    vertex a VPL; a path of two and more bounces is drawn both by the bundle's hit
 //!    connecting to a subpath vertex and by a subpath vertex lighting the pixel, the two
 //!    combined by MIS.
+//! 5. [`specular_paths`]: the paths through mirrors and glass, on the CPU (a light tracer
+//!    and camera paths through delta lobes), added to the specular target.
 
 mod bundles;
 mod emitted;
@@ -511,8 +513,9 @@ pub(super) fn frame(
     let groups = [&state.group, targets.lighting_group()];
     VplPass::get(&ctx).record(&mut encoder, &indirect_view, groups, ts);
     targets.record_composite(&ctx, &mut encoder, timer);
-    // 5. Mirrors and glass seen by the camera, traced on the CPU while the GPU works on the
-    // lights (uploaded before the composite runs: queue writes precede the submission).
+    // 5. The paths through mirrors and glass (`specular_paths`), traced on the CPU while the
+    // GPU works on the lights (uploaded before the composite runs: queue writes precede the
+    // submission).
     let t = Instant::now();
     let (specular, cpu_split) =
         specular(&ctx, targets, state, scene, bvh, options, frame, progress)?;
