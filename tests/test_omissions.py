@@ -42,14 +42,21 @@ def test_an_option_the_method_ignores_is_named(method):
         gi.Renderer(gi.load_scene("cornell"), method, **{row["name"]: row["default"]})
 
 
-def test_bidir_computes_every_depth_and_names_the_mirrors_it_leaves_out():
-    """bidir computes any max_depth (its light subpaths, issue 29): no warning at any depth;
-    the indirect light behind mirrors and glass is still named."""
+def test_bidir_computes_every_depth_and_names_the_caustics_it_leaves_out():
+    """bidir computes any max_depth (its light subpaths, issue 29) and the paths through
+    mirrors and glass (its CPU light tracer and camera paths): no warning at any depth nor on
+    the built-in scenes with mirrors and glass; the caustics of a parallel sun seen directly,
+    which nothing draws, are named."""
     scene = gi.load_scene("cornell")
     for depth in (1, 3, 5, 64):
         quiet(scene, "bidir", max_depth=depth)
-    with pytest.warns(gi.RenderWarning, match="mirrors and glass"):
-        gi.Renderer(gi.load_scene("cornell-glass"), "bidir", size=(8, 8))
+    for name in ("cornell-glass", "caustic-ring", "mirror-shadow", "ring-room"):
+        quiet(gi.load_scene(name), "bidir")
+    desc = json.loads(gi.builtin_json("cornell-glass"))
+    desc["lights"] = [{"type": "directional", "direction": [0, -1, 0], "irradiance": [2, 2, 2]}]
+    sun = gi.Scene.from_json(json.dumps(desc), "sun-glass")
+    with pytest.warns(gi.RenderWarning, match="caustics of parallel directional lights"):
+        gi.Renderer(sun, "bidir", size=(8, 8))
 
 
 def emitting_cornell() -> gi.Scene:

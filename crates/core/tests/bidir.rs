@@ -3,6 +3,8 @@
 //!
 //! - furnace: the one-bounce light (bidir − direct) against the analytic value;
 //! - Cornell box against the path tracer limited to the same depth (direct + one bounce);
+//! - every built-in scene at `max_depth` 7 against the path tracer (issue 29), those with
+//!   mirrors and glass included;
 //! - settings are validated.
 
 mod common;
@@ -519,7 +521,8 @@ fn bidir_mean_se(
 /// through the light subpaths of `subpaths.rs`, its two strategies combined by MIS) against
 /// ground truth: the furnace's analytic value (1 + ρ + … + ρ⁶)·L0 (32 bundles, 8 frames) and
 /// the path tracer at depth 7 (1024 spp) on the built-in scenes without mirrors or glass
-/// (those `bidir` names as left out), 32×32, 64 bundles, the mean of 32 frames (seeds 1–32).
+/// (those with: `mirror_and_glass_scenes_match_path_tracer`), 32×32, 64 bundles, the mean
+/// of 32 frames (seeds 1–32).
 ///
 /// Tolerance 2%, the issue's, on each channel. Measured (max channel): furnace −0.4%;
 /// cornell +0.5% (standard error 0.32%), cornell-anim −1.1% red (0.40%; −0.7…−0.8% green
@@ -795,4 +798,63 @@ fn max_depth_one_is_direct_light_only() {
         two.element_sum() > 1.1 * one.element_sum(),
         "{two} vs {one}"
     );
+}
+
+/// Issue 29: `bidir` at `max_depth` 7 on the built-in scenes with mirrors and glass against
+/// the path tracer at depth 7 (1024 spp), 32×32, 64 bundles, 4 direct samples a pixel (at
+/// 1 the pixel-centre direct light of `mirror-shadow`'s small bright patches is +3.8% over
+/// the pixel-area mean at depth 1, a sampling matter of the 32×32 image, not of the light
+/// transport: −1.3% at 16 samples), the mean of `frames` frames. The paths through mirrors
+/// and glass are traced on the CPU (`frame/bidir/specular_paths.rs`: the light tracer's
+/// caustics, the camera paths through a delta lobe); before them these scenes were 3–27%
+/// low (caustic-ring 0.810, cornell-glass 0.876, mirror-shadow 0.971, ring-room 0.727 of
+/// `path`, 8 frames at 32 bundles).
+///
+/// Tolerance 2%, the issue's, on each channel, and the standard error of the frames' mean
+/// under 0.7% of the reference (so that 2% tests the bias). Measured here (max channel,
+/// standard error): caustic-ring +0.00% (0.20%), cornell-glass +0.79% blue (0.46%),
+/// mirror-shadow −0.41% (0.38%), ring-room +0.17% (0.54%); with the `bidir_scenes` example
+/// (16 frames, mean of RGB, `spp` camera samples then): caustic-ring +0.05 ± 0.15%,
+/// cornell-glass +0.21 ± 0.24%, mirror-shadow −0.23 ± 0.64%, ring-room +0.46 ± 0.50%. The
+/// frame counts below keep the standard error near 0.5% (cornell-glass, 2.5–4.5 s a frame on
+/// lavapipe, 8 frames); about 75 s in all on 2 shared cores.
+#[test]
+fn mirror_and_glass_scenes_match_path_tracer() {
+    let mut failures = Vec::new();
+    for (name, frames) in [
+        ("caustic-ring", 8),
+        ("cornell-glass", 8),
+        ("mirror-shadow", 24),
+        ("ring-room", 16),
+    ] {
+        let scene = load(name);
+        let size = 32;
+        let s = bidir_settings(size)
+            .with("max_depth", 7)
+            .with("bundles", 64)
+            .with("spp", 4);
+        let (got, se, out) = bidir_mean_se(&scene, &s, frames);
+        let path = run(
+            &scene,
+            &bidir_settings(size)
+                .with_method(gi_core::Method::Path)
+                .with("spp", 1024)
+                .with("max_depth", 7),
+        );
+        let reference = mean(&path.radiance);
+        let err = rel_err(got, reference);
+        let noise = se / reference;
+        eprintln!(
+            "{name} depth 7: bidir {got:?} path {reference:?} (err {err:?}, standard error \
+             {noise:?}); {:?}",
+            out.stats
+        );
+        failures.extend(
+            (err.max_element() >= 0.02).then(|| format!("{name}: {got:?} vs {reference:?}")),
+        );
+        failures.extend(
+            (noise.max_element() >= 0.007).then(|| format!("{name}: too noisy, {noise:?}")),
+        );
+    }
+    assert!(failures.is_empty(), "{failures:?}");
 }

@@ -126,10 +126,17 @@ fn check_environment(_scene: &Scene, _method: Method) -> Result<()> {
 fn transport_omissions(scene: &Scene, options: &RenderOptions) -> Vec<String> {
     let mut out = Vec::new();
     if let MethodOptions::Bidir(_) = &options.method {
-        if scene.has_delta_materials() {
+        // The paths through mirrors and glass are traced on the CPU
+        // (`bidir/specular_paths.rs`), its light tracer from the point and spot lights only:
+        // no ray finds a parallel sun, so its caustics seen directly have no estimator.
+        let parallel = scene
+            .lights
+            .iter()
+            .any(|l| matches!(l, crate::scene::Light::Directional { .. }) && l.disc_pdf() == 0.0);
+        if scene.has_delta_materials() && parallel {
             out.push(
-                "method `bidir` traces mirrors and glass seen by the camera with direct light \
-                 only: the indirect light seen through them is missing"
+                "method `bidir` leaves out the caustics of parallel directional lights seen \
+                 directly (light, then mirrors or glass, then a surface the camera sees)"
                     .to_string(),
             );
         }

@@ -178,7 +178,16 @@ impl Head {
 
 /// The first vertex after `h`'s and the ones after it, up to `max_len` (orders 2 … ≤
 /// max_depth − 1), by BSDF sampling with Russian roulette.
-fn trace(scene: &Scene, bvh: &SceneBvh, h: &Head, max_len: u32, rng: &mut Rng) -> Vec<Vertex> {
+/// With `light_traced` (the head of a point or spot light's RSM) a delta lobe sampled at
+/// the head ends the subpath: those paths are the light tracer's
+/// ([`super::specular_paths::caustics`]).
+fn trace(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    h: &Head,
+    (max_len, light_traced): (u32, bool),
+    rng: &mut Rng,
+) -> Vec<Vertex> {
     let mut alpha = h.alpha;
     let mut material = h.material;
     let (mut position, mut ng, mut frame, mut w_prev) =
@@ -191,6 +200,9 @@ fn trace(scene: &Scene, bvh: &SceneBvh, h: &Head, max_len: u32, rng: &mut Rng) -
         let Some(bs) = material.sample(frame.to_local(w_prev), rng) else {
             break;
         };
+        if light_traced && out.is_empty() && bs.lobe.is_delta() {
+            break;
+        }
         let wi = frame.to_world(bs.wi);
         let same_side = wi.dot(ng) * w_prev.dot(ng) > 0.0;
         if same_side == matches!(bs.lobe, crate::bsdf::Lobe::GlassRefract) {
@@ -312,7 +324,9 @@ fn subpaths(
             let k = paired_vpl(b, pair_offset, n1, n2) as usize;
             if let Some(Some(v)) = own.get(k) {
                 let mut rng = Rng::new(seed, 0x5b9a, (light * n2 as usize + b as usize) as u64);
-                paths[light * n2 as usize + b as usize] = trace(scene, bvh, v, max_len, &mut rng);
+                let light_traced = scene.lights.get(light).is_some_and(|l| l.is_local());
+                paths[light * n2 as usize + b as usize] =
+                    trace(scene, bvh, v, (max_len, light_traced), &mut rng);
             }
         }
     }

@@ -200,7 +200,10 @@ fn vpl_light(v: Vpl, m1: Material, p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m
 // G2 ≈ 1 and the mean Fresnel reflectance; `cos_o`: the cosine on the side the light leaves.
 fn clamped(m_in: Material, dhat: f32, cos_o: f32) -> Material {
     var m = m_in;
-    if params.clamp_roughness == 0u || max3(m.specular) <= 0.0 || !(dhat > 0.0) {
+    // A mirror's delta lobe stays one (nothing here): its paths are traced on the CPU
+    // (`frame/bidir/specular_paths.rs`).
+    if params.clamp_roughness == 0u || max3(m.specular) <= 0.0 || !(dhat > 0.0)
+        || m.roughness < MIRROR_ROUGHNESS {
         return m;
     }
     let weight = 16.0 * avg3(fresnel_avg(m)) / (4.0 * max(abs(cos_o), 0.05));
