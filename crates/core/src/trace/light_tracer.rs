@@ -93,8 +93,11 @@ pub fn trace_path(
             return;
         }
         power *= bs.weight;
+        // Russian roulette as the path tracer's (`RR_SURVIVAL_SCALE`), on the power relative
+        // to the path's start.
         if depth + 1 >= s.rr_depth {
-            let q = (power.max_element() / start.max_element()).min(0.95);
+            let q = (power.max_element() / start.max_element() * super::path::RR_SURVIVAL_SCALE)
+                .min(0.95);
             if q <= 0.0 || rng.next_f32() >= q {
                 return;
             }
