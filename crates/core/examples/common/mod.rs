@@ -65,38 +65,12 @@ pub fn median(mut v: Vec<f64>) -> f64 {
 
 /// Light 0 nudged by `t` (metres along x).
 pub fn nudge(scene: &Scene, t: f32) -> SceneUpdate {
-    let light = match scene.light_desc(0).expect("a light") {
-        LightDesc::Point {
-            position,
-            intensity,
-        } => LightDesc::Point {
-            position: [position[0] + t, position[1], position[2]],
-            intensity,
-        },
-        LightDesc::Spot {
-            position,
-            direction,
-            intensity,
-            inner_angle,
-            outer_angle,
-        } => LightDesc::Spot {
-            position: [position[0] + t, position[1], position[2]],
-            direction,
-            intensity,
-            inner_angle,
-            outer_angle,
-        },
+    let mut light = scene.light_desc(0).expect("a light");
+    match &mut light {
+        LightDesc::Point { position, .. } | LightDesc::Spot { position, .. } => position[0] += t,
         // A distant light turns instead.
-        LightDesc::Directional {
-            direction,
-            irradiance,
-            angular_diameter,
-        } => LightDesc::Directional {
-            direction: [direction[0] + t, direction[1], direction[2]],
-            irradiance,
-            angular_diameter,
-        },
-    };
+        LightDesc::Directional { direction, .. } => direction[0] += t,
+    }
     SceneUpdate::Light { index: 0, light }
 }
 

@@ -15,9 +15,6 @@ use glam::Vec3;
 use rayon::prelude::*;
 use std::time::Instant;
 
-/// Light paths per parallel work item.
-const LIGHT_CHUNK: u64 = 1 << 14;
-
 pub fn render(
     scene: &Scene,
     bvh: &SceneBvh,
@@ -47,7 +44,7 @@ pub fn render(
     };
     let lights = DirectLight::of(scene);
     // Progress counts camera rows and light-path chunks together.
-    let light_chunks = light_paths.div_ceil(LIGHT_CHUNK);
+    let light_chunks = light_paths.div_ceil(light_tracer::CHUNK);
     // The camera connections of all light paths are kept until they are summed in order:
     // about one (pixel, radiance) splat of 16 bytes per path.
     crate::memory::check(
@@ -107,44 +104,14 @@ pub fn render(
         .push(("camera paths".into(), t.elapsed().as_secs_f64()));
     stage.finish()?;
 
-    // Light paths for caustics. Each chunk returns its camera connections, which are summed
-    // in chunk order so that the image is bit-for-bit the same for a seed on any schedule.
+    // Light paths for caustics.
     let t = Instant::now();
     let lts = LightTraceSettings {
         max_depth: options.max_depth,
         rr_depth: 3,
     };
-    let splats: Vec<Vec<(u32, Vec3)>> = (0..light_chunks)
-        .into_par_iter()
-        .map(|chunk| {
-            let mut splats = Vec::new();
-            if stage.stopped() {
-                return splats;
-            }
-            let end = ((chunk + 1) * LIGHT_CHUNK).min(light_paths);
-            for i in chunk * LIGHT_CHUNK..end {
-                if i % 256 == 0 && stage.stopped() {
-                    return splats;
-                }
-                let mut rng = Rng::new(frame.seed, u64::MAX - 1, i);
-                light_tracer::trace_path(
-                    scene,
-                    bvh,
-                    &sources,
-                    &mut rng,
-                    light_paths,
-                    &lts,
-                    &mut splats,
-                );
-            }
-            stage.advance(1);
-            splats
-        })
-        .collect();
-    let mut caustics = Image::new(w, h);
-    for (pixel, value) in splats.into_iter().flatten() {
-        caustics.pixels[pixel as usize] += value;
-    }
+    let seeds = (light_paths, frame.seed, u64::MAX - 1);
+    let caustics = light_tracer::image(scene, bvh, &sources, seeds, &lts, &stage);
     stats
         .stages
         .push(("light paths".into(), t.elapsed().as_secs_f64()));

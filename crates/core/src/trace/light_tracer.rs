@@ -10,9 +10,15 @@
 //! the two estimates add up without double counting.
 
 use super::{Interaction, SceneBvh};
+use crate::cancel::StageProgress;
+use crate::image::Image;
 use crate::sampling::Rng;
 use crate::scene::{Scene, Source, Sources};
 use glam::Vec3;
+use rayon::prelude::*;
+
+/// Light paths per parallel work item of [`image`] (one progress step each).
+pub const CHUNK: u64 = 1 << 14;
 
 /// Light tracer settings.
 #[derive(Clone, Copy, Debug)]
@@ -25,6 +31,41 @@ pub struct LightTraceSettings {
 /// path tracer finds by itself (a sky is large: its rays reach it through glass often).
 pub fn light_sources(scene: &Scene) -> Sources {
     Sources::filtered(scene, |s| s != Source::Environment)
+}
+
+/// The image of `paths` light paths from `sources` (path `i` drawing from
+/// `Rng::new(seed, stream, i)`), up to the settings' depth. Each chunk of [`CHUNK`] paths
+/// returns its camera connections, which are summed in path order, so that the image is bit
+/// for bit the same for a seed on any schedule. `stage` advances one step a chunk; when it
+/// is stopped the paths still untraced are left out.
+pub fn image(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    sources: &Sources,
+    (paths, seed, stream): (u64, u64, u64),
+    s: &LightTraceSettings,
+    stage: &StageProgress,
+) -> Image {
+    let splats: Vec<Vec<(u32, Vec3)>> = (0..paths.div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|chunk| {
+            let mut splats = Vec::new();
+            for i in chunk * CHUNK..((chunk + 1) * CHUNK).min(paths) {
+                if i % 256 == 0 && stage.stopped() {
+                    return splats;
+                }
+                let mut rng = Rng::new(seed, stream, i);
+                trace_path(scene, bvh, sources, &mut rng, paths, s, &mut splats);
+            }
+            stage.advance(1);
+            splats
+        })
+        .collect();
+    let mut image = Image::new(scene.camera.width, scene.camera.height);
+    for (pixel, value) in splats.into_iter().flatten() {
+        image.pixels[pixel as usize] += value;
+    }
+    image
 }
 
 /// Traces one of `total` light paths and appends its camera connections to `splats` as

@@ -613,7 +613,8 @@ fn specular(
         let (w, h) = (targets.width as u64, targets.height as u64);
         let paths = (w * h).max(specular_paths::MIN_LIGHT_PATHS);
         let t = Instant::now();
-        let caustics = specular_paths::caustics(scene, bvh, paths, options.max_depth, frame.seed);
+        let light = (paths, frame.seed, options.max_depth);
+        let caustics = specular_paths::caustics(scene, bvh, light, progress)?;
         let light_seconds = t.elapsed().as_secs_f64();
         let t = Instant::now();
         let camera = (

@@ -56,44 +56,23 @@ fn local_lights(scene: &Scene) -> Sources {
 pub(super) fn caustics(
     scene: &Scene,
     bvh: &SceneBvh,
-    paths: u64,
-    max_depth: u32,
-    seed: u64,
-) -> Image {
-    let (w, h) = (scene.camera.width, scene.camera.height);
-    let mut image = Image::new(w, h);
+    (paths, seed, max_depth): (u64, u64, u32),
+    progress: &dyn Progress,
+) -> Result<Image> {
     let sources = local_lights(scene);
     if sources.is_empty() || !scene.has_delta_materials() || max_depth < 2 {
-        return image;
+        return Ok(Image::new(scene.camera.width, scene.camera.height));
     }
     let settings = LightTraceSettings {
         max_depth,
         rr_depth: 3,
     };
-    const CHUNK: u64 = 1 << 12;
-    let splats: Vec<Vec<(u32, Vec3)>> = (0..paths.div_ceil(CHUNK))
-        .into_par_iter()
-        .map(|chunk| {
-            let mut splats = Vec::new();
-            for i in chunk * CHUNK..((chunk + 1) * CHUNK).min(paths) {
-                let mut rng = Rng::new(seed, 0xca05_71c5, i);
-                light_tracer::trace_path(
-                    scene,
-                    bvh,
-                    &sources,
-                    &mut rng,
-                    paths,
-                    &settings,
-                    &mut splats,
-                );
-            }
-            splats
-        })
-        .collect();
-    for (pixel, value) in splats.into_iter().flatten() {
-        image.pixels[pixel as usize] += value;
-    }
-    image
+    let chunks = paths.div_ceil(light_tracer::CHUNK);
+    let stage = StageProgress::new(progress, "caustic light paths", chunks);
+    let seeds = (paths, seed, 0xca05_71c5);
+    let image = light_tracer::image(scene, bvh, &sources, seeds, &settings, &stage);
+    stage.finish()?;
+    Ok(image)
 }
 
 /// The camera paths through a delta lobe at the first or the second vertex, `spp` jittered
