@@ -16,6 +16,7 @@ mod common;
 use gi_core::sampling::Rng;
 use gi_core::scene::emitters::Selection;
 use gi_core::trace::direct::DirectLight;
+use gi_core::trace::light_vertex::Connection;
 use gi_core::trace::path::{self, PathSettings, Strategy};
 use gi_core::trace::SceneBvh;
 use gi_core::{Image, Scene};
@@ -130,6 +131,7 @@ fn render(
         rr_depth: 3,
         light_traced: false,
         strategy: Strategy::Mis,
+        light_vertex: Connection::Mis,
     };
     let cam = &scene.camera;
     let (w, h) = (cam.width, cam.height);

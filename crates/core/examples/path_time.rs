@@ -5,7 +5,8 @@
 //! system, all threads; from `/proc/self/stat`, 10 ms ticks), which other work on a shared
 //! machine disturbs less than the wall clock. Run from the repository root:
 //!
-//! `cargo run --release -p gi-core --example path_time -- [SPP] [--error]`
+//! `cargo run --release -p gi-core --example path_time -- [SPP] [--error] [--scene NAME]
+//! [--no-light-vertices]`
 //!
 //! With `--error` it also prints the five renders' mean relMSE (the measure of
 //! `docs/bench/path-vs-mitsuba.md`: (x − ref)² / (ref² + 0.01) over pixels and channels)
@@ -33,6 +34,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
     };
     let error = args.iter().any(|a| a == "--error");
+    let light_vertices = !args.iter().any(|a| a == "--no-light-vertices");
     let spp: u32 = args
         .iter()
         .enumerate()
@@ -46,6 +48,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .with("spp", spp)
             .with("max_depth", 7)
             .with("seed", seed)
+            .with("light_vertices", light_vertices)
     };
     let reference = if error {
         let file = format!("target/path_time_reference-{name}.bin");

@@ -4,6 +4,7 @@
 
 use gi_core::sampling::Rng;
 use gi_core::trace::direct::DirectLight;
+use gi_core::trace::light_vertex::Connection;
 use gi_core::trace::path::{radiance, PathSettings, Strategy};
 use gi_core::trace::SceneBvh;
 use gi_core::{render, scene::builtin, Silent};
@@ -46,6 +47,7 @@ fn pixel_estimates(sobol: bool, (x, y): (u32, u32), spp: u32, seeds: u64) -> Vec
         rr_depth: 3,
         light_traced: false,
         strategy: Strategy::Mis,
+        light_vertex: Connection::Mis,
     };
     // The camera at 24×24: pixels a few degrees wide, with edges and shadows in them.
     let (sx, sy) = (cam.width as f32 / 24.0, cam.height as f32 / 24.0);

@@ -12,6 +12,7 @@
 use gi_core::sampling::Rng;
 use gi_core::scene::emitters::Selection;
 use gi_core::trace::direct::DirectLight;
+use gi_core::trace::light_vertex::Connection;
 use gi_core::trace::path::{self, PathSettings, Strategy};
 use gi_core::trace::SceneBvh;
 use gi_core::{render, Image, Scene, Silent};
@@ -81,6 +82,7 @@ fn settings(max_depth: u32, strategy: Strategy) -> PathSettings {
         rr_depth: 3,
         light_traced: false,
         strategy,
+        light_vertex: Connection::Mis,
     }
 }
 

@@ -9,6 +9,7 @@ use crate::sampling::Rng;
 use crate::scene::Scene;
 use crate::trace::direct::DirectLight;
 use crate::trace::light_tracer::{self, LightTraceSettings};
+use crate::trace::light_vertex::Connection;
 use crate::trace::path::{self, PathSettings};
 use crate::trace::SceneBvh;
 use glam::Vec3;
@@ -41,6 +42,11 @@ pub fn render(
         rr_depth: 3,
         light_traced: light_paths > 0,
         strategy: path::Strategy::Mis,
+        light_vertex: if options.light_vertices {
+            Connection::Mis
+        } else {
+            Connection::Off
+        },
     };
     let lights = DirectLight::of(scene);
     // Progress counts camera rows and light-path chunks together.

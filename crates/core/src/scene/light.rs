@@ -203,6 +203,21 @@ impl Light {
         ))
     }
 
+    /// The density over solid angle with which [`Light::emit`] sends a point or spot light's
+    /// photon along the unit direction `dir` (uniform over the sphere or the spot's outer
+    /// cone); 0 for a directional light, whose photons start on a disc.
+    pub fn emit_pdf(&self, dir: Vec3) -> f32 {
+        match *self {
+            Light::Point { .. } => 1.0 / (4.0 * PI),
+            Light::Spot {
+                direction,
+                cos_outer,
+                ..
+            } if dir.dot(direction) >= cos_outer => 1.0 / (2.0 * PI * (1.0 - cos_outer)),
+            _ => 0.0,
+        }
+    }
+
     /// Emits one photon carrying power `power / n` on average when called `n` times; a
     /// directional light's enter the scene through the disc of `bounds` facing it.
     pub fn emit(&self, rng: &mut Rng, bounds: Bounds) -> Emission {

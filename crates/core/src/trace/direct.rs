@@ -9,6 +9,7 @@
 //! [`escaped`]. Methods without that continuation (`gather`, the photon methods' specular
 //! paths) take the light samples at full weight.
 
+use super::light_vertex::LightVertices;
 use super::path::power_heuristic;
 use super::{Interaction, SceneBvh};
 use crate::sampling::Rng;
@@ -39,6 +40,9 @@ pub struct DirectLight {
     /// Whether a ray can find light by hitting it (an emitter, a sun's disc or the
     /// environment): without, the path tracer's last BSDF ray is not traced.
     pub found_by_rays: bool,
+    /// Where the path tracer's light vertices start ([`super::light_vertex`]): `None`
+    /// without point and spot lights.
+    pub light_vertices: Option<LightVertices>,
 }
 
 /// Where a BSDF-sampled ray left from, for the multiple-importance weight of an emitter it
@@ -70,6 +74,7 @@ impl DirectLight {
         DirectLight {
             emitters,
             found_by_rays,
+            light_vertices: LightVertices::of(scene),
         }
     }
 
@@ -84,16 +89,39 @@ impl DirectLight {
         rng: &mut Rng,
         nee: Nee,
     ) -> Vec3 {
+        self.estimate_weighted(scene, bvh, it, wo, rng, nee, |_| 1.0)
+    }
+
+    /// [`DirectLight::estimate`] with the light of each point, spot or parallel light
+    /// (`scene.lights[i]`) weighted by `weight(i)`, where another strategy shares it.
+    #[allow(clippy::too_many_arguments)]
+    pub fn estimate_weighted(
+        &self,
+        scene: &Scene,
+        bvh: &SceneBvh,
+        it: &Interaction,
+        wo: Vec3,
+        rng: &mut Rng,
+        nee: Nee,
+        weight: impl Fn(usize) -> f32,
+    ) -> Vec3 {
         if it.material.is_purely_specular() {
             return Vec3::ZERO;
         }
         let mis = nee == Nee::Mis;
         let mut sum = Vec3::ZERO;
-        for light in &scene.lights {
+        for (i, light) in scene.lights.iter().enumerate() {
             sum += match light.disc_radiance() {
                 Some(_) if nee == Nee::DeltaOnly => Vec3::ZERO,
                 Some(l) => sun_disc(light, l, bvh, it, wo, rng, mis),
-                None => analytic_light(light, bvh, it, wo),
+                None => {
+                    let l = analytic_light(light, bvh, it, wo);
+                    if l == Vec3::ZERO {
+                        l
+                    } else {
+                        l * weight(i)
+                    }
+                }
             };
         }
         if nee == Nee::DeltaOnly {

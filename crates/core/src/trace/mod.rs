@@ -5,6 +5,7 @@ pub mod bvh;
 pub mod direct;
 pub mod interaction;
 pub mod light_tracer;
+pub mod light_vertex;
 pub mod path;
 
 pub use bvh::{Hit, SceneBvh};

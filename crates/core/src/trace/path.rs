@@ -9,6 +9,7 @@
 //! sky's stay here.
 
 use super::direct::{escaped, BsdfVertex, DirectLight, Nee};
+use super::light_vertex::{self, Connection, LightVertices};
 use super::{Interaction, SceneBvh};
 use crate::image::Image;
 use crate::sampling::Rng;
@@ -18,6 +19,9 @@ use glam::Vec3;
 /// Dimensions of a low-discrepancy sample that the camera draws (the pixel jitter) before
 /// [`radiance`] draws its own.
 pub const CAMERA_DIMENSIONS: u32 = 2;
+/// Dimensions [`radiance`] sets apart for its light vertex ([`super::light_vertex`]), before
+/// the bounces'.
+pub const LIGHT_VERTEX_DIMENSIONS: u32 = light_vertex::DIMENSIONS;
 /// Dimensions [`radiance`] sets apart for each bounce: light selection and a point on it
 /// (3), the BSDF's lobe and direction (3), Russian roulette (1); a bounce that draws more
 /// (several suns, the sky) goes on into the next bounce's, which then starts after it.
@@ -46,6 +50,11 @@ pub struct PathSettings {
     pub light_traced: bool,
     /// How emitters, suns' discs and the sky are found.
     pub strategy: Strategy,
+    /// Whether the light of point and spot lights reflected once before it reaches the
+    /// camera path's first vertex is also found from light vertices
+    /// ([`super::light_vertex`]; needs `rr_depth` ≥ 2, so that the first BSDF sample is not
+    /// subject to Russian roulette).
+    pub light_vertex: Connection,
 }
 
 /// How the path tracer finds the light of emitters, suns' discs and the sky: both ways
@@ -203,11 +212,13 @@ pub fn radiance(
     // The path goes one step beyond its last scattering: a BSDF sample from the last
     // vertex still finds emitters, suns' discs and the sky (so that `max_depth` 1 is direct
     // light for both sampling strategies).
+    // The light vertex of this path, drawn at its first vertex.
+    let mut vertex = None;
+    let light_vertices = lights
+        .light_vertices
+        .as_ref()
+        .filter(|_| s.light_vertex != Connection::Off && s.max_depth >= 2);
     for depth in 0..=s.max_depth {
-        // A low-discrepancy generator ([`Rng::sobol`]) gives every bounce its own dimensions
-        // (after the camera's two), so that bounce `depth` of all samples of a pixel is one
-        // stratified point set.
-        rng.start_dimension(CAMERA_DIMENSIONS + depth * BOUNCE_DIMENSIONS);
         // Light reached through a delta scattering after a non-delta first one belongs to
         // the light tracer (its paths start at the source, scatter through that delta lobe
         // first and connect to the camera from the first surface).
@@ -235,13 +246,38 @@ pub fn radiance(
         if depth == s.max_depth {
             break;
         }
-        // Next-event estimation.
+        if depth == 0 {
+            if let Some(lv) = light_vertices {
+                rng.start_dimension(CAMERA_DIMENSIONS);
+                vertex = lv.sample(scene, bvh, rng);
+            }
+        }
+        // The light vertex's light reflected here, where the path tracer would find it
+        // with one more vertex.
+        if let Some(v) = vertex.as_ref().filter(|_| depth + 2 <= s.max_depth) {
+            l += beta * LightVertices::connect(bvh, &it, wo, v, s.light_vertex);
+        }
+        // A low-discrepancy generator ([`Rng::sobol`]) gives every bounce its own dimensions
+        // (after the camera's and the light vertex's), so that bounce `depth` of all samples
+        // of a pixel is one stratified point set.
+        rng.start_dimension(
+            CAMERA_DIMENSIONS + LIGHT_VERTEX_DIMENSIONS + depth * BOUNCE_DIMENSIONS,
+        );
+        // Next-event estimation; at the second vertex, the point and spot lights' share
+        // that light vertices leave.
         let nee = match s.strategy {
             Strategy::Mis => Nee::Mis,
             Strategy::Light => Nee::Alone,
             Strategy::Bsdf => Nee::DeltaOnly,
         };
-        l += beta * lights.estimate(scene, bvh, &it, wo, rng, nee);
+        l += beta
+            * match (light_vertices, from) {
+                (Some(lv), Some(f)) => {
+                    let weight = |i| lv.nee_weight(scene, i, &it, &f, s.light_vertex);
+                    lights.estimate_weighted(scene, bvh, &it, wo, rng, nee, weight)
+                }
+                _ => lights.estimate(scene, bvh, &it, wo, rng, nee),
+            };
         if depth + 1 == s.max_depth && !lights.found_by_rays {
             // The last BSDF ray could only find emitters, suns' discs or the sky.
             break;

@@ -29,6 +29,7 @@ use crate::scene::sources::{Source, Sources};
 use crate::scene::Scene;
 use crate::trace::direct::{escaped, DirectLight};
 use crate::trace::light_tracer::{self, LightTraceSettings};
+use crate::trace::light_vertex::Connection;
 use crate::trace::path::{self, PathSettings, Strategy};
 use crate::trace::{Interaction, SceneBvh};
 use glam::Vec3;
@@ -229,5 +230,6 @@ fn settings(max_depth: u32) -> PathSettings {
         rr_depth: 3,
         light_traced: false,
         strategy: Strategy::Mis,
+        light_vertex: Connection::Mis,
     }
 }

@@ -106,6 +106,8 @@ pub struct PathOptions {
     pub max_depth: u32,
     /// `None`: one per camera sample.
     pub light_paths: Option<u64>,
+    /// Camera paths also connect to a light vertex ([`crate::trace::light_vertex`]).
+    pub light_vertices: bool,
 }
 
 /// Method `photon`.
@@ -190,6 +192,7 @@ impl MethodOptions {
                 spp: v.u32("spp"),
                 max_depth: v.u32("max_depth"),
                 light_paths: v.opt_u64("light_paths"),
+                light_vertices: v.bool("light_vertices"),
             }),
             Method::Photon => MethodOptions::Photon(PhotonOptions {
                 spp: v.u32("spp"),

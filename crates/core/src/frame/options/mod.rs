@@ -348,6 +348,7 @@ impl RenderOptions {
                 out.push(("spp", int(o.spp as u64)));
                 out.push(("max_depth", int(o.max_depth as u64)));
                 out.push(("light_paths", opt_int(o.light_paths)));
+                out.push(("light_vertices", Value::Bool(o.light_vertices)));
             }
             MethodOptions::Photon(o) => {
                 out.push(("spp", int(o.spp as u64)));
