@@ -32,8 +32,8 @@ from gi.video import VIDEO_FORMATS, VideoWriter
 
 #: What each method is, in one line (`gi methods`; the README's table says more).
 METHOD_SUMMARIES = {
-    "path": "CPU reference: path tracing with next-event estimation and light tracing for"
-    " caustics; unbiased, the ground truth",
+    "path": "CPU reference: path tracing with next-event estimation, light vertices by MIS"
+    " and light tracing for caustics; unbiased, the ground truth",
     "photon": "classic photon mapping (Jensen): a kd-tree of photons, k-nearest-neighbour"
     " estimate; the baseline",
     "gather": "photon differentials: each shading point gathers the photon footprints that"
