@@ -1,10 +1,12 @@
-//! A second way for the path tracer to find light that reaches the first surface a camera
-//! ray hits after one diffuse or glossy bounce from a point or spot light: a light vertex
-//! `y` (where a ray from the light, drawn by power and by the light's own distribution of
-//! directions, first lands) connected to that surface `x` by a shadow ray. This is
-//! bidirectional path tracing's strategy with two light vertices (the light and `y`) and
-//! two camera vertices (Veach 1997, §10.2), combined with the path tracer's own (a BSDF
-//! sample from `x` reaching `y`, then next-event estimation there) by the power heuristic.
+//! A second way for the path tracer to find light that reaches a camera path's vertex `x`
+//! after one diffuse or glossy bounce from a point or spot light: a light vertex `y` (where
+//! a ray from the light, drawn by power and by the light's own distribution of directions,
+//! first lands; one per camera path) connected to `x` by a shadow ray, at every vertex of
+//! the path. This is bidirectional path tracing's strategy with two light vertices (the
+//! light and `y`) and the camera path's (Veach 1997, §10.2), combined with the path
+//! tracer's own (a BSDF sample from `x` reaching `y`, then next-event estimation there) by
+//! the power heuristic. Both sides weigh with the BSDF sample's density without Russian
+//! roulette's survival probability, so that the two weights of a path still add up to 1.
 //!
 //! It pays where the light's first bounce is concentrated, as on a wall or ceiling next to
 //! the light: a BSDF ray from a surface lit only indirectly finds that small bright patch
@@ -154,8 +156,8 @@ impl LightVertices {
     }
 
     /// The weight of next-event estimation from `scene.lights[light]` at `it`, reached by a
-    /// BSDF sample from the camera path's first vertex `from`: the share that light vertices
-    /// leave to the path tracer.
+    /// non-delta BSDF sample from the camera path's previous vertex `from`: the share that
+    /// the connection of `from` to a light vertex leaves to the path tracer.
     pub fn nee_weight(
         &self,
         scene: &Scene,

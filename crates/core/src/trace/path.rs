@@ -50,10 +50,9 @@ pub struct PathSettings {
     pub light_traced: bool,
     /// How emitters, suns' discs and the sky are found.
     pub strategy: Strategy,
-    /// Whether the light of point and spot lights reflected once before it reaches the
-    /// camera path's first vertex is also found from light vertices
-    /// ([`super::light_vertex`]; needs `rr_depth` ≥ 2, so that the first BSDF sample is not
-    /// subject to Russian roulette).
+    /// Whether the light of point and spot lights that reflects once before a camera
+    /// path's vertex is also found by connecting that vertex to a light vertex
+    /// ([`super::light_vertex`]).
     pub light_vertex: Connection,
 }
 
@@ -209,15 +208,15 @@ pub fn radiance(
     // Whether the path's first scattering (at the camera's first surface) was non-delta,
     // and whether the current ray left a delta scattering.
     let (mut first_non_delta, mut after_delta) = (false, false);
-    // The path goes one step beyond its last scattering: a BSDF sample from the last
-    // vertex still finds emitters, suns' discs and the sky (so that `max_depth` 1 is direct
-    // light for both sampling strategies).
-    // The light vertex of this path, drawn at its first vertex.
+    // The light vertex of this path (drawn at its first vertex), where it has one.
     let mut vertex = None;
     let light_vertices = lights
         .light_vertices
         .as_ref()
         .filter(|_| s.light_vertex != Connection::Off && s.max_depth >= 2);
+    // The path goes one step beyond its last scattering: a BSDF sample from the last
+    // vertex still finds emitters, suns' discs and the sky (so that `max_depth` 1 is direct
+    // light for both sampling strategies).
     for depth in 0..=s.max_depth {
         // Light reached through a delta scattering after a non-delta first one belongs to
         // the light tracer (its paths start at the source, scatter through that delta lobe
@@ -252,8 +251,8 @@ pub fn radiance(
                 vertex = lv.sample(scene, bvh, rng);
             }
         }
-        // The light vertex's light reflected here, where the path tracer would find it
-        // with one more vertex.
+        // The light vertex's light reflected here (the path tracer finds the same light
+        // with one more vertex, next-event estimation there).
         if let Some(v) = vertex.as_ref().filter(|_| depth + 2 <= s.max_depth) {
             l += beta * LightVertices::connect(bvh, &it, wo, v, s.light_vertex);
         }
@@ -263,8 +262,9 @@ pub fn radiance(
         rng.start_dimension(
             CAMERA_DIMENSIONS + LIGHT_VERTEX_DIMENSIONS + depth * BOUNCE_DIMENSIONS,
         );
-        // Next-event estimation; at the second vertex, the point and spot lights' share
-        // that light vertices leave.
+        // Next-event estimation; after a non-delta BSDF sample, of the point and spot
+        // lights' light the share that the previous vertex's light-vertex connection
+        // leaves.
         let nee = match s.strategy {
             Strategy::Mis => Nee::Mis,
             Strategy::Light => Nee::Alone,
