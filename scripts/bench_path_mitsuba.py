@@ -112,6 +112,18 @@ def mitsuba_xml(desc: dict, size: int, max_depth: int, spp: int, sampler: str) -
     return "\n".join(lines) + "\n"
 
 
+def adapt_xml(path: Path, size: int, max_depth: int) -> str:
+    """A Mitsuba XML scene (`--xml`) at `size`² pixels, Mitsuba `max_depth` gi's + 1, with a
+    box pixel filter (gi's) in place of its own."""
+    import re
+
+    xml = path.read_text()
+    xml = re.sub(r'<rfilter type="\w+"[^>]*?/>', '<rfilter type="box"/>', xml)
+    for name, value in (("width", size), ("height", size), ("max_depth", max_depth + 1)):
+        xml = re.sub(rf'(name="{name}" value=")\d+(")', rf"\g<1>{value}\g<2>", xml)
+    return xml
+
+
 def write_scene(size: int, max_depth: int) -> tuple[Path, Path]:
     """The scene as gi JSON and Mitsuba XML (Mitsuba's max_depth is gi's + 1)."""
     desc = json.loads(BUILTIN.read_text())
@@ -144,17 +156,23 @@ class Gi:
 
 
 class Mitsuba:
-    def __init__(self, desc: dict, size: int, max_depth: int, variant: str, sampler: str):
+    def __init__(
+        self, desc: dict, size: int, max_depth: int, variant: str, sampler: str,
+        xml: str | None = None,
+    ):  # fmt: skip
         import mitsuba as mi
 
         mi.set_variant(variant)
         self.mi, self.variant, self.version = mi, variant, mi.__version__
         self.desc, self.size, self.max_depth, self.sampler = desc, size, max_depth, sampler
+        self.xml = xml
         self.scenes: dict[int, object] = {}
 
     def render(self, spp: int, seed: int) -> tuple[np.ndarray, float]:
         if spp not in self.scenes:
-            xml = mitsuba_xml(self.desc, self.size, self.max_depth + 1, spp, self.sampler)
+            xml = self.xml or mitsuba_xml(
+                self.desc, self.size, self.max_depth + 1, spp, self.sampler
+            )
             self.scenes[spp] = self.mi.load_string(xml)
             self.mi.render(self.scenes[spp], spp=spp, seed=10_000)  # JIT warm-up, not timed
         t = time.perf_counter()
@@ -216,12 +234,27 @@ def main() -> None:
     ap.add_argument("--variant", default="llvm_ad_rgb")
     ap.add_argument("--mitsuba-sampler", default="independent")
     ap.add_argument("--no-table", action="store_true")
+    ap.add_argument(
+        "--xml", type=Path,
+        help="compare on this Mitsuba XML scene instead (both renderers load it; the table "
+        "is printed, not written), e.g. docs/scenes/cornell-box/cornell-box.xml",
+    )  # fmt: skip
     args = ap.parse_args()
 
-    gi_file, _ = write_scene(args.size, args.max_depth)
-    desc = json.loads(gi_file.read_text())
-    gi_r = Gi(gi_file, args.size, args.max_depth)
-    mi_r = Mitsuba(desc, args.size, args.max_depth, args.variant, args.mitsuba_sampler)
+    if args.xml:
+        import tempfile
+
+        xml = adapt_xml(args.xml, args.size, args.max_depth)
+        gi_file = Path(tempfile.mkdtemp()) / args.xml.name
+        gi_file.write_text(xml)
+        args.no_table = True
+        gi_r = Gi(gi_file, args.size, args.max_depth)
+        mi_r = Mitsuba({}, args.size, args.max_depth, args.variant, args.mitsuba_sampler, xml)
+    else:
+        gi_file, _ = write_scene(args.size, args.max_depth)
+        desc = json.loads(gi_file.read_text())
+        gi_r = Gi(gi_file, args.size, args.max_depth)
+        mi_r = Mitsuba(desc, args.size, args.max_depth, args.variant, args.mitsuba_sampler)
     t = time.perf_counter()
     ref, ref_info = reference(gi_r, mi_r, args.ref_spp, args.ref_batches)
     ref_info["seconds"] = round(time.perf_counter() - t, 1)

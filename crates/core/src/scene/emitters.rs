@@ -18,6 +18,10 @@ pub struct Emitters {
     pub triangles: Vec<u32>,
     /// Per emitting triangle its area (m²).
     areas: Vec<f32>,
+    /// Per emitting triangle its corners (world space) and unit normal (the front face's).
+    corners: Vec<([Vec3; 3], Vec3)>,
+    /// Per emitting triangle whether it emits from both faces.
+    two_sided: Vec<bool>,
     /// Per scene triangle its index in `triangles`, `u32::MAX` where it does not emit.
     slot: Vec<u32>,
     alias: Option<AliasTable>,
@@ -105,6 +109,9 @@ impl Emitters {
             e.slot[t] = e.triangles.len() as u32;
             e.triangles.push(t as u32);
             e.areas.push(area);
+            e.corners
+                .push(([a, b, c], (b - a).cross(c - a).normalize_or_zero()));
+            e.two_sided.push(scene.material_of(t).two_sided);
             e.power += power;
             weights.push(power.element_sum());
         }
@@ -114,6 +121,13 @@ impl Emitters {
 
     pub fn is_empty(&self) -> bool {
         self.alias.is_none()
+    }
+
+    /// The unit normal of emitting scene triangle `triangle` (its front face's) and
+    /// whether it emits from both faces; `None` where it does not emit.
+    pub fn face(&self, triangle: u32) -> Option<(Vec3, bool)> {
+        let i = self.slot_of(triangle)?;
+        Some((self.corners[i].1, self.two_sided[i]))
     }
 
     /// Emitting triangles.
@@ -138,10 +152,9 @@ impl Emitters {
     /// probability `p`.
     fn point_on(&self, scene: &Scene, i: usize, p: f32, u: Vec2) -> EmitterSample {
         let t = self.triangles[i] as usize;
-        let [a, b, c] = scene.triangle(t);
+        let ([a, b, c], normal) = self.corners[i];
         let (b1, b2) = uniform_triangle(u);
         let point = a * (1.0 - b1 - b2) + b * b1 + c * b2;
-        let normal = (b - a).cross(c - a).normalize_or_zero();
         let [t0, t1, t2] = scene.corner_uvs(t);
         EmitterSample {
             triangle: t as u32,

@@ -46,13 +46,40 @@ pub struct DirectLight {
 }
 
 /// Where a BSDF-sampled ray left from, for the multiple-importance weight of an emitter it
-/// hits: the shading point and normal the light samples there were drawn for, and the BSDF
-/// sample's density over solid angle.
+/// hits: the shading point and normal the light samples there were drawn for, its
+/// geometric normal, and the BSDF sample's density over solid angle.
 #[derive(Clone, Copy, Debug)]
 pub struct BsdfVertex {
     pub position: Vec3,
     pub normal: Vec3,
+    pub ng: Vec3,
     pub pdf: f32,
+}
+
+/// A third strategy that samples some of the light next-event estimation and BSDF rays
+/// find: the path tracer's light vertices (`super::light_vertex`), for the weights of
+/// next-event estimation's samples.
+pub trait SharedLight {
+    /// The weight of the light of point or spot light `light` at `it`.
+    fn light_weight(&self, light: usize, it: &Interaction) -> f32;
+    /// The other strategy's density for the emitter point `point` (on scene triangle
+    /// `triangle`) seen from `it`, on the scale of next-event estimation's density over
+    /// solid angle at `it` (0: it cannot sample that light; infinite: it takes all).
+    fn emitter_pdf(&self, it: &Interaction, point: Vec3, triangle: u32) -> f32;
+}
+
+/// Power heuristic (β = 2) weight of a strategy of density `a` against two others.
+#[inline]
+pub fn power_weight(a: f32, [b, c]: [f32; 2]) -> f32 {
+    let a2 = a * a;
+    let sum = a2 + b * b + c * c;
+    if a2.is_infinite() {
+        1.0
+    } else if sum.is_infinite() || sum.is_nan() || sum <= 0.0 {
+        0.0
+    } else {
+        a2 / sum
+    }
 }
 
 impl DirectLight {
@@ -89,11 +116,11 @@ impl DirectLight {
         rng: &mut Rng,
         nee: Nee,
     ) -> Vec3 {
-        self.estimate_weighted(scene, bvh, it, wo, rng, nee, |_| 1.0)
+        self.estimate_weighted(scene, bvh, it, wo, rng, nee, None)
     }
 
-    /// [`DirectLight::estimate`] with the light of each point, spot or parallel light
-    /// (`scene.lights[i]`) weighted by `weight(i)`, where another strategy shares it.
+    /// [`DirectLight::estimate`] with the point and spot lights' and the emitters' samples
+    /// weighted against a third strategy that finds the same light (`shared`).
     #[allow(clippy::too_many_arguments)]
     pub fn estimate_weighted(
         &self,
@@ -103,7 +130,7 @@ impl DirectLight {
         wo: Vec3,
         rng: &mut Rng,
         nee: Nee,
-        weight: impl Fn(usize) -> f32,
+        shared: Option<&dyn SharedLight>,
     ) -> Vec3 {
         if it.material.is_purely_specular() {
             return Vec3::ZERO;
@@ -116,10 +143,9 @@ impl DirectLight {
                 Some(l) => sun_disc(light, l, bvh, it, wo, rng, mis),
                 None => {
                     let l = analytic_light(light, bvh, it, wo);
-                    if l == Vec3::ZERO {
-                        l
-                    } else {
-                        l * weight(i)
+                    match shared {
+                        Some(shared) if l != Vec3::ZERO => l * shared.light_weight(i, it),
+                        _ => l,
                     }
                 }
             };
@@ -127,7 +153,7 @@ impl DirectLight {
         if nee == Nee::DeltaOnly {
             return sum;
         }
-        sum += self.emitter_light(scene, bvh, it, wo, rng, mis);
+        sum += self.emitter_light_weighted(scene, bvh, it, (wo, rng), mis, shared);
         // An environment that is not sampled by importance is left to the BSDF rays of the
         // path tracer (`EnvironmentDesc::importance`); without them it is sampled anyway.
         if let Some(env) = scene
@@ -149,6 +175,19 @@ impl DirectLight {
         wo: Vec3,
         rng: &mut Rng,
         mis: bool,
+    ) -> Vec3 {
+        self.emitter_light_weighted(scene, bvh, it, (wo, rng), mis, None)
+    }
+
+    /// [`DirectLight::emitter_light`], weighted against `shared` too.
+    fn emitter_light_weighted(
+        &self,
+        scene: &Scene,
+        bvh: &SceneBvh,
+        it: &Interaction,
+        (wo, rng): (Vec3, &mut Rng),
+        mis: bool,
+        shared: Option<&dyn SharedLight>,
     ) -> Vec3 {
         if self.emitters.is_empty() {
             return Vec3::ZERO;
@@ -195,29 +234,38 @@ impl DirectLight {
             return Vec3::ZERO;
         }
         let pdf = s.pdf_area * d2 / cos_l;
-        let w = if mis {
-            power_heuristic(pdf, m.pdf(wo_l, wi_l))
-        } else {
-            1.0
-        };
+        let bsdf = if mis { m.pdf(wo_l, wi_l) } else { 0.0 };
+        let other = shared.map_or(0.0, |o| o.emitter_pdf(it, s.point, s.triangle));
+        let w = power_weight(pdf, [bsdf, other]);
         f * wi_l.z.abs() * le * (w / pdf)
     }
 
     /// The multiple-importance weight of emitter triangle `triangle` hit at `point` (normal
     /// `ng`) by the BSDF sample that left `from`: the power heuristic of the sample's density
-    /// against that of [`DirectLight::emitter_light`] drawing the same point.
-    pub fn emitter_weight(&self, from: &BsdfVertex, triangle: u32, point: Vec3, ng: Vec3) -> f32 {
-        let pdf_area = self.emitters.pdf_area(from.position, from.normal, triangle);
-        if pdf_area <= 0.0 {
-            return 1.0;
-        }
+    /// against that of [`DirectLight::emitter_light`] drawing the same point (where `nee`)
+    /// and the density `other` of a third strategy (on the same scale: solid angle at
+    /// `from`).
+    pub fn emitter_weight(
+        &self,
+        from: &BsdfVertex,
+        (triangle, point, ng): (u32, Vec3, Vec3),
+        nee: bool,
+        other: f32,
+    ) -> f32 {
+        let pdf_area = if nee {
+            self.emitters.pdf_area(from.position, from.normal, triangle)
+        } else {
+            0.0
+        };
         let to = point - from.position;
         let d2 = to.length_squared();
         let cos = ng.dot(to).abs() / d2.sqrt();
-        if cos.is_nan() || cos <= 0.0 {
-            return 1.0;
-        }
-        power_heuristic(from.pdf, pdf_area * d2 / cos)
+        let light = if pdf_area > 0.0 && cos > 0.0 {
+            pdf_area * d2 / cos
+        } else {
+            0.0
+        };
+        power_weight(from.pdf, [light, other])
     }
 }
 

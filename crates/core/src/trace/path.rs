@@ -9,7 +9,7 @@
 //! sky's stay here.
 
 use super::direct::{escaped, BsdfVertex, DirectLight, Nee};
-use super::light_vertex::{self, Connection, LightVertices};
+use super::light_vertex::{self, Connection};
 use super::{Interaction, SceneBvh};
 use crate::image::Image;
 use crate::sampling::Rng;
@@ -205,6 +205,9 @@ pub fn radiance(
     // The vertex the current ray left by a non-delta BSDF sample (multiple importance
     // sampling applies to what it hits); `None` for camera rays and delta scatterings.
     let mut from: Option<BsdfVertex> = None;
+    // The same for the ray before (the vertex `from` was reached from by a non-delta
+    // sample), for the light vertices' weights.
+    let mut prev_from: Option<BsdfVertex> = None;
     // Whether the path's first scattering (at the camera's first surface) was non-delta,
     // and whether the current ray left a delta scattering.
     let (mut first_non_delta, mut after_delta) = (false, false);
@@ -234,10 +237,19 @@ pub fn radiance(
         let wo = -d;
         if it.material.emits() && !light_traced {
             let w = match (from, s.strategy) {
-                (None, _) | (Some(_), Strategy::Bsdf) => 1.0,
+                (None, _) => 1.0,
                 (Some(_), Strategy::Light) => 0.0,
-                (Some(f), Strategy::Mis) => {
-                    lights.emitter_weight(&f, it.triangle, it.position, it.ng)
+                (Some(f), strategy) => {
+                    // Light vertices find this emitter's light too where the ray left a
+                    // vertex that a non-delta sample reached.
+                    let other = match (light_vertices, prev_from) {
+                        (Some(lv), Some(x)) => {
+                            lv.emitter_hit_pdf((&x, &f), (it.position, it.triangle), s.light_vertex)
+                        }
+                        _ => 0.0,
+                    };
+                    let hit = (it.triangle, it.position, it.ng);
+                    lights.emitter_weight(&f, hit, strategy == Strategy::Mis, other)
                 }
             };
             l += beta * it.material.emitted(it.ng, wo) * w;
@@ -254,7 +266,9 @@ pub fn radiance(
         // The light vertex's light reflected here (the path tracer finds the same light
         // with one more vertex, next-event estimation there).
         if let Some(v) = vertex.as_ref().filter(|_| depth + 2 <= s.max_depth) {
-            l += beta * LightVertices::connect(bvh, &it, wo, v, s.light_vertex);
+            let lv = light_vertices.expect("a vertex comes from light vertices");
+            let c = lv.connect(scene, (bvh, lights), &it, wo, v, s.light_vertex, s.strategy);
+            l += beta * c;
         }
         // A low-discrepancy generator ([`Rng::sobol`]) gives every bounce its own dimensions
         // (after the camera's and the light vertex's), so that bounce `depth` of all samples
@@ -273,8 +287,8 @@ pub fn radiance(
         l += beta
             * match (light_vertices, from) {
                 (Some(lv), Some(f)) => {
-                    let weight = |i| lv.nee_weight(scene, i, &it, &f, s.light_vertex);
-                    lights.estimate_weighted(scene, bvh, &it, wo, rng, nee, weight)
+                    let shared = lv.sharing(scene, f, s.light_vertex);
+                    lights.estimate_weighted(scene, bvh, &it, wo, rng, nee, Some(&shared))
                 }
                 _ => lights.estimate(scene, bvh, &it, wo, rng, nee),
             };
@@ -300,9 +314,11 @@ pub fn radiance(
             first_non_delta = !delta;
         }
         after_delta = delta;
+        prev_from = from;
         from = (!delta).then_some(BsdfVertex {
             position: it.position,
             normal: it.frame.n,
+            ng: it.ng,
             pdf: bs.pdf,
         });
         // Possibly terminate the path with Russian roulette.
