@@ -143,7 +143,7 @@ pub(super) fn render(
     let lights = DirectLight::of(scene);
     let (radiance, first) =
         render_image(scene, bvh, &samples, progress, |it, wo, rng, _: &mut ()| {
-            lights.estimate(scene, bvh, it, wo, rng, Nee::Alone) + map.radiance(it, wo)
+            lights.estimate(scene, bvh, it, wo, rng, Nee::Alone, None) + map.radiance(it, wo)
         })?;
     let caustics = Image::new(radiance.width, radiance.height);
     let mut out = RenderOutput::of_cpu(radiance, first, caustics, stats);

@@ -106,23 +106,11 @@ impl DirectLight {
     }
 
     /// Light arriving at `it` directly from the sources `nee` says, times the BSDF towards
-    /// `wo` (world space, pointing away from the surface).
-    pub fn estimate(
-        &self,
-        scene: &Scene,
-        bvh: &SceneBvh,
-        it: &Interaction,
-        wo: Vec3,
-        rng: &mut Rng,
-        nee: Nee,
-    ) -> Vec3 {
-        self.estimate_weighted(scene, bvh, it, wo, rng, nee, None)
-    }
-
-    /// [`DirectLight::estimate`] with the point and spot lights' and the emitters' samples
-    /// weighted against a third strategy that finds the same light (`shared`).
+    /// `wo` (world space, pointing away from the surface); the point and spot lights' and
+    /// the emitters' samples weighted against a third strategy that finds the same light,
+    /// where `shared` says.
     #[allow(clippy::too_many_arguments)]
-    pub fn estimate_weighted(
+    pub fn estimate(
         &self,
         scene: &Scene,
         bvh: &SceneBvh,

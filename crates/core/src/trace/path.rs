@@ -288,9 +288,9 @@ pub fn radiance(
             * match (light_vertices, from) {
                 (Some(lv), Some(f)) => {
                     let shared = lv.sharing(scene, f, s.light_vertex);
-                    lights.estimate_weighted(scene, bvh, &it, wo, rng, nee, Some(&shared))
+                    lights.estimate(scene, bvh, &it, wo, rng, nee, Some(&shared))
                 }
-                _ => lights.estimate(scene, bvh, &it, wo, rng, nee),
+                _ => lights.estimate(scene, bvh, &it, wo, rng, nee, None),
             };
         if depth + 1 == s.max_depth && !lights.found_by_rays {
             // The last BSDF ray could only find emitters, suns' discs or the sky.
