@@ -132,6 +132,7 @@ fn render(
         light_traced: false,
         strategy: Strategy::Mis,
         light_vertex: Connection::Mis,
+        first_ray_suns: true,
     };
     let cam = &scene.camera;
     let (w, h) = (cam.width, cam.height);

@@ -48,6 +48,7 @@ fn pixel_estimates(sobol: bool, (x, y): (u32, u32), spp: u32, seeds: u64) -> Vec
         light_traced: false,
         strategy: Strategy::Mis,
         light_vertex: Connection::Mis,
+        first_ray_suns: true,
     };
     // The camera at 24×24: pixels a few degrees wide, with edges and shadows in them.
     let (sx, sy) = (cam.width as f32 / 24.0, cam.height as f32 / 24.0);

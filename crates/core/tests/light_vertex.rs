@@ -79,6 +79,7 @@ fn settings(connection: Connection) -> PathSettings {
         light_traced: false,
         strategy: Strategy::Mis,
         light_vertex: connection,
+        first_ray_suns: true,
     }
 }
 

@@ -83,6 +83,7 @@ fn settings(max_depth: u32, strategy: Strategy) -> PathSettings {
         light_traced: false,
         strategy,
         light_vertex: Connection::Mis,
+        first_ray_suns: true,
     }
 }
 

@@ -47,6 +47,7 @@ pub fn render(
         } else {
             Connection::Off
         },
+        first_ray_suns: true,
     };
     let lights = DirectLight::of(scene);
     // Progress counts camera rows and light-path chunks together.

@@ -54,6 +54,10 @@ pub struct PathSettings {
     /// path's vertex is also found by connecting that vertex to a light vertex
     /// ([`super::light_vertex`]).
     pub light_vertex: Connection,
+    /// Whether the first ray counts the suns' discs it escapes to (`false` where the
+    /// caller's next-event estimation at the ray's origin took the directional lights along
+    /// their axes at full weight).
+    pub first_ray_suns: bool,
 }
 
 /// How the path tracer finds the light of emitters, suns' discs and the sky: both ways
@@ -229,7 +233,8 @@ pub fn radiance(
         let Some(hit) = bvh.intersect(o, d, f32::INFINITY) else {
             if !(s.strategy == Strategy::Light && from.is_some()) {
                 let pdf = pdf.filter(|_| s.strategy == Strategy::Mis);
-                l += beta * escaped(scene, d, pdf, !light_traced);
+                let suns = !light_traced && (depth > 0 || s.first_ray_suns);
+                l += beta * escaped(scene, d, pdf, suns);
             }
             break;
         };

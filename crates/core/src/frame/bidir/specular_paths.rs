@@ -27,7 +27,7 @@ use crate::image::Image;
 use crate::sampling::Rng;
 use crate::scene::sources::{Source, Sources};
 use crate::scene::Scene;
-use crate::trace::direct::{escaped, DirectLight};
+use crate::trace::direct::DirectLight;
 use crate::trace::light_tracer::{self, LightTraceSettings};
 use crate::trace::light_vertex::Connection;
 use crate::trace::path::{self, PathSettings, Strategy};
@@ -174,13 +174,11 @@ fn sample(
             // (a) z's non-delta scattering, past the next-event estimation: its first ray
             // sees the emitters and the sky, not the suns' discs (the estimation at z took
             // the directional lights along their axes).
-            let o = it.spawn(wi);
-            if bvh.intersect(o, wi, f32::INFINITY).is_none() {
-                l += weight * escaped(scene, wi, None, false);
-            } else {
-                let ps = settings(max_depth - vertex);
-                l += weight * path::radiance(scene, bvh, lights, (o, wi), rng, &ps);
-            }
+            let ps = PathSettings {
+                first_ray_suns: false,
+                ..settings(max_depth - vertex)
+            };
+            l += weight * path::radiance(scene, bvh, lights, (it.spawn(wi), wi), rng, &ps);
         } else if max_depth >= 2 {
             // (b) x1's non-delta lobe towards a delta lobe at x2.
             l += weight * through_x2(scene, bvh, lights, (it.spawn(wi), wi), max_depth, rng);
@@ -231,5 +229,6 @@ fn settings(max_depth: u32) -> PathSettings {
         light_traced: false,
         strategy: Strategy::Mis,
         light_vertex: Connection::Mis,
+        first_ray_suns: true,
     }
 }
