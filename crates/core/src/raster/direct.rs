@@ -100,16 +100,24 @@ pub struct DirectParamsRaw {
     pub env_sin: f32,
     /// Emitting triangles in the polygons texture (0: the emitters' light is sampled only).
     pub polygons: u32,
-    pub _pad: f32,
+    /// The groups (emitting objects) the polygons form, at most [`MAX_GROUPS`].
+    pub groups: u32,
+    /// Per group its points [x, y) (the first records, group by group) and its polygons
+    /// [z, w).
+    pub group_ranges: [[u32; 4]; MAX_GROUPS],
 }
 
-/// Texels per emitting triangle in the polygons texture: the corners (w: 1 when two-sided)
-/// and the radiance.
+/// Texels per emitting triangle in the polygons texture: the corners (w of the first: 1 when
+/// two-sided) and the radiance.
 pub const POLYGON_TEXELS: u32 = 4;
 
 /// Most emitting triangles whose unshadowed diffuse light the direct pass sums in closed
 /// form per pixel (beyond, their light is sampled only).
 pub const MAX_POLYGONS: usize = 64;
+
+/// Most polygon groups (emitting objects), each with its own visibility ratio (`MAX_GROUPS`
+/// of `direct_shade.wgsl`).
+pub const MAX_GROUPS: usize = 8;
 
 /// The accumulation target: radiance·weight in rgb, the sum of weights in alpha.
 pub const ACCUM: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;

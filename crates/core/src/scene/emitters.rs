@@ -4,6 +4,10 @@
 //! (an alias table), and a point uniformly on the drawn triangle, for next-event estimation
 //! and for photons and light paths.
 
+mod groups;
+
+pub use groups::PolygonGroups;
+
 use super::light::Emission;
 use super::light_bvh::{LightBounds, LightBvh};
 use super::Scene;
@@ -25,6 +29,8 @@ pub struct Emitters {
     /// Per scene triangle its index in `triangles`, `u32::MAX` where it does not emit.
     slot: Vec<u32>,
     alias: Option<AliasTable>,
+    /// Per emitting triangle the weight it is drawn with (its power summed over channels).
+    weights: Vec<f32>,
     /// Total emitted power (W per channel).
     power: Vec3,
 }
@@ -46,6 +52,8 @@ pub struct EmitterSample {
 /// a cosine lobe, standing for the part of the emitters' area it was drawn from.
 #[derive(Clone, Copy, Debug)]
 pub struct EmitterPoint {
+    /// The scene triangle it lies on.
+    pub triangle: u32,
     pub position: Vec3,
     /// The triangle's geometric normal (its front face's side).
     pub normal: Vec3,
@@ -65,6 +73,8 @@ pub struct EmitterTriangle {
     pub corners: [Vec3; 3],
     pub radiance: Vec3,
     pub two_sided: bool,
+    /// The group (an emitting object) it belongs to, in [`PolygonGroups`].
+    pub group: u32,
 }
 
 /// How far off a surface at `p` a ray starts so as not to hit it again (that of
@@ -116,6 +126,7 @@ impl Emitters {
             weights.push(power.element_sum());
         }
         e.alias = AliasTable::new(&weights);
+        e.weights = weights;
         e
     }
 
@@ -194,49 +205,44 @@ impl Emitters {
     /// an oriented point light: their lighting (Σ over points of I·cos θ'·cos θ/d²) is an
     /// unbiased estimate of the emitters'.
     pub fn points(&self, scene: &Scene, n: u32, seed: u64) -> Vec<EmitterPoint> {
-        if self.is_empty() || n == 0 {
+        match &self.alias {
+            Some(alias) => self.points_from(scene, (alias, None), n, (seed, 0)),
+            None => Vec::new(),
+        }
+    }
+
+    /// `n` points drawn from `table` over the emitters `slots` (all when `None`), as
+    /// [`Emitters::points`] describes, from random stream `stream` of `seed`.
+    fn points_from(
+        &self,
+        scene: &Scene,
+        (table, slots): (&AliasTable, Option<&[u32]>),
+        n: u32,
+        (seed, stream): (u64, u64),
+    ) -> Vec<EmitterPoint> {
+        if n == 0 {
             return Vec::new();
         }
-        let mut rng = Rng::new(seed, 0xE417_7E25, 0);
+        let mut rng = Rng::new(seed, 0xE417_7E25, stream);
         let offset = rng.next_2d();
         let r2 = Vec2::new(0.754_877_7, 0.569_840_3);
         (0..n)
-            .filter_map(|i| {
+            .map(|i| {
                 let u_select = ((i as f32 + rng.next_f32()) / n as f32).min(1.0 - f32::EPSILON);
                 let u = (offset + r2 * i as f32).fract();
-                let s = self.sample(scene, u_select, u)?;
+                let (j, p) = table.sample(u_select);
+                let slot = slots.map_or(j, |s| s[j] as usize);
+                let s = self.point_on(scene, slot, p, u);
                 let m = scene.material_at(s.triangle as usize, s.uv, 0.0);
                 let area = 1.0 / (n as f32 * s.pdf_area);
-                Some(EmitterPoint {
+                EmitterPoint {
+                    triangle: s.triangle,
                     position: s.point,
                     normal: s.normal,
                     intensity: m.emission * area,
                     two_sided: m.two_sided,
                     area,
-                })
-            })
-            .collect()
-    }
-
-    /// The emitting triangles as polygons of uniform radiance, when there are at most `max`
-    /// and none has an emission texture (`None` otherwise: their light is then sampled only).
-    pub fn polygons(&self, scene: &Scene, max: usize) -> Option<Vec<EmitterTriangle>> {
-        if self.triangles.len() > max {
-            return None;
-        }
-        self.triangles
-            .iter()
-            .map(|&t| {
-                let t = t as usize;
-                if scene.maps_of(t).emission.is_some() {
-                    return None;
                 }
-                let m = scene.material_of(t);
-                Some(EmitterTriangle {
-                    corners: scene.triangle(t),
-                    radiance: m.emission,
-                    two_sided: m.two_sided,
-                })
             })
             .collect()
     }

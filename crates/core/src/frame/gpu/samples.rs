@@ -14,11 +14,11 @@ use crate::gpu::raw::ViewRaw;
 use crate::gpu::timer::Timer;
 use crate::gpu::{self, GpuContext, Pipelines};
 use crate::raster::direct::{
-    DirectParamsRaw, SampledLightRaw, MAX_POLYGONS, POLYGON_TEXELS, SAMPLE_TEXELS,
+    DirectParamsRaw, SampledLightRaw, MAX_GROUPS, MAX_POLYGONS, POLYGON_TEXELS, SAMPLE_TEXELS,
 };
 use crate::raster::shadow::{self, CullUnits, ShadowPass};
 use crate::raster::{buffer_init, Geometry, VIEW_SIZE};
-use crate::scene::emitters::Emitters;
+use crate::scene::emitters::{Emitters, PolygonGroups};
 use crate::scene::light_views::{self, orthographic_view, CUBE_FACES};
 use crate::scene::{Environment, Scene};
 use bytemuck::Zeroable;
@@ -80,9 +80,9 @@ pub(crate) struct LightSamples {
     params_raw: DirectParamsRaw,
     polygons: wgpu::Texture,
     pub polygons_view: wgpu::TextureView,
-    /// The emitting triangles (kept until geometry or materials change) and how many of
-    /// them the polygons texture holds (0: their light is sampled only).
-    emitters: Option<(Emitters, u32)>,
+    /// The emitting triangles (kept until geometry or materials change) and the polygon
+    /// groups the polygons texture holds.
+    emitters: Option<(Emitters, PolygonGroups)>,
     /// CPU copies of the layers' matrices (for culling), and which layers to render.
     clip: Vec<Mat4>,
     render: Vec<bool>,
@@ -269,8 +269,9 @@ impl LightSamples {
         }
         if self.emitters.is_none() && c.area > 0 {
             let emitters = Emitters::of(scene);
-            let polygons = emitters.polygons(scene, MAX_POLYGONS).unwrap_or_default();
-            let texels: Vec<[f32; 4]> = polygons
+            let groups = emitters.polygon_groups(scene, (MAX_POLYGONS, MAX_GROUPS), c.area);
+            let texels: Vec<[f32; 4]> = groups
+                .triangles
                 .iter()
                 .flat_map(|t| {
                     let [a, b, c] = t.corners;
@@ -290,18 +291,37 @@ impl LightSamples {
                 POLYGON_TEXELS,
                 &texels,
             );
-            self.emitters = Some((emitters, polygons.len() as u32));
+            self.emitters = Some((emitters, groups));
         }
-        let (emitters, polygons) = match &self.emitters {
-            Some((e, n)) => (Some(e), *n),
-            None => (None, 0),
-        };
+        let mut polygons = 0;
+        let mut group_ranges = [[0u32; 4]; MAX_GROUPS];
+        // The points of the polygon groups first, group by group, then the others'.
+        let mut points = Vec::new();
+        if let Some((e, groups)) = &self.emitters {
+            points = e.stratified_points(scene, groups, c.area, seed);
+            polygons = groups.triangles.len() as u32;
+            for (g, range) in group_ranges
+                .iter_mut()
+                .enumerate()
+                .take(groups.groups as usize)
+            {
+                let triangles = groups.polygons_of(g as u32);
+                range[2..].copy_from_slice(&[triangles.start, triangles.end]);
+            }
+            for (i, (g, _)) in points.iter().enumerate() {
+                if let Some(range) = g.map(|g| &mut group_ranges[g as usize]) {
+                    if range[1] == 0 {
+                        range[0] = i as u32;
+                    }
+                    range[1] = i as u32 + 1;
+                }
+            }
+        }
         let (lo, hi) = light_views::bounds(scene);
         let mut records = Vec::new();
         self.clip.clear();
         self.render.clear();
-        let points = emitters.map_or_else(Vec::new, |e| e.points(scene, c.area, seed));
-        for p in points {
+        for (_, p) in points {
             // Just off the emitter, so that its own surface is behind the cube's centre.
             let origin = p.position + p.normal * (1e-4 * (hi - lo).length());
             let (faces, texel_scale) = crate::raster::vpl::cube_views(origin, lo, hi, c.size);
@@ -367,6 +387,8 @@ impl LightSamples {
         }
         let params = DirectParamsRaw {
             polygons,
+            groups: self.emitters.as_ref().map_or(0, |(_, g)| g.groups),
+            group_ranges,
             ratio: ratio as u32,
             ..params_of(scene, c, area, sky)
         };
@@ -443,7 +465,8 @@ fn params_of(scene: &Scene, c: SampleCounts, area: u32, sky: u32) -> DirectParam
         env_cos,
         env_sin,
         polygons: 0,
-        _pad: 0.0,
+        groups: 0,
+        group_ranges: [[0; 4]; MAX_GROUPS],
     }
 }
 

@@ -10,11 +10,14 @@
 //   f·|cos θi|·I·cos θ'/(d² + r²) times one bilinear tap of its cube shadow map, where r² is
 //   the radius² of the disc of the area the point stands for (the disc's on-axis form factor:
 //   bounded where d → 0, exact for the disc there, ≈ r²/d² dark relative elsewhere); with
-//   `ratio` and the emitters as `polygons` (untextured, few), the diffuse lobe is the ratio
-//   estimator: the unshadowed diffuse light of the polygons in closed form (Lambert's
-//   formula for the irradiance of a polygon clipped to the horizon, i.e. linearly
-//   transformed cosines for the diffuse lobe, the Fresnel coupling taken at the polygons'
-//   mean direction) times Σ f_d·G·V / Σ f_d·G over the points;
+//   `ratio`, the diffuse lobe of the emitting objects held as `polygons` (untextured, few;
+//   scene/emitters/groups.rs takes them by power, and draws the points stratified over
+//   them and the other emitters) is the ratio estimator, per object (`groups`): its
+//   unshadowed diffuse light in closed form (Lambert's formula for the irradiance of a
+//   polygon clipped to the horizon, i.e. linearly transformed cosines for the diffuse lobe,
+//   the Fresnel coupling taken at the object's mean direction) times Σ f_d·G·V / Σ f_d·G
+//   over the points drawn on that object; the other emitters' points are summed as they
+//   are;
 // - per direction drawn from the sky (`sky_count` records), a distant light of irradiance
 //   L/(n·p) with one tap of its orthographic shadow map; with `ratio` the diffuse lobe is
 //   the ratio estimator (Heitz, Hill & McGuire 2018): the unshadowed diffuse light from the
@@ -42,7 +45,7 @@
 @group(0) @binding(10) var irradiance_table: texture_2d<f32>;
 @group(0) @binding(11) var<uniform> direct_params: DirectParams;
 // The emitting triangles (`polygons` of them): corners (w of the first: 1 when two-sided)
-// and radiance, four texels a row.
+// and radiance, four texels a row, group by group.
 @group(0) @binding(12) var emitter_polygons: texture_2d<f32>;
 @group(1) @binding(0) var g_position: texture_2d<f32>;
 @group(1) @binding(1) var g_normals: texture_2d<f32>;
@@ -63,8 +66,15 @@ struct DirectParams {
     env_sin: f32,
     // Emitting triangles in `emitter_polygons` (0: their light is sampled only).
     polygons: u32,
-    _pad: f32,
+    // The emitting objects (groups) the polygons form, at most `MAX_GROUPS`.
+    groups: u32,
+    // Per group its points [x, y) (the first records, group by group) and its polygons
+    // [z, w).
+    group_ranges: array<vec4<u32>, MAX_GROUPS>,
 }
+
+// Most polygon groups (`MAX_GROUPS` of raster/direct.rs).
+const MAX_GROUPS: u32 = 8u;
 
 const SAMPLE_TEXELS: u32 = 4u;
 const TWO_PI: f32 = 6.28318530718;
@@ -456,45 +466,82 @@ fn diffuse_eval(m: Material, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec3
     return m.diffuse / PI * coupling;
 }
 
-// Lambert's vector irradiance ½ Σ θᵢ·ûᵢ of the triangle `a`, `b`, `c` (relative to the
-// receiver) of unit radiance, clipped to the hemisphere above `n`: its irradiance is
-// |n·Φ|, its direction the mean direction of the light arriving from it.
-fn polygon_vector(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
-    var tri = array<vec3<f32>, 3>(a, b, c);
-    var v: array<vec3<f32>, 4>;
-    var count = 0u;
-    for (var i = 0u; i < 3u; i++) {
-        let cur = tri[i];
-        let next = tri[(i + 1u) % 3u];
-        let dc = dot(cur, n);
-        let dn = dot(next, n);
-        if dc > 0.0 {
-            v[count] = cur;
-            count++;
-        }
-        if (dc > 0.0) != (dn > 0.0) {
-            v[count] = mix(cur, next, dc / (dc - dn));
-            count++;
-        }
-    }
-    var phi = vec3<f32>(0.0);
-    for (var i = 0u; i < count; i++) {
-        let p0 = normalize(v[i]);
-        let p1 = normalize(v[(i + 1u) % count]);
-        let cr = cross(p0, p1);
-        let l = length(cr);
-        if l > 1e-12 {
-            phi += cr * (atan2(l, dot(p0, p1)) / l);
-        }
-    }
-    return 0.5 * phi;
+// θ/sin θ for the angle θ between two unit vectors of cosine `x`: the rational fit of Hill &
+// Heitz (2016, "Real-time area lighting: a journey from research to production"), relative
+// error below 2e-6 over x in [−1, 1] (checked against acos in float64), in place of an
+// atan2, a length and a division per edge.
+fn theta_over_sin(x: f32) -> f32 {
+    let y = abs(x);
+    let a = 0.8543985 + (0.4965155 + 0.0145206 * y) * y;
+    let b = 3.4175940 + (4.1616724 + y) * y;
+    let v = a / b;
+    return TWO_PI * select(0.5 * inverseSqrt(max(1.0 - x * x, 1e-7)) - v, v, x > 0.0);
 }
 
-// The unshadowed diffuse light of the emitter polygons at `p` (see the header).
-fn polygons_diffuse(p: vec3<f32>, ns: vec3<f32>, m: Material, wo: vec3<f32>) -> vec3<f32> {
+// Lambert's edge term θ·û of the arc from unit vector `u` to unit vector `w`.
+fn edge_vector(u: vec3<f32>, w: vec3<f32>) -> vec3<f32> {
+    return cross(u, w) * theta_over_sin(dot(u, w));
+}
+
+// Adds the part of the edge `p` → `q` (heights `dp`, `dq` above the horizon) that lies above
+// the horizon to `phi`, and records where the polygon leaves (`exit`) or re-enters
+// (`entry`) the hemisphere.
+fn clipped_edge(
+    p: vec3<f32>,
+    q: vec3<f32>,
+    dp: f32,
+    dq: f32,
+    phi: ptr<function, vec3<f32>>,
+    exit: ptr<function, vec3<f32>>,
+    entry: ptr<function, vec3<f32>>,
+) {
+    if dp > 0.0 && dq > 0.0 {
+        *phi += edge_vector(normalize(p), normalize(q));
+    } else if dp > 0.0 {
+        let x = normalize(mix(p, q, dp / (dp - dq)));
+        *phi += edge_vector(normalize(p), x);
+        *exit = x;
+    } else if dq > 0.0 {
+        let x = normalize(mix(p, q, dp / (dp - dq)));
+        *phi += edge_vector(x, normalize(q));
+        *entry = x;
+    }
+}
+
+// Lambert's vector irradiance ½ Σ θᵢ·ûᵢ of the triangle `a`, `b`, `c` (relative to the
+// receiver) of unit radiance, clipped to the hemisphere above `n`: its irradiance is
+// |n·Φ|, its direction the mean direction of the light arriving from it. Written without
+// arrays: with the clipped polygon in a private array, lavapipe spent ~50 ms a polygon a
+// frame at 640×480 here, about three times as long (docs/bench/lights-gpu.md).
+fn polygon_vector(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    let da = dot(a, n);
+    let db = dot(b, n);
+    let dc = dot(c, n);
+    if da > 0.0 && db > 0.0 && dc > 0.0 {
+        let ua = normalize(a);
+        let ub = normalize(b);
+        let uc = normalize(c);
+        return 0.5 * (edge_vector(ua, ub) + edge_vector(ub, uc) + edge_vector(uc, ua));
+    }
+    if da <= 0.0 && db <= 0.0 && dc <= 0.0 {
+        return vec3<f32>(0.0);
+    }
+    // Partly above: the clipped edges, then the horizon's arc from the exit to the entry.
+    var phi = vec3<f32>(0.0);
+    var exit = vec3<f32>(0.0);
+    var entry = vec3<f32>(0.0);
+    clipped_edge(a, b, da, db, &phi, &exit, &entry);
+    clipped_edge(b, c, db, dc, &phi, &exit, &entry);
+    clipped_edge(c, a, dc, da, &phi, &exit, &entry);
+    return 0.5 * (phi + edge_vector(exit, entry));
+}
+
+// The unshadowed diffuse light at `p` of the emitter polygons [`first`, `end`) (one group:
+// see the header).
+fn polygons_diffuse(p: vec3<f32>, ns: vec3<f32>, m: Material, wo: vec3<f32>, first: u32, end: u32) -> vec3<f32> {
     var e = vec3<f32>(0.0);
     var dir = vec3<f32>(0.0);
-    for (var t = 0u; t < direct_params.polygons; t++) {
+    for (var t = first; t < end; t++) {
         let t0 = textureLoad(emitter_polygons, vec2<u32>(0u, t), 0);
         let a = t0.xyz - p;
         let b = textureLoad(emitter_polygons, vec2<u32>(1u, t), 0).xyz - p;
@@ -522,6 +569,49 @@ fn visible_ratio(lit: vec3<f32>, unshadowed: vec3<f32>) -> vec3<f32> {
     return select(vec3<f32>(1.0), lit / max(unshadowed, vec3<f32>(1e-30)), unshadowed > vec3<f32>(0.0));
 }
 
+// The light at `p` of emitter point `i`: its diffuse lobe unshadowed (`fd`), its glossy
+// lobe unshadowed (`fs`) and its shadow map's visibility (`v`).
+struct PointLight {
+    fd: vec3<f32>,
+    fs: vec3<f32>,
+    v: f32,
+}
+
+fn point_light(i: u32, p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, glossy: Material, wo: vec3<f32>) -> PointLight {
+    var out = PointLight(vec3<f32>(0.0), vec3<f32>(0.0), 0.0);
+    let t0 = textureLoad(sample_records, vec2<u32>(0u, i), 0);
+    let to_point = t0.xyz - p;
+    let d2 = dot(to_point, to_point);
+    let wi = to_point * inverseSqrt(d2);
+    let cos_g = dot(wi, ng);
+    if cos_g <= 0.0 {
+        return out;
+    }
+    let t1 = textureLoad(sample_records, vec2<u32>(1u, i), 0);
+    let t3 = textureLoad(sample_records, vec2<u32>(3u, i), 0);
+    var cos_e = -dot(wi, t1.xyz);
+    if t3.x > 0.5 {
+        cos_e = abs(cos_e);
+    }
+    if cos_e <= 0.0 {
+        return out;
+    }
+    let t2 = textureLoad(sample_records, vec2<u32>(2u, i), 0);
+    let g = t2.xyz * (abs(dot(ns, wi)) * cos_e / (d2 + t2.w));
+    out.fd = diffuse_eval(m, ns, wo, wi) * g;
+    if max3(m.specular) > 0.0 {
+        out.fs = bsdf_eval(glossy, ns, wo, wi) * g;
+    }
+    if max3(out.fd + out.fs) <= 0.0 {
+        return out;
+    }
+    let dist = sqrt(d2);
+    let q = p + ng * (t1.w * dist * (1.0 - cos_g) + 1e-4 * dist);
+    let layer = shadow_layer_of(u32(t0.w + 0.5), 6u, q - t0.xyz);
+    out.v = shadow_tap(sample_maps, shadow_sampler, sample_view(layer), layer, q);
+    return out;
+}
+
 // The light of the points drawn on the emitters and of the directions drawn from the sky
 // at `p` (see the header).
 fn sampled_light(p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, wo: vec3<f32>) -> vec3<f32> {
@@ -530,54 +620,35 @@ fn sampled_light(p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, wo: ve
     var glossy = m;
     glossy.diffuse = vec3<f32>(0.0);
     let has_glossy = max3(m.specular) > 0.0;
-    var lit = vec3<f32>(0.0);
-    var unshadowed = vec3<f32>(0.0);
-    for (var i = 0u; i < direct_params.area_count; i++) {
-        let t0 = textureLoad(sample_records, vec2<u32>(0u, i), 0);
-        let to_point = t0.xyz - p;
-        let d2 = dot(to_point, to_point);
-        let wi = to_point * inverseSqrt(d2);
-        let cos_g = dot(wi, ng);
-        if cos_g <= 0.0 {
-            continue;
+    // The polygon groups' points come first, group by group: per group the ratio estimator.
+    var plain = 0u;
+    if direct_params.ratio != 0u && direct_params.polygons > 0u {
+        for (var g = 0u; g < min(direct_params.groups, MAX_GROUPS); g++) {
+            let range = direct_params.group_ranges[g];
+            var lit = vec3<f32>(0.0);
+            var unshadowed = vec3<f32>(0.0);
+            for (var i = range.x; i < range.y; i++) {
+                let l = point_light(i, p, ns, ng, m, glossy, wo);
+                lit += l.fd * l.v;
+                unshadowed += l.fd;
+                sum += l.fs * l.v;
+            }
+            if max3(m.diffuse) > 0.0 {
+                sum += polygons_diffuse(p, ns, m, wo, range.z, range.w) * visible_ratio(lit, unshadowed);
+            }
+            plain = range.y;
         }
-        let t1 = textureLoad(sample_records, vec2<u32>(1u, i), 0);
-        let t3 = textureLoad(sample_records, vec2<u32>(3u, i), 0);
-        var cos_e = -dot(wi, t1.xyz);
-        if t3.x > 0.5 {
-            cos_e = abs(cos_e);
-        }
-        if cos_e <= 0.0 {
-            continue;
-        }
-        let t2 = textureLoad(sample_records, vec2<u32>(2u, i), 0);
-        let g = t2.xyz * (abs(dot(ns, wi)) * cos_e / (d2 + t2.w));
-        let fd = diffuse_eval(m, ns, wo, wi) * g;
-        var fs = vec3<f32>(0.0);
-        if has_glossy {
-            fs = bsdf_eval(glossy, ns, wo, wi) * g;
-        }
-        if max3(fd + fs) <= 0.0 {
-            continue;
-        }
-        let dist = sqrt(d2);
-        let q = p + ng * (t1.w * dist * (1.0 - cos_g) + 1e-4 * dist);
-        let layer = shadow_layer_of(u32(t0.w + 0.5), 6u, q - t0.xyz);
-        let v = shadow_tap(sample_maps, shadow_sampler, sample_view(layer), layer, q);
-        lit += fd * v;
-        unshadowed += fd;
-        sum += fs * v;
     }
-    if direct_params.ratio != 0u && direct_params.polygons > 0u && max3(m.diffuse) > 0.0 {
-        sum += polygons_diffuse(p, ns, m, wo) * visible_ratio(lit, unshadowed);
-    } else {
-        sum += lit;
+    // The other points (every point without the ratio estimator), summed as they are.
+    for (var i = plain; i < direct_params.area_count; i++) {
+        let l = point_light(i, p, ns, ng, m, glossy, wo);
+        sum += (l.fd + l.fs) * l.v;
     }
     if direct_params.sky_count == 0u {
         return sum;
     }
-    lit = vec3<f32>(0.0);
-    unshadowed = vec3<f32>(0.0);
+    var lit = vec3<f32>(0.0);
+    var unshadowed = vec3<f32>(0.0);
     let end = direct_params.area_count + direct_params.sky_count;
     for (var i = direct_params.area_count; i < end; i++) {
         let t0 = textureLoad(sample_records, vec2<u32>(0u, i), 0);

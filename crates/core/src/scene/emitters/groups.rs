@@ -1,0 +1,301 @@
+//! The emitters as the GPU direct pass lights them in one frame: the emitting objects whose
+//! unshadowed diffuse light it sums in closed form (polygon groups, each with its own
+//! visibility ratio: the ratio estimator of Heitz, Hill & McGuire 2018), and points drawn
+//! on the emitters stratified over those groups and the other emitters, so that every group
+//! has points for its ratio and every emitter its share of the points.
+
+use super::{EmitterPoint, EmitterTriangle, Emitters};
+use crate::sampling::AliasTable;
+use crate::scene::Scene;
+
+/// The emitting objects whose light the GPU direct pass sums in closed form, each a group
+/// of triangles (see [`Emitters::polygon_groups`]).
+#[derive(Clone, Debug, Default)]
+pub struct PolygonGroups {
+    /// Their triangles, group by group.
+    pub triangles: Vec<EmitterTriangle>,
+    /// Per emitting triangle (an index into `Emitters::triangles`) its group, if any.
+    slot_group: Vec<Option<u32>>,
+    pub groups: u32,
+}
+
+impl PolygonGroups {
+    /// The range of `triangles` that group `g` holds.
+    pub fn polygons_of(&self, g: u32) -> std::ops::Range<u32> {
+        let first = self.triangles.partition_point(|t| t.group < g);
+        let end = self.triangles.partition_point(|t| t.group <= g);
+        first as u32..end as u32
+    }
+}
+
+/// `n` points shared among strata of power `powers`: one each (when there are at least as
+/// many points), the rest in proportion to power, by largest remainder.
+fn allocate(n: u32, powers: &[f64]) -> Vec<u32> {
+    let total: f64 = powers.iter().sum();
+    let base = if n as usize >= powers.len() { 1 } else { 0 };
+    let spare = n - base * powers.len() as u32;
+    if total.is_nan() || total <= 0.0 {
+        return vec![base; powers.len()];
+    }
+    let shares: Vec<f64> = powers.iter().map(|p| spare as f64 * p / total).collect();
+    let mut counts: Vec<u32> = shares.iter().map(|s| base + s.floor() as u32).collect();
+    let mut left = n - counts.iter().sum::<u32>();
+    let mut order: Vec<usize> = (0..powers.len()).collect();
+    order.sort_by(|&a, &b| {
+        (shares[b] - shares[b].floor()).total_cmp(&(shares[a] - shares[a].floor()))
+    });
+    for i in order.into_iter().cycle() {
+        if left == 0 {
+            break;
+        }
+        counts[i] += 1;
+        left -= 1;
+    }
+    counts
+}
+
+impl Emitters {
+    /// The emitters whose unshadowed diffuse light is summed in closed form (the ratio
+    /// estimator's numerator): whole objects, each a group of polygons of uniform radiance
+    /// (none with an emission texture), taken by power, most powerful first, while they fit
+    /// in `max_polygons` triangles and `max_groups` groups, and the groups and the other
+    /// emitters (one stratum) in `points`, so that [`Emitters::stratified_points`] gives
+    /// each of them a point. The other emitters' light is sampled only.
+    pub fn polygon_groups(
+        &self,
+        scene: &Scene,
+        (max_polygons, max_groups): (usize, usize),
+        points: u32,
+    ) -> PolygonGroups {
+        // The emitting triangles of each object, its power, and whether it can be a group.
+        let mut objects: Vec<(usize, Vec<usize>, f32, bool)> = Vec::new();
+        for (slot, &t) in self.triangles.iter().enumerate() {
+            let object = scene.objects.partition_point(|o| o.triangles.end <= t);
+            let closed = scene.maps_of(t as usize).emission.is_none();
+            let power = self.weights[slot];
+            match objects.last_mut() {
+                Some(o) if o.0 == object => {
+                    o.1.push(slot);
+                    o.2 += power;
+                    o.3 &= closed;
+                }
+                _ => objects.push((object, vec![slot], power, closed)),
+            }
+        }
+        let emitting = self.weights.iter().filter(|&&w| w > 0.0).count();
+        objects.retain(|o| o.3 && o.2 > 0.0);
+        objects.sort_by(|a, b| b.2.total_cmp(&a.2));
+        let mut chosen: Vec<Vec<usize>> = Vec::new();
+        let mut polygons = 0;
+        for (_, slots, _, _) in objects {
+            if chosen.len() < max_groups && polygons + slots.len() <= max_polygons {
+                polygons += slots.len();
+                chosen.push(slots);
+            }
+        }
+        // At most `points` strata: the weakest groups join the other emitters.
+        while let Some(last) = chosen.last() {
+            let rest = polygons < emitting;
+            if chosen.len() + rest as usize <= points as usize {
+                break;
+            }
+            polygons -= last.len();
+            chosen.pop();
+        }
+        let mut groups = PolygonGroups {
+            triangles: Vec::new(),
+            slot_group: vec![None; self.triangles.len()],
+            groups: chosen.len() as u32,
+        };
+        for (g, slots) in chosen.into_iter().enumerate() {
+            for slot in slots {
+                let m = scene.material_of(self.triangles[slot] as usize);
+                groups.slot_group[slot] = Some(g as u32);
+                groups.triangles.push(EmitterTriangle {
+                    corners: self.corners[slot].0,
+                    radiance: m.emission,
+                    two_sided: m.two_sided,
+                    group: g as u32,
+                });
+            }
+        }
+        groups
+    }
+
+    /// `n` points as [`Emitters::points`] draws them, but stratified over the polygon groups
+    /// of `groups` and the other emitters (the last stratum): each stratum gets at least one
+    /// point and the rest by power, drawn by power within it. Group by group, then the
+    /// others, each with its group. Their lighting is an unbiased estimate of the emitters'
+    /// too, and every group has points for its ratio estimator.
+    pub fn stratified_points(
+        &self,
+        scene: &Scene,
+        groups: &PolygonGroups,
+        n: u32,
+        seed: u64,
+    ) -> Vec<(Option<u32>, EmitterPoint)> {
+        let mut strata: Vec<(Option<u32>, Vec<u32>)> =
+            (0..groups.groups).map(|g| (Some(g), Vec::new())).collect();
+        let mut rest = Vec::new();
+        for (slot, g) in groups.slot_group.iter().enumerate() {
+            match g {
+                Some(g) => strata[*g as usize].1.push(slot as u32),
+                None if self.weights[slot] > 0.0 => rest.push(slot as u32),
+                None => {}
+            }
+        }
+        if !rest.is_empty() {
+            strata.push((None, rest));
+        }
+        let powers: Vec<f64> = strata
+            .iter()
+            .map(|(_, slots)| slots.iter().map(|&i| self.weights[i as usize] as f64).sum())
+            .collect();
+        let counts = allocate(n, &powers);
+        let mut out = Vec::new();
+        for (k, ((group, slots), count)) in strata.iter().zip(counts).enumerate() {
+            let weights: Vec<f32> = slots.iter().map(|&i| self.weights[i as usize]).collect();
+            let Some(table) = AliasTable::new(&weights) else {
+                continue;
+            };
+            let points = self.points_from(scene, (&table, Some(slots)), count, (seed, k as u64));
+            out.extend(points.into_iter().map(|p| (*group, p)));
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+    use std::collections::HashMap;
+
+    /// A ceiling panel (2 triangles), an emitting box (12) and an emitting geodesic sphere
+    /// (320), in that order of power, over a grey floor that does not emit.
+    const ROOM: &str = r#"{
+        "camera": {"position": [0, 1, 4], "look_at": [0, 1, 0]},
+        "materials": {
+            "grey": {"diffuse": [0.5, 0.5, 0.5]},
+            "panel": {"diffuse": [0, 0, 0], "emission": [8, 8, 8]},
+            "lantern": {"diffuse": [0, 0, 0], "emission": [6, 3, 1]},
+            "globe": {"diffuse": [0, 0, 0], "emission": [1, 2, 4]}
+        },
+        "objects": [
+            {"shape": {"type": "quad", "size": [4, 4]}, "material": "grey"},
+            {"shape": {"type": "quad", "size": [1, 1]}, "material": "panel",
+             "transform": {"rotate": [180, 0, 0], "translate": [0, 2.5, 0]}},
+            {"shape": {"type": "box", "size": [0.3, 0.3, 0.3]}, "material": "lantern",
+             "transform": {"translate": [1, 1, 0]}},
+            {"shape": {"type": "sphere", "radius": 0.2, "subdivisions": 2}, "material": "globe",
+             "transform": {"translate": [-1, 0.2, 0]}}
+        ]
+    }"#;
+
+    fn room() -> (Scene, Emitters) {
+        let scene = Scene::from_json(ROOM, "room", &HashMap::new()).unwrap();
+        let e = Emitters::of(&scene);
+        (scene, e)
+    }
+
+    #[test]
+    fn allocation_gives_each_stratum_a_point_and_the_rest_by_power() {
+        // 1 each, then 13 spare as 6.5 / 3.25 / 3.25: floors 6, 3, 3 and the last to the
+        // largest remainder.
+        assert_eq!(allocate(16, &[8.0, 4.0, 4.0]), vec![8, 4, 4]);
+        assert_eq!(allocate(16, &[1000.0, 1e-3]), vec![15, 1]);
+        assert_eq!(allocate(4, &[0.0, 0.0]), vec![1, 1]);
+        for n in 0..40 {
+            for powers in [
+                &[1.0][..],
+                &[3.0, 1.0],
+                &[1.0, 1.0, 1.0],
+                &[5.0, 0.1, 2.0, 9.0],
+            ] {
+                let counts = allocate(n, powers);
+                assert_eq!(counts.iter().sum::<u32>(), n, "{n} {powers:?}");
+                if n as usize >= powers.len() {
+                    assert!(counts.iter().all(|&c| c >= 1), "{n} {powers:?} {counts:?}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn groups_are_whole_objects_by_power_within_the_budgets() {
+        let (scene, e) = room();
+        assert_eq!(e.len(), 2 + 12 + 320);
+        let radiance = |g: &PolygonGroups, k: u32| {
+            let r = g.polygons_of(k);
+            g.triangles[r.start as usize].radiance
+        };
+        // The sphere's 320 triangles exceed 64: the panel, then the box.
+        let g = e.polygon_groups(&scene, (64, 8), 16);
+        assert_eq!(g.groups, 2);
+        assert_eq!(g.polygons_of(0), 0..2);
+        assert_eq!(g.polygons_of(1), 2..14);
+        assert_eq!(radiance(&g, 0), Vec3::splat(8.0));
+        assert_eq!(radiance(&g, 1), Vec3::new(6.0, 3.0, 1.0));
+        // 12 polygons: the box does not fit after the panel; one group.
+        assert_eq!(e.polygon_groups(&scene, (12, 8), 16).groups, 1);
+        // One group at most.
+        assert_eq!(e.polygon_groups(&scene, (64, 1), 16).groups, 1);
+        // Two points: one group and the other emitters; one point: no group.
+        assert_eq!(e.polygon_groups(&scene, (64, 8), 2).groups, 1);
+        assert_eq!(e.polygon_groups(&scene, (64, 8), 1).groups, 0);
+        // Room for the sphere: three groups, nothing else emits.
+        let all = e.polygon_groups(&scene, (400, 8), 3);
+        assert_eq!((all.groups, all.triangles.len()), (3, 334));
+    }
+
+    /// Each stratum's points carry its light exactly: within a stratum of one radiance a
+    /// point drawn by power stands for intensity L·A_s/n_s, so Σ I over its points is
+    /// Σ L·A over its triangles, whatever the seed; the points come group by group, then
+    /// the others, and lie on their group's triangles.
+    #[test]
+    fn stratified_points_carry_each_stratum_s_light() {
+        let (scene, e) = room();
+        let groups = e.polygon_groups(&scene, (64, 8), 16);
+        let light = |from: std::ops::Range<usize>| -> Vec3 {
+            e.triangles[from]
+                .iter()
+                .map(|&t| {
+                    let [a, b, c] = scene.triangle(t as usize);
+                    scene.material_of(t as usize).emission * (0.5 * (b - a).cross(c - a).length())
+                })
+                .sum()
+        };
+        let expected = [light(0..2), light(2..14), light(14..334)];
+        for seed in 0..5 {
+            let points = e.stratified_points(&scene, &groups, 16, seed);
+            assert_eq!(points.len(), 16);
+            let order: Vec<u32> = points.iter().map(|p| p.0.unwrap_or(2)).collect();
+            assert!(order.windows(2).all(|w| w[0] <= w[1]), "{order:?}");
+            for (k, want) in expected.iter().enumerate() {
+                let mine: Vec<&EmitterPoint> = points
+                    .iter()
+                    .filter(|p| p.0.unwrap_or(2) == k as u32)
+                    .map(|p| &p.1)
+                    .collect();
+                assert!(!mine.is_empty(), "stratum {k} has no point");
+                let sum: Vec3 = mine.iter().map(|p| p.intensity).sum();
+                assert!(
+                    (sum - *want).abs().max_element() < 1e-4 * want.max_element(),
+                    "{k}: {sum} {want}"
+                );
+                let range = if k < 2 {
+                    groups.polygons_of(k as u32)
+                } else {
+                    14..334
+                };
+                let on = |p: &EmitterPoint| {
+                    e.triangles[range.start as usize..range.end as usize].contains(&p.triangle)
+                };
+                assert!(
+                    mine.iter().all(|p| on(p)),
+                    "stratum {k}: a point off its triangles"
+                );
+            }
+        }
+    }
+}
