@@ -11,7 +11,7 @@ shadow maps kept). Markdown table on stdout. The references are cached in
 ``target/emitter-groups-*.npy``.
 
     .venv/bin/python scripts/bench_emitter_groups.py [--size 128] [--ref-spp 2048]
-        [--frames 7] [--label NAME]
+        [--frames 7] [--area-samples 16] [--scenes emissive-room cornell-box] [--label NAME]
 
 To compare two builds, run it with each on ``PYTHONPATH`` (e.g. the parent commit's wheel
 unpacked into a folder) in the same session, alternating.
@@ -49,10 +49,10 @@ def reference(name: str, depth: int, size: int, spp: int) -> np.ndarray:
     return img
 
 
-def camera_moved_ms(scene: gi.Scene, frames: int) -> float:
+def camera_moved_ms(scene: gi.Scene, frames: int, points: int) -> float:
     """Median wall milliseconds of `frames` ``direct`` frames at 640×480, the camera moved
     1 mm along x and back between them (after a warm-up frame)."""
-    r = gi.Renderer(scene, "direct", size=(640, 480), seed=1)
+    r = gi.Renderer(scene, "direct", size=(640, 480), seed=1, area_samples=points)
     r.render()
     position = np.array(r.describe("camera")["position"], float)
     times = []
@@ -69,23 +69,28 @@ def main() -> None:
     ap.add_argument("--size", type=int, default=128)
     ap.add_argument("--ref-spp", type=int, default=2048)
     ap.add_argument("--frames", type=int, default=7)
+    ap.add_argument("--area-samples", type=int, default=16, help="points on the emitters")
+    ap.add_argument("--scenes", nargs="+", default=SCENES, choices=SCENES)
     ap.add_argument("--label", default="this build")
     a = ap.parse_args()
-    print(f"gi {gi.__version__} ({gi.__file__}), {a.label}")
+    print(f"gi {gi.__version__} ({gi.__file__}), {a.label}, area_samples {a.area_samples}")
     print()
     print("| scene | method | image mean / reference | FLIP | relMSE | camera-moved frame (ms) |")
     print("|---|---|---|---|---|---|")
-    for name in SCENES:
+    for name in a.scenes:
         scene = load(name)
         for method, depth in METHODS.items():
             ref = reference(name, depth, a.size, a.ref_spp)
             rows = []
             for seed in (11, 12, 13):
-                r = gi.Renderer(scene, method, size=(a.size, a.size), seed=seed, spp=16)
+                size = (a.size, a.size)
+                o = {"seed": seed, "spp": 16, "area_samples": a.area_samples}
+                r = gi.Renderer(scene, method, size=size, **o)
                 img = r.render().radiance[..., :3]
                 rows.append((img.mean() / ref.mean(), flip(ref, img), relmse(img, ref)))
             m = np.mean(rows, axis=0)
-            ms = f"{camera_moved_ms(scene, a.frames):.0f}" if method == "direct" else ""
+            direct = method == "direct"
+            ms = f"{camera_moved_ms(scene, a.frames, a.area_samples):.0f}" if direct else ""
             row = f"| {name} | {method} | {m[0]:.4f} | {m[1]:.3f} | {m[2]:.5f} | {ms} |"
             print(row, flush=True)
 

@@ -126,7 +126,9 @@ impl Emitters {
     /// of `groups` and the other emitters (the last stratum): each stratum gets at least one
     /// point and the rest by power, drawn by power within it. Group by group, then the
     /// others, each with its group. Their lighting is an unbiased estimate of the emitters'
-    /// too, and every group has points for its ratio estimator.
+    /// too, and every group has points for its ratio estimator, given `groups` from
+    /// [`Emitters::polygon_groups`] for at least `n` points (with fewer points than strata,
+    /// some strata would get none and their light would be missing).
     pub fn stratified_points(
         &self,
         scene: &Scene,

@@ -636,7 +636,7 @@ fn sampled_light(p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, wo: ve
             if max3(m.diffuse) > 0.0 {
                 sum += polygons_diffuse(p, ns, m, wo, range.z, range.w) * visible_ratio(lit, unshadowed);
             }
-            plain = range.y;
+            plain = max(plain, range.y);
         }
     }
     // The other points (every point without the ratio estimator), summed as they are.
