@@ -2,24 +2,13 @@
 
 import sys
 
-import flip_evaluator
 import numpy as np
 import pytest
+from image_metrics import flip
 
 import gi
 
 SIZE = (48, 48)
-
-
-def flip(reference: np.ndarray, test: np.ndarray) -> float:
-    """Mean HDR-FLIP (flip-evaluator, 67 pixels per degree); 0 is identical."""
-    _, mean, _ = flip_evaluator.evaluate(
-        np.ascontiguousarray(reference, np.float32),
-        np.ascontiguousarray(np.maximum(test, 0.0), np.float32),
-        "HDR",
-        applyMagma=False,
-    )
-    return float(mean)
 
 
 @pytest.fixture(scope="module")

@@ -43,9 +43,9 @@ import sys
 import warnings
 from pathlib import Path
 
-import flip_evaluator
 import numpy as np
 import pytest
+from image_metrics import flip
 
 import gi
 
@@ -128,17 +128,6 @@ def test_method_matches_mitsuba(name, method):
     if bound is not None:
         error = flip(ref, img)
         assert error < bound, f"{method} on {name}: FLIP {error:.3f} (bound {bound})"
-
-
-def flip(reference: np.ndarray, test: np.ndarray) -> float:
-    """Mean HDR-FLIP (flip-evaluator, 67 pixels per degree); 0 is identical."""
-    _, mean, _ = flip_evaluator.evaluate(
-        np.ascontiguousarray(reference, np.float32),
-        np.ascontiguousarray(np.maximum(test, 0.0), np.float32),
-        "HDR",
-        applyMagma=False,
-    )
-    return float(mean)
 
 
 def test_readme_first_example(tmp_path):

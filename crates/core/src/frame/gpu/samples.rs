@@ -298,7 +298,7 @@ impl LightSamples {
         // The points of the polygon groups first, group by group, then the others'.
         let mut points = Vec::new();
         if let Some((e, groups)) = &self.emitters {
-            points = e.stratified_points(scene, groups, c.area, seed);
+            points = e.stratified_points(scene, groups, seed);
             polygons = groups.triangles.len() as u32;
             for (g, range) in group_ranges
                 .iter_mut()

@@ -14,9 +14,22 @@ use crate::scene::Scene;
 pub struct PolygonGroups {
     /// Their triangles, group by group.
     pub triangles: Vec<EmitterTriangle>,
-    /// Per emitting triangle (an index into `Emitters::triangles`) its group, if any.
-    slot_group: Vec<Option<u32>>,
     pub groups: u32,
+    /// What [`Emitters::stratified_points`] draws from, built once: the groups, then the
+    /// other emitters.
+    strata: Vec<Stratum>,
+}
+
+/// A part of the emitters that gets its own share of the points.
+#[derive(Clone, Debug)]
+struct Stratum {
+    /// Its polygon group (`None`: the emitters of no group).
+    group: Option<u32>,
+    /// Its emitting triangles (indices into `Emitters::triangles`) and their table by power.
+    slots: Vec<u32>,
+    table: AliasTable,
+    /// Its points.
+    count: u32,
 }
 
 impl PolygonGroups {
@@ -59,8 +72,9 @@ impl Emitters {
     /// estimator's numerator): whole objects, each a group of polygons of uniform radiance
     /// (none with an emission texture), taken by power, most powerful first, while they fit
     /// in `max_polygons` triangles and `max_groups` groups, and the groups and the other
-    /// emitters (one stratum) in `points`, so that [`Emitters::stratified_points`] gives
-    /// each of them a point. The other emitters' light is sampled only.
+    /// emitters (one stratum) in `points`; with the strata that
+    /// [`Emitters::stratified_points`] draws those `points` from, each with at least one.
+    /// The other emitters' light is sampled only.
     pub fn polygon_groups(
         &self,
         scene: &Scene,
@@ -102,50 +116,26 @@ impl Emitters {
             polygons -= last.len();
             chosen.pop();
         }
-        let mut groups = PolygonGroups {
-            triangles: Vec::new(),
-            slot_group: vec![None; self.triangles.len()],
-            groups: chosen.len() as u32,
-        };
+        let mut triangles = Vec::new();
+        let mut in_group = vec![false; self.triangles.len()];
+        let mut strata: Vec<(Option<u32>, Vec<u32>)> = Vec::new();
         for (g, slots) in chosen.into_iter().enumerate() {
-            for slot in slots {
+            for &slot in &slots {
                 let m = scene.material_of(self.triangles[slot] as usize);
-                groups.slot_group[slot] = Some(g as u32);
-                groups.triangles.push(EmitterTriangle {
+                in_group[slot] = true;
+                triangles.push(EmitterTriangle {
                     corners: self.corners[slot].0,
                     radiance: m.emission,
                     two_sided: m.two_sided,
                     group: g as u32,
                 });
             }
+            strata.push((Some(g as u32), slots.iter().map(|&i| i as u32).collect()));
         }
-        groups
-    }
-
-    /// `n` points as [`Emitters::points`] draws them, but stratified over the polygon groups
-    /// of `groups` and the other emitters (the last stratum): each stratum gets at least one
-    /// point and the rest by power, drawn by power within it. Group by group, then the
-    /// others, each with its group. Their lighting is an unbiased estimate of the emitters'
-    /// too, and every group has points for its ratio estimator, given `groups` from
-    /// [`Emitters::polygon_groups`] for at least `n` points (with fewer points than strata,
-    /// some strata would get none and their light would be missing).
-    pub fn stratified_points(
-        &self,
-        scene: &Scene,
-        groups: &PolygonGroups,
-        n: u32,
-        seed: u64,
-    ) -> Vec<(Option<u32>, EmitterPoint)> {
-        let mut strata: Vec<(Option<u32>, Vec<u32>)> =
-            (0..groups.groups).map(|g| (Some(g), Vec::new())).collect();
-        let mut rest = Vec::new();
-        for (slot, g) in groups.slot_group.iter().enumerate() {
-            match g {
-                Some(g) => strata[*g as usize].1.push(slot as u32),
-                None if self.weights[slot] > 0.0 => rest.push(slot as u32),
-                None => {}
-            }
-        }
+        let rest: Vec<u32> = (0..self.triangles.len())
+            .filter(|&i| !in_group[i] && self.weights[i] > 0.0)
+            .map(|i| i as u32)
+            .collect();
         if !rest.is_empty() {
             strata.push((None, rest));
         }
@@ -153,15 +143,49 @@ impl Emitters {
             .iter()
             .map(|(_, slots)| slots.iter().map(|&i| self.weights[i as usize] as f64).sum())
             .collect();
-        let counts = allocate(n, &powers);
+        let counts = allocate(points, &powers);
+        let strata = strata
+            .into_iter()
+            .zip(counts)
+            .filter_map(|((group, slots), count)| {
+                let weights: Vec<f32> = slots.iter().map(|&i| self.weights[i as usize]).collect();
+                let table = AliasTable::new(&weights)?;
+                Some(Stratum {
+                    group,
+                    slots,
+                    table,
+                    count,
+                })
+            })
+            .collect();
+        PolygonGroups {
+            groups: triangles.last().map_or(0, |t| t.group + 1),
+            triangles,
+            strata,
+        }
+    }
+
+    /// Points as [`Emitters::points`] draws them, but stratified over the polygon groups of
+    /// `groups` and the other emitters (the last stratum), as many as `groups` was made for
+    /// ([`Emitters::polygon_groups`]): each stratum gets at least one and the rest by power,
+    /// drawn by power within it. Group by group, then the others, each with its group. Their
+    /// lighting is an unbiased estimate of the emitters' too, and every group has points for
+    /// its ratio estimator.
+    pub fn stratified_points(
+        &self,
+        scene: &Scene,
+        groups: &PolygonGroups,
+        seed: u64,
+    ) -> Vec<(Option<u32>, EmitterPoint)> {
         let mut out = Vec::new();
-        for (k, ((group, slots), count)) in strata.iter().zip(counts).enumerate() {
-            let weights: Vec<f32> = slots.iter().map(|&i| self.weights[i as usize]).collect();
-            let Some(table) = AliasTable::new(&weights) else {
-                continue;
-            };
-            let points = self.points_from(scene, (&table, Some(slots)), count, (seed, k as u64));
-            out.extend(points.into_iter().map(|p| (*group, p)));
+        for (k, st) in groups.strata.iter().enumerate() {
+            let points = self.points_from(
+                scene,
+                (&st.table, Some(&st.slots)),
+                st.count,
+                (seed, k as u64),
+            );
+            out.extend(points.into_iter().map(|p| (st.group, p)));
         }
         out
     }
@@ -269,7 +293,7 @@ mod tests {
         };
         let expected = [light(0..2), light(2..14), light(14..334)];
         for seed in 0..5 {
-            let points = e.stratified_points(&scene, &groups, 16, seed);
+            let points = e.stratified_points(&scene, &groups, seed);
             assert_eq!(points.len(), 16);
             let order: Vec<u32> = points.iter().map(|p| p.0.unwrap_or(2)).collect();
             assert!(order.windows(2).all(|w| w[0] <= w[1]), "{order:?}");
