@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 import gi
+from gi import cli
 from gi.animation import FrameProgressBar
 from gi.video import VideoWriter
 
@@ -338,6 +339,23 @@ def test_video_writer_leaves_no_half_file(tmp_path):
     video, size = read_video(tmp_path / "b.mp4")
     assert size == (34, 26) and len(video) == 2
     assert [f.name for f in tmp_path.iterdir()] == ["b.mp4"]
+
+
+def test_video_without_its_encoder_package_is_a_typed_error(tmp_path, monkeypatch):
+    # An install that lacks imageio-ffmpeg (the GPU check's image had none): an OutputError
+    # naming the package, from the API and the CLI, and no file left.
+    monkeypatch.setitem(sys.modules, "imageio_ffmpeg", None)  # import raises ImportError
+    w = VideoWriter(tmp_path / "a.mp4", fps=24)
+    with pytest.raises(gi.OutputError, match="pip install imageio-ffmpeg"):
+        w.write(np.zeros((8, 8, 3), np.uint8))
+    w.abort()
+    args = cli._parser().parse_args(
+        ["render", "cornell-anim", "-o", str(tmp_path / "v.mp4"), "--size", "8x8"]
+        + ["--spp", "1", "--photons", "300", "--frames", "0:2", "-q"]
+    )
+    with pytest.raises(gi.OutputError, match="imageio-ffmpeg"):
+        cli.run(args)
+    assert list(tmp_path.iterdir()) == []
 
 
 def readme_section() -> str:

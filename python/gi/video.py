@@ -16,6 +16,18 @@ from gi._checks import OutputError, named_error
 VIDEO_FORMATS = {".mp4", ".mov", ".mkv"}
 
 
+def _encoder(path: Path) -> Any:
+    """The ``imageio_ffmpeg`` module, or an :class:`OutputError` naming the missing package
+    (an install without gi's dependency ``imageio-ffmpeg``)."""
+    try:
+        import imageio_ffmpeg  # type: ignore[import-untyped]
+    except ImportError as e:
+        raise OutputError(
+            path, f"video needs the imageio-ffmpeg package ({e}); pip install imageio-ffmpeg"
+        ) from e
+    return imageio_ffmpeg
+
+
 class VideoWriter:
     """Writes frames (``(height, width, 3)`` uint8 sRGB) to ``path`` at ``fps`` frames a
     second, H.264 in yuv420p (what players expect). Odd sizes are padded to even ones by
@@ -55,8 +67,7 @@ class VideoWriter:
             frame = np.pad(frame, ((0, h % 2), (0, w % 2), (0, 0)), mode="edge")
         try:
             if self._gen is None:
-                import imageio_ffmpeg  # type: ignore[import-untyped]
-
+                imageio_ffmpeg = _encoder(self.path)
                 self.path.parent.mkdir(parents=True, exist_ok=True)
                 self._size = (w, h)
                 self._gen = imageio_ffmpeg.write_frames(

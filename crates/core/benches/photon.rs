@@ -8,7 +8,7 @@
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use gi_core::frame::gather::gather_trace_settings;
 use gi_core::frame::{FrameDesc, Renderer};
-use gi_core::photon::footprint_map::{scene_area, FootprintMap, LeafSize};
+use gi_core::photon::footprint_map::{FootprintMap, LeafSize};
 use gi_core::photon::{emit_and_trace, Kernel};
 use gi_core::scene::builtin;
 use gi_core::trace::{Interaction, SceneBvh};
@@ -33,7 +33,7 @@ fn photons(c: &mut Criterion) {
         b.iter(|| black_box(emit_and_trace(&scene, &bvh, n, &settings, 1)))
     });
     let set = emit_and_trace(&scene, &bvh, n, &settings, 1);
-    let area = scene_area(&scene);
+    let area = scene.surface_area();
     g.throughput(Throughput::Elements(set.photons.len() as u64));
     g.bench_function(
         format!("footprint LBVH build, {} photons", set.photons.len()),

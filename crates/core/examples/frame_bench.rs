@@ -48,7 +48,8 @@
 //! (`sky_samples` directions), on an open yard and on `cornell` with its point light or an
 //! emitting ceiling quad: a frame after the camera moved (G-buffer, edges, direct light;
 //! the shadow maps kept), and a progressive pass (new light samples: their shadow maps and
-//! the direct light), with the GPU-timestamp stages of each.
+//! the direct light), with the GPU-timestamp stages of each (`--stages`: a last column with
+//! every stage of the camera-moved frame).
 mod common;
 
 use common::{median, nudge};
@@ -319,11 +320,17 @@ fn lights_table(args: &common::Args, runs: usize) -> Result<(), Box<dyn std::err
         ),
         ("cornell, area light".into(), cornell_area()?, vec![]),
     ];
+    // --stages: a last column, the camera-moved frame's every stage (median per name).
+    let all_stages = args.flag("--stages");
     println!(
         "| scene | samples | camera moved: frame (ms) | direct light (ms) | progressive pass (ms) | \
-         light shadow maps (ms) | sampled-light shadow maps (ms) | direct light (ms) |"
+         light shadow maps (ms) | sampled-light shadow maps (ms) | direct light (ms) |{}",
+        if all_stages { " camera moved: stages (ms) |" } else { "" }
     );
-    println!("|---|---|---|---|---|---|---|---|");
+    println!(
+        "|---|---|---|---|---|---|---|---|{}",
+        if all_stages { "---|" } else { "" }
+    );
     for (name, scene, extra) in rows {
         let mut o = gi_core::options!(Direct, width: w, height: h);
         for (k, v) in &extra {
@@ -346,7 +353,7 @@ fn lights_table(args: &common::Args, runs: usize) -> Result<(), Box<dyn std::err
         // Camera moves: the G-buffer, edges and direct light again, shadows kept.
         let mut r = Renderer::new(&scene, &o)?;
         r.render(&FrameDesc::default(), &Silent)?;
-        let (mut moved, mut moved_direct) = (Vec::new(), Vec::new());
+        let (mut moved, mut moved_direct, mut moved_outs) = (Vec::new(), Vec::new(), Vec::new());
         for i in 0..runs {
             let mut camera = r.scene().camera_desc();
             camera.position[0] += 0.001 * (i + 1) as f32;
@@ -355,6 +362,7 @@ fn lights_table(args: &common::Args, runs: usize) -> Result<(), Box<dyn std::err
             let out = r.render(&FrameDesc::default(), &Silent)?;
             moved.push(t.elapsed().as_secs_f64());
             moved_direct.push(stage(&out, &["direct light", "edge shading"]));
+            moved_outs.push(out);
         }
         // Progressive passes: new samples each, their shadow maps rendered again.
         let mut p = Renderer::new(&scene, &o.clone().progressive())?;
@@ -369,8 +377,13 @@ fn lights_table(args: &common::Args, runs: usize) -> Result<(), Box<dyn std::err
             direct.push(stage(&out, &["direct light", "edge shading"]));
         }
         let ms = |v: Vec<f64>| format!("{:.0}", median(v) * 1e3);
+        let split = if all_stages {
+            format!(" {} |", stage_medians(&moved_outs))
+        } else {
+            String::new()
+        };
         println!(
-            "| {name} | {samples} | {} | {} | {} | {} | {} | {} |",
+            "| {name} | {samples} | {} | {} | {} | {} | {} | {} |{split}",
             ms(moved),
             ms(moved_direct),
             ms(pass),
@@ -380,6 +393,24 @@ fn lights_table(args: &common::Args, runs: usize) -> Result<(), Box<dyn std::err
         );
     }
     Ok(())
+}
+
+/// "name ms, …": each stage's median over `outs` (a stage's repeats in a frame summed).
+fn stage_medians(outs: &[RenderOutput]) -> String {
+    let mut names: Vec<&str> = Vec::new();
+    for (n, _) in outs.iter().flat_map(|o| &o.stats.stages) {
+        if !names.contains(&n.as_str()) {
+            names.push(n);
+        }
+    }
+    names
+        .iter()
+        .map(|n| {
+            let ms = median(outs.iter().map(|o| stage(o, &[n])).collect());
+            format!("{n} {:.1}", ms * 1e3)
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 /// An option's value in `extra`, else `default`.

@@ -10,7 +10,7 @@
 //! (`-- obvhs` or `-- radii` runs section 4 or 5 alone).
 
 use gi_core::frame::gather::gather_trace_settings;
-use gi_core::photon::footprint_map::{scene_area, FootprintMap, LeafSize};
+use gi_core::photon::footprint_map::{FootprintMap, LeafSize};
 use gi_core::photon::knn::PhotonMap;
 use gi_core::photon::{emit_and_trace, Kernel};
 use gi_core::scene::builtin;
@@ -55,7 +55,7 @@ fn main() {
     }
     let scene = builtin::load("cornell").expect("built-in");
     let bvh = SceneBvh::build(&scene);
-    let area = scene_area(&scene);
+    let area = scene.surface_area();
     println!("# Photon map benchmarks\n");
     println!("Command: `cargo run -p gi-core --profile test --example photon_map_bench > docs/bench/photon-map.md`");
     let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
@@ -262,7 +262,7 @@ fn lbvh_vs_obvhs(scene: &gi_core::Scene) {
     let map = FootprintMap::build(
         &set,
         1,
-        scene_area(scene),
+        scene.surface_area(),
         LeafSize::Auto,
         Kernel::Epanechnikov,
     );
@@ -318,7 +318,7 @@ fn lbvh_vs_obvhs(scene: &gi_core::Scene) {
                 "Footprints containing a query point: {:.1} on average (the paper's k_PD, Table 2: \
                  175–480); Σ footprint area / scene area = {:.1}.\n",
                 hits as f64 / np,
-                fps.iter().map(|f| f.area as f64).sum::<f64>() / scene_area(scene)
+                fps.iter().map(|f| f.area as f64).sum::<f64>() / scene.surface_area()
             );
             println!("| hierarchy | leaf size | build (ms) | query (ms) | tests / point | build vs LBVH | query vs LBVH |");
             println!("|---|---|---|---|---|---|---|");

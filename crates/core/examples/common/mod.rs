@@ -43,7 +43,12 @@ impl Args {
 
     /// `--quick`: the smallest configurations only.
     pub fn quick(&self) -> bool {
-        self.0.iter().any(|a| a == "--quick")
+        self.flag("--quick")
+    }
+
+    /// Whether `flag` is given (a flag without a value).
+    pub fn flag(&self, flag: &str) -> bool {
+        self.0.iter().any(|a| a == flag)
     }
 }
 

@@ -12,7 +12,7 @@ use crate::error::Result;
 use crate::image::Image;
 use crate::photon::camera_pass::render_image;
 use crate::photon::differential::global_spacing;
-use crate::photon::footprint_map::{scene_area, FootprintMap, LeafSize};
+use crate::photon::footprint_map::{FootprintMap, LeafSize};
 use crate::photon::trace::emit_and_trace_focused;
 use crate::photon::trace::Checked;
 use crate::photon::trace::DifferentialSettings;
@@ -129,7 +129,7 @@ pub(super) fn render(
     let map = FootprintMap::try_build(
         &set,
         1,
-        scene_area(scene),
+        scene.surface_area(),
         leaf,
         options.kernel.kernel,
         progress,

@@ -9,7 +9,9 @@
 use crate::sampling::{uniform_cone, uniform_sphere, Frame, Rng};
 use crate::scene::{Light, Scene};
 use glam::Vec3;
+use std::collections::HashMap;
 use std::f32::consts::PI;
+use std::sync::Arc;
 
 /// A cone of directions from a light: unit axis and cosine of its half-angle.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -44,28 +46,42 @@ pub struct Focus {
 
 /// Bounding spheres (centre, radius) of the scene's objects with a delta lobe.
 fn specular_spheres(scene: &Scene) -> Vec<(Vec3, f32)> {
-    scene
-        .objects
-        .iter()
-        .filter(|o| {
-            (o.triangles.start as usize..o.triangles.end as usize)
-                .any(|t| scene.materials[scene.triangle_material(t) as usize].has_delta_lobe())
-        })
-        .filter_map(|o| {
-            let ps: Vec<Vec3> = scene.object_vertices(o).collect();
-            if ps.is_empty() {
-                return None;
-            }
-            let (lo, hi) = ps
+    // Per object its materials, not per placed triangle (O(objects) for single-material
+    // objects; a face table's distinct offsets found once per shared table).
+    let delta = |m: u32| scene.materials[m as usize].has_delta_lobe();
+    let mut tables: HashMap<*const Vec<u32>, Vec<u32>> = HashMap::new();
+    let mut out = Vec::new();
+    for o in &scene.objects {
+        let specular = match &o.face_materials {
+            None => delta(o.material),
+            Some(f) => tables
+                .entry(Arc::as_ptr(f))
+                .or_insert_with(|| {
+                    let mut d = f.to_vec();
+                    d.sort_unstable();
+                    d.dedup();
+                    d
+                })
                 .iter()
-                .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
-                    (lo.min(*p), hi.max(*p))
-                });
-            let c = 0.5 * (lo + hi);
-            let r = ps.iter().map(|p| (*p - c).length()).fold(0.0f32, f32::max);
-            Some((c, r * 1.001 + 1e-5))
-        })
-        .collect()
+                .any(|&off| delta(o.material + off)),
+        };
+        if !specular {
+            continue;
+        }
+        let ps: Vec<Vec3> = scene.object_vertices(o).collect();
+        if ps.is_empty() {
+            continue;
+        }
+        let (lo, hi) = ps
+            .iter()
+            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
+                (lo.min(*p), hi.max(*p))
+            });
+        let c = 0.5 * (lo + hi);
+        let r = ps.iter().map(|p| (*p - c).length()).fold(0.0f32, f32::max);
+        out.push((c, r * 1.001 + 1e-5));
+    }
+    out
 }
 
 impl Focus {
@@ -176,6 +192,80 @@ impl Focus {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The definition `specular_spheres` implements per object: the objects one of whose
+    /// placed triangles has a material with a delta lobe.
+    fn specular_by_triangle(scene: &Scene) -> Vec<usize> {
+        (0..scene.objects.len())
+            .filter(|&i| {
+                let o = &scene.objects[i];
+                (o.triangles.start as usize..o.triangles.end as usize)
+                    .any(|t| scene.material_of(t).has_delta_lobe())
+            })
+            .collect()
+    }
+
+    /// The objects whose spheres `specular_spheres` returns (centres are distinct here).
+    fn specular_objects(scene: &Scene) -> Vec<usize> {
+        let spheres = specular_spheres(scene);
+        let found: Vec<usize> = (0..scene.objects.len())
+            .filter(|&i| {
+                let ps: Vec<Vec3> = scene.object_vertices(&scene.objects[i]).collect();
+                let (lo, hi) = ps
+                    .iter()
+                    .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
+                        (lo.min(*p), hi.max(*p))
+                    });
+                spheres.iter().any(|(c, _)| *c == 0.5 * (lo + hi))
+            })
+            .collect();
+        assert_eq!(found.len(), spheres.len());
+        found
+    }
+
+    #[test]
+    fn specular_objects_are_those_with_a_delta_triangle() {
+        for name in [
+            "cornell",
+            "cornell-glass",
+            "caustic-ring",
+            "ring-room",
+            "mirror-shadow",
+        ] {
+            let scene = crate::scene::builtin::load(name).unwrap();
+            let want = specular_by_triangle(&scene);
+            assert_eq!(specular_objects(&scene), want, "{name}");
+            assert_eq!(want.is_empty(), name == "cornell", "{name}");
+        }
+        // Face tables: two walls share one table naming offsets 0 and 1; from one wall's
+        // first material offset 1 is a mirror, from the other's both are diffuse.
+        let mut scene = crate::scene::builtin::load("cornell-glass").unwrap();
+        let glass = scene
+            .materials
+            .iter()
+            .position(|m| m.has_delta_lobe())
+            .unwrap();
+        let diffuse = scene
+            .materials
+            .iter()
+            .position(|m| !m.has_delta_lobe())
+            .unwrap();
+        let base = scene.materials.len() as u32;
+        for m in [diffuse, glass, diffuse, diffuse] {
+            scene.materials.push(scene.materials[m]);
+        }
+        let (a, b) = (0, 1);
+        assert_eq!(scene.objects[a].mesh, scene.objects[b].mesh);
+        let n = scene.meshes[scene.objects[a].mesh as usize].indices.len();
+        let table = Arc::new((0..n as u32).map(|t| t % 2).collect::<Vec<u32>>());
+        for (i, first) in [(a, base), (b, base + 2)] {
+            scene.objects[i].material = first;
+            scene.objects[i].face_materials = Some(table.clone());
+        }
+        let want = specular_by_triangle(&scene);
+        assert!(want.contains(&a) && !want.contains(&b), "{want:?}");
+        assert_eq!(specular_objects(&scene), want);
+    }
 
     #[test]
     fn mixture_weights_integrate_to_the_light_power() {

@@ -149,16 +149,6 @@ impl FootprintMap {
 /// footprints per point; the paper's own T_auto / k_PD (Tables 1–2) is 0.03–0.12.
 pub const T_AUTO_SCALE: f64 = 0.08;
 
-/// Total surface area of the scene's triangles (m²).
-pub fn scene_area(scene: &crate::Scene) -> f64 {
-    let mut area = 0.0f64;
-    scene.for_each_triangle(
-        |_| false,
-        |_, [a, b, c]| area += 0.5 * (b - a).cross(c - a).length() as f64,
-    );
-    area
-}
-
 /// Footprint radii per path kind (the paper's Table 3): for each kind present, the photon
 /// count and the radii (m) at the percentiles `qs` (0–100).
 pub fn radius_percentiles(set: &PhotonSet, qs: &[f64]) -> Vec<(super::PathKind, usize, Vec<f32>)> {

@@ -10,11 +10,7 @@ pub const Z_RATIO: f32 = 0.5;
 
 /// Radius (m) of a photon volume of path density 1: `kernel_scale`·√(scene area / photons).
 pub fn base_radius(scene: &Scene, photons: u64, kernel_scale: f32) -> f32 {
-    let mut area = 0.0f64;
-    scene.for_each_triangle(
-        |_| false,
-        |_, [a, b, c]| area += 0.5 * (b - a).cross(c - a).length() as f64,
-    );
+    let area = scene.surface_area();
     (kernel_scale as f64 * (area / photons.max(1) as f64).sqrt()) as f32
 }
 
