@@ -11,7 +11,9 @@ use pyo3::types::PyDict;
 
 fn image_array<'py>(py: Python<'py>, img: Image) -> PyResult<Bound<'py, PyAny>> {
     let (w, h) = (img.width as usize, img.height as usize);
-    let flat: Vec<f32> = bytemuck::cast_slice(&img.pixels).to_vec();
+    // The pixels' own allocation, reinterpreted (Vec3 is three f32s): no copy.
+    let flat: Vec<f32> = bytemuck::allocation::try_cast_vec(img.pixels)
+        .unwrap_or_else(|(_, pixels)| bytemuck::cast_slice(&pixels).to_vec());
     Ok(flat.into_pyarray(py).reshape([h, w, 3])?.into_any())
 }
 

@@ -281,6 +281,17 @@ impl GpuContext {
         buffers: &[&wgpu::Buffer],
         after: Option<wgpu::SubmissionIndex>,
     ) -> Result<Vec<Vec<u8>>> {
+        self.read_buffers_with(buffers, after, |_, bytes| bytes.to_vec())
+    }
+
+    /// As [`Self::read_buffers`], but `f(i, bytes)` reads buffer `i`'s mapped bytes in place
+    /// (no copy of the whole buffer first) and its results are returned.
+    pub fn read_buffers_with<R>(
+        &self,
+        buffers: &[&wgpu::Buffer],
+        after: Option<wgpu::SubmissionIndex>,
+        mut f: impl FnMut(usize, &[u8]) -> R,
+    ) -> Result<Vec<R>> {
         let (tx, rx) = std::sync::mpsc::channel();
         for (i, b) in buffers.iter().enumerate() {
             let tx = tx.clone();
@@ -301,14 +312,17 @@ impl GpuContext {
         }
         buffers
             .iter()
-            .map(|b| {
-                let bytes = b
-                    .slice(..)
-                    .get_mapped_range()
-                    .map_err(|e| Error::Gpu(e.to_string()))?
-                    .to_vec();
+            .enumerate()
+            .map(|(i, b)| {
+                let out = {
+                    let bytes = b
+                        .slice(..)
+                        .get_mapped_range()
+                        .map_err(|e| Error::Gpu(e.to_string()))?;
+                    f(i, &bytes)
+                };
                 b.unmap();
-                Ok(bytes)
+                Ok(out)
             })
             .collect()
     }

@@ -191,15 +191,14 @@ impl LayerTargets {
     ) -> Result<Vec<Vec<Vec4>>> {
         let width = self.max_res as usize * 16;
         let buffers: Vec<&wgpu::Buffer> = self.staging.iter().collect();
-        Ok(ctx
-            .read_buffers(&buffers, after)?
-            .into_iter()
-            .map(|bytes| {
-                bytes
-                    .chunks_exact(self.row as usize)
-                    .flat_map(|r| bytemuck::cast_slice::<u8, Vec4>(&r[..width]).to_vec())
-                    .collect()
-            })
-            .collect())
+        // Rows copied out of the mapped buffers directly (one copy, no per-row vectors).
+        ctx.read_buffers_with(&buffers, after, |_, bytes| {
+            let rows = bytes.chunks_exact(self.row as usize);
+            let mut out: Vec<Vec4> = Vec::with_capacity(rows.len() * self.max_res as usize);
+            for r in rows {
+                out.extend_from_slice(bytemuck::cast_slice::<u8, Vec4>(&r[..width]));
+            }
+            out
+        })
     }
 }

@@ -690,20 +690,17 @@ impl Targets {
         let (w, h) = (self.width as usize, self.height as usize);
         let row = (w * 16).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT as usize);
         let buffers: Vec<&wgpu::Buffer> = names.iter().map(|n| &self.readback[n]).collect();
-        let bytes = ctx.read_buffers(&buffers, None)?;
-        Ok(names
-            .iter()
-            .zip(bytes)
-            .map(|(&n, b)| {
-                let mut out = Vec::with_capacity(w * h);
-                for y in 0..h {
-                    out.extend_from_slice(bytemuck::cast_slice::<u8, Vec4>(
-                        &b[y * row..y * row + w * 16],
-                    ));
-                }
-                (n, out)
-            })
-            .collect())
+        // The rows are copied out of the mapped buffers directly (one copy, not two).
+        let texels = ctx.read_buffers_with(&buffers, None, |_, b| {
+            let mut out: Vec<Vec4> = Vec::with_capacity(w * h);
+            for y in 0..h {
+                out.extend_from_slice(bytemuck::cast_slice::<u8, Vec4>(
+                    &b[y * row..y * row + w * 16],
+                ));
+            }
+            out
+        })?;
+        Ok(names.iter().copied().zip(texels).collect())
     }
 }
 
