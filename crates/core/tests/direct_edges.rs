@@ -165,3 +165,35 @@ fn short_edge_buffers_grow() {
     );
     assert_eq!(short.radiance.pixels, normal.radiance.pixels);
 }
+
+/// The edge mask (`EdgePass::record_mask`: the sub-pixel G-buffer passes shade only the
+/// listed pixels) changes no bit of the image: the listed pixels see the same fragments
+/// against the same depth (1, the clear value) and no other pixel of those passes is read.
+#[test]
+fn the_edge_mask_changes_no_bit() {
+    let scenes = [
+        ("checker", checker_scene()),
+        ("cornell", builtin::load("cornell").unwrap()),
+        ("cornell-glass", builtin::load("cornell-glass").unwrap()),
+    ];
+    let stages = |o: &gi_core::RenderOutput| -> Vec<String> {
+        o.stats.stages.iter().map(|(n, _)| n.clone()).collect()
+    };
+    for (name, scene) in scenes {
+        let s = settings(16, true);
+        let masked = render(&scene, &s, &Silent).unwrap();
+        std::env::set_var(gi_core::raster::edges::MASK_ENV, "0");
+        let unmasked = render(&scene, &s, &Silent);
+        std::env::remove_var(gi_core::raster::edges::MASK_ENV);
+        let unmasked = unmasked.unwrap();
+        assert!(stages(&masked).contains(&"edge mask".to_string()), "{name}");
+        assert!(
+            !stages(&unmasked).contains(&"edge mask".to_string()),
+            "{name}"
+        );
+        assert_eq!(masked.radiance.pixels, unmasked.radiance.pixels, "{name}");
+        // The sub-pixel samples matter here: one sample differs.
+        let one = render(&scene, &settings(1, true), &Silent).unwrap();
+        assert_ne!(one.radiance.pixels, masked.radiance.pixels, "{name}");
+    }
+}

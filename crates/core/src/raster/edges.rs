@@ -9,7 +9,9 @@
 //! those get the mean over all `spp` sub-pixel samples (the same box filter as full
 //! supersampling). The listed pixels' sub-sample G-buffer values are kept: while the camera,
 //! the geometry and the materials stand still, a frame whose lights changed re-shades them
-//! without rasterizing anything but the shadow maps.
+//! without rasterizing anything but the shadow maps. Each sub-pixel G-buffer pass is masked
+//! to the listed pixels (a depth mask, [`EdgePass::record_mask`]): its fragment stage and its
+//! six targets' writes happen only there, the same values as a full pass gives them.
 //!
 //! Shader: `direct_edges.wgsl` (groups 0 and 1 are the direct pass's, group 2 these
 //! buffers). Sub-pixel features that no pixel centre sees (a wire thinner than a pixel) are
@@ -35,6 +37,10 @@ pub struct EdgePass {
     args: wgpu::ComputePipeline,
     store: wgpu::ComputePipeline,
     shade: wgpu::ComputePipeline,
+    /// The edge mask of the sub-pixel G-buffer passes (`edge_mask.wgsl`) and its group's
+    /// layout (the image size).
+    mask: wgpu::RenderPipeline,
+    mask_layout: wgpu::BindGroupLayout,
 }
 
 /// The bind groups of one frame's edge passes: the direct pass's scene and G-buffer groups
@@ -121,12 +127,15 @@ impl EdgePass {
                 },
             )
         };
+        let (mask, mask_layout) = mask_pipeline(device);
         EdgePass {
             find: pipeline("find_edges"),
             args: pipeline("edge_args"),
             store: pipeline("store_samples"),
             shade: pipeline("shade_edges"),
             layout,
+            mask,
+            mask_layout,
         }
     }
 
@@ -163,8 +172,9 @@ impl EdgePass {
         pass.set_pipeline(&self.args);
         pass.dispatch_workgroups(1, 1, 1);
         drop(pass);
-        // A buffer written in a pass cannot be its indirect arguments: copy them out.
-        encoder.copy_buffer_to_buffer(&e.args, 0, &e.indirect, 0, 12);
+        // A buffer written in a pass cannot be its indirect arguments: copy them out (the
+        // dispatch's, then the mask's point draw's).
+        encoder.copy_buffer_to_buffer(&e.args, 0, &e.indirect, 0, ARGS_BYTES);
         encoder.copy_buffer_to_buffer(&e.count, 0, &e.count_readback, 0, 4);
     }
 
@@ -181,6 +191,40 @@ impl EdgePass {
         pass.dispatch_workgroups_indirect(&groups.edges.indirect, 0);
     }
 
+    /// Makes `depth` (a sub-pixel G-buffer's) the edge mask: 0 everywhere (no fragment
+    /// passes a `less` test) but 1 at the listed pixels, the G-buffer pass's own clear
+    /// value. A G-buffer pass that then keeps this depth
+    /// ([`super::gbuffer::GBufferPass::record_over`] with `LoadOp::Load`) runs its fragment
+    /// stage and writes its targets at the listed pixels alone, with the same values there
+    /// as after a clear: [`Self::record_store`] reads no other pixel.
+    pub fn record_mask(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        edges: &EdgeBuffers,
+        depth: &wgpu::TextureView,
+        timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
+    ) {
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("edge mask"),
+            color_attachments: &[],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: depth,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(0.0),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: timestamps,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&self.mask);
+        pass.set_bind_group(0, &edges.mask_group, &[]);
+        pass.set_vertex_buffer(0, edges.edges.slice(..));
+        pass.draw_indirect(&edges.indirect, DRAW_ARGS_OFFSET);
+    }
+
     /// Writes the mean direct light of the kept sub-pixel samples over the listed pixels.
     pub fn record_shade(
         &self,
@@ -192,6 +236,73 @@ impl EdgePass {
         pass.set_pipeline(&self.shade);
         pass.dispatch_workgroups_indirect(&groups.edges.indirect, 0);
     }
+}
+
+/// Bytes of the indirect arguments `edge_args` writes: the dispatch over the listed pixels
+/// (3 words, padded to 4), then the mask's draw of one point per listed pixel (4 words).
+const ARGS_BYTES: u64 = 32;
+/// Where the draw's arguments start.
+const DRAW_ARGS_OFFSET: u64 = 16;
+
+/// The mask's pipeline (points at the listed pixels writing depth 1) and its group's layout.
+fn mask_pipeline(device: &wgpu::Device) -> (wgpu::RenderPipeline, wgpu::BindGroupLayout) {
+    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("edge mask bind group layout"),
+        entries: &[wgpu::BindGroupLayoutEntry {
+            binding: 0,
+            visibility: wgpu::ShaderStages::VERTEX,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: false,
+                min_binding_size: wgpu::BufferSize::new(16),
+            },
+            count: None,
+        }],
+    });
+    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some("edge mask pipeline layout"),
+        bind_group_layouts: &[Some(&layout)],
+        immediate_size: 0,
+    });
+    let module = shaders::module(device, "edge mask shader", &[wgsl::EDGE_MASK]);
+    let pipeline = gpu::create_render_pipeline(
+        device,
+        &wgpu::RenderPipelineDescriptor {
+            label: Some("edge mask"),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("mask_vs"),
+                compilation_options: Default::default(),
+                buffers: &[Some(wgpu::VertexBufferLayout {
+                    array_stride: 4,
+                    step_mode: wgpu::VertexStepMode::Vertex,
+                    attributes: &wgpu::vertex_attr_array![0 => Uint32],
+                })],
+            },
+            primitive: wgpu::PrimitiveState {
+                topology: wgpu::PrimitiveTopology::PointList,
+                ..Default::default()
+            },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: super::gbuffer::DEPTH,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Always),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("mask_fs"),
+                compilation_options: Default::default(),
+                targets: &[],
+            }),
+            multiview_mask: None,
+            cache: None,
+        },
+    );
+    (pipeline, layout)
 }
 
 /// `EdgeParams` of `direct_edges.wgsl`.
@@ -215,7 +326,7 @@ pub struct EdgeBuffers {
     height: u32,
     /// Listed pixels the buffers hold.
     pub capacity: u32,
-    _edges: wgpu::Buffer,
+    edges: wgpu::Buffer,
     count: wgpu::Buffer,
     count_readback: wgpu::Buffer,
     args: wgpu::Buffer,
@@ -223,6 +334,8 @@ pub struct EdgeBuffers {
     _params: wgpu::Buffer,
     params_stride: u32,
     group: wgpu::BindGroup,
+    _mask_params: wgpu::Buffer,
+    mask_group: wgpu::BindGroup,
 }
 
 /// The most listed pixels of `spp` samples: one dispatch dimension of workgroups, and the
@@ -240,6 +353,16 @@ pub fn max_capacity(ctx: &GpuContext, spp: u32) -> u32 {
 /// Environment variable overriding the initial edge capacity (a fraction of the pixels),
 /// for testing the regrowth.
 pub const CAPACITY_ENV: &str = "GI_EDGE_CAPACITY";
+
+/// Environment variable that turns the edge mask of the sub-pixel G-buffer passes off
+/// (`0`), for comparing the images and costs with and without it.
+pub const MASK_ENV: &str = "GI_EDGE_MASK";
+
+/// Whether the sub-pixel G-buffer passes are masked to the listed pixels
+/// ([`EdgePass::record_mask`]; on unless [`MASK_ENV`] is `0`).
+pub fn mask_enabled() -> bool {
+    std::env::var(MASK_ENV).map_or(true, |v| v != "0")
+}
 
 /// The listed pixels an image of `pixels` starts with: a quarter of the image (edge pixels
 /// measured 2.9% of `cornell` at 640×480) and at least 16384 (small images: all of them),
@@ -260,7 +383,7 @@ impl EdgeBuffers {
     /// accumulation target (written as storage).
     pub fn new(
         ctx: &GpuContext,
-        layout: &wgpu::BindGroupLayout,
+        pass: &EdgePass,
         (width, height, spp): (u32, u32, u32),
         capacity: u32,
         accum: &wgpu::TextureView,
@@ -281,11 +404,11 @@ impl EdgeBuffers {
             )
         };
         use wgpu::BufferUsages as U;
-        let edges = buffer("edge pixels", capacity as u64 * 4, U::STORAGE);
+        let edges = buffer("edge pixels", capacity as u64 * 4, U::STORAGE | U::VERTEX);
         let count = buffer("edge count", 16, U::STORAGE | U::COPY_DST | U::COPY_SRC);
         let count_readback = buffer("edge count readback", 16, U::MAP_READ | U::COPY_DST);
-        let args = buffer("edge dispatch", 16, U::STORAGE | U::COPY_SRC);
-        let indirect = buffer("edge dispatch args", 16, U::INDIRECT | U::COPY_DST);
+        let args = buffer("edge dispatch", ARGS_BYTES, U::STORAGE | U::COPY_SRC);
+        let indirect = buffer("edge dispatch args", ARGS_BYTES, U::INDIRECT | U::COPY_DST);
         let cache = buffer("edge samples", cache_bytes, U::STORAGE);
         let align = device.limits().min_uniform_buffer_offset_alignment;
         let params_stride = (PARAMS_BYTES as u32).div_ceil(align) * align;
@@ -313,7 +436,7 @@ impl EdgeBuffers {
             device,
             &wgpu::BindGroupDescriptor {
                 label: Some("edge bind group"),
-                layout,
+                layout: &pass.layout,
                 entries: &[
                     entire(0, &edges),
                     entire(1, &count),
@@ -334,11 +457,26 @@ impl EdgeBuffers {
                 ],
             },
         );
+        let size = [width, height, 0, 0];
+        let mask_params = super::buffer_init(
+            ctx,
+            "edge mask parameters",
+            bytemuck::cast_slice(&size),
+            U::UNIFORM,
+        );
+        let mask_group = gpu::create_bind_group(
+            device,
+            &wgpu::BindGroupDescriptor {
+                label: Some("edge mask bind group"),
+                layout: &pass.mask_layout,
+                entries: &[entire(0, &mask_params)],
+            },
+        );
         Ok(EdgeBuffers {
             width,
             height,
             capacity,
-            _edges: edges,
+            edges,
             count,
             count_readback,
             args,
@@ -346,6 +484,8 @@ impl EdgeBuffers {
             _params: params,
             params_stride,
             group,
+            _mask_params: mask_params,
+            mask_group,
         })
     }
 

@@ -242,6 +242,23 @@ impl GBufferPass {
         target: &GBuffer,
         bind_group: &wgpu::BindGroup,
         view_offset: u32,
+        draws: (&super::Geometry, Option<&[super::Draw]>),
+        textures: (&wgpu::BindGroup, super::textures::Variant),
+        timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
+    ) {
+        let depth = wgpu::LoadOp::Clear(1.0);
+        let pass = (bind_group, view_offset, depth);
+        self.record_over(encoder, target, pass, draws, textures, timestamps);
+    }
+
+    /// As [`Self::record`], with the depth buffer's start given: `LoadOp::Load` keeps the
+    /// depth a mask pass left (`super::edges::EdgePass::record_mask`: 0 where no fragment
+    /// may land, so the fragment stage runs only at the pixels the mask opened).
+    pub fn record_over(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        target: &GBuffer,
+        (bind_group, view_offset, depth): (&wgpu::BindGroup, u32, wgpu::LoadOp<f32>),
         (geometry, draws): (&super::Geometry, Option<&[super::Draw]>),
         textures: (&wgpu::BindGroup, super::textures::Variant),
         timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
@@ -268,7 +285,7 @@ impl GBufferPass {
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                 view: &target.depth,
                 depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(1.0),
+                    load: depth,
                     store: wgpu::StoreOp::Discard,
                 }),
                 stencil_ops: None,

@@ -261,7 +261,7 @@ impl Targets {
         let edges = if spp > 1 && edge_supersampling {
             Some(edges::EdgeBuffers::new(
                 ctx,
-                &EdgePass::get(ctx).layout,
+                &EdgePass::get(ctx),
                 (w, h, spp),
                 edges::initial_capacity(w * h),
                 &accum_view,
@@ -464,8 +464,24 @@ impl Targets {
                     gbuffer: &self.sub_gbuffer_group,
                     ..*find
                 };
+                let masked = edges::mask_enabled();
                 encoder = self.for_each_sample(ctx, encoder, progress, |encoder, s, offset| {
-                    gbuffer_pass(encoder, timer, &self.sub, offset);
+                    if masked {
+                        // Only the listed pixels are kept: the pass shades only them.
+                        let ts = timer.pass("edge mask");
+                        edge_p.record_mask(encoder, find.edges, &self.sub.depth, ts);
+                        let ts = timer.pass("gbuffer");
+                        gbuffer_p.record_over(
+                            encoder,
+                            &self.sub,
+                            (&self.gbuffer_group, offset, wgpu::LoadOp::Load),
+                            (&gs.geometry, Some(&self.eye_draws)),
+                            (&gs.textures.group, gs.variant),
+                            ts,
+                        );
+                    } else {
+                        gbuffer_pass(encoder, timer, &self.sub, offset);
+                    }
                     let ts = timer.compute_pass("edges");
                     edge_p.record_store(encoder, &store, s, ts);
                 })?;
@@ -604,7 +620,7 @@ impl Targets {
         let capacity = (found + found / 4).min(most);
         self.edges = Some(edges::EdgeBuffers::new(
             ctx,
-            &EdgePass::get(ctx).layout,
+            &EdgePass::get(ctx),
             (self.width, self.height, self.spp),
             capacity,
             &self.accum_view,

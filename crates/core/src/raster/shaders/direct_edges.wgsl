@@ -88,12 +88,17 @@ fn listed() -> u32 {
     return min(atomicLoad(&edge_count[0]), params.capacity);
 }
 
-// The indirect dispatch arguments of the passes over the listed pixels.
+// The indirect dispatch arguments of the passes over the listed pixels, then (from word 4)
+// the indirect draw arguments of the edge mask: one point per listed pixel.
 @compute @workgroup_size(1)
 fn edge_args() {
     args[0] = (listed() + 63u) / 64u;
     args[1] = 1u;
     args[2] = 1u;
+    args[4] = listed();
+    args[5] = 1u;
+    args[6] = 0u;
+    args[7] = 0u;
 }
 
 fn pixel_of(slot: u32) -> vec2<i32> {
