@@ -378,7 +378,7 @@ fn lights_table(args: &common::Args, runs: usize) -> Result<(), Box<dyn std::err
         }
         let ms = |v: Vec<f64>| format!("{:.0}", median(v) * 1e3);
         let split = if all_stages {
-            format!(" {} |", stage_medians(&moved_outs))
+            format!(" {} |", stage_list(&moved_outs))
         } else {
             String::new()
         };
@@ -393,24 +393,6 @@ fn lights_table(args: &common::Args, runs: usize) -> Result<(), Box<dyn std::err
         );
     }
     Ok(())
-}
-
-/// "name ms, …": each stage's median over `outs` (a stage's repeats in a frame summed).
-fn stage_medians(outs: &[RenderOutput]) -> String {
-    let mut names: Vec<&str> = Vec::new();
-    for (n, _) in outs.iter().flat_map(|o| &o.stats.stages) {
-        if !names.contains(&n.as_str()) {
-            names.push(n);
-        }
-    }
-    names
-        .iter()
-        .map(|n| {
-            let ms = median(outs.iter().map(|o| stage(o, &[n])).collect());
-            format!("{n} {:.1}", ms * 1e3)
-        })
-        .collect::<Vec<_>>()
-        .join(", ")
 }
 
 /// An option's value in `extra`, else `default`.
