@@ -16,8 +16,8 @@ import platform
 import time
 from pathlib import Path
 
-import flip_evaluator
 import numpy as np
+from image_metrics import flip
 
 import gi
 from gi.denoising import denoise_image
@@ -31,17 +31,6 @@ def cpu_name() -> str:
     except OSError:
         pass
     return platform.machine()
-
-
-def flip(reference: np.ndarray, test: np.ndarray) -> float:
-    """Mean HDR-FLIP (0 = identical), at FLIP's default 67 pixels per degree."""
-    _, mean, _ = flip_evaluator.evaluate(
-        np.ascontiguousarray(reference, np.float32),
-        np.ascontiguousarray(np.maximum(test, 0.0), np.float32),
-        "HDR",
-        applyMagma=False,
-    )
-    return float(mean)
 
 
 def timed_render(scene, method: str, **settings) -> tuple[gi.RenderResult, float]:

@@ -29,6 +29,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from image_metrics import flip
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENE_DIR = ROOT / "docs" / "scenes" / "cornell-point"
@@ -182,18 +183,6 @@ class Mitsuba:
 
 def rel_mse(ref: np.ndarray, img: np.ndarray) -> float:
     return float(np.mean((img - ref) ** 2 / (ref**2 + 0.01)))
-
-
-def flip(ref: np.ndarray, img: np.ndarray) -> float:
-    import flip_evaluator
-
-    _, mean, _ = flip_evaluator.evaluate(
-        np.ascontiguousarray(ref, np.float32),
-        np.ascontiguousarray(np.maximum(img, 0.0), np.float32),
-        "HDR",
-        applyMagma=False,
-    )
-    return float(mean)
 
 
 def reference(gi_r: Gi, mi_r: Mitsuba, spp: int, batches: int) -> tuple[np.ndarray, dict]:

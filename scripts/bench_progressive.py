@@ -21,8 +21,8 @@ import sys
 import time
 from pathlib import Path
 
-import flip_evaluator
 import numpy as np
+from image_metrics import flip
 
 import gi
 
@@ -54,16 +54,6 @@ def cpu_name() -> str:
 
 def relmse(x: np.ndarray, ref: np.ndarray) -> float:
     return float(np.mean((x - ref) ** 2 / (ref**2 + 1e-2)))
-
-
-def flip(ref: np.ndarray, x: np.ndarray) -> float:
-    _, mean, _ = flip_evaluator.evaluate(
-        np.ascontiguousarray(ref, np.float32),
-        np.ascontiguousarray(np.maximum(x, 0.0), np.float32),
-        "HDR",
-        applyMagma=False,
-    )
-    return float(mean)
 
 
 def ref_cache_dir() -> Path:

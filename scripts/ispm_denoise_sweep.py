@@ -8,21 +8,11 @@ Usage: .venv/bin/python scripts/ispm_denoise_sweep.py
 
 from __future__ import annotations
 
-import flip_evaluator
 import numpy as np
+from image_metrics import flip
 
 import gi
 from gi.denoising import denoise_image, filter_indirect
-
-
-def flip(ref: np.ndarray, img: np.ndarray) -> float:
-    _, mean, _ = flip_evaluator.evaluate(
-        np.ascontiguousarray(ref, np.float32),
-        np.ascontiguousarray(np.maximum(img, 0), np.float32),
-        "HDR",
-        applyMagma=False,
-    )
-    return float(mean)
 
 
 def main() -> None:

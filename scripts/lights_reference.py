@@ -31,6 +31,7 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
+from image_metrics import flip
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENES = ROOT / "docs" / "scenes"
@@ -156,19 +157,6 @@ def mitsuba_references(args: argparse.Namespace) -> None:
 
 
 # -- gi -------------------------------------------------------------------------------------
-
-
-def flip(reference: np.ndarray, test: np.ndarray) -> float:
-    """Mean HDR-FLIP (0 = identical), at FLIP's default 67 pixels per degree."""
-    import flip_evaluator
-
-    _, mean, _ = flip_evaluator.evaluate(
-        np.ascontiguousarray(reference, np.float32),
-        np.ascontiguousarray(np.maximum(test, 0.0), np.float32),
-        "HDR",
-        applyMagma=False,
-    )
-    return float(mean)
 
 
 def render_gi(name: str, method: str, settings: dict) -> dict:
