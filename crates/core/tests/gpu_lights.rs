@@ -450,6 +450,101 @@ fn emitting_objects_in_groups_match_path() {
     assert!(err < 0.15 && bias < 0.04, "block error {err}, bias {bias}");
 }
 
+/// Merging the closed-form emitters' coplanar triangle pairs into convex quads
+/// (`scene::emitters::quads`: four edge terms instead of six, the shared edge's two
+/// cancelling) changes one frame of `direct` by float rounding alone: on the room of
+/// emitting objects (the box's six faces as quads), on the same room with the box sunk
+/// halfway into the floor (whose points see its side faces cut by their horizon: the clipped
+/// quads) and on the open area-lit quad, per pixel
+/// within 1e-4 of the image's brightest pixel (the edge terms are sums of f32 arc terms of
+/// relative error ~1e-6: 2e-6 for the rational θ/sin θ, a few ulps for the normalizations).
+#[test]
+fn emitter_quads_change_the_light_by_rounding_alone() {
+    use gi_core::scene::emitters::{quads, Emitters};
+    for (name, scene) in [
+        ("groups", scene(GROUPS_SCENE, "groups")),
+        (
+            "sunk",
+            scene(
+                &GROUPS_SCENE.replace("[0.6, 0.7, -0.8]", "[0.6, 0.0, -0.8]"),
+                "sunk",
+            ),
+        ),
+        ("open", open_area_scene()),
+    ] {
+        let groups = Emitters::of(&scene).polygon_groups(&scene, (64, 8), 16);
+        assert!(
+            groups.polygons.len() < groups.triangles.len(),
+            "{name}: nothing merged"
+        );
+        let o = options(Method::Direct).with("seed", 3u64);
+        let merged = render(&scene, &o, &Silent).expect("direct");
+        std::env::set_var(quads::QUADS_ENV, "0");
+        let triangles = render(&scene, &o, &Silent);
+        std::env::remove_var(quads::QUADS_ENV);
+        let triangles = triangles.expect("direct");
+        let peak = triangles
+            .radiance
+            .pixels
+            .iter()
+            .map(|p| p.max_element())
+            .fold(0.0f32, f32::max);
+        let diff = merged
+            .radiance
+            .pixels
+            .iter()
+            .zip(&triangles.radiance.pixels)
+            .map(|(a, b)| (*a - *b).abs().max_element())
+            .fold(0.0f32, f32::max);
+        eprintln!("{name}: quads against triangles, largest difference {diff:e} (peak {peak})");
+        assert!(
+            peak > 0.0 && diff <= 1e-4 * peak,
+            "{name}: {diff} of {peak}"
+        );
+    }
+}
+
+/// A white emitting cube (emitting from its outer sides), alone in the dark and turned so
+/// that three faces show: no face of a convex emitter lights another
+/// (each lies behind the others' planes) nor itself (every direction to it from its own
+/// surface is grazing), so every pixel it covers has its emission, L, exactly, and no pixel
+/// more. Per pixel within 1e-4·L (f32 rounding), with the closed-form polygons as quads and
+/// as triangles. Before the plane's thickness was taken from the polygon's size, a sample at
+/// the silhouette on a back face's inner side (the G-buffer draws both sides) could come out
+/// at L + ρ·L: its own face seemed to fill its hemisphere.
+#[test]
+fn an_emitter_lights_neither_itself_nor_its_other_faces() {
+    let json = r#"{
+      "camera": { "position": [1.6, 1.3, 2.1], "look_at": [0, 0, 0], "fov": 25, "width": 64, "height": 64 },
+      "materials": { "lamp": { "diffuse": [0.75, 0.75, 0.75], "emission": [8, 4, 1.2] } },
+      "objects": [ { "shape": { "type": "box", "size": [0.6, 0.6, 0.6] }, "transform": { "rotate": [10, 30, 0] }, "material": "lamp" } ]
+    }"#;
+    let scene = scene(json, "lone-lamp");
+    let emission = Vec3::new(8.0, 4.0, 1.2);
+    for quads in ["1", "0"] {
+        std::env::set_var(gi_core::scene::emitters::quads::QUADS_ENV, quads);
+        let out = render(&scene, &options(Method::Direct), &Silent);
+        std::env::remove_var(gi_core::scene::emitters::quads::QUADS_ENV);
+        let out = out.expect("direct");
+        let keep = geometric_keep(&out);
+        let (mut interior, mut over) = (0.0f32, 0.0f32);
+        let mut covered = 0;
+        for (i, px) in out.radiance.pixels.iter().enumerate() {
+            over = over.max((*px - emission).max_element());
+            if keep[i] && out.depth[i] > 0.0 {
+                interior = interior.max((*px - emission).abs().max_element());
+                covered += 1;
+            }
+        }
+        eprintln!("lone lamp (quads {quads}): {covered} interior pixels, off by {interior:e}, over by {over:e}");
+        assert!(covered > 300, "{covered}");
+        assert!(
+            interior <= 1e-4 * 8.0 && over <= 1e-4 * 8.0,
+            "quads {quads}: {interior} {over}"
+        );
+    }
+}
+
 /// Fraction of a disc light of unit radius visible past a straight edge at signed distance
 /// `s` (in radii) from the disc's centre: the circular segment beyond it.
 fn segment(s: f64) -> f64 {

@@ -98,7 +98,7 @@ pub struct DirectParamsRaw {
     /// (cos, sin) of the environment's rotation about +y.
     pub env_cos: f32,
     pub env_sin: f32,
-    /// Emitting triangles in the polygons texture (0: the emitters' light is sampled only).
+    /// Emitting polygons in the polygons texture (0: the emitters' light is sampled only).
     pub polygons: u32,
     /// The groups (emitting objects) the polygons form, at most [`MAX_GROUPS`].
     pub groups: u32,
@@ -107,9 +107,10 @@ pub struct DirectParamsRaw {
     pub group_ranges: [[u32; 4]; MAX_GROUPS],
 }
 
-/// Texels per emitting triangle in the polygons texture: the corners (w of the first: 1 when
-/// two-sided) and the radiance.
-pub const POLYGON_TEXELS: u32 = 4;
+/// Texels per emitting polygon (a triangle or a convex quad, `scene::EmitterPolygon`) in
+/// the polygons texture: three corners (w of the first: 1 when two-sided; of the second: 1
+/// for a quad), the radiance, and a quad's fourth corner.
+pub const POLYGON_TEXELS: u32 = 5;
 
 /// Most emitting triangles whose unshadowed diffuse light the direct pass sums in closed
 /// form per pixel (beyond, their light is sampled only).

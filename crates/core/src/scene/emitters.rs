@@ -5,8 +5,10 @@
 //! and for photons and light paths.
 
 mod groups;
+pub mod quads;
 
 pub use groups::PolygonGroups;
+pub use quads::EmitterPolygon;
 
 use super::light::Emission;
 use super::light_bvh::{LightBounds, LightBvh};

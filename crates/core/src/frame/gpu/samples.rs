@@ -18,7 +18,7 @@ use crate::raster::direct::{
 };
 use crate::raster::shadow::{self, CullUnits, ShadowPass};
 use crate::raster::{buffer_init, Geometry, VIEW_SIZE};
-use crate::scene::emitters::{Emitters, PolygonGroups};
+use crate::scene::emitters::{EmitterPolygon, Emitters, PolygonGroups};
 use crate::scene::light_views::{self, orthographic_view, CUBE_FACES};
 use crate::scene::{Environment, Scene};
 use bytemuck::Zeroable;
@@ -270,20 +270,7 @@ impl LightSamples {
         if self.emitters.is_none() && c.area > 0 {
             let emitters = Emitters::of(scene);
             let groups = emitters.polygon_groups(scene, (MAX_POLYGONS, MAX_GROUPS), c.area);
-            let texels: Vec<[f32; 4]> = groups
-                .triangles
-                .iter()
-                .flat_map(|t| {
-                    let [a, b, c] = t.corners;
-                    let side = t.two_sided as u32 as f32;
-                    [
-                        a.extend(side).to_array(),
-                        b.extend(0.0).to_array(),
-                        c.extend(0.0).to_array(),
-                        t.radiance.extend(0.0).to_array(),
-                    ]
-                })
-                .collect();
+            let texels: Vec<[f32; 4]> = groups.polygons.iter().flat_map(polygon_texels).collect();
             write_rows(
                 ctx,
                 &self.polygons,
@@ -299,14 +286,14 @@ impl LightSamples {
         let mut points = Vec::new();
         if let Some((e, groups)) = &self.emitters {
             points = e.stratified_points(scene, groups, seed);
-            polygons = groups.triangles.len() as u32;
+            polygons = groups.polygons.len() as u32;
             for (g, range) in group_ranges
                 .iter_mut()
                 .enumerate()
                 .take(groups.groups as usize)
             {
-                let triangles = groups.polygons_of(g as u32);
-                range[2..].copy_from_slice(&[triangles.start, triangles.end]);
+                let polygons = groups.polygons_of(g as u32);
+                range[2..].copy_from_slice(&[polygons.start, polygons.end]);
             }
             for (i, (g, _)) in points.iter().enumerate() {
                 if let Some(range) = g.map(|g| &mut group_ranges[g as usize]) {
@@ -439,6 +426,22 @@ impl LightSamples {
             );
         }
     }
+}
+
+/// A polygon's row of the polygons texture ([`POLYGON_TEXELS`] texels): three corners (w
+/// of the first: 1 when two-sided; of the second: 1 for a quad), the radiance, and a
+/// quad's fourth corner.
+fn polygon_texels(t: &EmitterPolygon) -> [[f32; 4]; POLYGON_TEXELS as usize] {
+    let [a, b, c] = t.corners;
+    let side = t.two_sided as u32 as f32;
+    let quad = t.fourth.is_some() as u32 as f32;
+    [
+        a.extend(side).to_array(),
+        b.extend(quad).to_array(),
+        c.extend(0.0).to_array(),
+        t.radiance.extend(0.0).to_array(),
+        t.fourth.unwrap_or(c).extend(0.0).to_array(),
+    ]
 }
 
 /// Whether any of the cube face (`forward`, `up`)'s frustum lies in front of a surface of

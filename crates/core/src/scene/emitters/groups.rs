@@ -4,6 +4,7 @@
 //! on the emitters stratified over those groups and the other emitters, so that every group
 //! has points for its ratio and every emitter its share of the points.
 
+use super::quads::{self, EmitterPolygon};
 use super::{EmitterPoint, EmitterTriangle, Emitters};
 use crate::sampling::AliasTable;
 use crate::scene::Scene;
@@ -14,6 +15,9 @@ use crate::scene::Scene;
 pub struct PolygonGroups {
     /// Their triangles, group by group.
     pub triangles: Vec<EmitterTriangle>,
+    /// The same light as polygons, group by group: the triangles with coplanar pairs merged
+    /// into quads ([`quads::merge`]). The GPU direct pass sums these.
+    pub polygons: Vec<EmitterPolygon>,
     pub groups: u32,
     /// What [`Emitters::stratified_points`] draws from, built once: the groups, then the
     /// other emitters.
@@ -34,9 +38,16 @@ struct Stratum {
 
 impl PolygonGroups {
     /// The range of `triangles` that group `g` holds.
-    pub fn polygons_of(&self, g: u32) -> std::ops::Range<u32> {
+    pub fn triangles_of(&self, g: u32) -> std::ops::Range<u32> {
         let first = self.triangles.partition_point(|t| t.group < g);
         let end = self.triangles.partition_point(|t| t.group <= g);
+        first as u32..end as u32
+    }
+
+    /// The range of `polygons` that group `g` holds.
+    pub fn polygons_of(&self, g: u32) -> std::ops::Range<u32> {
+        let first = self.polygons.partition_point(|t| t.group < g);
+        let end = self.polygons.partition_point(|t| t.group <= g);
         first as u32..end as u32
     }
 }
@@ -160,6 +171,7 @@ impl Emitters {
             .collect();
         PolygonGroups {
             groups: triangles.last().map_or(0, |t| t.group + 1),
+            polygons: quads::merge(&triangles),
             triangles,
             strata,
         }
@@ -252,14 +264,18 @@ mod tests {
         let (scene, e) = room();
         assert_eq!(e.len(), 2 + 12 + 320);
         let radiance = |g: &PolygonGroups, k: u32| {
-            let r = g.polygons_of(k);
+            let r = g.triangles_of(k);
             g.triangles[r.start as usize].radiance
         };
         // The sphere's 320 triangles exceed 64: the panel, then the box.
         let g = e.polygon_groups(&scene, (64, 8), 16);
         assert_eq!(g.groups, 2);
-        assert_eq!(g.polygons_of(0), 0..2);
-        assert_eq!(g.polygons_of(1), 2..14);
+        assert_eq!(g.triangles_of(0), 0..2);
+        assert_eq!(g.triangles_of(1), 2..14);
+        // As polygons: the panel one quad, the box six.
+        assert_eq!(g.polygons_of(0), 0..1);
+        assert_eq!(g.polygons_of(1), 1..7);
+        assert_eq!(g.polygons[0].radiance, Vec3::splat(8.0));
         assert_eq!(radiance(&g, 0), Vec3::splat(8.0));
         assert_eq!(radiance(&g, 1), Vec3::new(6.0, 3.0, 1.0));
         // 12 polygons: the box does not fit after the panel; one group.
@@ -272,6 +288,8 @@ mod tests {
         // Room for the sphere: three groups, nothing else emits.
         let all = e.polygon_groups(&scene, (400, 8), 3);
         assert_eq!((all.groups, all.triangles.len()), (3, 334));
+        // The sphere's faces are not coplanar: 1 + 6 + 320 polygons.
+        assert_eq!(all.polygons.len(), 327);
     }
 
     /// Each stratum's points carry its light exactly: within a stratum of one radiance a
@@ -310,7 +328,7 @@ mod tests {
                     "{k}: {sum} {want}"
                 );
                 let range = if k < 2 {
-                    groups.polygons_of(k as u32)
+                    groups.triangles_of(k as u32)
                 } else {
                     14..334
                 };

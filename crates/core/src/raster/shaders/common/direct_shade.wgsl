@@ -44,8 +44,9 @@
 @group(0) @binding(9) var env_table: texture_2d<f32>;
 @group(0) @binding(10) var irradiance_table: texture_2d<f32>;
 @group(0) @binding(11) var<uniform> direct_params: DirectParams;
-// The emitting triangles (`polygons` of them): corners (w of the first: 1 when two-sided)
-// and radiance, four texels a row, group by group.
+// The emitting polygons (`polygons` of them), triangles or convex quads: three corners (w
+// of the first: 1 when two-sided; of the second: 1 for a quad), the radiance and a quad's
+// fourth corner, five texels a row, group by group.
 @group(0) @binding(12) var emitter_polygons: texture_2d<f32>;
 @group(1) @binding(0) var g_position: texture_2d<f32>;
 @group(1) @binding(1) var g_normals: texture_2d<f32>;
@@ -64,7 +65,7 @@ struct DirectParams {
     // (cos, sin) of the environment's rotation about +y.
     env_cos: f32,
     env_sin: f32,
-    // Emitting triangles in `emitter_polygons` (0: their light is sampled only).
+    // Emitting polygons in `emitter_polygons` (0: their light is sampled only).
     polygons: u32,
     // The emitting objects (groups) the polygons form, at most `MAX_GROUPS`.
     groups: u32,
@@ -483,6 +484,20 @@ fn edge_vector(u: vec3<f32>, w: vec3<f32>) -> vec3<f32> {
     return cross(u, w) * theta_over_sin(dot(u, w));
 }
 
+// Lambert's edge term of the horizon's arc from unit vector `u` to unit vector `w`, where a
+// clipped polygon leaves and re-enters the hemisphere, with θ from atan2: these two can be
+// nearly opposite (a receiver close to the polygon's plane, e.g. next to an emitting box's
+// edge), where θ/sin θ's fit is clamped (sin θ under 3e-4) and the small terms of the
+// clipped edges must cancel the arc's large one.
+fn arc_vector(u: vec3<f32>, w: vec3<f32>) -> vec3<f32> {
+    let c = cross(u, w);
+    let s = length(c);
+    if s <= 0.0 {
+        return vec3<f32>(0.0);
+    }
+    return c * (atan2(s, dot(u, w)) / s);
+}
+
 // Adds the part of the edge `p` → `q` (heights `dp`, `dq` above the horizon) that lies above
 // the horizon to `phi`, and records where the polygon leaves (`exit`) or re-enters
 // (`entry`) the hemisphere.
@@ -508,22 +523,31 @@ fn clipped_edge(
     }
 }
 
-// Lambert's vector irradiance ½ Σ θᵢ·ûᵢ of the triangle `a`, `b`, `c` (relative to the
-// receiver) of unit radiance, clipped to the hemisphere above `n`: its irradiance is
-// |n·Φ|, its direction the mean direction of the light arriving from it. Written without
-// arrays: with the clipped polygon in a private array, lavapipe spent ~50 ms a polygon a
-// frame at 640×480 here, about three times as long (docs/bench/lights-gpu.md).
-fn polygon_vector(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+// Lambert's vector irradiance ½ Σ θᵢ·ûᵢ of the polygon `a`, `b`, `c` (and `d` when `quad`:
+// a convex quad), relative to the receiver, of unit radiance, clipped to the hemisphere
+// above `n`: its irradiance is |n·Φ|, its direction the mean direction of the light
+// arriving from it. Convex, it leaves and re-enters the hemisphere once at most. Written
+// without arrays: with the clipped polygon in a private array, lavapipe spent ~50 ms a
+// polygon a frame at 640×480 here, about three times as long (docs/bench/lights-gpu.md).
+fn polygon_vector(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>, d: vec3<f32>, quad: bool, n: vec3<f32>) -> vec3<f32> {
     let da = dot(a, n);
     let db = dot(b, n);
     let dc = dot(c, n);
-    if da > 0.0 && db > 0.0 && dc > 0.0 {
+    let dd = select(dc, dot(d, n), quad);
+    if da > 0.0 && db > 0.0 && dc > 0.0 && dd > 0.0 {
         let ua = normalize(a);
         let ub = normalize(b);
         let uc = normalize(c);
-        return 0.5 * (edge_vector(ua, ub) + edge_vector(ub, uc) + edge_vector(uc, ua));
+        var phi = edge_vector(ua, ub) + edge_vector(ub, uc);
+        if quad {
+            let ud = normalize(d);
+            phi += edge_vector(uc, ud) + edge_vector(ud, ua);
+        } else {
+            phi += edge_vector(uc, ua);
+        }
+        return 0.5 * phi;
     }
-    if da <= 0.0 && db <= 0.0 && dc <= 0.0 {
+    if da <= 0.0 && db <= 0.0 && dc <= 0.0 && dd <= 0.0 {
         return vec3<f32>(0.0);
     }
     // Partly above: the clipped edges, then the horizon's arc from the exit to the entry.
@@ -532,8 +556,13 @@ fn polygon_vector(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>, n: vec3<f32>) -> vec
     var entry = vec3<f32>(0.0);
     clipped_edge(a, b, da, db, &phi, &exit, &entry);
     clipped_edge(b, c, db, dc, &phi, &exit, &entry);
-    clipped_edge(c, a, dc, da, &phi, &exit, &entry);
-    return 0.5 * (phi + edge_vector(exit, entry));
+    if quad {
+        clipped_edge(c, d, dc, dd, &phi, &exit, &entry);
+        clipped_edge(d, a, dd, da, &phi, &exit, &entry);
+    } else {
+        clipped_edge(c, a, dc, da, &phi, &exit, &entry);
+    }
+    return 0.5 * (phi + arc_vector(exit, entry));
 }
 
 // The unshadowed diffuse light at `p` of the emitter polygons [`first`, `end`) (one group:
@@ -543,14 +572,29 @@ fn polygons_diffuse(p: vec3<f32>, ns: vec3<f32>, m: Material, wo: vec3<f32>, fir
     var dir = vec3<f32>(0.0);
     for (var t = first; t < end; t++) {
         let t0 = textureLoad(emitter_polygons, vec2<u32>(0u, t), 0);
+        let t1 = textureLoad(emitter_polygons, vec2<u32>(1u, t), 0);
         let a = t0.xyz - p;
-        let b = textureLoad(emitter_polygons, vec2<u32>(1u, t), 0).xyz - p;
+        let b = t1.xyz - p;
         let c = textureLoad(emitter_polygons, vec2<u32>(2u, t), 0).xyz - p;
-        // A one-sided emitter lights its front side only.
-        if t0.w < 0.5 && dot(a, cross(b - a, c - a)) >= 0.0 {
+        // A one-sided emitter lights its front side only. A receiver in the polygon's plane
+        // gets no light from it: every direction to it is grazing. Such receivers are the
+        // emitter's own face (seen from either side: a two-sided material's back face too)
+        // and surfaces flush with it, whose positions put them off the plane by rounding,
+        // where the polygon would seem to fill their hemisphere (E = π). So the plane is
+        // taken as 1e-4 of the polygon's size thick (as √|front|, independent of the corner
+        // it is measured from).
+        let front = cross(b - a, c - a);
+        let area2 = length(front);
+        let height = dot(a, front);
+        if (t0.w < 0.5 && height >= 0.0) || abs(height) <= 1e-4 * area2 * sqrt(area2) {
             continue;
         }
-        let phi = polygon_vector(a, b, c, ns);
+        let quad = t1.w > 0.5;
+        var d = c;
+        if quad {
+            d = textureLoad(emitter_polygons, vec2<u32>(4u, t), 0).xyz - p;
+        }
+        let phi = polygon_vector(a, b, c, d, quad, ns);
         let en = dot(ns, phi);
         let l = textureLoad(emitter_polygons, vec2<u32>(3u, t), 0).xyz;
         e += l * abs(en);
