@@ -312,21 +312,9 @@ impl BundleBuffers {
         encoder.clear_buffer(&self.heads, 0, None);
         encoder.clear_buffer(&self.counter, 0, None);
         for i in 0..count.min(self.bundles) {
-            let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("bundle pass"),
-                color_attachments: &[],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &self.depth,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Discard,
-                    }),
-                    stencil_ops: None,
-                }),
-                timestamp_writes: timer.pass("ray bundles"),
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
+            let ops = (wgpu::LoadOp::Clear(1.0), wgpu::StoreOp::Discard);
+            let ts = timer.pass("ray bundles");
+            let mut rp = super::depth_pass(encoder, "bundle pass", &self.depth, ops, ts);
             rp.set_pipeline(&pass.pipelines[textures.1 as usize]);
             rp.set_bind_group(0, &self.group, &[(i as u64 * VIEW_BYTES) as u32]);
             rp.set_bind_group(1, textures.0, &[]);

@@ -109,7 +109,8 @@ pub struct DirectParamsRaw {
 
 /// Texels per emitting polygon (a triangle or a convex quad, `scene::EmitterPolygon`) in
 /// the polygons texture: three corners (w of the first: 1 when two-sided; of the second: 1
-/// for a quad), the radiance, and a quad's fourth corner.
+/// for a quad; of the third: `EmitterPolygon::in_plane_bound`), the radiance, and a quad's
+/// fourth corner.
 pub const POLYGON_TEXELS: u32 = 5;
 
 /// Most emitting triangles whose unshadowed diffuse light the direct pass sums in closed

@@ -204,21 +204,8 @@ impl EdgePass {
         depth: &wgpu::TextureView,
         timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) {
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("edge mask"),
-            color_attachments: &[],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: depth,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(0.0),
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: None,
-            }),
-            timestamp_writes: timestamps,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
+        let ops = (wgpu::LoadOp::Clear(0.0), wgpu::StoreOp::Store);
+        let mut pass = super::depth_pass(encoder, "edge mask", depth, ops, timestamps);
         pass.set_pipeline(&self.mask);
         pass.set_bind_group(0, &edges.mask_group, &[]);
         pass.set_vertex_buffer(0, edges.edges.slice(..));

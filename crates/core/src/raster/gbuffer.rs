@@ -25,6 +25,9 @@ pub const MATERIAL: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 pub const ALBEDO: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 pub const EMISSION: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 pub const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+/// The depth a G-buffer pass starts from (the far plane), which the edge mask writes at the
+/// pixels it opens (`edge_mask.wgsl`).
+pub const CLEAR_DEPTH: f32 = 1.0;
 
 /// The G-buffer's colour targets in location order, with their labels.
 const TARGETS: [(&str, wgpu::TextureFormat); 6] = [
@@ -246,7 +249,7 @@ impl GBufferPass {
         textures: (&wgpu::BindGroup, super::textures::Variant),
         timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) {
-        let depth = wgpu::LoadOp::Clear(1.0);
+        let depth = wgpu::LoadOp::Clear(CLEAR_DEPTH);
         let pass = (bind_group, view_offset, depth);
         self.record_over(encoder, target, pass, draws, textures, timestamps);
     }

@@ -88,6 +88,29 @@ pub fn eye_cull_view(scene: &Scene) -> Mat4 {
     Mat4::from_scale(Vec3::new(w / (w + 2.0), h / (h + 2.0), 1.0)) * centre
 }
 
+/// A render pass that writes depth alone (no colour target) into `depth`, starting from
+/// `load` and keeping the result or not (`store`): shadow maps, ray bundles, the edge mask.
+pub(crate) fn depth_pass<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    label: &str,
+    depth: &wgpu::TextureView,
+    (load, store): (wgpu::LoadOp<f32>, wgpu::StoreOp),
+    timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
+) -> wgpu::RenderPass<'e> {
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some(label),
+        color_attachments: &[],
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view: depth,
+            depth_ops: Some(wgpu::Operations { load, store }),
+            stencil_ops: None,
+        }),
+        timestamp_writes: timestamps,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    })
+}
+
 /// Decodes `oct_encode` of `types.wgsl`.
 pub(crate) fn oct_decode(e: Vec2) -> Vec3 {
     let mut n = Vec3::new(e.x, e.y, 1.0 - e.x.abs() - e.y.abs());

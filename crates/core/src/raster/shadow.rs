@@ -285,21 +285,8 @@ impl ShadowPass {
         masks: Option<&wgpu::BindGroup>,
         timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) {
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("shadow pass"),
-            color_attachments: &[],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: layer,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(1.0),
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: None,
-            }),
-            timestamp_writes: timestamps,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
+        let ops = (wgpu::LoadOp::Clear(1.0), wgpu::StoreOp::Store);
+        let mut pass = super::depth_pass(encoder, "shadow pass", layer, ops, timestamps);
         match masks {
             Some(textures) => {
                 pass.set_pipeline(&self.masked);

@@ -429,8 +429,8 @@ impl LightSamples {
 }
 
 /// A polygon's row of the polygons texture ([`POLYGON_TEXELS`] texels): three corners (w
-/// of the first: 1 when two-sided; of the second: 1 for a quad), the radiance, and a
-/// quad's fourth corner.
+/// of the first: 1 when two-sided; of the second: 1 for a quad; of the third: its
+/// [`EmitterPolygon::in_plane_bound`]), the radiance, and a quad's fourth corner.
 fn polygon_texels(t: &EmitterPolygon) -> [[f32; 4]; POLYGON_TEXELS as usize] {
     let [a, b, c] = t.corners;
     let side = t.two_sided as u32 as f32;
@@ -438,7 +438,7 @@ fn polygon_texels(t: &EmitterPolygon) -> [[f32; 4]; POLYGON_TEXELS as usize] {
     [
         a.extend(side).to_array(),
         b.extend(quad).to_array(),
-        c.extend(0.0).to_array(),
+        c.extend(t.in_plane_bound()).to_array(),
         t.radiance.extend(0.0).to_array(),
         t.fourth.unwrap_or(c).extend(0.0).to_array(),
     ]

@@ -417,21 +417,28 @@ impl Targets {
             DirectPass::get(ctx),
             EdgePass::get(ctx),
         );
-        let gbuffer_pass = |encoder: &mut wgpu::CommandEncoder,
+        // A G-buffer pass whose depth starts cleared, or (`Load`) as an edge mask left it.
+        let gbuffer_over = |encoder: &mut wgpu::CommandEncoder,
                             timer: &mut Timer,
                             target: &gbuffer::GBuffer,
-                            offset: u32| {
+                            offset: u32,
+                            depth: wgpu::LoadOp<f32>| {
             let ts = timer.pass("gbuffer");
-            gbuffer_p.record(
+            gbuffer_p.record_over(
                 encoder,
                 target,
-                &self.gbuffer_group,
-                offset,
+                (&self.gbuffer_group, offset, depth),
                 (&gs.geometry, Some(&self.eye_draws)),
                 (&gs.textures.group, gs.variant),
                 ts,
             );
         };
+        let clear = wgpu::LoadOp::Clear(gbuffer::CLEAR_DEPTH);
+        let gbuffer_pass =
+            |encoder: &mut wgpu::CommandEncoder,
+             timer: &mut Timer,
+             target: &gbuffer::GBuffer,
+             offset: u32| gbuffer_over(encoder, timer, target, offset, clear);
         let scene_group = &self.direct_scene_group;
         // The edge passes over the centre G-buffer (finding edges, shading them).
         let centre_edges = self.edges.as_ref().map(|edges| edges::EdgeGroups {
@@ -470,15 +477,7 @@ impl Targets {
                         // Only the listed pixels are kept: the pass shades only them.
                         let ts = timer.pass("edge mask");
                         edge_p.record_mask(encoder, find.edges, &self.sub.depth, ts);
-                        let ts = timer.pass("gbuffer");
-                        gbuffer_p.record_over(
-                            encoder,
-                            &self.sub,
-                            (&self.gbuffer_group, offset, wgpu::LoadOp::Load),
-                            (&gs.geometry, Some(&self.eye_draws)),
-                            (&gs.textures.group, gs.variant),
-                            ts,
-                        );
+                        gbuffer_over(encoder, timer, &self.sub, offset, wgpu::LoadOp::Load);
                     } else {
                         gbuffer_pass(encoder, timer, &self.sub, offset);
                     }

@@ -1,7 +1,8 @@
 // The edge mask of the sub-pixel G-buffer passes (`raster/edges.rs`, `EdgePass::record_mask`):
 // after the depth buffer is cleared to 0 (no fragment passes a `less` test there), one point
-// per listed edge pixel writes depth 1 (the G-buffer pass's own clear value) at that pixel,
-// so the next G-buffer pass runs its fragment stage and writes its targets only there.
+// per listed edge pixel writes depth 1 (`gbuffer::CLEAR_DEPTH`, the G-buffer pass's start)
+// at that pixel, so the next G-buffer pass runs its fragment stage and writes its targets
+// only there.
 
 struct MaskParams {
     // Image width and height (pixels).

@@ -32,8 +32,22 @@ impl EmitterPolygon {
         }
     }
 
+    /// The bound on |(a − p)·((b − a) × (c − a))| under which a receiver `p` counts as in
+    /// the polygon's plane and gets none of its light (every direction to it grazing): the
+    /// plane taken as 1e-4 of the polygon's size thick, the size √|(b − a) × (c − a)|. Such
+    /// receivers are the emitter's own face (either side: the G-buffer draws back faces too)
+    /// and surfaces flush with it; rounding puts them off the plane, where the polygon would
+    /// seem to fill their hemisphere (E = π). A polygon constant, so the direct pass reads it
+    /// (`polygons_diffuse` of `direct_shade.wgsl`).
+    pub fn in_plane_bound(&self) -> f32 {
+        let [a, b, c] = self.corners;
+        let area2 = (b - a).cross(c - a).length();
+        1e-4 * area2 * area2.sqrt()
+    }
+
     /// Its corners in winding order.
-    pub fn points(&self) -> Vec<Vec3> {
+    #[cfg(test)]
+    fn points(&self) -> Vec<Vec3> {
         let mut p = self.corners.to_vec();
         p.extend(self.fourth);
         p

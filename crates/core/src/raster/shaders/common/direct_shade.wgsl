@@ -45,7 +45,8 @@
 @group(0) @binding(10) var irradiance_table: texture_2d<f32>;
 @group(0) @binding(11) var<uniform> direct_params: DirectParams;
 // The emitting polygons (`polygons` of them), triangles or convex quads: three corners (w
-// of the first: 1 when two-sided; of the second: 1 for a quad), the radiance and a quad's
+// of the first: 1 when two-sided; of the second: 1 for a quad; of the third: the bound of
+// the in-plane test below, `EmitterPolygon::in_plane_bound`), the radiance and a quad's
 // fourth corner, five texels a row, group by group.
 @group(0) @binding(12) var emitter_polygons: texture_2d<f32>;
 @group(1) @binding(0) var g_position: texture_2d<f32>;
@@ -575,18 +576,15 @@ fn polygons_diffuse(p: vec3<f32>, ns: vec3<f32>, m: Material, wo: vec3<f32>, fir
         let t1 = textureLoad(emitter_polygons, vec2<u32>(1u, t), 0);
         let a = t0.xyz - p;
         let b = t1.xyz - p;
-        let c = textureLoad(emitter_polygons, vec2<u32>(2u, t), 0).xyz - p;
+        let t2 = textureLoad(emitter_polygons, vec2<u32>(2u, t), 0);
+        let c = t2.xyz - p;
         // A one-sided emitter lights its front side only. A receiver in the polygon's plane
-        // gets no light from it: every direction to it is grazing. Such receivers are the
-        // emitter's own face (seen from either side: a two-sided material's back face too)
-        // and surfaces flush with it, whose positions put them off the plane by rounding,
-        // where the polygon would seem to fill their hemisphere (E = π). So the plane is
-        // taken as 1e-4 of the polygon's size thick (as √|front|, independent of the corner
-        // it is measured from).
-        let front = cross(b - a, c - a);
-        let area2 = length(front);
-        let height = dot(a, front);
-        if (t0.w < 0.5 && height >= 0.0) || abs(height) <= 1e-4 * area2 * sqrt(area2) {
+        // (within the bound in t2.w: the plane 1e-4 of the polygon's size thick) gets no
+        // light from it, every direction to it grazing: its own face, or one flush with it,
+        // which rounding would put just in front, lit as if the polygon filled its
+        // hemisphere.
+        let height = dot(a, cross(b - a, c - a));
+        if (t0.w < 0.5 && height >= 0.0) || abs(height) <= t2.w {
             continue;
         }
         let quad = t1.w > 0.5;
