@@ -394,6 +394,8 @@ def test_gi_view_serves_a_frame_and_stops_on_sigint(tmp_path):
         assert status == 400 and "translate" in err["error"]
         status, err = post(base + "settings", {"estimator": "sideways"})
         assert status == 400 and "one of auto" in err["error"]
+        status, err = post(base + "settings", {"photons": -5})  # the option table's range
+        assert status == 400 and "-5 is not an integer in 1..=1000000000" in err["error"]
         status, err = post(base + "camera", b"{not json")
         assert status == 400
         # Another site's page may not drive it.

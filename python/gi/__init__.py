@@ -50,6 +50,25 @@ from gi.render import Renderer, RenderResult, method_options, options_table, ren
 from gi.scene import SceneWarning, load_scene  # noqa: E402
 from gi.viewer import view  # noqa: E402  (imports aiohttp only when called)
 
+
+
+def _present_as_gi() -> None:
+    """Tracebacks, warnings and reprs name gi's exception and warning classes as users
+    import them: ``gi.SceneError``, not ``_gi.SceneError``; the Python layer's subclasses
+    of :class:`gi.SettingError` (``ValueError``/``KeyError`` too, for older callers) as
+    ``gi.SettingError``, not ``gi._checks.SettingValueError``."""
+    from gi import _checks
+
+    public = (GiError, SceneError, SettingError, GpuError, InternalError, OutOfMemoryError)
+    for cls in (*public, RenderCancelled, RenderWarning, OutputError, AssetWarning, SceneWarning):
+        cls.__module__ = "gi"
+    for cls in (_checks.SettingValueError, _checks.AovError):
+        cls.__module__ = "gi"
+        cls.__qualname__ = "SettingError"
+
+
+_present_as_gi()
+
 __all__ = [
     "AssetWarning",
     "GiError",

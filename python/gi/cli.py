@@ -340,7 +340,49 @@ def _check_outputs(args: argparse.Namespace, outputs: list[_Output]) -> list[str
         if wanted and all(o.video for o in outputs):
             raise named_error("aov", "--aov needs an image-sequence output (videos hold none)")
     _check_files(outputs, wanted, [args.frames[0] if args.frames is not None else 0])
+    _warn_display_unused(args, outputs)
     return wanted
+
+
+def _warn_display_unused(args: argparse.Namespace, outputs: list[_Output]) -> None:
+    """``--exposure`` and ``--tonemap`` change the 8-bit outputs (and videos) only: with
+    float outputs alone they would change nothing, so say so rather than ignore them."""
+    if any(o.video or Path(o.path).suffix.lower() in SRGB_FORMATS for o in outputs):
+        return
+    given = []
+    if args.exposure != 0.0:
+        given.append("--exposure")
+    if args.tonemap != "clip":
+        given.append("--tonemap")
+    if given:
+        floats = ", ".join(sorted({Path(o.path).suffix.lower() for o in outputs}))
+        print(
+            f"gi: warning: {' and '.join(given)} {'change' if len(given) > 1 else 'changes'} only 8-bit outputs (.png, .jpg) and"
+            f" videos; the {floats} output stores linear radiance as rendered (add a .png"
+            " output, or scale the values when reading them)",
+            file=sys.stderr,
+        )
+
+
+def _warn_past_the_end(scene: gi.Scene, source: str, frames: range, fps: float) -> None:
+    """Frames past the end of the animation all show its last pose: say so, and how many."""
+    duration = scene.animation_duration
+    if duration is None:
+        print(
+            f"gi: warning: {source} has no animation: the {len(frames)} frames are all the"
+            " same image",
+            file=sys.stderr,
+        )
+        return
+    past = [n for n in frames if n / fps > duration * (1 + 1e-9)]
+    if past:
+        end = max(1, round(duration * fps))
+        print(
+            f"gi: warning: {len(past)} of the {len(frames)} frames ({past[0]}..{past[-1]}) are"
+            f" past the end of {source}'s {duration:g} s animation (frames 0..{end - 1} at"
+            f" {fps:g} fps): they all show its last pose",
+            file=sys.stderr,
+        )
 
 
 def _check_files(outputs: list[_Output], aovs: list[str], frames: Iterable[int]) -> None:
@@ -507,6 +549,8 @@ def _render_sequence(args: argparse.Namespace, outputs: list[_Output], aovs: lis
             "frames", f"{args.scene} has no animation: give the frames (--frames START:END)"
         )
     frames = args.frames if args.frames is not None else default_frames(scene, args.fps)
+    if args.frames is not None:
+        _warn_past_the_end(scene, args.scene, frames, args.fps)
     _check_files(outputs, aovs, frames)
     renderer = gi.Renderer(scene, args.method, **_settings(args))
     videos = [o for o in outputs if o.video]
@@ -582,8 +626,13 @@ def _footprints(args: argparse.Namespace) -> int:
     smoothing = args.smoothing if math.isfinite(args.smoothing) else 0.0
     seed = int_setting("seed", args.seed, U64_MAX)
     rows = gi.footprint_radii(_load(args.scene), photons, seed, smoothing, qs)
-    print(f"footprint radius (m) by percentile, {args.photons} photons, s = {args.smoothing}")
-    print(f"{'kind':8} {'photons':>9} " + " ".join(f"{f'p{q:g}':>8}" for q in qs))
+    # The count is of stored hits: one emitted photon stores a hit at each diffuse bounce,
+    # so a kind may count more hits than photons were emitted.
+    print(
+        f"footprint radius (m) by percentile of the photon hits stored, by path kind;"
+        f" {args.photons} photons emitted, s = {args.smoothing}"
+    )
+    print(f"{'kind':8} {'hits':>9} " + " ".join(f"{f'p{q:g}':>8}" for q in qs))
     for kind, (count, radii) in rows.items():
         print(f"{kind:8} {count:9d} " + " ".join(f"{r:8.4f}" for r in radii))
     return 0

@@ -15,6 +15,7 @@ written.
 
 from __future__ import annotations
 
+import errno
 import os
 import tempfile
 from collections.abc import Iterable, Mapping
@@ -128,10 +129,23 @@ def check_writable(path: str | Path) -> Path:
     try:
         fd, probe = tempfile.mkstemp(prefix=".gi-probe-", dir=parent)
     except OSError as e:
-        raise OutputError(path, f"{parent} is not writable ({e.strerror or e})") from e
+        raise OutputError(path, _why_not_writable(parent, e)) from e
     os.close(fd)
     os.unlink(probe)
     return path
+
+
+def _why_not_writable(directory: Path, e: OSError) -> str:
+    """Why no file can be made in the existing ``directory``, in words that match the
+    error: a file system that makes no new files (``/proc``) answers "no such
+    file" for a directory that exists."""
+    if e.errno in (errno.EACCES, errno.EPERM):
+        return f"{directory} is not writable (permission denied)"
+    if e.errno == errno.EROFS:
+        return f"{directory} is on a read-only file system"
+    if e.errno == errno.ENOENT:
+        return f"{directory} is on a file system that makes no new files (such as /proc)"
+    return f"cannot create a file in {directory} ({e.strerror or e})"
 
 
 @dataclass
@@ -393,13 +407,21 @@ def plan_result(
     return planned
 
 
-def read_image(path: str | Path) -> np.ndarray:
-    """Reads an image as float32 H×W×C (8-bit formats scaled to [0, 1], not linearised)."""
+def read_image(path: str | Path, layer: str | None = None) -> np.ndarray:
+    """Reads an image as float32 H×W×C (8-bit formats scaled to [0, 1], not linearised).
+
+    A layered EXR (the AOVs gi writes as layers of one file) reads as its beauty, the
+    channels without a layer name (``R``, ``G``, ``B``), so that the image can be saved
+    to any format again; ``layer="albedo"`` reads that layer's channels instead
+    (``albedo.R`` …, in the file's order), and :func:`read_channels` every channel by
+    name. An unknown ``layer`` is a :class:`gi.SettingError` naming the layers the file
+    has."""
     oiio = _oiio()
     inp = oiio.ImageInput.open(str(path))
     if inp is None:
         raise OSError(f"cannot read {path}: {oiio.geterror() or 'unknown format'}")
     try:
+        names = list(inp.spec().channelnames)
         pixels = inp.read_image(oiio.FLOAT)
         error = inp.geterror()
     finally:
@@ -408,7 +430,23 @@ def read_image(path: str | Path) -> np.ndarray:
     if pixels is None or error:
         raise OSError(f"cannot read {path}: {error or 'truncated or corrupt'}")
     arr = np.asarray(pixels, dtype=np.float32)
-    return arr if arr.ndim == 3 else arr.reshape(arr.shape[0], arr.shape[1], -1)
+    arr = arr if arr.ndim == 3 else arr.reshape(arr.shape[0], arr.shape[1], -1)
+    return _layer_channels(path, arr, names, layer)
+
+
+def _layer_channels(
+    path: str | Path, arr: np.ndarray, names: list[str], layer: str | None
+) -> np.ndarray:
+    """The channels of ``layer`` (``None``: those without a layer name) of ``arr``."""
+    layers = {n.rpartition(".")[0] for n in names}
+    if layer is None and (layers == {""} or "" not in layers):
+        return arr  # not layered (or nothing but layers): every channel
+    want = "" if layer is None else layer
+    if not isinstance(want, str) or want not in layers:
+        shown = ", ".join(sorted(repr(n) for n in layers if n)) or "none"
+        raise named_error("layer", f"{path} has no layer {layer!r} (its layers: {shown})")
+    keep = [i for i, n in enumerate(names) if n.rpartition(".")[0] == want]
+    return arr[:, :, keep]
 
 
 def read_channels(path: str | Path) -> dict[str, np.ndarray]:

@@ -225,6 +225,10 @@ class Renderer:
         self._native = _gi.Renderer(scene, method, _options(options))
         self._scene = scene
         self._pass_seconds = 0.0
+        # Object transforms as last given to update() (index -> translate/rotate/scale),
+        # which describe() gives back as they were given (295°, not the -65° that taking
+        # the matrix apart yields); a matrix update drops the object's entry.
+        self._given_transforms: dict[int, dict[str, Any]] = {}
         for message in self._native.warnings:
             warnings.warn(message, RenderWarning, stacklevel=_caller_level())
         _warn_if_black(scene)
@@ -272,8 +276,10 @@ class Renderer:
         """The current ``"camera"``, ``"light"`` (key: index) or ``"material"`` (key: name)
         in the scene format, what :meth:`update` takes; ``"object"`` (key: index or name) as
         ``{"name", "transform", "matrix", "triangles"}``: its ``transform`` in the scene
-        format (``translate``/``rotate``/``scale``; ``None`` for a matrix with shear, which
-        they cannot describe) and ``matrix`` (4×4 rows), either of which :meth:`update`
+        format (``translate``/``rotate``/``scale`` as the scene file or the last
+        :meth:`update` gave them, angles included: ``rotate: [0, 295, 0]`` reads back as
+        295, not as the -65 of the same rotation; after a ``matrix`` update, the matrix
+        taken apart; ``None`` for a matrix with shear, which they cannot describe) and ``matrix`` (4×4 rows), either of which :meth:`update`
         takes, and ``triangles`` ``[start, end]``, its range of ``Scene.mesh_arrays()``'
         triangles."""
         targets = ("camera", "light", "object", "material")
@@ -291,6 +297,9 @@ class Renderer:
             names = ", ".join(self._scene.material_names)
             raise _checks.setting_error("key", f"must be a material's name ({names}), got {key!r}")
         desc = json.loads(self._native.describe(target, key))
+        if target == "object" and desc.get("transform") is not None:
+            i = self.object_names.index(key) if isinstance(key, str) else key
+            desc["transform"] = dict(self._given_transforms.get(i, desc["transform"]))
         if target == "material":
             desc = _texture_names_out(desc)
         return desc  # type: ignore[no-any-return]
@@ -362,7 +371,14 @@ class Renderer:
         for key, transform in (objects or {}).items():
             key = self._object_index(key, "objects")
             i = self.object_names.index(key) if isinstance(key, str) else key
-            self._native.update("object", key, _json(f"objects[{i}].transform", transform))
+            given = _json(f"objects[{i}].transform", transform)
+            before = self.describe("object", i)["transform"] or {}
+            self._native.update("object", key, given)
+            fields = json.loads(given)
+            if "matrix" in fields:
+                self._given_transforms.pop(i, None)
+            else:
+                self._given_transforms[i] = {**before, **fields}
         for name, material in (materials or {}).items():
             if not isinstance(name, str):
                 names = ", ".join(self._scene.material_names)

@@ -192,10 +192,14 @@ def _number(value: Any, field: str, lo: float = -math.inf, hi: float = math.inf)
     return v
 
 
-def _int(value: Any, field: str, lo: int, hi: int) -> int:
+def _integer(value: Any, field: str) -> int:
     if isinstance(value, bool) or not isinstance(value, numbers.Integral):
         raise MessageError(field, f"expected an integer, got {_kind(value)}")
-    v = int(value)
+    return int(value)
+
+
+def _int(value: Any, field: str, lo: int, hi: int) -> int:
+    v = _integer(value, field)
     if not lo <= v <= hi:
         raise MessageError(field, f"{v} is outside {lo}..{hi}")
     return v
@@ -345,7 +349,8 @@ def settings(value: Any, methods: list[str], field: str = "settings") -> dict[st
         elif key == "estimator":
             out[key] = _option(key, _string(v, where), where)
         else:
-            out[key] = _option(key, _int(v, where, 1, 2**63), where)
+            # The option table's range, not a wider one: "-5 is not an integer in 1..=…".
+            out[key] = _option(key, _integer(v, where), where)
     return out
 
 

@@ -1,0 +1,158 @@
+"""A newcomer's first hour (issue 46): the bugs a new user met, each through the entry point
+the user used (the `gi` command or the Python API)."""
+
+from __future__ import annotations
+
+import pickle
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import gi
+from gi.viewer import messages
+
+
+def run(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "gi.cli", *args],
+        capture_output=True,
+        text=True,
+        cwd=cwd,
+        timeout=300,
+    )
+
+
+def python(code: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+
+
+# -- 6. bugs ----------------------------------------------------------------------------------
+
+
+def test_a_layered_exr_reads_as_its_beauty_and_saves_to_png(tmp_path):
+    exr = tmp_path / "frame.exr"
+    p = run(
+        *["render", "cornell", "-o", str(exr), "--method", "path", "--spp", "1"],
+        *["--size", "16x12", "--aov", "albedo", "--aov", "normal", "-q"],
+    )
+    assert p.returncode == 0, p.stderr
+    assert len(gi.read_channels(exr)) == 9  # R G B, albedo.RGB, N.XYZ
+    beauty = gi.read_image(exr)
+    assert beauty.shape == (12, 16, 3)
+    channels = gi.read_channels(exr)
+    np.testing.assert_array_equal(beauty, np.stack([channels[c] for c in "RGB"], axis=2))
+    albedo = gi.read_image(exr, layer="albedo")
+    np.testing.assert_array_equal(
+        albedo, np.stack([channels[f"albedo.{c}"] for c in "RGB"], axis=2)
+    )
+    gi.save_image(tmp_path / "x.png", gi.read_image(exr))  # failed: 9 channels for a PNG
+    assert gi.read_image(tmp_path / "x.png").shape == (12, 16, 3)
+    with pytest.raises(gi.SettingError, match="no layer 'specular'.*'N', 'albedo'"):
+        gi.read_image(exr, layer="specular")
+
+
+def test_the_viewer_names_the_photon_range_of_the_option_table():
+    photons = next(row for row in gi.options_table() if row["name"] == "photons")
+    with pytest.raises(messages.MessageError) as e:
+        messages.parse('{"type": "settings", "settings": {"photons": -5}}', gi.methods())
+    assert e.value.field == "settings.photons"
+    assert photons["range"] in str(e.value) and "9223372036854775808" not in str(e.value)
+
+
+def test_an_output_on_proc_gives_the_real_reason():
+    if not Path("/proc/self").exists():
+        pytest.skip("no /proc on this system")  # not Linux: nothing to check
+    p = run("render", "cornell", "-o", "/proc/x.png", "--spp", "1")
+    assert p.returncode == 2
+    # root: procfs answers "no such file" for a directory that exists; others: permission.
+    assert "makes no new files" in p.stderr or "permission denied" in p.stderr, p.stderr
+    assert "No such file or directory" not in p.stderr
+
+
+def test_exposure_with_only_float_outputs_warns(tmp_path):
+    base = ["render", "cornell", "--method", "path", "--spp", "1", "--size", "8x8", "-q"]
+    p = run(*base, "-o", str(tmp_path / "a.exr"), "--exposure", "2")
+    assert p.returncode == 0, p.stderr
+    assert "gi: warning: --exposure changes only 8-bit outputs" in p.stderr
+    p = run(*base, "-o", str(tmp_path / "b.exr"), "--tonemap", "filmic", "--exposure", "1")
+    assert "--exposure and --tonemap change only 8-bit outputs" in p.stderr
+    p = run(*base, "-o", str(tmp_path / "c.exr"), "-o", str(tmp_path / "c.png"), "--exposure", "2")
+    assert p.returncode == 0 and p.stderr == ""
+
+
+def test_frames_past_the_end_of_the_animation_warn(tmp_path):
+    # cornell-anim lasts 4 s: at 30 fps frame 120 is its end, 121 and later repeat it.
+    base = ["render", "cornell-anim", "--method", "direct", "--spp", "1", "--size", "8x8", "-q"]
+    p = run(*base, "-o", str(tmp_path / "f_%04d.exr"), "--frames", "118:123")
+    assert p.returncode == 0, p.stderr
+    assert "2 of the 5 frames (121..122) are past the end of cornell-anim's 4 s" in p.stderr
+    p = run(*base, "-o", str(tmp_path / "g_%04d.exr"), "--frames", "0:2")
+    assert p.returncode == 0 and p.stderr == ""
+    p = run(
+        "render",
+        "cornell",
+        "--method",
+        "direct",
+        "--spp",
+        "1",
+        "--size",
+        "8x8",
+        "-q",
+        "-o",
+        str(tmp_path / "s_%02d.exr"),
+        "--frames",
+        "0:2",
+    )
+    assert p.returncode == 0 and "cornell has no animation" in p.stderr
+
+
+def test_exceptions_present_as_gi_classes():
+    p = python("import gi; gi.load_scene('no-such-scene')")
+    assert "\ngi.SceneError: no-such-scene" in p.stderr and "_gi." not in p.stderr, p.stderr
+    p = python("import gi; gi.save_image('x.bmpx', [[1.0]])")
+    assert "\ngi.SettingError: unsupported image format" in p.stderr, p.stderr
+    assert "_checks" not in p.stderr
+    r = gi.render("cornell", "direct", size=(4, 4))
+    try:
+        r.aov("nope")
+    except KeyError as e:
+        assert f"{type(e).__module__}.{type(e).__qualname__}" == "gi.SettingError"
+    for cls in (gi.SceneError, gi.OutputError, gi.RenderWarning, gi.OutOfMemoryError):
+        assert cls.__module__ == "gi"
+    err = pickle.loads(pickle.dumps(gi.SceneError("x")))
+    assert type(err) is gi.SceneError
+
+
+def test_footprints_count_hits_not_photons():
+    p = run("footprints", "cornell", "--photons", "2000")
+    assert p.returncode == 0, p.stderr
+    head, columns, *rows = p.stdout.splitlines()
+    assert "2000 photons emitted" in head and "hits stored" in head
+    assert columns.split()[:2] == ["kind", "hits"]
+    # One photon stores a hit at every diffuse bounce: more hits than photons is no error.
+    assert sum(int(r.split()[1]) for r in rows) > 2000
+
+
+def test_describe_gives_back_the_angle_given():
+    r = gi.Renderer("cornell", "direct", size=(8, 8))
+    r.update(objects={6: {"rotate": [0, 295, 0]}})
+    assert r.describe("object", 6)["transform"]["rotate"] == [0, 295, 0]
+    r.update(objects={6: {"translate": np.array([0.1, 0.5, 0.0])}})
+    t = r.describe("object", 6)["transform"]
+    assert t["rotate"] == [0, 295, 0] and t["translate"] == [0.1, 0.5, 0.0]
+    assert t["scale"] == 1.0
+    # The same rotation as -65°: the picture and the matrix agree.
+    m295 = np.array(r.describe("object", 6)["matrix"])
+    r.update(objects={6: {"rotate": [0, -65, 0]}})
+    assert r.describe("object", 6)["transform"]["rotate"] == [0, -65, 0]
+    np.testing.assert_allclose(np.array(r.describe("object", 6)["matrix"]), m295, atol=1e-6)
+    # A matrix update reads back as the matrix taken apart.
+    r.update(objects={6: {"matrix": np.eye(4)}})
+    assert r.describe("object", 6)["transform"] == {
+        "translate": [0.0, 0.0, 0.0],
+        "rotate": [0.0, 0.0, 0.0],
+        "scale": 1.0,
+    }
