@@ -41,9 +41,9 @@ def test_render_returns_float32_arrays_and_stats():
 def test_same_seed_same_image_other_seed_other_noise():
     # cornell-glass exercises both the path tracer and the parallel light tracer.
     scene = gi.load_scene("cornell-glass")
-    a = gi.render(scene, spp=2, size=(16, 16), seed=5).radiance
-    b = gi.render(scene, spp=2, size=(16, 16), seed=5).radiance
-    c = gi.render(scene, spp=2, size=(16, 16), seed=6).radiance
+    a = gi.render(scene, "path", spp=2, size=(16, 16), seed=5).radiance
+    b = gi.render(scene, "path", spp=2, size=(16, 16), seed=5).radiance
+    c = gi.render(scene, "path", spp=2, size=(16, 16), seed=6).radiance
     assert np.array_equal(a, b)
     assert not np.array_equal(a, c)
 
@@ -51,10 +51,12 @@ def test_same_seed_same_image_other_seed_other_noise():
 def test_progress_callback_and_cancel():
     scene = gi.load_scene("cornell")
     seen = []
-    gi.render(scene, spp=1, size=(16, 16), progress=lambda stage, f: seen.append((stage, f)))
+    gi.render(
+        scene, "path", spp=1, size=(16, 16), progress=lambda stage, f: seen.append((stage, f))
+    )
     assert seen and seen[-1][1] == pytest.approx(1.0)
     with pytest.raises(gi.RenderCancelled):
-        gi.render(scene, spp=64, size=(128, 128), progress=lambda stage, f: False)
+        gi.render(scene, "path", spp=64, size=(128, 128), progress=lambda stage, f: False)
 
 
 def test_progress_callback_exception_propagates():
@@ -62,7 +64,7 @@ def test_progress_callback_exception_propagates():
         raise RuntimeError("from callback")
 
     with pytest.raises(RuntimeError, match="from callback"):
-        gi.render(gi.load_scene("cornell"), spp=1, size=(8, 8), progress=boom)
+        gi.render(gi.load_scene("cornell"), "path", spp=1, size=(8, 8), progress=boom)
 
 
 def test_gil_is_released_while_rendering():
@@ -79,7 +81,7 @@ def test_gil_is_released_while_rendering():
     t = threading.Thread(target=count)
     t.start()
     start = time.monotonic()
-    gi.render(scene, spp=128, size=(96, 96))
+    gi.render(scene, "path", spp=128, size=(96, 96))
     elapsed = time.monotonic() - start
     done.set()
     t.join()
@@ -90,7 +92,7 @@ def test_gil_is_released_while_rendering():
 
 def test_furnace_from_python_matches_analytic():
     # L = ρ·I / (π·R²·(1 − ρ)) for the built-in furnace (ρ = 0.5, I = 1, R = 1).
-    r = gi.render(gi.load_scene("furnace"), spp=16, size=(32, 32), seed=2)
+    r = gi.render(gi.load_scene("furnace"), "path", spp=16, size=(32, 32), seed=2)
     expected = 0.5 * 1.0 / (np.pi * 1.0 * 0.5)
     assert r.radiance.mean() == pytest.approx(expected, rel=0.015)
 

@@ -156,3 +156,28 @@ def test_describe_gives_back_the_angle_given():
         "rotate": [0.0, 0.0, 0.0],
         "scale": 1.0,
     }
+
+
+# -- 4. one default method ----------------------------------------------------------------------
+
+
+def test_one_default_method_everywhere_and_said_so():
+    import inspect
+
+    from gi.animation import render_animation
+
+    assert gi.DEFAULT_METHOD in gi.methods()
+    for entry in (gi.render, gi.Renderer.__init__, gi.view, render_animation):
+        method = inspect.signature(entry).parameters["method"]
+        assert method.default == gi.DEFAULT_METHOD, entry
+    from gi.batch import plan
+
+    job = {"scene": "cornell", "frames": [0, 1], "output": "out/{index}.exr"}
+    assert [f.method for f in plan(job)] == [gi.DEFAULT_METHOD]
+    for command in ("render", "view"):
+        p = run(command, "--help")
+        assert f"(default {gi.DEFAULT_METHOD}, as in gi.render" in " ".join(p.stdout.split())
+    p = run("methods")
+    assert p.stdout.splitlines()[-1].startswith(f"default: {gi.DEFAULT_METHOD} (gi render,")
+    # And what renders without one is that method.
+    assert gi.render("cornell", size=(8, 8)).stats.method == gi.DEFAULT_METHOD

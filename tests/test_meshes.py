@@ -26,7 +26,7 @@ def test_formats_load_with_the_right_triangle_count(tmp_path, ext):
     box.export(tmp_path / f"box.{ext}")
     scene = gi.load_scene(scene_with_mesh(tmp_path, f"box.{ext}"))
     assert scene.triangle_count == 10 + 12  # five wall quads + the box
-    r = gi.render(scene, spp=1, size=(16, 16))
+    r = gi.render(scene, "path", spp=1, size=(16, 16))
     assert np.isfinite(r.radiance).all()
 
 

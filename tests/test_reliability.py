@@ -170,7 +170,7 @@ def test_binary_stl_with_a_solid_header(write_scene, cornell_desc, tmp_path):
     (tmp_path / "ball.stl").write_bytes(b"solid ball".ljust(80, b" ") + data[80:])
     scene = gi.load_scene(mesh_scene(write_scene, cornell_desc, "ball.stl"))
     assert scene.triangle_count > len(mesh.faces)
-    img = gi.render(scene, spp=1, size=(16, 16)).radiance
+    img = gi.render(scene, "path", spp=1, size=(16, 16)).radiance
     assert np.isfinite(img).all()
 
 
@@ -243,7 +243,9 @@ def test_a_panic_becomes_internal_error():
     # pyo3's PanicException (a BaseException), and the process renders on.
     with pytest.raises(gi.InternalError, match="report"):
         gi._gi._panic_for_tests()
-    assert np.isfinite(gi.render(gi.load_scene("cornell"), spp=1, size=(8, 8)).radiance).all()
+    assert np.isfinite(
+        gi.render(gi.load_scene("cornell"), "path", spp=1, size=(8, 8)).radiance
+    ).all()
 
 
 def test_nan_rays_are_refused():

@@ -46,10 +46,16 @@ from gi.denoising import denoise  # noqa: E402
 from gi.display import to_display  # noqa: E402
 from gi.io import read_channels, read_image, save_image, save_layers, save_result  # noqa: E402
 from gi.meshes import AssetWarning  # noqa: E402
-from gi.render import Renderer, RenderResult, method_options, options_table, render  # noqa: E402
+from gi.render import (  # noqa: E402
+    DEFAULT_METHOD,
+    Renderer,
+    RenderResult,
+    method_options,
+    options_table,
+    render,
+)
 from gi.scene import SceneWarning, load_scene  # noqa: E402
 from gi.viewer import view  # noqa: E402  (imports aiohttp only when called)
-
 
 
 def _present_as_gi() -> None:
@@ -70,6 +76,7 @@ def _present_as_gi() -> None:
 _present_as_gi()
 
 __all__ = [
+    "DEFAULT_METHOD",
     "AssetWarning",
     "GiError",
     "GpuError",

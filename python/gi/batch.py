@@ -4,7 +4,7 @@ A job (a dict, or a JSON file for ``gi batch JOB.json``)::
 
     {
       "scene": "cornell",                      # built-in name or scene file (relative to the job)
-      "method": "path",
+      "method": "path",                        # default: gi.DEFAULT_METHOD (ispm)
       "settings": {"spp": 16, "size": [64, 64], "seed": 0},   # gi.render keywords
       "frames": [0, 8],                        # frames 0..7; frame f uses seed + f
       "camera": [                              # optional keyframes, linearly interpolated
@@ -196,7 +196,7 @@ def plan(job: dict[str, Any], base_dir: str | Path = ".") -> list[Frame]:
                 "job", f"sweep[{variant}]: expected an object with fields {sorted(SWEEP_KEYS)}"
             )
         scene = str(entry.get("scene", job.get("scene", "cornell")))
-        method = str(entry.get("method", job.get("method", "path")))
+        method = str(entry.get("method", job.get("method", gi.DEFAULT_METHOD)))
         if method not in methods:
             raise named_error(
                 "job", f"sweep[{variant}]: unknown method {method!r} (use {', '.join(methods)})"

@@ -46,6 +46,12 @@ METHOD_SUMMARIES = {
 }
 
 
+_METHOD_HELP = (
+    f"rendering method: {', '.join(gi.methods())} (default {gi.DEFAULT_METHOD}, as in gi.render"
+    " and gi.Renderer; `gi methods` says what each is)"
+)
+
+
 def _size(text: str) -> tuple[int, int]:
     try:
         w, h = (int(v) for v in text.lower().split("x"))
@@ -163,7 +169,7 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument(
         "--fps", type=_fps, default=30.0, help="frames a second: frame n shows n/fps s (30)"
     )
-    r.add_argument("--method", default="ispm", help="rendering method (see `gi methods`)")
+    r.add_argument("--method", default=gi.DEFAULT_METHOD, help=_METHOD_HELP)
     r.add_argument("--size", type=_size, help="image size WIDTHxHEIGHT (default: the scene's)")
     r.add_argument(
         "--time", type=_fps, metavar="SECONDS", help="progressive: stop after this many seconds"
@@ -203,7 +209,7 @@ def _parser() -> argparse.ArgumentParser:
     )
     v = sub.add_parser("view", help="interactive viewer in the browser (pip install 'gi[view]')")
     v.add_argument("scene", help="built-in scene name, JSON scene file, Mitsuba 3 XML or glTF")
-    v.add_argument("--method", default="ispm", help="rendering method (see `gi methods`)")
+    v.add_argument("--method", default=gi.DEFAULT_METHOD, help=_METHOD_HELP)
     v.add_argument(
         "--size",
         type=_size,
@@ -356,8 +362,9 @@ def _warn_display_unused(args: argparse.Namespace, outputs: list[_Output]) -> No
         given.append("--tonemap")
     if given:
         floats = ", ".join(sorted({Path(o.path).suffix.lower() for o in outputs}))
+        verb = "change" if len(given) > 1 else "changes"
         print(
-            f"gi: warning: {' and '.join(given)} {'change' if len(given) > 1 else 'changes'} only 8-bit outputs (.png, .jpg) and"
+            f"gi: warning: {' and '.join(given)} {verb} only 8-bit outputs (.png, .jpg) and"
             f" videos; the {floats} output stores linear radiance as rendered (add a .png"
             " output, or scale the values when reading them)",
             file=sys.stderr,
@@ -677,6 +684,10 @@ def run(args: argparse.Namespace) -> int:
     if args.command == "methods":
         for name in gi.methods():
             print(f"{name:8} {METHOD_SUMMARIES.get(name, '')}".rstrip())
+        print(
+            f"\ndefault: {gi.DEFAULT_METHOD} (gi render, gi view, gi.render, gi.Renderer,"
+            " batch jobs)"
+        )
         return 0
     return _render(args)
 

@@ -24,6 +24,12 @@ from gi.scene import TEXTURE_FIELDS
 
 ProgressCallback = Callable[[str, float], "bool | None"]
 
+#: The method of every entry point that is given none (:func:`render`, :class:`Renderer`,
+#: ``gi render``, ``gi view``, :func:`gi.view`, batch jobs): ``ispm``, the renderer's own
+#: method, real-time on a GPU and the interactive one in the viewer. ``path`` is the
+#: reference, to be asked for by name (it is the slowest at equal settings).
+DEFAULT_METHOD = "ispm"
+
 
 @dataclass(frozen=True)
 class RenderResult:
@@ -216,7 +222,10 @@ class Renderer:
     """
 
     def __init__(
-        self, scene: Scene | str | os.PathLike[str], method: str = "ispm", **options: Any
+        self,
+        scene: Scene | str | os.PathLike[str],
+        method: str = DEFAULT_METHOD,
+        **options: Any,
     ) -> None:
         scene = _scene(scene)
         if not isinstance(method, str):
@@ -279,9 +288,9 @@ class Renderer:
         format (``translate``/``rotate``/``scale`` as the scene file or the last
         :meth:`update` gave them, angles included: ``rotate: [0, 295, 0]`` reads back as
         295, not as the -65 of the same rotation; after a ``matrix`` update, the matrix
-        taken apart; ``None`` for a matrix with shear, which they cannot describe) and ``matrix`` (4×4 rows), either of which :meth:`update`
-        takes, and ``triangles`` ``[start, end]``, its range of ``Scene.mesh_arrays()``'
-        triangles."""
+        taken apart; ``None`` for a matrix with shear, which they cannot describe) and
+        ``matrix`` (4×4 rows), either of which :meth:`update` takes, and ``triangles``
+        ``[start, end]``, its range of ``Scene.mesh_arrays()``' triangles."""
         targets = ("camera", "light", "object", "material")
         if not isinstance(target, str) or target not in targets:
             raise _checks.setting_error(
@@ -631,15 +640,16 @@ def method_options(method: str, **options: Any) -> dict[str, Any]:
 
 def render(
     scene: Scene | str | os.PathLike[str],
-    method: str = "path",
+    method: str = DEFAULT_METHOD,
     *,
     progress: bool | ProgressCallback = False,
     denoise: bool = False,
     **options: Any,
 ) -> RenderResult:
     """Renders ``scene`` (a :class:`gi.Scene`, or a built-in name or scene file for
-    :func:`gi.load_scene`) with ``method`` (see :func:`gi.methods`): one frame of a
-    :class:`Renderer` with every image read back.
+    :func:`gi.load_scene`) with ``method`` (see :func:`gi.methods`; by default
+    :data:`DEFAULT_METHOD`, ``ispm``): one frame of a :class:`Renderer` with every image
+    read back.
 
     ``options`` are the method's render options (listed below, and by
     :func:`gi.options`); ``size=(width, height)`` sets width and height. An option that

@@ -148,7 +148,7 @@ _running: dict[str, _Background] = {}
 
 def view(
     scene: gi.Scene | str,
-    method: str = "ispm",
+    method: str = gi.DEFAULT_METHOD,
     *,
     host: str = "127.0.0.1",
     port: int = 0,
