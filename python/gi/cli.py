@@ -172,9 +172,15 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("--method", default=gi.DEFAULT_METHOD, help=_METHOD_HELP)
     r.add_argument("--size", type=_size, help="image size WIDTHxHEIGHT (default: the scene's)")
     r.add_argument(
-        "--time", type=_fps, metavar="SECONDS", help="progressive: stop after this many seconds"
+        "--time",
+        type=_fps,
+        metavar="SECONDS",
+        help="render progressively (implies --progressive) until this many seconds have"
+        " passed: the pass under way then is dropped, unless it is the first",
     )
-    r.add_argument("--passes", type=int, help="progressive: stop after this many passes")
+    r.add_argument(
+        "--passes", type=int, help="render progressively (implies --progressive) this many passes"
+    )
     _add_options(r)
     r.add_argument(
         "--exposure", type=float, default=0.0, help="exposure in stops for 8-bit outputs"
@@ -318,17 +324,19 @@ def _check_outputs(args: argparse.Namespace, outputs: list[_Output]) -> list[str
         raise named_error(
             "method", f"unknown method {args.method!r} (use {', '.join(gi.methods())})"
         )
-    progressive = args.progressive or args.time is not None or args.passes is not None
+    # --time and --passes imply --progressive (they mean nothing else).
+    if args.time is not None or args.passes is not None:
+        if args.progressive is False:
+            raise named_error("progressive", "--time and --passes render progressively")
+        args.progressive = True
     sequence = _is_sequence(args, outputs)
-    if progressive:
+    if args.progressive:
         if sequence:
             raise named_error(
                 "progressive",
                 "--progressive renders one still image: not with --frames, an image"
                 " sequence or a video",
             )
-        if not args.progressive:
-            raise named_error("progressive", "--time and --passes need --progressive")
         if args.time is None and args.passes is None:
             raise named_error("progressive", "--progressive needs --time SECONDS or --passes N")
         if args.passes is not None and args.passes < 1:
@@ -481,11 +489,28 @@ def _print_choices(args: argparse.Namespace, result: gi.RenderResult) -> None:
         print(f"first bounce {s.first_bounce}: {s.first_bounce_reason}", file=sys.stderr)
 
 
+#: A progressive pass's settings where the command line gives none: small passes, which
+#: converge fastest for the time (docs/bench/progressive.md): one camera sample per pixel,
+#: 30k photons for gather, 80k for ispm at full resolution (its upsampling is a bias no
+#: pass removes). Options the method does not take are left out.
+PROGRESSIVE_PASS: dict[str, dict[str, object]] = {
+    "path": {"spp": 1},
+    "gather": {"spp": 1, "photons": 30_000},
+    "ispm": {"spp": 1, "photons": 80_000, "subsample": 1},
+}
+
+
+def _progressive_settings(args: argparse.Namespace) -> dict[str, object]:
+    """The options of one progressive pass: those given, else :data:`PROGRESSIVE_PASS`."""
+    given = _settings(args)
+    return {**PROGRESSIVE_PASS.get(args.method, {}), **given, "progressive": True}
+
+
 def _render_progressive(args: argparse.Namespace, aovs: list[str]) -> int:
     """``--progressive``: passes until ``--time`` or ``--passes``; Ctrl-C keeps the passes
     done so far and writes them."""
     scene = _load(args.scene)
-    options = {**_settings(args), "progressive": True}
+    options = _progressive_settings(args)
     renderer = gi.Renderer(scene, args.method, **options)
     interrupted = False
 
@@ -513,9 +538,12 @@ def _render_progressive(args: argparse.Namespace, aovs: list[str]) -> int:
     if not args.quiet or interrupted:
         files = ", ".join(map(str, written))
         why = "interrupted, " if interrupted else ""
+        each = ", ".join(
+            f"{k} {v}" for k, v in options.items() if k in ("spp", "photons", "subsample")
+        )
         print(
             f"wrote {files} ({result.stats.method}, progressive: {why}{result.stats.passes}"
-            f" passes, {result.stats.total_seconds:.1f}s)",
+            f" passes{f' of {each}' if each else ''}, {result.stats.total_seconds:.1f}s)",
             file=sys.stderr,
         )
         _print_choices(args, result)
