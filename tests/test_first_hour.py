@@ -241,3 +241,63 @@ def test_cli_time_implies_progressive_and_small_passes(tmp_path):
         str(tmp_path / "n.exr"),
     )
     assert p.returncode == 2 and "--time and --passes render progressively" in p.stderr
+
+
+# -- 7. CLI ergonomics ------------------------------------------------------------------------
+
+
+def test_an_argument_error_is_one_line_and_a_hint():
+    p = run("render", "cornell", "-o", "x.png", "--spp", "many")
+    assert p.returncode == 2
+    assert p.stderr.splitlines() == [
+        "gi render: error: argument --spp: invalid int value: 'many'",
+        "(`gi render --help` lists the options)",
+    ]
+    p = run("render")
+    assert p.returncode == 2 and len(p.stderr.splitlines()) == 2 and "required" in p.stderr
+
+
+def test_help_speaks_the_command_lines_words():
+    for command in ("render", "view"):
+        p = run(command, "--help")
+        text = " ".join(p.stdout.split())
+        assert p.returncode == 0 and "None" not in text and "True" not in text, command
+        assert "(auto: one per camera sample)" in text
+        # argparse breaks lines at hyphens: compared without white space.
+        assert "(--no-edge-supersampling:everypixel" in "".join(text.split())
+
+
+def test_frame_numbers_either_way(tmp_path):
+    base = ["render", "cornell-anim", "--method", "direct", "--spp", "1", "--size", "8x8", "-q"]
+    p = run(
+        *base,
+        "--frames",
+        "0:2",
+        "-o",
+        str(tmp_path / "a_{frame:03d}.exr"),
+        "-o",
+        str(tmp_path / "b_%02d.png"),
+    )
+    assert p.returncode == 0, p.stderr
+    names = sorted(f.name for f in tmp_path.iterdir())
+    assert names == ["a_000.exr", "a_001.exr", "b_00.png", "b_01.png"]
+    p = run(*base, "--frames", "0:2", "-o", str(tmp_path / "c_{frame}_%d.exr"))
+    assert p.returncode == 2 and "more than one frame number" in p.stderr
+    from gi.batch import plan
+
+    job = {"scene": "cornell", "method": "direct", "frames": [3, 5], "output": "f/%04d.exr"}
+    assert [Path(f.outputs[0]).name for f in plan(job, tmp_path)] == ["0003.exr", "0004.exr"]
+
+
+def test_stage_times_only_when_verbose_and_in_pipeline_order(tmp_path):
+    from gi.cli import PIPELINE
+
+    args = ["render", "cornell", "--size", "16x16", "--photons", "2000", "--method", "ispm"]
+    p = run(*args, "-o", str(tmp_path / "a.png"))
+    assert p.returncode == 0, p.stderr
+    assert len(p.stderr.splitlines()) == 1 and "shadow maps" not in p.stderr
+    p = run(*args, "-o", str(tmp_path / "b.png"), "-v")
+    stages = [line.split("  ")[1].strip() for line in p.stderr.splitlines() if line[:2] == "  "]
+    # ispm reports its GPU stages (shadow maps, gbuffer, ...) after its CPU ones.
+    assert {"shadow maps", "cpu trace", "composite"} <= set(stages), p.stderr
+    assert [PIPELINE.index(s) for s in stages] == sorted(PIPELINE.index(s) for s in stages)

@@ -22,8 +22,9 @@ Every ``sweep`` entry (default: one empty entry) is rendered for every frame; an
 overrides ``scene``, ``method``, ``settings`` (merged), ``camera``, ``aovs`` or
 ``denoise``. Output patterns take ``{index}`` (0, 1, … over the whole batch), ``{frame}``,
 ``{variant}`` (the sweep entry), ``{scene}`` (the scene's file stem or name) and
-``{method}``. Everything (outputs, formats, AOV names, settings names, scenes) is checked
-before a frame starts.
+``{method}``; the frame also as ``gi render`` writes it, ``%04d`` (:mod:`gi.patterns`).
+Everything (outputs, formats, AOV names, settings names, scenes) is checked before a frame
+starts.
 
 Frames run as Ray tasks: on a local Ray started for the batch, or on the cluster that
 ``RAY_ADDRESS`` (or ``address=``) names. Each worker process keeps one ``gi.Renderer`` per
@@ -51,6 +52,7 @@ from gi._checks import named_error
 from gi.aovs import check_aovs
 from gi.display import check_tonemap
 from gi.io import check_output_path, check_writable, planned_files, save_result
+from gi.patterns import frame_path
 
 CAMERA_FIELDS = ("position", "look_at", "up", "fov")
 JOB_KEYS = {
@@ -230,7 +232,8 @@ def plan(job: dict[str, Any], base_dir: str | Path = ".") -> list[Frame]:
                 "method": method,
             }
             try:
-                outs = [str(base / o.format(**names)) for o in outputs]
+                # The frame number as gi render writes it too (%04d), else str.format's.
+                outs = [str(base / frame_path(o, f).format(**names)) for o in outputs]
             except (KeyError, IndexError, ValueError) as e:
                 raise named_error("job", f"output pattern: {e} (use {sorted(names)})") from None
             for o in outs:
@@ -300,6 +303,19 @@ def _ray():  # type: ignore[no-untyped-def]
     return ray
 
 
+def _drop_token_auth_notice(record: logging.LogRecord) -> bool:
+    return not record.getMessage().startswith("Token authentication is enabled")
+
+
+def _quiet_token_auth_notice() -> None:
+    """Ray (2.5x) announces on every start that the local cluster it starts uses token
+    authentication, the secure default; a batch prints its frames, not that. Its warning
+    that authentication is *disabled* is kept."""
+    logger = logging.getLogger("ray._private.authentication.authentication_token_setup")
+    if _drop_token_auth_notice not in logger.filters:
+        logger.addFilter(_drop_token_auth_notice)
+
+
 def render_batch(
     job: dict[str, Any] | str | Path,
     *,
@@ -334,6 +350,7 @@ def render_batch(
     ray = _ray()
     started_here = not ray.is_initialized()
     if started_here:
+        _quiet_token_auth_notice()
         ray.init(
             address=address or os.environ.get("RAY_ADDRESS"),
             include_dashboard=False,

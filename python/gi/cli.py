@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import argparse
 import math
-import re
 import signal
 import sys
 import time
+import typing
 import warnings
 from collections.abc import Iterable
 from dataclasses import dataclass
@@ -28,6 +28,8 @@ from gi.io import (
     save_result,
     to_srgb8,
 )
+from gi.patterns import frame_number_count, frame_path, pattern_error
+from gi.presets import PROGRESSIVE_PASS, with_preset
 from gi.video import VIDEO_FORMATS, VideoWriter
 
 #: What each method is, in one line (`gi methods`; the README's table says more).
@@ -100,6 +102,14 @@ def _fps(text: str) -> float:
     return fps
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse, but an error is its one line and where to read more, not the whole usage
+    (35 lines for ``gi render``) with the message at its end."""
+
+    def error(self, message: str) -> typing.NoReturn:
+        self.exit(2, f"{self.prog}: error: {message}\n(`{self.prog} --help` lists the options)\n")
+
+
 # Command-line spellings kept from before the options were generated from the table.
 _ALIASES = {"progressive_alpha": ["--alpha"], "bundle_memory_mb": ["--bundle-memory"]}
 
@@ -109,6 +119,22 @@ def _option_names() -> list[str]:
     (``--size``)."""
     names = dict.fromkeys(row["name"] for row in gi.options_table())
     return [n for n in names if n not in ("width", "height")]
+
+
+def _shown(default: object) -> str:
+    """An option's default as the command line spells it."""
+    if default is None:
+        return "auto"
+    if isinstance(default, bool):
+        return "on" if default else "off"
+    return str(default)
+
+
+def _cli_doc(doc: str, name: str) -> str:
+    """An option's doc (written for Python) in the command line's words: ``None`` is
+    leaving the option out (auto), ``False`` its ``--no-`` flag."""
+    flag = name.replace("_", "-")
+    return doc.replace("(None: ", "(auto: ").replace("(False: ", f"(--no-{flag}: ")
 
 
 def _add_options(parser: argparse.ArgumentParser) -> None:
@@ -122,9 +148,11 @@ def _add_options(parser: argparse.ArgumentParser) -> None:
         first = variants[0]
         parts = []
         for row in variants:
-            default = "auto" if row["default"] is None else row["default"]
+            default = _shown(row["default"])
             methods = ", ".join(row["methods"])
-            parts.append(f"{row['doc']} [{row['range']}; default {default}; {methods}]")
+            parts.append(
+                f"{_cli_doc(row['doc'], name)} [{row['range']}; default {default}; {methods}]"
+            )
         flags = [f"--{name.replace('_', '-')}", *_ALIASES.get(name, [])]
         kind = first["kind"]
         # argparse expands %-formats in help; the docs have literal percents ("0.5%").
@@ -142,7 +170,7 @@ def _add_options(parser: argparse.ArgumentParser) -> None:
 
 
 def _parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="gi", description="Global illumination renderer (ISPM).")
+    p = _Parser(prog="gi", description="Global illumination renderer (ISPM).")
     p.add_argument("--version", action="version", version=f"gi {gi.__version__}")
     sub = p.add_subparsers(dest="command", required=True)
     r = sub.add_parser("render", help="render a scene to an image")
@@ -157,7 +185,8 @@ def _parser() -> argparse.ArgumentParser:
         action="append",
         help="output image: .exr (float; AOVs become layers of the same file), .png/.jpg"
         " (8-bit sRGB through --tonemap), .hdr/.pfm/.tif (float); repeat for several. With"
-        " --frames: an image sequence named by a printf pattern (out/frame_%%04d.exr), or a"
+        " --frames: an image sequence named with its frame number (out/frame_%%04d.exr or"
+        " out/frame_{frame:04d}.exr, as in batch jobs), or a"
         " video (.mp4, .mov, .mkv)",
     )
     r.add_argument(
@@ -211,7 +240,8 @@ def _parser() -> argparse.ArgumentParser:
         "-v",
         "--verbose",
         action="store_true",
-        help="also say which estimator and first-bounce search ispm chose, and why",
+        help="also print the time of each stage, and which estimator and first-bounce search"
+        " ispm chose, and why",
     )
     v = sub.add_parser("view", help="interactive viewer in the browser (pip install 'gi[view]')")
     v.add_argument("scene", help="built-in scene name, JSON scene file, Mitsuba 3 XML or glTF")
@@ -267,22 +297,10 @@ class _Output:
 
     def at(self, frame: int) -> str:
         """The image file of ``frame`` (the path itself for a still)."""
-        return self.path % frame if self.numbered else self.path.replace("%%", "%")
+        return frame_path(self.path, frame)
 
 
-def _frame_number_count(path: str) -> int:
-    """How many frame-number conversions (``%d``, ``%04d``) ``path`` has; ``%%`` is a
-    literal ``%``; any other ``%`` is an error."""
-    count = 0
-    for m in re.finditer(r"%(%|\d*d)?", path):
-        if m.group(1) is None:
-            raise _output_error(path, "a frame-number pattern takes %d or %04d (and %% for a %)")
-        count += m.group(1) != "%"
-    return count
-
-
-def _output_error(path: str, reason: str) -> gi.SettingError:
-    return named_error("output", f"output {path!r}: {reason}")
+_output_error = pattern_error
 
 
 def _outputs(paths: list[str]) -> list[_Output]:
@@ -290,7 +308,7 @@ def _outputs(paths: list[str]) -> list[_Output]:
     out = []
     for p in paths:
         suffix = Path(p).suffix.lower()
-        numbers = _frame_number_count(p)
+        numbers = frame_number_count(p)
         if numbers > 1:
             raise _output_error(p, "more than one frame number")
         if suffix in VIDEO_FORMATS:
@@ -473,10 +491,10 @@ def _render(args: argparse.Namespace) -> int:
         written += save_result(out, result, aovs, tonemap=args.tonemap, exposure=args.exposure)
     if not args.quiet:
         s = result.stats
-        stages = ", ".join(f"{n} {t:.2f}s" for n, t in s.stages)
         files = ", ".join(map(str, written))
-        print(f"wrote {files} ({s.method}, {s.total_seconds:.2f}s: {stages})", file=sys.stderr)
+        print(f"wrote {files} ({s.method}, {s.total_seconds:.2f}s)", file=sys.stderr)
         _print_choices(args, result)
+        _print_stages(args, result)
     return 0
 
 
@@ -489,21 +507,65 @@ def _print_choices(args: argparse.Namespace, result: gi.RenderResult) -> None:
         print(f"first bounce {s.first_bounce}: {s.first_bounce_reason}", file=sys.stderr)
 
 
-#: A progressive pass's settings where the command line gives none: small passes, which
-#: converge fastest for the time (docs/bench/progressive.md): one camera sample per pixel,
-#: 30k photons for gather, 80k for ispm at full resolution (its upsampling is a bias no
-#: pass removes). Options the method does not take are left out.
-PROGRESSIVE_PASS: dict[str, dict[str, object]] = {
-    "path": {"spp": 1},
-    "gather": {"spp": 1, "photons": 30_000},
-    "ispm": {"spp": 1, "photons": 80_000, "subsample": 1},
-}
-
-
 def _progressive_settings(args: argparse.Namespace) -> dict[str, object]:
-    """The options of one progressive pass: those given, else :data:`PROGRESSIVE_PASS`."""
+    """The options of one progressive pass: those given, else
+    :data:`gi.presets.PROGRESSIVE_PASS`."""
     given = _settings(args)
-    return {**PROGRESSIVE_PASS.get(args.method, {}), **given, "progressive": True}
+    return {**with_preset(PROGRESSIVE_PASS.get(args.method, {}), given), "progressive": True}
+
+
+#: The stages of the methods' frames in the order they run (the GPU's, timed by queries,
+#: are reported after the CPU's); a stage not listed keeps its place after these.
+PIPELINE = (
+    "bvh build",
+    "upload",
+    "shadow maps",
+    "rsm",
+    "rsm readback",
+    "vpl sampling",
+    "vpls",
+    "vpl shadow maps",
+    "light subpaths",
+    "ray bundles",
+    "gbuffer",
+    "gbuffer readback",
+    "edges",
+    "edge mask",
+    "direct light",
+    "edge shading",
+    "camera paths",
+    "light paths",
+    "bounce maps",
+    "bounce trace",
+    "photon trace",
+    "cpu trace",
+    "boundary compensation",
+    "specular paths",
+    "photon lists regrown",
+    "kd-tree build",
+    "photon map build",
+    "photon upload",
+    "cpu estimate",
+    "radiance estimate",
+    "bidir lighting",
+    "upsample",
+    "composite",
+    "readback",
+    "earlier passes",
+)
+
+
+def pipeline_order(stages: list[tuple[str, float]]) -> list[tuple[str, float]]:
+    """``stats.stages`` in the order the frame runs them (:data:`PIPELINE`)."""
+    rank = {name: i for i, name in enumerate(PIPELINE)}
+    return sorted(stages, key=lambda s: rank.get(s[0], len(PIPELINE)))
+
+
+def _print_stages(args: argparse.Namespace, result: gi.RenderResult) -> None:
+    """``-v``: the time of each stage, in pipeline order, one a line."""
+    if args.verbose:
+        for name, seconds in pipeline_order(result.stats.stages):
+            print(f"  {name:24} {seconds:7.3f} s", file=sys.stderr)
 
 
 def _render_progressive(args: argparse.Namespace, aovs: list[str]) -> int:
@@ -547,6 +609,7 @@ def _render_progressive(args: argparse.Namespace, aovs: list[str]) -> int:
             file=sys.stderr,
         )
         _print_choices(args, result)
+        _print_stages(args, result)
     return 0
 
 

@@ -4,11 +4,15 @@ the changes the page and scripts send, renders, and hands each frame to the serv
 One render runs at a time however many pages are open: every change goes through
 :meth:`Engine.submit` into one queue that the render thread empties before each frame, so
 a burst of camera messages becomes one frame showing the last of them. A changed view is
-rendered by the interactive renderer (the method and options as given); once the view has
-been still for :data:`REFINE_AFTER` seconds and a page is watching, a second renderer
-with ``progressive=True`` adds passes to a running mean (Knaus & Zwicker 2011) until the
-next change, which cancels the pass under way. Methods without a progressive mode (the
-option table, :func:`gi.options_table`) keep their last frame.
+rendered by the interactive renderer (the method and options as given, the rest from the
+method's :data:`gi.presets.INTERACTIVE` settings: fewer samples and photons, and for the
+CPU methods fewer pixels, so that a frame takes a second or less); once the view has been
+still for :data:`REFINE_AFTER` seconds and a page is watching, a second renderer with
+``progressive=True`` at the view's full size (small passes:
+:data:`gi.presets.PROGRESSIVE_PASS`) adds passes to a running mean (Knaus & Zwicker 2011)
+until the next change, which cancels the pass under way. Methods without a progressive
+mode (the option table, :func:`gi.options_table`) keep their last frame. Each frame's
+``doing`` says which of the two made it, and with what.
 
 Options the method does not take are kept for the methods that do: each renderer made after
 the first gets only its method's options (so a method switch in the panel warns of none).
@@ -28,6 +32,7 @@ import numpy as np
 import gi
 from gi.aovs import aov_names
 from gi.display import TONEMAPS, aov_display, png_bytes, quantize8, to_display
+from gi.presets import INTERACTIVE, PROGRESSIVE_PASS, Interactive, describe, with_preset
 from gi.render import Renderer, RenderResult, method_options, options_table
 from gi.viewer import messages as m
 from gi.viewer.picking import ObjectPicker, View, pick_light, translated
@@ -60,11 +65,13 @@ class DisplayState:
 
 @dataclass
 class _Slot:
-    """A renderer and the scene state it has been given (the change ``version``, size)."""
+    """A renderer and the scene state it has been given (the change ``version``, size);
+    it renders frames of 1/``scale`` of the view's pixels a side."""
 
     renderer: Renderer
     version: int = 0
     size: tuple[int, int] = (0, 0)
+    scale: Interactive = field(default_factory=Interactive)
 
 
 @dataclass
@@ -105,7 +112,9 @@ class Engine:
         self._on_event = on_event
         self._display = display or DisplayState()
         # Made here, so that bad settings fail before anything is served.
-        self._interactive = _Slot(Renderer(scene, method, **self._options))
+        preset = INTERACTIVE.get(method, Interactive())
+        given = with_preset(method_options(method, **preset.options), self._options)
+        self._interactive = _Slot(Renderer(scene, method, **given), scale=preset)
         self._size = self._interactive.renderer.size
         self._interactive.size = self._size
         self._progressive: _Slot | None = None
@@ -370,9 +379,10 @@ class Engine:
             if version > slot.version:
                 r.update(**_update_arguments(target, key, value))
         slot.version = self._version
-        if slot.size != self._size:
-            r.resize(*self._size)
-            slot.size = self._size
+        size = slot.scale.size(*self._size)
+        if slot.size != size:
+            r.resize(*size)
+            slot.size = size
         return r
 
     def _change_settings(self, changes: dict[str, Any]) -> None:
@@ -385,7 +395,9 @@ class Engine:
                 options.pop(k, None)
             else:
                 options[k] = v
-        slot = _Slot(self._renderer(method, options, progressive=False))  # SettingError
+        preset = INTERACTIVE.get(method, Interactive())
+        renderer = self._renderer(method, options, progressive=False)  # SettingError
+        slot = _Slot(renderer, size=renderer.size, scale=preset)
         self._sync(slot)
         self._method, self._options = method, options
         self._interactive = slot
@@ -493,14 +505,19 @@ class Engine:
             "progressive": progressive,
             "passes": result.stats.passes if progressive else 0,
             "lights": self._light_marks(),
+            "doing": _doing(r, progressive, result.stats.passes),
         }
         self._show(result, meta, ops, seqs)
         return True
 
     def _renderer(self, method: str, options: dict[str, Any], *, progressive: bool) -> Renderer:
-        """A renderer of ``method`` with the options it takes; ``progressive`` is the
-        viewer's to set."""
-        given = method_options(method, **options)
+        """A renderer of ``method`` with the options it takes, the rest from its preset
+        (:mod:`gi.presets`); ``progressive`` is the viewer's to set."""
+        if progressive:
+            preset = PROGRESSIVE_PASS.get(method, {})
+        else:
+            preset = INTERACTIVE.get(method, Interactive()).options
+        given = method_options(method, **with_preset(preset, options))
         given.pop("progressive", None)
         if progressive:
             given["progressive"] = True
@@ -626,6 +643,17 @@ class Engine:
                 if row["name"] in m.SETTINGS
             },
         }
+
+
+def _doing(renderer: Renderer, progressive: bool, passes: int) -> str:
+    """What made a frame, for the page: the interactive renderer while the view changes,
+    the progressive one refining a still view."""
+    w, h = renderer.size
+    settings = describe(renderer.options)
+    each = f" of {settings}" if settings else ""
+    if progressive:
+        return f"still: refining {w}×{h}, pass {passes}{each}"
+    return f"moving: {w}×{h}{f', {settings}' if settings else ''} a frame"
 
 
 def _update_arguments(target: str, key: Any, value: dict[str, Any]) -> dict[str, Any]:

@@ -174,6 +174,7 @@
     $("timing").textContent =
       `${meta.method} ${meta.width}×${meta.height} · ${(meta.total_seconds * 1000).toFixed(1)} ms · ${fps.toFixed(1)} fps`;
     $("passes").textContent = meta.progressive ? String(meta.passes) : "–";
+    $("doing").textContent = meta.doing || "";
     $("photons").textContent = meta.photons_stored ? meta.photons_stored.toLocaleString("en") : "–";
     history.push(meta.stages);
     if (history.length > 60) history.shift();
@@ -309,7 +310,7 @@
     $("pause").textContent = state.paused ? "Resume" : "Pause";
     $("progressive-note").textContent = state.progressive_error
       ? `no refinement: ${state.progressive_error}`
-      : "a still view refines by itself";
+      : "moving: quick frames (fewer samples; CPU methods at half size) · still: refines by itself";
     $("adapter").textContent = state.adapter;
   }
 
