@@ -593,3 +593,51 @@ def test_browser_drives_the_viewer(tmp_path):
         gi.viewer.stop(url)
     assert not errors, errors
     assert shot.stat().st_size > 10_000
+
+
+# The CPU methods in the browser (issue 46): interactive frames at half size with cheap
+# settings, refined at full size while still. The bound is hang detection only (a frame
+# within a minute, as for ispm above): the times are docs/bench/view.md's, made by
+# scripts/bench/view_methods.py.
+PANEL = 250  # px: the page's side panel (viewer.css #panel)
+
+
+@pytest.mark.parametrize("method", ["gather", "path"])
+def test_browser_cpu_methods_are_interactive(method):
+    if CHROMIUM is None:
+        pytest.fail("the viewer test needs Debian's chromium (see test_browser_drives_the_viewer)")
+    from playwright.sync_api import sync_playwright
+
+    w, h = 320, 240
+    url = gi.view("cornell-glass", method, size=(w, h))
+    errors: list[str] = []
+    try:
+        with sync_playwright() as pw:
+            browser = pw.chromium.launch(executable_path=CHROMIUM, headless=True)
+            page = browser.new_page(viewport={"width": PANEL + 3 * w, "height": 3 * h})
+            page.set_default_timeout(60_000)
+            page.on("pageerror", lambda e: errors.append(str(e)))
+            page.goto(url)
+            # The first frame: the interactive renderer's, at half the view's sides.
+            page.wait_for_function("giViewer.frames > 0")
+            meta = page.evaluate("giViewer.meta")
+            assert meta["doing"].startswith(f"moving: {w // 2}×{h // 2}, 1 spp"), meta["doing"]
+            assert (meta["width"], meta["height"]) == (w // 2, h // 2)
+            assert canvas_pixels(page).mean() > 0.02
+            # Still: the progressive renderer refines at the full size, and the page says so.
+            page.wait_for_function("giViewer.meta.progressive && giViewer.meta.passes >= 2")
+            still = canvas_pixels(page)[..., :3]
+            assert still.shape == (h, w, 3)
+            assert page.locator("#doing").text_content().startswith(f"still: refining {w}×{h}")
+            # An orbit: the next frame shows it, at once and cheaply, then refines again.
+            wait_frame_after(page, page.evaluate("giViewer.orbit(0.3, 0)"))
+            meta = page.evaluate("giViewer.meta")
+            assert not meta["progressive"] and meta["doing"].startswith("moving:")
+            moved = canvas_pixels(page)[..., :3]
+            small = still.reshape(h // 2, 2, w // 2, 2, 3).mean(axis=(1, 3))
+            assert np.abs(moved - small).mean() > 0.02  # another view
+            page.wait_for_function("giViewer.meta.progressive && giViewer.meta.passes >= 1")
+            browser.close()
+    finally:
+        gi.viewer.stop(url)
+    assert not errors, errors
