@@ -1,16 +1,21 @@
-# The README's two commands: `make render` and `make test`. Both set up a fresh machine first.
+# The README's two commands: `make render` and `make test`. Both set up a fresh machine
+# first, saying what they do: `render` only what rendering needs, `test` also the test tools
+# and Chromium (scripts/setup.sh).
 VENV := .venv
 BIN := $(VENV)/bin
 
-.PHONY: setup render test lint bench
+.PHONY: setup setup-test render test lint bench
 setup:
-	scripts/setup.sh
+	scripts/setup.sh render
+
+setup-test:
+	scripts/setup.sh test
 
 render: setup
 	mkdir -p out
 	$(BIN)/gi render cornell -o out/cornell.exr -o out/cornell.png
 
-lint: setup
+lint: setup-test
 	python3 scripts/check_layers.py
 	cargo fmt --all -- --check
 	cargo clippy --workspace --all-targets -- -D warnings

@@ -422,7 +422,7 @@ def test_gi_view_serves_a_frame_and_stops_on_sigint(tmp_path):
 # The browser --------------------------------------------------------------------------------
 
 CHROMIUM = os.environ.get("GI_CHROMIUM") or shutil.which("chromium")
-# Where to save the screenshot for the README (GI_VIEW_SCREENSHOT=docs/images/view.png), and
+# Where to save the screenshot for the README (GI_VIEW_SCREENSHOT=docs/view.png, the README's), and
 # then render more pixels than the test needs.
 SCREENSHOT = os.environ.get("GI_VIEW_SCREENSHOT")
 
