@@ -301,3 +301,30 @@ def test_stage_times_only_when_verbose_and_in_pipeline_order(tmp_path):
     # ispm reports its GPU stages (shadow maps, gbuffer, ...) after its CPU ones.
     assert {"shadow maps", "cpu trace", "composite"} <= set(stages), p.stderr
     assert [PIPELINE.index(s) for s in stages] == sorted(PIPELINE.index(s) for s in stages)
+
+
+# -- 1. the viewer in every method ------------------------------------------------------------
+
+
+def test_the_viewer_engine_uses_quick_frames_and_says_so():
+    from gi.presets import INTERACTIVE
+    from gi.viewer.engine import Engine
+
+    frames = []
+    engine = Engine(
+        gi.load_scene("cornell"),
+        "gather",
+        {"size": (64, 48)},
+        on_frame=frames.append,
+        on_event=lambda client, message: None,
+    )
+    state = engine.state()
+    assert state["options"]["photons"]["default"] == INTERACTIVE["gather"].options["photons"]
+    engine.start()
+    try:
+        frame = engine.wait_frame(120)
+        assert frame is not None
+        assert frame.meta["doing"] == "moving: 32×24, 1 spp, 10000 photons a frame"
+        assert frame.pixels.shape == (24, 32, 3)
+    finally:
+        engine.stop()

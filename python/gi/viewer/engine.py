@@ -636,13 +636,23 @@ class Engine:
             "adapter": self._adapter,
             "scene": self._scene.source,
             "pixels": list(self._pixels),
-            # The panel's options for this method (option table rows; absent: not taken).
+            # The panel's options for this method (option table rows; absent: not taken),
+            # the default being what the viewer's interactive frames use.
             "options": {
-                row["name"]: {k: row.get(k) for k in ("default", "range", "doc", "choices")}
+                row["name"]: {
+                    **{k: row.get(k) for k in ("default", "range", "doc", "choices")},
+                    **_interactive_default(self._method, row["name"]),
+                }
                 for row in options_table(self._method)
                 if row["name"] in m.SETTINGS
             },
         }
+
+
+def _interactive_default(method: str, name: str) -> dict[str, Any]:
+    """``{"default": value}`` where the viewer's interactive preset sets option ``name``."""
+    options = INTERACTIVE.get(method, Interactive()).options
+    return {"default": options[name]} if name in options else {}
 
 
 def _doing(renderer: Renderer, progressive: bool, passes: int) -> str:
