@@ -58,7 +58,7 @@ step "installing the build tool (maturin) into $VENV"
 # the release build of the Rust core takes minutes on a small machine the first time.
 step "building gi (cargo, release; minutes the first time, seconds after)"
 rm -rf target/setup-wheels
-"$VENV/bin/maturin" build --release --out target/setup-wheels
+"$VENV/bin/maturin" build --release --interpreter "$VENV/bin/python" --out target/setup-wheels
 wheel=$(ls target/setup-wheels/gi-*.whl)
 
 extra=""
