@@ -117,11 +117,11 @@ def test_nan_in_description(write_scene, cornell_desc):
 @pytest.mark.parametrize(
     ("kwargs", "setting"),
     [
-        ({"spp": 0}, "spp"),
-        ({"spp": 10**9}, "spp"),
-        ({"size": (0, 10)}, "width"),
-        ({"max_depth": 0}, "max_depth"),
-        ({"light_paths": 10**15}, "light_paths"),
+        ({"method": "path", "spp": 0}, "spp"),
+        ({"method": "path", "spp": 10**9}, "spp"),
+        ({"method": "path", "size": (0, 10)}, "width"),
+        ({"method": "path", "max_depth": 0}, "max_depth"),
+        ({"method": "path", "light_paths": 10**15}, "light_paths"),
         ({"method": "magic"}, "method"),
         ({"method": "photon", "photons": 0}, "photons"),
         ({"method": "photon", "photons": 10**12}, "photons"),

@@ -265,6 +265,10 @@ def test_help_speaks_the_command_lines_words():
         assert "(auto: one per camera sample)" in text
         # argparse breaks lines at hyphens: compared without white space.
         assert "(--no-edge-supersampling:everypixel" in "".join(text.split())
+        # --progressive lists the methods that take it: not photon, which refuses it.
+        progressive = text[text.index("--progressive, --no-progressive") :]
+        methods = progressive[: progressive.index("]")].split("default off;")[1]
+        assert "photon" not in methods and "gather" in methods
 
 
 def test_frame_numbers_either_way(tmp_path):

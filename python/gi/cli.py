@@ -149,7 +149,9 @@ def _add_options(parser: argparse.ArgumentParser) -> None:
         parts = []
         for row in variants:
             default = _shown(row["default"])
-            methods = ", ".join(row["methods"])
+            # A method the option's doc excludes ("not method photon": it refuses) is not
+            # listed as one that takes it.
+            methods = ", ".join(m for m in row["methods"] if f"not method {m}" not in row["doc"])
             parts.append(
                 f"{_cli_doc(row['doc'], name)} [{row['range']}; default {default}; {methods}]"
             )
