@@ -775,12 +775,10 @@ def run(args: argparse.Namespace) -> int:
     if args.command == "view":
         return _view(args)
     if args.command == "methods":
+        # One line a method; the default's says so (of every entry point: gi.DEFAULT_METHOD).
         for name in gi.methods():
-            print(f"{name:8} {METHOD_SUMMARIES.get(name, '')}".rstrip())
-        print(
-            f"\ndefault: {gi.DEFAULT_METHOD} (gi render, gi view, gi.render, gi.Renderer,"
-            " batch jobs)"
-        )
+            default = "(the default) " if name == gi.DEFAULT_METHOD else ""
+            print(f"{name:8} {default}{METHOD_SUMMARIES.get(name, '')}".rstrip())
         return 0
     return _render(args)
 
