@@ -6,10 +6,10 @@ BIN := $(VENV)/bin
 
 .PHONY: setup setup-test render test lint bench
 setup:
-	scripts/setup.sh render
+	VENV=$(VENV) scripts/setup.sh render
 
 setup-test:
-	scripts/setup.sh test
+	VENV=$(VENV) scripts/setup.sh test
 
 render: setup
 	mkdir -p out
