@@ -35,14 +35,25 @@ class Interactive:
 #: Per method, chosen for a first frame within 1-2 s at 320×240 on lavapipe (2 cores):
 #: the CPU methods at half the view's sides and one sample per pixel (gather and photon
 #: with 10k photons a frame), ispm with 20k photons and 4 edge samples, bidir at half size
-#: with 8 ray bundles and 32 VPLs a light. docs/bench/view.md has the times.
+#: with 4 ray bundles of 64² and 16 VPLs a light with 64² shadow maps (2.0 s a camera move
+#: on cornell-glass at 160×120 against 3.1 s with 8 bundles of 128², 32 VPLs of 128²,
+#: 4 spp). docs/bench/view.md has the times.
 INTERACTIVE: dict[str, Interactive] = {
     "path": Interactive(2, {"spp": 1}),
     "photon": Interactive(2, {"spp": 1, "photons": 10_000}),
     "gather": Interactive(2, {"spp": 1, "photons": 10_000}),
     "direct": Interactive(1, {"spp": 4}),
     "ispm": Interactive(1, {"spp": 4, "photons": 20_000}),
-    "bidir": Interactive(2, {"spp": 4, "bundles": 8, "vpls_per_light": 32}),
+    "bidir": Interactive(
+        2,
+        {
+            "spp": 1,
+            "bundles": 4,
+            "bundle_resolution": 64,
+            "vpls_per_light": 16,
+            "vpl_shadow_map_size": 64,
+        },
+    ),
 }
 
 
