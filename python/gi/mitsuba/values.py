@@ -1,0 +1,140 @@
+"""Reading property values: attributes with ``$name`` defaults substituted, numbers,
+vectors, the named properties of a plugin, floats, strings, booleans and colours; and the
+errors that name the file, the element and its line."""
+
+from __future__ import annotations
+
+import math
+import re
+from pathlib import Path
+
+import numpy as np
+
+from gi._gi import SceneError
+from gi.meshes import scene_error
+from gi.mitsuba.elements import Element
+from gi.textures import TextureSet
+
+# Value tags that name a property of their parent plugin.
+PROPERTY_TAGS = (
+    "float",
+    "integer",
+    "boolean",
+    "string",
+    "rgb",
+    "spectrum",
+    "point",
+    "vector",
+    "transform",
+    "texture",
+)
+
+
+class Reader:
+    """The file being read: its defaults, ids, the notes (warnings) gathered so far and its
+    textures; the value accessors every plugin translator uses."""
+
+    def __init__(self, path: Path):
+        self.path = path
+        self.file = str(path)
+        self.defaults: dict[str, str] = {}
+        self.ids: dict[str, Element] = {}
+        self.notes: dict[str, str] = {}
+        self.textures = TextureSet(path.parent)
+
+    def error(self, el: Element, reason: str) -> SceneError:
+        return scene_error(self.file, el.label, reason)
+
+    def attr(self, el: Element, key: str, default: str | None = None) -> str:
+        value = el.attrs.get(key, default)
+        if value is None:
+            raise self.error(el, f"missing attribute `{key}`")
+
+        def sub(m: re.Match[str]) -> str:
+            if m.group(1) not in self.defaults:
+                raise self.error(el, f"no <default> for parameter ${m.group(1)}")
+            return self.defaults[m.group(1)]
+
+        return re.sub(r"\$([A-Za-z_][A-Za-z0-9_]*)", sub, value)
+
+    def numbers(self, el: Element, text: str, count: int | None = None) -> list[float]:
+        try:
+            vals = [float(x) for x in text.replace(",", " ").split()]
+        except ValueError:
+            raise self.error(el, f"expected numbers, got {text!r}") from None
+        if count is not None and len(vals) != count:
+            raise self.error(el, f"expected {count} numbers, got {text!r}")
+        if not all(math.isfinite(v) for v in vals):
+            raise self.error(el, "values must be finite")
+        return vals
+
+    def vec3(self, el: Element) -> np.ndarray:
+        if "value" in el.attrs:
+            v = self.numbers(el, self.attr(el, "value"))
+            if len(v) == 1:
+                v = v * 3
+            if len(v) != 3:
+                raise self.error(el, "expected 1 or 3 numbers")
+            return np.array(v)
+        return np.array([self.numbers(el, self.attr(el, k, "0"), 1)[0] for k in ("x", "y", "z")])
+
+    def props(self, el: Element) -> dict[str, Element]:
+        """The named property children of a plugin element."""
+        out = {}
+        for c in el.children:
+            if c.tag in PROPERTY_TAGS or (c.tag == "ref" and "name" in c.attrs):
+                out[self.attr(c, "name")] = c
+        return out
+
+    def float(self, el: Element, props: dict[str, Element], name: str, default: float) -> float:
+        p = props.get(name)
+        if p is None:
+            return default
+        if p.tag not in ("float", "integer"):
+            raise self.error(p, f"`{name}` must be a float")
+        return self.numbers(p, self.attr(p, "value"), 1)[0]
+
+    def string(self, props: dict[str, Element], name: str, default: str) -> str:
+        p = props.get(name)
+        return default if p is None else self.attr(p, "value")
+
+    def boolean(self, props: dict[str, Element], name: str, default: bool) -> bool:
+        p = props.get(name)
+        if p is None:
+            return default
+        value = self.attr(p, "value").strip().lower()
+        if value not in ("true", "false"):
+            raise self.error(p, "expected true or false")
+        return value == "true"
+
+    def color(self, props: dict[str, Element], name: str, default: float) -> np.ndarray:
+        """An rgb/spectrum/float property or a bitmap texture (its mean colour)."""
+        from gi.mitsuba.bitmaps import bitmap_mean
+
+        p = props.get(name)
+        if p is None:
+            return np.full(3, default)
+        if p.tag == "texture":
+            return bitmap_mean(self, p)
+        if p.tag == "ref":
+            return bitmap_mean(self, self.resolve(p))
+        text = self.attr(p, "value")
+        if p.tag == "spectrum" and ":" in text:
+            raise self.error(p, "sampled spectra are not supported (use rgb or one value)")
+        if p.tag not in ("rgb", "spectrum", "float"):
+            raise self.error(p, f"`{name}` must be an rgb, spectrum, float or texture")
+        v = self.numbers(p, text)
+        if len(v) not in (1, 3):
+            raise self.error(p, "expected 1 or 3 numbers")
+        return np.array(v * 3 if len(v) == 1 else v)
+
+    def note_unknown(self, props: dict[str, Element], known: set[str]) -> None:
+        for key, p in props.items():
+            if key not in known:
+                self.notes[p.label] = "ignored"
+
+    def resolve(self, ref: Element) -> Element:
+        key = self.attr(ref, "id")
+        if key not in self.ids:
+            raise self.error(ref, f"no element with id `{key}`")
+        return self.ids[key]
