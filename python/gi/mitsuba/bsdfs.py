@@ -178,8 +178,12 @@ def bsdf(t: Translator, el: Element, name: str | None = None) -> str:
     if translate is None:
         raise t.error(el, "unsupported BSDF (see docs/mitsuba.md for the list)")
     props = t.props(el)
+    ext_eta = props.pop("ext_eta", None)  # Mitsuba 0.x conductors: the outside's index
+    if ext_eta is not None and t.float(ext_eta, {"ext_eta": ext_eta}, "ext_eta", 1.0) != 1.0:
+        raise t.error(ext_eta, "property `ext_eta` other than 1 is not supported")
     desc = translate(t, el, props)
-    t.note_unknown(props, KNOWN)
+    t.refuse_unknown(props, KNOWN)
+    note_approximations(t, el, kind or "", props)
     name = el.attrs.get("id") or name or f"bsdf@{el.line}"
     while name in t.materials:
         name += "'"
@@ -189,6 +193,22 @@ def bsdf(t: Translator, el: Element, name: str | None = None) -> str:
     }
     t.material_of[id(el)] = name
     return name
+
+
+def note_approximations(t: Translator, el: Element, kind: str, props: Props) -> None:
+    """An AssetWarning for each way the uber BSDF approximates Mitsuba's model (until the
+    `materials` branch's models replace these mappings)."""
+    said = []
+    if kind.startswith("rough"):
+        dist = t.string(props, "distribution", "beckmann").lower()
+        if dist != "ggx":
+            said.append(f"the {dist} distribution is rendered as GGX")
+    if kind in ("plastic", "roughplastic"):
+        said.append("the coating over the diffuse base is Lambert + Fresnel-weighted GGX")
+    if kind in ("conductor", "roughconductor") and ("eta" in props or "material" in props):
+        said.append("the complex index is reduced to Schlick's F0")
+    if said:
+        t.notes[el.label] = "; ".join(said)
 
 
 def twosided(t: Translator, el: Element, name: str | None) -> str:

@@ -15,6 +15,9 @@ from gi.mitsuba.transforms import transform
 if TYPE_CHECKING:
     from gi.mitsuba.translator import Translator
 
+# Changes only how the light is sampled (the noise), not the picture.
+COSMETIC = frozenset({"sampling_weight"})
+
 
 def emitter(t: Translator, el: Element) -> None:
     """A top-level ``<emitter>``."""
@@ -32,8 +35,10 @@ def emitter(t: Translator, el: Element) -> None:
             "area emitters)",
         )
     props = t.props(el)
-    t.note_unknown(props, {"intensity", "to_world", "position", "cutoff_angle", "beam_width"})
-    intensity = t.color(props, "intensity", 1.0)
+    t.refuse_unknown(
+        props, {"intensity", "to_world", "position", "cutoff_angle", "beam_width"}, COSMETIC
+    )
+    intensity = t.color(props, "intensity", 1.0, emitter=True)
     xf = transform(t, props.get("to_world"))
     if kind == "point":
         pos = t.vec3(props["position"]) if "position" in props else xf[:3, 3]
@@ -60,14 +65,14 @@ def area_emitter(t: Translator, shape: Element, el: Element, material: str) -> s
     colour or a bitmap), one-sided (the shape's normal side) as Mitsuba's. Each emitting
     shape gets its own material, named after the shape's id or line."""
     props = t.props(el)
-    t.note_unknown(props, {"radiance"})
+    t.refuse_unknown(props, {"radiance"}, COSMETIC)
     desc = dict(t.materials[material])
     p = props.get("radiance")
     if p is not None and p.tag in ("texture", "ref"):
         tex = t.resolve(p) if p.tag == "ref" else p
         desc["emission_texture"], desc["emission"] = emission_bitmap(t, tex)
     else:
-        desc["emission"] = t.color(props, "radiance", 1.0).tolist()
+        desc["emission"] = t.color(props, "radiance", 1.0, emitter=True).tolist()
     name = shape.attrs.get("id") or f"emitter@line{el.line}"
     while name in t.materials:
         name += "'"
@@ -79,7 +84,7 @@ def directional(t: Translator, el: Element) -> None:
     """`directional`: `irradiance` (W/m²) travelling along `direction`, or along
     `to_world`'s +z."""
     props = t.props(el)
-    t.note_unknown(props, {"irradiance", "direction", "to_world"})
+    t.refuse_unknown(props, {"irradiance", "direction", "to_world"}, COSMETIC)
     if "direction" in props:
         d = t.vec3(props["direction"])
     else:
@@ -90,7 +95,7 @@ def directional(t: Translator, el: Element) -> None:
         {
             "type": "directional",
             "direction": (d / np.linalg.norm(d)).tolist(),
-            "irradiance": t.color(props, "irradiance", 1.0).tolist(),
+            "irradiance": t.color(props, "irradiance", 1.0, emitter=True).tolist(),
         }
     )
 
@@ -102,10 +107,10 @@ def env_emitter(t: Translator, el: Element, kind: str) -> None:
         raise t.error(el, "a second environment emitter (gi takes one)")
     props = t.props(el)
     if kind == "constant":
-        t.note_unknown(props, {"radiance"})
-        t.environment = {"radiance": t.color(props, "radiance", 1.0).tolist()}
+        t.refuse_unknown(props, {"radiance"}, COSMETIC)
+        t.environment = {"radiance": t.color(props, "radiance", 1.0, emitter=True).tolist()}
         return
-    t.note_unknown(props, {"filename", "scale", "to_world"})
+    t.refuse_unknown(props, {"filename", "scale", "to_world"}, COSMETIC)
     if "filename" not in props:
         raise t.error(el, "an envmap needs a `filename`")
     name = t.string(props, "filename", "")

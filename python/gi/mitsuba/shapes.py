@@ -24,7 +24,17 @@ Props = dict[str, Element]
 # Vertices, faces, normals (or None), UVs (or None) of a mesh in its local frame.
 Built = tuple[Any, Any, Any, Any]
 
-KNOWN = {"filename", "face_normals", "flip_normals", "to_world", "center", "radius", "bsdf"}
+# The properties each shape reads (a nested <bsdf>/<emitter> is a child, not a property).
+COMMON = {"to_world", "flip_normals", "bsdf"}
+KNOWN = {
+    "obj": COMMON | {"filename", "face_normals", "flip_tex_coords"},
+    "ply": COMMON | {"filename", "face_normals"},
+    "serialized": COMMON | {"filename", "face_normals", "shape_index"},
+    "rectangle": COMMON,
+    "cube": COMMON,
+    "disk": COMMON,
+    "sphere": COMMON | {"center", "radius"},
+}
 
 
 def shape(t: Translator, el: Element, parent: np.ndarray | None = None) -> None:
@@ -75,7 +85,7 @@ def shape_mesh(
     smooth: bool | None = None
     local = np.eye(4)
     build: Callable[[], Built]
-    if kind in ("obj", "ply"):
+    if kind in ("obj", "ply", "serialized"):
         key, smooth, build = mesh_file(t, el, kind, props)
     elif kind in BUILT_INS:
         key, build = kind, BUILT_INS[kind]
@@ -84,13 +94,16 @@ def shape_mesh(
             local[:3, :3] *= r
             local[:3, 3] = t.vec3(props["center"]) if "center" in props else np.zeros(3)
     else:
-        raise t.error(el, "unsupported shape (gi reads obj, ply, rectangle, cube, disk, sphere)")
-    t.note_unknown(props, KNOWN)
+        raise t.error(
+            el, "unsupported shape (gi reads obj, ply, serialized, rectangle, cube, disk, sphere)"
+        )
+    t.refuse_unknown(props, KNOWN[kind])
     flip = t.boolean(props, "flip_normals", False)
     if flip:
         key += " (flip_normals)"
     if key not in t.meshes:
         v, f, n, uv = build()
+        n = None if n is not None and not len(n) else n
         f = np.asarray(f, np.int64)
         if flip:
             f = f[:, [0, 2, 1]]
@@ -109,21 +122,43 @@ def shape_mesh(
 def mesh_file(
     t: Translator, el: Element, kind: str, props: Props
 ) -> tuple[str, bool | None, Callable[[], Built]]:
-    """An ``obj``/``ply`` shape: its file read once, its smoothing as Mitsuba's
-    (``face_normals`` shades flat; a file without normals, smooth)."""
+    """An ``obj``/``ply``/``serialized`` shape: its file read once, its smoothing as
+    Mitsuba's (``face_normals`` shades flat; a file without normals, smooth)."""
     file = t.string(props, "filename", "")
     key = f"{kind}:{file}"
+    if kind == "serialized":
+        index = int(t.float(el, props, "shape_index", 0))
+        key += f"#{index}"
+    if kind == "obj" and not t.boolean(props, "flip_tex_coords", True):
+        key += " (flip_tex_coords=false)"
     if key not in t.files:
-        field = f"{el.label} filename"
-        v, f, n, _m, _fm, uv = load_mesh(t.path.parent / file, t.file, field, t.textures)
-        t.files[key] = (v, f, n, uv)
+        t.files[key] = read_mesh_file(t, el, kind, props, file)
     built = t.files[key]
     smooth: bool | None = None
-    if t.boolean(props, "face_normals", False):
-        smooth = False
+    if t.boolean(props, "face_normals", False) or (built[2] is not None and not len(built[2])):
+        smooth = False  # asked for, or a serialized shape stored with face normals
     elif built[2] is None:
         smooth = True
     return key, smooth, lambda: built
+
+
+def read_mesh_file(t: Translator, el: Element, kind: str, props: Props, file: str) -> Built:
+    """Vertices, faces, normals and UVs of a mesh file (OBJ UVs with v flipped, as Mitsuba's
+    default ``flip_tex_coords``; unflipped when it is false)."""
+    field = f"{el.label} filename"
+    if kind == "serialized":
+        from gi.mitsuba.serialized import SerializedError, read_serialized
+
+        index = int(t.float(el, props, "shape_index", 0))
+        try:
+            return read_serialized(t.path.parent / file, index)
+        except (OSError, SerializedError) as e:
+            raise t.error(el, f"cannot read {file}: {e}") from None
+    v, f, n, _m, _fm, uv = load_mesh(t.path.parent / file, t.file, field, t.textures)
+    if kind == "obj" and uv is not None and not t.boolean(props, "flip_tex_coords", True):
+        uv = np.array(uv, copy=True)
+        uv[:, 1] = 1.0 - uv[:, 1]
+    return v, f, n, uv
 
 
 def rectangle() -> Built:
@@ -221,7 +256,7 @@ def instance(t: Translator, el: Element) -> None:
             raise t.error(c, "an instance holds a <ref> to a shapegroup and `to_world`")
     if len(groups) != 1:
         raise t.error(el, "an instance refers to one <shapegroup> (<ref id=...>)")
-    t.note_unknown(props, {"to_world"} | {r.attrs.get("name", "") for r in groups})
+    t.refuse_unknown(props, {"to_world"} | {r.attrs.get("name", "") for r in groups})
     xf = transform(t, props.get("to_world"))
     check_group(t, groups[0])
     for child in groups[0].children:

@@ -14,11 +14,14 @@ from gi.meshes import MeshEntry, report, scene_error
 from gi.mitsuba.bsdfs import bsdf
 from gi.mitsuba.elements import Element, parse_xml
 from gi.mitsuba.emitters import emitter
-from gi.mitsuba.sensor import sensor
+from gi.mitsuba.sensor import check_clip, sensor
 from gi.mitsuba.shapes import check_group, shape
+from gi.mitsuba.upgrade import upgrade
 from gi.mitsuba.values import Reader
 
-_IGNORED = {"integrator", "sampler", "rfilter"}  # render settings: gi.render chooses these
+# Render settings: gi.render's arguments choose these (the integrator's depth, the sampler's
+# sample count, the pixel filter).
+_IGNORED = {"integrator", "sampler", "rfilter"}
 
 
 class Translator(Reader):
@@ -36,10 +39,13 @@ class Translator(Reader):
         self.camera: dict[str, Any] | None = None
         self.environment: dict[str, Any] | None = None
         self.env_images: dict[str, np.ndarray] = {}
+        # The sensor element, its near and far clip distances and its properties.
+        self.clip: tuple[Element, float, float, dict[str, Element]] | None = None
 
     def run(self, root: Element) -> None:
         if root.tag != "scene":
             raise self.error(root, "the root element must be <scene>")
+        upgrade(root)
         self.collect(root)
         for el in root.children:
             if el.tag in ("default", *_IGNORED):
@@ -60,6 +66,7 @@ class Translator(Reader):
                 raise self.error(el, "unsupported element")
         if self.camera is None:
             raise scene_error(self.file, "<sensor>", "the scene has no sensor")
+        check_clip(self)
 
     def collect(self, root: Element) -> None:
         """The scene's `<default>` parameters and every element with an `id`."""

@@ -12,6 +12,7 @@ import numpy as np
 
 from gi._gi import SceneError
 from gi.meshes import scene_error
+from gi.mitsuba import spectra
 from gi.mitsuba.elements import Element
 from gi.textures import TextureSet
 
@@ -22,12 +23,17 @@ PROPERTY_TAGS = (
     "boolean",
     "string",
     "rgb",
+    "srgb",
     "spectrum",
     "point",
     "vector",
     "transform",
     "texture",
 )
+
+
+# Properties Mitsuba reads as unbounded spectra (a conductor's complex index).
+UNBOUNDED = frozenset({"eta", "k"})
 
 
 class Reader:
@@ -107,8 +113,13 @@ class Reader:
             raise self.error(p, "expected true or false")
         return value == "true"
 
-    def color(self, props: dict[str, Element], name: str, default: float) -> np.ndarray:
-        """An rgb/spectrum/float property or a bitmap texture (its mean colour)."""
+    def color(
+        self, props: dict[str, Element], name: str, default: float, emitter: bool = False
+    ) -> np.ndarray:
+        """An rgb/srgb/spectrum/float property or a bitmap texture (its mean colour), in
+        linear sRGB as Mitsuba's RGB variants read it: `emitter` for an emitter's radiance
+        or intensity (spectra not weighted by D65, not bounded), `eta`/`k` unbounded, other
+        spectra reflectances (clamped to [0, 1]); see :mod:`gi.mitsuba.spectra`."""
         from gi.mitsuba.bitmaps import bitmap_mean
 
         p = props.get(name)
@@ -118,20 +129,50 @@ class Reader:
             return bitmap_mean(self, p)
         if p.tag == "ref":
             return bitmap_mean(self, self.resolve(p))
-        text = self.attr(p, "value")
-        if p.tag == "spectrum" and ":" in text:
-            raise self.error(p, "sampled spectra are not supported (use rgb or one value)")
-        if p.tag not in ("rgb", "spectrum", "float"):
+        if p.tag == "spectrum":
+            return self.spectrum(p, emitter, unbounded=name in UNBOUNDED)
+        if p.tag not in ("rgb", "srgb", "float", "integer"):
             raise self.error(p, f"`{name}` must be an rgb, spectrum, float or texture")
-        v = self.numbers(p, text)
+        v = self.numbers(p, self.attr(p, "value"))
         if len(v) not in (1, 3):
             raise self.error(p, "expected 1 or 3 numbers")
-        return np.array(v * 3 if len(v) == 1 else v)
+        rgb = np.array(v * 3 if len(v) == 1 else v)
+        if p.tag == "srgb":  # Mitsuba 0.x: a gamma-encoded sRGB colour
+            rgb = np.where(rgb <= 0.04045, rgb / 12.92, ((rgb + 0.055) / 1.055) ** 2.4)
+        return rgb
 
-    def note_unknown(self, props: dict[str, Element], known: set[str]) -> None:
+    def spectrum(self, p: Element, emitter: bool, unbounded: bool) -> np.ndarray:
+        """``<spectrum value="...">`` (one value or wavelength:value pairs) or
+        ``<spectrum filename="...">`` in linear sRGB."""
+        if "type" in p.attrs:
+            raise self.error(p, f"spectrum plugins (type={p.attrs['type']!r}) are not supported")
+        has_value, has_file = "value" in p.attrs, "filename" in p.attrs
+        if has_value == has_file:
+            raise self.error(p, "a <spectrum> takes either `value` or `filename`")
+        try:
+            if has_file:
+                w, v = spectra.read_spd(self.path.parent / self.attr(p, "filename"))
+            else:
+                text = self.attr(p, "value")
+                if ":" not in text:
+                    value = self.numbers(p, text, 1)[0]
+                    return spectra.uniform_to_srgb(value, emitter)
+                w, v = spectra.parse_pairs(text)
+        except (OSError, ValueError) as e:
+            raise self.error(p, f"invalid spectrum: {e}") from None
+        return spectra.pairs_to_srgb(w, v, emitter, unbounded)
+
+    def refuse_unknown(
+        self, props: dict[str, Element], known: set[str], cosmetic: frozenset[str] = frozenset()
+    ) -> None:
+        """A property gi does not read is a :class:`gi.SceneError` naming the file, the
+        property and its line: it may change the picture. Those in `cosmetic` (output and
+        sampling settings that do not change the rendered radiance) are accepted."""
         for key, p in props.items():
-            if key not in known:
-                self.notes[p.label] = "ignored"
+            if key not in known and key not in cosmetic:
+                raise self.error(
+                    p, f"property `{key}` is not supported (it may change the picture)"
+                )
 
     def resolve(self, ref: Element) -> Element:
         key = self.attr(ref, "id")
