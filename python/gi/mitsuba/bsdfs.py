@@ -174,6 +174,10 @@ def bsdf(t: Translator, el: Element, name: str | None = None) -> str:
     kind = el.attrs.get("type")
     if kind == "twosided":
         return twosided(t, el, name)
+    if kind in ("mask", "normalmap", "bumpmap"):
+        from gi.mitsuba import layers
+
+        return getattr(layers, kind)(t, el, name)
     translate = BSDFS.get(kind or "")
     if translate is None:
         raise t.error(el, "unsupported BSDF (see docs/mitsuba.md for the list)")

@@ -66,6 +66,10 @@ def shape(t: Translator, el: Element, parent: np.ndarray | None = None) -> None:
         material = area_emitter(t, el, emitter, material)
     m = xf @ local
     check_matrix(t, props.get("to_world", el), m)
+    if material in t.bumps:
+        from gi.mitsuba.layers import bake_bump
+
+        material = bake_bump(t, material, key, m)
     obj: dict[str, Any] = {
         "shape": {"type": "mesh", "file": key},
         "material": material,

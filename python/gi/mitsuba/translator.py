@@ -39,6 +39,8 @@ class Translator(Reader):
         self.camera: dict[str, Any] | None = None
         self.environment: dict[str, Any] | None = None
         self.env_images: dict[str, np.ndarray] = {}
+        # Bump-mapped materials: height map and scale (baked per shape, gi.mitsuba.layers).
+        self.bumps: dict[str, tuple[np.ndarray, float]] = {}
         # The sensor element, its near and far clip distances and its properties.
         self.clip: tuple[Element, float, float, dict[str, Element]] | None = None
 

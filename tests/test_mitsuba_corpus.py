@@ -1,0 +1,132 @@
+"""Published Mitsuba scenes, committed untouched with their licences
+(`tests/scenes/third_party/*/README.md`), load with no warning and render like Mitsuba 3.9.1
+(`reference.exr`, `scripts/data/mitsuba_third_party.py`: 4096 spp, path tracer, max_depth
+65 = gi's 64 scattering events, box filter).
+
+- cornell-box: Bitterli's Cornell box (Mitsuba 0.5 format: camelCase, `toWorld`, ldrfilm);
+- cbox: Mitsuba 3's own Cornell box (reflectances and emission as sampled spectra);
+- veach-mis: Bitterli's Veach MIS scene (0.5 format; Beckmann rough conductors with complex
+  IOR: its warnings and its error wait for branch `materials`).
+
+Tolerance: `path`'s image mean within 2% per channel. Noise: over 4 seeds the per-channel
+means at these sizes and spp spread by 0.08-0.18% (cbox, cornell-box, 64×64 at 64 spp; 2-3 s
+each here); veach-mis's tiny bright sphere (radius 0.05, radiance 3039) seen in its glossy
+plates spreads its mean by ≈1.5% at 128 spp, so it renders 1024 spp at 80×45 (σ ≈ 0.5%,
+35 s on 2 shared cores); the references' standard errors are below 0.3%. 2% is over 10σ for
+the Cornell boxes and 4σ for veach-mis: a failure is a bias, not noise. veach-mis measures
+1.018, 1.027, 1.026 today (seed 7; 1.016-1.027 over seeds 5-8 at 128 spp with the
+directly seen light masked out): its rough conductors are the uber BSDF's GGX with Schlick F0
+until branch `materials` brings Beckmann and the complex-IOR Fresnel; its checks are strict
+xfails until then (an XPASS fails: remove the mark when `materials` is merged).
+
+`mitsuba-layers` (gi's own scene, `scripts/data/mitsuba_layers.py`, Mitsuba `volpath`
+reference: its `path` integrator treats a mask as opaque for shadow rays) checks `mask`,
+`normalmap` and `bumpmap`: each rectangle's mean within 3% of Mitsuba's.
+"""
+
+import json
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import gi
+
+THIRD_PARTY = Path(__file__).parent / "scenes" / "third_party"
+# scene -> (file, render size, spp)
+SCENES = {
+    "cornell-box": ("scene.xml", (64, 64), 64),
+    "cbox": ("cbox.xml", (64, 64), 64),
+    "veach-mis": ("scene.xml", (80, 45), 1024),
+}
+# Scenes whose materials gi approximates until branch `materials` lands (Beckmann rough
+# conductors with complex IOR): they load with an AssetWarning naming the approximation.
+NEEDS_MATERIALS = {"veach-mis"}
+
+
+def load(name):
+    file = SCENES[name][0]
+    return gi.load_scene(THIRD_PARTY / name / file)
+
+
+@pytest.mark.parametrize("name", sorted(SCENES))
+def test_scene_is_committed_with_its_licence_and_reference(name):
+    d = THIRD_PARTY / name
+    assert (d / "LICENSE.txt").stat().st_size > 0 and (d / "README.md").stat().st_size > 0
+    meta = json.loads((d / "reference.json").read_text())
+    ref = gi.read_image(d / "reference.exr")[..., :3]
+    assert list(ref.shape[1::-1]) == meta["size"] and meta["spp"] >= 4096
+    assert meta["max_depth"] == 65 and meta["rfilter"] == "box"
+    # The reference's own noise is far below the 2% checked against it.
+    assert max(np.array(meta["stderr"]) / np.array(meta["mean"])) < 0.003
+    assert ref.mean(axis=(0, 1)) == pytest.approx(meta["mean"], rel=2e-3)  # half floats
+
+
+WAIT_FOR_MATERIALS = [
+    pytest.param(n, marks=pytest.mark.xfail(strict=True, reason="needs branch materials"))
+    if n in NEEDS_MATERIALS
+    else n
+    for n in sorted(SCENES)
+]
+
+
+@pytest.mark.parametrize("name", WAIT_FOR_MATERIALS)
+def test_scene_loads_untouched_without_a_warning(name):
+    text = (THIRD_PARTY / name / SCENES[name][0]).read_text()
+    assert "<scene version=" in text
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        load(name)
+
+
+@pytest.mark.parametrize("name", WAIT_FOR_MATERIALS)
+def test_path_matches_mitsuba_within_2_percent(name):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gi.AssetWarning)  # veach-mis until `materials`
+        scene = load(name)
+    _file, size, spp = SCENES[name]
+    img = gi.render(scene, "path", spp=spp, seed=7, size=size).radiance
+    ref = gi.read_image(THIRD_PARTY / name / "reference.exr")[..., :3]
+    ratio = img.mean(axis=(0, 1)) / ref.mean(axis=(0, 1))
+    assert np.all(np.abs(ratio - 1) <= 0.02), (name, ratio)
+
+
+def test_old_format_scene_places_camera_and_shapes():
+    """Bitterli's Cornell box: the camera at (0, 1, 6.8) looking down -z (its `toWorld`
+    matrix), every wall placed (none left at the origin)."""
+    scene = load("cornell-box")
+    r = gi.render(scene, "path", spp=1, seed=1, size=(32, 32))
+    assert (r.depth > 0).all()  # a closed box seen from its open side: every pixel hits
+    assert 5.5 < r.depth[16, 16] < 8.0  # the back wall, about 7.8 away along the axis
+
+
+LAYERS = Path(__file__).parent / "scenes" / "mitsuba-layers"
+
+
+def rect_region(img, centre, half_extent=0.45):
+    """Pixels of the rectangle centred at x = `centre` (camera at z = 5, fov 40° along x)."""
+    h, w = img.shape[:2]
+    half_x = 5 * np.tan(np.radians(20))
+    half_y = half_x * h / w
+    x0, x1 = (
+        int((c + half_x) / (2 * half_x) * w) for c in (centre - half_extent, centre + half_extent)
+    )
+    y0, y1 = (int((half_y - c) / (2 * half_y) * h) for c in (half_extent, -half_extent))
+    return img[y0:y1, x0:x1]
+
+
+def test_mask_normalmap_bumpmap_match_mitsuba():
+    with pytest.warns(gi.AssetWarning, match="bump map baked"):
+        scene = gi.load_scene(LAYERS / "scene.xml")
+    img = gi.render(scene, "path", spp=64, seed=3).radiance
+    ref = gi.read_image(LAYERS / "reference.exr")[..., :3]
+    for name, centre in (("mask", -1.2), ("normalmap", 0.0), ("bumpmap", 1.2)):
+        ratio = rect_region(img, centre).mean() / rect_region(ref, centre).mean()
+        # Measured at 256 spp: mask 1.006, normalmap 1.013 (gi's 0.696 is the analytic
+        # 0.8/π · 3 · cos 24.4°; Mitsuba's 1.3% lower), bumpmap 1.002.
+        assert abs(ratio - 1) < 0.03, (name, ratio)
+    # The cut-out is seen: about half of the masked rectangle is its lit white (0.8/π · 3 ·
+    # cos 48° ≈ 0.51), the rest the grey wall behind it (at most 0.3/π · 3 · 0.67 ≈ 0.19).
+    bright = (rect_region(img, -1.2).mean(axis=-1) > 0.4).mean()
+    assert 0.35 < bright < 0.65, bright
