@@ -315,6 +315,14 @@ APERTURE = SENSOR.replace(
         ('<shape type="sphere"/>', NEAR, '<float name="near_clip">', 1, "near_clip"),
         ('<shape type="sphere"/>', FAR, '<float name="far_clip">', 1, "far_clip"),
         (
+            '<bsdf type="diffuse" id="d"><texture type="bitmap" name="reflectance">'
+            '<transform name="to_uv"><scale x="2"/></transform></texture></bsdf>',
+            None,
+            '<transform name="to_uv">',
+            6,
+            "to_uv",
+        ),
+        (
             '<bsdf type="roughconductor" id="c"><float name="ext_eta" value="1.5"/></bsdf>',
             None,
             '<float name="ext_eta">',

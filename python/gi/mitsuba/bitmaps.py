@@ -12,6 +12,20 @@ from gi.mitsuba.values import Reader
 from gi.textures import TextureError
 
 
+def check_bitmap(r: Reader, tex: Element) -> None:
+    """A bitmap's properties: `filename`, `raw`, `wrap_mode` (repeat; others warn),
+    `filter_type` (bilinear; `nearest` warns: gi filters bilinearly) and a `to_uv` that must
+    be the identity (gi's materials have no texture transform)."""
+    from gi.mitsuba.transforms import transform
+
+    props = r.props(tex)
+    r.refuse_unknown(props, {"filename", "raw", "wrap_mode", "filter_type", "to_uv"})
+    if "to_uv" in props and not np.allclose(transform(r, props["to_uv"]), np.eye(4)):
+        raise r.error(props["to_uv"], "a texture transform (`to_uv`) is not supported")
+    if r.string(props, "filter_type", "bilinear") != "bilinear":
+        r.notes[props["filter_type"].label] = "gi filters textures bilinearly (with mipmaps)"
+
+
 def use_bitmap(
     r: Reader, desc: dict[str, Any], props: dict[str, Element], name: str, to: str
 ) -> None:
@@ -21,6 +35,7 @@ def use_bitmap(
     if p is None or p.tag not in ("texture", "ref"):
         return
     tex = r.resolve(p) if p.tag == "ref" else p
+    check_bitmap(r, tex)
     file = r.path.parent / r.string(r.props(tex), "filename", "")
     raw = r.boolean(r.props(tex), "raw", False)
     try:
@@ -38,6 +53,7 @@ def bitmap_mean(r: Reader, tex: Element) -> np.ndarray:
     """A bitmap's mean colour (linear), with a note that the texture is read as one."""
     if tex.tag != "texture" or tex.attrs.get("type") != "bitmap":
         raise r.error(tex, "only bitmap textures are supported")
+    check_bitmap(r, tex)
     props = r.props(tex)
     file = r.path.parent / r.string(props, "filename", "")
     if not file.is_file():
@@ -67,6 +83,7 @@ def emission_bitmap(r: Reader, tex: Element) -> tuple[str, list[float]]:
     props = r.props(tex)
     if tex.tag != "texture" or tex.attrs.get("type") != "bitmap":
         raise r.error(tex, "only bitmap textures are supported")
+    check_bitmap(r, tex)
     file = r.path.parent / r.string(props, "filename", "")
     raw = r.boolean(props, "raw", False)
     try:

@@ -61,8 +61,10 @@ def texture_values(t: Translator, tex: Element) -> np.ndarray:
     """A bitmap as Mitsuba evaluates it: (H, W, C) linear unless ``raw``."""
     if tex.tag != "texture" or tex.attrs.get("type") != "bitmap":
         raise t.error(tex, "only bitmap textures are supported here")
+    from gi.mitsuba.bitmaps import check_bitmap
+
     props = t.props(tex)
-    t.refuse_unknown(props, {"filename", "raw"}, frozenset({"filter_type"}))
+    check_bitmap(t, tex)
     file = t.path.parent / t.string(props, "filename", "")
     try:
         img, integer = read_image(file)
