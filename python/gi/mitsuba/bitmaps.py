@@ -12,17 +12,18 @@ from gi.mitsuba.values import Reader
 from gi.textures import TextureError
 
 
-def check_bitmap(r: Reader, tex: Element) -> None:
+def check_bitmap(r: Reader, tex: Element, filtered: bool = True) -> None:
     """A bitmap's properties: `filename`, `raw`, `wrap_mode` (repeat; others warn),
     `filter_type` (bilinear; `nearest` warns: gi filters bilinearly) and a `to_uv` that must
-    be the identity (gi's materials have no texture transform)."""
+    be the identity (gi's materials have no texture transform). `filtered` False: the
+    filter does not matter (a 0/1 opacity cut at 0.5 has the same edges either way)."""
     from gi.mitsuba.transforms import transform
 
     props = r.props(tex)
     r.refuse_unknown(props, {"filename", "raw", "wrap_mode", "filter_type", "to_uv"})
     if "to_uv" in props and not np.allclose(transform(r, props["to_uv"]), np.eye(4)):
         raise r.error(props["to_uv"], "a texture transform (`to_uv`) is not supported")
-    if r.string(props, "filter_type", "bilinear") != "bilinear":
+    if filtered and r.string(props, "filter_type", "bilinear") != "bilinear":
         r.notes[props["filter_type"].label] = "gi filters textures bilinearly (with mipmaps)"
 
 

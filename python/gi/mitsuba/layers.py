@@ -57,14 +57,14 @@ def derived(t: Translator, el: Element, base: str, fields: dict[str, Any], name:
     return name
 
 
-def texture_values(t: Translator, tex: Element) -> np.ndarray:
+def texture_values(t: Translator, tex: Element, filtered: bool = True) -> np.ndarray:
     """A bitmap as Mitsuba evaluates it: (H, W, C) linear unless ``raw``."""
     if tex.tag != "texture" or tex.attrs.get("type") != "bitmap":
         raise t.error(tex, "only bitmap textures are supported here")
     from gi.mitsuba.bitmaps import check_bitmap
 
     props = t.props(tex)
-    check_bitmap(t, tex)
+    check_bitmap(t, tex, filtered)
     file = t.path.parent / t.string(props, "filename", "")
     try:
         img, integer = read_image(file)
@@ -98,7 +98,7 @@ def mask(t: Translator, el: Element, name: str | None) -> str:
     p = props.get("opacity")
     if p is not None and p.tag in ("texture", "ref"):
         tex = t.resolve(p) if p.tag == "ref" else p
-        alpha = scalar(texture_values(t, tex))
+        alpha = scalar(texture_values(t, tex, filtered=False))
     else:
         value = float(t.color(props, "opacity", 0.5).mean())
         if value not in (0.0, 1.0):
