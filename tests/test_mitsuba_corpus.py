@@ -139,3 +139,37 @@ def test_mask_normalmap_bumpmap_match_mitsuba():
     # cos 48° ≈ 0.51), the rest the grey wall behind it (at most 0.3/π · 3 · 0.67 ≈ 0.19).
     bright = (rect_region(img, -1.2).mean(axis=-1) > 0.4).mean()
     assert 0.35 < bright < 0.65, bright
+
+
+# The other methods on the scenes whose materials gi renders as Mitsuba does (64×64, seed
+# 7, max_depth 64): `photon`/`gather` within 3%, `ispm`/`bidir` within 5% of Mitsuba's
+# image mean per channel (issue 42). Measured here: cornell-box photon 0.996-1.000, gather
+# 1.008-1.010, ispm 1.007-1.008, bidir 0.961-0.977 (8 passes); cbox photon 0.989-0.990,
+# gather 1.000, ispm 1.011-1.013, bidir 0.839-0.872: `bidir` is 13-16% dark on Mitsuba's
+# own Cornell box (its small luminaire under the ceiling), an open defect: a strict xfail.
+OTHER = {
+    "photon": ({"photons": 200_000, "spp": 16}, 0.03),
+    "gather": ({"photons": 200_000, "spp": 16}, 0.03),
+    "ispm": ({"photons": 200_000, "spp": 16}, 0.05),
+    "bidir": ({"spp": 16, "progressive": True, "passes": 16}, 0.05),
+}
+BIDIR_DARK = pytest.mark.xfail(strict=True, reason="bidir 13-16% dark on cbox (open)")
+
+
+@pytest.mark.parametrize(
+    "name, method",
+    [
+        pytest.param(n, m, marks=BIDIR_DARK) if (n, m) == ("cbox", "bidir") else (n, m)
+        for n in ("cbox", "cornell-box")
+        for m in OTHER
+    ],
+)
+def test_other_methods_match_mitsuba(name, method):
+    settings, tolerance = OTHER[method]
+    settings = dict(settings)
+    passes = settings.pop("passes", None)
+    r = gi.Renderer(load(name), method, size=(64, 64), seed=7, max_depth=64, **settings)
+    img = (r.render_progressive(passes=passes) if passes else r.render()).radiance
+    ref = gi.read_image(THIRD_PARTY / name / "reference.exr")[..., :3]
+    ratio = img.mean(axis=(0, 1)) / ref.mean(axis=(0, 1))
+    assert np.all(np.abs(ratio - 1) <= tolerance), (name, method, ratio)

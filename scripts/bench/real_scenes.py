@@ -4,7 +4,12 @@
 scene and method the ratio of the image means per channel, HDR-FLIP and the render time, at
 the reference's size, written to `docs/bench/real-scenes.md`.
 
-    .venv/bin/python scripts/bench/real_scenes.py [--scenes cbox ...] [--methods path ...]
+    DRJIT_LIBLLVM_PATH=.../libLLVM-19.so .venv/bin/python scripts/bench/real_scenes.py \
+        [--scenes cbox ...] [--methods path ...] [--mitsuba-flip]
+
+With `--mitsuba-flip` (needs the `mitsuba` package), `path` rows also give the FLIP of
+Mitsuba's own render at gi's spp (`llvm_ad_rgb`, another seed) against its reference: the
+noise floor gi's FLIP is compared with.
 
 Every method traces to gi's max_depth 64 (Mitsuba's 65 path segments); `direct` renders
 direct light only and is left out (the references hold all bounces).
@@ -19,6 +24,8 @@ import sys
 import time
 import warnings
 from pathlib import Path
+
+import numpy as np
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "scripts"))
@@ -38,7 +45,22 @@ SETTINGS = {
 }
 
 
-def run(name: str, method: str) -> dict:
+def mitsuba_flip(name: str, spp: int) -> float:
+    """FLIP of Mitsuba's render at `spp` (seed 99) against its 4096-spp reference."""
+    sys.path.insert(0, str(ROOT / "scripts" / "data"))
+    import mitsuba as mi
+    from mitsuba_third_party import mitsuba_copy
+
+    mi.set_variant("llvm_ad_rgb")
+    d = THIRD_PARTY / name
+    ref = gi.read_image(d / "reference.exr")[..., :3]
+    h, w = ref.shape[:2]
+    scene = mi.load_string(mitsuba_copy(d / FILES[name], w, h, spp, seed=99))
+    img = np.array(mi.render(scene, spp=spp, seed=99), np.float32)[..., :3]
+    return round(flip(ref, img), 4)
+
+
+def run(name: str, method: str, with_mitsuba: bool) -> dict:
     d = THIRD_PARTY / name
     ref = gi.read_image(d / "reference.exr")[..., :3]
     meta = json.loads((d / "reference.json").read_text())
@@ -63,6 +85,9 @@ def run(name: str, method: str) -> dict:
         "mitsuba_seconds": meta["seconds"],
         "mitsuba_spp": meta["spp"],
         "warnings": len({str(c.message) for c in caught}),
+        "mitsuba_flip": mitsuba_flip(name, SETTINGS[method]["spp"])
+        if with_mitsuba and method == "path"
+        else None,
     }
 
 
@@ -78,15 +103,16 @@ def table(rows: list[dict], command: str) -> str:
         "a converged render's, not an equal-time one). `warnings`: AssetWarnings at load (the",
         "uber BSDF's approximations of veach-mis's rough conductors until branch `materials`).",
         "",
-        "| scene | method | settings | mean ratio (R, G, B) | FLIP | gi s | Mitsuba s (4096 spp) "
-        "| warnings |",
-        "|---|---|---|---|---|---|---|---|",
+        "| scene | method | settings | mean ratio (R, G, B) | FLIP | Mitsuba's FLIP at equal "
+        "spp | gi s | Mitsuba s (4096 spp) | warnings |",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
         settings = ", ".join(f"{k} {v}" for k, v in r["settings"].items())
         ratio = ", ".join(f"{x:.3f}" for x in r["ratio"])
+        own = "–" if r.get("mitsuba_flip") is None else f"{r['mitsuba_flip']:.3f}"
         out.append(
-            f"| {r['scene']} | {r['method']} | {settings} | {ratio} | {r['flip']:.3f} | "
+            f"| {r['scene']} | {r['method']} | {settings} | {ratio} | {r['flip']:.3f} | {own} | "
             f"{r['seconds']} | {r['mitsuba_seconds']} | {r['warnings']} |"
         )
     out += [
@@ -102,11 +128,12 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--scenes", nargs="*", default=list(FILES))
     ap.add_argument("--methods", nargs="*", default=list(SETTINGS))
+    ap.add_argument("--mitsuba-flip", action="store_true")
     args = ap.parse_args()
     rows = []
     for name in args.scenes:
         for method in args.methods:
-            rows.append(run(name, method))
+            rows.append(run(name, method, args.mitsuba_flip))
             print(json.dumps(rows[-1]), flush=True)
     TABLE.write_text(table(rows, " ".join(["scripts/bench/real_scenes.py", *sys.argv[1:]])))
     print(f"wrote {TABLE}")
