@@ -323,6 +323,20 @@ APERTURE = SENSOR.replace(
             "to_uv",
         ),
         (
+            '<emitter type="point"><blackbody name="intensity" temperature="5000"/></emitter>',
+            None,
+            '<blackbody name="intensity">',
+            6,
+            "blackbody",
+        ),
+        (
+            '<shape type="sphere"><medium type="homogeneous" name="interior"/></shape>',
+            None,
+            '<medium type="homogeneous">',
+            6,
+            "medium",
+        ),
+        (
             '<bsdf type="roughconductor" id="c"><float name="ext_eta" value="1.5"/></bsdf>',
             None,
             '<float name="ext_eta">',

@@ -32,6 +32,9 @@ PROPERTY_TAGS = (
 )
 
 
+# Plugins nested in another that gi reads where they belong (checked there).
+NESTED_TAGS = frozenset({"ref", "bsdf", "emitter", "film", "sampler", "rfilter"})
+
 # Properties Mitsuba reads as unbounded spectra (a conductor's complex index).
 UNBOUNDED = frozenset({"eta", "k"})
 
@@ -85,11 +88,15 @@ class Reader:
         return np.array([self.numbers(el, self.attr(el, k, "0"), 1)[0] for k in ("x", "y", "z")])
 
     def props(self, el: Element) -> dict[str, Element]:
-        """The named property children of a plugin element."""
+        """The named property children of a plugin element. A child that is neither a
+        property nor a nested plugin gi reads (a Mitsuba 0.x `<blackbody>`, a `<medium>`...)
+        is a SceneError: ignoring it could change the picture."""
         out = {}
         for c in el.children:
             if c.tag in PROPERTY_TAGS or (c.tag == "ref" and "name" in c.attrs):
                 out[self.attr(c, "name")] = c
+            elif c.tag not in NESTED_TAGS:
+                raise self.error(c, f"unsupported element <{c.tag}> in <{el.tag}>")
         return out
 
     def float(self, el: Element, props: dict[str, Element], name: str, default: float) -> float:
