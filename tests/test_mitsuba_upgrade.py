@@ -123,9 +123,8 @@ def test_uv_offsets_become_a_to_uv_transform():
     ]
 
 
-# Mitsuba 3.9.1 `scalar_rgb`, `mi.traverse` of a diffuse BSDF's `reflectance` and an area
-# emitter's `radiance` given these spectra (tests/scenes/third_party/cbox's, and others).
-CBOX_WHITE = "tests/scenes/third_party/cbox/cbox.xml"
+# Mitsuba 3.9.1 `scalar_rgb`'s `mi.traverse` of a diffuse BSDF's `reflectance` and an area
+# emitter's `radiance` given these spectra (scripts/probe/mitsuba_spectra.py).
 MITSUBA_SRGB = [
     ("reflectance", "400:0.78, 500:0.78, 600:0.78, 700:0.78", [0.7763668, 0.77981, 0.7760291]),
     ("radiance", "400:0, 500:8, 600:15.6, 700:18.4", [20.710836, 10.854634, 2.771152]),
