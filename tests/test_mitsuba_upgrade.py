@@ -369,3 +369,14 @@ def test_cosmetic_settings_load_silently(tmp_path):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         gi.load_scene(write(tmp_path, body, sensor=sensor))
+
+
+def test_clip_planes_that_cut_nothing_load(tmp_path):
+    """A camera inside a closed room (the default near plane, 0.01, cuts nothing there) and
+    a far plane beyond everything: no error (only geometry the planes would cut is)."""
+    sensor = SENSOR.replace(
+        '<float name="fov" value="40"/>',
+        '<float name="fov" value="40"/><float name="far_clip" value="20"/>',
+    )
+    body = '<shape type="cube"><transform name="to_world"><scale value="5"/></transform></shape>'
+    translate(write(tmp_path, body, sensor=sensor))
