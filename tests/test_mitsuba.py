@@ -220,7 +220,7 @@ up="0, 0, 1"/></transform><float name="cutoff_angle" value="30"/></emitter>"""
 
 def test_bitmap_texture_is_rendered_as_a_texture(tmp_path):
     """A rectangle facing the camera with a bitmap reflectance, red on the image's left half
-    and black on its right: the albedo shows both halves, upright (the mean colour used to
+    and black on its right: the albedo shows both halves (the mean colour used to
     be taken instead, with a warning)."""
     texture = np.zeros((4, 4, 3), np.float32)
     texture[:, :2] = [1, 0, 0]

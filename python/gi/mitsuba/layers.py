@@ -145,8 +145,50 @@ def normalmap(t: Translator, el: Element, name: str | None) -> str:
     if img.shape[2] != 3:
         raise t.error(tex, "a normal map needs an RGB image")
     rgba = np.concatenate([img, np.ones(img.shape[:2] + (1,))], axis=2)
-    key = t.textures.add_array(f"normalmap@{tex.line}#linear", rgba)
-    return derived(t, el, base, {"normal_texture": key}, name)
+    out = derived(t, el, base, {}, name)
+    t.normal_maps[out] = rgba
+    return out
+
+
+def orient_normal_map(t: Translator, material: str, mesh: str, matrix: np.ndarray) -> str:
+    """The material for a shape (`mesh` placed by `matrix`) with a normal-mapped `material`.
+    Mitsuba's map frame is (s, n × s, n) with s along ∂p/∂u; gi's (t, −w·n × t, n) with w
+    the UV handedness (its bitangent w·n × t runs along +v). They agree where w = −1 (v runs
+    against n × s, as on OBJ meshes with Mitsuba's flipped v); where the shape's UVs have
+    w = +1 (Mitsuba's rectangle, v up +y) the map's green is flipped for gi. A shape whose
+    triangles disagree takes the majority, with an AssetWarning."""
+    v, f, _n, _m, _fm, uv = t.meshes[mesh]
+    if uv is None:
+        raise scene_error(t.file, material, "a normal-mapped shape needs UVs")
+    p = (v.astype(np.float64) @ matrix[:3, :3].T)[f]
+    w = handedness(p, uv.astype(np.float64)[f])
+    flip = (w > 0).sum() > (w < 0).sum()
+    if (w > 0).any() and (w < 0).any():
+        t.notes[f"material {material} on {mesh}"] = (
+            "the shape's UVs mix handedness: the normal map's green follows the majority"
+        )
+    key = f"{material}#normals{'-flipped' if flip else ''}"
+    if key not in t.materials:
+        rgba = t.normal_maps[material].copy()
+        if flip:
+            rgba[..., 1] = 1.0 - rgba[..., 1]
+        tex = t.textures.add_array(f"{key}#linear", rgba)
+        t.materials[key] = dict(t.materials[material]) | {"normal_texture": tex}
+    return key
+
+
+def handedness(p: np.ndarray, uv: np.ndarray) -> np.ndarray:
+    """Per triangle (p: (n, 3, 3), uv: (n, 3, 2)): +1 where ∂p/∂v runs along n × ∂p/∂u, −1
+    against, 0 for degenerate UVs (gi's `triangle_tangent`)."""
+    e1, e2 = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]
+    d1, d2 = uv[:, 1] - uv[:, 0], uv[:, 2] - uv[:, 0]
+    det = d1[:, 0] * d2[:, 1] - d2[:, 0] * d1[:, 1]
+    ok = np.abs(det) > 1e-20
+    det = np.where(ok, det, 1.0)
+    tangent = (e1 * d2[:, 1:2] - e2 * d1[:, 1:2]) / det[:, None]
+    bitangent = (e2 * d1[:, 0:1] - e1 * d2[:, 0:1]) / det[:, None]
+    n = np.cross(e1, e2)
+    return np.where(ok, np.sign((np.cross(n, tangent) * bitangent).sum(axis=1)), 0.0)
 
 
 def bumpmap(t: Translator, el: Element, name: str | None) -> str:

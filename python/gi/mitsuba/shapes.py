@@ -70,6 +70,10 @@ def shape(t: Translator, el: Element, parent: np.ndarray | None = None) -> None:
         from gi.mitsuba.layers import bake_bump
 
         material = bake_bump(t, material, key, m)
+    if material in t.normal_maps:
+        from gi.mitsuba.layers import orient_normal_map
+
+        material = orient_normal_map(t, material, key, m)
     obj: dict[str, Any] = {
         "shape": {"type": "mesh", "file": key},
         "material": material,
@@ -166,10 +170,11 @@ def read_mesh_file(t: Translator, el: Element, kind: str, props: Props, file: st
 
 
 def rectangle() -> Built:
-    """Mitsuba's rectangle: [-1, 1]² in the xy plane facing +z, the image upright seen from
-    +z (v runs down the image)."""
+    """Mitsuba's rectangle: [-1, 1]² in the xy plane facing +z, uv = ((x + 1)/2, (y + 1)/2)
+    as Mitsuba's: v runs up +y, so the image's first row lies along y = -1 (Mitsuba shows
+    a bitmap upside down on an unrotated rectangle seen from +z, and so does gi)."""
     v = np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], np.float64)
-    uv = np.stack([(v[:, 0] + 1) / 2, (1 - v[:, 1]) / 2], axis=1)
+    uv = (v[:, :2] + 1) / 2
     return v, np.array([[0, 1, 2], [0, 2, 3]]), np.tile([0.0, 0.0, 1.0], (4, 1)), uv
 
 

@@ -41,6 +41,8 @@ class Translator(Reader):
         self.env_images: dict[str, np.ndarray] = {}
         # Bump-mapped materials: height map and scale (baked per shape, gi.mitsuba.layers).
         self.bumps: dict[str, tuple[np.ndarray, float]] = {}
+        # Normal-mapped materials: the map's RGBA (oriented per shape, gi.mitsuba.layers).
+        self.normal_maps: dict[str, np.ndarray] = {}
         # The sensor element, its near and far clip distances and its properties.
         self.clip: tuple[Element, float, float, dict[str, Element]] | None = None
 
