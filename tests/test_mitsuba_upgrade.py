@@ -380,3 +380,23 @@ def test_clip_planes_that_cut_nothing_load(tmp_path):
     )
     body = '<shape type="cube"><transform name="to_world"><scale value="5"/></transform></shape>'
     translate(write(tmp_path, body, sensor=sensor))
+
+
+def test_include_errors_name_the_included_file(tmp_path):
+    """An error in an included file names that file and its line; a file including itself
+    is refused, not followed forever."""
+    (tmp_path / "part.xml").write_text(
+        '<scene version="0.5.0">\n<shape type="sphere">\n'
+        '<float name="noSuchThing" value="1"/></shape>\n</scene>\n'
+    )
+    path = write(tmp_path, '<include filename="part.xml"/>')
+    with pytest.raises(gi.SceneError) as e:
+        gi.load_scene(path)
+    # The part's own 0.5 version upgraded its camelCase name.
+    assert e.value.file == str(tmp_path / "part.xml")
+    assert e.value.field == '<float name="no_such_thing"> (line 3)'
+    (tmp_path / "loop.xml").write_text(
+        '<scene version="3.0.0"><include filename="loop.xml"/></scene>'
+    )
+    with pytest.raises(gi.SceneError, match="nested more than"):
+        gi.load_scene(write(tmp_path, '<include filename="loop.xml"/>'))

@@ -37,7 +37,7 @@ def use_bitmap(
         return
     tex = r.resolve(p) if p.tag == "ref" else p
     check_bitmap(r, tex)
-    file = r.path.parent / r.string(r.props(tex), "filename", "")
+    file = r.file_path(tex, r.string(r.props(tex), "filename", ""))
     raw = r.boolean(r.props(tex), "raw", False)
     try:
         desc[f"{to}_texture"] = r.textures.add(file, not raw)
@@ -56,7 +56,7 @@ def bitmap_mean(r: Reader, tex: Element) -> np.ndarray:
         raise r.error(tex, "only bitmap textures are supported")
     check_bitmap(r, tex)
     props = r.props(tex)
-    file = r.path.parent / r.string(props, "filename", "")
+    file = r.file_path(tex, r.string(props, "filename", ""))
     if not file.is_file():
         raise r.error(tex, f"texture file not found: {file}")
     from gi.io import read_image
@@ -85,7 +85,7 @@ def emission_bitmap(r: Reader, tex: Element) -> tuple[str, list[float]]:
     if tex.tag != "texture" or tex.attrs.get("type") != "bitmap":
         raise r.error(tex, "only bitmap textures are supported")
     check_bitmap(r, tex)
-    file = r.path.parent / r.string(props, "filename", "")
+    file = r.file_path(tex, r.string(props, "filename", ""))
     raw = r.boolean(props, "raw", False)
     try:
         key = r.textures.add(file, not raw)

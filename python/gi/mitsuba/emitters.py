@@ -116,7 +116,7 @@ def env_emitter(t: Translator, el: Element, kind: str) -> None:
     name = t.string(props, "filename", "")
     from gi.environment import load_environment_image
 
-    t.env_images[name] = load_environment_image(t.path.parent / name, t.file, el.label)
+    t.env_images[name] = load_environment_image(t.file_path(el, name), el.file or t.file, el.label)
     m = transform(t, props.get("to_world"))[:3, :3]
     cols = m / np.linalg.norm(m, axis=0)
     # gi rotates environments about +y only: to_world must be such a rotation (any uniform

@@ -65,7 +65,7 @@ def texture_values(t: Translator, tex: Element, filtered: bool = True) -> np.nda
 
     props = t.props(tex)
     check_bitmap(t, tex, filtered)
-    file = t.path.parent / t.string(props, "filename", "")
+    file = t.file_path(tex, t.string(props, "filename", ""))
     try:
         img, integer = read_image(file)
     except (TextureError, OSError) as e:

@@ -159,10 +159,10 @@ def read_mesh_file(t: Translator, el: Element, kind: str, props: Props, file: st
 
         index = int(t.float(el, props, "shape_index", 0))
         try:
-            return read_serialized(t.path.parent / file, index)
+            return read_serialized(t.file_path(el, file), index)
         except (OSError, SerializedError) as e:
             raise t.error(el, f"cannot read {file}: {e}") from None
-    v, f, n, _m, _fm, uv = load_mesh(t.path.parent / file, t.file, field, t.textures)
+    v, f, n, _m, _fm, uv = load_mesh(t.file_path(el, file), el.file or t.file, field, t.textures)
     if kind == "obj" and uv is not None and not t.boolean(props, "flip_tex_coords", True):
         uv = np.array(uv, copy=True)
         uv[:, 1] = 1.0 - uv[:, 1]

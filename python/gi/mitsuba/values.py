@@ -52,7 +52,17 @@ class Reader:
         self.textures = TextureSet(path.parent)
 
     def error(self, el: Element, reason: str) -> SceneError:
-        return scene_error(self.file, el.label, reason)
+        return scene_error(el.file or self.file, el.label, reason)
+
+    def file_path(self, el: Element, name: str) -> Path:
+        """A file an element names: relative to the file the element comes from (an
+        included file's folder first, as Mitsuba's resolver), else to the scene file."""
+        main = self.path.parent / name
+        if el.file is not None:
+            near = Path(el.file).parent / name
+            if near.exists() or not main.exists():
+                return near
+        return main
 
     def attr(self, el: Element, key: str, default: str | None = None) -> str:
         value = el.attrs.get(key, default)
@@ -158,7 +168,7 @@ class Reader:
             raise self.error(p, "a <spectrum> takes either `value` or `filename`")
         try:
             if has_file:
-                w, v = spectra.read_spd(self.path.parent / self.attr(p, "filename"))
+                w, v = spectra.read_spd(self.file_path(p, self.attr(p, "filename")))
             else:
                 text = self.attr(p, "value")
                 if ":" not in text:
