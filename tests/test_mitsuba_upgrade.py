@@ -239,6 +239,10 @@ def test_serialized_shapes(tmp_path):
     with pytest.raises(gi.SceneError, match="out of range") as e:
         gi.load_scene(write(tmp_path, bad))
     assert e.value.field == '<shape type="serialized"> (line 6)'
+    data = serialized_bytes([quad, tri])
+    (tmp_path / "m.serialized").write_bytes(data[:30] + data[-12:])  # a truncated shape
+    with pytest.raises(gi.SceneError, match="cannot read m.serialized"):
+        gi.load_scene(write(tmp_path, body))
 
 
 # One per kind of property that changes the picture: (body, sensor or None, element, line,
