@@ -7,9 +7,10 @@ the reference's size, written to `docs/bench/real-scenes.md`.
     DRJIT_LIBLLVM_PATH=.../libLLVM-19.so .venv/bin/python scripts/bench/real_scenes.py \
         [--scenes cbox ...] [--methods path ...] [--mitsuba-flip]
 
-With `--mitsuba-flip` (needs the `mitsuba` package), `path` rows also give the FLIP of
-Mitsuba's own render at gi's spp (`llvm_ad_rgb`, another seed) against its reference: the
-noise floor gi's FLIP is compared with.
+With `--mitsuba-flip` (needs the `mitsuba` package), every row also gives the FLIP of
+Mitsuba's own path tracer (`llvm_ad_rgb`, another seed) against its reference at equal
+time (the spp its reference render reaches in gi's time: 4096 · gi's seconds / the
+reference's seconds, JIT included) and, for `path`, at gi's spp.
 
 Every method traces to gi's max_depth 64 (Mitsuba's 65 path segments); `direct` renders
 direct light only and is left out (the references hold all bounces).
@@ -88,6 +89,9 @@ def run(name: str, method: str, with_mitsuba: bool) -> dict:
         "mitsuba_flip": mitsuba_flip(name, SETTINGS[method]["spp"])
         if with_mitsuba and method == "path"
         else None,
+        "mitsuba_equal_time": mitsuba_flip(name, equal_spp)
+        if with_mitsuba and (equal_spp := max(1, round(4096 * seconds / meta["seconds"])))
+        else None,
     }
 
 
@@ -104,16 +108,17 @@ def table(rows: list[dict], command: str) -> str:
         "uber BSDF's approximations of veach-mis's rough conductors until branch `materials`).",
         "",
         "| scene | method | settings | mean ratio (R, G, B) | FLIP | Mitsuba's FLIP at equal "
-        "spp | gi s | Mitsuba s (4096 spp) | warnings |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "spp | Mitsuba's FLIP at equal time | gi s | Mitsuba s (4096 spp) | warnings |",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
         settings = ", ".join(f"{k} {v}" for k, v in r["settings"].items())
         ratio = ", ".join(f"{x:.3f}" for x in r["ratio"])
         own = "–" if r.get("mitsuba_flip") is None else f"{r['mitsuba_flip']:.3f}"
+        timed = "–" if r.get("mitsuba_equal_time") is None else f"{r['mitsuba_equal_time']:.3f}"
         out.append(
             f"| {r['scene']} | {r['method']} | {settings} | {ratio} | {r['flip']:.3f} | {own} | "
-            f"{r['seconds']} | {r['mitsuba_seconds']} | {r['warnings']} |"
+            f"{timed} | {r['seconds']} | {r['mitsuba_seconds']} | {r['warnings']} |"
         )
     out += [
         "",
