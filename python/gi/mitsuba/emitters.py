@@ -48,6 +48,10 @@ def emitter(t: Translator, el: Element) -> None:
         return
     cutoff = t.float(el, props, "cutoff_angle", 20.0)
     beam = t.float(el, props, "beam_width", cutoff * 0.75)
+    t.notes[el.label] = (
+        "Mitsuba's spot falls off linearly in angle between beam_width and cutoff_angle; "
+        "gi's as a smoothstep in cos(theta) between the same angles"
+    )
     t.lights.append(
         {
             "type": "spot",
