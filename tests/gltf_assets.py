@@ -133,13 +133,18 @@ def bump_normals(n: int = 64, cells: int = 4, height: float = 0.6) -> np.ndarray
 
 
 def normal_mapped_quad(
-    path: Path, tangents: str = "stored", mirror_u: bool = False, quantized: bool = False
+    path: Path,
+    tangents: str = "stored",
+    mirror_u: bool = False,
+    quantized: bool = False,
+    emissive: float = 0.0,
 ) -> Path:
     """A 2×2 m quad in the xy plane facing +z (glTF's default view), u along +x (or −x with
     ``mirror_u``: the map mirrored, as in Khronos' NormalTangentMirrorTest), v down the
     image along −y, a white-ish diffuse material with :func:`bump_normals`. ``tangents``:
     "stored" (the right TANGENT: +x or −x and w = +1 or −1), "none" (MikkTSpace's), or
-    "wrong-w" (stored with w negated: what a reader that ignores handedness gets)."""
+    "wrong-w" (stored with w negated: what a reader that ignores handedness gets);
+    ``emissive``: a red emissive factor (an indicator light, not lighting)."""
     g = Glb()
     pos = np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], np.float32)
     nrm = np.tile([0.0, 0.0, 1.0], (4, 1))
@@ -180,6 +185,7 @@ def normal_mapped_quad(
                 "roughnessFactor": 1.0,
             },
             "normalTexture": {"index": normal_tex},
+            "emissiveFactor": [emissive, 0.0, 0.0],
         }
     )
     prim = {"attributes": attrs, "indices": g.accessor(idx, USHORT), "material": mat}
@@ -240,7 +246,7 @@ def draco_sphere(path: Path, compressed: bool = True, n: int = 24) -> Path:
 
     s = trimesh.creation.uv_sphere(radius=1.0, count=[n, n])
     pos = np.asarray(s.vertices, np.float32)
-    nrm = np.asarray(s.vertex_normals, np.float32)
+    nrm = (pos / np.linalg.norm(pos, axis=1, keepdims=True)).astype(np.float32)
     faces = np.asarray(s.faces, np.uint32)
     g = Glb()
     mat = g.material(
@@ -260,7 +266,9 @@ def draco_sphere(path: Path, compressed: bool = True, n: int = 24) -> Path:
         return g.write(path)
     import DracoPy  # noqa: N813
 
-    data = DracoPy.encode(pos, faces, quantization_bits=14, preserve_order=True, normals=nrm)
+    data = DracoPy.encode(
+        pos, faces, quantization_bits=14, preserve_order=True, normals=nrm.astype(np.float64)
+    )
     decoded = DracoPy.decode(data)
     ids = {a["attribute_type"]: a["unique_id"] for a in decoded.attributes}
     view = g.view(data)
