@@ -14,10 +14,10 @@ import warnings
 
 import numpy as np
 import pytest
+from gltf_assets import bump_normals, draco_sphere, normal_mapped_quad, textured_quad
 
 import gi
 from gi.gltf import read_gltf
-from gltf_assets import bump_normals, draco_sphere, normal_mapped_quad, textured_quad
 
 SIZE = 64
 LIGHT = np.array([0.5, 0.5, 0.7071]) / np.linalg.norm([0.5, 0.5, 0.7071])

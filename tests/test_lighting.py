@@ -12,9 +12,10 @@ import warnings
 
 import numpy as np
 import pytest
+from gltf_assets import normal_mapped_quad
 
 import gi
-from gltf_assets import normal_mapped_quad
+from gi import lighting
 
 RHO = 0.5
 
@@ -70,12 +71,12 @@ def test_constant_environment_array_lights_a_convex_object_exactly(write_scene):
 def test_add_sums_with_the_scenes_own_sky_and_keeps_its_lights(write_scene):
     light = {"type": "point", "position": [0, 3, 0], "intensity": [2, 2, 2]}
     scene = sphere_scene(write_scene, [light], {"radiance": [0.25, 0.25, 0.25]})
-    added = gi.lighting.with_environment(scene, np.full((4, 8, 3), 0.5, np.float32))
+    added = lighting.with_environment(scene, np.full((4, 8, 3), 0.5, np.float32))
     assert added.light_count == 1 and added.has_environment
     r = gi.render(added, "path", spp=4, seed=1)
     _, miss = masks(r)
     np.testing.assert_allclose(r.radiance[miss], 0.75, rtol=1e-6)
-    replaced = gi.lighting.with_environment(
+    replaced = lighting.with_environment(
         scene, {"source": np.full((4, 8, 3), 0.5, np.float32), "mode": "replace"}
     )
     assert replaced.light_count == 0
@@ -103,17 +104,17 @@ def test_renderer_update_changes_the_environment_and_none_restores_the_scene(wri
 
 def test_built_in_sky_has_a_sun_that_strength_and_rotation_move(write_scene):
     scene = sphere_scene(write_scene)
-    lit = gi.lighting.with_environment(scene, "sky")
+    lit = lighting.with_environment(scene, "sky")
     assert lit.light_count == 1 and lit.has_environment
-    l = gi.lighting.Lighting({"source": "sky", "strength": 2, "sun": [1, 1, 0]})
-    sun = l.lights[0]
+    sky = lighting.Lighting({"source": "sky", "strength": 2, "sun": [1, 1, 0]})
+    sun = sky.lights[0]
     np.testing.assert_allclose(sun["direction"], [-(0.5**0.5), -(0.5**0.5), 0], atol=1e-12)
-    np.testing.assert_allclose(sun["irradiance"], [2 * e for e in gi.lighting.SUN_IRRADIANCE])
-    assert gi.lighting.Lighting({"source": "sky", "sun": None}).lights == []
+    np.testing.assert_allclose(sun["irradiance"], [2 * e for e in lighting.SUN_IRRADIANCE])
+    assert lighting.Lighting({"source": "sky", "sun": None}).lights == []
     # The sky's brightest horizon column faces the sun, whatever the rotation.
     for rotation in (0.0, 90.0):
         spec = {"source": "sky", "sun": [1, 0.2, 0], "rotation": rotation}
-        img = gi.lighting.Lighting(spec).image
+        img = lighting.Lighting(spec).image
         col = int(np.argmax(img[img.shape[0] // 2 - 1, :, 0]))
         phi = 2 * np.pi * (col + 0.5) / img.shape[1]
         local = np.array([np.sin(phi), 0.0, -np.cos(phi)])
@@ -139,7 +140,7 @@ def test_built_in_sky_has_a_sun_that_strength_and_rotation_move(write_scene):
 )
 def test_bad_environments_are_typed_errors_naming_the_field(spec, field):
     with pytest.raises((gi.SettingError, gi.SceneError)) as e:
-        gi.lighting.Lighting(spec)
+        lighting.Lighting(spec)
     assert field in str(e.value)
 
 
@@ -153,7 +154,7 @@ def test_gltf_without_lights_warns_nearly_black_and_env_lights_it(tmp_path):
     scene = gi.load_scene(glb)
     with pytest.warns(gi.SceneWarning, match="nearly black.*--env"):
         gi.Renderer(scene, "path", spp=1)
-    lit = gi.lighting.with_environment(scene, "sky")
+    lit = lighting.with_environment(scene, "sky")
     means = {}
     for method, kw in (("path", {"spp": 64}), ("direct", {"spp": 4}), ("ispm", {"spp": 4})):
         with warnings.catch_warnings():
