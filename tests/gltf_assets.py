@@ -219,7 +219,7 @@ def textured_quad(
         "NORMAL": g.accessor(np.tile([0.0, 0.0, 1.0], (4, 1))),
         "TEXCOORD_0": g.accessor(uv),
     }
-    info: dict[str, Any] = {"index": g.image(checker(), srgb=True)}
+    info: dict[str, Any] = {"index": g.image(checker(n=64), srgb=True)}
     if transform is not None:
         info["extensions"] = {"KHR_texture_transform": transform}
         g.doc["extensionsUsed"] = ["KHR_texture_transform"]
