@@ -293,3 +293,62 @@ def draco_sphere(path: Path, compressed: bool = True, n: int = 24) -> Path:
     g.doc["extensionsRequired"] = ["KHR_draco_mesh_compression"]
     g.mesh([prim])
     return g.write(path)
+
+
+def lit_room(path: Path) -> Path:
+    """A glTF scene with its own lights (``KHR_lights_punctual``): a grey sphere of radius
+    0.5 on a 4×4 m grey floor, a point light of 20 cd 1.5 m above the floor and a spot
+    light of 40 cd (45° outer cone, a sharp edge from 43°: Blender's import approximates
+    glTF's smooth cone falloff by its own blend, 11% darker here with a 29° inner cone) aimed
+    down from the side."""
+    import trimesh
+
+    g = Glb()
+    grey = g.material(
+        {
+            "name": "grey",
+            "pbrMetallicRoughness": {
+                "baseColorFactor": [0.6, 0.6, 0.6, 1.0],
+                "metallicFactor": 0.0,
+                "roughnessFactor": 0.9,
+            },
+        }
+    )
+    floor = np.array([[-2, 0, -2], [2, 0, -2], [2, 0, 2], [-2, 0, 2]], np.float32)
+    attrs = {"POSITION": g.accessor(floor), "NORMAL": g.accessor(np.tile([0.0, 1, 0], (4, 1)))}
+    idx = np.array([0, 2, 1, 0, 3, 2], np.uint16)
+    g.mesh([{"attributes": attrs, "indices": g.accessor(idx, USHORT), "material": grey}])
+    s = trimesh.creation.uv_sphere(radius=0.5, count=[24, 24])
+    pos = np.asarray(s.vertices, np.float32)
+    nrm = pos / np.linalg.norm(pos, axis=1, keepdims=True)
+    attrs = {"POSITION": g.accessor(pos), "NORMAL": g.accessor(nrm)}
+    faces = np.asarray(s.faces, np.uint32).ravel()
+    prim = {"attributes": attrs, "indices": g.accessor(faces, UINT), "material": grey}
+    g.mesh([prim], translation=[0.0, 0.5, 0.0])
+    lights = [
+        {"type": "point", "color": [1.0, 0.9, 0.8], "intensity": 20.0},
+        {
+            "type": "spot",
+            "intensity": 40.0,
+            "spot": {"outerConeAngle": 0.785, "innerConeAngle": 0.75},
+        },
+    ]
+    g.doc["extensions"] = {"KHR_lights_punctual": {"lights": lights}}
+    g.doc["extensionsUsed"] = ["KHR_lights_punctual"]
+    # The point light 1.5 m up; the spot at (1.5, 2, 0) looking at the origin (its -z axis).
+    g.doc["nodes"].append(
+        {"translation": [0.3, 1.5, 0.4], "extensions": {"KHR_lights_punctual": {"light": 0}}}
+    )
+    d = np.array([-1.5, -2.0, 0.0]) / 2.5
+    axis = np.cross([0.0, 0.0, -1.0], d)
+    angle = np.arccos(np.dot([0.0, 0.0, -1.0], d))
+    q = [*(axis / np.linalg.norm(axis) * np.sin(angle / 2)), np.cos(angle / 2)]
+    g.doc["nodes"].append(
+        {
+            "translation": [1.5, 2.0, 0.0],
+            "rotation": q,
+            "extensions": {"KHR_lights_punctual": {"light": 1}},
+        }
+    )
+    g.doc["scenes"][0]["nodes"] += [len(g.doc["nodes"]) - 2, len(g.doc["nodes"]) - 1]
+    return g.write(path)

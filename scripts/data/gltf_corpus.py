@@ -41,11 +41,12 @@ def corpus() -> dict[str, dict]:
         "texture_transform": {"kind": "textured"},
         "sphere": {"kind": "sphere", "compressed": False},
         "sphere_draco": {"kind": "sphere", "compressed": True, "cycles_twin": "sphere"},
+        "lit_room": {"kind": "lights"},
     }
 
 
 def write_assets() -> None:
-    from gltf_assets import draco_sphere, normal_mapped_quad, textured_quad
+    from gltf_assets import draco_sphere, lit_room, normal_mapped_quad, textured_quad
 
     OUT.mkdir(parents=True, exist_ok=True)
     for name, spec in corpus().items():
@@ -56,8 +57,24 @@ def write_assets() -> None:
         elif spec["kind"] == "textured":
             transform = {"offset": [0.25, -0.1], "rotation": 0.4, "scale": [2.0, 1.5]}
             textured_quad(glb, transform=transform)
+        elif spec["kind"] == "lights":
+            lit_room(glb)
         else:
             draco_sphere(glb, **kw)
+        if spec["kind"] == "lights":
+            # The file's own lights only: no sun, no sky.
+            scene = {
+                "camera": {
+                    "position": [0, 2.5, 4],
+                    "look_at": [0, 0.4, 0],
+                    "fov": 45,
+                    "width": SIZE,
+                    "height": SIZE,
+                },
+                "objects": [{"shape": {"type": "mesh", "file": glb.name}}],
+            }
+            (OUT / f"{name}.json").write_text(json.dumps(scene, indent=1) + "\n")
+            continue
         sphere = spec["kind"] == "sphere"
         n = math.sqrt(sum(x * x for x in SUN))
         scene = {
@@ -103,7 +120,7 @@ def render_cycles(name: str, scene: dict, glb: Path, samples: int) -> None:
     look = to_blender(cam["look_at"]) - obj.location
     obj.rotation_euler = look.to_track_quat("-Z", "Y").to_euler()
     s.camera = obj
-    for light in scene["lights"]:
+    for light in scene.get("lights", []):
         sun = bpy.data.lights.new("sun", "SUN")
         sun.energy = light["irradiance"][0]
         sun.angle = 0.0
@@ -113,7 +130,8 @@ def render_cycles(name: str, scene: dict, glb: Path, samples: int) -> None:
     world = bpy.data.worlds.new("world")
     world.use_nodes = True
     bg = world.node_tree.nodes["Background"]
-    bg.inputs["Color"].default_value = (*scene["environment"]["radiance"], 1.0)
+    sky = scene.get("environment", {}).get("radiance", [0.0, 0.0, 0.0])
+    bg.inputs["Color"].default_value = (*sky, 1.0)
     bg.inputs["Strength"].default_value = 1.0
     s.world = world
     s.render.engine = "CYCLES"
