@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 
 from gi import _checks
+from gi._gi import Scene
 
 #: Default direction towards the built-in sky's sun: 45° up, from +x and +z.
 SUN = (0.5, 0.7071, 0.5)
@@ -75,7 +76,9 @@ def _rotate_y(d: np.ndarray, degrees: float) -> np.ndarray:
     return np.array([c * d[0] + s * d[2], d[1], -s * d[0] + c * d[2]])
 
 
-def sky_image(sun: np.ndarray | None, width: int = _SKY_SIZE[0], height: int = _SKY_SIZE[1]):
+def sky_image(
+    sun: np.ndarray | None, width: int = _SKY_SIZE[0], height: int = _SKY_SIZE[1]
+) -> np.ndarray:
     """The built-in sky, float32 (height, width, 3), in the sky's own frame (Mitsuba's
     ``envmap`` layout: top row +y, u grows with ``atan2(x, −z)``); ``sun``: the unit
     direction towards the sun in that frame (its azimuth brightens the horizon)."""
@@ -169,7 +172,7 @@ class Lighting:
             path = base_dir / path
         return str(path), load_environment_image(path, "environment", "environment.source")
 
-    def apply(self, scene: Any) -> Any:
+    def apply(self, scene: Scene) -> Scene:
         """``scene`` (a :class:`gi.Scene`) with this lighting."""
         return scene.with_lighting(**self.native_args(), source="environment")
 
@@ -183,7 +186,7 @@ class Lighting:
         }
 
 
-def with_environment(scene: Any, environment: Any) -> Any:
+def with_environment(scene: Scene, environment: Any) -> Scene:
     """``scene`` lit by ``environment`` (see the module); ``None`` leaves it as it is."""
     if environment is None:
         return scene

@@ -15,6 +15,8 @@ import numpy as np
 from gi.gltf.errors import GltfError
 
 EXTENSION = "KHR_draco_mesh_compression"
+# glTF's integer component types.
+_INTEGERS = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32}
 _NO_DECODER = (
     "this file's meshes are Draco-compressed and the Draco decoder is not installed:"
     " `pip install DracoPy` (or gi[draco]), or decompress the file with"
@@ -30,7 +32,7 @@ def decode(
     compressed ``data`` of its ``bufferView``; ``ext`` is the extension object."""
     ew = f"{where}.extensions.{EXTENSION}"
     try:
-        import DracoPy  # noqa: N813
+        import DracoPy  # type: ignore[import-not-found]  # noqa: N813
     except ImportError as e:
         raise GltfError(ew, _NO_DECODER) from e
     ids = ext.get("attributes") if isinstance(ext, dict) else None
@@ -51,7 +53,9 @@ def decode(
         arr = np.asarray(attr["data"])
         arr = arr.reshape(len(arr), -1)
         acc = accessors[attributes[name]] if name in attributes else {}
-        if acc.get("normalized") and arr.dtype.kind in "iu":
-            arr = np.maximum(arr.astype(np.float64) / np.iinfo(arr.dtype).max, -1.0)
+        kind = _INTEGERS.get(acc.get("componentType"))
+        if acc.get("normalized") and kind is not None:
+            # Normalized by the accessor's type (what the encoder quantized to).
+            arr = np.maximum(arr.astype(np.float64) / np.iinfo(kind).max, -1.0)
         out[name] = arr
     return out, np.asarray(faces, dtype=np.int64).reshape(-1, 3)
