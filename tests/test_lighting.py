@@ -9,6 +9,7 @@ import json
 import subprocess
 import sys
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -176,6 +177,11 @@ def test_cli_env_sky_renders_a_lit_asset(tmp_path):
     assert "nearly black" in bare.stderr and "--env" in bare.stderr
     lit = subprocess.run([*cmd, "--env", "sky", "--sun", "1,1,1"], capture_output=True, text=True)
     assert lit.returncode == 0 and "nearly black" not in lit.stderr, lit.stderr
+    hdr = Path(__file__).parents[1] / "docs" / "examples" / "sky" / "sky.exr"
+    image = [*cmd, "--env", str(hdr), "--env-strength", "2", "--env-rotation", "90"]
+    lit = subprocess.run(image, capture_output=True, text=True)
+    assert lit.returncode == 0 and "nearly black" not in lit.stderr, lit.stderr
+    assert gi.read_image(out).mean() > 0.1
     bad = subprocess.run([*cmd, "--sun", "1,1,1"], capture_output=True, text=True)
     assert bad.returncode != 0 and "--env sky" in bad.stderr
 
