@@ -194,3 +194,46 @@ def test_viewer_environment_message_is_an_update():
     assert m.parse('{"type": "environment", "source": "scene"}', ["path"]).spec() == "none"
     with pytest.raises(m.MessageError):
         m.parse('{"type": "environment", "source": "/etc/passwd"}', ["path"])
+
+
+def test_viewer_panel_lights_a_gltf_asset_and_gives_the_scene_back(tmp_path):
+    """The Environment panel's choice reaches the renderer (the sky lights the unlit asset),
+    a change of method keeps it (the progressive renderer too), and "scene" restores the
+    file's own (black) light."""
+    from gi.viewer import messages as m
+    from gi.viewer.engine import Engine
+
+    scene = gi.load_scene(normal_mapped_quad(tmp_path / "asset.glb", emissive=0.05))
+    with pytest.warns(gi.SceneWarning, match="nearly black"):
+        engine = Engine(
+            scene,
+            "direct",
+            {"size": (16, 16), "spp": 1},
+            on_frame=lambda frame: None,
+            on_event=lambda client, event: None,
+        )
+    engine.start()
+    try:
+
+        def send(msg):
+            return engine.submit(msg, 1, wait=True).result(timeout=120)
+
+        def mean():
+            frame = engine.wait_frame(timeout=120)
+            assert frame is not None
+            return float(frame.pixels.astype(np.float64).mean())
+
+        dark = mean()
+        send(m.Environment("sky", strength=1.0))
+        assert engine.state()["environment"]["source"] == "sky"
+        lit = mean()
+        assert lit > dark + 50  # 8-bit sRGB pixels: a lit quad, not a black image
+        # A new renderer starts from the unlit scene (and says so) before the panel's sky.
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", gi.SceneWarning)
+            send(m.Settings({"method": "path"}))
+        assert mean() > dark + 50
+        send(m.Environment("scene"))
+        assert mean() == pytest.approx(dark, abs=5)
+    finally:
+        engine.stop()
