@@ -278,7 +278,11 @@ fn mesh_vertices(scene: &Scene, g: &GpuMesh, out: &mut Vec<VertexRaw>) {
     for (t, tri) in mesh.indices.iter().enumerate() {
         let p = tri.map(|i| mesh.positions[i as usize]);
         let ng = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero();
-        let tangents = match &scene.mesh_tangents[g.source as usize] {
+        let stored = scene
+            .mesh_tangents
+            .get(g.source as usize)
+            .and_then(Option::as_ref);
+        let tangents = match stored {
             Some(corners) => corners[t],
             None => [triangle_tangent(p, uvs[t]).unwrap_or(Vec4::ZERO); 3],
         };

@@ -24,7 +24,7 @@ impl Scene {
         s.mesh_tangents = s
             .objects
             .iter()
-            .map(|o| self.mesh_tangents[o.mesh as usize].clone())
+            .map(|o| self.mesh_tangents.get(o.mesh as usize).cloned().flatten())
             .collect();
         for (i, o) in s.objects.iter_mut().enumerate() {
             o.mesh = i as u32;
@@ -78,7 +78,7 @@ impl Scene {
     /// Object `o`'s mesh tangents placed in world space, in its flat corner order (what
     /// [`Scene::tangent_at`] interpolates), for the flattened scene.
     fn placed_tangents(&self, o: &super::SceneObject) -> Option<super::tangents::CornerTangents> {
-        let corners = self.mesh_tangents[o.mesh as usize].as_ref()?;
+        let corners = self.mesh_tangents.get(o.mesh as usize)?.as_ref()?;
         let linear = glam::Mat3::from_mat4(o.transform);
         let flip = if o.flipped { -1.0 } else { 1.0 };
         let place = |k: glam::Vec4| {

@@ -112,13 +112,14 @@ impl Scene {
 mod tests {
     use super::*;
     use glam::Vec3;
+    use std::f32::consts::PI;
 
     fn scene(environment: &str) -> Scene {
         let text = format!(
             r#"{{"camera": {{"position": [0, 0, 3], "look_at": [0, 0, 0]}},
                 "lights": [{{"type": "point", "position": [0, 2, 0], "intensity": [1, 1, 1]}}],
                 "materials": {{"m": {{"diffuse": [0.5, 0.5, 0.5]}}}},
-                "objects": [{{"shape": {{"type": "sphere"}}, "material": "m"}}]{environment}}}"#
+                "objects": [{{"shape": {{"type": "sphere", "radius": 1}}, "material": "m"}}]{environment}}}"#
         );
         Scene::from_json(&text, "test", &HashMap::new()).unwrap()
     }
@@ -144,6 +145,41 @@ mod tests {
         let e = lit.environment.as_ref().unwrap();
         for d in [Vec3::Y, Vec3::X, -Vec3::Z] {
             assert_eq!(e.radiance(d), Vec3::new(1.25, 1.5, 2.0));
+        }
+    }
+
+    #[test]
+    fn an_image_plus_a_rotated_image_is_their_sum_in_every_texel_direction() {
+        // Two 8×4 images of distinct texels, the second turned by 90°: the sum, on the
+        // first's grid, is each texel's own radiance plus the second's along its centre.
+        let img = |k: f32| EnvImage {
+            width: 8,
+            height: 4,
+            texels: (0..32).map(|i| Vec3::splat(k + i as f32)).collect(),
+        };
+        let a = Environment::image(img(1.0), 2.0, 30.0);
+        let b = Environment::image(img(100.0), 0.5, 120.0);
+        let s = a.sum(&b);
+        for i in 0..32 {
+            let (u, theta) = ((i % 8) as f32 + 0.5, ((i / 8) as f32 + 0.5) / 4.0 * PI);
+            let phi = 2.0 * PI * u / 8.0;
+            let local = Vec3::new(
+                theta.sin() * phi.sin(),
+                theta.cos(),
+                -theta.sin() * phi.cos(),
+            );
+            let r = 30f32.to_radians();
+            let d = Vec3::new(
+                r.cos() * local.x + r.sin() * local.z,
+                local.y,
+                -r.sin() * local.x + r.cos() * local.z,
+            );
+            let want = a.radiance(d) + b.radiance(d);
+            assert!(
+                (s.radiance(d) - want).abs().max_element() < 1e-3,
+                "{i}: {} vs {want}",
+                s.radiance(d)
+            );
         }
     }
 
