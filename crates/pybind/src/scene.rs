@@ -54,15 +54,13 @@ fn mesh_from_py(key: &str, value: &Bound<'_, PyAny>, source: &str) -> PyResult<M
             Some(a) if !a.is_none() => a
                 .extract::<PyReadonlyArray2<'_, f32>>()
                 .map(Some)
-                .map_err(|e| expected(PyErr::from(e))),
+                .map_err(expected),
             _ => Ok(None),
         }
     };
     let (uv, tangents) = (optional(5)?, optional(6)?);
     let head = pyo3::types::PyTuple::new(value.py(), items.iter().take(5))?;
-    let (v, f, n, mats, face_mats) = head
-        .extract::<Entry>()
-        .map_err(|e| expected(PyErr::from(e)))?;
+    let (v, f, n, mats, face_mats) = head.extract::<Entry>().map_err(expected)?;
     // The arrays are copied into the mesh, the scene (placed) and its normals.
     let (nv, nf) = (v.as_array().nrows() as u64, f.as_array().nrows() as u64);
     gi_core::memory::check(|| format!("mesh `{key}`"), (nv * 24 + nf * 16) * 3)
