@@ -278,16 +278,14 @@ def test_unrendered_features_warn_once_naming_file_and_field(tmp_path):
     with pytest.warns(gi.AssetWarning) as record:
         gi.load_scene(viewing_scene(tmp_path, "lamp.gltf"))
     fields = sorted(w.message.field for w in record)
+    # Occlusion maps are explained once per file; stored tangents are read (no warning).
     assert fields == sorted(
         [
-            "materials[0].occlusionTexture",
+            "materials[*].occlusionTexture",
             "materials[0].alphaMode",
             "materials[0].pbrMetallicRoughness.baseColorTexture",
-            "materials[1].occlusionTexture",
             "meshes[0].primitives[0].attributes.COLOR_0",
-            "meshes[0].primitives[0].attributes.TANGENT",
             "meshes[1].primitives[0].attributes.COLOR_0",
-            "meshes[1].primitives[0].attributes.TANGENT",
         ]
     )
     assert all(w.message.file == str(path) for w in record)
@@ -360,14 +358,15 @@ def test_large_mesh_without_normals_loads_quietly(tmp_path):
 
 
 def test_gltf_requiring_an_unread_extension_is_a_scene_error(tmp_path):
-    path = write_gltf(tmp_path, "draco.gltf", [{"name": "m"}])
+    # (Draco is read: tests/test_gltf.py.)
+    path = write_gltf(tmp_path, "volume.gltf", [{"name": "m"}])
     doc = json.loads(path.read_text())
-    doc["extensionsRequired"] = ["KHR_draco_mesh_compression"]
+    doc["extensionsRequired"] = ["KHR_materials_volume"]
     path.write_text(json.dumps(doc))
     with pytest.raises(gi.SceneError) as e:
-        gi.load_scene(viewing_scene(tmp_path, "draco.gltf"))
+        gi.load_scene(viewing_scene(tmp_path, "volume.gltf"))
     assert e.value.field == "objects[0].shape.file"
-    assert "extensionsRequired: unsupported extension KHR_draco_mesh_compression" in str(e.value)
+    assert "extensionsRequired: unsupported extension KHR_materials_volume" in str(e.value)
 
 
 def test_cli_prints_asset_warnings(tmp_path):
@@ -381,8 +380,9 @@ def test_cli_prints_asset_warnings(tmp_path):
     )  # fmt: skip
     assert p.returncode == 0, p.stderr
     assert p.stderr == (
-        f"gi: warning: {path}: materials[0].occlusionTexture: "
-        "this texture is not supported; it is ignored\n"
+        f"gi: warning: {path}: materials[*].occlusionTexture: ignored: gi computes how much"
+        " light reaches each point by tracing it, so a baked ambient-occlusion map would"
+        " darken what the light transport already shadows (first: materials[0])\n"
     )
 
 

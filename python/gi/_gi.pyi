@@ -35,6 +35,17 @@ _MeshArraysUV = tuple[
     npt.NDArray[np.uint32] | None,
     npt.NDArray[np.float32] | None,
 ]
+# ... and tangents per vertex (N, 4) or None, in gi's convention: xyz along +u, the
+# bitangent along +v is w · n × t (glTF's TANGENT with w negated).
+_MeshArraysUVT = tuple[
+    npt.NDArray[np.float32],
+    npt.NDArray[np.uint32],
+    npt.NDArray[np.float32] | None,
+    str | None,
+    npt.NDArray[np.uint32] | None,
+    npt.NDArray[np.float32] | None,
+    npt.NDArray[np.float32] | None,
+]
 
 @final
 class Scene:
@@ -42,12 +53,20 @@ class Scene:
     def from_json(
         text: str,
         source: str = ...,
-        meshes: dict[str, _MeshArrays | _MeshArraysUV] | None = None,
+        meshes: dict[str, _MeshArrays | _MeshArraysUV | _MeshArraysUVT] | None = None,
         images: dict[str, npt.NDArray[np.float32]] | None = None,
         textures: dict[str, npt.NDArray[np.float32]] | None = None,
     ) -> Scene: ...
     @staticmethod
     def builtin(name: str) -> Scene: ...
+    def with_lighting(
+        self,
+        environment: str | None = None,
+        images: dict[str, npt.NDArray[np.float32]] | None = None,
+        lights: str | None = None,
+        add: bool = True,
+        source: str = ...,
+    ) -> Scene: ...
     @property
     def source(self) -> str: ...
     @property
@@ -150,6 +169,13 @@ class Renderer:
         progress: Callable[[str, float], bool | None] | None = None,
     ) -> dict[str, Any]: ...
     def update(self, target: str, key: int | str | None, json: str) -> None: ...
+    def set_lighting(
+        self,
+        environment: str | None = None,
+        images: dict[str, npt.NDArray[np.float32]] | None = None,
+        lights: str | None = None,
+        add: bool = True,
+    ) -> None: ...
     def resize(self, width: int, height: int) -> None: ...
     def describe(self, target: str, key: int | str | None = None) -> str: ...
     @property

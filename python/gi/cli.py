@@ -212,6 +212,7 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument(
         "--passes", type=int, help="render progressively (implies --progressive) this many passes"
     )
+    _add_env_options(r)
     _add_options(r)
     r.add_argument(
         "--exposure", type=float, default=0.0, help="exposure in stops for 8-bit outputs"
@@ -254,6 +255,7 @@ def _parser() -> argparse.ArgumentParser:
         help="image size WIDTHxHEIGHT (default: the scene's); the page keeps its pixel count"
         " and takes the window's aspect",
     )
+    _add_env_options(v)
     _add_options(v)
     v.add_argument("--exposure", type=float, default=0.0, help="exposure in stops (0)")
     v.add_argument(
@@ -441,6 +443,52 @@ def _check_files(outputs: list[_Output], aovs: list[str], frames: Iterable[int])
                 directories.add(key.parent)
 
 
+def _add_env_options(parser: argparse.ArgumentParser) -> None:
+    """``--env`` and its settings (:mod:`gi.lighting`)."""
+    g = parser.add_argument_group("environment light (gi.lighting)")
+    g.add_argument(
+        "--env",
+        metavar="FILE|sky",
+        help="light the scene with an equirectangular HDR image (.hdr, .exr) or the built-in"
+        " sky with a sun ('sky')",
+    )
+    g.add_argument("--env-strength", type=float, default=1.0, help="scale of --env (1)")
+    g.add_argument("--env-rotation", type=float, default=0.0, help="degrees about +y of --env (0)")
+    g.add_argument(
+        "--sun",
+        metavar="X,Y,Z|none",
+        help="--env sky: direction towards the sun (default 0.5,0.7071,0.5), or none",
+    )
+    g.add_argument(
+        "--env-mode",
+        choices=["add", "replace"],
+        default="add",
+        help="add to the scene's light (default) or replace its lights and environment",
+    )
+
+
+def _lit(args: argparse.Namespace, scene: gi.Scene) -> gi.Scene:
+    """``scene`` lit by ``--env`` (unchanged without it)."""
+    if args.env is None:
+        if args.sun is not None:
+            raise named_error("sun", "--sun goes with --env sky")
+        return scene
+    from gi.lighting import with_environment
+
+    spec: dict[str, object] = {
+        "source": args.env,
+        "strength": args.env_strength,
+        "rotation": args.env_rotation,
+        "mode": args.env_mode,
+    }
+    if args.sun is not None:
+        try:
+            spec["sun"] = None if args.sun == "none" else [float(x) for x in args.sun.split(",")]
+        except ValueError as e:
+            raise named_error("sun", f"--sun X,Y,Z or none, got {args.sun!r}") from e
+    return with_environment(scene, spec)
+
+
 def _load(source: str) -> gi.Scene:
     """Loads a scene; what its files hold that gi does not render is printed as it is found
     (:func:`_show_warning`), so also when loading then fails."""
@@ -480,7 +528,7 @@ def _render(args: argparse.Namespace) -> int:
         return _render_sequence(args, outputs, aovs)
     if args.progressive:
         return _render_progressive(args, aovs)
-    scene = _load(args.scene)
+    scene = _lit(args, _load(args.scene))
     result = gi.render(
         scene,
         args.method,
@@ -573,7 +621,7 @@ def _print_stages(args: argparse.Namespace, result: gi.RenderResult) -> None:
 def _render_progressive(args: argparse.Namespace, aovs: list[str]) -> int:
     """``--progressive``: passes until ``--time`` or ``--passes``; Ctrl-C keeps the passes
     done so far and writes them."""
-    scene = _load(args.scene)
+    scene = _lit(args, _load(args.scene))
     options = _progressive_settings(args)
     renderer = gi.Renderer(scene, args.method, **options)
     interrupted = False
@@ -643,7 +691,7 @@ def _render_sequence(args: argparse.Namespace, outputs: list[_Output], aovs: lis
     """Renders frames of the scene's animation to image sequences and videos: each frame's
     images are written like a still's (:func:`gi.save_result`), after every file of every
     frame was checked."""
-    scene = _load(args.scene)
+    scene = _lit(args, _load(args.scene))
     if args.frames is None and scene.animation_duration is None:
         raise named_error(
             "frames", f"{args.scene} has no animation: give the frames (--frames START:END)"
@@ -705,7 +753,7 @@ def _view(args: argparse.Namespace) -> int:
 
     if args.method not in gi.methods():
         raise gi.SettingError(f"unknown method {args.method!r} (use {', '.join(gi.methods())})")
-    scene = _load(args.scene)
+    scene = _lit(args, _load(args.scene))
     return viewer.serve(
         scene,
         args.method,

@@ -24,7 +24,8 @@ import numpy as np
 from gi._gi import GiError, OutOfMemoryError, SceneError
 from gi.textures import TextureError, TextureSet, height_to_normal
 
-MeshEntry = tuple[Any, Any, Any, "str | None", Any, Any]
+# (vertices, faces, normals, materials JSON, face materials, uvs[, tangents]): `gi._gi.pyi`
+MeshEntry = tuple[Any, ...]
 
 
 class AssetWarning(UserWarning):
@@ -286,6 +287,7 @@ def _entry(
     materials: list[tuple[str, dict[str, Any]]],
     face_mats: np.ndarray | None,
     uvs: np.ndarray | None = None,
+    tangents: np.ndarray | None = None,
 ) -> MeshEntry:
     if len(faces) == 0:
         raise scene_error(scene_file, field, f"mesh file has no triangles: {path}")
@@ -313,6 +315,7 @@ def _entry(
         json.dumps(materials) if has_mats else None,
         np.ascontiguousarray(face_mats, dtype=np.uint32) if has_mats else None,
         None if uvs is None else np.ascontiguousarray(uvs, dtype=np.float32),
+        *([] if tangents is None else [np.ascontiguousarray(tangents, dtype=np.float32)]),
     )
 
 
@@ -346,6 +349,7 @@ def _load_gltf(
         m.materials,
         m.face_materials,
         m.uvs,
+        m.tangents,
     )
 
 

@@ -155,15 +155,31 @@ def _scene(scene: Any) -> Scene:
     )
 
 
+#: How to light a scene that has no light of its own; every "no light" message ends so.
+LIGHT_HINT = (
+    "light it with an environment: `gi render SCENE --env FILE.hdr` (or `--env sky`),"
+    " environment= in gi.render / gi.Renderer, or the viewer's Environment panel"
+)
+
+
 def _warn_if_black(scene: Scene) -> None:
-    """A :class:`gi.SceneWarning` for a scene that renders black: no light source with power
-    (lights, emitting surfaces, an environment), or nothing to see."""
+    """A :class:`gi.SceneWarning` for a scene that renders black (no light source with
+    power: lights, emitting surfaces, an environment) or nearly black (a glTF asset without
+    lights or an environment, lit only by its emissive surfaces: glTF assets are made to be
+    lit by the viewer's environment), or that has nothing to see."""
     from gi.scene import SceneWarning
 
+    gltf = Path(scene.source).suffix.lower() in (".gltf", ".glb")
     if max(scene.total_power) <= 0.0:
         reason = (
             "the scene has no light source with power (lights, emitting surfaces or an"
-            " environment): the image is black"
+            f" environment): the image is black; {LIGHT_HINT}"
+        )
+        warnings.warn(SceneWarning(scene.source, "lights", reason), stacklevel=_caller_level())
+    elif gltf and scene.light_count == 0 and not scene.has_environment:
+        reason = (
+            "the glTF file has no lights and gi no environment: only its emissive surfaces"
+            f" light it and the image is nearly black; {LIGHT_HINT}"
         )
         warnings.warn(SceneWarning(scene.source, "lights", reason), stacklevel=_caller_level())
     if scene.triangle_count == 0 and not scene.has_environment:
@@ -225,9 +241,13 @@ class Renderer:
         self,
         scene: Scene | str | os.PathLike[str],
         method: str = DEFAULT_METHOD,
+        *,
+        environment: Any = None,
         **options: Any,
     ) -> None:
-        scene = _scene(scene)
+        from gi.lighting import with_environment
+
+        scene = with_environment(_scene(scene), environment)
         if not isinstance(method, str):
             methods = ", ".join(_gi.methods())
             raise _checks.setting_error("method", f"must be one of {methods}; got {method!r}")
@@ -347,8 +367,14 @@ class Renderer:
         lights: dict[int, dict[str, Any]] | None = None,
         objects: dict[int | str, dict[str, Any]] | None = None,
         materials: dict[str, dict[str, Any]] | None = None,
+        environment: Any = None,
     ) -> None:
         """Changes the scene before the next frame, in the scene format's terms.
+
+        ``environment`` lights the scene as :mod:`gi.lighting` describes (a file, an array,
+        ``"sky"`` or a dict with strength, rotation, sun and mode), starting from the
+        scene's own lights and environment as loaded (calls do not accumulate; light
+        updates made before it are dropped); ``"none"`` gives the scene its own light back.
 
         ``camera`` and each ``lights[i]``, ``objects[name or index]`` and
         ``materials[name]`` give the fields that change (``{"position": [0, 1, 3]}``); the
@@ -372,6 +398,8 @@ class Renderer:
                 raise _update_error(
                     group, f"must be a dict from {key} to its fields, got {value!r}"
                 )
+        if environment is not None:
+            self._set_environment(environment)
         if camera is not None:
             self._native.update("camera", None, _json("camera", camera))
         for i, light in (lights or {}).items():
@@ -394,6 +422,14 @@ class Renderer:
                 raise _update_error("materials", f"a material's name ({names}), got {name!r}")
             material = self._texture_names_in(name, material)
             self._native.update("material", name, _json(f"materials.{name}", material))
+
+    def _set_environment(self, environment: Any) -> None:
+        from gi.lighting import Lighting
+
+        if isinstance(environment, str) and environment == "none":
+            self._native.set_lighting(None, None, None, True)
+            return
+        self._native.set_lighting(**Lighting(environment).native_args())
 
     def _texture_names_in(self, name: str, material: Any) -> Any:
         """A material update's texture names (as in the scene file) as the scene loaded
@@ -656,6 +692,7 @@ def render(
     *,
     progress: bool | ProgressCallback = False,
     denoise: bool = False,
+    environment: Any = None,
     **options: Any,
 ) -> RenderResult:
     """Renders ``scene`` (a :class:`gi.Scene`, or a built-in name or scene file for
@@ -671,14 +708,15 @@ def render(
     logs). The GIL is released while rendering; Ctrl-C cancels with
     :class:`KeyboardInterrupt`. ``denoise`` runs Intel Open Image Denoise on the radiance,
     guided by the albedo and normal AOVs (:func:`gi.denoise`); the noisy radiance is kept
-    as the AOV ``noisy``.
+    as the AOV ``noisy``. ``environment`` lights the scene with an environment image or
+    the built-in sky (``"sky"``), added to its light or replacing it (:mod:`gi.lighting`).
     """
     if _flag("denoise", denoise):
         from gi.denoising import INSTALL_HINT, available
 
         if not available():
             raise SettingError(INSTALL_HINT)
-    renderer = Renderer(scene, method, **options)
+    renderer = Renderer(scene, method, environment=environment, **options)
     result = renderer.render(aovs=True, extras=True, progress=progress)
     if denoise:
         from gi.denoising import denoise as run_denoiser

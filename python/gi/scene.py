@@ -278,7 +278,16 @@ def _gltf_scene_description(
             if key not in meshes:
                 normals = None if prim.normals is None else _unit_rows(prim.normals)
                 meshes[key] = _entry(
-                    path, file, key, prim.vertices, prim.faces, normals, [], None, prim.uvs
+                    path,
+                    file,
+                    key,
+                    prim.vertices,
+                    prim.faces,
+                    normals,
+                    [],
+                    None,
+                    prim.uvs,
+                    prim.tangents,
                 )
             if prim.material < 0:
                 materials.setdefault(default, default_material())

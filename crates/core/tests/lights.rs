@@ -579,6 +579,7 @@ fn degenerate_and_enclosed_lights_render_finite_images() {
         face_materials: Vec::new(),
         material_textures: Vec::new(),
         uvs: Vec::new(),
+        tangents: Vec::new(),
     };
     let degenerate = Scene::from_json(
         r#"{

@@ -204,6 +204,26 @@ impl PyRenderer {
         })
     }
 
+    /// Gives the scene an environment (JSON section, `None`: none; `images` holds its
+    /// `file`) and lights (a JSON list), added to its light (`add`) or replacing it, before
+    /// the next frame.
+    #[pyo3(signature = (environment = None, images = None, lights = None, add = true))]
+    fn set_lighting(
+        &mut self,
+        py: Python<'_>,
+        environment: Option<&str>,
+        images: Option<&Bound<'_, PyDict>>,
+        lights: Option<&str>,
+        add: bool,
+    ) -> PyResult<()> {
+        let lighting =
+            crate::scene::lighting_from_py(py, environment, images, lights, add, "scene update")?;
+        let inner = &mut self.inner;
+        crate::guard::catch("Renderer.set_lighting", || {
+            inner.set_lighting(&lighting).map_err(|e| to_py(py, e))
+        })
+    }
+
     /// Changes the image size (targets are rebuilt at the next frame).
     fn resize(
         &mut self,

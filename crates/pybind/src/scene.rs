@@ -41,18 +41,26 @@ fn mesh_from_py(key: &str, value: &Bound<'_, PyAny>, source: &str) -> PyResult<M
         Option<PyReadonlyArray2<'py, f32>>,
         Option<String>,
         Option<PyReadonlyArray1<'py, u32>>,
-        Option<PyReadonlyArray2<'py, f32>>,
     );
-    let with_uvs: PyResult<Entry> = value.extract();
-    let (v, f, n, mats, face_mats, uv) = match with_uvs {
-        Ok(e) => e,
-        Err(_) => {
-            let (v, f, n, m, fm) = value.extract().map_err(|e| {
-                SceneError::new_err(format!("{source}: mesh `{key}`: expected (vertices, faces, normals, materials, face_materials[, uvs]): {e}"))
-            })?;
-            (v, f, n, m, fm, None)
+    let expected = |e: PyErr| {
+        SceneError::new_err(format!("{source}: mesh `{key}`: expected (vertices, faces, normals, materials, face_materials[, uvs[, tangents]]): {e}"))
+    };
+    let items: Vec<Bound<'_, PyAny>> = value
+        .try_iter()
+        .and_then(|it| it.collect::<PyResult<_>>())
+        .map_err(expected)?;
+    let optional = |i: usize| -> PyResult<Option<PyReadonlyArray2<'_, f32>>> {
+        match items.get(i) {
+            Some(a) if !a.is_none() => a
+                .extract::<PyReadonlyArray2<'_, f32>>()
+                .map(Some)
+                .map_err(expected),
+            _ => Ok(None),
         }
     };
+    let (uv, tangents) = (optional(5)?, optional(6)?);
+    let head = pyo3::types::PyTuple::new(value.py(), items.iter().take(5))?;
+    let (v, f, n, mats, face_mats) = head.extract::<Entry>().map_err(expected)?;
     // The arrays are copied into the mesh, the scene (placed) and its normals.
     let (nv, nf) = (v.as_array().nrows() as u64, f.as_array().nrows() as u64);
     gi_core::memory::check(|| format!("mesh `{key}`"), (nv * 24 + nf * 16) * 3)
@@ -105,6 +113,10 @@ fn mesh_from_py(key: &str, value: &Bound<'_, PyAny>, source: &str) -> PyResult<M
                 .collect()
         }
     };
+    let tangents = match tangents {
+        None => Vec::new(),
+        Some(a) => corner_tangents(&a, &indices, key, source)?,
+    };
     Ok(MeshData {
         mesh: TriMesh {
             positions,
@@ -115,7 +127,38 @@ fn mesh_from_py(key: &str, value: &Bound<'_, PyAny>, source: &str) -> PyResult<M
         face_materials,
         material_textures,
         uvs,
+        tangents,
     })
+}
+
+/// A mesh's per-vertex tangents (N, 4) in gi's convention (`gi_core::scene::tangents`) as
+/// tangents per triangle corner.
+fn corner_tangents(
+    a: &PyReadonlyArray2<'_, f32>,
+    indices: &[[u32; 3]],
+    key: &str,
+    source: &str,
+) -> PyResult<Vec<[glam::Vec4; 3]>> {
+    let a = a.as_array();
+    let n = indices
+        .iter()
+        .flatten()
+        .max()
+        .map_or(0, |&m| m as usize + 1);
+    if a.ncols() != 4 || a.nrows() < n {
+        return Err(SceneError::new_err(format!(
+            "{source}: mesh `{key}`: tangents must have shape (N, 4), one per vertex"
+        )));
+    }
+    let per_vertex: Vec<glam::Vec4> = a
+        .rows()
+        .into_iter()
+        .map(|r| glam::Vec4::new(r[0], r[1], r[2], r[3]))
+        .collect();
+    Ok(indices
+        .iter()
+        .map(|t| t.map(|i| per_vertex[i as usize]))
+        .collect())
 }
 
 /// Converts the `textures` argument: name -> f32 array (H, W, 4), linear RGBA, top row first.
@@ -185,8 +228,59 @@ fn env_image_from_py(key: &str, value: &Bound<'_, PyAny>, source: &str) -> PyRes
     })
 }
 
+/// Converts the `images` argument: environment file name -> float32 (H, W, 3) image.
+fn env_images_from_py(
+    images: Option<&Bound<'_, PyDict>>,
+    source: &str,
+) -> PyResult<HashMap<String, EnvImage>> {
+    let mut out = HashMap::new();
+    if let Some(images) = images {
+        for (k, v) in images.iter() {
+            let key: String = k.extract()?;
+            let image = env_image_from_py(&key, &v, source)?;
+            out.insert(key, image);
+        }
+    }
+    Ok(out)
+}
+
+/// New lighting from its JSON sections and images (see `gi_core::scene::Lighting`).
+pub fn lighting_from_py(
+    py: Python<'_>,
+    environment: Option<&str>,
+    images: Option<&Bound<'_, PyDict>>,
+    lights: Option<&str>,
+    add: bool,
+    source: &str,
+) -> PyResult<gi_core::scene::Lighting> {
+    let images = env_images_from_py(images, source)?;
+    gi_core::scene::Lighting::from_json(environment, &images, lights, add, source)
+        .map_err(|e| to_py(py, e))
+}
+
 #[pymethods]
 impl PyScene {
+    /// The scene with an environment (JSON section, `None`: none; `images` holds its
+    /// `file`) and lights (a JSON list) added to its light (`add`) or replacing it; errors
+    /// name `source` and the field.
+    #[pyo3(signature = (environment = None, images = None, lights = None, add = true, source = "lighting".to_string()))]
+    fn with_lighting(
+        &self,
+        py: Python<'_>,
+        environment: Option<&str>,
+        images: Option<&Bound<'_, PyDict>>,
+        lights: Option<&str>,
+        add: bool,
+        source: String,
+    ) -> PyResult<Self> {
+        let lighting = lighting_from_py(py, environment, images, lights, add, &source)?;
+        Ok(PyScene {
+            inner: self.inner.with_lighting(&lighting),
+            source: self.source.clone(),
+            bvh: Default::default(),
+        })
+    }
+
     /// Parses a JSON scene description. `meshes` maps each `mesh` object's `file` string to
     /// its arrays (see `gi.scene` for the loader that fills it); `images` maps the
     /// `environment` section's `file` to its float32 (H, W, 3) image.
@@ -200,14 +294,7 @@ impl PyScene {
         images: Option<&Bound<'_, PyDict>>,
         textures: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
-        let mut env_images = HashMap::new();
-        if let Some(images) = images {
-            for (k, v) in images.iter() {
-                let key: String = k.extract()?;
-                let image = env_image_from_py(&key, &v, &source)?;
-                env_images.insert(key, image);
-            }
-        }
+        let env_images = env_images_from_py(images, &source)?;
         let mut map = HashMap::new();
         if let Some(meshes) = meshes {
             for (k, v) in meshes.iter() {

@@ -129,6 +129,7 @@ class Engine:
         self._object_descs = [
             self._interactive.renderer.describe("object", i) for i in range(len(names))
         ]
+        self._environment = m.Environment("scene")
         self._picker: ObjectPicker | None = None
         self._drag: _Drag | None = None
         # Scene changes since the start, newest value per (target, key) with its version.
@@ -324,6 +325,9 @@ class Engine:
         elif isinstance(msg, m.Materials):
             for name, fields in msg.materials.items():
                 self._update("material", name, fields)
+        elif isinstance(msg, m.Environment):
+            self._update("environment", None, msg.spec())
+            self._environment = msg
         elif isinstance(msg, m.Settings):
             self._change_settings(msg.settings)
         elif isinstance(msg, m.Display):
@@ -351,7 +355,9 @@ class Engine:
         records the whole resulting description for the progressive one."""
         r = self._sync(self._interactive)
         r.update(**_update_arguments(target, key, fields))
-        if target == "camera":
+        if target == "environment":
+            value: Any = fields
+        elif target == "camera":
             value = {k: v for k, v in r.describe("camera").items() if k not in ("width", "height")}
         elif target == "light":
             value = r.describe("light", key)
@@ -618,6 +624,13 @@ class Engine:
             "source": source,
             "camera": camera,
             "lights": self._light_descs,
+            "environment": {
+                "source": self._environment.source,
+                "strength": self._environment.strength,
+                "rotation": self._environment.rotation,
+                "mode": self._environment.mode,
+                "choices": list(m.ENVIRONMENTS),
+            },
             "objects": [d["name"] for d in self._object_descs],
             "method": self._method,
             "settings": {k: self._options.get(k) for k in m.SETTINGS if k != "method"},
@@ -668,8 +681,8 @@ def _doing(renderer: Renderer, progressive: bool, passes: int) -> str:
 
 def _update_arguments(target: str, key: Any, value: dict[str, Any]) -> dict[str, Any]:
     """The :meth:`gi.Renderer.update` keywords of one change."""
-    if target == "camera":
-        return {"camera": value}
+    if target in ("camera", "environment"):
+        return {target: value}
     return {f"{target}s": {key: value}}
 
 

@@ -75,6 +75,38 @@ class Materials:
     seq: int | None = None
 
 
+#: The panel's environment choices: the scene's own light (as loaded, with ``--env`` if
+#: given), or the built-in sky with or without its sun (:mod:`gi.lighting`).
+ENVIRONMENTS = ("scene", "sky", "sky without sun")
+
+
+@dataclass(frozen=True)
+class Environment:
+    """The environment light chosen in the panel (one of :data:`ENVIRONMENTS`), its
+    strength, rotation (degrees about +y) and mode ("add" to the scene's light or
+    "replace" it)."""
+
+    source: str
+    strength: float = 1.0
+    rotation: float = 0.0
+    mode: str = "add"
+    seq: int | None = None
+
+    def spec(self) -> Any:
+        """What :meth:`gi.Renderer.update` takes as ``environment``."""
+        if self.source == "scene":
+            return "none"
+        spec: dict[str, Any] = {
+            "source": "sky",
+            "strength": self.strength,
+            "rotation": self.rotation,
+            "mode": self.mode,
+        }
+        if self.source == "sky without sun":
+            spec["sun"] = None
+        return spec
+
+
 @dataclass(frozen=True)
 class Settings:
     """Render options that need a new renderer: method, estimator, photons, subsample
@@ -146,6 +178,7 @@ Message = (
     | Lights
     | Objects
     | Materials
+    | Environment
     | Settings
     | Display
     | Resize
@@ -377,6 +410,7 @@ def parse(text: str | bytes, methods: list[str]) -> Message:
         "lights": ("lights", "seq"),
         "objects": ("objects", "seq"),
         "materials": ("materials", "seq"),
+        "environment": ("source", "strength", "rotation", "mode", "seq"),
         "settings": ("settings",),
         "display": ("exposure", "tonemap", "aov"),
         "resize": ("width", "height"),
@@ -393,7 +427,8 @@ def parse(text: str | bytes, methods: list[str]) -> Message:
         )
     _only(obj, "", ("type", *fields[kind]))
     for name in fields[kind]:
-        if name not in obj and name not in ("seq", "exposure", "tonemap", "aov"):
+        optional = ("seq", "exposure", "tonemap", "aov", "strength", "rotation", "mode")
+        if name not in obj and name not in optional:
             raise MessageError(name, "missing")
     if kind == "camera":
         return Camera(camera_fields(obj["camera"]), _seq(obj))
@@ -403,6 +438,14 @@ def parse(text: str | bytes, methods: list[str]) -> Message:
         return Objects(objects(obj["objects"]), _seq(obj))
     if kind == "materials":
         return Materials(materials(obj["materials"]), _seq(obj))
+    if kind == "environment":
+        return Environment(
+            _string(obj["source"], "source", ENVIRONMENTS),
+            _number(obj.get("strength", 1.0), "strength", 0.0, 1e6),
+            _number(obj.get("rotation", 0.0), "rotation", -1e6, 1e6),
+            _string(obj.get("mode", "add"), "mode", ("add", "replace")),
+            _seq(obj),
+        )
     if kind == "settings":
         return Settings(settings(obj["settings"], methods))
     if kind == "display":

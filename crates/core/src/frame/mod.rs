@@ -112,6 +112,12 @@ pub struct Renderer {
     bvh_cost: BvhCost,
     /// Progressive mode: the running sum of the passes since the last change.
     accum: Option<progressive::Accumulation>,
+    /// The scene's own lights and environment before the first [`Renderer::set_lighting`],
+    /// which each later call starts from.
+    own_lighting: Option<(
+        Vec<crate::scene::Light>,
+        Option<Arc<crate::scene::Environment>>,
+    )>,
 }
 
 /// Every method lights a scene with its environment light: the CPU methods and `ispm`'s
@@ -187,6 +193,7 @@ impl Renderer {
             frame_index: 0,
             bvh_cost: BvhCost::default(),
             accum: None,
+            own_lighting: None,
         })
     }
 
@@ -242,6 +249,33 @@ impl Renderer {
             SceneUpdate::Light { index, .. } => self.lights_changed.push(*index),
             _ => {}
         }
+        Ok(())
+    }
+
+    /// Gives the scene `lighting` before the next frame, starting from its own lights and
+    /// environment as they were before the first call (so that calls do not accumulate;
+    /// light updates made since are dropped): the GPU state, photons and progressive sum
+    /// are rebuilt from the new scene (geometry and its BVH stay).
+    pub fn set_lighting(&mut self, lighting: &crate::scene::Lighting) -> Result<()> {
+        let (lights, env) = self
+            .own_lighting
+            .get_or_insert_with(|| (self.scene.lights.clone(), self.scene.environment.clone()))
+            .clone();
+        let mut scene = self.scene.clone();
+        scene.lights = lights;
+        scene.environment = env;
+        scene.set_lighting(lighting);
+        check_environment(&scene, self.method())?;
+        self.scene = scene;
+        self.warnings = transport_omissions(&self.scene, &self.options);
+        self.gpu = None;
+        self.accum = None;
+        self.ring = PhotonRing::new(self.options.method.temporal_frames() as usize);
+        self.lights_changed = (0..self.scene.lights.len()).collect();
+        self.changes = self.changes.union(Changes {
+            lights: true,
+            ..Default::default()
+        });
         Ok(())
     }
 

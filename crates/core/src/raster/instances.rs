@@ -268,8 +268,9 @@ fn gpu_mesh(scene: &Scene, o: &SceneObject, first: u32) -> GpuMesh {
 }
 
 /// GPU mesh `g`'s vertices in its mesh's frame: per triangle corner its position, shading
-/// normal, texture coordinates, and per triangle its geometric normal (from the winding),
-/// tangent and per-face material offset (0 without). Placement (and a mirrored object's
+/// normal, texture coordinates and tangent (the mesh's per-corner tangents, else the
+/// triangle's own frame at each corner), and per triangle its geometric normal (from the
+/// winding) and per-face material offset (0 without). Placement (and a mirrored object's
 /// flipped handedness) is the instance's, in the vertex stage.
 fn mesh_vertices(scene: &Scene, g: &GpuMesh, out: &mut Vec<VertexRaw>) {
     let mesh = &scene.meshes[g.source as usize];
@@ -277,9 +278,16 @@ fn mesh_vertices(scene: &Scene, g: &GpuMesh, out: &mut Vec<VertexRaw>) {
     for (t, tri) in mesh.indices.iter().enumerate() {
         let p = tri.map(|i| mesh.positions[i as usize]);
         let ng = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero();
-        let tangent = triangle_tangent(p, uvs[t]).unwrap_or(Vec4::ZERO);
+        let stored = scene
+            .mesh_tangents
+            .get(g.source as usize)
+            .and_then(Option::as_ref);
+        let tangents = match stored {
+            Some(corners) => corners[t],
+            None => [triangle_tangent(p, uvs[t]).unwrap_or(Vec4::ZERO); 3],
+        };
         let material = g.faces.as_ref().map_or(0, |f| f[t]);
-        for c in 0..3 {
+        for (c, tangent) in tangents.into_iter().enumerate() {
             out.push(VertexRaw {
                 position: p[c].into(),
                 normal: mesh.normals[tri[c] as usize].into(),

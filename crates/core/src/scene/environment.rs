@@ -310,6 +310,47 @@ impl Environment {
         }
     }
 
+    /// The light of `self` and `other` together, as one environment: the constant sum of
+    /// two constants; else an image on the grid of `self`'s image (of `other`'s when `self`
+    /// is constant) in its frame, each texel its own radiance plus the other's along the
+    /// texel's centre direction (the other's nearest texel: exact for a constant, resampled
+    /// for a second image).
+    pub fn sum(&self, other: &Environment) -> Environment {
+        let (base, add) = match (&self.source, &other.source) {
+            (Source::Constant(_), Source::Image { .. }) => (other, self),
+            _ => (self, other),
+        };
+        let importance = self.importance && other.importance;
+        let Source::Image { image, .. } = &base.source else {
+            let mut e = Environment::constant(self.radiance(Vec3::Y) + other.radiance(Vec3::Y));
+            e.importance = importance;
+            return e;
+        };
+        let (w, h) = (image.width as usize, image.height as usize);
+        let texels = (0..w * h)
+            .map(|i| {
+                let u = ((i % w) as f32 + 0.5) / w as f32;
+                let theta = PI * ((i / w) as f32 + 0.5) / h as f32;
+                let phi = 2.0 * PI * u;
+                let local = Vec3::new(
+                    theta.sin() * phi.sin(),
+                    theta.cos(),
+                    -theta.sin() * phi.cos(),
+                );
+                image.texels[i] * base.scale + add.radiance(base.to_world(local))
+            })
+            .collect();
+        let summed = EnvImage {
+            width: image.width,
+            height: image.height,
+            texels,
+        };
+        let (c, s) = base.rot;
+        let mut e = Environment::image(summed, 1.0, s.atan2(c).to_degrees());
+        e.importance = importance;
+        e
+    }
+
     /// (cos, sin) of the rotation about +y.
     pub fn rotation(&self) -> (f32, f32) {
         self.rot

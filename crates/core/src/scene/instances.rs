@@ -21,6 +21,11 @@ impl Scene {
             .iter()
             .map(|o| Arc::new((*self.mesh_uvs[o.mesh as usize]).clone()))
             .collect();
+        s.mesh_tangents = s
+            .objects
+            .iter()
+            .map(|o| self.mesh_tangents.get(o.mesh as usize).cloned().flatten())
+            .collect();
         for (i, o) in s.objects.iter_mut().enumerate() {
             o.mesh = i as u32;
         }
@@ -57,6 +62,7 @@ impl Scene {
                 Arc::new(flat.uvs[o.triangles.start as usize..o.triangles.end as usize].to_vec())
             })
             .collect();
+        s.mesh_tangents = s.objects.iter().map(|o| self.placed_tangents(o)).collect();
         for (i, o) in s.objects.iter_mut().enumerate() {
             o.mesh = i as u32;
             o.set_transform(Mat4::IDENTITY);
@@ -65,5 +71,29 @@ impl Scene {
         }
         s.flat = Default::default();
         s
+    }
+}
+
+impl Scene {
+    /// Object `o`'s mesh tangents placed in world space, in its flat corner order (what
+    /// [`Scene::tangent_at`] interpolates), for the flattened scene.
+    fn placed_tangents(&self, o: &super::SceneObject) -> Option<super::tangents::CornerTangents> {
+        let corners = self.mesh_tangents.get(o.mesh as usize)?.as_ref()?;
+        let linear = glam::Mat3::from_mat4(o.transform);
+        let flip = if o.flipped { -1.0 } else { 1.0 };
+        let place = |k: glam::Vec4| {
+            (linear * k.truncate())
+                .normalize_or_zero()
+                .extend(k.w * flip)
+        };
+        Some(Arc::new(
+            corners
+                .iter()
+                .map(|c| {
+                    let c = if o.flipped { [c[0], c[2], c[1]] } else { *c };
+                    c.map(place)
+                })
+                .collect(),
+        ))
     }
 }

@@ -12,10 +12,12 @@ pub mod instances;
 pub mod light;
 pub mod light_bvh;
 pub mod light_views;
+pub mod lighting;
 pub mod primitives;
 pub mod shading;
 pub mod sources;
 pub mod surface;
+pub mod tangents;
 pub mod update;
 
 pub use animation::Animation;
@@ -25,6 +27,7 @@ pub use emitters::{EmitterSampler, Emitters};
 pub use environment::{EnvImage, Environment};
 pub use flat::Flat;
 pub use light::{Bounds, Light};
+pub use lighting::Lighting;
 pub use primitives::TriMesh;
 pub use shading::Smoothing;
 pub use sources::{Source, Sources};
@@ -56,6 +59,9 @@ pub struct MeshData {
     pub material_textures: Vec<desc::TextureRefs>,
     /// Texture coordinates per triangle corner (empty: none, all zero).
     pub uvs: Vec<[Vec2; 3]>,
+    /// Tangent frames per triangle corner in gi's convention ([`tangents`]; glTF's
+    /// `TANGENT` with `w` negated); empty: none (MikkTSpace's where a normal map needs them).
+    pub tangents: Vec<[glam::Vec4; 3]>,
 }
 
 /// A renderable scene: unique meshes in their local frames ([`Scene::meshes`]), objects that
@@ -81,6 +87,9 @@ pub struct Scene {
     pub meshes: Vec<Arc<TriMesh>>,
     /// Texture coordinates per triangle corner of each unique mesh (same order as `meshes`).
     pub mesh_uvs: Vec<Arc<Vec<[Vec2; 3]>>>,
+    /// Tangent frames per triangle corner of each unique mesh (same order as `meshes`),
+    /// stored or MikkTSpace's; `None`: each triangle's own frame ([`tangents`]).
+    pub mesh_tangents: Vec<Option<tangents::CornerTangents>>,
     /// The flat world-space view, built on first use ([`Scene::flat`]).
     pub(crate) flat: std::sync::OnceLock<Arc<Flat>>,
     /// The description's keyframed tracks, if any (see [`animation`]).
@@ -184,6 +193,31 @@ fn resolve_objects<'a>(
         out.push((xf, mesh_index, uvs, file_materials, material));
     }
     Ok((out, names))
+}
+
+/// The tangents each unique mesh's file stores (index: mesh), checked against its
+/// triangles; an error names the first object that places a mesh with invalid ones.
+fn stored_tangents(
+    resolved: &[Resolved],
+    meshes: usize,
+) -> std::result::Result<Vec<Option<tangents::CornerTangents>>, (usize, String)> {
+    let mut out: Vec<Option<tangents::CornerTangents>> = vec![None; meshes];
+    for (i, (_, m, uvs, data, _)) in resolved.iter().enumerate() {
+        let Some(data) = data.filter(|d| !d.tangents.is_empty()) else {
+            continue;
+        };
+        if out[*m as usize].is_some() {
+            continue;
+        }
+        if !tangents::valid(&data.tangents, uvs.len().max(data.mesh.indices.len())) {
+            return Err((
+                i,
+                "tangents must be finite, one per triangle corner".to_string(),
+            ));
+        }
+        out[*m as usize] = Some(Arc::new(data.tangents.clone()));
+    }
+    Ok(out)
 }
 
 /// Bytes of the flat view per vertex (position, normal) and per triangle (corners, texture
@@ -432,6 +466,7 @@ impl Scene {
             objects: Vec::new(),
             meshes: Vec::new(),
             mesh_uvs: Vec::new(),
+            mesh_tangents: Vec::new(),
             flat: Default::default(),
             animation: None,
             environment: None,
@@ -446,6 +481,8 @@ impl Scene {
             source_name,
         )?;
         scene.check_flat(&resolved)?;
+        let stored = stored_tangents(&resolved, scene.meshes.len())
+            .map_err(|(i, m)| err(format!("objects[{i}].shape.file"), &m))?;
         scene.objects.reserve_exact(resolved.len());
         // The file's per-face materials, shared by the objects that place one mesh.
         let mut face_of: HashMap<u32, Arc<Vec<u32>>> = HashMap::new();
@@ -501,6 +538,7 @@ impl Scene {
                 o.described = Some(obj.transform.clone());
             }
         }
+        scene.build_tangents(&stored);
         if let Some(anim) = &desc.animation {
             scene.animation = Some(Animation::from_desc(anim, desc, &scene, source_name)?);
         }

@@ -58,7 +58,7 @@ impl Interaction {
         }
         let uv = scene.uv_at(t, hit.u, hit.v);
         if let Some(i) = scene.maps_of(t).normal {
-            if let Some(tangent) = scene.tangent_of(t) {
+            if let Some(tangent) = scene.tangent_at(t, hit.u, hit.v) {
                 // ns is on the winding's side here, as the tangent frame.
                 let texel = scene.texture(i).sample(uv, 0.0).truncate();
                 let n = surface::perturb_normal(ns, tangent, texel);

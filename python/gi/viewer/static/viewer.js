@@ -288,6 +288,11 @@
     $("scene").textContent = state.scene;
     fillSelect($("method"), state.methods, state.method);
     fillSelect($("tonemap"), state.tonemaps, state.display.tonemap);
+    if (state.environment) {
+      fillSelect($("env-source"), state.environment.choices, state.environment.source);
+      setInput($("env-strength"), state.environment.strength);
+      if (document.activeElement !== $("env-mode")) $("env-mode").value = state.environment.mode;
+    }
     fillSelect($("aov"), state.aovs, state.display.aov, (n) => (n === "radiance" ? "beauty" : n));
     // The option table's rows for this method (gi.options_table): choices, defaults, docs; an
     // option the method does not take is disabled (kept for the methods that do).
@@ -496,6 +501,20 @@
     send({ type: "display", exposure: Number(e.target.value) });
   });
   $("tonemap").addEventListener("change", (e) => send({ type: "display", tonemap: e.target.value }));
+  // The environment light (gi.lighting): the scene's own, or the built-in sky.
+  function sendEnvironment() {
+    const strength = Number($("env-strength").value);
+    if (!(strength >= 0)) return showError("environment strength: expected a number ≥ 0");
+    send({
+      type: "environment", source: $("env-source").value, strength,
+      rotation: Number($("env-rotation").value), mode: $("env-mode").value, seq: ++seq,
+    });
+  }
+  ["env-source", "env-strength", "env-mode"].forEach((id) => $(id).addEventListener("change", sendEnvironment));
+  $("env-rotation").addEventListener("input", (e) => {
+    $("env-rotation-value").textContent = e.target.value;
+  });
+  $("env-rotation").addEventListener("change", sendEnvironment);
   $("aov").addEventListener("change", (e) => send({ type: "display", aov: e.target.value }));
   $("pause").addEventListener("click", () => send({ type: "pause", paused: !(server && server.paused) }));
   $("reset").addEventListener("click", () => send({ type: "reset_view", seq: ++seq }));

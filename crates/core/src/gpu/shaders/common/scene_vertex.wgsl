@@ -35,7 +35,8 @@ struct VertexOut {
     @location(2) @interpolate(flat) geometric_normal: vec3<f32>,
     @location(3) @interpolate(flat) material: u32,
     @location(4) uv: vec2<f32>,
-    @location(5) @interpolate(flat) tangent: vec4<f32>,
+    // Interpolated across the triangle, as `Scene::tangent_at` does on the CPU.
+    @location(5) tangent: vec4<f32>,
 }
 
 fn normalize_or_zero(v: vec3<f32>) -> vec3<f32> {

@@ -29,12 +29,19 @@ from typing import Any
 
 import numpy as np
 
+from gi.gltf import draco
+from gi.gltf.errors import GltfError
+from gi.gltf.uv import MaterialUv, apply
 from gi.textures import TextureError, TextureSet, resample
 
 _DTYPES = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32}
 _DTYPES[5126] = np.float32
 _COMPONENTS = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT4": 16}
-_UNSUPPORTED_TEXTURES = ("occlusionTexture",)
+# Why the occlusion map is not read, said once per file.
+_OCCLUSION = (
+    "ignored: gi computes how much light reaches each point by tracing it, so a baked"
+    " ambient-occlusion map would darken what the light transport already shadows"
+)
 _REPEAT = 10497
 # Material extensions gi reads.
 _MATERIAL_EXTENSIONS = (
@@ -56,17 +63,9 @@ _READABLE = {
     "KHR_materials_emissive_strength",
     "KHR_texture_transform",
     "KHR_mesh_quantization",
+    "KHR_draco_mesh_compression",
     "EXT_mesh_gpu_instancing",
 }
-
-
-class GltfError(ValueError):
-    """A malformed or unsupported glTF file; ``field`` names the JSON path at fault."""
-
-    def __init__(self, field: str, reason: str):
-        super().__init__(f"{field}: {reason}")
-        self.field = field
-        self.reason = reason
 
 
 @dataclass
@@ -81,6 +80,7 @@ class GltfMesh:
     warnings: dict[str, str] = field(default_factory=dict)  # JSON path -> what is ignored
     uvs: np.ndarray | None = None  # float64 (N, 2), TEXCOORD_0 (v down), zero where none
     lights: list[dict[str, Any]] = field(default_factory=list)  # gi lights, world space
+    tangents: np.ndarray | None = None  # float64 (N, 4), gi's convention, zero w: none
 
 
 def _read_document(path: Path) -> tuple[dict[str, Any], bytes | None]:
@@ -287,9 +287,12 @@ def _texture(
     where: str,
     colour: bool,
     warn: dict[str, str],
+    uv: MaterialUv | None = None,
 ) -> str | None:
     """The texture a material's texture-info refers to, read into `textures`; None (with a
-    warning) where gi cannot use it."""
+    warning) where gi cannot use it. Its texture-coordinate set and transform go to `uv`."""
+    if uv is not None:
+        uv.add(info, where)
     if reader is None or textures is None:
         return None
     doc = reader.doc
@@ -299,10 +302,6 @@ def _texture(
     except (KeyError, IndexError, TypeError):
         warn[where] = "the texture has no image gi can read; the constant factor is used"
         return None
-    if info.get("texCoord", 0) != 0:
-        warn[f"{where}.texCoord"] = "only TEXCOORD_0 is read; the first set is used"
-    if "KHR_texture_transform" in info.get("extensions", {}):
-        warn[f"{where}.extensions.KHR_texture_transform"] = "texture transforms are ignored"
     sampler = doc.get("samplers", [])[tex["sampler"]] if "sampler" in tex else {}
     if sampler.get("wrapS", _REPEAT) != _REPEAT or sampler.get("wrapT", _REPEAT) != _REPEAT:
         warn[f"{where}.sampler"] = "only repeat wrapping is supported; it repeats"
@@ -319,8 +318,10 @@ def _material(
     warn: dict[str, str],
     reader: _Reader | None = None,
     textures: TextureSet | None = None,
+    uv: MaterialUv | None = None,
 ) -> dict[str, Any]:
-    """glTF metallic-roughness (with the glTF defaults) onto the uber BSDF."""
+    """glTF metallic-roughness (with the glTF defaults) onto the uber BSDF; the texture
+    coordinates its textures read are collected in `uv`."""
     mat = doc["materials"][i]
     where = f"materials[{i}]"
     pbr = mat.get("pbrMetallicRoughness", {})
@@ -346,7 +347,7 @@ def _material(
     base_tex = mr_tex = None
     if "baseColorTexture" in pbr:
         base_tex = _texture(
-            reader, textures, pbr["baseColorTexture"], f"{pw}.baseColorTexture", True, warn
+            reader, textures, pbr["baseColorTexture"], f"{pw}.baseColorTexture", True, warn, uv
         )
     if "metallicRoughnessTexture" in pbr:
         mr_tex = _texture(
@@ -356,20 +357,20 @@ def _material(
             f"{pw}.metallicRoughnessTexture",
             False,
             warn,
+            uv,
         )
     if textures is not None and (base_tex or mr_tex):
         _bake_metallic(desc, textures, base_tex, mr_tex, base, metal, trans, i)
     if "normalTexture" in mat:
         info = mat["normalTexture"]
-        normal = _texture(reader, textures, info, f"{where}.normalTexture", False, warn)
+        normal = _texture(reader, textures, info, f"{where}.normalTexture", False, warn, uv)
         if normal:
             desc["normal_texture"] = normal
             if float(info.get("scale", 1.0)) != 1.0:
                 warn[f"{where}.normalTexture.scale"] = "normal map scales are ignored (1 is used)"
-    for name in _UNSUPPORTED_TEXTURES:
-        if name in mat:
-            warn[f"{where}.{name}"] = "this texture is not supported; it is ignored"
-    _emission(desc, mat, where, warn, reader, textures)
+    if "occlusionTexture" in mat:
+        warn.setdefault("materials[*].occlusionTexture", f"{_OCCLUSION} (first: {where})")
+    _emission(desc, mat, where, warn, reader, textures, uv)
     mode = mat.get("alphaMode", "OPAQUE")
     if mode != "OPAQUE":
         cutoff = float(mat.get("alphaCutoff", 0.5)) if mode == "MASK" else 0.5
@@ -403,6 +404,7 @@ def _emission(
     warn: dict[str, str],
     reader: _Reader | None,
     textures: TextureSet | None,
+    uv: MaterialUv | None = None,
 ) -> None:
     """glTF emission onto the material: ``emission`` = ``emissiveFactor`` × the
     ``KHR_materials_emissive_strength`` (radiance, W·sr⁻¹·m⁻²), ``emission_texture`` =
@@ -417,7 +419,7 @@ def _emission(
         desc["two_sided"] = True
     if "emissiveTexture" in mat:
         info = mat["emissiveTexture"]
-        tex = _texture(reader, textures, info, f"{where}.emissiveTexture", True, warn)
+        tex = _texture(reader, textures, info, f"{where}.emissiveTexture", True, warn, uv)
         if tex:
             desc["emission_texture"] = tex
 
@@ -520,6 +522,8 @@ class GltfPrimitive:
     uvs: np.ndarray  # float64 (N, 2), TEXCOORD_0 (v down), zero where none
     material: int  # index into `GltfScene.materials`, -1: none
     index: int = 0  # the primitive's index in its glTF mesh
+    # float64 (N, 4) tangents in gi's convention (TANGENT with w negated), None: none
+    tangents: np.ndarray | None = None
 
 
 @dataclass
@@ -583,11 +587,15 @@ class _SceneReader:
         self.materials: list[tuple[str, dict[str, Any]]] = []
         self.names: set[str] = set()
         self.meshes: dict[int, list[GltfPrimitive]] = {}
+        # Our material index -> the TEXCOORD set and transform its textures read.
+        self.uvs: dict[int, tuple[int, np.ndarray | None]] = {}
 
     def material(self, mi: int) -> int:
         if mi not in self.used:
             doc = self.doc
-            desc = _material(doc, mi, self.warn, self.reader, self.textures)
+            uv = MaterialUv()
+            desc = _material(doc, mi, self.warn, self.reader, self.textures, uv)
+            self.uvs[len(self.materials)] = uv.resolve()
             base = f"{self.path.name}:{doc['materials'][mi].get('name') or f'material{mi}'}"
             name = base if base not in self.names else f"{base}#{mi}"
             self.names.add(name)
@@ -602,47 +610,95 @@ class _SceneReader:
 
     def _primitives(self, mi: int) -> list[GltfPrimitive | None]:
         out: list[GltfPrimitive | None] = []
-        warn, reader = self.warn, self.reader
         for pi, prim in enumerate(self.doc["meshes"][mi]["primitives"]):
-            where = f"meshes[{mi}].primitives[{pi}]"
-            attrs = prim.get("attributes", {})
-            if "POSITION" not in attrs:
-                continue
-            p = reader.accessor(attrs["POSITION"]).astype(np.float64)[:, :3]
-            if "indices" in prim:
-                idx = reader.accessor(prim["indices"]).astype(np.int64).ravel()
-            else:
-                idx = np.arange(len(p), dtype=np.int64)
-            tri = _triangles(prim.get("mode", 4), idx, where)
-            if tri is None:
-                warn[f"{where}.mode"] = "points and lines are skipped (no surface)"
-                continue
-            if len(tri) == 0:
-                continue
-            if tri.min() < 0 or tri.max() >= len(p):
-                raise GltfError(f"{where}.indices", "index out of range")
-            normals = None
-            if "NORMAL" in attrs:
-                normals = reader.accessor(attrs["NORMAL"]).astype(np.float64)[:, :3]
-            if "TEXCOORD_0" in attrs:
-                uv = reader.accessor(attrs["TEXCOORD_0"]).astype(np.float64)[:, :2]
-                uv = np.nan_to_num(uv) if len(uv) == len(p) else np.zeros((len(p), 2))
-            else:
-                uv = np.zeros((len(p), 2))
-            if prim.get("targets"):
-                warn[f"{where}.targets"] = "morph targets are ignored (the base shape is used)"
-            if "TANGENT" in attrs:
-                warn[f"{where}.attributes.TANGENT"] = (
-                    "stored tangents are ignored: normal maps use each triangle's tangent "
-                    "frame from its UVs (MikkTSpace-baked maps may shade slightly differently)"
-                )
-            for a in attrs:
-                if a.startswith("COLOR_"):
-                    warn[f"{where}.attributes.{a}"] = "vertex colours are not supported"
-            mat = prim.get("material")
-            material = -1 if mat is None else self.material(mat)
-            out.append(GltfPrimitive(p, tri, normals, uv, material, pi))
+            out.append(self._primitive(prim, f"meshes[{mi}].primitives[{pi}]", pi))
         return out
+
+    def _attributes(
+        self, prim: dict[str, Any], where: str
+    ) -> tuple[dict[str, np.ndarray], np.ndarray | None]:
+        """The primitive's attribute arrays by name and its indices (None: none), read
+        from its accessors or decoded from its Draco data."""
+        attrs = prim.get("attributes", {})
+        ext = prim.get("extensions", {}).get(draco.EXTENSION)
+        if ext is not None:
+            try:
+                view = self.doc["bufferViews"][ext["bufferView"]]
+                start = view.get("byteOffset", 0)
+                data = self.reader.buffer(view["buffer"])[start : start + view["byteLength"]]
+            except (KeyError, IndexError, TypeError) as e:
+                ew = f"{where}.extensions.{draco.EXTENSION}.bufferView"
+                raise GltfError(ew, f"names no buffer view ({e!r})") from e
+            acc = self.doc.get("accessors", [])
+            arrays, faces = draco.decode(ext, attrs, acc, data, where)
+            # Attributes the compressed data leaves out are read from their accessors.
+            for name, i in attrs.items():
+                arrays.setdefault(name, self.reader.accessor(i))
+            return arrays, faces.ravel()
+        arrays = {name: self.reader.accessor(i) for name, i in attrs.items() if name in _READ}
+        if "indices" in prim:
+            return arrays, self.reader.accessor(prim["indices"]).astype(np.int64).ravel()
+        return arrays, None
+
+    def _primitive(self, prim: dict[str, Any], where: str, pi: int) -> GltfPrimitive | None:
+        warn = self.warn
+        attrs = prim.get("attributes", {})
+        if "POSITION" not in attrs:
+            return None
+        arrays, idx = self._attributes(prim, where)
+        p = arrays["POSITION"].astype(np.float64)[:, :3]
+        if idx is None:
+            idx = np.arange(len(p), dtype=np.int64)
+        tri = _triangles(prim.get("mode", 4), idx.astype(np.int64), where)
+        if tri is None:
+            warn[f"{where}.mode"] = "points and lines are skipped (no surface)"
+            return None
+        if len(tri) == 0:
+            return None
+        if tri.min() < 0 or tri.max() >= len(p):
+            raise GltfError(f"{where}.indices", "index out of range")
+        normals = None
+        if "NORMAL" in arrays:
+            normals = arrays["NORMAL"].astype(np.float64)[:, :3]
+        mat = prim.get("material")
+        material = -1 if mat is None else self.material(mat)
+        coord, transform = self.uvs.get(material, (0, None))
+        name = f"TEXCOORD_{coord}"
+        if name in arrays:
+            uv = arrays[name].astype(np.float64)[:, :2]
+            uv = np.nan_to_num(uv) if len(uv) == len(p) else np.zeros((len(p), 2))
+            uv = apply(uv, transform)
+        elif coord != 0:
+            raise GltfError(f"{where}.attributes", f"no {name}, which its material's textures read")
+        else:
+            uv = np.zeros((len(p), 2))
+        if prim.get("targets"):
+            warn[f"{where}.targets"] = "morph targets are ignored (the base shape is used)"
+        tangents = _tangents(arrays, len(p), where) if "TANGENT" in arrays else None
+        for a in attrs:
+            if a.startswith("COLOR_"):
+                warn[f"{where}.attributes.{a}"] = "vertex colours are not supported"
+        return GltfPrimitive(p, tri, normals, uv, material, pi, tangents)
+
+
+# Attributes the reader uses (others, e.g. JOINTS_0, are not read).
+_READ = {"POSITION", "NORMAL", "TANGENT", *(f"TEXCOORD_{i}" for i in range(8))}
+
+
+def _tangents(arrays: dict[str, np.ndarray], n: int, where: str) -> np.ndarray:
+    """A primitive's ``TANGENT`` (xyz, w = ±1: glTF's bitangent is w · n × t, up the image)
+    in gi's convention, w negated (its bitangent runs down the image, along +v)."""
+    t = arrays["TANGENT"].astype(np.float64)
+    tw = f"{where}.attributes.TANGENT"
+    if t.ndim != 2 or t.shape[1] != 4 or len(t) != n:
+        raise GltfError(tw, "must be VEC4 with one tangent per vertex")
+    if not np.isfinite(t).all():
+        raise GltfError(
+            tw, f"tangent {int(np.flatnonzero(~np.isfinite(t).all(axis=1))[0])} is not finite"
+        )
+    out = t.copy()
+    out[:, 3] = np.where(t[:, 3] < 0, 1.0, -1.0)
+    return out
 
 
 def _camera(
@@ -732,6 +788,7 @@ def load_gltf(path: Path, textures: TextureSet | None = None) -> GltfMesh:
     `textures` (without one, textures are reported and not read)."""
     scene = read_gltf(path, textures)
     verts, faces, normals, face_mats, uvs = [], [], [], [], []
+    tangents: list[np.ndarray | None] = []
     offset = 0
     for inst in scene.instances:
         world = inst.matrix
@@ -752,6 +809,7 @@ def load_gltf(path: Path, textures: TextureSet | None = None) -> GltfMesh:
             else:
                 normals.append(None)
             uvs.append(prim.uvs)
+            tangents.append(_placed_tangents(prim.tangents, lin, mirrored))
             faces.append(tri + offset)
             offset += len(p)
             face_mats.append(np.full(len(tri), prim.material, np.int64))
@@ -783,4 +841,25 @@ def load_gltf(path: Path, textures: TextureSet | None = None) -> GltfMesh:
         warnings=warn,
         uvs=np.concatenate(uvs),
         lights=lights,
+        tangents=(
+            np.concatenate(
+                [
+                    t if t is not None else np.zeros((len(v), 4))
+                    for t, v in zip(tangents, verts, strict=True)
+                ]
+            )
+            if any(t is not None for t in tangents)
+            else None
+        ),
     )
+
+
+def _placed_tangents(t: np.ndarray | None, lin: np.ndarray, mirrored: bool) -> np.ndarray | None:
+    """Tangents (gi's convention) placed by a node's linear map: xyz mapped and normalized,
+    w negated by a mirroring map (as the core places an object's tangents)."""
+    if t is None:
+        return None
+    xyz = t[:, :3] @ lin.T
+    with np.errstate(all="ignore"):
+        xyz = np.nan_to_num(xyz / np.linalg.norm(xyz, axis=1, keepdims=True))
+    return np.concatenate([xyz, t[:, 3:] * (-1.0 if mirrored else 1.0)], axis=1)
