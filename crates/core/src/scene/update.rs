@@ -332,6 +332,14 @@ impl Scene {
             emission: m.emission.into(),
             emission_texture: t.emission,
             two_sided: m.two_sided,
+            distribution: match m.distribution {
+                crate::bsdf::Distribution::Ggx => super::desc::DistributionDesc::Ggx,
+                crate::bsdf::Distribution::Beckmann => super::desc::DistributionDesc::Beckmann,
+            },
+            coating_ior: m.coating.map(|c| c.eta),
+            coating_nonlinear: m.coating.is_some_and(|c| c.nonlinear),
+            conductor_eta: m.conductor.map(|c| c.eta.into()),
+            conductor_k: m.conductor.map(|c| c.k.into()),
         })
     }
 }
