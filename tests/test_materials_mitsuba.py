@@ -58,3 +58,42 @@ def test_gpu_methods_name_their_stand_ins():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         gi.Renderer(scene, "path", size=(16, 16), spp=1)
+
+
+@pytest.mark.parametrize(
+    "bsdf, element",
+    [
+        (
+            '<bsdf type="roughplastic"><float name="alpha_u" value="0.1"/>'
+            '<float name="alpha_v" value="0.2"/></bsdf>',
+            '<bsdf type="roughplastic">',
+        ),
+        (
+            '<bsdf type="roughconductor"><string name="distribution" value="phong"/></bsdf>',
+            '<string name="distribution">',
+        ),
+        (
+            '<bsdf type="conductor"><string name="material" value="Au"/>'
+            '<rgb name="eta" value="0.2"/></bsdf>',
+            '<string name="material">',
+        ),
+        (
+            '<bsdf type="conductor"><string name="material" value="Unobtainium"/></bsdf>',
+            '<string name="material">',
+        ),
+        (
+            '<bsdf type="plastic"><float name="int_ior" value="1.2"/>'
+            '<float name="ext_ior" value="1.33"/></bsdf>',
+            '<bsdf type="plastic">',
+        ),
+    ],
+)
+def test_material_properties_gi_cannot_render_are_errors(tmp_path, bsdf, element):
+    """Mitsuba refuses these too (or they have no meaning): a SceneError naming the file,
+    the element and its line, never a warning and another material."""
+    path = tmp_path / "s.xml"
+    path.write_text(f'<scene version="3.0.0">\n<shape type="sphere">\n{bsdf}\n</shape>\n</scene>\n')
+    with pytest.raises(gi.SceneError) as e:
+        gi.load_scene(path)
+    assert e.value.field == f"{element} (line 3)", e.value.field
+    assert e.value.file.endswith("s.xml")
