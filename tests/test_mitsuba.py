@@ -215,15 +215,17 @@ up="0, 0, 1"/></transform><float name="cutoff_angle" value="30"/></emitter>"""
     spot = t.lights[0]
     assert spot["direction"] == pytest.approx([0, -1, 0])
     assert (spot["inner_angle"], spot["outer_angle"]) == (22.5, 30.0)
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
         scene = gi.load_scene(path)
+    # The spot's falloff is the one approximation here; the BSDFs have none.
+    assert [str(w.message) for w in caught if "spot" not in str(w.message)] == []
     assert scene.triangle_count > 12 + 2
 
 
 def test_bitmap_texture_is_rendered_as_a_texture(tmp_path):
     """A rectangle facing the camera with a bitmap reflectance, red on the image's left half
-    and black on its right: the albedo shows both halves, upright (the mean colour used to
+    and black on its right: the albedo shows both halves (the mean colour used to
     be taken instead, with a warning)."""
     texture = np.zeros((4, 4, 3), np.float32)
     texture[:, :2] = [1, 0, 0]

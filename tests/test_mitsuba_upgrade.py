@@ -123,9 +123,8 @@ def test_uv_offsets_become_a_to_uv_transform():
     ]
 
 
-# Mitsuba 3.9.1 `scalar_rgb`, `mi.traverse` of a diffuse BSDF's `reflectance` and an area
-# emitter's `radiance` given these spectra (tests/scenes/third_party/cbox's, and others).
-CBOX_WHITE = "tests/scenes/third_party/cbox/cbox.xml"
+# Mitsuba 3.9.1 `scalar_rgb`'s `mi.traverse` of a diffuse BSDF's `reflectance` and an area
+# emitter's `radiance` given these spectra (scripts/probe/mitsuba_spectra.py).
 MITSUBA_SRGB = [
     ("reflectance", "400:0.78, 500:0.78, 600:0.78, 700:0.78", [0.7763668, 0.77981, 0.7760291]),
     ("radiance", "400:0, 500:8, 600:15.6, 700:18.4", [20.710836, 10.854634, 2.771152]),
@@ -240,6 +239,10 @@ def test_serialized_shapes(tmp_path):
     with pytest.raises(gi.SceneError, match="out of range") as e:
         gi.load_scene(write(tmp_path, bad))
     assert e.value.field == '<shape type="serialized"> (line 6)'
+    data = serialized_bytes([quad, tri])
+    (tmp_path / "m.serialized").write_bytes(data[:30] + data[-12:])  # a truncated shape
+    with pytest.raises(gi.SceneError, match="cannot read m.serialized"):
+        gi.load_scene(write(tmp_path, body))
 
 
 # One per kind of property that changes the picture: (body, sensor or None, element, line,
@@ -315,6 +318,28 @@ APERTURE = SENSOR.replace(
         ('<shape type="sphere"/>', NEAR, '<float name="near_clip">', 1, "near_clip"),
         ('<shape type="sphere"/>', FAR, '<float name="far_clip">', 1, "far_clip"),
         (
+            '<bsdf type="diffuse" id="d"><texture type="bitmap" name="reflectance">'
+            '<transform name="to_uv"><scale x="2"/></transform></texture></bsdf>',
+            None,
+            '<transform name="to_uv">',
+            6,
+            "to_uv",
+        ),
+        (
+            '<emitter type="point"><blackbody name="intensity" temperature="5000"/></emitter>',
+            None,
+            '<blackbody name="intensity">',
+            6,
+            "blackbody",
+        ),
+        (
+            '<shape type="sphere"><medium type="homogeneous" name="interior"/></shape>',
+            None,
+            '<medium type="homogeneous">',
+            6,
+            "medium",
+        ),
+        (
             '<bsdf type="roughconductor" id="c"><float name="ext_eta" value="1.5"/></bsdf>',
             None,
             '<float name="ext_eta">',
@@ -348,3 +373,34 @@ def test_cosmetic_settings_load_silently(tmp_path):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         gi.load_scene(write(tmp_path, body, sensor=sensor))
+
+
+def test_clip_planes_that_cut_nothing_load(tmp_path):
+    """A camera inside a closed room (the default near plane, 0.01, cuts nothing there) and
+    a far plane beyond everything: no error (only geometry the planes would cut is)."""
+    sensor = SENSOR.replace(
+        '<float name="fov" value="40"/>',
+        '<float name="fov" value="40"/><float name="far_clip" value="20"/>',
+    )
+    body = '<shape type="cube"><transform name="to_world"><scale value="5"/></transform></shape>'
+    translate(write(tmp_path, body, sensor=sensor))
+
+
+def test_include_errors_name_the_included_file(tmp_path):
+    """An error in an included file names that file and its line; a file including itself
+    is refused, not followed forever."""
+    (tmp_path / "part.xml").write_text(
+        '<scene version="0.5.0">\n<shape type="sphere">\n'
+        '<float name="noSuchThing" value="1"/></shape>\n</scene>\n'
+    )
+    path = write(tmp_path, '<include filename="part.xml"/>')
+    with pytest.raises(gi.SceneError) as e:
+        gi.load_scene(path)
+    # The part's own 0.5 version upgraded its camelCase name.
+    assert e.value.file == str(tmp_path / "part.xml")
+    assert e.value.field == '<float name="no_such_thing"> (line 3)'
+    (tmp_path / "loop.xml").write_text(
+        '<scene version="3.0.0"><include filename="loop.xml"/></scene>'
+    )
+    with pytest.raises(gi.SceneError, match="nested more than"):
+        gi.load_scene(write(tmp_path, '<include filename="loop.xml"/>'))

@@ -44,6 +44,8 @@ def test_wheel_is_abi3_manylinux_and_small(tmp_path):
         # The viewer's page is package data (it must work offline).
         for name in ("index.html", "viewer.js", "viewer.css"):
             assert f"gi/viewer/static/{name}" in z.namelist(), name
+        # The Mitsuba importer's CIE tables are package data too.
+        assert "gi/mitsuba/cie_tables.npz" in z.namelist()
         dist_info = next(n for n in z.namelist() if n.endswith(".dist-info/METADATA"))
         metadata = z.read(dist_info).decode()
         wheel_meta = z.read(dist_info.replace("METADATA", "WHEEL")).decode()

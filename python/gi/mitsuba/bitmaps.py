@@ -12,6 +12,21 @@ from gi.mitsuba.values import Reader
 from gi.textures import TextureError
 
 
+def check_bitmap(r: Reader, tex: Element, filtered: bool = True) -> None:
+    """A bitmap's properties: `filename`, `raw`, `wrap_mode` (repeat; others warn),
+    `filter_type` (bilinear; `nearest` warns: gi filters bilinearly) and a `to_uv` that must
+    be the identity (gi's materials have no texture transform). `filtered` False: the
+    filter does not matter (a 0/1 opacity cut at 0.5 has the same edges either way)."""
+    from gi.mitsuba.transforms import transform
+
+    props = r.props(tex)
+    r.refuse_unknown(props, {"filename", "raw", "wrap_mode", "filter_type", "to_uv"})
+    if "to_uv" in props and not np.allclose(transform(r, props["to_uv"]), np.eye(4)):
+        raise r.error(props["to_uv"], "a texture transform (`to_uv`) is not supported")
+    if filtered and r.string(props, "filter_type", "bilinear") != "bilinear":
+        r.notes[props["filter_type"].label] = "gi filters textures bilinearly (with mipmaps)"
+
+
 def use_bitmap(
     r: Reader, desc: dict[str, Any], props: dict[str, Element], name: str, to: str
 ) -> None:
@@ -21,7 +36,8 @@ def use_bitmap(
     if p is None or p.tag not in ("texture", "ref"):
         return
     tex = r.resolve(p) if p.tag == "ref" else p
-    file = r.path.parent / r.string(r.props(tex), "filename", "")
+    check_bitmap(r, tex)
+    file = r.file_path(tex, r.string(r.props(tex), "filename", ""))
     raw = r.boolean(r.props(tex), "raw", False)
     try:
         desc[f"{to}_texture"] = r.textures.add(file, not raw)
@@ -38,8 +54,9 @@ def bitmap_mean(r: Reader, tex: Element) -> np.ndarray:
     """A bitmap's mean colour (linear), with a note that the texture is read as one."""
     if tex.tag != "texture" or tex.attrs.get("type") != "bitmap":
         raise r.error(tex, "only bitmap textures are supported")
+    check_bitmap(r, tex)
     props = r.props(tex)
-    file = r.path.parent / r.string(props, "filename", "")
+    file = r.file_path(tex, r.string(props, "filename", ""))
     if not file.is_file():
         raise r.error(tex, f"texture file not found: {file}")
     from gi.io import read_image
@@ -67,7 +84,8 @@ def emission_bitmap(r: Reader, tex: Element) -> tuple[str, list[float]]:
     props = r.props(tex)
     if tex.tag != "texture" or tex.attrs.get("type") != "bitmap":
         raise r.error(tex, "only bitmap textures are supported")
-    file = r.path.parent / r.string(props, "filename", "")
+    check_bitmap(r, tex)
+    file = r.file_path(tex, r.string(props, "filename", ""))
     raw = r.boolean(props, "raw", False)
     try:
         key = r.textures.add(file, not raw)

@@ -47,23 +47,20 @@ IOR_NAMES = {
     "diamond": 2.419,
 }
 
-# Properties the BSDF functions read (others are noted as ignored).
+# Properties each BSDF type's function reads; any other is a SceneError (it may change the
+# picture). `sample_visible` only changes how a microfacet lobe is sampled (the noise).
+_CONDUCTOR = {"material", "eta", "k", "specular_reflectance"}
+_ROUGH = {"alpha", "alpha_u", "alpha_v", "distribution"}
+_PLASTIC = {"int_ior", "ext_ior", "diffuse_reflectance", "specular_reflectance", "nonlinear"}
 KNOWN = {
-    "reflectance",
-    "material",
-    "eta",
-    "k",
-    "specular_reflectance",
-    "int_ior",
-    "ext_ior",
-    "specular_transmittance",
-    "diffuse_reflectance",
-    "alpha",
-    "alpha_u",
-    "alpha_v",
-    "distribution",
-    "nonlinear",
+    "diffuse": {"reflectance"},
+    "conductor": _CONDUCTOR,
+    "roughconductor": _CONDUCTOR | _ROUGH,
+    "dielectric": {"int_ior", "ext_ior", "specular_transmittance"},
+    "plastic": _PLASTIC,
+    "roughplastic": _PLASTIC | _ROUGH,
 }
+COSMETIC = frozenset({"sample_visible"})
 
 
 def ior(r: Reader, props: Props, name: str, default: float) -> float:
@@ -185,6 +182,10 @@ def bsdf(t: Translator, el: Element, name: str | None = None) -> str:
     kind = el.attrs.get("type")
     if kind == "twosided":
         return twosided(t, el, name)
+    if kind in ("mask", "normalmap", "bumpmap"):
+        from gi.mitsuba import layers
+
+        return getattr(layers, kind)(t, el, name)
     translate = BSDFS.get(kind or "")
     if translate is None:
         raise t.error(el, "unsupported BSDF (see docs/mitsuba.md for the list)")
@@ -193,7 +194,7 @@ def bsdf(t: Translator, el: Element, name: str | None = None) -> str:
     if ext_eta is not None and t.float(ext_eta, {"ext_eta": ext_eta}, "ext_eta", 1.0) != 1.0:
         raise t.error(ext_eta, "property `ext_eta` other than 1 is not supported")
     desc = translate(t, el, props)
-    t.refuse_unknown(props, KNOWN)
+    t.refuse_unknown(props, KNOWN[kind or ""], COSMETIC)
     name = el.attrs.get("id") or name or f"bsdf@{el.line}"
     while name in t.materials:
         name += "'"

@@ -16,6 +16,8 @@ class Element:
     attrs: dict[str, str]
     line: int
     children: list[Element] = field(default_factory=list)
+    # The file the element comes from when it is not the scene file (an <include>).
+    file: str | None = None
 
     @property
     def label(self) -> str:

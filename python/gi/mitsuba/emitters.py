@@ -48,6 +48,10 @@ def emitter(t: Translator, el: Element) -> None:
         return
     cutoff = t.float(el, props, "cutoff_angle", 20.0)
     beam = t.float(el, props, "beam_width", cutoff * 0.75)
+    t.notes[el.label] = (
+        "Mitsuba's spot falls off linearly in angle between beam_width and cutoff_angle; "
+        "gi's as a smoothstep in cos(theta) between the same angles"
+    )
     t.lights.append(
         {
             "type": "spot",
@@ -116,7 +120,7 @@ def env_emitter(t: Translator, el: Element, kind: str) -> None:
     name = t.string(props, "filename", "")
     from gi.environment import load_environment_image
 
-    t.env_images[name] = load_environment_image(t.path.parent / name, t.file, el.label)
+    t.env_images[name] = load_environment_image(t.file_path(el, name), el.file or t.file, el.label)
     m = transform(t, props.get("to_world"))[:3, :3]
     cols = m / np.linalg.norm(m, axis=0)
     # gi rotates environments about +y only: to_world must be such a rotation (any uniform

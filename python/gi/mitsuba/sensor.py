@@ -143,31 +143,40 @@ def half_height(t: Translator, el: Element, props: Props, width: int, height: in
 def check_clip(t: Translator) -> None:
     """Mitsuba clips what lies nearer than ``near_clip`` or farther than ``far_clip``
     (defaults 0.01 and 10⁴) along the view axis; gi's camera does not. Where a triangle may
-    lie in front of the camera within the near plane's reach, or any vertex beyond the far
+    lie in front of the camera within the near plane's reach, or a vertex beyond the far
     plane, the picture could differ: a SceneError naming the property (its defaults when
-    not given). Conservative: a bounding sphere per triangle for near, depth per vertex for
-    far."""
+    not given). Each object is first tested by its mesh's bounding box placed in the world
+    (cheap for many instances); only objects the box does not clear are tested triangle by
+    triangle (exact distance for near, vertex depth for far)."""
     if t.camera is None or t.clip is None:
         return
     el, near, far, props = t.clip
     pos = np.array(t.camera["position"])
     view = np.array(t.camera["look_at"]) - pos
+    ty = math.tan(math.radians(t.camera["fov"]) / 2)
+    tx = ty * t.camera["width"] / max(t.camera["height"], 1)
+    reach = near * math.sqrt(1 + tx * tx + ty * ty)  # the near plane's farthest corner
+    boxes: dict[str, np.ndarray] = {}
     for obj in t.objects:
-        v, f = t.meshes[obj["shape"]["file"]][:2]
+        key = obj["shape"]["file"]
+        v, f = t.meshes[key][:2]
+        if key not in boxes:
+            lo, hi = v.min(axis=0), v.max(axis=0)
+            boxes[key] = np.array(
+                [[(hi if b >> i & 1 else lo)[i] for i in range(3)] for b in range(8)]
+            )
         m = np.array(obj["transform"]["matrix"])
+        corners = boxes[key] @ m[:, :3].T + m[:, 3]
+        lo, hi = corners.min(axis=0), corners.max(axis=0)
+        beyond = ((corners - pos) @ view).max() > far
+        near_box = np.linalg.norm(np.clip(pos, lo, hi) - pos) < reach
+        if not (beyond or near_box):
+            continue
         w = v.astype(np.float64) @ m[:, :3].T + m[:, 3]
-        depth = (w - pos) @ view
-        if depth.max() > far:
+        if beyond and ((w - pos) @ view).max() > far:
             name = "far_clip"
             raise t.error(props.get(name, el), f"geometry lies beyond {name} = {far:g}")
-        tri = w[f]
-        centre = tri.mean(axis=1)
-        radius = np.linalg.norm(tri - centre[:, None], axis=2).max(axis=1)
-        ty = math.tan(math.radians(t.camera["fov"]) / 2)
-        tx = ty * t.camera["width"] / max(t.camera["height"], 1)
-        reach = near * math.sqrt(1 + tx * tx + ty * ty)  # the near plane's farthest corner
-        close = np.linalg.norm(centre - pos, axis=1) - radius < reach
-        if close.any() and (triangle_distance(tri[close], pos) < reach).any():
+        if near_box and (triangle_distance(w[f], pos) < reach).any():
             name = "near_clip"
             raise t.error(props.get(name, el), f"geometry lies within {name} = {near:g}")
 

@@ -29,6 +29,18 @@ class SerializedError(ValueError):
 def read_serialized(
     path: Path, index: int
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray | None]:
+    """See :func:`_read`; a truncated or malformed file is a :class:`SerializedError`."""
+    try:
+        return _read(path, index)
+    except (struct.error, ValueError) as e:
+        if isinstance(e, SerializedError):
+            raise
+        raise SerializedError(f"malformed file: {e}") from None
+
+
+def _read(
+    path: Path, index: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray | None]:
     """Shape `index` of a serialized file: vertices, faces, normals (None where the file
     has none; an empty (0, 3) array where it asks for face normals: flat shading), UVs
     (None where it has none)."""

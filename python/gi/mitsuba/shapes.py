@@ -66,6 +66,14 @@ def shape(t: Translator, el: Element, parent: np.ndarray | None = None) -> None:
         material = area_emitter(t, el, emitter, material)
     m = xf @ local
     check_matrix(t, props.get("to_world", el), m)
+    if material in t.bumps:
+        from gi.mitsuba.layers import bake_bump
+
+        material = bake_bump(t, material, key, m)
+    if material in t.normal_maps:
+        from gi.mitsuba.layers import orient_normal_map
+
+        material = orient_normal_map(t, material, key, m)
     obj: dict[str, Any] = {
         "shape": {"type": "mesh", "file": key},
         "material": material,
@@ -151,10 +159,10 @@ def read_mesh_file(t: Translator, el: Element, kind: str, props: Props, file: st
 
         index = int(t.float(el, props, "shape_index", 0))
         try:
-            return read_serialized(t.path.parent / file, index)
+            return read_serialized(t.file_path(el, file), index)
         except (OSError, SerializedError) as e:
             raise t.error(el, f"cannot read {file}: {e}") from None
-    v, f, n, _m, _fm, uv = load_mesh(t.path.parent / file, t.file, field, t.textures)
+    v, f, n, _m, _fm, uv = load_mesh(t.file_path(el, file), el.file or t.file, field, t.textures)
     if kind == "obj" and uv is not None and not t.boolean(props, "flip_tex_coords", True):
         uv = np.array(uv, copy=True)
         uv[:, 1] = 1.0 - uv[:, 1]
@@ -162,10 +170,11 @@ def read_mesh_file(t: Translator, el: Element, kind: str, props: Props, file: st
 
 
 def rectangle() -> Built:
-    """Mitsuba's rectangle: [-1, 1]² in the xy plane facing +z, the image upright seen from
-    +z (v runs down the image)."""
+    """Mitsuba's rectangle: [-1, 1]² in the xy plane facing +z, uv = ((x + 1)/2, (y + 1)/2)
+    as Mitsuba's: v runs up +y, so the image's first row lies along y = -1 (Mitsuba shows
+    a bitmap upside down on an unrotated rectangle seen from +z, and so does gi)."""
     v = np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], np.float64)
-    uv = np.stack([(v[:, 0] + 1) / 2, (1 - v[:, 1]) / 2], axis=1)
+    uv = (v[:, :2] + 1) / 2
     return v, np.array([[0, 1, 2], [0, 2, 3]]), np.tile([0.0, 0.0, 1.0], (4, 1)), uv
 
 

@@ -14,6 +14,7 @@ from gi.meshes import MeshEntry, report, scene_error
 from gi.mitsuba.bsdfs import bsdf
 from gi.mitsuba.elements import Element, parse_xml
 from gi.mitsuba.emitters import emitter
+from gi.mitsuba.includes import expand_includes
 from gi.mitsuba.sensor import check_clip, sensor
 from gi.mitsuba.shapes import check_group, shape
 from gi.mitsuba.upgrade import upgrade
@@ -39,6 +40,10 @@ class Translator(Reader):
         self.camera: dict[str, Any] | None = None
         self.environment: dict[str, Any] | None = None
         self.env_images: dict[str, np.ndarray] = {}
+        # Bump-mapped materials: height map and scale (baked per shape, gi.mitsuba.layers).
+        self.bumps: dict[str, tuple[np.ndarray, float]] = {}
+        # Normal-mapped materials: the map's RGBA (oriented per shape, gi.mitsuba.layers).
+        self.normal_maps: dict[str, np.ndarray] = {}
         # The sensor element, its near and far clip distances and its properties.
         self.clip: tuple[Element, float, float, dict[str, Element]] | None = None
 
@@ -46,6 +51,7 @@ class Translator(Reader):
         if root.tag != "scene":
             raise self.error(root, "the root element must be <scene>")
         upgrade(root)
+        expand_includes(self, root)
         self.collect(root)
         for el in root.children:
             if el.tag in ("default", *_IGNORED):
@@ -61,6 +67,8 @@ class Translator(Reader):
             elif el.tag == "shapegroup":
                 check_group(self, el)  # placed where an instance refers to it
             elif el.tag == "emitter":
+                if el.attrs.get("type") == "area" and "id" in el.attrs:
+                    continue  # an area emitter shapes refer to (<ref id=...>)
                 emitter(self, el)
             else:
                 raise self.error(el, "unsupported element")

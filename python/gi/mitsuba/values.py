@@ -32,6 +32,9 @@ PROPERTY_TAGS = (
 )
 
 
+# Plugins nested in another that gi reads where they belong (checked there).
+NESTED_TAGS = frozenset({"ref", "bsdf", "emitter", "film", "sampler", "rfilter"})
+
 # Properties Mitsuba reads as unbounded spectra (a conductor's complex index).
 UNBOUNDED = frozenset({"eta", "k"})
 
@@ -49,7 +52,17 @@ class Reader:
         self.textures = TextureSet(path.parent)
 
     def error(self, el: Element, reason: str) -> SceneError:
-        return scene_error(self.file, el.label, reason)
+        return scene_error(el.file or self.file, el.label, reason)
+
+    def file_path(self, el: Element, name: str) -> Path:
+        """A file an element names: relative to the file the element comes from (an
+        included file's folder first, as Mitsuba's resolver), else to the scene file."""
+        main = self.path.parent / name
+        if el.file is not None:
+            near = Path(el.file).parent / name
+            if near.exists() or not main.exists():
+                return near
+        return main
 
     def attr(self, el: Element, key: str, default: str | None = None) -> str:
         value = el.attrs.get(key, default)
@@ -85,11 +98,15 @@ class Reader:
         return np.array([self.numbers(el, self.attr(el, k, "0"), 1)[0] for k in ("x", "y", "z")])
 
     def props(self, el: Element) -> dict[str, Element]:
-        """The named property children of a plugin element."""
+        """The named property children of a plugin element. A child that is neither a
+        property nor a nested plugin gi reads (a Mitsuba 0.x `<blackbody>`, a `<medium>`...)
+        is a SceneError: ignoring it could change the picture."""
         out = {}
         for c in el.children:
             if c.tag in PROPERTY_TAGS or (c.tag == "ref" and "name" in c.attrs):
                 out[self.attr(c, "name")] = c
+            elif c.tag not in NESTED_TAGS:
+                raise self.error(c, f"unsupported element <{c.tag}> in <{el.tag}>")
         return out
 
     def float(self, el: Element, props: dict[str, Element], name: str, default: float) -> float:
@@ -151,7 +168,7 @@ class Reader:
             raise self.error(p, "a <spectrum> takes either `value` or `filename`")
         try:
             if has_file:
-                w, v = spectra.read_spd(self.path.parent / self.attr(p, "filename"))
+                w, v = spectra.read_spd(self.file_path(p, self.attr(p, "filename")))
             else:
                 text = self.attr(p, "value")
                 if ":" not in text:
