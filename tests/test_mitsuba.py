@@ -199,22 +199,27 @@ up="0, 0, 1"/></transform><float name="cutoff_angle" value="30"/></emitter>"""
     path = write(tmp_path, body)
     t = _Translator(path)
     t.run(parse_xml(path.read_bytes(), str(path)))
-    # The uber BSDF's approximations of these models are named (until branch `materials`).
-    assert "GGX" in t.notes['<bsdf type="roughplastic"> (line 6)']
+    # Mitsuba's models map onto gi's (docs/scene-format.md), with nothing approximated.
+    assert '<bsdf type="roughplastic"> (line 6)' not in t.notes
     m = t.materials
     assert m["p"]["diffuse"] == pytest.approx([0.5, 0.2, 0.1])
     assert m["p"]["roughness"] == pytest.approx(0.2)  # sqrt(alpha)
-    n = 1.49 / 1.000277  # polypropylene in air, Mitsuba's default indices
-    assert m["p"]["specular"] == pytest.approx([((n - 1) / (n + 1)) ** 2] * 3, rel=1e-6)
-    assert m["gold"]["specular"] == pytest.approx([1.0, 0.766, 0.336])
-    assert m["gold"]["fresnel"] is True and m["gold"]["diffuse"] == [0, 0, 0]
+    assert m["p"]["distribution"] == "beckmann"  # Mitsuba's default
+    assert m["p"]["coating_ior"] == pytest.approx(1.49 / 1.000277)  # polypropylene in air
+    assert m["p"]["specular"] == [1, 1, 1] and m["p"]["coating_nonlinear"] is False
+    assert m["gold"]["conductor_eta"] == pytest.approx([0.143036, 0.375307, 1.44205])
+    assert m["gold"]["conductor_k"] == pytest.approx([3.983, 2.38556, 1.60336])
+    assert m["gold"]["specular"] == [1, 1, 1] and m["gold"]["diffuse"] == [0, 0, 0]
     assert m["glass"]["ior"] == pytest.approx(1.333 / 1.000277)
     assert m["glass"]["transmission"] == [1, 1, 1]
     spot = t.lights[0]
     assert spot["direction"] == pytest.approx([0, -1, 0])
     assert (spot["inner_angle"], spot["outer_angle"]) == (22.5, 30.0)
-    with pytest.warns(gi.AssetWarning):
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
         scene = gi.load_scene(path)
+    # The spot's falloff is the one approximation here; the BSDFs have none.
+    assert [str(w.message) for w in caught if "spot" not in str(w.message)] == []
     assert scene.triangle_count > 12 + 2
 
 

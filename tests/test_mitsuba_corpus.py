@@ -6,7 +6,7 @@
 - cornell-box: Bitterli's Cornell box (Mitsuba 0.5 format: camelCase, `toWorld`, ldrfilm);
 - cbox: Mitsuba 3's own Cornell box (reflectances and emission as sampled spectra);
 - veach-mis: Bitterli's Veach MIS scene (0.5 format; Beckmann rough conductors with complex
-  IOR: its warnings and its error wait for branch `materials`).
+  IOR, Mitsuba's models since branch `materials`).
 
 Tolerance: `path`'s image mean within 2% per channel. Noise: over 4 seeds the per-channel
 means at these sizes and spp spread by 0.08-0.18% (cbox, cornell-box, 64×64 at 64 spp; 2-3 s
@@ -15,9 +15,9 @@ plates spreads its mean by ≈1.5% at 128 spp, so it renders 1024 spp at 80×45 
 35 s on 2 shared cores); the references' standard errors are below 0.3%. 2% is over 10σ for
 the Cornell boxes and 4σ for veach-mis: a failure is a bias, not noise. veach-mis measures
 1.018, 1.027, 1.026 today (seed 7; 1.016-1.027 over seeds 5-8 at 128 spp with the
-directly seen light masked out): its rough conductors are the uber BSDF's GGX with Schlick F0
-until branch `materials` brings Beckmann and the complex-IOR Fresnel; its checks are strict
-xfails until then (an XPASS fails: remove the mark when `materials` is merged).
+directly seen light masked out) with the uber BSDF's GGX and Schlick F0 in place of its
+Beckmann complex-IOR conductors; with branch `materials`' models it loads without a warning
+and its checks pass.
 
 `mitsuba-layers` (gi's own scene, `scripts/data/mitsuba_layers.py`, Mitsuba `volpath`
 reference: its `path` integrator treats a mask as opaque for shadow rays) checks `mask`,
@@ -40,9 +40,9 @@ SCENES = {
     "cbox": ("cbox.xml", (64, 64), 64),
     "veach-mis": ("scene.xml", (80, 45), 1024),
 }
-# Scenes whose materials gi approximates until branch `materials` lands (Beckmann rough
-# conductors with complex IOR): they load with an AssetWarning naming the approximation.
-NEEDS_MATERIALS = {"veach-mis"}
+# Scenes whose materials gi approximates (none since branch `materials`: Beckmann rough
+# conductors with complex IOR are Mitsuba's models).
+NEEDS_MATERIALS: set[str] = set()
 
 
 def load(name):
@@ -236,9 +236,9 @@ def test_normal_map_y_and_rectangle_uv_as_mitsuba(tmp_path, light, expected):
 MATERIALS = Path(__file__).parent / "scenes" / "mitsuba-materials"
 # Measured today (the sphere's disc, 64 spp; within 0.5% over seeds): plastic 1.002, 0.988,
 # 0.971; roughplastic GGX 1.097, 1.072, 1.044; Beckmann 1.032, 1.012, 0.989; conductor Au
-# 1.048, 0.967, 1.029; roughconductor Cu 0.933, 0.957, 0.975; roughdielectric refused. Each
-# waits for branch `materials` (Mitsuba's plastic coating, Beckmann, complex-IOR Fresnel,
-# rough transmission): strict xfails, to be removed when it is merged.
+# 1.048, 0.967, 1.029; roughconductor Cu 0.933, 0.957, 0.975 before branch `materials`
+# (Mitsuba's plastic coating, Beckmann, complex-IOR Fresnel), which they now pass;
+# roughdielectric is refused (no rough transmission yet): a strict xfail.
 MATERIAL_SPHERES = [
     "plastic",
     "roughplastic-ggx",
@@ -249,8 +249,15 @@ MATERIAL_SPHERES = [
 ]
 
 
-@pytest.mark.xfail(strict=True, reason="needs branch materials")
-@pytest.mark.parametrize("name", MATERIAL_SPHERES)
+@pytest.mark.parametrize(
+    "name",
+    [
+        pytest.param(n, marks=pytest.mark.xfail(strict=True, reason="rough transmission"))
+        if n == "roughdielectric"
+        else n
+        for n in MATERIAL_SPHERES
+    ],
+)
 def test_material_sphere_matches_mitsuba(name):
     """One sphere per BSDF of issue 42 (`scripts/data/mitsuba_materials.py`, Mitsuba 3.9.1
     at 4096 spp): loads without an AssetWarning (nothing approximated) and the sphere's disc

@@ -1,5 +1,6 @@
 //! CPU/GPU parity of the uber BSDF: a compute shader evaluates `bsdf.wgsl` on a table of
-//! (normal, wo, wi, material) cases and must match `Material::eval(wo, wi)·|cos θi|`.
+//! (normal, wo, wi, material) cases and must match `Material::eval(wo, wi)·|cos θi|` (of the
+//! uber stand-in, for Mitsuba's models).
 //!
 //! Tolerance per channel: |gpu − cpu| ≤ 1e-4·|cpu| + 1e-6 + 4·s, where the absolute floor
 //! 1e-6 guards values near zero and `s` is the case's own f32 sensitivity: the largest change
@@ -9,7 +10,7 @@
 //! implementations can agree there to 1e-4; everywhere else `s` is negligible.
 
 use bytemuck::{Pod, Zeroable};
-use gi_core::bsdf::Material;
+use gi_core::bsdf::{Coating, Conductor, Distribution, Material};
 use gi_core::gpu::{self, raw::MaterialRaw, shaders};
 use gi_core::sampling::{uniform_sphere, Frame, Rng};
 use glam::Vec3;
@@ -59,6 +60,33 @@ fn materials() -> Vec<Material> {
             ..Default::default()
         },
     ];
+    // Mitsuba's models: a rough coating, a rough conductor (gold), a Beckmann uber lobe.
+    out.push(Material {
+        diffuse: d,
+        specular: Vec3::ONE,
+        roughness: 0.3,
+        distribution: Distribution::Beckmann,
+        coating: Some(Coating::new(1.49, true, 0.09, Distribution::Beckmann)),
+        ..Default::default()
+    });
+    out.push(Material {
+        diffuse: Vec3::ZERO,
+        specular: Vec3::ONE,
+        roughness: 0.4,
+        conductor: Some(Conductor::new(
+            Vec3::new(0.143, 0.375, 1.442),
+            Vec3::new(3.983, 2.386, 1.603),
+        )),
+        ..Default::default()
+    });
+    out.push(Material {
+        diffuse: d,
+        specular: s,
+        roughness: 0.4,
+        fresnel: true,
+        distribution: Distribution::Beckmann,
+        ..Default::default()
+    });
     for roughness in [0.05, 0.2, 0.5, 1.0] {
         for fresnel in [false, true] {
             out.push(Material {
@@ -122,10 +150,13 @@ fn cases() -> Vec<Case> {
     out
 }
 
+/// The CPU value the GPU must give: the BSDF of the material's GPU copy (`to_raw`), the
+/// uber stand-in of Mitsuba's models (`Material::uber_equivalent`; the material itself
+/// for uber materials).
 fn cpu(c: &Case) -> Vec3 {
     let frame = Frame::new(c.normal);
     let (wo, wi) = (frame.to_local(c.wo), frame.to_local(c.wi));
-    c.material.eval(wo, wi) * wi.z.abs()
+    c.material.uber_equivalent().eval(wo, wi) * wi.z.abs()
 }
 
 /// The largest change of the CPU value when an input moves by about 8 ULPs.

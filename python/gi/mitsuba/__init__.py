@@ -15,8 +15,9 @@ the element and its line (``<bsdf type="roughdielectric"> (line 12)``); a proper
 ignores is an :class:`gi.AssetWarning`.
 """
 
-from gi.mitsuba.bsdfs import CONDUCTOR_F0, IOR_NAMES
+from gi.mitsuba.bsdfs import IOR_NAMES
 from gi.mitsuba.elements import Element, parse_xml
+from gi.mitsuba.metals import METALS
 from gi.mitsuba.shapes import DISK_SEGMENTS, _cube, _disk
 from gi.mitsuba.transforms import coordinate_system
 from gi.mitsuba.translator import Translator, load_mitsuba
@@ -24,7 +25,7 @@ from gi.mitsuba.translator import Translator, load_mitsuba
 _Translator = Translator  # the name tests and scripts used before the split
 
 __all__ = [
-    "CONDUCTOR_F0",
+    "METALS",
     "DISK_SEGMENTS",
     "IOR_NAMES",
     "Element",

@@ -12,6 +12,7 @@ import numpy as np
 
 from gi.mitsuba.bitmaps import use_bitmap
 from gi.mitsuba.elements import Element
+from gi.mitsuba.metals import METALS
 from gi.mitsuba.values import Reader
 
 if TYPE_CHECKING:
@@ -46,20 +47,6 @@ IOR_NAMES = {
     "diamond": 2.419,
 }
 
-# Normal-incidence reflectance (linear sRGB) of Mitsuba's named conductors.
-CONDUCTOR_F0 = {
-    "none": (1.0, 1.0, 1.0),
-    "Ag": (0.972, 0.960, 0.915),
-    "Al": (0.913, 0.922, 0.924),
-    "Au": (1.000, 0.766, 0.336),
-    "Cr": (0.550, 0.556, 0.554),
-    "Cu": (0.955, 0.638, 0.538),
-    "Fe": (0.562, 0.565, 0.578),
-    "Ni": (0.660, 0.609, 0.526),
-    "Pt": (0.673, 0.637, 0.585),
-    "Ti": (0.542, 0.497, 0.449),
-}
-
 # Properties each BSDF type's function reads; any other is a SceneError (it may change the
 # picture). `sample_visible` only changes how a microfacet lobe is sampled (the noise).
 _CONDUCTOR = {"material", "eta", "k", "specular_reflectance"}
@@ -90,15 +77,26 @@ def ior(r: Reader, props: Props, name: str, default: float) -> float:
 
 
 def roughness(r: Reader, el: Element, props: Props) -> float:
-    """gi's roughness (√α) of a rough BSDF's `alpha` (or √(αu·αv), with a note)."""
+    """gi's roughness (√α) of a rough BSDF's `alpha` (or √(αu·αv), with a note); Mitsuba
+    clamps α to 1e-4 (a rough BSDF never becomes a mirror)."""
     if "alpha_u" in props or "alpha_v" in props:
+        if el.attrs.get("type") == "roughplastic":
+            raise r.error(el, "roughplastic has no anisotropic roughness (Mitsuba refuses it)")
         au = r.float(el, props, "alpha_u", 0.1)
         av = r.float(el, props, "alpha_v", 0.1)
         alpha = math.sqrt(au * av)
         r.notes[el.label] = "anisotropic roughness is not supported; sqrt(αu·αv)"
     else:
         alpha = r.float(el, props, "alpha", 0.1)
-    return min(max(math.sqrt(max(alpha, 0.0)), 0.0), 1.0)
+    return min(math.sqrt(max(alpha, 1e-4)), 1.0)
+
+
+def distribution(r: Reader, props: Props) -> str:
+    """A rough BSDF's microfacet distribution (Mitsuba's default: Beckmann)."""
+    name = r.string(props, "distribution", "beckmann").strip().lower()
+    if name not in ("beckmann", "ggx"):
+        raise r.error(props["distribution"], f"unknown distribution {name!r} (beckmann, ggx)")
+    return name
 
 
 def diffuse(r: Reader, el: Element, props: Props) -> dict[str, Any]:
@@ -108,24 +106,31 @@ def diffuse(r: Reader, el: Element, props: Props) -> dict[str, Any]:
 
 
 def conductor(r: Reader, el: Element, props: Props) -> dict[str, Any]:
+    """Mitsuba's conductor: the exact Fresnel term of `eta + i·k` (given, or a named
+    metal's RGB index as Mitsuba's RGB variants have it), times `specular_reflectance`."""
     metal = r.string(props, "material", "none")
-    if "eta" in props or "k" in props:
-        eta = r.color(props, "eta", 0.0)
-        k = r.color(props, "k", 1.0)
-        f0 = ((eta - 1) ** 2 + k**2) / ((eta + 1) ** 2 + k**2)
-    elif metal in CONDUCTOR_F0:
-        f0 = np.array(CONDUCTOR_F0[metal])
+    if "eta" in props or "k" in props or metal == "none":
+        if metal != "none":
+            raise r.error(props["material"], "give either eta and k or material, not both")
+        eta = [float(x) for x in r.color(props, "eta", 0.0)]
+        k = [float(x) for x in r.color(props, "k", 1.0)]
+    elif metal in METALS:
+        eta, k = (list(v) for v in METALS[metal])
     else:
         raise r.error(props["material"], f"unknown conductor {metal!r}")
+    if min(eta + k) < 0:
+        raise r.error(el, "eta and k must not be negative")
     return {
         "diffuse": np.zeros(3),
-        "specular": f0 * r.color(props, "specular_reflectance", 1.0),
-        "fresnel": metal != "none" or "eta" in props,
+        "specular": r.color(props, "specular_reflectance", 1.0),
+        "conductor_eta": eta,
+        "conductor_k": k,
     }
 
 
 def roughconductor(r: Reader, el: Element, props: Props) -> dict[str, Any]:
-    return conductor(r, el, props) | {"roughness": roughness(r, el, props)}
+    rough = {"roughness": roughness(r, el, props), "distribution": distribution(r, props)}
+    return conductor(r, el, props) | rough
 
 
 def dielectric(r: Reader, el: Element, props: Props) -> dict[str, Any]:
@@ -138,19 +143,25 @@ def dielectric(r: Reader, el: Element, props: Props) -> dict[str, Any]:
 
 
 def plastic(r: Reader, el: Element, props: Props) -> dict[str, Any]:
+    """Mitsuba's plastic: the diffuse base under a dielectric coating of index
+    int_ior/ext_ior (gi's `coating_ior`), `specular_reflectance` multiplying its Fresnel
+    reflectance, `nonlinear` as Mitsuba's."""
     n = ior(r, props, "int_ior", 1.49) / ior(r, props, "ext_ior", 1.000277)
-    f0 = ((n - 1) / (n + 1)) ** 2
+    if not 1.0 < n <= 4.0:
+        raise r.error(el, f"the coating's index int_ior/ext_ior = {n:.4g} is not in (1, 4]")
     desc = {
         "diffuse": r.color(props, "diffuse_reflectance", 0.5),
-        "specular": f0 * r.color(props, "specular_reflectance", 1.0),
-        "fresnel": True,
+        "specular": r.color(props, "specular_reflectance", 1.0),
+        "coating_ior": n,
+        "coating_nonlinear": r.boolean(props, "nonlinear", False),
     }
     use_bitmap(r, desc, props, "diffuse_reflectance", "diffuse")
     return desc
 
 
 def roughplastic(r: Reader, el: Element, props: Props) -> dict[str, Any]:
-    return plastic(r, el, props) | {"roughness": roughness(r, el, props)}
+    rough = {"roughness": roughness(r, el, props), "distribution": distribution(r, props)}
+    return plastic(r, el, props) | rough
 
 
 BSDFS: dict[str, Callable[[Reader, Element, Props], dict[str, Any]]] = {
@@ -184,7 +195,6 @@ def bsdf(t: Translator, el: Element, name: str | None = None) -> str:
         raise t.error(ext_eta, "property `ext_eta` other than 1 is not supported")
     desc = translate(t, el, props)
     t.refuse_unknown(props, KNOWN[kind or ""], COSMETIC)
-    note_approximations(t, el, kind or "", props)
     name = el.attrs.get("id") or name or f"bsdf@{el.line}"
     while name in t.materials:
         name += "'"
@@ -194,22 +204,6 @@ def bsdf(t: Translator, el: Element, name: str | None = None) -> str:
     }
     t.material_of[id(el)] = name
     return name
-
-
-def note_approximations(t: Translator, el: Element, kind: str, props: Props) -> None:
-    """An AssetWarning for each way the uber BSDF approximates Mitsuba's model (until the
-    `materials` branch's models replace these mappings)."""
-    said = []
-    if kind.startswith("rough"):
-        dist = t.string(props, "distribution", "beckmann").lower()
-        if dist != "ggx":
-            said.append(f"the {dist} distribution is rendered as GGX")
-    if kind in ("plastic", "roughplastic"):
-        said.append("the coating over the diffuse base is Lambert + Fresnel-weighted GGX")
-    if kind in ("conductor", "roughconductor") and ("eta" in props or "material" in props):
-        said.append("the complex index is reduced to Schlick's F0")
-    if said:
-        t.notes[el.label] = "; ".join(said)
 
 
 def twosided(t: Translator, el: Element, name: str | None) -> str:

@@ -15,8 +15,12 @@
 //! surface: `wo` towards the viewer (or the previous photon vertex), `wi` towards the light.
 //! The same formulas are implemented in WGSL for the GPU passes.
 
+pub mod coated;
 pub mod fresnel;
 pub mod microfacet;
+
+pub use coated::Coating;
+pub use microfacet::Distribution;
 
 use crate::sampling::{cosine_hemisphere, Rng};
 use glam::Vec3;
@@ -45,6 +49,33 @@ pub struct Material {
     pub emission: Vec3,
     /// Whether the back face emits `emission` too.
     pub two_sided: bool,
+    /// The microfacet distribution of the rough lobes.
+    pub distribution: Distribution,
+    /// Mitsuba's plastic/roughplastic: `diffuse` under this dielectric coating, whose
+    /// reflection `specular` multiplies ([`coated`]). Replaces the uber's lobes.
+    pub coating: Option<Coating>,
+    /// A conductor's Fresnel term in place of Schlick's: `specular` multiplies it.
+    pub conductor: Option<Conductor>,
+}
+
+/// The complex index of refraction `eta + i·k` (relative to the outside, per channel) of a
+/// conductor, with its Fresnel term's cosine-weighted mean.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Conductor {
+    pub eta: Vec3,
+    pub k: Vec3,
+    /// `2∫F(μ)μ dμ`.
+    pub average: Vec3,
+}
+
+impl Conductor {
+    pub fn new(eta: Vec3, k: Vec3) -> Conductor {
+        Conductor {
+            eta,
+            k,
+            average: fresnel::conductor_average(eta, k),
+        }
+    }
 }
 
 impl Default for Material {
@@ -58,6 +89,9 @@ impl Default for Material {
             ior: 1.5,
             emission: Vec3::ZERO,
             two_sided: false,
+            distribution: Distribution::Ggx,
+            coating: None,
+            conductor: None,
         }
     }
 }
@@ -107,7 +141,36 @@ impl Material {
     /// side of the surface (and 0 across it): no specular lobe and no Fresnel coupling of
     /// the diffuse lobe.
     pub fn lambertian(&self) -> Option<Vec3> {
-        (!self.has_specular() && !self.fresnel).then(|| self.diffuse * FRAC_1_PI)
+        (!self.has_specular() && !self.fresnel && self.coating.is_none())
+            .then(|| self.diffuse * FRAC_1_PI)
+    }
+
+    /// Whether the rough lobes mask with Mitsuba's separable Smith G (its conductors and
+    /// coatings) rather than the uber's height-correlated one.
+    fn separable_masking(&self) -> bool {
+        self.conductor.is_some() || self.coating.is_some()
+    }
+
+    /// The uber material that the GPU passes shade in place of this one (they carry the
+    /// uber's parameters only): itself for uber materials; for a coating, Schlick's
+    /// Fresnel of its index and the diffuse albedo of the same cosine-weighted mean
+    /// ([`coated`]); for a conductor, Schlick's Fresnel from its exact normal-incidence
+    /// reflectance; Beckmann's roughness as GGX's.
+    pub fn uber_equivalent(&self) -> Material {
+        let mut m = if let Some(c) = &self.coating {
+            coated::uber_equivalent(self, c)
+        } else if let Some(c) = &self.conductor {
+            Material {
+                specular: self.specular * fresnel::conductor(1.0, c.eta, c.k),
+                fresnel: true,
+                conductor: None,
+                ..*self
+            }
+        } else {
+            *self
+        };
+        m.distribution = Distribution::Ggx;
+        m
     }
     /// Diffuse reflection alone (no specular or glass lobe, a non-black albedo): what most
     /// surfaces of most scenes are. `sample`, `eval` and `pdf` then take a short path that
@@ -170,6 +233,9 @@ impl Material {
 
     /// Specular Fresnel term F_s(cos).
     pub fn fresnel_spec(&self, cos: f32) -> Vec3 {
+        if let Some(c) = &self.conductor {
+            return self.specular * fresnel::conductor(cos, c.eta, c.k);
+        }
         if self.fresnel {
             fresnel::schlick(self.specular, cos)
         } else {
@@ -178,6 +244,9 @@ impl Material {
     }
 
     fn fresnel_avg(&self) -> Vec3 {
+        if let Some(c) = &self.conductor {
+            return self.specular * c.average;
+        }
         if self.fresnel {
             fresnel::schlick_average(self.specular)
         } else {
@@ -212,6 +281,9 @@ impl Material {
     /// [`Material::eval`] for every material, `wo` and `wi` on one side.
     fn eval_general(&self, wo: Vec3, wi: Vec3) -> Vec3 {
         let (wo, wi) = if wo.z < 0.0 { (-wo, -wi) } else { (wo, wi) };
+        if let Some(c) = &self.coating {
+            return coated::eval(self, c, wo, wi);
+        }
         let mut f = Vec3::ZERO;
         let one_minus_avg = Vec3::ONE - self.fresnel_avg();
         if self.diffuse.max_element() > 0.0 {
@@ -225,8 +297,13 @@ impl Material {
         }
         if self.has_specular() && !self.is_mirror() {
             let h = (wo + wi).normalize();
-            let alpha = self.alpha();
-            let dg = microfacet::d(h, alpha) * microfacet::g2(wo, wi, alpha) / (4.0 * wo.z * wi.z);
+            let (alpha, dist) = (self.alpha(), self.distribution);
+            let g = if self.separable_masking() {
+                microfacet::g_separable(wo, wi, alpha, dist)
+            } else {
+                microfacet::g2(wo, wi, alpha, dist)
+            };
+            let dg = microfacet::d(h, alpha, dist) * g / (4.0 * wo.z * wi.z);
             f += self.fresnel_spec(wi.dot(h)) * dg;
         }
         f
@@ -246,11 +323,14 @@ impl Material {
     /// [`Material::pdf`] for every material, `wo` and `wi` on one side.
     fn pdf_general(&self, wo: Vec3, wi: Vec3) -> f32 {
         let (wo, wi) = if wo.z < 0.0 { (-wo, -wi) } else { (wo, wi) };
+        if let Some(c) = &self.coating {
+            return coated::pdf(self, c, wo, wi);
+        }
         let [ps, pd, _] = self.lobe_probabilities(wo.z);
         let mut pdf = pd * wi.z * FRAC_1_PI;
         if !self.is_mirror() && ps > 0.0 {
             let h = (wo + wi).normalize();
-            pdf += ps * microfacet::pdf_reflected(wo, h, self.alpha());
+            pdf += ps * microfacet::pdf_reflected(wo, h, self.alpha(), self.distribution);
         }
         pdf
     }
@@ -270,6 +350,9 @@ impl Material {
     fn sample_general(&self, wo: Vec3, sign: f32, rng: &mut Rng) -> Option<BsdfSample> {
         let flip = sign < 0.0;
         let wo_up = wo * sign;
+        if let Some(c) = &self.coating {
+            return coated::sample(self, c, wo_up, sign, rng);
+        }
         let [ps, pd, pg] = self.lobe_probabilities(wo_up.z);
         let u = rng.next_f32();
         let u2 = rng.next_2d();
@@ -285,7 +368,7 @@ impl Material {
                 });
             }
             let (wi_up, lobe) = if u < ps {
-                let h = microfacet::sample_h(u2, self.alpha());
+                let h = microfacet::sample_h(u2, self.alpha(), self.distribution);
                 let wi = 2.0 * wo_up.dot(h) * h - wo_up;
                 (wi, Lobe::Glossy)
             } else {
@@ -344,7 +427,14 @@ impl Material {
         let flip = wo.z < 0.0;
         let sign = if flip { -1.0 } else { 1.0 };
         let wo_up = wo * sign;
-        let [ps, _, pg] = self.lobe_probabilities(wo_up.z);
+        let coated = self
+            .coating
+            .and_then(|c| coated::delta_lobe(self, &c, wo_up, sign));
+        let [ps, _, pg] = if self.coating.is_some() {
+            [0.0; 3]
+        } else {
+            self.lobe_probabilities(wo_up.z)
+        };
         let mirror_dir = Vec3::new(-wo.x, -wo.y, wo.z);
         let f = self.fresnel_spec(wo_up.z);
         let mirror = (ps > 0.0 && self.is_mirror()).then_some(BsdfSample {
@@ -376,7 +466,7 @@ impl Material {
                 });
             }
         }
-        [mirror, reflect, refract]
+        [coated, mirror, reflect, refract]
             .into_iter()
             .flatten()
             .filter(|s| s.weight.max_element() > 0.0)
@@ -385,6 +475,9 @@ impl Material {
     /// The scatter probability ρs = ∫ f cos dωi for viewing direction `wo` (exact for the
     /// diffuse, mirror and glass lobes; the GGX lobe's is bounded by its Fresnel term).
     pub fn scatter_probability(&self, wo: Vec3) -> Vec3 {
+        if let Some(c) = &self.coating {
+            return coated::scatter_probability(self, c, wo.z.abs());
+        }
         let f = self.fresnel_spec(wo.z.abs());
         f + (Vec3::ONE - f) * (self.diffuse + self.transmission)
     }
@@ -392,3 +485,5 @@ impl Material {
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_models;

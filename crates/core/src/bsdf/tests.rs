@@ -4,13 +4,13 @@ use super::*;
 use crate::sampling::{uniform_sphere, Rng};
 use std::f64::consts::PI;
 
-fn dir(cos_theta: f32, phi: f32) -> Vec3 {
+pub(super) fn dir(cos_theta: f32, phi: f32) -> Vec3 {
     let s = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
     Vec3::new(s * phi.cos(), s * phi.sin(), cos_theta)
 }
 
 /// Mean sample weight over `n` samples: an unbiased estimate of the albedo, with its standard error.
-fn albedo_by_sampling(m: &Material, wo: Vec3, n: usize, seed: u64) -> (Vec3, Vec3) {
+pub(super) fn albedo_by_sampling(m: &Material, wo: Vec3, n: usize, seed: u64) -> (Vec3, Vec3) {
     let mut rng = Rng::new(seed, 1, 0);
     let mut sum = glam::DVec3::ZERO;
     let mut sum2 = glam::DVec3::ZERO;
@@ -170,7 +170,7 @@ fn chi2_p_value(chi2: f64, k: f64) -> f64 {
 
 /// Pearson chi-square test of `sampler.sample` against `reference.pdf` over a (cos θ, φ)
 /// grid of the sphere; returns the p-value.
-fn chi_square(sampler: &Material, reference: &Material, wo: Vec3, seed: u64) -> f64 {
+pub(super) fn chi_square(sampler: &Material, reference: &Material, wo: Vec3, seed: u64) -> f64 {
     const NZ: usize = 16;
     const NP: usize = 32;
     const SUB: usize = 24;

@@ -23,7 +23,14 @@ pub struct MaterialRaw {
 }
 
 impl Material {
+    /// The GPU's copy: the uber parameters of [`Material::uber_equivalent`] (the GPU
+    /// passes shade the uber BSDF only).
     pub fn to_raw(&self) -> MaterialRaw {
+        let m = self.uber_equivalent();
+        m.uber_raw()
+    }
+
+    fn uber_raw(&self) -> MaterialRaw {
         MaterialRaw {
             diffuse: self.diffuse.into(),
             roughness: self.roughness,

@@ -145,6 +145,36 @@ pub struct MaterialDesc {
     /// The back face emits too.
     #[serde(default, skip_serializing_if = "is_false")]
     pub two_sided: bool,
+    /// Microfacet distribution of the rough lobes (`roughness` stays √α).
+    #[serde(default, skip_serializing_if = "is_ggx")]
+    pub distribution: DistributionDesc,
+    /// Mitsuba's plastic/roughplastic: `diffuse` under a dielectric coating of this relative
+    /// index (> 1), whose Fresnel reflectance `specular` multiplies.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub coating_ior: Option<f32>,
+    /// Mitsuba's `nonlinear`: the base's internal scattering darkens its colour.
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub coating_nonlinear: bool,
+    /// Mitsuba's conductors: the specular Fresnel term is the exact conductor Fresnel of
+    /// the complex index `conductor_eta + i·conductor_k` (per channel, relative to the
+    /// outside); `specular` multiplies it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub conductor_eta: Option<V3>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub conductor_k: Option<V3>,
+}
+
+/// `"ggx"` or `"beckmann"`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum DistributionDesc {
+    #[default]
+    Ggx,
+    Beckmann,
+}
+
+fn is_ggx(d: &DistributionDesc) -> bool {
+    *d == DistributionDesc::Ggx
 }
 
 fn is_zero3(v: &V3) -> bool {

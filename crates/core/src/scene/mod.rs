@@ -34,7 +34,7 @@ pub use sources::{Source, Sources};
 pub use surface::{MaterialMaps, TextureMap};
 pub use update::{Changes, SceneObject, SceneUpdate};
 
-use crate::bsdf::Material;
+use crate::bsdf::{Coating, Conductor, Material};
 use crate::error::{Error, Result};
 use crate::memory;
 use crate::texture::Texture;
@@ -877,6 +877,47 @@ pub(crate) fn material_from_desc(m: &MaterialDesc) -> std::result::Result<Materi
             "must be at most 1e10 W·sr⁻¹·m⁻² per channel (MAX_RADIANCE)",
         ));
     }
+    let distribution = match m.distribution {
+        desc::DistributionDesc::Ggx => crate::bsdf::Distribution::Ggx,
+        desc::DistributionDesc::Beckmann => crate::bsdf::Distribution::Beckmann,
+    };
+    let coating = match m.coating_ior {
+        None => None,
+        Some(eta) if !(eta > 1.0 && eta <= 4.0) => {
+            return Err(("coating_ior".into(), "must be in (1, 4]"));
+        }
+        Some(_) if m.transmission.iter().any(|t| *t > 0.0) => {
+            return Err((
+                "coating_ior".into(),
+                "excludes transmission (a coated base is opaque)",
+            ));
+        }
+        Some(eta) => Some(Coating::new(
+            eta,
+            m.coating_nonlinear,
+            m.roughness * m.roughness,
+            distribution,
+        )),
+    };
+    if m.coating_nonlinear && coating.is_none() {
+        return Err(("coating_nonlinear".into(), "needs coating_ior"));
+    }
+    let conductor = match (m.conductor_eta, m.conductor_k) {
+        (None, None) => None,
+        (Some(eta), Some(k)) => {
+            for (name, v) in [("conductor_eta", eta), ("conductor_k", k)] {
+                if !finite3(v) || v.iter().any(|x| !(0.0..=100.0).contains(x)) {
+                    return Err((name.into(), "each channel must be in [0, 100]"));
+                }
+            }
+            if coating.is_some() {
+                return Err(("conductor_eta".into(), "excludes coating_ior"));
+            }
+            Some(Conductor::new(eta.into(), k.into()))
+        }
+        (Some(_), None) => return Err(("conductor_k".into(), "needed with conductor_eta")),
+        (None, Some(_)) => return Err(("conductor_eta".into(), "needed with conductor_k")),
+    };
     Ok(Material {
         diffuse: m.diffuse.into(),
         specular: m.specular.into(),
@@ -886,6 +927,9 @@ pub(crate) fn material_from_desc(m: &MaterialDesc) -> std::result::Result<Materi
         ior: m.ior,
         emission: m.emission.into(),
         two_sided: m.two_sided,
+        distribution,
+        coating,
+        conductor,
     })
 }
 

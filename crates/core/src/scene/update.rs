@@ -85,10 +85,11 @@ pub enum SceneUpdate {
     /// Object `object` (index into `Scene::objects`) placed by a new object -> world
     /// transform; a mirroring transform flips its winding, as in the description.
     Transform { object: usize, transform: Mat4 },
-    /// The material called `name` replaced by `material`.
+    /// The material called `name` replaced by `material` (boxed: a description is several
+    /// times larger than the other updates).
     Material {
         name: String,
-        material: MaterialDesc,
+        material: Box<MaterialDesc>,
     },
 }
 
@@ -332,6 +333,14 @@ impl Scene {
             emission: m.emission.into(),
             emission_texture: t.emission,
             two_sided: m.two_sided,
+            distribution: match m.distribution {
+                crate::bsdf::Distribution::Ggx => super::desc::DistributionDesc::Ggx,
+                crate::bsdf::Distribution::Beckmann => super::desc::DistributionDesc::Beckmann,
+            },
+            coating_ior: m.coating.map(|c| c.eta),
+            coating_nonlinear: m.coating.is_some_and(|c| c.nonlinear),
+            conductor_eta: m.conductor.map(|c| c.eta.into()),
+            conductor_k: m.conductor.map(|c| c.k.into()),
         })
     }
 }
@@ -426,7 +435,7 @@ mod tests {
             },
             SceneUpdate::Material {
                 name: "no such".into(),
-                material: scene.material_desc(&scene.material_names[0]).expect("m"),
+                material: Box::new(scene.material_desc(&scene.material_names[0]).expect("m")),
             },
         ];
         for u in &bad {
@@ -814,7 +823,7 @@ impl Scene {
                 let current = to_value(serde_json::to_value(desc))?;
                 SceneUpdate::Material {
                     name: name.clone(),
-                    material: typed(merged(current), &prefix)?,
+                    material: Box::new(typed(merged(current), &prefix)?),
                 }
             }
             UpdateTarget::Object(i) => {

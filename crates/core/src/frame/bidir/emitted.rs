@@ -110,16 +110,17 @@ pub(super) fn append_records(
             } else {
                 h.alpha
             };
+            let uber = h.material.uber_equivalent();
             raw = VplRaw {
                 position: p.into(),
                 first_layer: 0,
                 flux: flux.into(),
                 texel_scale,
                 to_light: h.to_light.into(),
-                fresnel: h.material.fresnel as u32,
-                diffuse: h.material.diffuse.into(),
-                roughness: h.material.roughness,
-                specular: h.material.specular.into(),
+                fresnel: uber.fresnel as u32,
+                diffuse: uber.diffuse.into(),
+                roughness: uber.roughness,
+                specular: uber.specular.into(),
                 pdf: -1.0,
                 ns: ns.into(),
                 light_flux: 0.0,

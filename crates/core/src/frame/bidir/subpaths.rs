@@ -358,16 +358,17 @@ fn subpaths(
             let (m, texel_scale) = cube_views(pos, lo, hi, size);
             out.matrices[slot * 6..slot * 6 + 6].copy_from_slice(&m);
             let next = s.get(j + 1).map_or(0.0, |&n| (first as usize + n) as f32);
+            let uber = v.material.uber_equivalent();
             out.raws[slot] = VplRaw {
                 position: pos.into(),
                 first_layer: 0,
                 flux: v.flux.into(),
                 texel_scale,
                 to_light: v.to_prev.into(),
-                fresnel: v.material.fresnel as u32,
-                diffuse: v.material.diffuse.into(),
-                roughness: v.material.roughness,
-                specular: v.material.specular.into(),
+                fresnel: uber.fresnel as u32,
+                diffuse: uber.diffuse.into(),
+                roughness: uber.roughness,
+                specular: uber.specular.into(),
                 pdf: v.density,
                 ns: v.ns.into(),
                 light_flux: v.continuation,

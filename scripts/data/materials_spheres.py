@@ -1,0 +1,116 @@
+"""Single-material spheres of issue 42 (Mitsuba's plastic, roughplastic with GGX and
+Beckmann, conductor and roughconductor with named metals) and their Mitsuba 3 references.
+
+Writes tests/scenes/materials/<name>.xml (Mitsuba 3 XML: a unit sphere under a constant
+environment and a small rectangular area light, 64×64, box pixel filter) and
+<name>-reference.exr (Mitsuba's `path`, max_depth 65 = gi's 64 scattering events, the mean
+of BATCHES renders of different seeds), plus references.json: each reference's mean per
+channel and its standard error (from the batches).
+
+Run: /work/main/.venv/bin/python scripts/data/materials_spheres.py  (pip install
+mitsuba==3.9.1; CI never runs Mitsuba)."""
+
+import json
+import pathlib
+
+import numpy as np
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+OUT = ROOT / "tests" / "scenes" / "materials"
+SIZE = 64
+SPP = 512
+BATCHES = 8
+
+MATERIALS = {
+    "plastic": """<bsdf type="plastic">
+        <rgb name="diffuse_reflectance" value="0.6, 0.25, 0.1"/>
+    </bsdf>""",
+    "roughplastic-ggx": """<bsdf type="roughplastic">
+        <string name="distribution" value="ggx"/>
+        <float name="alpha" value="0.2"/>
+        <rgb name="diffuse_reflectance" value="0.1, 0.3, 0.7"/>
+    </bsdf>""",
+    "roughplastic-beckmann": """<bsdf type="roughplastic">
+        <rgb name="diffuse_reflectance" value="0.8, 0.7, 0.2"/>
+        <boolean name="nonlinear" value="true"/>
+    </bsdf>""",
+    "conductor-au": """<bsdf type="conductor">
+        <string name="material" value="Au"/>
+    </bsdf>""",
+    "roughconductor-cu": """<bsdf type="roughconductor">
+        <string name="material" value="Cu"/>
+        <float name="alpha" value="0.2"/>
+    </bsdf>""",
+    "roughconductor-al-ggx": """<bsdf type="roughconductor">
+        <string name="material" value="Al"/>
+        <string name="distribution" value="ggx"/>
+        <float name="alpha" value="0.3"/>
+    </bsdf>""",
+}
+
+SCENE = """<scene version="3.0.0">
+    <!-- Issue 42's single-material sphere: {name} (scripts/data/materials_spheres.py). -->
+    <integrator type="path">
+        <integer name="max_depth" value="65"/>
+    </integrator>
+    <sensor type="perspective">
+        <float name="fov" value="36"/>
+        <transform name="to_world">
+            <lookat origin="0, 0.6, 4" target="0, 0, 0" up="0, 1, 0"/>
+        </transform>
+        <sampler type="independent">
+            <integer name="sample_count" value="{spp}"/>
+        </sampler>
+        <film type="hdrfilm">
+            <integer name="width" value="{size}"/>
+            <integer name="height" value="{size}"/>
+            <rfilter type="box"/>
+        </film>
+    </sensor>
+    <emitter type="constant">
+        <rgb name="radiance" value="0.4"/>
+    </emitter>
+    <shape type="rectangle">
+        <transform name="to_world">
+            <scale value="0.4"/>
+            <lookat origin="2, 3, 2.5" target="0, 0, 0" up="0, 1, 0"/>
+        </transform>
+        <emitter type="area">
+            <rgb name="radiance" value="12"/>
+        </emitter>
+    </shape>
+    <shape type="sphere">
+        {bsdf}
+    </shape>
+</scene>
+"""
+
+
+def main() -> None:
+    import mitsuba as mi
+
+    mi.set_variant("scalar_rgb")
+    OUT.mkdir(parents=True, exist_ok=True)
+    meta = {}
+    for name, bsdf in MATERIALS.items():
+        xml = SCENE.format(name=name, spp=SPP, size=SIZE, bsdf=bsdf)
+        path = OUT / f"{name}.xml"
+        path.write_text(xml)
+        scene = mi.load_file(str(path))
+        imgs = [np.array(mi.render(scene, seed=s)) for s in range(BATCHES)]
+        img = np.mean(imgs, axis=0)
+        means = np.array([i.reshape(-1, 3).mean(0) for i in imgs])
+        se = means.std(0, ddof=1) / np.sqrt(BATCHES)
+        mi.Bitmap(img.astype(np.float32)).write(str(OUT / f"{name}-reference.exr"))
+        meta[name] = {
+            "mean": img.reshape(-1, 3).mean(0).tolist(),
+            "standard_error": se.tolist(),
+            "spp": SPP * BATCHES,
+            "mitsuba": mi.__version__,
+        }
+        print(name, meta[name]["mean"], se / img.reshape(-1, 3).mean(0))
+    (OUT / "references.json").write_text(json.dumps(meta, indent=1) + "\n")
+
+
+if __name__ == "__main__":
+    main()
