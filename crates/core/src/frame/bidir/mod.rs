@@ -103,8 +103,9 @@ impl BidirState {
             res,
             mb as u64 * (1 << 20),
         )?;
-        let (env_table, env_pdf_scale) = bundles::env_table(ctx, scene.environment.as_deref());
-        let group = lighting_group(ctx, &g.scene, &vpls, &bundles, &params, &env_table);
+        let env = bundles::env_tables(ctx, scene.environment.as_deref());
+        let env_pdf_scale = env.pdf_scale;
+        let group = lighting_group(ctx, &g.scene, &vpls, &bundles, &params, &env);
         let (w, h) = (g.targets.width, g.targets.height);
         Ok(BidirState {
             layers,
@@ -150,19 +151,20 @@ impl BidirState {
 }
 
 /// The lighting pass's bind group: its parameters, the VPLs and their shadow maps, the
-/// lights and theirs, the ray bundles and the environment's table.
+/// lights and theirs, the ray bundles and the environment's tables.
 fn lighting_group(
     ctx: &GpuContext,
     gs: &GpuScene,
     vpls: &VplMaps,
     bundles: &BundleBuffers,
     params: &wgpu::Buffer,
-    env_table: &wgpu::Texture,
+    env: &bundles::EnvTables,
 ) -> wgpu::BindGroup {
     let (light_views, light_maps) = gs.shadow_lookup();
     let sampler = &DirectPass::get(ctx).shadow_sampler;
     let records = vpls.records.create_view(&Default::default());
-    let env = env_table.create_view(&Default::default());
+    let irradiance = env.irradiance.create_view(&Default::default());
+    let env = env.radiance.create_view(&Default::default());
     fn buffer(binding: u32, b: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
         wgpu::BindGroupEntry {
             binding,
@@ -190,6 +192,7 @@ fn lighting_group(
                 buffer(9, &bundles.heads),
                 buffer(10, &bundles.nodes),
                 texture(11, &env),
+                texture(12, &irradiance),
             ],
         },
     )
@@ -385,8 +388,14 @@ fn state<'a>(
     let lights = vpl_groups(scene);
     let first = options.vpls_per_light * lights;
     let max_slots = ctx.device.limits().max_texture_array_layers / 6;
-    let capacity =
-        first + subpaths::slots(lights, options.bundles, options.max_depth, first, max_slots);
+    let capacity = first
+        + subpaths::slots(
+            lights,
+            (options.vpls_per_light, options.bundles),
+            options.max_depth,
+            first,
+            max_slots,
+        );
     let size = options.vpl_shadow_map_size;
     let bundle_key = (
         options.bundles.max(1),
