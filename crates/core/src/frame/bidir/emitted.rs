@@ -60,6 +60,7 @@ const MAX_TRIES: u32 = 64;
 /// take one emission each instead, their points on the disc stratified (a Fibonacci
 /// lattice under a random offset): its photons then cover the sunlit surfaces evenly (the
 /// sun's one-bounce light varied by 2.1% of the image a frame, its VPLs drawn at random).
+/// The emitters' slots likewise, their cosine directions stratified.
 pub(super) fn heads(
     scene: &Scene,
     bvh: &SceneBvh,
@@ -92,12 +93,21 @@ pub(super) fn heads(
         let share = p * n as f32;
         let mut head = None;
         let mut used = 0;
+        let j = tries.iter().find(|t| t.0 == source).map_or(0, |t| t.1);
         if let Some(sun) = directional(scene, source).filter(|_| h >= 2) {
             // The sun: its slots' points stratified over the disc, one emission each.
-            let j = tries.iter().find(|t| t.0 == source).map_or(0, |t| t.1);
             let u = lattice(j, h as u32, offset);
             let e = sun.emit_directional(rng.next_2d(), u, sources.bounds);
             head = hit_head(scene, bvh, e, share);
+            used = 1;
+        } else if source == Source::Emitters && h >= 2 {
+            // The emitters: their slots' directions stratified (where the photons land
+            // follows them), one emission each.
+            let u = lattice(j, h as u32, offset);
+            head = sources
+                .emitters
+                .emit_sample_towards(scene, rng, Some(u))
+                .and_then(|(e, _)| hit_head(scene, bvh, e, share));
             used = 1;
         } else {
             let max_tries = if h >= 2 { MAX_TRIES } else { 1 };
@@ -123,7 +133,8 @@ pub(super) fn heads(
         let Some(&(_, emitted, hits)) = tries.iter().find(|t| t.0 == *source) else {
             continue;
         };
-        if slots_of(*source) >= 2 && directional(scene, *source).is_none() {
+        let stratified = directional(scene, *source).is_some() || *source == Source::Emitters;
+        if slots_of(*source) >= 2 && !stratified {
             let p_hit = if hits >= 2 && emitted >= 2 {
                 (hits - 1) as f32 / (emitted - 1) as f32
             } else {

@@ -19,10 +19,13 @@
 //!    combined by MIS.
 //! 5. [`specular_paths`]: the paths through mirrors and glass, on the CPU (a light tracer
 //!    and camera paths through delta lobes), added to the specular target.
+//! 6. [`spikes`]: the lighting pass's image read back, its isolated spikes spread over
+//!    their neighbourhood (mean-preserving hot-spot control), the radiance corrected.
 
 mod bundles;
 mod emitted;
 mod specular_paths;
+mod spikes;
 mod subpaths;
 mod vpls;
 
@@ -529,7 +532,11 @@ pub(super) fn frame(
     let (specular, cpu_split) =
         specular(&ctx, targets, state, scene, bvh, options, frame, progress)?;
     let specular_seconds = t.elapsed().as_secs_f64();
-    let names = readback_names(images, true);
+    let mut names = readback_names(images, true);
+    if !names.contains(&"indirect") {
+        // For the hot-spot control of `output` (`spikes`).
+        names.push("indirect");
+    }
     targets.record_readback(&ctx, &mut encoder, &names, Some(&state.indirect));
     timer.resolve(&mut encoder);
     let index = ctx.queue.submit([encoder.finish()]);
@@ -578,15 +585,33 @@ fn output(
     stats: RenderStats,
 ) -> RenderOutput {
     let mut out = assemble(scene, targets, data, stats);
+    let (w, h) = (targets.width, targets.height);
+    // The lighting pass's image with its spikes spread (`spikes`), the difference added
+    // to the radiance.
+    let indirect = data.get("indirect").map(|i| {
+        let mut img = rgb_image(w, h, i);
+        let covered: Vec<bool> = i.iter().map(|p| p.w > 0.5).collect();
+        let original = img.pixels.clone();
+        spikes::spread(&mut img.pixels, &covered, w as usize, h as usize);
+        for ((r, new), old) in out
+            .radiance
+            .pixels
+            .iter_mut()
+            .zip(&img.pixels)
+            .zip(&original)
+        {
+            *r += *new - *old;
+        }
+        img
+    });
     if images.extras {
-        let (w, h) = (targets.width, targets.height);
         if let Some(a) = data.get("accum") {
             out.aovs.push(("direct".into(), normalized(targets, a)));
         }
         let specular = specular.unwrap_or_else(|| Image::new(w, h));
         out.aovs.push(("specular".into(), specular));
-        if let Some(i) = data.get("indirect") {
-            out.aovs.push(("indirect".into(), rgb_image(w, h, i)));
+        if let Some(i) = indirect {
+            out.aovs.push(("indirect".into(), i));
         }
     }
     out

@@ -385,7 +385,8 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
         let size = vec2<f32>(textureDimensions(g_position));
         let ndc = vec2<f32>(frag.x / size.x * 2.0 - 1.0, 1.0 - frag.y / size.y * 2.0);
         let w = params.inv_view_proj * vec4<f32>(ndc, 1.0, 1.0);
-        return vec4<f32>(env_radiance(normalize(w.xyz / w.w - params.eye)), 1.0);
+        // (Alpha 0: no surface, for the hot-spot control of `frame/bidir/spikes.rs`.)
+        return vec4<f32>(env_radiance(normalize(w.xyz / w.w - params.eye)), 0.0);
     }
     let p = pos.xyz;
     let nn = textureLoad(g_normals, px, 0);
