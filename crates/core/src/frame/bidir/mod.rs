@@ -532,11 +532,7 @@ pub(super) fn frame(
     let (specular, cpu_split) =
         specular(&ctx, targets, state, scene, bvh, options, frame, progress)?;
     let specular_seconds = t.elapsed().as_secs_f64();
-    let mut names = readback_names(images, true);
-    if !names.contains(&"indirect") {
-        // For the hot-spot control of `output` (`spikes`).
-        names.push("indirect");
-    }
+    let names = spikes::with_indirect(readback_names(images, true));
     targets.record_readback(&ctx, &mut encoder, &names, Some(&state.indirect));
     timer.resolve(&mut encoder);
     let index = ctx.queue.submit([encoder.finish()]);

@@ -29,6 +29,14 @@ pub(super) const SPREAD_RADIUS: i64 = 3;
 /// lit ones keep their light).
 const FLOOR_SHARE: f32 = 0.1;
 
+/// The textures to read back, with the lighting pass's (`indirect`) that [`spread`] needs.
+pub(super) fn with_indirect(mut names: Vec<&'static str>) -> Vec<&'static str> {
+    if !names.contains(&"indirect") {
+        names.push("indirect");
+    }
+    names
+}
+
 fn lum(c: Vec3) -> f32 {
     (c.x + c.y + c.z) / 3.0
 }
@@ -61,7 +69,7 @@ pub(super) fn spread(img: &mut [Vec3], covered: &[bool], width: usize, height: u
         for x in 0..width {
             let i = y * width + x;
             let l = lum(img[i]);
-            if !covered[i] || !(l > floor) {
+            if !covered[i] || l.is_nan() || l <= floor {
                 continue;
             }
             around.clear();
@@ -77,7 +85,7 @@ pub(super) fn spread(img: &mut [Vec3], covered: &[bool], width: usize, height: u
             let mid = around.len() / 2;
             let median = *around.select_nth_unstable_by(mid, f32::total_cmp).1;
             let keep = SPIKE_FACTOR * median.max(0.0) + floor;
-            if !(l > keep) {
+            if l <= keep {
                 continue;
             }
             let excess = img[i] * ((l - keep) / l);
