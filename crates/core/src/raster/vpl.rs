@@ -171,6 +171,7 @@ impl VplPass {
                 super::storage_entry(9, frag),
                 super::storage_entry(10, frag),
                 texture_entry(11, frag),
+                texture_entry(12, frag),
             ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {

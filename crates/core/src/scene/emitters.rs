@@ -274,6 +274,17 @@ impl Emitters {
     /// [`Emitters::emit`] with the point it left from (its `pdf_area`: the photons' density
     /// over the emitters' surface, per photon drawn).
     pub fn emit_sample(&self, scene: &Scene, rng: &mut Rng) -> Option<(Emission, EmitterSample)> {
+        self.emit_sample_towards(scene, rng, None)
+    }
+
+    /// [`Emitters::emit_sample`] with the cosine-distributed direction drawn from `u_dir`
+    /// when given (so that a caller may stratify the directions), from `rng` otherwise.
+    pub fn emit_sample_towards(
+        &self,
+        scene: &Scene,
+        rng: &mut Rng,
+        u_dir: Option<glam::Vec2>,
+    ) -> Option<(Emission, EmitterSample)> {
         let s = self.sample(scene, rng.next_f32(), rng.next_2d())?;
         let m = scene.material_at(s.triangle as usize, s.uv, 0.0);
         let (mut n, mut sides) = (s.normal, 1.0);
@@ -283,7 +294,8 @@ impl Emitters {
                 n = -n;
             }
         }
-        let dir = Frame::new(n).to_world(cosine_hemisphere(rng.next_2d()));
+        let u = u_dir.unwrap_or_else(|| rng.next_2d());
+        let dir = Frame::new(n).to_world(cosine_hemisphere(u));
         let e = Emission {
             // Off the surface on the side it emits from, as a ray leaving a hit
             // (`Interaction::spawn`): a ray from the surface itself may hit it again.

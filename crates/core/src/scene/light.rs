@@ -245,22 +245,44 @@ impl Light {
                     power: self.intensity_towards(dir) / pdf,
                 }
             }
-            Light::Directional {
-                irradiance,
-                direction,
-                ..
-            } => {
-                let towards = match self.sample_towards(rng.next_2d()) {
-                    Some((d, _)) => d,
-                    None => -direction,
-                };
-                let (origin, area) = bounds.disc_point(towards, rng.next_2d());
-                Emission {
-                    origin,
-                    direction: -towards,
-                    power: irradiance * (area * self.disc_flux_factor()),
-                }
+            Light::Directional { .. } => {
+                let u_towards = rng.next_2d();
+                self.emit_directional(u_towards, rng.next_2d(), bounds)
             }
+        }
+    }
+
+    /// [`Light::emit`] of a directional light from its two uniform samples: `u_towards`
+    /// for the direction within its disc of directions, `u_disc` for the point on the disc
+    /// of `bounds` (so that a caller may stratify the points). Other lights: as from the
+    /// centre of the disc of directions, power zero.
+    pub fn emit_directional(
+        &self,
+        u_towards: glam::Vec2,
+        u_disc: glam::Vec2,
+        bounds: Bounds,
+    ) -> Emission {
+        let Light::Directional {
+            irradiance,
+            direction,
+            ..
+        } = *self
+        else {
+            return Emission {
+                origin: bounds.centre,
+                direction: Vec3::NEG_Y,
+                power: Vec3::ZERO,
+            };
+        };
+        let towards = match self.sample_towards(u_towards) {
+            Some((d, _)) => d,
+            None => -direction,
+        };
+        let (origin, area) = bounds.disc_point(towards, u_disc);
+        Emission {
+            origin,
+            direction: -towards,
+            power: irradiance * (area * self.disc_flux_factor()),
         }
     }
 }

@@ -8,9 +8,73 @@ use crate::scene::light_views;
 use crate::scene::{Environment, Scene};
 use glam::Vec3;
 
+/// Side of the environment's irradiance table (columns; rows side/2 + 1), as the `direct`
+/// frame's.
+const IRRADIANCE_SIDE: u32 = 64;
+
+/// The environment's tables for the lighting pass.
+pub(super) struct EnvTables {
+    /// Radiance (`Rgba32Float`, 1×1 black without an environment).
+    pub radiance: wgpu::Texture,
+    /// Irradiance E(n) (`Environment::irradiance_table`, rows from pole to pole): the
+    /// expectation of the sky's direct-light control variate (`bidir.wgsl`).
+    pub irradiance: wgpu::Texture,
+    /// For an image drawn by importance (§3.3) 1 / ∫ lum(L) dω (0 otherwise).
+    pub pdf_scale: f32,
+}
+
+/// The environment's tables ([`EnvTables`]).
+pub(super) fn env_tables(ctx: &GpuContext, env: Option<&Environment>) -> EnvTables {
+    let (radiance, pdf_scale) = env_table(ctx, env);
+    let (iw, ih) = (IRRADIANCE_SIDE, IRRADIANCE_SIDE / 2 + 1);
+    let (w, h, texels) = match env {
+        Some(e) => (iw, ih, e.irradiance_table(iw, ih)),
+        None => (1, 1, vec![Vec3::ZERO]),
+    };
+    EnvTables {
+        radiance,
+        irradiance: float_table(ctx, "environment irradiance", w, h, &texels),
+        pdf_scale,
+    }
+}
+
+/// A `w`×`h` `Rgba32Float` texture of `texels`.
+fn float_table(ctx: &GpuContext, label: &str, w: u32, h: u32, texels: &[Vec3]) -> wgpu::Texture {
+    let data: Vec<[f32; 4]> = texels.iter().map(|t| t.extend(1.0).to_array()).collect();
+    let texture = gpu::create_texture(
+        &ctx.device,
+        &wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba32Float,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            view_formats: &[],
+        },
+    );
+    crate::gpu::alloc::note_upload(label, data.len() as u64 * 16);
+    ctx.queue.write_texture(
+        texture.as_image_copy(),
+        bytemuck::cast_slice(&data),
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(w * 16),
+            rows_per_image: Some(h),
+        },
+        texture.size(),
+    );
+    texture
+}
+
 /// The environment's radiance table as an `Rgba32Float` texture (1×1 black without one),
 /// and for an image drawn by importance (§3.3) 1 / ∫ lum(L) dω (0 otherwise).
-pub(super) fn env_table(ctx: &GpuContext, env: Option<&Environment>) -> (wgpu::Texture, f32) {
+fn env_table(ctx: &GpuContext, env: Option<&Environment>) -> (wgpu::Texture, f32) {
     let (w, h, texels) = match env {
         Some(e) => {
             let (w, h, t, _) = e.gpu_table();
@@ -35,36 +99,10 @@ pub(super) fn env_table(ctx: &GpuContext, env: Option<&Environment>) -> (wgpu::T
     } else {
         0.0
     };
-    let data: Vec<[f32; 4]> = texels.iter().map(|t| t.extend(1.0).to_array()).collect();
-    let texture = gpu::create_texture(
-        &ctx.device,
-        &wgpu::TextureDescriptor {
-            label: Some("environment table"),
-            size: wgpu::Extent3d {
-                width: w,
-                height: h,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::Rgba32Float,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-            view_formats: &[],
-        },
-    );
-    crate::gpu::alloc::note_upload("environment table", data.len() as u64 * 16);
-    ctx.queue.write_texture(
-        texture.as_image_copy(),
-        bytemuck::cast_slice(&data),
-        wgpu::TexelCopyBufferLayout {
-            offset: 0,
-            bytes_per_row: Some(w * 16),
-            rows_per_image: Some(h),
-        },
-        texture.size(),
-    );
-    (texture, pdf_scale)
+    (
+        float_table(ctx, "environment table", w, h, &texels),
+        pdf_scale,
+    )
 }
 
 /// The frame's `n` bundle directions: a spherical Fibonacci set under a uniformly random

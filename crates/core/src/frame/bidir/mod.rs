@@ -19,10 +19,13 @@
 //!    combined by MIS.
 //! 5. [`specular_paths`]: the paths through mirrors and glass, on the CPU (a light tracer
 //!    and camera paths through delta lobes), added to the specular target.
+//! 6. [`spikes`]: the lighting pass's image read back, its isolated spikes spread over
+//!    their neighbourhood (mean-preserving hot-spot control), the radiance corrected.
 
 mod bundles;
 mod emitted;
 mod specular_paths;
+mod spikes;
 mod subpaths;
 mod vpls;
 
@@ -103,8 +106,9 @@ impl BidirState {
             res,
             mb as u64 * (1 << 20),
         )?;
-        let (env_table, env_pdf_scale) = bundles::env_table(ctx, scene.environment.as_deref());
-        let group = lighting_group(ctx, &g.scene, &vpls, &bundles, &params, &env_table);
+        let env = bundles::env_tables(ctx, scene.environment.as_deref());
+        let env_pdf_scale = env.pdf_scale;
+        let group = lighting_group(ctx, &g.scene, &vpls, &bundles, &params, &env);
         let (w, h) = (g.targets.width, g.targets.height);
         Ok(BidirState {
             layers,
@@ -150,19 +154,20 @@ impl BidirState {
 }
 
 /// The lighting pass's bind group: its parameters, the VPLs and their shadow maps, the
-/// lights and theirs, the ray bundles and the environment's table.
+/// lights and theirs, the ray bundles and the environment's tables.
 fn lighting_group(
     ctx: &GpuContext,
     gs: &GpuScene,
     vpls: &VplMaps,
     bundles: &BundleBuffers,
     params: &wgpu::Buffer,
-    env_table: &wgpu::Texture,
+    env: &bundles::EnvTables,
 ) -> wgpu::BindGroup {
     let (light_views, light_maps) = gs.shadow_lookup();
     let sampler = &DirectPass::get(ctx).shadow_sampler;
     let records = vpls.records.create_view(&Default::default());
-    let env = env_table.create_view(&Default::default());
+    let irradiance = env.irradiance.create_view(&Default::default());
+    let env = env.radiance.create_view(&Default::default());
     fn buffer(binding: u32, b: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
         wgpu::BindGroupEntry {
             binding,
@@ -190,6 +195,7 @@ fn lighting_group(
                 buffer(9, &bundles.heads),
                 buffer(10, &bundles.nodes),
                 texture(11, &env),
+                texture(12, &irradiance),
             ],
         },
     )
@@ -385,8 +391,14 @@ fn state<'a>(
     let lights = vpl_groups(scene);
     let first = options.vpls_per_light * lights;
     let max_slots = ctx.device.limits().max_texture_array_layers / 6;
-    let capacity =
-        first + subpaths::slots(lights, options.bundles, options.max_depth, first, max_slots);
+    let capacity = first
+        + subpaths::slots(
+            lights,
+            (options.vpls_per_light, options.bundles),
+            options.max_depth,
+            first,
+            max_slots,
+        );
     let size = options.vpl_shadow_map_size;
     let bundle_key = (
         options.bundles.max(1),
@@ -520,7 +532,7 @@ pub(super) fn frame(
     let (specular, cpu_split) =
         specular(&ctx, targets, state, scene, bvh, options, frame, progress)?;
     let specular_seconds = t.elapsed().as_secs_f64();
-    let names = readback_names(images, true);
+    let names = spikes::with_indirect(readback_names(images, true));
     targets.record_readback(&ctx, &mut encoder, &names, Some(&state.indirect));
     timer.resolve(&mut encoder);
     let index = ctx.queue.submit([encoder.finish()]);
@@ -569,15 +581,33 @@ fn output(
     stats: RenderStats,
 ) -> RenderOutput {
     let mut out = assemble(scene, targets, data, stats);
+    let (w, h) = (targets.width, targets.height);
+    // The lighting pass's image with its spikes spread (`spikes`), the difference added
+    // to the radiance.
+    let indirect = data.get("indirect").map(|i| {
+        let mut img = rgb_image(w, h, i);
+        let covered: Vec<bool> = i.iter().map(|p| p.w > 0.5).collect();
+        let original = img.pixels.clone();
+        spikes::spread(&mut img.pixels, &covered, w as usize, h as usize);
+        for ((r, new), old) in out
+            .radiance
+            .pixels
+            .iter_mut()
+            .zip(&img.pixels)
+            .zip(&original)
+        {
+            *r += *new - *old;
+        }
+        img
+    });
     if images.extras {
-        let (w, h) = (targets.width, targets.height);
         if let Some(a) = data.get("accum") {
             out.aovs.push(("direct".into(), normalized(targets, a)));
         }
         let specular = specular.unwrap_or_else(|| Image::new(w, h));
         out.aovs.push(("specular".into(), specular));
-        if let Some(i) = data.get("indirect") {
-            out.aovs.push(("indirect".into(), rgb_image(w, h, i)));
+        if let Some(i) = indirect {
+            out.aovs.push(("indirect".into(), i));
         }
     }
     out

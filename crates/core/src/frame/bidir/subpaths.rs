@@ -1,7 +1,10 @@
-//! Light subpaths longer than one vertex (issue 29), instant-radiosity style: from the VPL
-//! that each ray bundle is paired with (§4.3's pairing), a light subpath is continued on the
-//! CPU by BSDF sampling, and each of its later vertices y2, y3, … becomes a VPL with its own
-//! cube shadow map. Each path length has two strategies, combined by MIS as the one-bounce
+//! Light subpaths longer than one vertex (issue 29), instant-radiosity style: from every
+//! first VPL y1 (`vpls_per_light` a light; issue 48: before, only from the VPL each ray
+//! bundle is paired with, 16 subpaths a light at the defaults, whose few samples made one
+//! frame's image mean vary by ±4% on `cornell`) a light subpath is continued on the CPU by
+//! BSDF sampling, and each of its later vertices y2, y3, … becomes a VPL with its own cube
+//! shadow map. A bundle connects to the subpath of the VPL it is paired with (§4.3's
+//! pairing). Each path length has two strategies, combined by MIS as the one-bounce
 //! light's (§4.2):
 //!
 //! - depth 1: direct light (the `direct` frame);
@@ -11,7 +14,7 @@
 //!   bundle's hit to every vertex of its bundle's subpath; (B) x3 ↔ y_{d−1}, every subpath
 //!   vertex a VPL at the pixel. They differ in how the vertex next to x3 is drawn: from x3 by
 //!   the bundles (area density D(ω)·|ng·ω|/d², D the bundles' density of directions) or from
-//!   y_{d−2} by the subpath (n2 subpaths a light, `mis_density` each); balance heuristic on
+//!   y_{d−2} by the subpath (n1 subpaths a light, `mis_density` each); balance heuristic on
 //!   those. Where x2 and y_{d−2} are close (1/d² in A) B's density grows as fast, so A needs
 //!   no clamp (it had one, ‖x2 − y‖ ≥ 10% of the diagonal, that dropped 11% of the
 //!   two-bounce light on `cornell-anim`; `docs/bench/bidir-breakdown.md`), and the same
@@ -107,16 +110,22 @@ struct Subpaths {
     pub used: usize,
 }
 
-/// Slots for subpath vertices: one per (light, bundle) for the first vertex y2, and
-/// [`EXTRA_PER_SUBPATH`] per subpath for the rest, as far as `max_slots` (the GPU's layer
-/// limit over 6) leaves room after the `first` slots of the RSM's VPLs. Zero when
-/// `max_depth` asks for no vertex after y1 (depth < 3: strategy B of depth d takes y_{d−1})
-/// or there are no bundles.
-pub(super) fn slots(lights: u32, bundles: u32, max_depth: u32, first: u32, max_slots: u32) -> u32 {
+/// Slots for subpath vertices: one per (light, VPL) for the first vertex y2 (every VPL is
+/// continued: `n1` subpaths a light), and [`EXTRA_PER_SUBPATH`] per subpath for the rest, as
+/// far as `max_slots` (the GPU's layer limit over 6) leaves room after the `first` slots of
+/// the first VPLs. Zero when `max_depth` asks for no vertex after y1 (depth < 3: strategy B
+/// of depth d takes y_{d−1}) or there are no bundles.
+pub(super) fn slots(
+    lights: u32,
+    (n1, bundles): (u32, u32),
+    max_depth: u32,
+    first: u32,
+    max_slots: u32,
+) -> u32 {
     if max_depth < 3 || bundles == 0 {
         return 0;
     }
-    let heads = lights * bundles;
+    let heads = lights * n1;
     let extra = if max_depth > 3 {
         heads * EXTRA_PER_SUBPATH
     } else {
@@ -130,8 +139,10 @@ pub(super) fn slots(lights: u32, bundles: u32, max_depth: u32, first: u32, max_s
     heads + extra.min(room - heads)
 }
 
-/// The VPL the lighting pass pairs bundle `b` with: ⌊(b + u)·n1/n2⌋ (`bidir.wgsl`).
-pub(super) fn paired_vpl(b: u32, pair_offset: f32, n1: u32, n2: u32) -> u32 {
+/// The VPL the lighting pass pairs bundle `b` with: ⌊(b + u)·n1/n2⌋ (`bidir.wgsl`; its
+/// subpath is the one strategy A of that bundle continues).
+#[cfg(test)]
+fn paired_vpl(b: u32, pair_offset: f32, n1: u32, n2: u32) -> u32 {
     (((b as f32 + pair_offset) * n1 as f32 / n2 as f32) as u32).min(n1.saturating_sub(1))
 }
 
@@ -277,9 +288,8 @@ pub(super) fn append(
         scene,
         bvh,
         groups,
-        (options.vpls_per_light, options.bundles),
+        options.vpls_per_light,
         options.max_depth,
-        super::pair_offset(frame),
         (first, maps.capacity.saturating_sub(first)),
         maps.size,
         frame.seed,
@@ -289,8 +299,10 @@ pub(super) fn append(
     (out.placed, out.used)
 }
 
-/// The subpaths as records for slots `first`, `first + 1`, … (`slots` of them): the first
-/// vertex of subpath (light j, bundle b) in slot `first + j·n2 + b`, each record's
+/// The subpaths as records for slots `first`, `first + 1`, … (`slots` of them): one subpath
+/// from each first VPL y1 (`n1` a light), the first vertex of subpath (light j, VPL k) in
+/// slot `first + j·n1 + k` (bundle b connects to the subpath of the VPL it is paired with,
+/// `paired_vpl`), each record's
 /// `light_dist2` holding the slot of the subpath's next vertex (0: none; the field is
 /// unused beyond the RSM's VPLs). Later vertices are placed order by order, so that a full
 /// budget drops the highest orders.
@@ -299,15 +311,14 @@ fn subpaths(
     scene: &Scene,
     bvh: &SceneBvh,
     groups: &[Vec<Option<Head>>],
-    (n1, n2): (u32, u32),
+    n1: u32,
     max_depth: u32,
-    pair_offset: f32,
     (first, slots): (u32, u32),
     size: u32,
     seed: u64,
 ) -> Subpaths {
     let lights = groups.len();
-    let heads = lights * n2 as usize;
+    let heads = lights * n1 as usize;
     let mut out = Subpaths {
         raws: vec![VplRaw::zeroed(); slots as usize],
         matrices: vec![Mat4::IDENTITY; slots as usize * 6],
@@ -320,13 +331,12 @@ fn subpaths(
     let max_len = max_depth.saturating_sub(2);
     let mut paths: Vec<Vec<Vertex>> = vec![Vec::new(); heads];
     for (light, own) in groups.iter().enumerate() {
-        for b in 0..n2 {
-            let k = paired_vpl(b, pair_offset, n1, n2) as usize;
+        for k in 0..n1 as usize {
             if let Some(Some(v)) = own.get(k) {
-                let mut rng = Rng::new(seed, 0x5b9a, (light * n2 as usize + b as usize) as u64);
+                let i = light * n1 as usize + k;
+                let mut rng = Rng::new(seed, 0x5b9a, i as u64);
                 let light_traced = scene.lights.get(light).is_some_and(|l| l.is_local());
-                paths[light * n2 as usize + b as usize] =
-                    trace(scene, bvh, v, (max_len, light_traced), &mut rng);
+                paths[i] = trace(scene, bvh, v, (max_len, light_traced), &mut rng);
             }
         }
     }
@@ -389,12 +399,12 @@ mod tests {
 
     #[test]
     fn slots_fit_the_budget_and_the_gpu() {
-        assert_eq!(slots(1, 16, 2, 64, 1000), 0);
-        assert_eq!(slots(1, 0, 7, 64, 1000), 0);
-        assert_eq!(slots(2, 16, 3, 64, 1000), 32);
-        assert_eq!(slots(2, 16, 7, 64, 1000), 32 * (1 + EXTRA_PER_SUBPATH));
+        assert_eq!(slots(1, (64, 16), 2, 64, 1000), 0);
+        assert_eq!(slots(1, (64, 0), 7, 64, 1000), 0);
+        assert_eq!(slots(2, (16, 4), 3, 32, 1000), 32);
+        assert_eq!(slots(2, (16, 4), 7, 32, 1000), 32 * (1 + EXTRA_PER_SUBPATH));
         // The extra slots shrink to what the GPU holds.
-        assert_eq!(slots(1, 16, 64, 64, 100), 36);
+        assert_eq!(slots(1, (16, 4), 64, 64, 100), 36);
     }
 
     #[test]

@@ -15,7 +15,7 @@
 //   CPU (`subpaths.rs`), each vertex a VPL of its own (strategy A). Strategy B of the same
 //   path lengths: every subpath vertex y_j (j ≥ 2) lights x3 as a VPL. A and B combined by
 //   MIS (balance heuristic on the area density of the vertex next to x3: D(ω)·cos/d² from
-//   the bundles, n2·`mis_density` from the subpaths, `b_density`), so that no pair needs a
+//   the bundles, n1·`mis_density` from the subpaths (one from every VPL), `b_density`), so that no pair needs a
 //   clamp; in modes 1 and 2 A alone, ‖x2 − y‖² clamped from below.
 // - roughness clamping (§5): the GGX α of the BSDF at a path vertex is raised so that the
 //   distribution's peak D(0) = 1/(πα²) stays under d̂/m (kernel radius estimation, eq. 9),
@@ -108,6 +108,8 @@ struct Params {
 @group(0) @binding(10) var<storage, read> nodes: array<Node>;
 // Radiance table of the environment (equirectangular; 1×1 for a constant colour).
 @group(0) @binding(11) var env_table: texture_2d<f32>;
+// Its irradiance table (`Environment::irradiance_table`: rows from pole to pole).
+@group(0) @binding(12) var irradiance_table: texture_2d<f32>;
 @group(1) @binding(0) var g_position: texture_2d<f32>;
 @group(1) @binding(1) var g_normals: texture_2d<f32>;
 @group(1) @binding(2) var g_diffuse: texture_2d<f32>;
@@ -212,14 +214,16 @@ fn clamped(m_in: Material, dhat: f32, cos_o: f32) -> Material {
     return m;
 }
 
-// Strategy B's area density (all n2 subpaths of a light) of the vertex x next to x3 when
-// the subpath draws it from `y` (continuation `q`): n2·q·|ns_y·ω|/π·|ng·ω|/d², as
-// `subpaths::mis_density` stores it in the records of the subpaths' vertices.
+// Strategy B's area density of the vertex x next to x3 when the subpath draws it from `y`
+// (continuation `q`), scaled as the bundles' D(ω)·cos/d² is (both counted per first VPL:
+// each of the n1 VPLs of a light is continued by one subpath, and picked by n2/n1 bundles):
+// n1·q·|ns_y·ω|/π·|ng·ω|/d², as `subpaths::mis_density` stores it (without n1) in the
+// records of the subpaths' vertices.
 fn b_density(y: Vpl, q: f32, x: vec3<f32>, ng: vec3<f32>) -> f32 {
     let d = x - y.position;
     let d2 = max(dot(d, d), 1e-20);
     let w = d / sqrt(d2);
-    return f32(params.bundles) * q * abs(dot(y.ns, w)) / PI * abs(dot(ng, w)) / d2;
+    return f32(params.vpls_per_light) * q * abs(dot(y.ns, w)) / PI * abs(dot(ng, w)) / d2;
 }
 
 // d̂ of eq. 13 from the two solid-angle densities.
@@ -244,6 +248,56 @@ fn env_radiance(d: vec3<f32>) -> vec3<f32> {
     let x = min(u32(u * f32(size.x)), size.x - 1u);
     let y = min(u32(v * f32(size.y)), size.y - 1u);
     return textureLoad(env_table, vec2<u32>(x, y), 0).xyz;
+}
+
+// The environment's irradiance on a surface facing world direction `n`, bilinear in the
+// irradiance table (as `direct_shade.wgsl`'s `env_irradiance`).
+fn env_irradiance(n: vec3<f32>) -> vec3<f32> {
+    let c = params.env_cos;
+    let s = params.env_sin;
+    let l = vec3<f32>(c * n.x - s * n.z, n.y, s * n.x + c * n.z);
+    let size = textureDimensions(irradiance_table);
+    var u = atan2(l.x, -l.z) / TWO_PI;
+    u = u - floor(u);
+    let v = atan2(sqrt(l.x * l.x + l.z * l.z), l.y) / PI;
+    let st = vec2<f32>(u * f32(size.x) - 0.5, v * f32(size.y - 1u));
+    let base = floor(st);
+    let f = st - base;
+    let w = i32(size.x);
+    let h = i32(size.y) - 1;
+    let x0 = (i32(base.x) % w + w) % w;
+    let x1 = (x0 + 1) % w;
+    let y0 = clamp(i32(base.y), 0, h);
+    let y1 = clamp(i32(base.y) + 1, 0, h);
+    let a = mix(textureLoad(irradiance_table, vec2<i32>(x0, y0), 0).xyz, textureLoad(irradiance_table, vec2<i32>(x1, y0), 0).xyz, f.x);
+    let b = mix(textureLoad(irradiance_table, vec2<i32>(x0, y1), 0).xyz, textureLoad(irradiance_table, vec2<i32>(x1, y1), 0).xyz, f.x);
+    return mix(a, b, f.y);
+}
+
+// The diffuse lobe of `bsdf_eval` alone (Lambert with its Fresnel coupling), the
+// integrand of the sky's control variate.
+fn diffuse_lobe(m: Material, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
+    let co = dot(n, wo);
+    let ci = dot(n, wi);
+    if co * ci <= 0.0 || max3(m.diffuse) <= 0.0 {
+        return vec3<f32>(0.0);
+    }
+    let one_minus_avg = vec3<f32>(1.0) - fresnel_avg(m);
+    let num = (vec3<f32>(1.0) - fresnel_spec(m, abs(co))) * (vec3<f32>(1.0) - fresnel_spec(m, abs(ci)));
+    let coupling = select(vec3<f32>(0.0), num / one_minus_avg, one_minus_avg > vec3<f32>(1e-6));
+    return m.diffuse / PI * coupling;
+}
+
+// The control variate's expectation: the diffuse lobe's unshadowed sky light in closed form,
+// ρ/π·(1 − F(cos θo))·E(ns) (the Fresnel coupling's mean over the incident cosines is
+// 1 − F_avg: exact for a constant sky, as `direct_shade.wgsl`'s ratio estimator takes it).
+fn sky_diffuse_unshadowed(m: Material, ns: vec3<f32>, wo: vec3<f32>) -> vec3<f32> {
+    let one_minus_avg = vec3<f32>(1.0) - fresnel_avg(m);
+    if max3(m.diffuse) <= 0.0 {
+        return vec3<f32>(0.0);
+    }
+    let coupling = select(vec3<f32>(0.0), vec3<f32>(1.0) - fresnel_spec(m, abs(dot(ns, wo))), one_minus_avg > vec3<f32>(1e-6));
+    return m.diffuse / PI * coupling * env_irradiance(ns);
 }
 
 fn luminance(c: vec3<f32>) -> f32 {
@@ -331,7 +385,8 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
         let size = vec2<f32>(textureDimensions(g_position));
         let ndc = vec2<f32>(frag.x / size.x * 2.0 - 1.0, 1.0 - frag.y / size.y * 2.0);
         let w = params.inv_view_proj * vec4<f32>(ndc, 1.0, 1.0);
-        return vec4<f32>(env_radiance(normalize(w.xyz / w.w - params.eye)), 1.0);
+        // (Alpha 0: no surface, for the hot-spot control of `frame/bidir/spikes.rs`.)
+        return vec4<f32>(env_radiance(normalize(w.xyz / w.w - params.eye)), 0.0);
     }
     let p = pos.xyz;
     let nn = textureLoad(g_normals, px, 0);
@@ -379,7 +434,7 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
     }
 
     // Three and more bounces, strategy B: the light subpaths' vertices y_j (j ≥ 2) as VPLs
-    // at x3; n2 subpaths a light, each carrying n2/n1 of its VPL's share (weight n1/n2).
+    // at x3; n1 subpaths a light, one from each first VPL (each carrying its VPL's share).
     let mis = params.mode == 0u;
     let tiny_d2 = params.min_dist2 * 1e-6;
     if mis && params.bundles > 0u && params.bounces >= 2u {
@@ -393,12 +448,23 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
             let d2 = max(dot(to_v, to_v), 1e-20);
             let cos_v = abs(dot(to_v, v.ng)) / sqrt(d2);
             let pa = bundle_density(to_v / sqrt(d2)) * cos_v / d2;
-            let pb = n2 * v.pdf;
+            let pb = n1 * v.pdf;
             let d3 = (pa + pb) * d2 / max(cos_v, 1e-6);
             let mv = clamped(vpl_material(v), d3, cos_v);
             let t = vpl_light(v, mv, p, ns, ng, clamped(m, d3, dot(ns, wo)), wo, tiny_d2);
-            sum += t * (n1 / n2) * (pb / (pa + pb));
+            sum += t * (pb / (pa + pb));
         }
+    }
+
+    // The sky's direct light through the bundles' misses has a control variate (issue 48):
+    // its diffuse lobe's unshadowed light in closed form plus, per bundle, that lobe's
+    // sampled unshadowed light subtracted (below), so that the bundles estimate only the
+    // part the scene occludes. Unbiased up to the irradiance table's interpolation of an
+    // image sky (exact for a constant one) and a shading normal off the geometric one; an
+    // open scene's frame then no longer varies with how its few bundle directions fall on
+    // the sky (`docs/bench/bidir-depth.md`).
+    if params.has_env != 0u && params.bundles > 0u {
+        sum += sky_diffuse_unshadowed(m, ns, wo);
     }
 
     // Camera subpaths through the ray bundles.
@@ -421,12 +487,18 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
             // samples lie up to 0.71 texels off the ray): skipped, at the cost of hits in the
             // last quarter texel of a corner.
             let hit = trace_bundle(bv, p, dir, 0.02 * texel, 0.25 * texel);
-            if !hit.found {
-                // §6: nothing along ±ω, the environment is seen (the only strategy for it).
-                if params.has_env != 0u {
+            if params.has_env != 0u {
+                // §6: nothing along ±ω, the environment is seen (the only strategy for it),
+                // less the control variate's sample (every bundle's, hit or not: its diffuse
+                // lobe's unshadowed light, whose expectation is added per pixel below).
+                let l_env = env_radiance(dir) * (abs(dot(ns, dir)) * bv.inv_density);
+                sum -= diffuse_lobe(m, ns, wo, dir) * l_env;
+                if !hit.found {
                     let f3 = bsdf_eval(clamped(m, 1.0 / bv.inv_density, dot(ns, wo)), ns, wo, dir);
-                    sum += f3 * env_radiance(dir) * (abs(dot(ns, dir)) * bv.inv_density);
+                    sum += f3 * l_env;
                 }
+            }
+            if !hit.found {
                 continue;
             }
             // The fragment's own point (on its surface, up to 0.71 texels off the ray).
@@ -506,7 +578,7 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
                     // continued from that VPL for this bundle (`subpaths.rs`), linked by
                     // their records' `light_dist2` (0 ends the subpath; `light_flux` holds
                     // the vertex's continuation for the MIS weight).
-                    var row = params.vpl_count + j * params.bundles + b;
+                    var row = params.vpl_count + j * params.vpls_per_light + k;
                     for (var o = 2u; o < params.bounces && row != 0u; o++) {
                         let y = vpl_at(row);
                         var ty = vpl_light(y, vpl_material(y), x2, ns2, ng2, m2, -dir, min_d2);
