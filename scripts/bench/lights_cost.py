@@ -1,14 +1,14 @@
-"""What a point-lit scene pays for the GPU direct light of many kinds of light: two builds
-of gi (``--old`` and ``--new``, each a ``python/`` directory holding a built ``gi``
-package) render the same frames in one run, alternating round by round, each in its own
-worker process, the scene's first light moving every frame (so shadows and direct light
-are redrawn). Prints the median frame time and median per-stage times of each build, a
-Markdown table for ``docs/bench/lights-gpu.md``.
+"""What a point-lit scene pays for the GPU direct light of many kinds of light: builds of
+gi (``--build NAME=DIR``, DIR a ``python/`` directory holding a built ``gi`` package)
+render the same frames in one run, alternating round by round (the order rotating), each
+in its own worker process, the scene's first light moving every frame (so shadows and
+direct light are redrawn). Prints the median frame time and median per-stage times of each
+build, a Markdown table for ``docs/bench/lights-gpu.md``.
 
-    python scripts/bench/lights_cost.py --old /tmp/old/python --new python \\
+    python scripts/bench/lights_cost.py --build old=/tmp/old/python --build new=python \\
         [--scene cornell] [--size 640x480] [--photons 20000] [--rounds 8] [--frames 4]
 
-The machine may be shared: alternating rounds give both builds the same load, and the
+The machine may be shared: alternating rounds give the builds the same load, and the
 medians leave out the rounds a burst of other work slowed.
 """
 
@@ -22,7 +22,7 @@ import subprocess
 import sys
 import time
 
-STAGES = ("direct light", "edge shading", "photon upload", "shadow maps", "gbuffer")
+STAGES = ("direct light", "edge shading", "photon upload", "shadow maps")
 
 
 def worker(scene: str, size: str, photons: int) -> None:
@@ -59,8 +59,7 @@ def start(path: str, a: argparse.Namespace) -> subprocess.Popen[str]:
 
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--old", help="python/ directory of the baseline build")
-    p.add_argument("--new", help="python/ directory of the build measured")
+    p.add_argument("--build", action="append", default=[], help="NAME=DIR (repeat)")
     p.add_argument("--scene", default="cornell")
     p.add_argument("--size", default="640x480")
     p.add_argument("--photons", type=int, default=20_000)
@@ -71,10 +70,14 @@ def main() -> None:
     if a.worker:
         worker(a.scene, a.size, a.photons)
         return
-    builds = {"old": start(a.old, a), "new": start(a.new, a)}
+    builds = {}
+    for b in a.build:
+        name, _, path = b.partition("=")
+        builds[name] = start(path, a)
+    names = list(builds)
     got: dict[str, list[dict]] = {k: [] for k in builds}
     for rnd in range(a.rounds):
-        order = ("old", "new") if rnd % 2 == 0 else ("new", "old")
+        order = names[rnd % len(names) :] + names[: rnd % len(names)]
         for k in order:
             proc = builds[k]
             assert proc.stdin is not None and proc.stdout is not None
