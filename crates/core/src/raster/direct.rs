@@ -10,6 +10,7 @@
 //! emission the G-buffer saw and the environment behind uncovered samples; the formulas and
 //! their bias are in `shaders/common/direct_shade.wgsl`.
 
+use super::direct_variant::{DirectVariant, VariantCache};
 use super::wgsl;
 use crate::gpu::layout::texture_entry;
 use crate::gpu::shaders;
@@ -124,11 +125,16 @@ pub const MAX_GROUPS: usize = 8;
 /// The accumulation target: radiance·weight in rgb, the sum of weights in alpha.
 pub const ACCUM: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
+/// A variant's pipelines: (adds one weighted sub-pixel sample, writes the pixel-centre
+/// sample with weight 1).
+type Pipelines = (wgpu::RenderPipeline, wgpu::RenderPipeline);
+
 pub struct DirectPass {
-    /// Adds one weighted sub-pixel sample.
-    pub pipeline: wgpu::RenderPipeline,
-    /// Writes the pixel-centre sample with weight 1.
-    pub centre: wgpu::RenderPipeline,
+    device: wgpu::Device,
+    module: wgpu::ShaderModule,
+    pipeline_layout: wgpu::PipelineLayout,
+    /// Per [`DirectVariant`], compiled on first use.
+    variants: VariantCache<Pipelines>,
     /// Group 0: view, lights, shadow matrices, shadow maps, comparison sampler, the
     /// penumbra taps per axis of the pixel-centre pass ([`penumbra_taps`]), the sampled
     /// lights' records, shadow matrices (a texture) and maps, the environment's radiance and
@@ -233,34 +239,6 @@ impl DirectPass {
                 wgsl::DIRECT,
             ],
         );
-        let add = wgpu::BlendComponent {
-            src_factor: wgpu::BlendFactor::One,
-            dst_factor: wgpu::BlendFactor::One,
-            operation: wgpu::BlendOperation::Add,
-        };
-        let blend = wgpu::BlendState {
-            color: add,
-            alpha: add,
-        };
-        let pipeline = |entry: &str, blend: Option<wgpu::BlendState>| {
-            let target = wgpu::ColorTargetState {
-                format: ACCUM,
-                blend,
-                write_mask: wgpu::ColorWrites::ALL,
-            };
-            crate::gpu::create_fullscreen_pipeline(
-                device,
-                entry,
-                &pipeline_layout,
-                &module,
-                entry,
-                target,
-            )
-        };
-        let (centre, pipeline) = (
-            pipeline("fs_centre", None),
-            pipeline("fs_main", Some(blend)),
-        );
         let shadow_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("shadow comparison sampler"),
             mag_filter: wgpu::FilterMode::Linear,
@@ -269,16 +247,74 @@ impl DirectPass {
             ..Default::default()
         });
         DirectPass {
-            pipeline,
-            centre,
+            device: device.clone(),
+            module,
+            pipeline_layout,
+            variants: VariantCache::default(),
             scene_layout,
             gbuffer_layout,
             shadow_sampler,
         }
     }
 
+    /// The pipelines of `variant`, compiled the first time.
+    fn pipelines(&self, variant: DirectVariant) -> Pipelines {
+        self.variants.get(variant, |v| {
+            let add = wgpu::BlendComponent {
+                src_factor: wgpu::BlendFactor::One,
+                dst_factor: wgpu::BlendFactor::One,
+                operation: wgpu::BlendOperation::Add,
+            };
+            let blend = wgpu::BlendState {
+                color: add,
+                alpha: add,
+            };
+            let constants = v.constants();
+            let pipeline = |entry: &str, blend: Option<wgpu::BlendState>| {
+                let target = wgpu::ColorTargetState {
+                    format: ACCUM,
+                    blend,
+                    write_mask: wgpu::ColorWrites::ALL,
+                };
+                let compilation_options = wgpu::PipelineCompilationOptions {
+                    constants: &constants,
+                    ..Default::default()
+                };
+                crate::gpu::create_render_pipeline(
+                    &self.device,
+                    &wgpu::RenderPipelineDescriptor {
+                        label: Some(entry),
+                        layout: Some(&self.pipeline_layout),
+                        vertex: wgpu::VertexState {
+                            module: &self.module,
+                            entry_point: Some("vs_main"),
+                            compilation_options: Default::default(),
+                            buffers: &[],
+                        },
+                        primitive: wgpu::PrimitiveState::default(),
+                        depth_stencil: None,
+                        multisample: Default::default(),
+                        fragment: Some(wgpu::FragmentState {
+                            module: &self.module,
+                            entry_point: Some(entry),
+                            compilation_options,
+                            targets: &[Some(target)],
+                        }),
+                        multiview_mask: None,
+                        cache: None,
+                    },
+                )
+            };
+            (
+                pipeline("fs_main", Some(blend)),
+                pipeline("fs_centre", None),
+            )
+        })
+    }
+
     /// Records the pass, adding into `accum` (cleared first when `clear`), or writing the
-    /// pixel-centre sample when `centre`. The bind groups are those of `scene_layout` and
+    /// pixel-centre sample when `centre`, by the pipelines of `variant` (which must cover
+    /// the scene's lights). The bind groups are those of `scene_layout` and
     /// `gbuffer_layout`.
     #[allow(clippy::too_many_arguments)]
     pub fn record(
@@ -288,7 +324,7 @@ impl DirectPass {
         clear: bool,
         centre: bool,
         [scene_group, gbuffer_group]: [&wgpu::BindGroup; 2],
-        view_offset: u32,
+        (view_offset, variant): (u32, DirectVariant),
         timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) {
         let load = if clear {
@@ -296,6 +332,7 @@ impl DirectPass {
         } else {
             wgpu::LoadOp::Load
         };
+        let (add, write) = self.pipelines(variant);
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("direct light pass"),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {
@@ -312,7 +349,7 @@ impl DirectPass {
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_pipeline(if centre { &self.centre } else { &self.pipeline });
+        pass.set_pipeline(if centre { &write } else { &add });
         pass.set_bind_group(0, scene_group, &[view_offset]);
         pass.set_bind_group(1, gbuffer_group, &[]);
         pass.draw(0..3, 0..1);

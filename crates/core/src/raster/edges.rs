@@ -17,6 +17,7 @@
 //! buffers). Sub-pixel features that no pixel centre sees (a wire thinner than a pixel) are
 //! not found; [`crate::render::Settings::edge_supersampling`] turns the whole scheme off.
 
+use super::direct_variant::{DirectVariant, VariantCache};
 use super::wgsl;
 use crate::error::Result;
 use crate::gpu::{self, shaders, GpuContext};
@@ -36,7 +37,11 @@ pub struct EdgePass {
     find: wgpu::ComputePipeline,
     args: wgpu::ComputePipeline,
     store: wgpu::ComputePipeline,
-    shade: wgpu::ComputePipeline,
+    /// `shade_edges` per [`DirectVariant`], compiled on first use.
+    shade: VariantCache<wgpu::ComputePipeline>,
+    device: wgpu::Device,
+    module: wgpu::ShaderModule,
+    pipeline_layout: wgpu::PipelineLayout,
     /// The edge mask of the sub-pixel G-buffer passes (`edge_mask.wgsl`) and its group's
     /// layout (the image size).
     mask: wgpu::RenderPipeline,
@@ -132,7 +137,10 @@ impl EdgePass {
             find: pipeline("find_edges"),
             args: pipeline("edge_args"),
             store: pipeline("store_samples"),
-            shade: pipeline("shade_edges"),
+            shade: VariantCache::default(),
+            device: device.clone(),
+            module: module.clone(),
+            pipeline_layout: pipeline_layout.clone(),
             layout,
             mask,
             mask_layout,
@@ -216,11 +224,28 @@ impl EdgePass {
     pub fn record_shade(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        groups: &EdgeGroups,
+        (groups, variant): (&EdgeGroups, DirectVariant),
         timestamps: Option<wgpu::ComputePassTimestampWrites<'_>>,
     ) {
+        let shade = self.shade.get(variant, |v| {
+            let constants = v.constants();
+            gpu::create_compute_pipeline(
+                &self.device,
+                &wgpu::ComputePipelineDescriptor {
+                    label: Some("shade_edges"),
+                    layout: Some(&self.pipeline_layout),
+                    module: &self.module,
+                    entry_point: Some("shade_edges"),
+                    compilation_options: wgpu::PipelineCompilationOptions {
+                        constants: &constants,
+                        ..Default::default()
+                    },
+                    cache: None,
+                },
+            )
+        });
         let mut pass = Self::begin(encoder, groups, 0, timestamps);
-        pass.set_pipeline(&self.shade);
+        pass.set_pipeline(&shade);
         pass.dispatch_workgroups_indirect(&groups.edges.indirect, 0);
     }
 }

@@ -5,6 +5,7 @@ pub mod bounce;
 pub mod bundles;
 pub mod composite;
 pub mod direct;
+pub mod direct_variant;
 pub mod edges;
 pub mod gbuffer;
 pub mod instances;

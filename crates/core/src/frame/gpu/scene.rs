@@ -56,6 +56,8 @@ pub(crate) struct GpuScene {
     /// The progressive pass whose directional-light directions the lights hold (`None`:
     /// their axes).
     lights_jitter: Option<u64>,
+    /// Whether any light is directional (the direct pass's variant).
+    directional: bool,
 }
 
 fn storage_init(ctx: &GpuContext, label: &str, bytes: &[u8]) -> wgpu::Buffer {
@@ -107,6 +109,7 @@ impl GpuScene {
             samples,
             shadow_map_size,
             lights_jitter: None,
+            directional: raster::direct_variant::any_directional(&shadows.lights),
         })
     }
 
@@ -152,6 +155,7 @@ impl GpuScene {
     pub fn write_lights(&mut self, ctx: &GpuContext, scene: &Scene, jitter: Option<u64>) {
         let shadows = shadow::ShadowViews::new(scene, self.shadow_map_size, jitter);
         self.lights_jitter = jitter;
+        self.directional = raster::direct_variant::any_directional(&shadows.lights);
         let matrices: Vec<[f32; 16]> = shadows.matrices.iter().map(|m| m.to_cols_array()).collect();
         let q = &ctx.queue;
         gpu::write_buffer(
@@ -177,6 +181,16 @@ impl GpuScene {
         );
         self.shadow_clip = shadows.matrices;
         self.shadows_stale = true;
+    }
+
+    /// The direct-light shaders for the kinds of light the scene has.
+    pub fn direct_variant(&self) -> raster::direct_variant::DirectVariant {
+        let c = &self.samples.counts;
+        raster::direct_variant::DirectVariant {
+            sampled: c.area > 0 || c.sky > 0,
+            directional: self.directional,
+            background: c.background,
+        }
     }
 
     /// The lights' shadow matrices and maps (for lookups outside the direct pass).

@@ -440,6 +440,7 @@ impl Targets {
              target: &gbuffer::GBuffer,
              offset: u32| gbuffer_over(encoder, timer, target, offset, clear);
         let scene_group = &self.direct_scene_group;
+        let variant = gs.direct_variant();
         // The edge passes over the centre G-buffer (finding edges, shading them).
         let centre_edges = self.edges.as_ref().map(|edges| edges::EdgeGroups {
             scene: scene_group,
@@ -456,7 +457,7 @@ impl Targets {
                     s == 0,
                     false,
                     [scene_group, &self.sub_gbuffer_group],
-                    offset,
+                    (offset, variant),
                     ts,
                 );
             })?;
@@ -494,12 +495,12 @@ impl Targets {
                 true,
                 true,
                 [scene_group, &self.direct_gbuffer_group],
-                0,
+                (0, variant),
                 ts,
             );
             if let Some(groups) = &centre_edges {
                 let ts = timer.compute_pass("edge shading");
-                edge_p.record_shade(&mut encoder, groups, ts);
+                edge_p.record_shade(&mut encoder, (groups, variant), ts);
             }
         }
         // Current once recorded in full (a cancelled frame leaves it to the next).

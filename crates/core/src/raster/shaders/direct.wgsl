@@ -8,7 +8,7 @@
 @fragment
 fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
     var g = load_sample(vec2<i32>(frag.xy));
-    if g.position.w == 0.0 {
+    if BACKGROUND && g.position.w == 0.0 {
         g.ray = view_ray(frag.xy);
     }
     let sum = shade(g);
@@ -18,7 +18,7 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
 @fragment
 fn fs_centre(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
     var g = load_sample(vec2<i32>(frag.xy));
-    if g.position.w == 0.0 {
+    if BACKGROUND && g.position.w == 0.0 {
         g.ray = view_ray(frag.xy);
     }
     // The pixel's footprint on its surface: across a discontinuity the difference is

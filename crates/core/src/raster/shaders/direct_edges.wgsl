@@ -132,7 +132,10 @@ fn shade_edges(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     var sum = vec3<f32>(0.0);
     // Samples without a surface see the environment along the pixel centre's ray.
-    let ray = view_ray(vec2<f32>(pixel_of(id.x)) + 0.5);
+    var ray = vec3<f32>(0.0);
+    if BACKGROUND {
+        ray = view_ray(vec2<f32>(pixel_of(id.x)) + 0.5);
+    }
     for (var s = 0u; s < params.samples; s++) {
         let base = (s * params.capacity + id.x) * 4u;
         let m = cache[base + 2u];

@@ -75,6 +75,18 @@ struct DirectParams {
     group_ranges: array<vec4<u32>, MAX_GROUPS>,
 }
 
+// Which kinds of light the pipeline is compiled for (raster/direct.rs `DirectVariant`):
+// false leaves out the code of a kind the scene lacks. lavapipe runs both sides of a
+// branch whose condition varies per lane and pays for code behind uniform branches too
+// (registers, inlined loops): a scene with one point light paid ~2x for the sampled
+// lights, the sun's soft shadows and the environment (docs/bench/lights-gpu.md).
+// Points on the emitters or directions of the sky (`area_count`, `sky_count`).
+override SAMPLED_LIGHTS: bool = true;
+// Directional lights (`Light.kind` 2).
+override DIRECTIONAL_LIGHTS: bool = true;
+// The environment behind uncovered samples (`background`).
+override BACKGROUND: bool = true;
+
 // Most polygon groups (`MAX_GROUPS` of raster/direct.rs).
 const MAX_GROUPS: u32 = 8u;
 
@@ -225,6 +237,11 @@ struct Footprint {
     taps: u32,
 }
 
+// Whether `l` is a directional light (never in a pipeline compiled without them).
+fn is_directional(l: Light) -> bool {
+    return DIRECTIONAL_LIGHTS && l.kind == 2u;
+}
+
 // Direct radiance towards the eye from sample `g` (0 where it has no surface).
 fn shade(g: GSample) -> vec3<f32> {
     var centre: Footprint;
@@ -238,7 +255,7 @@ fn shade(g: GSample) -> vec3<f32> {
 fn light_term(l: Light, m: Material, p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>) -> vec3<f32> {
     var wi = -l.direction;
     var li = l.intensity;
-    if l.kind != 2u {
+    if !is_directional(l) {
         let to_light = l.position - p;
         let dist2 = dot(to_light, to_light);
         wi = to_light * inverseSqrt(dist2);
@@ -258,7 +275,7 @@ fn light_term(l: Light, m: Material, p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>)
 // The unit direction from `p` towards light `l` and its distance (a directional light's
 // along its axis, at the depth of its orthographic view).
 fn towards_light(l: Light, p: vec3<f32>) -> vec4<f32> {
-    if l.kind == 2u {
+    if is_directional(l) {
         return vec4<f32>(-l.direction, l.depth_extent);
     }
     let to_light = l.position - p;
@@ -271,7 +288,7 @@ fn towards_light(l: Light, p: vec3<f32>) -> vec4<f32> {
 fn shadow_offset(l: Light, p: vec3<f32>, ng: vec3<f32>) -> vec3<f32> {
     let t = towards_light(l, p);
     let cos_g = dot(t.xyz, ng);
-    if l.kind == 2u {
+    if is_directional(l) {
         return ng * (l.texel_scale * (1.0 - cos_g) + 1e-4 * l.depth_extent);
     }
     return ng * (l.texel_scale * t.w * (1.0 - cos_g) + 1e-4 * t.w);
@@ -334,7 +351,7 @@ fn sun_visibility(l: Light, sv: ShadowView, q: vec3<f32>) -> f32 {
 
 // Shadow-map visibility of light `l` at `q` in view `sv`.
 fn light_visibility(l: Light, sv: ShadowView, q: vec3<f32>) -> f32 {
-    if l.kind == 2u {
+    if is_directional(l) {
         return sun_visibility(l, sv, q);
     }
     return visibility(sv, q);
@@ -367,7 +384,7 @@ fn flat_across(l: Light, m: Material, p: vec3<f32>, fp: Footprint) -> bool {
         return false;
     }
     // A directional light's term varies with the normal alone.
-    if l.kind == 2u {
+    if is_directional(l) {
         return true;
     }
     let to_light = l.position - p;
@@ -388,7 +405,7 @@ fn flat_across(l: Light, m: Material, p: vec3<f32>, fp: Footprint) -> bool {
 // same points. With one tap, the centre sample alone (a sub-pixel sample's own shading).
 fn shade_pixel(g: GSample, fp: Footprint) -> vec3<f32> {
     if g.position.w == 0.0 {
-        if direct_params.background != 0u {
+        if BACKGROUND && direct_params.background != 0u {
             return env_radiance(g.ray);
         }
         return vec3<f32>(0.0);
@@ -402,7 +419,10 @@ fn shade_pixel(g: GSample, fp: Footprint) -> vec3<f32> {
     m.specular = g.specular.xyz;
     m.fresnel = u32(g.specular.w > 0.5);
     let wo = normalize(view.eye - p);
-    var sum = g.emission.xyz + sampled_light(p, ns, ng, m, wo);
+    var sum = g.emission.xyz;
+    if SAMPLED_LIGHTS {
+        sum += sampled_light(p, ns, ng, m, wo);
+    }
     let taps = fp.taps;
     for (var i = 0u; i < arrayLength(&lights); i++) {
         let l = lights[i];

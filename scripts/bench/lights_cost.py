@@ -1,0 +1,108 @@
+"""What a point-lit scene pays for the GPU direct light of many kinds of light: builds of
+gi (``--build NAME=DIR``, DIR a ``python/`` directory holding a built ``gi`` package)
+render the same frames in one run, alternating round by round (the order rotating), each
+in its own worker process, the scene's first light moving every frame (so shadows and
+direct light are redrawn). Prints the median frame time and median per-stage times of each
+build, a Markdown table for ``docs/bench/lights-gpu.md``.
+
+    python scripts/bench/lights_cost.py --build old=/tmp/old/python --build new=python \\
+        [--scene cornell] [--size 640x480] [--photons 20000] [--rounds 8] [--frames 4]
+
+The machine may be shared: alternating rounds give the builds the same load, and the
+medians leave out the rounds a burst of other work slowed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import time
+
+STAGES = ("direct light", "edge shading", "photon upload", "shadow maps")
+
+
+def worker(scene: str, size: str, photons: int) -> None:
+    """Reads a frame count per line, renders that many frames and answers a JSON line."""
+    import gi
+
+    w, h = (int(v) for v in size.split("x"))
+    r = gi.Renderer(gi.load_scene(scene), "ispm", size=(w, h), photons=photons)
+    p0 = r.describe("light", 0)["position"]
+    r.render()
+    i = 0
+    for line in sys.stdin:
+        frames = []
+        for _ in range(int(line)):
+            i += 1
+            dx = 0.02 * ((i % 10) - 5)
+            r.update(lights={0: {"position": [p0[0] + dx, p0[1], p0[2]]}})
+            t = time.perf_counter()
+            out = r.render()
+            total = time.perf_counter() - t
+            stages: dict[str, float] = {}
+            for name, s in out.stats.stages:
+                stages[name] = stages.get(name, 0.0) + s
+            frames.append({"frame": total, "stages": stages})
+        print(json.dumps(frames), flush=True)
+
+
+def start(path: str, a: argparse.Namespace) -> subprocess.Popen[str]:
+    env = dict(os.environ, PYTHONPATH=os.path.abspath(path))
+    cmd = [sys.executable, __file__, "--worker", "--scene", a.scene, "--size", a.size]
+    cmd += ["--photons", str(a.photons)]
+    return subprocess.Popen(cmd, env=env, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--build", action="append", default=[], help="NAME=DIR (repeat)")
+    p.add_argument("--scene", default="cornell")
+    p.add_argument("--size", default="640x480")
+    p.add_argument("--photons", type=int, default=20_000)
+    p.add_argument("--rounds", type=int, default=8)
+    p.add_argument("--frames", type=int, default=4, help="frames per round")
+    p.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
+    a = p.parse_args()
+    if a.worker:
+        worker(a.scene, a.size, a.photons)
+        return
+    builds = {}
+    for b in a.build:
+        name, _, path = b.partition("=")
+        builds[name] = start(path, a)
+    names = list(builds)
+    got: dict[str, list[dict]] = {k: [] for k in builds}
+    for rnd in range(a.rounds):
+        order = names[rnd % len(names) :] + names[: rnd % len(names)]
+        for k in order:
+            proc = builds[k]
+            assert proc.stdin is not None and proc.stdout is not None
+            proc.stdin.write(f"{a.frames}\n")
+            proc.stdin.flush()
+            line = proc.stdout.readline()
+            if not line:
+                sys.exit(f"the {k} build's worker ended early")
+            got[k].extend(json.loads(line))
+    for proc in builds.values():
+        assert proc.stdin is not None
+        proc.stdin.close()
+        proc.wait()
+    n = a.rounds * a.frames
+    print(f"{a.scene} {a.size}, ispm, {a.photons} photons, light moving; median of {n} frames")
+    print(f"a build each, {a.rounds} alternating rounds of {a.frames} frames (ms)\n")
+    print("| build | frame | " + " | ".join(STAGES) + " |")
+    print("|---|---:|" + "---:|" * len(STAGES))
+    for k in builds:
+        f = [x["frame"] for x in got[k]]
+        cells = [statistics.median(x["stages"].get(s, 0.0) for x in got[k]) for s in STAGES]
+        lo, hi = min(f), max(f)
+        row = f"| {k} | {statistics.median(f) * 1e3:.0f} ({lo * 1e3:.0f}–{hi * 1e3:.0f}) | "
+        print(row + " | ".join(f"{c * 1e3:.1f}" for c in cells) + " |")
+
+
+if __name__ == "__main__":
+    main()
