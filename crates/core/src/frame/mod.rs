@@ -382,7 +382,7 @@ impl Renderer {
 
     /// The CPU BVH (built or updated at the start of every frame of a method that uses it).
     fn cpu_bvh(&self) -> Result<&SceneBvh> {
-        self.bvh.as_ref().ok_or(Error::Cancelled)
+        self.bvh.as_ref().ok_or_else(no_bvh)
     }
 
     fn gpu_frame(
@@ -403,7 +403,7 @@ impl Renderer {
         ctx.scoped("frame", || {
             self.sync_gpu(&ctx, &direct)?;
             let mut out = self.gpu_method_frame(frame, images, progress)?;
-            let g = self.gpu.as_mut().ok_or(Error::Cancelled)?;
+            let g = self.gpu.as_mut().ok_or_else(no_gpu_state)?;
             if g.targets.grow_edges(&ctx)? {
                 if frame.progressive && ispm {
                     // Progressive `ispm` corrects the composite on the CPU (ray-traced
@@ -426,9 +426,9 @@ impl Renderer {
         images: Images,
         progress: &dyn Progress,
     ) -> Result<RenderOutput> {
-        let gpu = self.gpu.as_mut().ok_or(Error::Cancelled)?;
+        let gpu = self.gpu.as_mut().ok_or_else(no_gpu_state)?;
         // Built by `render` for the methods that use it (not `direct`).
-        let bvh = || self.bvh.as_ref().ok_or(Error::Cancelled);
+        let bvh = || self.bvh.as_ref().ok_or_else(no_bvh);
         // The sampled lights: drawn once from the options' seed (a still view re-draws
         // nothing), anew per progressive pass.
         let draw = gpu::LightDraw {
@@ -583,4 +583,15 @@ pub fn render(
         },
         progress,
     )
+}
+
+/// The error of a step that finds no CPU BVH (`render` builds it first for the methods
+/// that use it).
+fn no_bvh() -> Error {
+    Error::internal("the CPU BVH is used before it is built")
+}
+
+/// The error of a GPU method's frame that finds no GPU state (`sync_gpu` makes it first).
+fn no_gpu_state() -> Error {
+    Error::internal("a GPU frame found no GPU state (made by `sync_gpu` first)")
 }

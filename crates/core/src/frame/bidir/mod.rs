@@ -404,7 +404,7 @@ fn state<'a>(
         g.targets.bind_composite(&ctx, Some(&view));
         g.bidir = Some(state);
     }
-    let state = g.bidir.as_mut().ok_or(Error::Cancelled)?;
+    let state = g.bidir.as_mut().ok_or_else(no_state)?;
     state.layers = layers;
     Ok(state)
 }
@@ -433,7 +433,7 @@ pub(super) fn frame(
         bidir,
         ..
     } = g;
-    let state = bidir.as_mut().ok_or(Error::Cancelled)?;
+    let state = bidir.as_mut().ok_or_else(no_state)?;
     let t = Instant::now();
     targets.write_eye(&ctx, scene, &gs.cull);
     let n_env = state.write_views(&ctx, scene, options.bundles, frame.seed);
@@ -641,4 +641,9 @@ fn specular(
         state.specular_written = false;
     }
     Ok((None, (0.0, 0.0)))
+}
+
+/// The error of a `bidir` frame that finds no `bidir` state (`state` makes it first).
+fn no_state() -> Error {
+    Error::internal("a bidir frame found no bidir state (made by `state` first)")
 }
