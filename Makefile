@@ -14,6 +14,7 @@ lint: setup
 	python3 scripts/check_layers.py
 	cargo fmt --all -- --check
 	cargo clippy --workspace --all-targets -- -D warnings
+	RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps
 	$(BIN)/ruff check python tests scripts
 	$(BIN)/ruff format --check python tests scripts
 

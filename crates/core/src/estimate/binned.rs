@@ -1,5 +1,5 @@
 //! The compute estimators that bin photons into lists before shading the view samples
-//! (`gpu/shaders/tiled.wgsl` and `cluster.wgsl`), over the same photons, kernels, BSDF and
+//! (`estimate/shaders/tiled.wgsl` and `cluster.wgsl`), over the same photons, kernels, BSDF and
 //! normal test as the raster photon volumes ([`super::Volumes`]), so the same image up to
 //! the order of the float sums; the work runs on compute units instead of the rasterizer.
 //! - [`Mode::Tiled`] (Mara et al. 2013, as Moreau et al. 2016 section 3.2 describe it): the

@@ -4,8 +4,8 @@
 //! of one size, the estimator's resources and the temporal photon ring. A frame re-uploads
 //! only what changed and reads back only the images asked for ([`FrameDesc`]).
 //!
-//! One file per method runs its passes in order: [`direct`], [`ispm`], [`bidir`]; the CPU
-//! methods (`path`, `photon`, `gather`) reuse the renderer's BVH ([`cpu`]).
+//! One file per method runs its passes in order: `direct`, `ispm`, `bidir`; the CPU
+//! methods (`path`, `photon`, `gather`) reuse the renderer's BVH.
 
 mod bidir;
 mod direct;
@@ -114,13 +114,6 @@ pub struct Renderer {
     accum: Option<progressive::Accumulation>,
 }
 
-/// Every method lights a scene with its environment light: the CPU methods and `ispm`'s
-/// photons, `direct`'s, `ispm`'s and `bidir`'s GPU direct light (`bidir` through its ray
-/// bundles, §6). Nothing is refused any more; kept as the one place to refuse a method.
-fn check_environment(_scene: &Scene, _method: Method) -> Result<()> {
-    Ok(())
-}
-
 /// Light transport `options` ask for that their method does not compute, one message each
 /// (they become `gi.RenderWarning`s).
 fn transport_omissions(scene: &Scene, options: &RenderOptions) -> Vec<String> {
@@ -163,7 +156,6 @@ impl Renderer {
     pub fn new(scene: &Scene, options: &RenderOptions) -> Result<Self> {
         options.validate()?;
         let method = options.method();
-        check_environment(scene, method)?;
         let camera = scene.camera.with_size(
             options.common.width.unwrap_or(scene.camera.width),
             options.common.height.unwrap_or(scene.camera.height),

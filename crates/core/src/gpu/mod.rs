@@ -2,7 +2,7 @@
 //! choice, WGSL loading, readback and timestamp helpers.
 //!
 //! The adapter is a real GPU when one is present, else a CPU implementation (Mesa lavapipe).
-//! An explicit choice comes from `Settings::adapter` or, failing that, the environment
+//! An explicit choice comes from the `adapter` option (`DirectLightOptions::adapter`) or, failing that, the environment
 //! variable `GI_ADAPTER`: `"cpu"`, `"gpu"`, or a case-insensitive substring of the adapter
 //! name.
 

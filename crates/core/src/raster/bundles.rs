@@ -5,7 +5,7 @@
 //! pixel's list to find the nearest fragment along ±ω from a visible point.
 //!
 //! Memory: `res`² head pointers per bundle and one node buffer for all bundles of a frame;
-//! fragments beyond its capacity are dropped and counted ([`BundleBuffers::overflow`]).
+//! fragments beyond its capacity are dropped and counted ([`BundleBuffers::fragments`]).
 
 use super::wgsl;
 use super::{buffer_init, gbuffer, Geometry};

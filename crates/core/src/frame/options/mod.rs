@@ -8,7 +8,7 @@
 //! job format (`gi._gi.options()` hands the table to Python).
 //!
 //! Options that vary per frame are not here: the frame's seed, the progressive pass's
-//! kernel scale and whether the first-hit images are wanted live in [`super::FrameParams`].
+//! kernel scale and whether the first-hit images are wanted live in `FrameParams`.
 
 mod methods;
 mod table;
