@@ -4,14 +4,14 @@ BIN := $(VENV)/bin
 
 .PHONY: setup render test lint bench
 setup:
-	scripts/setup.sh
+	scripts/ci/setup.sh
 
 render: setup
 	mkdir -p out
 	$(BIN)/gi render cornell -o out/cornell.exr -o out/cornell.png
 
 lint: setup
-	python3 scripts/check_layers.py
+	python3 scripts/ci/check_layers.py
 	cargo fmt --all -- --check
 	cargo clippy --workspace --all-targets -- -D warnings
 	RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps

@@ -9,7 +9,7 @@
 //! which the low-resolution samples alias: a caustic smaller than a low-resolution texel was
 //! spread over its neighbours at that texel's value or missed (cornell-glass 48×48, the
 //! glass sphere's caustic: the image mean 1.25% above the full-resolution splat's,
-//! `scripts/caustic_breakdown.py`). The paper's upsampling is the step it calls
+//! `scripts/probe/caustic_breakdown.py`). The paper's upsampling is the step it calls
 //! inconsistent (section 5.2); the diffuse photons' smooth light keeps it.
 
 use super::super::gpu::Targets;
@@ -261,7 +261,7 @@ impl Indirect {
 /// covers a pixel's centre and not at all elsewhere, which does not average out over seeds
 /// (the caustic lies where the geometry puts it). cornell-glass at 32x32: the glass
 /// sphere's caustic (0.3% of the pixels) put the image mean 1.8% above `path`'s
-/// (`scripts/caustic_breakdown.py`). A kernel at least a pixel wide makes the point reading
+/// (`scripts/probe/caustic_breakdown.py`). A kernel at least a pixel wide makes the point reading
 /// the kernel's mean over about a pixel, as the pixel's own filter would; the kernels are
 /// normalised, so no light is added or lost. The footprint is from this frame's camera
 /// (the binned and CPU estimators keep it until the photons change).
