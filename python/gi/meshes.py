@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from gi._gi import GiError, OutOfMemoryError, SceneError
+from gi.gltf import GltfError, load_gltf
 from gi.textures import TextureError, TextureSet, height_to_normal
 
 MeshEntry = tuple[Any, Any, Any, "str | None", Any, Any]
@@ -323,8 +324,6 @@ def _load_gltf(
     textures: TextureSet,
     lights: list[dict[str, Any]] | None,
 ) -> MeshEntry:
-    from gi.gltf import GltfError, load_gltf
-
     try:
         m = load_gltf(path, textures)
     except GltfError as e:

@@ -7,6 +7,7 @@ mod options;
 mod render;
 mod scene;
 mod stats;
+mod values;
 
 use pyo3::prelude::*;
 
