@@ -517,16 +517,7 @@ impl Renderer {
             g.ispm = None;
             g.bidir = None;
         } else {
-            if c.camera || c.geometry {
-                // The eye views' depth range follows the scene's bounds.
-                g.targets.eye_current = false;
-            }
-            if c.camera || c.geometry || c.materials {
-                g.targets.samples_current = false;
-            }
-            if c.any() {
-                g.targets.direct_current = false;
-            }
+            g.targets.invalidate(gpu::Stale::of_changes(c));
         }
         Ok(())
     }

@@ -403,6 +403,35 @@ pub fn create_texture(device: &wgpu::Device, desc: &wgpu::TextureDescriptor) -> 
     device.create_texture(desc)
 }
 
+/// A 2D texture of `width × height` texels in `format` with one mip level and one layer
+/// (counted): the textures the passes render to, read and upload into.
+pub fn texture_2d(
+    device: &wgpu::Device,
+    label: &str,
+    width: u32,
+    height: u32,
+    format: wgpu::TextureFormat,
+    usage: wgpu::TextureUsages,
+) -> wgpu::Texture {
+    create_texture(
+        device,
+        &wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d {
+                width,
+                height,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage,
+            view_formats: &[],
+        },
+    )
+}
+
 /// `Device::create_bind_group`, counted.
 pub fn create_bind_group(
     device: &wgpu::Device,

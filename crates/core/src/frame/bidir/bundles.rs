@@ -36,22 +36,13 @@ pub(super) fn env_table(ctx: &GpuContext, env: Option<&Environment>) -> (wgpu::T
         0.0
     };
     let data: Vec<[f32; 4]> = texels.iter().map(|t| t.extend(1.0).to_array()).collect();
-    let texture = gpu::create_texture(
+    let texture = gpu::texture_2d(
         &ctx.device,
-        &wgpu::TextureDescriptor {
-            label: Some("environment table"),
-            size: wgpu::Extent3d {
-                width: w,
-                height: h,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::Rgba32Float,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-            view_formats: &[],
-        },
+        "environment table",
+        w,
+        h,
+        wgpu::TextureFormat::Rgba32Float,
+        wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
     );
     crate::gpu::alloc::note_upload("environment table", data.len() as u64 * 16);
     ctx.queue.write_texture(

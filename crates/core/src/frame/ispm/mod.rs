@@ -18,7 +18,7 @@ mod indirect;
 mod photons;
 mod specular;
 
-use super::direct::{assemble, normalized, readback_names};
+use super::gpu::{assemble, normalized, readback_names, Stale};
 use super::gpu::{rgb_image, GpuScene, LightDraw, Targets};
 use super::options::IspmOptions;
 use super::{FrameParams, GpuState, Images, RenderOutput, RenderStats};
@@ -244,7 +244,7 @@ fn record_direct_light(
         encoder
     } else {
         if gs.record_shadows(ctx, &mut encoder, timer, scene, draw) {
-            targets.direct_current = false;
+            targets.invalidate(Stale::SHADOWS);
         }
         targets.record_direct(ctx, gs, encoder, timer, progress)?
     };

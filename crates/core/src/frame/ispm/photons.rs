@@ -87,7 +87,7 @@ impl Trace<'_> {
         if o.footprint_volumes {
             PhotonTraceSettings {
                 store_direct: false,
-                ..super::super::gather::trace_settings(
+                ..super::super::options::derived::trace_settings(
                     self.scene,
                     o.photons,
                     o.max_depth,

@@ -66,13 +66,18 @@ impl Specular {
             self.image.clone()
         } else if self.enabled {
             let paths = SpecularPaths {
-                samples: super::super::photon::camera_samples(
+                samples: super::super::options::derived::camera_samples(
                     options.direct.spp,
                     options.max_depth,
                     params,
                 ),
                 sampling: options.specular_sampling,
-                gather: super::super::photon::knn_gather(scene, options.k, &options.kernel, params),
+                gather: super::super::options::derived::knn_gather(
+                    scene,
+                    options.k,
+                    &options.kernel,
+                    params,
+                ),
                 precompute: !params.progressive,
             };
             let (img, camera_paths) =

@@ -10,6 +10,7 @@
 //! Options that vary per frame are not here: the frame's seed, the progressive pass's
 //! kernel scale and whether the first-hit images are wanted live in `FrameParams`.
 
+pub mod derived;
 mod methods;
 mod table;
 mod values;
