@@ -12,6 +12,7 @@ render: setup
 
 lint: setup
 	python3 scripts/ci/check_layers.py
+	python3 scripts/ci/architecture.py --check
 	cargo fmt --all -- --check
 	cargo clippy --workspace --all-targets -- -D warnings
 	RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps
