@@ -14,7 +14,7 @@
 
 use super::super::gpu::Targets;
 use super::super::options::IspmOptions;
-use super::super::{FrameParams, RenderStats};
+use super::super::RenderStats;
 use super::stage;
 use crate::error::{Error, Result};
 use crate::estimate::volume_shape::partition;
@@ -50,7 +50,6 @@ pub(super) struct Indirect {
 pub(super) struct IndirectFrame<'a> {
     pub scene: &'a Scene,
     pub options: &'a IspmOptions,
-    pub params: &'a FrameParams,
     pub photons: &'a RingPhotons,
     /// The photons are not last frame's.
     pub photons_changed: bool,
@@ -61,6 +60,8 @@ pub(super) struct IndirectFrame<'a> {
     pub names: &'a [&'static str],
     /// Wait and time each stage (`FrameDesc::serial`).
     pub serial: bool,
+    /// The frame's volume radii (kernel-scaled), made once a frame by the orchestrator.
+    pub radius: VolumeRadius,
 }
 
 impl Indirect {
@@ -110,11 +111,10 @@ impl Indirect {
         timer: &mut Timer,
         f: &IndirectFrame,
         stats: &mut RenderStats,
-    ) -> Result<(Readback, VolumeRadius)> {
+    ) -> Result<Readback> {
         let mut t = Instant::now();
-        let (scene, options) = (f.scene, f.options);
-        let radius = VolumeRadius::of_scene(scene, options.photons, options.kernel_scale)
-            .scaled(f.params.radius_scale);
+        let scene = f.scene;
+        let radius = f.radius;
         let centre = targets.sample_centre();
         self.estimate.set_sample_centre(centre);
         if let Some(c) = &mut self.caustics {
@@ -186,7 +186,7 @@ impl Indirect {
             (stats.list_entries, stats.trivial_accepts) =
                 entries.fold((0, 0), |(a, b), (c, d)| (a + c, b + d));
         }
-        Ok((data, radius))
+        Ok(data)
     }
 
     /// The binned estimators, after the frame's submission: whether any one's lists

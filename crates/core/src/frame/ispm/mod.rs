@@ -28,7 +28,7 @@ use crate::gpu::timer::Timer;
 use crate::gpu::GpuContext;
 use crate::image::Image;
 use crate::photon::bounce::BounceMap;
-use crate::photon::radius::VolumeRadius;
+use crate::photon::radius::{SceneExtent, VolumeRadius};
 use crate::photon::ring::{PhotonRing, RingPhotons};
 use crate::scene::light_views::light_views;
 use crate::scene::{Changes, Scene};
@@ -120,7 +120,13 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     // redo its work.
     let t = Instant::now();
     // The bounce maps' share of the photons: the point and spot lights' of the power.
-    let layers = light_views(scene, photons::photon_budgets(scene, options.photons).0);
+    // Derived once a frame and passed down: the photon budget (the bounce maps' layers are
+    // sized from its share) and the volume radii of the frame's photons.
+    let budget = photons::PhotonBudget::of(scene, options.photons);
+    let extent = SceneExtent::of(scene);
+    let radius = VolumeRadius::of_extent(extent, options.photons, options.kernel_scale)
+        .scaled(params.radius_scale);
+    let layers = light_views(scene, budget.maps);
     let state = ispm.get_or_insert_with(|| IspmState::new(&ctx, targets, scene, options));
     let traced_seed = state.traced_seed.take();
     let was_current = state.indirect.take_current();
@@ -143,7 +149,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         &ctx, scene, bvh, &layers, bounce, seed, progress, &mut stats,
     )?;
     // 4. Temporal reuse: drop what moved, trace this frame's photons per light, keep them.
-    photons::invalidate(ring, &invalid, scene, options, params);
+    photons::invalidate(ring, &invalid, scene, radius);
     // Progressive mode normalises the kernels' boundary loss per pixel (query side) instead
     // of per photon, which leaves the crease pixels dark (`progressive::query_coverage`).
     // Only at full resolution: an upsampled estimate comes from other pixels' samples,
@@ -157,6 +163,8 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         options,
         params,
         layers: &layers,
+        budget,
+        extent,
         frame,
         compensate: options.refine.boundary_compensation && !query_side,
         progress,
@@ -193,15 +201,15 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     let indirect = IndirectFrame {
         scene,
         options,
-        params,
         photons: &photons,
         photons_changed: !reuse,
         changes,
         was_current,
         names: &names,
         serial,
+        radius,
     };
-    let (data, radius) = state
+    let data = state
         .indirect
         .render(&ctx, targets, timer, &indirect, &mut stats)?;
     stats.stages.append(&mut timer.totals);
