@@ -42,9 +42,6 @@ TOO_MANY_ARGUMENTS = {
     "frame/bidir/mod.rs": 1,
     "frame/bidir/subpaths.rs": 1,
     "frame/bidir/vpls.rs": 1,
-    "frame/ispm/first_hits.rs": 2,
-    "frame/ispm/mod.rs": 1,
-    "frame/ispm/specular.rs": 1,
 }
 
 USE_GROUP = re.compile(r"use\s+crate::\{([^;]*)\};", re.S)

@@ -8,6 +8,7 @@
 //! methods (`path`, `photon`, `gather`) reuse the renderer's BVH.
 
 mod bidir;
+mod context;
 mod direct;
 pub mod gather;
 mod gpu;

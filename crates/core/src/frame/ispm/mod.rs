@@ -18,6 +18,7 @@ mod indirect;
 mod photons;
 mod specular;
 
+use super::context::FrameCtx;
 use super::gpu::{assemble, normalized, readback_names, Stale};
 use super::gpu::{rgb_image, GpuScene, LightDraw, Targets};
 use super::options::IspmOptions;
@@ -109,10 +110,17 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     } = gpu;
     let (ctx, serial) = (ctx.clone(), *serial);
     timer.reset();
-    let mut stats = RenderStats {
-        triangles: scene.triangle_count() as u64,
-        samples_per_pixel: targets.spp(),
-        ..Default::default()
+    let mut fc = FrameCtx {
+        scene,
+        bvh,
+        params,
+        progress,
+        serial,
+        stats: RenderStats {
+            triangles: scene.triangle_count() as u64,
+            samples_per_pixel: targets.spp(),
+            ..Default::default()
+        },
     };
 
     // Resources: created on the first frame at this size, else kept. Marked current again
@@ -136,18 +144,14 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     let first_hits = &mut state.first_hits;
     first_hits.prepare(&ctx, scene, &gs.materials, &layers, params.seed, reuse)?;
     targets.write_eye(&ctx, scene, &gs.cull);
-    stage(&mut stats, "upload", t);
+    fc.stage("upload", t);
 
     // 1. Bounce maps, submitted first with their readback copies.
-    let bounce = first_hits.submit(&ctx, gs, &layers, reuse, timer, serial, &mut stats)?;
+    let bounce = first_hits.submit(&ctx, gs, &layers, reuse, timer, &mut fc)?;
     // 2. Direct light and the eye G-buffer, not waited on.
-    let light = (params.progressive, serial, draw);
-    record_direct_light(&ctx, gs, targets, timer, scene, light, progress, &mut stats)?;
+    record_direct_light(&ctx, gs, targets, timer, &mut fc, draw)?;
     // 3. The first hits: the bounce-map readback (or the traced first bounce).
-    let seed = (reuse, params.seed);
-    let bm = first_hits.finish(
-        &ctx, scene, bvh, &layers, bounce, seed, progress, &mut stats,
-    )?;
+    let bm = first_hits.finish(&ctx, &mut fc, &layers, bounce, reuse)?;
     // 4. Temporal reuse: drop what moved, trace this frame's photons per light, keep them.
     photons::invalidate(ring, &invalid, scene, radius);
     // Progressive mode normalises the kernels' boundary loss per pixel (query side) instead
@@ -169,26 +173,20 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         compensate: options.refine.boundary_compensation && !query_side,
         progress,
     };
-    trace_or_reuse(&trace, &bm, reuse, ring, &mut stats)?;
+    trace_or_reuse(&trace, &bm, reuse, ring, &mut fc.stats)?;
     // Progressive mode: the direct light ray traced on the CPU (the GPU rendered the eye
     // G-buffer alone), added to the composite below; shadow maps are a bias no pass removes.
-    let traced_direct = traced_direct_light(scene, bvh, options, params, progress, &mut stats)?;
+    let traced_direct = traced_direct_light(scene, bvh, options, params, progress, &mut fc.stats)?;
     let photons = ring.collect();
-    stats.photons_stored = photons.splat.len() as u64;
+    fc.stats.photons_stored = photons.splat.len() as u64;
     // 5. Mirrors and glass seen by the camera; their gather uses the photons as traced.
-    let specular = state.specular.render(
-        &ctx,
-        targets,
-        (scene, bvh),
-        (options, params),
-        photons.traced(),
-        !reuse,
-        progress,
-        &mut stats,
-    )?;
+    let specular =
+        state
+            .specular
+            .render(&ctx, targets, &mut fc, options, photons.traced(), !reuse)?;
     // 6. The indirect estimate, upsampling, composite, readback.
-    stats.first_bounce = first_hits.choice.0.name().into();
-    stats.first_bounce_reason = first_hits.choice.1.clone();
+    fc.stats.first_bounce = first_hits.choice.0.name().into();
+    fc.stats.first_bounce_reason = first_hits.choice.1.clone();
     crate::cancel::check(progress)?;
     let mut names = readback_names(images, true);
     if query_side {
@@ -211,8 +209,8 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     };
     let data = state
         .indirect
-        .render(&ctx, targets, timer, &indirect, &mut stats)?;
-    stats.stages.append(&mut timer.totals);
+        .render(&ctx, targets, timer, &indirect, &mut fc.stats)?;
+    fc.stats.stages.append(&mut timer.totals);
     let parts = Parts {
         data: &data,
         radius,
@@ -221,7 +219,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         specular,
         photons: &photons,
     };
-    let out = output(scene, bvh, targets, params, parts, images, stats);
+    let out = output(scene, bvh, targets, params, parts, images, fc.stats);
     state.traced_seed = Some(params.seed);
     state.indirect.mark_current();
     Ok(out)
@@ -230,24 +228,22 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
 /// Step 2: the direct light (shadow maps, eye G-buffers, deferred shading) or, in
 /// progressive mode (whose direct light is traced on the CPU), the eye G-buffer alone;
 /// submitted, waited on and timed only in `serial` frames.
-#[allow(clippy::too_many_arguments)]
 fn record_direct_light(
     ctx: &GpuContext,
     gs: &mut GpuScene,
     targets: &mut Targets,
     timer: &mut Timer,
-    scene: &Scene,
-    (progressive, serial, draw): (bool, bool, LightDraw),
-    progress: &dyn Progress,
-    stats: &mut RenderStats,
+    fc: &mut FrameCtx,
+    draw: LightDraw,
 ) -> Result<()> {
+    let (scene, progress) = (fc.scene, fc.progress);
     let t = Instant::now();
     let mut encoder = ctx
         .device
         .create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("direct frame"),
         });
-    let encoder = if progressive {
+    let encoder = if fc.params.progressive {
         targets.record_gbuffer(ctx, gs, &mut encoder, timer);
         encoder
     } else {
@@ -257,9 +253,9 @@ fn record_direct_light(
         targets.record_direct(ctx, gs, encoder, timer, progress)?
     };
     ctx.queue.submit([encoder.finish()]);
-    if serial {
+    if fc.serial {
         ctx.wait()?;
-        stage(stats, "direct light (wall)", t);
+        fc.stage("direct light (wall)", t);
     }
     Ok(())
 }
