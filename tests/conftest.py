@@ -1,13 +1,8 @@
 import json
-import sys
-from pathlib import Path
 
 import pytest
 
 import gi
-
-# The scripts' shared modules (image_metrics) for the tests that measure images.
-sys.path.append(str(Path(__file__).resolve().parent.parent / "scripts"))
 
 
 @pytest.fixture

@@ -404,9 +404,9 @@ def test_readme_python_example(tmp_path, monkeypatch):
 
 
 def test_soak_script_records_rss(tmp_path):
-    """scripts/soak_rss.py (its committed 1000-frame result is docs/bench/rss.md), run short:
+    """scripts/probe/soak_rss.py (its committed 1000-frame result is docs/bench/rss.md), run short:
     it writes its table and exits 0 inside the band."""
-    script = README.parent / "scripts" / "soak_rss.py"
+    script = README.parent / "scripts" / "probe" / "soak_rss.py"
     out = tmp_path / "rss.md"
     p = subprocess.run(
         [sys.executable, str(script), "--frames", "12", "--warmup", "4", "--size", "16x12"]

@@ -8,7 +8,7 @@
   indirect light above a stated multiple of the reference's largest.
 
 The breakdown by path length behind these numbers: `docs/bench/bidir-depth.md`
-(`scripts/bench_bidir_depth.py --terms`).
+(`scripts/bench/bench_bidir_depth.py --terms`).
 """
 
 import re

@@ -9,7 +9,7 @@ import gi
 def dots(x, window=9, factor=4.0):
     """Share of pixels brighter than `factor` times the median of the `window`² pixels
     around them (isolated bright dots), ignoring pixels under 1% of the image mean (the
-    measure of scripts/bench_caustics.py)."""
+    measure of scripts/bench/bench_caustics.py)."""
     y = x.mean(axis=2)
     pad = window // 2
     windows = np.lib.stride_tricks.sliding_window_view(
@@ -20,7 +20,7 @@ def dots(x, window=9, factor=4.0):
 
 
 def fireflies(x, ref, window=9, factor=4.0):
-    """The issue's firefly measure (as in scripts/bench_caustics.py): share of pixels whose
+    """The issue's firefly measure (as in scripts/bench/bench_caustics.py): share of pixels whose
     error against the reference is over `factor` times the median error of the `window`²
     pixels around them, errors under 1% of the reference mean counting as none."""
     e = np.abs(x - ref).mean(axis=2)

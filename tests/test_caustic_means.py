@@ -4,7 +4,7 @@ The ground truth is `path` plus, on caustic-ring, the light `path` cannot render
 light's caustic seen in the ring's mirror walls (light → mirror → floor → mirror → camera;
 camera paths never reach the point light and light paths cannot connect to the camera
 through a mirror). That light is computed independently by
-`scripts/caustic_breakdown.py`'s `ring_mirror_caustic` (the floor's light-traced radiance,
+`scripts/probe/caustic_breakdown.py`'s `ring_mirror_caustic` (the floor's light-traced radiance,
 rendered top-down by `path`, read where the camera rays reflected by the ring land): 6.7% of
 the image mean (48x48, 64M light paths), which is most of the "5% too bright" of the issue.
 On cornell-glass the caustics seen through the glass sphere are missing from `path` too; there
@@ -21,7 +21,7 @@ import pytest
 
 import gi
 
-SCRIPTS = Path(__file__).resolve().parents[1] / "scripts"
+SCRIPTS = Path(__file__).resolve().parents[1] / "scripts" / "probe"
 SIZE = (32, 32)
 
 

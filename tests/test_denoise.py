@@ -41,7 +41,7 @@ def test_denoising_lowers_flip_for_ispm_at_defaults(reference96):
     # that is seed variance comes as blotches the size of a photon volume, which OIDN keeps
     # (alone: denoised/noisy 1.00-1.02). gi.denoise first filters the albedo-demodulated
     # indirect light at that scale (`filter_indirect`, 1/32 of the width). Measured
-    # (scripts/ispm_denoise_sweep.py, seeds 1-3): 0.942 at 96², 0.874 at 192²; here seed 1
+    # (scripts/probe/ispm_denoise_sweep.py, seeds 1-3): 0.942 at 96², 0.874 at 192²; here seed 1
     # 0.934. At 48² the volumes are 1-2 pixels and it does not help (1.02), so the test
     # renders 96². Bound 0.98: the gain is a few percent, but a filter that does nothing
     # (1.00) or blurs across edges (1.07-1.17 at twice the width) fails it.

@@ -11,7 +11,7 @@ ROOT = Path(__file__).resolve().parent.parent
 
 
 def load_driver():
-    spec = importlib.util.spec_from_file_location("gi_fuzz", ROOT / "scripts" / "fuzz.py")
+    spec = importlib.util.spec_from_file_location("gi_fuzz", ROOT / "scripts" / "ci" / "fuzz.py")
     assert spec and spec.loader
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)

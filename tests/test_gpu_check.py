@@ -1,5 +1,5 @@
-"""The GPU check's summary (scripts/gpu_summary.py) reads what scripts/gpu_check.sh writes, and
-its pytest plugin turns only "no lavapipe" failures into skips (docs/gpu-check.md)."""
+"""The GPU check's summary (scripts/ci/gpu_summary.py) reads what scripts/ci/gpu_check.sh
+writes, and its pytest plugin turns only "no lavapipe" failures into skips (docs/gpu-check.md)."""
 
 import json
 import subprocess
@@ -7,7 +7,7 @@ import sys
 import textwrap
 from pathlib import Path
 
-SCRIPTS = Path(__file__).resolve().parent.parent / "scripts"
+SCRIPTS = Path(__file__).resolve().parent.parent / "scripts" / "ci"
 FRAME_HEAD = (
     "| scene | size | photons | one-shot frame (ms) | engine frame (ms) | speed-up | "
     "serial frame (ms) | CPU photon trace (ms) | CPU specular paths (ms) | splat (ms) | "

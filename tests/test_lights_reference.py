@@ -2,7 +2,7 @@
 Cornell box (an area light), a sun and a sky, a room lit by emissive surfaces only.
 
 The references are Mitsuba 3 path-traced images, 64×64, committed beside the scenes
-(`scripts/lights_reference.py mitsuba` renders them; CI never runs Mitsuba), one per
+(`scripts/data/lights_reference.py mitsuba` renders them; CI never runs Mitsuba), one per
 `max_depth` that gi's methods trace by default (64; 3, `bidir`'s old two-bounce default;
 1 for `direct`, which renders direct light), Mitsuba's `max_depth` one more (it counts
 path segments, gi scattering events). Their means are known to better than 0.1%
@@ -111,7 +111,7 @@ def test_method_matches_mitsuba(name, method):
     warned = [str(w.message) for w in caught if issubclass(w.category, gi.RenderWarning)]
     depth = int(r.options.get("max_depth", 1))  # `direct` renders direct light
     if depth not in DEPTHS:
-        pytest.fail(f"no reference for max_depth {depth} (scripts/lights_reference.py)")
+        pytest.fail(f"no reference for max_depth {depth} (scripts/data/lights_reference.py)")
     passes = PASSES.get(method)
     img = (r.render_progressive(passes=passes) if passes else r.render()).radiance
     ref = gi.read_image(reference_file(name, depth))[..., :3]

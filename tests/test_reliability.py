@@ -249,6 +249,14 @@ def test_a_panic_becomes_internal_error():
     ).all()
 
 
+def test_a_broken_invariant_becomes_internal_error():
+    # A core `Error::Internal` (a broken invariant, a bug) raises gi.InternalError; only a
+    # cancelled render raises gi.RenderCancelled.
+    with pytest.raises(gi.InternalError, match="deliberate broken invariant.*report") as e:
+        gi._gi._internal_error_for_tests()
+    assert not isinstance(e.value, gi.RenderCancelled)
+
+
 def test_nan_rays_are_refused():
     scene = gi.load_scene("cornell")
     o = np.array([[0, 1, 3], [np.nan, 0, 0]], np.float32)

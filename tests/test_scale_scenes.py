@@ -1,4 +1,4 @@
-"""scripts/scale_scenes.py at its test size: both scenes load with the triangle counts the
+"""scripts/data/scale_scenes.py at its test size: both scenes load with the triangle counts the
 script reports, the forest's trees share their mesh files, and both render finite images; a
 scene of billions of instanced triangles loads, and its world-space copy is refused by estimate."""
 
@@ -12,7 +12,7 @@ import pytest
 
 import gi
 
-SCRIPT = Path(__file__).resolve().parent.parent / "scripts" / "scale_scenes.py"
+SCRIPT = Path(__file__).resolve().parent.parent / "scripts" / "data" / "scale_scenes.py"
 
 
 def test_small_scale_scenes_load_and_render(tmp_path):

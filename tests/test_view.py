@@ -1,6 +1,6 @@
 """`gi view`: the browser viewer (issue 30), served and driven as a user would.
 
-The browser test drives Debian's `chromium` (installed by scripts/setup.sh) through
+The browser test drives Debian's `chromium` (installed by scripts/ci/setup.sh) through
 Playwright's Python package with `executable_path`: Playwright downloads no browser. A
 machine without it fails here rather than skipping: the viewer is only tested in a browser.
 The two time limits below (a frame within a minute of starting, exit within 2 s of SIGINT)
@@ -446,7 +446,7 @@ def wait_frame_after(page, seq: int) -> None:
 
 def test_browser_drives_the_viewer(tmp_path):
     assert CHROMIUM, (
-        "the viewer test needs Debian's chromium (apt-get install chromium; scripts/setup.sh"
+        "the viewer test needs Debian's chromium (apt-get install chromium; scripts/ci/setup.sh"
         " installs it) or GI_CHROMIUM=/path/to/chromium"
     )
     from playwright.sync_api import sync_playwright

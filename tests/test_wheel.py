@@ -13,7 +13,7 @@ MAX_EXTENSION_BYTES = 15 * 1024 * 1024
 
 
 def test_wheel_is_abi3_manylinux_and_small(tmp_path):
-    # maturin reuses the release build in target/ that scripts/setup.sh made for the
+    # maturin reuses the release build in target/ that scripts/ci/setup.sh made for the
     # installed package, so this packs the wheel rather than compiling gi again.
     maturin = Path(sys.executable).parent / "maturin"
     p = subprocess.run(

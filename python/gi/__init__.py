@@ -40,7 +40,7 @@ from gi._gi import (  # noqa: E402
 atexit.register(_wait_gpu_idle)
 
 from gi._checks import OutputError  # noqa: E402
-from gi.animation import animation_updates, render_animation  # noqa: E402
+from gi.animation import animation_updates  # noqa: E402
 from gi.batch import render_batch  # noqa: E402  (imports Ray only when called)
 from gi.denoising import denoise  # noqa: E402
 from gi.display import to_display  # noqa: E402
@@ -49,11 +49,12 @@ from gi.meshes import AssetWarning  # noqa: E402
 from gi.render import (  # noqa: E402
     DEFAULT_METHOD,
     Renderer,
-    RenderResult,
     method_options,
     options_table,
     render,
+    render_animation,
 )
+from gi.result import RenderResult  # noqa: E402
 from gi.scene import SceneWarning, load_scene  # noqa: E402
 from gi.viewer import view  # noqa: E402  (imports aiohttp only when called)
 

@@ -7,20 +7,25 @@ validates and evaluates them. Frame ``n`` of a sequence shows time ``n / fps`` s
 
 from __future__ import annotations
 
-import json
 import math
 import sys
 import time
 from collections.abc import Callable, Iterable, Iterator, Sequence, Sized
-from typing import IO, TYPE_CHECKING, Any
+from typing import IO, Any, Protocol
 
 from gi._checks import setting_error
 from gi._gi import RenderCancelled, Scene
-
-if TYPE_CHECKING:
-    from gi.render import Renderer, RenderResult
+from gi.result import RenderResult
 
 ProgressCallback = Callable[[str, float], "bool | None"]
+
+
+class Animated(Protocol):
+    """What :func:`render_frames` asks of a renderer (:class:`gi.Renderer`)."""
+
+    def apply_animation(self, time: float) -> None: ...
+
+    def render(self, *, aovs: bool, extras: bool, seed: int | None) -> RenderResult: ...
 
 
 def animation_updates(scene: Scene, time: float) -> dict[str, Any]:
@@ -33,7 +38,7 @@ def animation_updates(scene: Scene, time: float) -> dict[str, Any]:
     """
     out: dict[str, Any] = {}
     groups = {"light": "lights", "object": "objects", "material": "materials"}
-    for u in json.loads(scene.animation_at(float(time))):
+    for u in scene.animation_at(float(time)):
         if u["target"] == "camera":
             out["camera"] = u["value"]
         else:
@@ -128,7 +133,7 @@ def _frame_progress(progress: bool | ProgressCallback, total: int) -> Callable[[
 
 
 def render_frames(
-    renderer: Renderer,
+    renderer: Animated,
     scene: Scene,
     frames: Iterable[int] | None,
     fps: float,
@@ -154,23 +159,3 @@ def render_frames(
             yield n, result
 
     return run()
-
-
-def render_animation(
-    scene: Scene,
-    method: str = "ispm",
-    frames: Iterable[int] | None = None,
-    fps: float = 30.0,
-    *,
-    aovs: bool = False,
-    extras: bool = False,
-    progress: bool | ProgressCallback = False,
-    **settings: Any,
-) -> Iterator[tuple[int, RenderResult]]:
-    """Renders frames of ``scene``'s animation with one :class:`gi.Renderer` (``method`` and
-    ``settings`` as for :func:`gi.render`): an iterator of ``(frame number, RenderResult)``.
-    See :meth:`gi.Renderer.render_animation`."""
-    from gi.render import Renderer
-
-    renderer = Renderer(scene, method, **settings)
-    return renderer.render_animation(frames, fps, aovs=aovs, extras=extras, progress=progress)

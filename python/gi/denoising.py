@@ -2,7 +2,7 @@
 
 Method ``ispm`` first gets a photon-scale filter of its indirect light (`filter_indirect`):
 its error is not pixel noise but photon-volume blotches a few pixels wide, which OIDN keeps
-as signal (docs/bench/denoise.md, scripts/ispm_error_breakdown.py).
+as signal (docs/bench/denoise.md, scripts/probe/ispm_error_breakdown.py).
 
 OIDN's ``RT`` filter takes the HDR beauty with gi's first-hit ``albedo`` and ``normal``
 AOVs as guides. Those are taken at each pixel's centre, so they are noise-free (not
@@ -15,14 +15,12 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from typing import TYPE_CHECKING
 
 import numpy as np
 
+from gi._checks import setting_error
 from gi._gi import SettingError
-
-if TYPE_CHECKING:
-    from gi.render import RenderResult
+from gi.result import RenderResult
 
 INSTALL_HINT = "denoising needs Intel Open Image Denoise: pip install 'gi[denoise]' (pyoidn)"
 
@@ -120,9 +118,6 @@ def denoise(result: RenderResult) -> RenderResult:
     the AOV ``noisy`` and the time taken is the stage ``denoise`` in ``stats``. For ``ispm``
     (results with the ``direct``, ``specular`` and ``indirect`` AOVs) the indirect light is
     first filtered at the photon scale (`filter_indirect`) and recomposed."""
-    from gi._checks import setting_error
-    from gi.render import RenderResult
-
     if not isinstance(result, RenderResult):
         raise setting_error("result", f"expected a gi.RenderResult, got {result!r}")
     for name in ("albedo", "normal"):

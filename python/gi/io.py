@@ -21,15 +21,14 @@ import tempfile
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from gi import _checks, display
 from gi._checks import OutputError, named_error
-
-if TYPE_CHECKING:
-    from gi.render import RenderResult
+from gi._gi import __version__
+from gi.result import RenderResult
 
 #: Suffixes holding several AOVs as layers of one file.
 LAYERED_FORMATS = {".exr"}
@@ -363,9 +362,6 @@ def plan_result(
     exposure: float = 0.0,
 ) -> list[_Planned]:
     """The files :func:`save_result` writes, converted and checked, without writing."""
-    from gi import __version__
-    from gi.render import RenderResult
-
     path = check_format(path)
     if not isinstance(result, RenderResult):
         raise named_error(

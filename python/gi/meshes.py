@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from gi._gi import GiError, OutOfMemoryError, SceneError
+from gi.gltf import GltfError, load_gltf
 from gi.textures import TextureError, TextureSet, height_to_normal
 
 # (vertices, faces, normals, materials JSON, face materials, uvs[, tangents]): `gi._gi.pyi`
@@ -326,8 +327,6 @@ def _load_gltf(
     textures: TextureSet,
     lights: list[dict[str, Any]] | None,
 ) -> MeshEntry:
-    from gi.gltf import GltfError, load_gltf
-
     try:
         m = load_gltf(path, textures)
     except GltfError as e:

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
 import numbers
 import os
@@ -11,16 +10,20 @@ import sys
 import time
 import warnings
 from collections.abc import Callable, Iterable, Iterator, Mapping
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from gi import _checks, _gi, aovs
-from gi._gi import RenderStats, RenderWarning, Scene, SceneError, SettingError
+from gi import _checks, _gi
+from gi._gi import RenderWarning, Scene, SceneError, SettingError
+from gi.animation import animation_updates, render_frames
+from gi.denoising import INSTALL_HINT, available
+from gi.denoising import denoise as run_denoiser
+from gi.meshes import scene_error
 from gi.progress import ProgressBar
-from gi.scene import TEXTURE_FIELDS
+from gi.result import RenderResult
+from gi.scene import TEXTURE_FIELDS, SceneWarning, load_scene
 
 ProgressCallback = Callable[[str, float], "bool | None"]
 
@@ -29,86 +32,6 @@ ProgressCallback = Callable[[str, float], "bool | None"]
 #: method, real-time on a GPU and the interactive one in the viewer. ``path`` is the
 #: reference, to be asked for by name (it is the slowest at equal settings).
 DEFAULT_METHOD = "ispm"
-
-
-@dataclass(frozen=True)
-class RenderResult:
-    """A rendered frame. Images are float32 ``(height, width, 3)`` in linear RGB.
-
-    ``radiance`` is in W·sr⁻¹·m⁻² (the pixel's box-filtered mean); ``caustics`` is the
-    light-traced part of it; ``albedo``, ``normal``, ``position`` and ``depth`` (view-space
-    distance along the camera axis, ``(height, width)``) describe the first surface seen
-    through each pixel centre.
-    """
-
-    radiance: np.ndarray
-    albedo: np.ndarray
-    normal: np.ndarray
-    position: np.ndarray
-    depth: np.ndarray
-    caustics: np.ndarray
-    stats: RenderStats
-    extra: dict[str, np.ndarray] = field(default_factory=dict)
-
-    BASE = aovs.BASE
-
-    def aov_names(self) -> list[str]:
-        """Names :meth:`aov` accepts: the base images that were read back (all of them with
-        ``aovs=True``; ``caustics`` for method ``path`` only), then the method's own
-        (``extra``; method ``ispm``: direct, specular, indirect, photons)."""
-        base = aovs.base_names(self.stats.method)
-        return [n for n in base if getattr(self, n).size > 0 or n == "radiance"] + [*self.extra]
-
-    def aov(self, name: str) -> np.ndarray:
-        """An image by name (see :meth:`aov_names`); else :class:`gi.SettingError` (also a
-        ``KeyError``) saying why it is missing: not read back (``aovs=True``,
-        ``extras=True``), not rendered by the method, or unknown."""
-        if isinstance(name, str) and name in self.aov_names():
-            return getattr(self, name) if name in self.BASE else self.extra[name]  # type: ignore[no-any-return]
-        raise _checks.AovError(self._why_missing(name))
-
-    def _why_missing(self, name: object) -> str:
-        method = self.stats.method
-        available = ", ".join(self.aov_names())
-        if not isinstance(name, str):
-            return f"AOV names are strings, got {name!r} (available: {available})"
-        if name in aovs.base_names(method):
-            return (
-                f"{name!r} was not read back: render with aovs=True (gi.Renderer.render,"
-                f" render_progressive; available: {available})"
-            )
-        if name in aovs.METHOD_EXTRA.get(method, ()):
-            return (
-                f"{name!r} was not read back: render with extras=True (gi.Renderer.render,"
-                f" render_progressive; available: {available})"
-            )
-        if name in self.BASE or name in aovs.DENOISE_EXTRA:
-            return aovs.why_not(method, name) + f" (this result has: {available})"
-        return f"no image {name!r} (available: {available})"
-
-    def __repr__(self) -> str:
-        h, w = self.radiance.shape[:2]
-        s = self.stats
-        samples = f"{s.samples_per_pixel} spp"
-        if s.passes > 1:
-            samples = f"{s.passes} passes of {s.samples_per_pixel} spp"
-        return (
-            f"<RenderResult {s.method} {w}x{h}, {samples}, {s.total_seconds:.2f} s;"
-            f" aovs: {', '.join(self.aov_names())}>"
-        )
-
-    def display(self, tonemap: str = "clip", exposure: float = 0.0) -> np.ndarray:
-        """The beauty as 8-bit sRGB (H×W×3 uint8) through a display transform
-        (:mod:`gi.display`: "clip", "filmic"/"agx" or "aces")."""
-        from gi.display import to_srgb8
-
-        return to_srgb8(self.radiance, exposure, tonemap)
-
-    def _repr_png_(self) -> bytes:
-        """The tone-mapped beauty as PNG, for Jupyter."""
-        from gi.display import png_bytes
-
-        return png_bytes(self.display())
 
 
 def _options(options: dict[str, Any]) -> dict[str, Any]:
@@ -146,8 +69,6 @@ def _scene(scene: Any) -> Scene:
     if isinstance(scene, Scene):
         return scene
     if isinstance(scene, (str, os.PathLike)):
-        from gi.scene import load_scene
-
         return load_scene(scene)
     raise _checks.setting_error(
         "scene",
@@ -167,8 +88,6 @@ def _warn_if_black(scene: Scene) -> None:
     power: lights, emitting surfaces, an environment) or nearly black (a glTF asset without
     lights or an environment, lit only by its emissive surfaces: glTF assets are made to be
     lit by the viewer's environment), or that has nothing to see."""
-    from gi.scene import SceneWarning
-
     gltf = Path(scene.source).suffix.lower() in (".gltf", ".glb")
     if max(scene.total_power) <= 0.0:
         reason = (
@@ -325,7 +244,7 @@ class Renderer:
         ):
             names = ", ".join(self._scene.material_names)
             raise _checks.setting_error("key", f"must be a material's name ({names}), got {key!r}")
-        desc = json.loads(self._native.describe(target, key))
+        desc = self._native.describe(target, key)
         if target == "object" and desc.get("transform") is not None:
             i = self.object_names.index(key) if isinstance(key, str) else key
             desc["transform"] = dict(self._given_transforms.get(i, desc["transform"]))
@@ -401,27 +320,26 @@ class Renderer:
         if environment is not None:
             self._set_environment(environment)
         if camera is not None:
-            self._native.update("camera", None, _json("camera", camera))
+            self._native.update("camera", None, _fields("camera", camera))
         for i, light in (lights or {}).items():
             i = self._light_index(i, "lights")
-            self._native.update("light", i, _json(f"lights[{i}]", light))
+            self._native.update("light", i, _fields(f"lights[{i}]", light))
         for key, transform in (objects or {}).items():
             key = self._object_index(key, "objects")
             i = self.object_names.index(key) if isinstance(key, str) else key
-            given = _json(f"objects[{i}].transform", transform)
+            given = _fields(f"objects[{i}].transform", transform)
             before = self.describe("object", i)["transform"] or {}
             self._native.update("object", key, given)
-            fields = json.loads(given)
-            if "matrix" in fields:
+            if "matrix" in given:
                 self._given_transforms.pop(i, None)
             else:
-                self._given_transforms[i] = {**before, **fields}
+                self._given_transforms[i] = {**before, **given}
         for name, material in (materials or {}).items():
             if not isinstance(name, str):
                 names = ", ".join(self._scene.material_names)
                 raise _update_error("materials", f"a material's name ({names}), got {name!r}")
             material = self._texture_names_in(name, material)
-            self._native.update("material", name, _json(f"materials.{name}", material))
+            self._native.update("material", name, _fields(f"materials.{name}", material))
 
     def _set_environment(self, environment: Any) -> None:
         from gi.lighting import Lighting
@@ -588,8 +506,6 @@ class Renderer:
         """Poses the scene at ``time`` seconds of its ``animation`` tracks: every animated
         camera, light, object and material takes its description at that time (the fields
         no track animates keep the scene file's values). Nothing happens without tracks."""
-        from gi.animation import animation_updates
-
         self.update(**animation_updates(self._scene, time))
 
     def render_animation(
@@ -613,8 +529,6 @@ class Renderer:
         >>> for n, frame in r.render_animation(range(0, 120), fps=30):
         ...     gi.save_image(f"frame_{n:04d}.png", frame.radiance)
         """
-        from gi.animation import render_frames
-
         return render_frames(
             self,
             self._scene,
@@ -627,6 +541,24 @@ class Renderer:
         )
 
 
+def render_animation(
+    scene: Scene,
+    method: str = "ispm",
+    frames: Iterable[int] | None = None,
+    fps: float = 30.0,
+    *,
+    aovs: bool = False,
+    extras: bool = False,
+    progress: bool | ProgressCallback = False,
+    **settings: Any,
+) -> Iterator[tuple[int, RenderResult]]:
+    """Renders frames of ``scene``'s animation with one :class:`gi.Renderer` (``method`` and
+    ``settings`` as for :func:`gi.render`): an iterator of ``(frame number, RenderResult)``.
+    See :meth:`gi.Renderer.render_animation`."""
+    renderer = Renderer(scene, method, **settings)
+    return renderer.render_animation(frames, fps, aovs=aovs, extras=extras, progress=progress)
+
+
 def _texture_names_out(desc: dict[str, Any]) -> dict[str, Any]:
     """A material description's texture names as the scene file gives them."""
     for key in TEXTURE_FIELDS:
@@ -636,8 +568,6 @@ def _texture_names_out(desc: dict[str, Any]) -> dict[str, Any]:
 
 
 def _update_error(field: str, reason: str) -> SceneError:
-    from gi.meshes import scene_error
-
     return scene_error("scene update", field, reason)
 
 
@@ -649,9 +579,10 @@ def _key_error(field: str, reason: str) -> SceneError | SettingError:
     return _update_error(field, reason)
 
 
-def _jsonable(value: Any, field: str) -> Any:
-    """``value`` with numpy arrays and scalars as lists and numbers, checked for what JSON
-    cannot hold (NaN, infinities, objects): :class:`gi.SceneError` naming the field."""
+def _plain(value: Any, field: str) -> Any:
+    """``value`` with numpy arrays and scalars as lists and numbers, checked for what the
+    scene format cannot hold (NaN, infinities, objects): :class:`gi.SceneError` naming the
+    field."""
     if isinstance(value, np.ndarray):
         value = value.tolist()
     elif isinstance(value, np.generic):
@@ -661,10 +592,10 @@ def _jsonable(value: Any, field: str) -> Any:
         for k, v in value.items():
             if not isinstance(k, str):
                 raise _update_error(field, f"field names are strings, got {k!r}")
-            out[k] = _jsonable(v, f"{field}.{k}")
+            out[k] = _plain(v, f"{field}.{k}")
         return out
     if isinstance(value, (list, tuple)):
-        return [_jsonable(v, f"{field}[{i}]") for i, v in enumerate(value)]
+        return [_plain(v, f"{field}[{i}]") for i, v in enumerate(value)]
     if isinstance(value, float) and not math.isfinite(value):
         raise _update_error(field, f"must be a finite number, got {value}")
     if value is None or isinstance(value, (str, bool, int, float)):
@@ -672,10 +603,12 @@ def _jsonable(value: Any, field: str) -> Any:
     raise _update_error(field, f"expected a number, string, list or dict, got {value!r}")
 
 
-def _json(field: str, value: Any) -> str:
+def _fields(field: str, value: Any) -> dict[str, Any]:
+    """An update's fields as plain Python values (dicts, lists, numbers, strings), what the
+    native ``update`` takes."""
     if not isinstance(value, Mapping):
         raise _update_error(field, f"must be a dict of the fields that change, got {value!r}")
-    return json.dumps(_jsonable(value, field), allow_nan=False)
+    return _plain(value, field)  # type: ignore[no-any-return]
 
 
 def method_options(method: str, **options: Any) -> dict[str, Any]:
@@ -711,16 +644,11 @@ def render(
     as the AOV ``noisy``. ``environment`` lights the scene with an environment image or
     the built-in sky (``"sky"``), added to its light or replacing it (:mod:`gi.lighting`).
     """
-    if _flag("denoise", denoise):
-        from gi.denoising import INSTALL_HINT, available
-
-        if not available():
-            raise SettingError(INSTALL_HINT)
+    if _flag("denoise", denoise) and not available():
+        raise SettingError(INSTALL_HINT)
     renderer = Renderer(scene, method, environment=environment, **options)
     result = renderer.render(aovs=True, extras=True, progress=progress)
     if denoise:
-        from gi.denoising import denoise as run_denoiser
-
         result = run_denoiser(result)
     return result
 

@@ -19,11 +19,13 @@ from typing import Any
 
 import numpy as np
 
-from gi._gi import Scene, builtin_scenes
+from gi._gi import GiError, OutOfMemoryError, Scene, builtin_scenes
 from gi._placement import first_bad_placement
 from gi.environment import load_environment
-from gi.meshes import MeshEntry, load_mesh, report
+from gi.gltf import DEFAULT_MATERIAL_NAME, GltfError, default_material, read_gltf
+from gi.meshes import MeshEntry, _entry, _unit_rows, load_failure, load_mesh, report
 from gi.meshes import scene_error as _scene_error
+from gi.mitsuba import load_mitsuba
 from gi.textures import TextureError, TextureSet
 
 
@@ -72,8 +74,6 @@ def load_scene(source: str | Path) -> Scene:
         hint = f" (built-in scenes: {', '.join(names)})" if path.suffix == "" else ""
         raise _scene_error(file, "(file)", f"no such scene file{hint}")
     if path.suffix.lower() == ".xml":
-        from gi.mitsuba import load_mitsuba
-
         return load_mitsuba(path)
     if path.suffix.lower() in (".gltf", ".glb"):
         return load_gltf_scene(path)
@@ -231,10 +231,6 @@ def gltf_scene_description(
 
     Every failure is typed: :class:`gi.SceneError` naming the file's field (``nodes[3]``)
     or the file, :class:`gi.OutOfMemoryError`."""
-    from gi._gi import GiError, OutOfMemoryError
-    from gi.gltf import GltfError
-    from gi.meshes import load_failure
-
     file = str(path)
     try:
         return _gltf_scene_description(path)
@@ -251,9 +247,6 @@ def gltf_scene_description(
 def _gltf_scene_description(
     path: Path,
 ) -> tuple[dict[str, Any], dict[str, MeshEntry], TextureSet]:
-    from gi.gltf import DEFAULT_MATERIAL_NAME, default_material, read_gltf
-    from gi.meshes import _entry, _unit_rows
-
     file = str(path)
     textures = TextureSet(path.parent)
     g = read_gltf(path, textures)

@@ -30,7 +30,7 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "scripts"))
-from image_metrics import flip  # noqa: E402
+from shared import flip  # noqa: E402
 
 import gi  # noqa: E402
 

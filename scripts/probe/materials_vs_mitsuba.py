@@ -7,14 +7,17 @@ Run: /work/wt/dev.sh python scripts/probe/materials_vs_mitsuba.py [--methods pat
 
 import argparse
 import json
+import sys
 import time
 import warnings
 from pathlib import Path
 
 import numpy as np
-from image_metrics import flip
 
-import gi
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from shared import flip  # noqa: E402
+
+import gi  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENES = ROOT / "tests" / "scenes" / "materials"

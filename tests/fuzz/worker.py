@@ -6,7 +6,7 @@ Before a case runs, a ``start`` record (with the generated input) is written and
 after it, an ``end`` record with its outcome: ``ok`` (rendered, every pixel finite),
 ``typed`` (a ``gi.GiError``), ``untyped`` (any other exception) or ``nan`` (accepted but a
 non-finite pixel). A crash or a hang shows as a ``start`` with no ``end``; the driver
-(``scripts/fuzz.py``) watches for both.
+(``scripts/ci/fuzz.py``) watches for both.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-//! Time of the indirect estimators (`Settings::estimator`) over the same photons, as a
+//! Time of the indirect estimators (the `estimator` option) over the same photons, as a
 //! markdown table: photon count × kernel scale × image size, one `Renderer` per row and
 //! estimator. After the frame that traces the photons, the camera moves by a hair every
 //! frame, so every frame splats the same photons again (the trace is reused); the time is the

@@ -36,7 +36,7 @@
 //! `--no-one-shot` leaves out the one-shot frames (`–` in their columns); `--table-only` the
 //! tables after the first. `--method bidir` times method `bidir` instead (its defaults, the
 //! direct light's options above, the light moving): engine frame, still frame and its stages
-//! per scene and size (`scripts/gpu_check.sh` runs these).
+//! per scene and size (`scripts/ci/gpu_check.sh` runs these).
 //!
 //! `--instancing`: the GPU instancing table instead (`common/instancing.rs`: instanced
 //! against flattened geometry, triangles per pass before and after culling, GPU geometry

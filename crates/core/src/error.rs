@@ -28,9 +28,16 @@ pub enum Error {
     /// No usable GPU adapter, or a GPU operation failed.
     #[error("GPU: {0}")]
     Gpu(String),
-    /// The render was cancelled by its progress callback.
+    /// The render was cancelled by its progress callback (Ctrl-C, or a callback that
+    /// returned `false`). Nothing else returns it.
     #[error("render cancelled")]
     Cancelled,
+    /// An internal invariant of gi does not hold (a bug, not bad input): e.g. the GPU state
+    /// or the BVH a frame step needs was not built before it.
+    #[error(
+        "internal error: {0} (this is a bug in gi; please report it with the scene and settings)"
+    )]
+    Internal(String),
     /// A stage would need more memory than the process can get (estimated before the
     /// allocation, or an allocation that failed).
     #[error(
@@ -62,6 +69,10 @@ impl Error {
             field: field.into(),
             message: message.into(),
         }
+    }
+    /// An [`Error::Internal`] naming the invariant that broke.
+    pub(crate) fn internal(what: impl Into<String>) -> Self {
+        Error::Internal(what.into())
     }
     pub(crate) fn setting(name: &'static str, message: impl Into<String>) -> Self {
         Error::Setting {

@@ -508,3 +508,38 @@ fn serial_frames_equal_overlapped_frames() {
         assert!(!has(&overlapped), "{name} in an overlapped frame");
     }
 }
+
+/// Method `ispm` reads the scene's extent (a pass over its meshes, for the photon volume
+/// radii) once a frame, however many sources trace photons: the orchestrator makes it and
+/// passes it down. Two point lights, three frames, the first light moving (every frame
+/// re-traces its photons and re-sizes their volumes).
+#[test]
+fn ispm_reads_the_scene_extent_once_a_frame() {
+    use gi_core::photon::radius::SceneExtent;
+    let mut desc: serde_json::Value =
+        serde_json::from_str(builtin::json("cornell").expect("cornell")).expect("json");
+    let second =
+        serde_json::json!({"type": "point", "position": [0.4, 1.2, 0.3], "intensity": [1, 1, 1]});
+    desc["lights"].as_array_mut().expect("lights").push(second);
+    let scene =
+        Scene::from_json(&desc.to_string(), "two lights", &Default::default()).expect("scene");
+    let options = settings(Method::Ispm).with("temporal_frames", 3);
+    let mut r = Renderer::new(&scene, &options).expect("renderer");
+    let desc = FrameDesc {
+        seed: None,
+        images: Images::default(),
+        serial: false,
+    };
+    for f in 0..3 {
+        let light = LightDesc::Point {
+            position: [0.1 * f as f32, 1.6, 0.0],
+            intensity: [3.0; 3],
+        };
+        r.update(&SceneUpdate::Light { index: 0, light })
+            .expect("update");
+        let before = SceneExtent::passes();
+        let out = r.render(&desc, &Silent).expect("frame");
+        assert!(out.stats.photons_stored > 0, "frame {f} stored no photons");
+        assert_eq!(SceneExtent::passes() - before, 1, "frame {f}");
+    }
+}

@@ -34,14 +34,14 @@ create_exception!(
     _gi,
     InternalError,
     GiError,
-    "A bug in gi: its core failed an internal check (a Rust panic). Please report it with the \
-     message and the scene and settings that caused it."
+    "A bug in gi: its core failed an internal check (a broken invariant or a Rust panic). \
+     Please report it with the message and the scene and settings that caused it."
 );
 create_exception!(
     _gi,
     RenderCancelled,
     GiError,
-    "The render was cancelled (progress callback or Ctrl-C)."
+    "The render was cancelled (a progress callback that returned False, or Ctrl-C)."
 );
 
 create_exception!(
@@ -111,6 +111,7 @@ pub fn to_py(py: Python<'_>, e: gi_core::Error) -> PyErr {
         }
         gi_core::Error::Gpu(_) => GpuError::new_err(msg),
         gi_core::Error::Cancelled => RenderCancelled::new_err(msg),
+        gi_core::Error::Internal(_) => InternalError::new_err(msg),
         gi_core::Error::OutOfMemory { needed, .. } => match out_of_memory_type(py) {
             Ok(ty) => {
                 let err = PyErr::from_type(ty.clone(), msg);

@@ -200,3 +200,20 @@ pub fn panic_for_tests(py: Python<'_>) -> PyResult<()> {
         panic!("a deliberate panic")
     })
 }
+
+/// Returns a core [`gi_core::Error::Internal`] (a broken invariant), to show that it becomes
+/// `gi.InternalError`, not `gi.RenderCancelled`.
+#[pyfunction]
+#[pyo3(name = "_internal_error_for_tests")]
+pub fn internal_error_for_tests(py: Python<'_>) -> PyResult<()> {
+    run(
+        py,
+        "_internal_error_for_tests",
+        None,
+        |_| -> gi_core::Result<()> {
+            Err(gi_core::Error::Internal(
+                "a deliberate broken invariant".into(),
+            ))
+        },
+    )
+}

@@ -7,6 +7,7 @@ mod options;
 mod render;
 mod scene;
 mod stats;
+mod values;
 
 use pyo3::prelude::*;
 
@@ -24,6 +25,7 @@ fn _gi(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(render::adapter_report, m)?)?;
     m.add_function(wrap_pyfunction!(render::footprint_radii, m)?)?;
     m.add_function(wrap_pyfunction!(guard::panic_for_tests, m)?)?;
+    m.add_function(wrap_pyfunction!(guard::internal_error_for_tests, m)?)?;
     m.add_function(wrap_pyfunction!(guard::wait_gpu_idle, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())

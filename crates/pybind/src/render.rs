@@ -149,16 +149,16 @@ impl PyRenderer {
         output_dict(py, out)
     }
 
-    /// Applies a scene update given as JSON: `target` is "camera", "light" (key: index),
-    /// "object" (key: index or name) or "material" (key: name); see
-    /// `Scene::update_from_json` for the fields.
-    #[pyo3(signature = (target, key, json))]
+    /// Applies a scene update given as Python values (a dict of the fields that change, in
+    /// the scene format): `target` is "camera", "light" (key: index), "object" (key: index
+    /// or name) or "material" (key: name); see `Scene::update_from_json` for the fields.
+    #[pyo3(signature = (target, key, fields))]
     fn update(
         &mut self,
         py: Python<'_>,
         target: &str,
         key: Option<&Bound<'_, PyAny>>,
-        json: &str,
+        fields: &Bound<'_, PyAny>,
     ) -> PyResult<()> {
         let scene = self.inner.scene();
         let bad = |msg: String| {
@@ -193,8 +193,7 @@ impl PyRenderer {
             }
             other => return Err(bad(format!("unknown update target `{other}`"))),
         };
-        let value: serde_json::Value =
-            serde_json::from_str(json).map_err(|e| bad(format!("invalid JSON: {e}")))?;
+        let value = crate::values::to_value(fields).map_err(bad)?;
         let update = scene
             .update_from_json(&target, &value)
             .map_err(|e| to_py(py, e))?;
@@ -298,15 +297,15 @@ impl PyRenderer {
             .collect()
     }
 
-    /// The current camera, light `i` or material as scene-format JSON; object `i` (index or
-    /// name) as `{"name", "matrix": 4×4 rows, "triangles": [start, end]}`.
+    /// The current camera, light `i` or material as a scene-format dict; object `i` (index
+    /// or name) as `{"name", "matrix": 4×4 rows, "triangles": [start, end]}`.
     #[pyo3(signature = (target, key = None))]
-    fn describe(
+    fn describe<'py>(
         &self,
-        py: Python<'_>,
+        py: Python<'py>,
         target: &str,
-        key: Option<&Bound<'_, PyAny>>,
-    ) -> PyResult<String> {
+        key: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyAny>> {
         let scene = self.inner.scene();
         let value = match target {
             "camera" => serde_json::to_string(&scene.camera_desc()),
@@ -373,7 +372,12 @@ impl PyRenderer {
                 ))
             }
         };
-        value.map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))
+        // Through text, so that the f32 values read as written (0.35, not
+        // 0.3499999940395355 as a JSON value made from the f32 would).
+        let text = value.map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))?;
+        let value: serde_json::Value = serde_json::from_str(&text)
+            .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))?;
+        crate::values::to_py(py, &value)
     }
 }
 

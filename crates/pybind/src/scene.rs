@@ -380,11 +380,11 @@ impl PyScene {
         self.inner.animation_duration()
     }
 
-    /// The animated targets at `time` (seconds) as JSON: a list of `{"target": "camera" |
+    /// The animated targets at `time` (seconds) as Python values: a list of `{"target": "camera" |
     /// "light" | "object" | "material", "key": null | light index | object name (index when
     /// unnamed) | material name, "value": the target's description at that time}` (an
     /// object's value is its whole transform), what `Renderer.update` takes.
-    fn animation_at(&self, py: Python<'_>, time: f64) -> PyResult<String> {
+    fn animation_at<'py>(&self, py: Python<'py>, time: f64) -> PyResult<Bound<'py, PyAny>> {
         use gi_core::scene::update::UpdateTarget;
         use serde_json::{json, Value};
         let values = self
@@ -409,7 +409,7 @@ impl PyScene {
                 json!({"target": name, "key": key, "value": value})
             })
             .collect();
-        Ok(Value::Array(list).to_string())
+        crate::values::to_py(py, &Value::Array(list))
     }
 
     /// World-space triangles: (vertices float32 (V, 3), faces uint32 (T, 3)).

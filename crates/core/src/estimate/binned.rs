@@ -1,5 +1,5 @@
 //! The compute estimators that bin photons into lists before shading the view samples
-//! (`gpu/shaders/tiled.wgsl` and `cluster.wgsl`), over the same photons, kernels, BSDF and
+//! (`estimate/shaders/tiled.wgsl` and `cluster.wgsl`), over the same photons, kernels, BSDF and
 //! normal test as the raster photon volumes ([`super::Volumes`]), so the same image up to
 //! the order of the float sums; the work runs on compute units instead of the rasterizer.
 //! - [`Mode::Tiled`] (Mara et al. 2013, as Moreau et al. 2016 section 3.2 describe it): the
@@ -389,22 +389,13 @@ fn texture_2d(
     size: [u32; 2],
     format: wgpu::TextureFormat,
 ) -> wgpu::Texture {
-    gpu::create_texture(
+    gpu::texture_2d(
         &ctx.device,
-        &wgpu::TextureDescriptor {
-            label: Some(label),
-            size: wgpu::Extent3d {
-                width: size[0],
-                height: size[1],
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-            view_formats: &[],
-        },
+        label,
+        size[0],
+        size[1],
+        format,
+        wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
     )
 }
 

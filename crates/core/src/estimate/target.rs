@@ -96,26 +96,17 @@ pub struct IndirectTarget {
 
 /// An `Rgba32Float` texture the estimators render to, write as storage, read and copy.
 pub(crate) fn float_target(ctx: &GpuContext, label: &str, w: u32, h: u32) -> wgpu::Texture {
-    gpu::create_texture(
+    gpu::texture_2d(
         &ctx.device,
-        &wgpu::TextureDescriptor {
-            label: Some(label),
-            size: wgpu::Extent3d {
-                width: w,
-                height: h,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: TARGET,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT
-                | wgpu::TextureUsages::STORAGE_BINDING
-                | wgpu::TextureUsages::TEXTURE_BINDING
-                | wgpu::TextureUsages::COPY_SRC
-                | wgpu::TextureUsages::COPY_DST,
-            view_formats: &[],
-        },
+        label,
+        w,
+        h,
+        TARGET,
+        wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::STORAGE_BINDING
+            | wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::COPY_SRC
+            | wgpu::TextureUsages::COPY_DST,
     )
 }
 

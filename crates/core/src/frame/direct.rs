@@ -2,16 +2,12 @@
 //! an eye G-buffer and deferred lighting accumulated on the GPU, the G-buffer at the pixel
 //! centres, the composite, and the readback of what was asked for.
 
-use super::gpu::{rgb_image, LightDraw, Targets};
+use super::gpu::{assemble, normalized, readback_names, rgb_image, LightDraw, Stale};
 use super::{GpuState, Images};
 use super::{RenderOutput, RenderStats};
 use crate::cancel::Progress;
 use crate::error::Result;
-use crate::image::Image;
-use crate::raster::oct_decode;
 use crate::scene::Scene;
-use glam::{Vec2, Vec3, Vec4};
-use std::collections::HashMap;
 use std::time::Instant;
 
 pub(super) fn frame(
@@ -38,7 +34,7 @@ pub(super) fn frame(
     if g.scene
         .record_shadows(&ctx, &mut encoder, &mut g.timer, scene, draw)
     {
-        g.targets.direct_current = false;
+        g.targets.invalidate(Stale::SHADOWS);
     }
     let mut encoder = g
         .targets
@@ -115,79 +111,4 @@ pub(super) fn redo(
         .stages
         .push(("edge buffers regrown".into(), t.elapsed().as_secs_f64()));
     Ok(())
-}
-
-/// The textures to read back for `images` (`accum` for the ISPM direct AOV; `indirect`
-/// when the method has one).
-pub(super) fn readback_names(images: Images, indirect: bool) -> Vec<&'static str> {
-    let mut names = vec!["radiance"];
-    if images.aovs || images.extras {
-        names.extend(["position", "normals", "albedo"]);
-    }
-    if images.extras {
-        names.push("accum");
-        if indirect {
-            names.push("indirect");
-        }
-    }
-    names
-}
-
-/// Radiance and the first-hit AOVs from the read-back textures.
-pub(super) fn assemble(
-    scene: &Scene,
-    t: &Targets,
-    data: &HashMap<&'static str, Vec<Vec4>>,
-    stats: RenderStats,
-) -> RenderOutput {
-    let (w, h) = (t.width, t.height);
-    let empty = || Image::new(0, 0);
-    let mut out = RenderOutput {
-        radiance: data
-            .get("radiance")
-            .map(|r| rgb_image(w, h, r))
-            .unwrap_or_else(empty),
-        albedo: empty(),
-        normal: empty(),
-        position: empty(),
-        depth: Vec::new(),
-        caustics: empty(),
-        aovs: Vec::new(),
-        stats,
-    };
-    if let (Some(position), Some(normals), Some(albedo)) = (
-        data.get("position"),
-        data.get("normals"),
-        data.get("albedo"),
-    ) {
-        let cam = &scene.camera;
-        out.albedo = Image::new(w, h);
-        out.normal = Image::new(w, h);
-        out.position = Image::new(w, h);
-        out.caustics = Image::new(w, h);
-        out.depth = vec![0.0; (w * h) as usize];
-        for i in 0..(w * h) as usize {
-            if position[i].w > 0.0 {
-                let p = position[i].truncate();
-                out.position.pixels[i] = p;
-                out.normal.pixels[i] = oct_decode(Vec2::new(normals[i].x, normals[i].y));
-                out.albedo.pixels[i] = albedo[i].truncate();
-                out.depth[i] = (p - cam.position).dot(cam.forward);
-            }
-        }
-    }
-    out
-}
-
-/// The accumulated direct light divided by its weights.
-pub(super) fn normalized(t: &Targets, accum: &[Vec4]) -> Image {
-    let mut img = Image::new(t.width, t.height);
-    for (d, a) in img.pixels.iter_mut().zip(accum) {
-        *d = if a.w > 0.0 {
-            a.truncate() / a.w
-        } else {
-            Vec3::ZERO
-        };
-    }
-    img
 }

@@ -4,70 +4,21 @@
 //! caustics. Camera rays follow mirrors and glass (`camera_pass`), so reflections and
 //! refractions show indirect light too.
 
-use super::options::{GatherOptions, KernelOptions};
-use super::photon::camera_samples;
-use super::{FrameParams, Method, MethodOptions, RenderOptions, RenderOutput, RenderStats};
+use super::options::derived::camera_samples;
+pub use super::options::derived::{gather_trace_settings, trace_settings};
+use super::options::GatherOptions;
+use super::{FrameParams, RenderOutput, RenderStats};
 use crate::cancel::Progress;
 use crate::error::Result;
 use crate::image::Image;
 use crate::photon::camera_pass::render_image;
-use crate::photon::differential::global_spacing;
 use crate::photon::footprint_map::{FootprintMap, LeafSize};
 use crate::photon::trace::emit_and_trace_focused;
 use crate::photon::trace::Checked;
-use crate::photon::trace::DifferentialSettings;
-use crate::photon::PhotonTraceSettings;
 use crate::scene::Scene;
 use crate::trace::direct::{DirectLight, Nee};
 use crate::trace::SceneBvh;
 use std::time::Instant;
-
-/// Default largest footprint semi-axis, as a fraction of the scene's diagonal.
-const DEFAULT_R_MAX_FRACTION: f32 = 0.1;
-
-/// Photon-trace settings of the gather method for `photons` photons traced to `max_depth`
-/// with differentials smoothed by `smoothing` and footprints capped at the kernel's
-/// `max_radius`, both shrunk by `radius_scale` (shared with the statistics of
-/// `footprint_statistics` and ISPM's footprint volumes).
-pub fn trace_settings(
-    scene: &Scene,
-    photons: u64,
-    max_depth: u32,
-    smoothing: f32,
-    kernel: &KernelOptions,
-    radius_scale: f32,
-) -> PhotonTraceSettings {
-    PhotonTraceSettings {
-        max_bounces: max_depth.saturating_sub(1).max(1),
-        store_direct: false,
-        differentials: Some(DifferentialSettings {
-            spacing: global_spacing(4.0 * std::f32::consts::PI, photons),
-            smoothing: smoothing * radius_scale,
-            r_max: radius_scale
-                * kernel
-                    .max_radius
-                    .unwrap_or_else(|| DEFAULT_R_MAX_FRACTION * scene.diagonal()),
-        }),
-    }
-}
-
-/// [`trace_settings`] of method `gather` with the photon options of `options` (those of
-/// `gather` or `ispm`; another method's: `gather`'s defaults), at the first pass's kernel
-/// scale.
-pub fn gather_trace_settings(scene: &Scene, options: &RenderOptions) -> PhotonTraceSettings {
-    let o = options.with_method(Method::Gather);
-    let MethodOptions::Gather(g) = &o.method else {
-        unreachable!("with_method(Gather) gives gather options")
-    };
-    trace_settings(
-        scene,
-        g.photons,
-        g.max_depth,
-        g.refine.smoothing,
-        &g.kernel,
-        1.0,
-    )
-}
 
 pub(super) fn render(
     scene: &Scene,

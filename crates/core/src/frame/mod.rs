@@ -4,10 +4,11 @@
 //! of one size, the estimator's resources and the temporal photon ring. A frame re-uploads
 //! only what changed and reads back only the images asked for ([`FrameDesc`]).
 //!
-//! One file per method runs its passes in order: [`direct`], [`ispm`], [`bidir`]; the CPU
-//! methods (`path`, `photon`, `gather`) reuse the renderer's BVH ([`cpu`]).
+//! One file per method runs its passes in order: `direct`, `ispm`, `bidir`; the CPU
+//! methods (`path`, `photon`, `gather`) reuse the renderer's BVH.
 
 mod bidir;
+mod context;
 mod direct;
 pub mod gather;
 mod gpu;
@@ -120,13 +121,6 @@ pub struct Renderer {
     )>,
 }
 
-/// Every method lights a scene with its environment light: the CPU methods and `ispm`'s
-/// photons, `direct`'s, `ispm`'s and `bidir`'s GPU direct light (`bidir` through its ray
-/// bundles, §6). Nothing is refused any more; kept as the one place to refuse a method.
-fn check_environment(_scene: &Scene, _method: Method) -> Result<()> {
-    Ok(())
-}
-
 /// Light transport `options` ask for that their method does not compute, one message each
 /// (they become `gi.RenderWarning`s).
 fn transport_omissions(scene: &Scene, options: &RenderOptions) -> Vec<String> {
@@ -187,7 +181,6 @@ impl Renderer {
     pub fn new(scene: &Scene, options: &RenderOptions) -> Result<Self> {
         options.validate()?;
         let method = options.method();
-        check_environment(scene, method)?;
         let camera = scene.camera.with_size(
             options.common.width.unwrap_or(scene.camera.width),
             options.common.height.unwrap_or(scene.camera.height),
@@ -434,7 +427,7 @@ impl Renderer {
 
     /// The CPU BVH (built or updated at the start of every frame of a method that uses it).
     fn cpu_bvh(&self) -> Result<&SceneBvh> {
-        self.bvh.as_ref().ok_or(Error::Cancelled)
+        self.bvh.as_ref().ok_or_else(no_bvh)
     }
 
     fn gpu_frame(
@@ -455,7 +448,7 @@ impl Renderer {
         ctx.scoped("frame", || {
             self.sync_gpu(&ctx, &direct)?;
             let mut out = self.gpu_method_frame(frame, images, progress)?;
-            let g = self.gpu.as_mut().ok_or(Error::Cancelled)?;
+            let g = self.gpu.as_mut().ok_or_else(no_gpu_state)?;
             if g.targets.grow_edges(&ctx)? {
                 if frame.progressive && ispm {
                     // Progressive `ispm` corrects the composite on the CPU (ray-traced
@@ -478,9 +471,9 @@ impl Renderer {
         images: Images,
         progress: &dyn Progress,
     ) -> Result<RenderOutput> {
-        let gpu = self.gpu.as_mut().ok_or(Error::Cancelled)?;
+        let gpu = self.gpu.as_mut().ok_or_else(no_gpu_state)?;
         // Built by `render` for the methods that use it (not `direct`).
-        let bvh = || self.bvh.as_ref().ok_or(Error::Cancelled);
+        let bvh = || self.bvh.as_ref().ok_or_else(no_bvh);
         // The sampled lights: drawn once from the options' seed (a still view re-draws
         // nothing), anew per progressive pass.
         let draw = gpu::LightDraw {
@@ -577,16 +570,7 @@ impl Renderer {
             g.ispm = None;
             g.bidir = None;
         } else {
-            if c.camera || c.geometry {
-                // The eye views' depth range follows the scene's bounds.
-                g.targets.eye_current = false;
-            }
-            if c.camera || c.geometry || c.materials {
-                g.targets.samples_current = false;
-            }
-            if c.any() {
-                g.targets.direct_current = false;
-            }
+            g.targets.invalidate(gpu::Stale::of_changes(c));
         }
         Ok(())
     }
@@ -635,4 +619,15 @@ pub fn render(
         },
         progress,
     )
+}
+
+/// The error of a step that finds no CPU BVH (`render` builds it first for the methods
+/// that use it).
+fn no_bvh() -> Error {
+    Error::internal("the CPU BVH is used before it is built")
+}
+
+/// The error of a GPU method's frame that finds no GPU state (`sync_gpu` makes it first).
+fn no_gpu_state() -> Error {
+    Error::internal("a GPU frame found no GPU state (made by `sync_gpu` first)")
 }

@@ -14,12 +14,12 @@ pub struct RenderStats {
     pub total_seconds: f64,
     pub samples_per_pixel: u32,
     /// Camera paths traced: `path`'s; `ispm`'s through mirrors and glass (0 in a frame that
-    /// reused the last frame's, see `raster::specular::specular_paths`).
+    /// reused the last frame's, see [`crate::photon::specular::specular_paths`]).
     pub camera_paths: u64,
     pub light_paths: u64,
     pub triangles: u64,
     /// Method `ispm`: bounce-map texels that hit the scene and photons aimed at mirrors and
-    /// glass (`Settings::photon_focus`): the photons emitted from the lights.
+    /// glass (the `photon_focus` option, `RefineOptions::photon_focus`): the photons emitted from the lights.
     pub photons_emitted: u64,
     /// Method `ispm`: photons that survived the first (bounce-map) scatter.
     pub photons_first_bounce: u64,
@@ -29,7 +29,7 @@ pub struct RenderStats {
     /// this frame.
     pub caustic_photons: u64,
     /// Method `ispm`: stored photons whose volumes were drawn as quads (the rest as
-    /// icosahedra; see `Settings::volume_shape`).
+    /// icosahedra; see the `volume_shape` option, `IspmOptions::volume_shape`).
     pub volume_quads: u64,
     /// Passes averaged into the radiance: 1, or in progressive mode the passes since the
     /// last change.

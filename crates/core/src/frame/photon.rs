@@ -8,41 +8,22 @@
 //!    else: direct light comes from the photons too, so the image converges to the full
 //!    solution as the photon count grows and the gather radius shrinks.
 
-use super::options::{KernelOptions, PhotonOptions};
+use super::options::derived::{camera_samples, knn_gather};
+use super::options::PhotonOptions;
 use super::{FrameParams, RenderOutput, RenderStats};
 use crate::cancel::Progress;
 use crate::error::Result;
 use crate::image::Image;
-use crate::photon::camera_pass::{render_image, CameraSamples};
-use crate::photon::knn::{Gather, PhotonMap};
+use crate::photon::camera_pass::render_image;
+use crate::photon::knn::PhotonMap;
 use crate::photon::trace::Checked;
 use crate::photon::{emit_and_trace_checked, Neighbour, PhotonTraceSettings};
 use crate::scene::Scene;
 use crate::trace::SceneBvh;
 use std::time::Instant;
 
-/// The k-nearest-neighbour gather of `k` photons with `kernel`, shrunk for the frame: the
-/// radiance estimate of method `photon`, and the gather of ISPM's specular paths.
-pub fn knn_gather(scene: &Scene, k: u32, kernel: &KernelOptions, frame: &FrameParams) -> Gather {
-    Gather::new(
-        scene,
-        k,
-        kernel.max_radius,
-        kernel.kernel,
-        frame.radius_scale,
-    )
-}
-
-/// The frame's camera samples: `spp` per pixel through delta lobes up to `max_depth`.
-pub(super) fn camera_samples(spp: u32, max_depth: u32, frame: &FrameParams) -> CameraSamples {
-    CameraSamples {
-        spp,
-        seed: frame.seed,
-        max_depth,
-        first_hit_aovs: frame.first_hit_aovs,
-    }
-}
-
+/// One frame of method `photon`: every bounce traced, a k-nearest-neighbour gather of
+/// the photon map at the camera paths' diffuse hits.
 pub fn render(
     scene: &Scene,
     bvh: &SceneBvh,

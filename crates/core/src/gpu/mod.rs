@@ -2,7 +2,7 @@
 //! choice, WGSL loading, readback and timestamp helpers.
 //!
 //! The adapter is a real GPU when one is present, else a CPU implementation (Mesa lavapipe).
-//! An explicit choice comes from `Settings::adapter` or, failing that, the environment
+//! An explicit choice comes from the `adapter` option (`DirectLightOptions::adapter`) or, failing that, the environment
 //! variable `GI_ADAPTER`: `"cpu"`, `"gpu"`, or a case-insensitive substring of the adapter
 //! name.
 
@@ -401,6 +401,48 @@ pub fn create_buffer_init(
 pub fn create_texture(device: &wgpu::Device, desc: &wgpu::TextureDescriptor) -> wgpu::Texture {
     alloc::note(alloc::Created::Texture);
     device.create_texture(desc)
+}
+
+/// A 2D texture of `width × height` texels in `format` with one mip level and one layer
+/// (counted): the textures the passes render to, read and upload into.
+pub fn texture_2d(
+    device: &wgpu::Device,
+    label: &str,
+    width: u32,
+    height: u32,
+    format: wgpu::TextureFormat,
+    usage: wgpu::TextureUsages,
+) -> wgpu::Texture {
+    let size = wgpu::Extent3d {
+        width,
+        height,
+        depth_or_array_layers: 1,
+    };
+    texture_array(device, label, size, format, usage)
+}
+
+/// A 2D texture (`size.depth_or_array_layers` layers) in `format` with one mip level
+/// (counted).
+pub fn texture_array(
+    device: &wgpu::Device,
+    label: &str,
+    size: wgpu::Extent3d,
+    format: wgpu::TextureFormat,
+    usage: wgpu::TextureUsages,
+) -> wgpu::Texture {
+    create_texture(
+        device,
+        &wgpu::TextureDescriptor {
+            label: Some(label),
+            size,
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage,
+            view_formats: &[],
+        },
+    )
 }
 
 /// `Device::create_bind_group`, counted.

@@ -4,7 +4,7 @@
 //! one photon leaves the light through a uniformly random point of the texel with power
 //! I(ω)·A·cos³θ (A: the layer's corrected texel area), its first hit is direct light and is
 //! not stored, and it scatters once as in the CPU photon tracer
-//! ([`super::trace::scatter`]). Only the first hit is found differently: a ray cast in the
+//! (`photon::trace::scatter`). Only the first hit is found differently: a ray cast in the
 //! scene BVH instead of a light-view G-buffer. A CPU rasterizer (lavapipe) sets up every
 //! triangle in a light's view whatever the map's resolution, so on dense scenes this costs
 //! a fraction of the raster passes (docs/bench/frame.md, session 9).

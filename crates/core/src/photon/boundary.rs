@@ -115,7 +115,7 @@ pub struct CoveredMoments {
 }
 
 impl CoveredMoments {
-    /// The whole disc: E[u²] = E[s²]/2 = 1/6 per axis (radial density ∝ (1 − s²)s).
+    /// The whole disc: E\[u²\] = E\[s²\]/2 = 1/6 per axis (radial density ∝ (1 − s²)s).
     pub const FULL: CoveredMoments = CoveredMoments {
         m0: 1.0,
         m1: Vec2::ZERO,

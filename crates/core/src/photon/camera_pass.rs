@@ -14,7 +14,7 @@ use rayon::prelude::*;
 
 /// The camera samples of a frame of the photon-map methods: `spp` jittered rays per pixel
 /// drawn from `seed`, each following delta lobes through up to `max_depth` scatterings
-/// (at most [`MAX_DELTA_BOUNCES`]); with `first_hit_aovs`, one more ray through each
+/// (at most `MAX_DELTA_BOUNCES`); with `first_hit_aovs`, one more ray through each
 /// pixel centre for the first-hit images.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct CameraSamples {

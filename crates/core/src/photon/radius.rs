@@ -29,15 +29,52 @@ pub struct VolumeRadius {
     pub r_max: f32,
 }
 
+/// What the volume radii read from a scene, in one pass over its meshes: its surface area
+/// and bounding-box diagonal. A frame makes it once ([`SceneExtent::of`]) and derives every
+/// radius it needs from it ([`VolumeRadius::of_extent`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SceneExtent {
+    /// Total surface area (m²).
+    pub area: f64,
+    /// Length of the bounding box's diagonal (m).
+    pub diagonal: f32,
+}
+
+thread_local! {
+    static EXTENT_PASSES: std::cell::Cell<u64> = const { std::cell::Cell::new(0) };
+}
+
+impl SceneExtent {
+    /// The extent of `scene` (a pass over its meshes; counted per thread, [`Self::passes`]).
+    pub fn of(scene: &Scene) -> SceneExtent {
+        EXTENT_PASSES.with(|n| n.set(n.get() + 1));
+        let (lo, hi) = crate::scene::light_views::bounds(scene);
+        SceneExtent {
+            area: scene.surface_area(),
+            diagonal: (hi - lo).length(),
+        }
+    }
+
+    /// How many extents this thread has made: the tests read it around a frame (a frame of
+    /// method `ispm` makes one).
+    pub fn passes() -> u64 {
+        EXTENT_PASSES.with(|n| n.get())
+    }
+}
+
 impl VolumeRadius {
     /// The radii of method `ispm` for `scene`: `r_base` from [`base_radius`],
     /// `r_max` a tenth of the scene's bounding-box diagonal.
     pub fn of_scene(scene: &Scene, photons: u64, kernel_scale: f32) -> Self {
-        let r_base = base_radius(scene, photons, kernel_scale);
-        let (lo, hi) = crate::scene::light_views::bounds(scene);
+        Self::of_extent(SceneExtent::of(scene), photons, kernel_scale)
+    }
+
+    /// [`Self::of_scene`] from the scene's `extent`, made once.
+    pub fn of_extent(extent: SceneExtent, photons: u64, kernel_scale: f32) -> Self {
+        let r_base = (kernel_scale as f64 * (extent.area / photons.max(1) as f64).sqrt()) as f32;
         VolumeRadius {
             r_base,
-            r_max: (0.1 * (hi - lo).length()).max(r_base),
+            r_max: (0.1 * extent.diagonal).max(r_base),
         }
     }
 

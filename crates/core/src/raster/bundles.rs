@@ -5,7 +5,7 @@
 //! pixel's list to find the nearest fragment along ±ω from a visible point.
 //!
 //! Memory: `res`² head pointers per bundle and one node buffer for all bundles of a frame;
-//! fragments beyond its capacity are dropped and counted ([`BundleBuffers::overflow`]).
+//! fragments beyond its capacity are dropped and counted ([`BundleBuffers::fragments`]).
 
 use super::wgsl;
 use super::{buffer_init, gbuffer, Geometry};
@@ -222,22 +222,13 @@ impl BundleBuffers {
         let nodes = make("bundle nodes", node_bytes);
         let counter = make("bundle counter", 4);
         let counter_readback = gpu::readback_buffer(device, "bundle counter readback", 4);
-        let depth = gpu::create_texture(
+        let depth = gpu::texture_2d(
             device,
-            &wgpu::TextureDescriptor {
-                label: Some("bundle depth"),
-                size: wgpu::Extent3d {
-                    width: res,
-                    height: res,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: gbuffer::DEPTH,
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-                view_formats: &[],
-            },
+            "bundle depth",
+            res,
+            res,
+            gbuffer::DEPTH,
+            wgpu::TextureUsages::RENDER_ATTACHMENT,
         )
         .create_view(&Default::default());
         let group = gpu::create_bind_group(

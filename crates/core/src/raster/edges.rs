@@ -15,7 +15,7 @@
 //!
 //! Shader: `direct_edges.wgsl` (groups 0 and 1 are the direct pass's, group 2 these
 //! buffers). Sub-pixel features that no pixel centre sees (a wire thinner than a pixel) are
-//! not found; [`crate::render::Settings::edge_supersampling`] turns the whole scheme off.
+//! not found; the `edge_supersampling` option (`DirectLightOptions::edge_supersampling`) turns the whole scheme off.
 
 use super::direct_variant::{DirectVariant, VariantCache};
 use super::wgsl;
@@ -351,7 +351,7 @@ pub struct EdgeBuffers {
 }
 
 /// The most listed pixels of `spp` samples: one dispatch dimension of workgroups, and the
-/// kept samples within [`MAX_CACHE_BYTES`] and the adapter's storage-binding limit.
+/// kept samples within `MAX_CACHE_BYTES` and the adapter's storage-binding limit.
 pub fn max_capacity(ctx: &GpuContext, spp: u32) -> u32 {
     let limit = ctx
         .device

@@ -84,19 +84,7 @@ impl GBuffer {
             depth_or_array_layers: 1,
         };
         let make = |label: &str, format, usage| {
-            crate::gpu::create_texture(
-                device,
-                &wgpu::TextureDescriptor {
-                    label: Some(label),
-                    size,
-                    mip_level_count: 1,
-                    sample_count: 1,
-                    dimension: wgpu::TextureDimension::D2,
-                    format,
-                    usage,
-                    view_formats: &[],
-                },
-            )
+            crate::gpu::texture_array(device, label, size, format, usage)
         };
         let usage = wgpu::TextureUsages::RENDER_ATTACHMENT
             | wgpu::TextureUsages::TEXTURE_BINDING

@@ -53,21 +53,7 @@ impl LayerTargets {
             height: max_res,
             depth_or_array_layers: n_layers,
         };
-        let make = |label, format, usage| {
-            gpu::create_texture(
-                device,
-                &wgpu::TextureDescriptor {
-                    label: Some(label),
-                    size,
-                    mip_level_count: 1,
-                    sample_count: 1,
-                    dimension: wgpu::TextureDimension::D2,
-                    format,
-                    usage,
-                    view_formats: &[],
-                },
-            )
-        };
+        let make = |label, format, usage| gpu::texture_array(device, label, size, format, usage);
         let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
         let targets: Vec<_> = kind
             .targets

@@ -1,5 +1,7 @@
-//! GPU rasterization passes and the `direct` frame: shadow maps, then per sub-pixel sample an
-//! eye G-buffer and deferred direct lighting accumulated into one image.
+//! GPU rasterization passes, each a struct with its pipeline and layouts: G-buffer, shadow
+//! maps (spot, cube), bounce maps, deferred direct light and its edge supersampling,
+//! reflective shadow maps, ray bundles, VPLs, composite. A pass never sees the options or
+//! the renderer; `frame/` orders them.
 
 pub mod bounce;
 pub mod bundles;

@@ -21,7 +21,7 @@ pub struct SceneObject {
     pub vertices: Range<u32>,
     /// Range of `Scene::triangles` / `Scene::triangle_materials`.
     pub triangles: Range<u32>,
-    /// Object -> world (changed by [`SceneObject::set_transform`], which keeps
+    /// Object -> world (changed by `SceneObject::set_transform`, which keeps
     /// `normal_matrix` with it).
     pub transform: Mat4,
     /// The inverse transpose of `transform`'s linear part (normals object -> world), kept

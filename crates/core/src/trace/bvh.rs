@@ -171,7 +171,7 @@ pub struct BuildSettings {
     /// toward the right: a run of identical boxes (copies of one mesh at one place) merges
     /// one pair per pass into a chain as deep as the copies, quadratic in them (242 copies of
     /// a 20k-triangle sphere: 33 s). With this set, coincident triangles' boxes are moved apart for the
-    /// build ([`separated_boxes`]) so that the copies pair up into a balanced subtree; the
+    /// build (`separated_boxes`) so that the copies pair up into a balanced subtree; the
     /// leaves get their exact boxes back (and the tree is refitted) before it is used.
     pub separate_coincident: bool,
 }

@@ -41,22 +41,13 @@ pub(super) fn env_tables(ctx: &GpuContext, env: Option<&Environment>) -> EnvTabl
 /// A `w`×`h` `Rgba32Float` texture of `texels`.
 fn float_table(ctx: &GpuContext, label: &str, w: u32, h: u32, texels: &[Vec3]) -> wgpu::Texture {
     let data: Vec<[f32; 4]> = texels.iter().map(|t| t.extend(1.0).to_array()).collect();
-    let texture = gpu::create_texture(
+    let texture = gpu::texture_2d(
         &ctx.device,
-        &wgpu::TextureDescriptor {
-            label: Some(label),
-            size: wgpu::Extent3d {
-                width: w,
-                height: h,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::Rgba32Float,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-            view_formats: &[],
-        },
+        label,
+        w,
+        h,
+        wgpu::TextureFormat::Rgba32Float,
+        wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
     );
     crate::gpu::alloc::note_upload(label, data.len() as u64 * 16);
     ctx.queue.write_texture(

@@ -29,7 +29,7 @@ mod spikes;
 mod subpaths;
 mod vpls;
 
-use super::direct::{assemble, normalized, readback_names};
+use super::gpu::{assemble, normalized, readback_names, Stale};
 use super::gpu::{rgb_image, GpuScene, LightDraw};
 use super::options::{BidirOptions, BidirStrategy};
 use super::{FrameParams, GpuState, Images, RenderOutput, RenderStats};
@@ -203,24 +203,15 @@ fn lighting_group(
 
 /// The lighting pass's `width × height` target.
 fn indirect_target(ctx: &GpuContext, width: u32, height: u32) -> wgpu::Texture {
-    gpu::create_texture(
+    gpu::texture_2d(
         &ctx.device,
-        &wgpu::TextureDescriptor {
-            label: Some("bidir indirect"),
-            size: wgpu::Extent3d {
-                width,
-                height,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: TARGET,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT
-                | wgpu::TextureUsages::TEXTURE_BINDING
-                | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        },
+        "bidir indirect",
+        width,
+        height,
+        TARGET,
+        wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::COPY_SRC,
     )
 }
 
@@ -416,7 +407,7 @@ fn state<'a>(
         g.targets.bind_composite(&ctx, Some(&view));
         g.bidir = Some(state);
     }
-    let state = g.bidir.as_mut().ok_or(Error::Cancelled)?;
+    let state = g.bidir.as_mut().ok_or_else(no_state)?;
     state.layers = layers;
     Ok(state)
 }
@@ -445,7 +436,7 @@ pub(super) fn frame(
         bidir,
         ..
     } = g;
-    let state = bidir.as_mut().ok_or(Error::Cancelled)?;
+    let state = bidir.as_mut().ok_or_else(no_state)?;
     let t = Instant::now();
     targets.write_eye(&ctx, scene, &gs.cull);
     let n_env = state.write_views(&ctx, scene, options.bundles, frame.seed);
@@ -458,7 +449,7 @@ pub(super) fn frame(
             label: Some("bidir lights"),
         });
     if gs.record_shadows(&ctx, &mut encoder, timer, scene, draw) {
-        targets.direct_current = false;
+        targets.invalidate(Stale::SHADOWS);
     }
     let textures = (&gs.textures.group, gs.variant);
     if let Some(rsm) = &state.rsm {
@@ -631,7 +622,8 @@ fn specular(
     progress: &dyn Progress,
 ) -> Result<(Option<Image>, (f64, f64))> {
     if scene.has_delta_materials() {
-        let samples = super::photon::camera_samples(options.direct.spp, options.max_depth, frame);
+        let samples =
+            super::options::derived::camera_samples(options.direct.spp, options.max_depth, frame);
         let sampling = options.specular_sampling;
         let mut img = specular_paths_direct(scene, bvh, &samples, sampling, progress)?;
         // One light path a pixel (at least MIN_LIGHT_PATHS), and ⌈spp/4⌉ camera samples a
@@ -671,4 +663,9 @@ fn specular(
         state.specular_written = false;
     }
     Ok((None, (0.0, 0.0)))
+}
+
+/// The error of a `bidir` frame that finds no `bidir` state (`state` makes it first).
+fn no_state() -> Error {
+    Error::internal("a bidir frame found no bidir state (made by `state` first)")
 }

@@ -157,22 +157,13 @@ impl VplMaps {
         }
         let bytes = n_layers as u64 * size as u64 * size as u64 * 4;
         crate::memory::check(|| "the VPL shadow maps".to_string(), bytes)?;
-        let records = gpu::create_texture(
+        let records = gpu::texture_2d(
             device,
-            &wgpu::TextureDescriptor {
-                label: Some("vpls"),
-                size: wgpu::Extent3d {
-                    width: VplRaw::TEXELS,
-                    height: capacity.max(1),
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: wgpu::TextureFormat::Rgba32Float,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-                view_formats: &[],
-            },
+            "vpls",
+            VplRaw::TEXELS,
+            capacity.max(1),
+            wgpu::TextureFormat::Rgba32Float,
+            wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
         );
         let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
         let matrices = buffer_init(

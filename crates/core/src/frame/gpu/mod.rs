@@ -2,10 +2,12 @@
 //! and the render targets of one image size ([`targets`]). Everything is created once; a
 //! frame writes only what changed ([`crate::scene::Changes`]) and records passes.
 
+mod readback;
 mod samples;
 mod scene;
 mod targets;
 
+pub(crate) use readback::{assemble, normalized, readback_names};
 pub(crate) use samples::SampleCounts;
 pub(crate) use scene::{check_limits, GpuScene, LightDraw};
-pub(crate) use targets::{frame_timer, rgb_image, Targets};
+pub(crate) use targets::{frame_timer, rgb_image, Stale, Targets};

@@ -99,22 +99,13 @@ fn float_texture(
     h: u32,
     data: Option<&[[f32; 4]]>,
 ) -> wgpu::Texture {
-    let texture = gpu::create_texture(
+    let texture = gpu::texture_2d(
         &ctx.device,
-        &wgpu::TextureDescriptor {
-            label: Some(label),
-            size: wgpu::Extent3d {
-                width: w,
-                height: h,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::Rgba32Float,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-            view_formats: &[],
-        },
+        label,
+        w,
+        h,
+        wgpu::TextureFormat::Rgba32Float,
+        wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
     );
     if let Some(data) = data {
         write_rows(ctx, &texture, label, w, data);

@@ -18,7 +18,7 @@ use crate::raster::{
     self, buffer_init, camera_view, edges, gbuffer, sample_positions, view_binding,
     SAMPLES_PER_SUBMIT, VIEW_SIZE,
 };
-use crate::scene::Scene;
+use crate::scene::{Changes, Scene};
 use glam::{Vec2, Vec4};
 use std::collections::HashMap;
 
@@ -47,14 +47,15 @@ pub(crate) struct Targets {
     /// new one per progressive pass (`frame::progressive`), zero otherwise.
     sample_offset: Vec2,
     /// Whether `eye` holds the current camera's views (false after a camera change).
-    pub eye_current: bool,
+    /// Written here only: [`Targets::invalidate`] from outside.
+    eye_current: bool,
     /// Whether the accumulated direct light is that of the current scene and camera (a
     /// still frame re-renders nothing).
-    pub direct_current: bool,
+    direct_current: bool,
     /// Whether the centre G-buffer and the edge pixels' kept sub-pixel samples are those of
     /// the current camera, geometry and materials (a frame whose lights alone changed
     /// re-shades them without rasterizing them).
-    pub samples_current: bool,
+    samples_current: bool,
     /// The G-buffer at the pixel centres (AOVs, photon estimates, the direct light of
     /// pixels off edges).
     pub gbuf: gbuffer::GBuffer,
@@ -90,22 +91,13 @@ fn target(
     h: u32,
     usage: wgpu::TextureUsages,
 ) -> wgpu::Texture {
-    gpu::create_texture(
+    gpu::texture_2d(
         &ctx.device,
-        &wgpu::TextureDescriptor {
-            label: Some(label),
-            size: wgpu::Extent3d {
-                width: w,
-                height: h,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::Rgba32Float,
-            usage,
-            view_formats: &[],
-        },
+        label,
+        w,
+        h,
+        wgpu::TextureFormat::Rgba32Float,
+        usage,
     )
 }
 
@@ -198,6 +190,35 @@ fn lighting_group(ctx: &GpuContext, g: &gbuffer::GBuffer) -> wgpu::BindGroup {
             entries: &entries,
         },
     )
+}
+
+/// Which of the work [`Targets`] keeps from frame to frame is stale.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) struct Stale {
+    /// The eye views (camera, or the scene bounds their depth range follows).
+    pub eye: bool,
+    /// The centre G-buffer and the edge pixels' kept sub-pixel samples.
+    pub samples: bool,
+    /// The accumulated direct light.
+    pub direct: bool,
+}
+
+impl Stale {
+    /// After shadow maps were redrawn: the direct light.
+    pub const SHADOWS: Stale = Stale {
+        eye: false,
+        samples: false,
+        direct: true,
+    };
+
+    /// After the scene changes `c`.
+    pub fn of_changes(c: Changes) -> Stale {
+        Stale {
+            eye: c.camera || c.geometry,
+            samples: c.camera || c.geometry || c.materials,
+            direct: c.any(),
+        }
+    }
 }
 
 impl Targets {
@@ -353,6 +374,15 @@ impl Targets {
     /// Where in its pixel the centre G-buffer is sampled.
     pub fn sample_centre(&self) -> Vec2 {
         (Vec2::splat(0.5) + self.sample_offset).fract()
+    }
+
+    /// Marks the kept work that `stale` names to be redone at the next frame: the one way
+    /// the eye views, the kept samples and the accumulated direct light are invalidated
+    /// from outside.
+    pub fn invalidate(&mut self, stale: Stale) {
+        self.eye_current &= !stale.eye;
+        self.samples_current &= !stale.samples;
+        self.direct_current &= !stale.direct;
     }
 
     /// Moves every sub-pixel sample by `offset` (mod 1); the eye views and the direct light

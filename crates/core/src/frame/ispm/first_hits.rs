@@ -3,9 +3,7 @@
 //! section 4.3's asynchronous readback) or the same photons cast in the CPU BVH
 //! ([`crate::photon::bounce`], cheaper on CPU devices).
 
-use super::super::RenderStats;
-use super::stage;
-use crate::cancel::Progress;
+use super::super::context::FrameCtx;
 use crate::error::{Error, Result};
 use crate::gpu::timer::Timer;
 use crate::gpu::{GpuContext, Pipelines};
@@ -14,7 +12,6 @@ use crate::photon::trace::Checked;
 use crate::raster::bounce::{BouncePass, BounceTargets};
 use crate::scene::light_views::LightView;
 use crate::scene::Scene;
-use crate::trace::SceneBvh;
 use std::time::Instant;
 
 /// Where the first hits are found, and the bounce maps' resources.
@@ -62,7 +59,6 @@ impl FirstHits {
 
     /// Submits the bounce maps with their readback copies (an empty submission when
     /// traced or reused); in `serial` frames waits and times them.
-    #[allow(clippy::too_many_arguments)]
     pub fn submit(
         &self,
         ctx: &GpuContext,
@@ -70,8 +66,7 @@ impl FirstHits {
         layers: &[LightView],
         reuse: bool,
         timer: &mut Timer,
-        serial: bool,
-        stats: &mut RenderStats,
+        fc: &mut FrameCtx,
     ) -> Result<wgpu::SubmissionIndex> {
         let t = Instant::now();
         let mut encoder = ctx
@@ -91,9 +86,9 @@ impl FirstHits {
             );
         }
         let submission = ctx.queue.submit([encoder.finish()]);
-        if serial {
+        if fc.serial {
             ctx.wait()?;
-            stage(stats, "bounce maps (wall)", t);
+            fc.stage("bounce maps (wall)", t);
         }
         Ok(submission)
     }
@@ -101,18 +96,15 @@ impl FirstHits {
     /// The first scatter of the frame's photons: the bounce maps read back once
     /// `submission` is done, or the same photons traced in `bvh`; nothing when the frame
     /// `reuse`s its photons.
-    #[allow(clippy::too_many_arguments)]
     pub fn finish(
         &self,
         ctx: &GpuContext,
-        scene: &Scene,
-        bvh: &SceneBvh,
+        fc: &mut FrameCtx,
         layers: &[LightView],
         submission: wgpu::SubmissionIndex,
-        (reuse, seed): (bool, u64),
-        progress: &dyn Progress,
-        stats: &mut RenderStats,
+        reuse: bool,
     ) -> Result<BounceMap> {
+        let (scene, bvh, seed, progress) = (fc.scene, fc.bvh, fc.params.seed, fc.progress);
         let t = Instant::now();
         let raster = self.raster();
         let bm = match (reuse, &self.targets) {
@@ -129,9 +121,9 @@ impl FirstHits {
         } else {
             "bounce trace"
         };
-        stage(stats, name, t);
-        stats.photons_emitted = bm.covered;
-        stats.photons_first_bounce = bm.rays.len() as u64;
+        fc.stage(name, t);
+        fc.stats.photons_emitted = bm.covered;
+        fc.stats.photons_first_bounce = bm.rays.len() as u64;
         if !progress.update("bounce maps", 1.0) {
             return Err(Error::Cancelled);
         }

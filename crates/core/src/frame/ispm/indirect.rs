@@ -9,12 +9,12 @@
 //! which the low-resolution samples alias: a caustic smaller than a low-resolution texel was
 //! spread over its neighbours at that texel's value or missed (cornell-glass 48×48, the
 //! glass sphere's caustic: the image mean 1.25% above the full-resolution splat's,
-//! `scripts/caustic_breakdown.py`). The paper's upsampling is the step it calls
+//! `scripts/probe/caustic_breakdown.py`). The paper's upsampling is the step it calls
 //! inconsistent (section 5.2); the diffuse photons' smooth light keeps it.
 
 use super::super::gpu::Targets;
 use super::super::options::IspmOptions;
-use super::super::{FrameParams, RenderStats};
+use super::super::RenderStats;
 use super::stage;
 use crate::error::{Error, Result};
 use crate::estimate::volume_shape::partition;
@@ -50,7 +50,6 @@ pub(super) struct Indirect {
 pub(super) struct IndirectFrame<'a> {
     pub scene: &'a Scene,
     pub options: &'a IspmOptions,
-    pub params: &'a FrameParams,
     pub photons: &'a RingPhotons,
     /// The photons are not last frame's.
     pub photons_changed: bool,
@@ -61,6 +60,8 @@ pub(super) struct IndirectFrame<'a> {
     pub names: &'a [&'static str],
     /// Wait and time each stage (`FrameDesc::serial`).
     pub serial: bool,
+    /// The frame's volume radii (kernel-scaled), made once a frame by the orchestrator.
+    pub radius: VolumeRadius,
 }
 
 impl Indirect {
@@ -110,11 +111,10 @@ impl Indirect {
         timer: &mut Timer,
         f: &IndirectFrame,
         stats: &mut RenderStats,
-    ) -> Result<(Readback, VolumeRadius)> {
+    ) -> Result<Readback> {
         let mut t = Instant::now();
-        let (scene, options) = (f.scene, f.options);
-        let radius = VolumeRadius::of_scene(scene, options.photons, options.kernel_scale)
-            .scaled(f.params.radius_scale);
+        let scene = f.scene;
+        let radius = f.radius;
         let centre = targets.sample_centre();
         self.estimate.set_sample_centre(centre);
         if let Some(c) = &mut self.caustics {
@@ -186,7 +186,7 @@ impl Indirect {
             (stats.list_entries, stats.trivial_accepts) =
                 entries.fold((0, 0), |(a, b), (c, d)| (a + c, b + d));
         }
-        Ok((data, radius))
+        Ok(data)
     }
 
     /// The binned estimators, after the frame's submission: whether any one's lists
@@ -261,7 +261,7 @@ impl Indirect {
 /// covers a pixel's centre and not at all elsewhere, which does not average out over seeds
 /// (the caustic lies where the geometry puts it). cornell-glass at 32x32: the glass
 /// sphere's caustic (0.3% of the pixels) put the image mean 1.8% above `path`'s
-/// (`scripts/caustic_breakdown.py`). A kernel at least a pixel wide makes the point reading
+/// (`scripts/probe/caustic_breakdown.py`). A kernel at least a pixel wide makes the point reading
 /// the kernel's mean over about a pixel, as the pixel's own filter would; the kernels are
 /// normalised, so no light is added or lost. The footprint is from this frame's camera
 /// (the binned and CPU estimators keep it until the photons change).

@@ -18,7 +18,8 @@ mod indirect;
 mod photons;
 mod specular;
 
-use super::direct::{assemble, normalized, readback_names};
+use super::context::FrameCtx;
+use super::gpu::{assemble, normalized, readback_names, Stale};
 use super::gpu::{rgb_image, GpuScene, LightDraw, Targets};
 use super::options::IspmOptions;
 use super::{FrameParams, GpuState, Images, RenderOutput, RenderStats};
@@ -28,7 +29,7 @@ use crate::gpu::timer::Timer;
 use crate::gpu::GpuContext;
 use crate::image::Image;
 use crate::photon::bounce::BounceMap;
-use crate::photon::radius::VolumeRadius;
+use crate::photon::radius::{SceneExtent, VolumeRadius};
 use crate::photon::ring::{PhotonRing, RingPhotons};
 use crate::scene::light_views::light_views;
 use crate::scene::{Changes, Scene};
@@ -109,10 +110,17 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     } = gpu;
     let (ctx, serial) = (ctx.clone(), *serial);
     timer.reset();
-    let mut stats = RenderStats {
-        triangles: scene.triangle_count() as u64,
-        samples_per_pixel: targets.spp(),
-        ..Default::default()
+    let mut fc = FrameCtx {
+        scene,
+        bvh,
+        params,
+        progress,
+        serial,
+        stats: RenderStats {
+            triangles: scene.triangle_count() as u64,
+            samples_per_pixel: targets.spp(),
+            ..Default::default()
+        },
     };
 
     // Resources: created on the first frame at this size, else kept. Marked current again
@@ -120,7 +128,13 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     // redo its work.
     let t = Instant::now();
     // The bounce maps' share of the photons: the point and spot lights' of the power.
-    let layers = light_views(scene, photons::photon_budgets(scene, options.photons).0);
+    // Derived once a frame and passed down: the photon budget (the bounce maps' layers are
+    // sized from its share) and the volume radii of the frame's photons.
+    let budget = photons::PhotonBudget::of(scene, options.photons);
+    let extent = SceneExtent::of(scene);
+    let radius = VolumeRadius::of_extent(extent, options.photons, options.kernel_scale)
+        .scaled(params.radius_scale);
+    let layers = light_views(scene, budget.maps);
     let state = ispm.get_or_insert_with(|| IspmState::new(&ctx, targets, scene, options));
     let traced_seed = state.traced_seed.take();
     let was_current = state.indirect.take_current();
@@ -130,20 +144,16 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     let first_hits = &mut state.first_hits;
     first_hits.prepare(&ctx, scene, &gs.materials, &layers, params.seed, reuse)?;
     targets.write_eye(&ctx, scene, &gs.cull);
-    stage(&mut stats, "upload", t);
+    fc.stage("upload", t);
 
     // 1. Bounce maps, submitted first with their readback copies.
-    let bounce = first_hits.submit(&ctx, gs, &layers, reuse, timer, serial, &mut stats)?;
+    let bounce = first_hits.submit(&ctx, gs, &layers, reuse, timer, &mut fc)?;
     // 2. Direct light and the eye G-buffer, not waited on.
-    let light = (params.progressive, serial, draw);
-    record_direct_light(&ctx, gs, targets, timer, scene, light, progress, &mut stats)?;
+    record_direct_light(&ctx, gs, targets, timer, &mut fc, draw)?;
     // 3. The first hits: the bounce-map readback (or the traced first bounce).
-    let seed = (reuse, params.seed);
-    let bm = first_hits.finish(
-        &ctx, scene, bvh, &layers, bounce, seed, progress, &mut stats,
-    )?;
+    let bm = first_hits.finish(&ctx, &mut fc, &layers, bounce, reuse)?;
     // 4. Temporal reuse: drop what moved, trace this frame's photons per light, keep them.
-    photons::invalidate(ring, &invalid, scene, options, params);
+    photons::invalidate(ring, &invalid, scene, radius);
     // Progressive mode normalises the kernels' boundary loss per pixel (query side) instead
     // of per photon, which leaves the crease pixels dark (`progressive::query_coverage`).
     // Only at full resolution: an upsampled estimate comes from other pixels' samples,
@@ -157,30 +167,26 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         options,
         params,
         layers: &layers,
+        budget,
+        extent,
         frame,
         compensate: options.refine.boundary_compensation && !query_side,
         progress,
     };
-    trace_or_reuse(&trace, &bm, reuse, ring, &mut stats)?;
+    trace_or_reuse(&trace, &bm, reuse, ring, &mut fc.stats)?;
     // Progressive mode: the direct light ray traced on the CPU (the GPU rendered the eye
     // G-buffer alone), added to the composite below; shadow maps are a bias no pass removes.
-    let traced_direct = traced_direct_light(scene, bvh, options, params, progress, &mut stats)?;
+    let traced_direct = traced_direct_light(scene, bvh, options, params, progress, &mut fc.stats)?;
     let photons = ring.collect();
-    stats.photons_stored = photons.splat.len() as u64;
+    fc.stats.photons_stored = photons.splat.len() as u64;
     // 5. Mirrors and glass seen by the camera; their gather uses the photons as traced.
-    let specular = state.specular.render(
-        &ctx,
-        targets,
-        (scene, bvh),
-        (options, params),
-        photons.traced(),
-        !reuse,
-        progress,
-        &mut stats,
-    )?;
+    let specular =
+        state
+            .specular
+            .render(&ctx, targets, &mut fc, options, photons.traced(), !reuse)?;
     // 6. The indirect estimate, upsampling, composite, readback.
-    stats.first_bounce = first_hits.choice.0.name().into();
-    stats.first_bounce_reason = first_hits.choice.1.clone();
+    fc.stats.first_bounce = first_hits.choice.0.name().into();
+    fc.stats.first_bounce_reason = first_hits.choice.1.clone();
     crate::cancel::check(progress)?;
     let mut names = readback_names(images, true);
     if query_side {
@@ -193,18 +199,18 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     let indirect = IndirectFrame {
         scene,
         options,
-        params,
         photons: &photons,
         photons_changed: !reuse,
         changes,
         was_current,
         names: &names,
         serial,
+        radius,
     };
-    let (data, radius) = state
+    let data = state
         .indirect
-        .render(&ctx, targets, timer, &indirect, &mut stats)?;
-    stats.stages.append(&mut timer.totals);
+        .render(&ctx, targets, timer, &indirect, &mut fc.stats)?;
+    fc.stats.stages.append(&mut timer.totals);
     let parts = Parts {
         data: &data,
         radius,
@@ -213,7 +219,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         specular,
         photons: &photons,
     };
-    let out = output(scene, bvh, targets, params, parts, images, stats);
+    let out = output(scene, bvh, targets, params, parts, images, fc.stats);
     state.traced_seed = Some(params.seed);
     state.indirect.mark_current();
     Ok(out)
@@ -222,36 +228,34 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
 /// Step 2: the direct light (shadow maps, eye G-buffers, deferred shading) or, in
 /// progressive mode (whose direct light is traced on the CPU), the eye G-buffer alone;
 /// submitted, waited on and timed only in `serial` frames.
-#[allow(clippy::too_many_arguments)]
 fn record_direct_light(
     ctx: &GpuContext,
     gs: &mut GpuScene,
     targets: &mut Targets,
     timer: &mut Timer,
-    scene: &Scene,
-    (progressive, serial, draw): (bool, bool, LightDraw),
-    progress: &dyn Progress,
-    stats: &mut RenderStats,
+    fc: &mut FrameCtx,
+    draw: LightDraw,
 ) -> Result<()> {
+    let (scene, progress) = (fc.scene, fc.progress);
     let t = Instant::now();
     let mut encoder = ctx
         .device
         .create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("direct frame"),
         });
-    let encoder = if progressive {
+    let encoder = if fc.params.progressive {
         targets.record_gbuffer(ctx, gs, &mut encoder, timer);
         encoder
     } else {
         if gs.record_shadows(ctx, &mut encoder, timer, scene, draw) {
-            targets.direct_current = false;
+            targets.invalidate(Stale::SHADOWS);
         }
         targets.record_direct(ctx, gs, encoder, timer, progress)?
     };
     ctx.queue.submit([encoder.finish()]);
-    if serial {
+    if fc.serial {
         ctx.wait()?;
-        stage(stats, "direct light (wall)", t);
+        fc.stage("direct light (wall)", t);
     }
     Ok(())
 }

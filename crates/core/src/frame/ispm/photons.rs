@@ -13,7 +13,7 @@ use crate::error::{Error, Result};
 use crate::photon::bounce::BounceMap;
 use crate::photon::focus::Focus;
 use crate::photon::lbvh::Aabb;
-use crate::photon::radius::{VolumeRadius, Z_RATIO};
+use crate::photon::radius::{SceneExtent, VolumeRadius, Z_RATIO};
 use crate::photon::ring::PhotonRing;
 use crate::photon::trace::{
     continue_paths_from, emit_aimed_caustics, emit_and_trace_sources, Checked, FirstSegment,
@@ -37,13 +37,12 @@ pub(in crate::frame) struct Invalidation<'a> {
 
 /// Drops the photons of `ring` that `invalid` made stale: all of them, a light's, or those
 /// within reach of a moved object (its bounds before and after, grown by the largest
-/// kernel).
+/// kernel, `radius.r_max`: the frame's volume radii).
 pub(super) fn invalidate(
     ring: &mut PhotonRing,
     invalid: &Invalidation,
     scene: &Scene,
-    options: &IspmOptions,
-    params: &FrameParams,
+    radius: VolumeRadius,
 ) {
     if invalid.all {
         ring.clear();
@@ -51,9 +50,7 @@ pub(super) fn invalidate(
     for &l in invalid.lights {
         ring.invalidate_light(l);
     }
-    let grow = VolumeRadius::of_scene(scene, options.photons, options.kernel_scale)
-        .scaled(params.radius_scale)
-        .r_max;
+    let grow = radius.r_max;
     for (object, before) in invalid.moved {
         let o = &scene.objects[*object];
         let after = super::super::object_bounds(scene, o);
@@ -72,6 +69,10 @@ pub(super) struct Trace<'a> {
     pub options: &'a IspmOptions,
     pub params: &'a FrameParams,
     pub layers: &'a [LightView],
+    /// The frame's photon budget (the bounce maps' share sized `layers`).
+    pub budget: PhotonBudget,
+    /// The scene's extent, made once a frame: each light's volume radii derive from it.
+    pub extent: SceneExtent,
     /// Frame number the photons are stored under.
     pub frame: u64,
     /// Compensate each photon's boundary loss (photon side); progressive passes at full
@@ -87,7 +88,7 @@ impl Trace<'_> {
         if o.footprint_volumes {
             PhotonTraceSettings {
                 store_direct: false,
-                ..super::super::gather::trace_settings(
+                ..super::super::options::derived::trace_settings(
                     self.scene,
                     o.photons,
                     o.max_depth,
@@ -230,7 +231,7 @@ impl Trace<'_> {
     /// The sources whose photons the bounce maps leave out (area lights, directional lights,
     /// the sky), each with its share by power of the photons the maps do not take.
     fn cpu_sources(&self) -> Vec<(Source, u64)> {
-        let (_, cpu) = photon_budgets(self.scene, self.options.photons);
+        let cpu = self.budget.cpu;
         let sources = non_local_sources(self.scene);
         let total = sources.power().element_sum() as f64;
         sources
@@ -279,7 +280,7 @@ impl Trace<'_> {
     fn size(&self, ring: &PhotonRing, light: usize, photons: &mut [Photon]) {
         let (o, p) = (self.options, self.params);
         let frames = (ring.held(light) + 1).min(ring.frames()) as u64;
-        let radius = VolumeRadius::of_scene(self.scene, o.photons * frames, o.kernel_scale)
+        let radius = VolumeRadius::of_extent(self.extent, o.photons * frames, o.kernel_scale)
             .scaled(p.radius_scale);
         for photon in photons.iter_mut() {
             photon.footprint_radius = radius.of(photon);
@@ -312,16 +313,33 @@ impl Trace<'_> {
     }
 }
 
-/// Where the frame's `photons` go: the bounce maps' texels (point and spot lights) and the
-/// photons emitted on the CPU from the other sources, split by power.
-pub(super) fn photon_budgets(scene: &Scene, photons: u64) -> (u64, u64) {
-    let total = Sources::of(scene).power().element_sum() as f64;
-    let cpu = non_local_sources(scene).power().element_sum() as f64;
-    if total.is_nan() || total <= 0.0 {
-        return (photons, 0);
+/// Where the frame's photons go, split by power: made once a frame ([`PhotonBudget::of`])
+/// and passed to the steps that need it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) struct PhotonBudget {
+    /// The bounce maps' texels (point and spot lights).
+    pub maps: u64,
+    /// The photons emitted on the CPU from the other sources.
+    pub cpu: u64,
+}
+
+impl PhotonBudget {
+    /// The split of `photons` for `scene`.
+    pub fn of(scene: &Scene, photons: u64) -> PhotonBudget {
+        let total = Sources::of(scene).power().element_sum() as f64;
+        let cpu = non_local_sources(scene).power().element_sum() as f64;
+        if total.is_nan() || total <= 0.0 {
+            return PhotonBudget {
+                maps: photons,
+                cpu: 0,
+            };
+        }
+        let cpu = (photons as f64 * cpu / total).round() as u64;
+        PhotonBudget {
+            maps: photons - cpu.min(photons),
+            cpu: cpu.min(photons),
+        }
     }
-    let cpu = (photons as f64 * cpu / total).round() as u64;
-    (photons - cpu.min(photons), cpu.min(photons))
 }
 
 /// The sources that the bounce maps do not see.

@@ -2,11 +2,9 @@
 //! CPU with a photon-map gather where the paths land (section 4), kept while nothing
 //! changes and their landings kept while only the lights change.
 
+use super::super::context::FrameCtx;
 use super::super::gpu::Targets;
 use super::super::options::IspmOptions;
-use super::super::{FrameParams, RenderStats};
-use super::stage;
-use crate::cancel::Progress;
 use crate::error::Result;
 use crate::gpu::GpuContext;
 use crate::image::Image;
@@ -14,7 +12,6 @@ use crate::photon::delta_paths::Landings;
 use crate::photon::specular::{specular_paths, SpecularPaths};
 use crate::photon::Photon;
 use crate::scene::{Changes, Scene};
-use crate::trace::SceneBvh;
 use std::time::Instant;
 
 /// The specular paths' state across frames.
@@ -49,42 +46,45 @@ impl Specular {
 
     /// The frame's specular image, traced (and uploaded) when the `photons` changed or no
     /// image is kept; `None` for a scene without mirrors or glass.
-    #[allow(clippy::too_many_arguments)]
     pub fn render(
         &mut self,
         ctx: &GpuContext,
         targets: &Targets,
-        (scene, bvh): (&Scene, &SceneBvh),
-        (options, params): (&IspmOptions, &FrameParams),
+        fc: &mut FrameCtx,
+        options: &IspmOptions,
         photons: &[Photon],
         photons_changed: bool,
-        progress: &dyn Progress,
-        stats: &mut RenderStats,
     ) -> Result<Option<Image>> {
+        let (scene, bvh, params, progress) = (fc.scene, fc.bvh, fc.params, fc.progress);
         let t = Instant::now();
         let image = if self.enabled && self.image.is_some() && !photons_changed {
             self.image.clone()
         } else if self.enabled {
             let paths = SpecularPaths {
-                samples: super::super::photon::camera_samples(
+                samples: super::super::options::derived::camera_samples(
                     options.direct.spp,
                     options.max_depth,
                     params,
                 ),
                 sampling: options.specular_sampling,
-                gather: super::super::photon::knn_gather(scene, options.k, &options.kernel, params),
+                gather: super::super::options::derived::knn_gather(
+                    scene,
+                    options.k,
+                    &options.kernel,
+                    params,
+                ),
                 precompute: !params.progressive,
             };
             let (img, camera_paths) =
                 specular_paths(scene, bvh, &paths, photons, &mut self.landings, progress)?;
-            stats.camera_paths = camera_paths;
+            fc.stats.camera_paths = camera_paths;
             targets.write_specular(ctx, &img);
             Some(img)
         } else {
             None
         };
         self.image = image.clone();
-        stage(stats, "specular paths", t);
+        fc.stage("specular paths", t);
         Ok(image)
     }
 }

@@ -8,8 +8,9 @@
 //! job format (`gi._gi.options()` hands the table to Python).
 //!
 //! Options that vary per frame are not here: the frame's seed, the progressive pass's
-//! kernel scale and whether the first-hit images are wanted live in [`super::FrameParams`].
+//! kernel scale and whether the first-hit images are wanted live in `FrameParams`.
 
+pub mod derived;
 mod methods;
 mod table;
 mod values;
