@@ -176,7 +176,8 @@ def test_textures_of_one_material_with_different_transforms_are_an_error(tmp_pat
 def test_draco_compressed_mesh_loads_as_the_plain_one(tmp_path):
     """KHR_draco_mesh_compression through DracoPy: the same triangles and (14-bit
     quantized) vertices as the uncompressed file, and the same image within 0.5%."""
-    pytest.importorskip("DracoPy")
+    import DracoPy  # noqa: F401  (the `test` extra installs it: never skipped)
+
     plain = read_gltf(draco_sphere(tmp_path / "plain.glb", compressed=False)).meshes[0][0]
     packed = read_gltf(draco_sphere(tmp_path / "draco.glb")).meshes[0][0]
     assert len(packed.faces) == len(plain.faces)
@@ -189,7 +190,8 @@ def test_draco_compressed_mesh_loads_as_the_plain_one(tmp_path):
 
 
 def test_draco_without_the_decoder_names_the_extension_and_the_fix(tmp_path, monkeypatch):
-    pytest.importorskip("DracoPy")
+    import DracoPy  # noqa: F401  (the `test` extra installs it: never skipped)
+
     glb = draco_sphere(tmp_path / "draco.glb")
     monkeypatch.setitem(sys.modules, "DracoPy", None)  # import fails
     with pytest.raises(gi.SceneError, match="KHR_draco_mesh_compression") as e:
