@@ -276,7 +276,6 @@ impl Renderer {
         scene.lights = lights;
         scene.environment = env;
         scene.set_lighting(lighting);
-        check_environment(&scene, self.method())?;
         self.scene = scene;
         self.warnings = transport_omissions(&self.scene, &self.options);
         self.gpu = None;
