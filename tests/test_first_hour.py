@@ -165,7 +165,7 @@ def test_describe_gives_back_the_angle_given():
 def test_one_default_method_everywhere_and_said_so():
     import inspect
 
-    from gi.animation import render_animation
+    from gi.render import render_animation
 
     assert gi.DEFAULT_METHOD in gi.methods()
     for entry in (gi.render, gi.Renderer.__init__, gi.view, render_animation):

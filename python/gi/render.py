@@ -543,7 +543,7 @@ class Renderer:
 
 def render_animation(
     scene: Scene,
-    method: str = "ispm",
+    method: str = DEFAULT_METHOD,
     frames: Iterable[int] | None = None,
     fps: float = 30.0,
     *,
