@@ -362,7 +362,8 @@ pub const OPTIONS: &[OptionSpec] = &[
         open(0.0, 1.0),
         Default::Float(0.7),
         PROGRESSIVE,
-        "progressive radius reduction: r²(i+1) = r²(i)·(i + α)/(i + 1)",
+        "progressive radius reduction: r²(i+1) = r²(i)·(i + α)/(i + 1) \
+         (not method photon: it has no progressive mode)",
     ),
     row(
         "vpls_per_light",
