@@ -138,13 +138,16 @@ def normal_mapped_quad(
     mirror_u: bool = False,
     quantized: bool = False,
     emissive: float = 0.0,
+    transform: dict[str, Any] | None = None,
 ) -> Path:
     """A 2×2 m quad in the xy plane facing +z (glTF's default view), u along +x (or −x with
     ``mirror_u``: the map mirrored, as in Khronos' NormalTangentMirrorTest), v down the
     image along −y, a white-ish diffuse material with :func:`bump_normals`. ``tangents``:
     "stored" (the right TANGENT: +x or −x and w = +1 or −1), "none" (MikkTSpace's), or
     "wrong-w" (stored with w negated: what a reader that ignores handedness gets);
-    ``emissive``: a red emissive factor (an indicator light, not lighting)."""
+    ``emissive``: a red emissive factor (an indicator light, not lighting); ``transform``:
+    the normal map's ``KHR_texture_transform`` (the stored tangents stay those of the
+    untransformed UVs, as an exporter writes them)."""
     g = Glb()
     pos = np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], np.float32)
     nrm = np.tile([0.0, 0.0, 1.0], (4, 1))
@@ -176,6 +179,10 @@ def normal_mapped_quad(
         if tangents != "none":
             attrs["TANGENT"] = g.accessor(tan)
     normal_tex = g.image(bump_normals(), srgb=False)
+    normal_info: dict[str, Any] = {"index": normal_tex}
+    if transform is not None:
+        normal_info["extensions"] = {"KHR_texture_transform": transform}
+        g.doc.setdefault("extensionsUsed", []).append("KHR_texture_transform")
     mat = g.material(
         {
             "name": "bumps",
@@ -184,7 +191,7 @@ def normal_mapped_quad(
                 "metallicFactor": 0.0,
                 "roughnessFactor": 1.0,
             },
-            "normalTexture": {"index": normal_tex},
+            "normalTexture": normal_info,
             "emissiveFactor": [emissive, 0.0, 0.0],
         }
     )

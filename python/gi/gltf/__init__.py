@@ -31,7 +31,7 @@ import numpy as np
 
 from gi.gltf import draco
 from gi.gltf.errors import GltfError
-from gi.gltf.uv import MaterialUv, apply
+from gi.gltf.uv import MaterialUv, apply, transform_tangents
 from gi.textures import TextureError, TextureSet, resample
 
 _DTYPES = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32}
@@ -675,6 +675,9 @@ class _SceneReader:
         if prim.get("targets"):
             warn[f"{where}.targets"] = "morph targets are ignored (the base shape is used)"
         tangents = _tangents(arrays, len(p), where) if "TANGENT" in arrays else None
+        if tangents is not None and transform is not None:
+            n = normals if normals is not None else _vertex_normals(p, tri)
+            tangents = transform_tangents(tangents, _unit(n), transform)
         for a in attrs:
             if a.startswith("COLOR_"):
                 warn[f"{where}.attributes.{a}"] = "vertex colours are not supported"
@@ -683,6 +686,20 @@ class _SceneReader:
 
 # Attributes the reader uses (others, e.g. JOINTS_0, are not read).
 _READ = {"POSITION", "NORMAL", "TANGENT", *(f"TEXCOORD_{i}" for i in range(8))}
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    with np.errstate(all="ignore"):
+        return np.nan_to_num(v / np.linalg.norm(v, axis=1, keepdims=True))
+
+
+def _vertex_normals(p: np.ndarray, tri: np.ndarray) -> np.ndarray:
+    """Area-weighted vertex normals of triangles ``tri`` (M, 3) over positions ``p``."""
+    face = np.cross(p[tri[:, 1]] - p[tri[:, 0]], p[tri[:, 2]] - p[tri[:, 0]])
+    n = np.zeros_like(p)
+    for k in range(3):
+        np.add.at(n, tri[:, k], face)
+    return n
 
 
 def _tangents(arrays: dict[str, np.ndarray], n: int, where: str) -> np.ndarray:

@@ -10,6 +10,12 @@ draw them wrongly), not a warning.
 The transform is the extension's ``uv' = T(offset) · R(rotation) · S(scale) · uv`` with
 ``R = [[cos r, sin r], [−sin r, cos r]]`` (rotation in radians, counter-clockwise in the
 image whose v runs down), in glTF's texture space, which is gi's (origin top-left).
+
+Stored tangents follow the transform (:func:`transform_tangents`): a normal map is read in
+the axes of the transformed coordinates, so the tangent frame is their derivatives
+``∂P/∂(u', v') = ∂P/∂(u, v) · A⁻¹`` (``A`` the matrix's linear part); a mirroring transform
+flips the handedness. MikkTSpace's tangents are generated from the transformed coordinates
+and need nothing more.
 """
 
 from __future__ import annotations
@@ -91,3 +97,25 @@ def apply(uv: np.ndarray, matrix: np.ndarray | None) -> np.ndarray:
     if matrix is None:
         return uv
     return uv @ matrix[:2, :2].T + matrix[:2, 2]
+
+
+def transform_tangents(
+    tangents: np.ndarray, normals: np.ndarray, matrix: np.ndarray | None
+) -> np.ndarray:
+    """Tangents (N, 4) in gi's convention (xyz along +u, bitangent ``w · n × t`` along +v)
+    for texture coordinates transformed by ``matrix`` (None: unchanged), over unit vertex
+    ``normals`` (N, 3). The old frame ``(t, b)`` stands for ``(∂P/∂u, ∂P/∂v)``; the new
+    tangent is ``∂P/∂u' = t · A⁻¹[0, 0] + b · A⁻¹[1, 0]`` projected on the tangent plane and
+    normalized, and ``w`` is the sign that makes ``w · n × t'`` point along ``∂P/∂v'``."""
+    if matrix is None:
+        return tangents
+    inv = np.linalg.inv(matrix[:2, :2])
+    t, w = tangents[:, :3], tangents[:, 3:]
+    b = w * np.cross(normals, t)
+    du = t * inv[0, 0] + b * inv[1, 0]
+    dv = t * inv[0, 1] + b * inv[1, 1]
+    du -= normals * np.sum(du * normals, axis=1, keepdims=True)
+    with np.errstate(all="ignore"):
+        du = np.nan_to_num(du / np.linalg.norm(du, axis=1, keepdims=True))
+    hand = np.where(np.sum(np.cross(normals, du) * dv, axis=1, keepdims=True) < 0, -1.0, 1.0)
+    return np.concatenate([du, hand], axis=1)
