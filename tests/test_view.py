@@ -641,3 +641,120 @@ def test_browser_cpu_methods_are_interactive(method):
     finally:
         gi.viewer.stop(url)
     assert not errors, errors
+
+
+# The Environment panel's file chooser (issue 47) --------------------------------------------
+
+
+def write_env(path: Path, radiance: float) -> Path:
+    """A constant 8×16 equirectangular image of ``radiance`` (EXR or Radiance HDR)."""
+    import OpenImageIO as oiio  # noqa: N813
+
+    img = np.full((8, 16, 3), radiance, np.float32)
+    out = oiio.ImageOutput.create(str(path))
+    out.open(str(path), oiio.ImageSpec(16, 8, 3, oiio.FLOAT))
+    out.write_image(img)
+    out.close()
+    return path
+
+
+def env_folder(tmp_path: Path) -> Path:
+    folder = tmp_path / "skies"
+    folder.mkdir()
+    write_env(folder / "bright.exr", 1.0)
+    write_env(folder / "dim.hdr", 0.05)
+    (folder / "notes.txt").write_text("not an image")
+    return folder
+
+
+def sphere_scene(tmp_path: Path) -> gi.Scene:
+    """A grey sphere under a constant 0.2 sky; the corners of the image see the sky."""
+    desc = {
+        "camera": {"position": [0, 0, 4], "look_at": [0, 0, 0], "fov": 30},
+        "materials": {"m": {"diffuse": [0.5] * 3}},
+        "environment": {"radiance": [0.2] * 3},
+        "objects": [{"shape": {"type": "sphere", "radius": 0.5}, "material": "m"}],
+    }
+    path = tmp_path / "sphere.json"
+    path.write_text(json.dumps(desc))
+    return gi.load_scene(path)
+
+
+def test_environment_files_are_the_folders_images_and_no_other_path(tmp_path):
+    from gi.viewer.environments import EnvironmentFiles
+
+    files = EnvironmentFiles(env_folder(tmp_path))
+    assert files.choices() == ["file: bright.exr", "file: dim.hdr"]
+    assert files.path("file: dim.hdr") == str(tmp_path / "skies" / "dim.hdr")
+    for name in ("notes.txt", "../sphere.json", "/etc/passwd"):
+        with pytest.raises(m.MessageError, match="no environment file"):
+            files.path("file: " + name)
+    msg = m.parse('{"type": "environment", "source": "file: bright.exr"}', ["direct"])
+    with pytest.raises(m.MessageError, match="offers no environment files"):
+        msg.spec()
+    assert msg.spec(files.path)["source"] == str(tmp_path / "skies" / "bright.exr")
+    with pytest.raises(gi.SettingError, match="env_dir"):
+        EnvironmentFiles(tmp_path / "missing")
+
+
+def test_cli_view_offers_the_folder_of_its_env_file(tmp_path, monkeypatch):
+    """``gi view --env FILE`` offers FILE's folder; ``--env-dir`` another."""
+    from gi import cli, viewer
+
+    folder = env_folder(tmp_path)
+    given: dict = {}
+    monkeypatch.setattr(viewer, "serve", lambda *a, **kw: given.update(kw) or 0)
+    sphere_scene(tmp_path)
+    scene = str(tmp_path / "sphere.json")
+    assert cli.main(["view", scene, "--env", str(folder / "dim.hdr"), "--no-browser"]) == 0
+    assert given["env_dir"] == str(folder)
+    assert cli.main(["view", scene, "--env-dir", str(tmp_path), "--no-browser"]) == 0
+    assert given["env_dir"] == str(tmp_path)
+
+
+def test_browser_environment_chooser_lights_the_scene_with_a_file(tmp_path):
+    """The panel lists the folder's .hdr/.exr images (not its other files); choosing one
+    with mode "replace" lights the scene with it: the sky seen in the image's corners goes
+    from the scene's 0.2 to the file's 1.0 (1.0 shown after the sRGB display transform),
+    and the dim file brings it to 0.05."""
+    assert CHROMIUM, "the viewer test needs Debian's chromium (see test_browser_drives_the_viewer)"
+    from playwright.sync_api import sync_playwright
+
+    url = gi.view(sphere_scene(tmp_path), "direct", size=(64, 48), env_dir=env_folder(tmp_path))
+    errors: list[str] = []
+    try:
+        with sync_playwright() as pw:
+            browser = pw.chromium.launch(executable_path=CHROMIUM, headless=True)
+            page = browser.new_page(viewport={"width": 900, "height": 560})
+            page.set_default_timeout(60_000)
+            page.on("pageerror", lambda e: errors.append(str(e)))
+            page.goto(url)
+            page.wait_for_function("giViewer.frames > 0")
+            options = page.eval_on_selector_all("#env-source option", "os => os.map(o => o.value)")
+            assert options == [
+                "scene",
+                "sky",
+                "sky without sun",
+                "file: bright.exr",
+                "file: dim.hdr",
+            ]
+
+            def corner() -> float:
+                return float(canvas_pixels(page)[:4, :4].mean())
+
+            before = corner()
+            page.select_option("#env-mode", "replace")
+            page.select_option("#env-source", "file: bright.exr")
+            page.wait_for_function("giViewer.state.environment.source === 'file: bright.exr'")
+            wait_frame_after(page, page.evaluate("giViewer.seq"))
+            bright = corner()
+            page.select_option("#env-source", "file: dim.hdr")
+            page.wait_for_function("giViewer.state.environment.source === 'file: dim.hdr'")
+            wait_frame_after(page, page.evaluate("giViewer.seq"))
+            dim = corner()
+            browser.close()
+    finally:
+        gi.viewer.stop(url)
+    assert not errors, errors
+    assert bright == pytest.approx(1.0, abs=0.02) and bright > before + 0.2
+    assert dim < before - 0.1

@@ -271,6 +271,12 @@ def _parser() -> argparse.ArgumentParser:
         " as the viewer has no password)",
     )
     v.add_argument("--no-browser", action="store_true", help="don't open the page in a browser")
+    v.add_argument(
+        "--env-dir",
+        metavar="DIR",
+        help="folder whose .hdr/.exr images the Environment panel offers (default: the folder"
+        " of --env FILE)",
+    )
     sub.add_parser("scenes", help="list the built-in scenes")
     sub.add_parser("methods", help="list the rendering methods, one line each")
     f = sub.add_parser(
@@ -754,6 +760,9 @@ def _view(args: argparse.Namespace) -> int:
     if args.method not in gi.methods():
         raise gi.SettingError(f"unknown method {args.method!r} (use {', '.join(gi.methods())})")
     scene = _lit(args, _load(args.scene))
+    env_dir = args.env_dir
+    if env_dir is None and args.env not in (None, "sky"):
+        env_dir = str(Path(args.env).resolve().parent)
     return viewer.serve(
         scene,
         args.method,
@@ -763,6 +772,7 @@ def _view(args: argparse.Namespace) -> int:
         open_browser=not args.no_browser,
         exposure=args.exposure,
         tonemap=args.tonemap,
+        env_dir=env_dir,
     )
 
 

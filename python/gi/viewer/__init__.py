@@ -68,9 +68,11 @@ def serve(
     open_browser: bool = True,
     exposure: float = 0.0,
     tonemap: str = "clip",
+    env_dir: str | None = None,
 ) -> int:
     """Runs the viewer in this thread until SIGINT or SIGTERM (the ``gi view`` command);
-    prints the URL to stderr."""
+    prints the URL to stderr. ``env_dir``: the folder whose .hdr/.exr images the
+    Environment panel offers."""
     server_module = _server_module()
     display = _display(exposure, tonemap)
     warning = warn_if_exposed(host)
@@ -79,7 +81,7 @@ def serve(
 
     async def main() -> None:
         server = server_module.ViewerServer(
-            scene, method, options, host=host, port=port, display=display
+            scene, method, options, host=host, port=port, display=display, env_dir=env_dir
         )
         stop = asyncio.Event()
         loop = asyncio.get_running_loop()
@@ -155,12 +157,14 @@ def view(
     open_browser: bool = False,
     exposure: float = 0.0,
     tonemap: str = "clip",
+    env_dir: str | None = None,
     **options: Any,
 ) -> str:
     """Starts the viewer of ``scene`` (a :class:`gi.Scene` or what :func:`gi.load_scene`
     takes) in a background thread and returns its URL; in Jupyter the page is shown inline.
     ``options`` are the keywords of :class:`gi.Renderer` (``size=(320, 240)``,
-    ``photons=20_000``, ...); ``port=0`` picks a free port. :func:`stop` ends it.
+    ``photons=20_000``, ...); ``port=0`` picks a free port; ``env_dir``: a folder whose
+    .hdr/.exr images the Environment panel offers. :func:`stop` ends it.
 
     >>> url = gi.view("cornell", size=(320, 240))
     """
@@ -173,7 +177,7 @@ def view(
         warnings.warn(warning, stacklevel=2)
     background = _Background(
         lambda: server_module.ViewerServer(
-            scene, method, options, host=host, port=port, display=display
+            scene, method, options, host=host, port=port, display=display, env_dir=env_dir
         )
     )
     url = background.start()

@@ -25,6 +25,7 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -35,6 +36,7 @@ from gi.display import TONEMAPS, aov_display, png_bytes, quantize8, to_display
 from gi.presets import INTERACTIVE, PROGRESSIVE_PASS, Interactive, describe, with_preset
 from gi.render import Renderer, RenderResult, method_options, options_table
 from gi.viewer import messages as m
+from gi.viewer.environments import EnvironmentFiles
 from gi.viewer.picking import ObjectPicker, View, pick_light, translated
 
 #: Seconds a view must stay unchanged before progressive passes start.
@@ -103,6 +105,7 @@ class Engine:
         on_frame: Callable[[Frame], None],
         on_event: Callable[[int | None, dict[str, Any]], None],
         display: DisplayState | None = None,
+        env_dir: str | Path | None = None,
     ) -> None:
         self._scene = scene
         self._method = method
@@ -130,6 +133,7 @@ class Engine:
             self._interactive.renderer.describe("object", i) for i in range(len(names))
         ]
         self._environment = m.Environment("scene")
+        self._env_files = EnvironmentFiles(env_dir)
         self._picker: ObjectPicker | None = None
         self._drag: _Drag | None = None
         # Scene changes since the start, newest value per (target, key) with its version.
@@ -326,7 +330,7 @@ class Engine:
             for name, fields in msg.materials.items():
                 self._update("material", name, fields)
         elif isinstance(msg, m.Environment):
-            self._update("environment", None, msg.spec())
+            self._update("environment", None, msg.spec(self._env_files.path))
             self._environment = msg
         elif isinstance(msg, m.Settings):
             self._change_settings(msg.settings)
@@ -629,7 +633,7 @@ class Engine:
                 "strength": self._environment.strength,
                 "rotation": self._environment.rotation,
                 "mode": self._environment.mode,
-                "choices": list(m.ENVIRONMENTS),
+                "choices": [*m.ENVIRONMENTS, *self._env_files.choices()],
             },
             "objects": [d["name"] for d in self._object_descs],
             "method": self._method,

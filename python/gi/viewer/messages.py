@@ -14,6 +14,7 @@ from __future__ import annotations
 import json
 import math
 import numbers
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -76,8 +77,10 @@ class Materials:
 
 
 #: The panel's environment choices: the scene's own light (as loaded, with ``--env`` if
-#: given), or the built-in sky with or without its sun (:mod:`gi.lighting`).
+#: given), or the built-in sky with or without its sun (:mod:`gi.lighting`); and an image
+#: of the viewer's environment folder, ``FILE_PREFIX + NAME`` (:mod:`gi.viewer.environments`).
 ENVIRONMENTS = ("scene", "sky", "sky without sun")
+FILE_PREFIX = "file: "
 
 
 @dataclass(frozen=True)
@@ -92,12 +95,18 @@ class Environment:
     mode: str = "add"
     seq: int | None = None
 
-    def spec(self) -> Any:
-        """What :meth:`gi.Renderer.update` takes as ``environment``."""
+    def spec(self, file: Callable[[str], str] | None = None) -> Any:
+        """What :meth:`gi.Renderer.update` takes as ``environment``; ``file`` gives the
+        path of a file choice (it raises :class:`MessageError` for one not offered)."""
         if self.source == "scene":
             return "none"
+        source = "sky"
+        if self.source.startswith(FILE_PREFIX):
+            if file is None:
+                raise MessageError("source", "this viewer offers no environment files")
+            source = file(self.source)
         spec: dict[str, Any] = {
-            "source": "sky",
+            "source": source,
             "strength": self.strength,
             "rotation": self.rotation,
             "mode": self.mode,
@@ -246,6 +255,16 @@ def _string(value: Any, field: str, choices: tuple[str, ...] | list[str] | None 
     if not 0 < len(value) <= 200:
         raise MessageError(field, "must have 1 to 200 characters")
     return value
+
+
+def _environment_source(value: Any) -> str:
+    """One of :data:`ENVIRONMENTS` or a file choice (``FILE_PREFIX + NAME``: whether the
+    viewer offers it is the engine's to check)."""
+    source = _string(value, "source")
+    if source not in ENVIRONMENTS and not source.startswith(FILE_PREFIX):
+        use = ", ".join([*ENVIRONMENTS, FILE_PREFIX + "NAME"])
+        raise MessageError("source", f"unknown {source!r} (use one of: {use})")
+    return source
 
 
 def _scene_value(value: Any, field: str, depth: int = 0) -> Any:
@@ -440,7 +459,7 @@ def parse(text: str | bytes, methods: list[str]) -> Message:
         return Materials(materials(obj["materials"]), _seq(obj))
     if kind == "environment":
         return Environment(
-            _string(obj["source"], "source", ENVIRONMENTS),
+            _environment_source(obj["source"]),
             _number(obj.get("strength", 1.0), "strength", 0.0, 1e6),
             _number(obj.get("rotation", 0.0), "rotation", -1e6, 1e6),
             _string(obj.get("mode", "add"), "mode", ("add", "replace")),

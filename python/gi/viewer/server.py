@@ -34,6 +34,7 @@ import struct
 import time
 from dataclasses import dataclass
 from importlib import resources
+from pathlib import Path
 from typing import Any
 from urllib.parse import urlsplit
 
@@ -91,6 +92,7 @@ class ViewerServer:
         host: str = "127.0.0.1",
         port: int = 0,
         display: DisplayState | None = None,
+        env_dir: str | Path | None = None,
     ) -> None:
         self.host, self.port = host, port
         self._loop: asyncio.AbstractEventLoop | None = None
@@ -105,6 +107,7 @@ class ViewerServer:
             on_frame=self._frame_from_thread,
             on_event=self._event_from_thread,
             display=display,
+            env_dir=env_dir,
         )
         self.url = ""
 
