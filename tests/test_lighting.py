@@ -103,6 +103,55 @@ def test_renderer_update_changes_the_environment_and_none_restores_the_scene(wri
     np.testing.assert_array_equal(r.render().radiance, before)
 
 
+def gradient_sky(top, bottom):
+    """A 8×16 equirectangular sky from ``top`` at the zenith to ``bottom`` at the nadir."""
+    t = np.linspace(0, 1, 8, dtype=np.float32)[:, None, None]
+    rows = (1 - t) * np.float32(top) + t * np.float32(bottom)
+    return np.repeat(rows, 16, axis=1).astype(np.float32)
+
+
+def created(after, before):
+    return {k: after[k] - before[k] for k in ("buffers", "textures", "bind_groups", "pipelines")}
+
+
+@pytest.mark.parametrize("method", ["direct", "ispm", "bidir"])
+def test_environment_update_keeps_the_gpu_scene_and_renders_as_a_new_renderer(write_scene, method):
+    """A GPU renderer's Renderer.update(environment=) swaps the environment's tables only.
+    Between the frames before and after it: no pipeline and no buffer is created for
+    `direct` and `ispm`, only the two environment tables and the bind group that holds them
+    (`bidir` makes its own state anew: fewer objects than a new renderer's first frame), and
+    the scene's texture table is not uploaded again. The image is the image of a new
+    Renderer made with that environment (same seed; measured equal to the bit)."""
+    scene = sphere_scene(write_scene, environment={"radiance": [0.2, 0.2, 0.2]})
+    opts = {"spp": 2, "seed": 3}
+    if method == "ispm":
+        opts["photons"] = 2000
+    if method == "bidir":
+        opts["bundles"] = 4
+    sky = {"source": gradient_sky([1.5, 1.2, 1.0], [0.1, 0.1, 0.2]), "mode": "replace"}
+    start = gi.gpu_counters()
+    fresh = gi.Renderer(scene, method, environment=sky, **opts).render().radiance
+    new_renderer = created(gi.gpu_counters(), start)
+    r = gi.Renderer(scene, method, **opts)
+    r.render()
+    r.render()
+    before = gi.gpu_counters()
+    r.update(environment=sky)
+    updated = r.render().radiance
+    after = gi.gpu_counters()
+    made = created(after, before)
+    assert made["pipelines"] == 0
+    if method == "bidir":
+        for kind in ("buffers", "textures", "bind_groups"):
+            assert made[kind] < new_renderer[kind], (kind, made, new_renderer)
+    else:
+        assert made == {"buffers": 0, "textures": 2, "bind_groups": 1, "pipelines": 0}
+    labels = {label for label, _ in after["uploads"][len(before["uploads"]) :]}
+    assert {"environment radiance", "environment irradiance"} <= labels
+    assert "texture table" not in labels, labels
+    np.testing.assert_allclose(updated, fresh, rtol=0, atol=1e-6)
+
+
 def test_built_in_sky_has_a_sun_that_strength_and_rotation_move(write_scene):
     scene = sphere_scene(write_scene)
     lit = lighting.with_environment(scene, "sky")

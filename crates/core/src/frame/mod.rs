@@ -119,6 +119,11 @@ pub struct Renderer {
         Vec<crate::scene::Light>,
         Option<Arc<crate::scene::Environment>>,
     )>,
+    /// [`Renderer::set_lighting`] changed the environment since the last frame: the GPU
+    /// state swaps its environment tables (and `bidir` its state) at the next one.
+    environment_changed: bool,
+    /// The number of lights the GPU scene's light buffer was made for.
+    gpu_lights: usize,
 }
 
 /// Light transport `options` ask for that their method does not compute, one message each
@@ -205,6 +210,8 @@ impl Renderer {
             bvh_cost: BvhCost::default(),
             accum: None,
             own_lighting: None,
+            environment_changed: false,
+            gpu_lights: 0,
         })
     }
 
@@ -265,8 +272,10 @@ impl Renderer {
 
     /// Gives the scene `lighting` before the next frame, starting from its own lights and
     /// environment as they were before the first call (so that calls do not accumulate;
-    /// light updates made since are dropped): the GPU state, photons and progressive sum
-    /// are rebuilt from the new scene (geometry and its BVH stay).
+    /// light updates made since are dropped). Geometry, its BVH and the GPU scene stay: the
+    /// next frame uploads the lights and the environment's tables (a GPU scene whose shadow
+    /// maps or sampled lights no longer fit, e.g. a sun added, is built anew); the photons
+    /// and the progressive sum start again.
     pub fn set_lighting(&mut self, lighting: &crate::scene::Lighting) -> Result<()> {
         let (lights, env) = self
             .own_lighting
@@ -278,7 +287,7 @@ impl Renderer {
         scene.set_lighting(lighting);
         self.scene = scene;
         self.warnings = transport_omissions(&self.scene, &self.options);
-        self.gpu = None;
+        self.environment_changed = true;
         self.accum = None;
         self.ring = PhotonRing::new(self.options.method.temporal_frames() as usize);
         self.lights_changed = (0..self.scene.lights.len()).collect();
@@ -525,10 +534,12 @@ impl Renderer {
             // `bidir` draws the environment (and lights with it) through its bundles.
             background: self.method() != Method::Bidir,
         };
+        // A new lighting may hold more or fewer lights than the light buffer was made for.
         let fits = self
             .gpu
             .as_ref()
-            .is_some_and(|g| g.scene.fits(scene, counts));
+            .is_some_and(|g| g.scene.fits(scene, counts))
+            && scene.lights.len() == self.gpu_lights;
         if !fits {
             crate::raster::check_scene_buffers(ctx, scene)?;
             let gs = gpu::GpuScene::new(ctx, scene, direct.shadow_map_size, counts)?;
@@ -544,11 +555,21 @@ impl Renderer {
                 bidir: None,
                 serial: false,
             });
+            self.gpu_lights = scene.lights.len();
+            self.environment_changed = false;
             return Ok(());
         }
         let Some(g) = self.gpu.as_mut() else {
             return Ok(());
         };
+        if std::mem::take(&mut self.environment_changed) {
+            g.scene
+                .samples
+                .set_environment(ctx, scene.environment.as_deref());
+            g.targets.rebind_scene(ctx, &g.scene);
+            // `bidir` binds the environment's tables in its own state.
+            g.bidir = None;
+        }
         let c = self.changes;
         if c.geometry {
             for (object, _) in &self.moved {

@@ -236,6 +236,16 @@ impl LightSamples {
         })
     }
 
+    /// Replaces the environment's radiance and irradiance tables (the scene's lighting
+    /// changed; the bind groups that hold the old views are to be made again) and draws the
+    /// samples anew at the next frame.
+    pub fn set_environment(&mut self, ctx: &GpuContext, env: Option<&Environment>) {
+        let (radiance, irradiance) = env_tables(ctx, env);
+        self.env_view = radiance.create_view(&Default::default());
+        self.irradiance_view = irradiance.create_view(&Default::default());
+        self.drawn = None;
+    }
+
     /// The samples are to be drawn again at the next frame (the lights, the geometry or the
     /// materials changed); `emitters`: the emitting triangles may have changed too.
     pub fn invalidate(&mut self, emitters: bool) {

@@ -79,6 +79,8 @@ pub(crate) struct Targets {
     radiance_view: wgpu::TextureView,
     pub gbuffer_group: wgpu::BindGroup,
     direct_scene_group: wgpu::BindGroup,
+    /// The penumbra taps the direct scene group holds (kept to make the group again).
+    penumbra: wgpu::Buffer,
     direct_gbuffer_group: wgpu::BindGroup,
     composite_group: Option<wgpu::BindGroup>,
     readback: HashMap<&'static str, wgpu::Buffer>,
@@ -316,10 +318,17 @@ impl Targets {
             radiance_view,
             gbuffer_group,
             direct_scene_group,
+            penumbra,
             direct_gbuffer_group,
             composite_group: None,
             readback: HashMap::new(),
         })
+    }
+
+    /// Makes the direct pass's scene group again over `gs`'s current lights and
+    /// environment tables (after [`super::samples::LightSamples::set_environment`]).
+    pub fn rebind_scene(&mut self, ctx: &GpuContext, gs: &GpuScene) {
+        self.direct_scene_group = direct_scene_group(ctx, &self.eye, gs, &self.penumbra);
     }
 
     /// Points the composite pass at `indirect` (the estimator's output, or black).
