@@ -17,9 +17,19 @@ bound; 1.2–1.7× the measured gap), FLIP below 0.08, and every other method wi
 
 The bumps' shading: the ratio of the bumps' upper-right to lower-right quadrants (lit and
 unlit sides for the sun from the upper right) matches Cycles' within 2%; a tangent frame of
-the wrong handedness moves it by more than 10%."""
+the wrong handedness moves it by more than 10%.
+
+Khronos' sample models (``khronos_*``: DamagedHelmet, NormalTangentMirrorTest, the
+Draco-compressed Box, BoxTextured; tests/scenes/gltf/README.md) under the corpus's horizon
+sky (and sun): gi `path` at 64 spp against Cycles with gi's texel lookup and microfacet
+model (single-scattering GGX): image means −0.2%, −0.4%, −0.9%, −1.3%, HDR-FLIP 0.019,
+0.058, 0.024, 0.025. With Cycles' defaults (Multiscatter GGX, interpolated 8-bit sRGB
+texels) the boxes are −2.4% and −3.2% (the light of a rough dielectric that single
+scattering loses) and the helmet's emission +12%. The other methods against `path`: see
+GLOSSY_GAP."""
 
 import json
+import os
 import warnings
 from pathlib import Path
 
@@ -29,6 +39,7 @@ from gltf_assets import normal_mapped_quad
 from image_metrics import flip
 
 import gi
+import gi.gltf
 
 CORPUS = Path(__file__).parent / "scenes" / "gltf"
 NAMES = sorted(p.stem for p in CORPUS.glob("*.json"))
@@ -62,17 +73,44 @@ def quadrant_ratio(img):
 
 
 def test_corpus_is_complete():
-    assert len(NAMES) == 8, NAMES
+    assert len(NAMES) == 12, NAMES
+    assert sum(n.startswith("khronos_") for n in NAMES) == 4
     for name in NAMES:
         assert (CORPUS / f"{name}.cycles.exr").is_file(), name
 
 
+# Khronos' metallic, glossy models lit by the sky: every method but `path` renders the
+# models darker (measured on the model's pixels, 64×64: DamagedHelmet direct −64%, ispm
+# −64%, bidir −28%, photon −43%, gather −21%; NormalTangentMirrorTest −28% to −46%; under
+# a constant sky too), so their image means are 3–21% below `path`'s. Not fixed here:
+# strict, so that the test says when they are.
+GLOSSY_GAP = {"khronos_damaged_helmet", "khronos_normal_tangent_mirror"}
+
+
 @pytest.mark.parametrize("name", NAMES)
-def test_path_matches_cycles_and_every_method_matches_path(name):
+def test_path_matches_cycles(name):
     ref = cycles(name)
     path = render(CORPUS / f"{name}.json")
     assert path.mean() == pytest.approx(ref.mean(), rel=0.03)
     assert flip(ref, path) < 0.08
+
+
+@pytest.mark.parametrize(
+    "name",
+    [
+        pytest.param(
+            n,
+            marks=pytest.mark.xfail(
+                strict=True, reason="the other methods miss glossy light from the sky"
+            ),
+        )
+        if n in GLOSSY_GAP
+        else n
+        for n in NAMES
+    ],
+)
+def test_every_method_matches_path(name):
+    path = render(CORPUS / f"{name}.json")
     for method in OTHERS:
         img = render(CORPUS / f"{name}.json", method)
         assert img.mean() == pytest.approx(path.mean(), rel=0.05), method
@@ -93,3 +131,103 @@ def test_wrong_handedness_is_seen_by_the_bump_test(tmp_path):
     (tmp_path / "bumps.json").write_text(json.dumps(scene))
     got = quadrant_ratio(render(tmp_path / "bumps.json"))
     assert abs(got / quadrant_ratio(cycles("bumps")) - 1) > 0.1
+
+
+def mirror_test_error(img, ref, mask):
+    """Mean absolute difference from Cycles over ``mask``, relative to Cycles' mean there."""
+    return np.abs(img - ref)[mask].mean() / ref[mask].mean()
+
+
+def test_khronos_mirror_test_cells_shade_as_in_cycles(monkeypatch):
+    """Khronos' NormalTangentMirrorTest (stored tangents, half of its cells with mirrored
+    UVs, w = −1) under the horizon sky and the sun. The regions that differ when the
+    tangents are wrong are the pixels where gi's image with every stored w negated (a
+    reader that ignores handedness) differs from its right image by more than 10% of the
+    image mean; there the right image is within 0.3 (relative mean absolute difference) of
+    Cycles' and at most half as far as the wrong one's (measured: 8.9% of the pixels,
+    0.13 against 0.52)."""
+    name = "khronos_normal_tangent_mirror"
+    ref = cycles(name)
+    right = render(CORPUS / f"{name}.json")
+
+    def negated_w(arrays, n, where):
+        t = real_tangents(arrays, n, where)
+        t[:, 3] = -t[:, 3]
+        return t
+
+    real_tangents = gi.gltf._tangents
+    monkeypatch.setattr(gi.gltf, "_tangents", negated_w)
+    wrong = render(CORPUS / f"{name}.json")
+    mask = (np.abs(wrong - right).mean(axis=2) > 0.1 * right.mean())[..., None].repeat(3, 2)
+    assert mask.mean() > 0.05  # the test reads a good part of the image
+    got, bad = mirror_test_error(right, ref, mask), mirror_test_error(wrong, ref, mask)
+    assert got < 0.3 and got < 0.5 * bad, (got, bad)
+
+
+HELMET = CORPUS / "khronos" / "DamagedHelmet" / "DamagedHelmet.glb"
+HORIZON = CORPUS / "khronos" / "horizon.exr"
+
+
+def centre(img):
+    """The middle 16×16 pixels of a 64×64 image: the helmet's visor and face."""
+    return float(img[24:40, 24:40].mean())
+
+
+def test_damaged_helmet_is_lit_by_env_on_the_command_line():
+    """The issue's must-show: ``gi render DamagedHelmet.glb --env HDR -o out`` (the default
+    method, at 64×64) lights the asset: the helmet's centre is more than 10× its
+    emission-only image (what the file alone gives, with the "nearly black" message)."""
+    import subprocess
+    import sys
+
+    def run(*extra):
+        out = Path(os.environ.get("TMPDIR", "/tmp")) / f"gi-helmet-{os.getpid()}.exr"
+        cmd = [sys.executable, "-m", "gi.cli", "render", str(HELMET), "--size", "64x64"]
+        done = subprocess.run([*cmd, "-q", "-o", str(out), *extra], capture_output=True, text=True)
+        assert done.returncode == 0, done.stderr
+        try:
+            return gi.read_image(out)[..., :3], done.stderr
+        finally:
+            out.unlink()
+
+    bare, said = run()
+    assert "nearly black" in said and "--env" in said
+    lit, said = run("--env", str(HORIZON))
+    assert "nearly black" not in said
+    assert centre(lit) > 10 * centre(bare) and centre(lit) > 0.05
+
+
+def test_damaged_helmet_is_lit_by_the_viewer_panels_file():
+    """The same in the viewer: its Environment panel's file (the folder of the horizon
+    sky) lights the helmet; "scene" gives the emission-only image back."""
+    from gi.viewer import messages as m
+    from gi.viewer.engine import Engine
+
+    with pytest.warns(gi.SceneWarning, match="nearly black"):
+        scene = gi.load_scene(HELMET)
+    engine = Engine(
+        scene,
+        "direct",
+        {"size": (64, 64), "spp": 1},
+        on_frame=lambda frame: None,
+        on_event=lambda client, event: None,
+        env_dir=HORIZON.parent,
+    )
+    engine.start()
+    try:
+
+        def centre_of_frame():
+            frame = engine.wait_frame(timeout=120)
+            assert frame is not None
+            return centre(frame.pixels.astype(np.float64))
+
+        dark = centre_of_frame()
+        choices = engine.state()["environment"]["choices"]
+        assert "file: horizon.exr" in choices
+        engine.submit(m.Environment("file: horizon.exr"), 1, wait=True).result(timeout=120)
+        lit = centre_of_frame()
+        assert lit > dark + 40, (dark, lit)  # 8-bit sRGB pixels
+        engine.submit(m.Environment("scene"), 1, wait=True).result(timeout=120)
+        assert centre_of_frame() == pytest.approx(dark, abs=5)
+    finally:
+        engine.stop()

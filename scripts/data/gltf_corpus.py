@@ -104,11 +104,50 @@ def to_blender(v: list[float]):
     return Vector((v[0], -v[2], v[1]))
 
 
-def render_cycles(name: str, scene: dict, glb: Path, samples: int) -> None:
+def world_of(env: dict):
+    """Blender's world for gi's ``environment``: a constant colour, or an equirectangular
+    image (relative to ``OUT``) read texel by texel (closest, as gi reads it)."""
+    import bpy
+
+    world = bpy.data.worlds.new("world")
+    world.use_nodes = True
+    bg = world.node_tree.nodes["Background"]
+    if "file" in env:
+        tex = world.node_tree.nodes.new("ShaderNodeTexEnvironment")
+        tex.image = bpy.data.images.load(str(OUT / env["file"]))
+        tex.image.colorspace_settings.name = "Linear Rec.709"
+        tex.interpolation = "Closest"
+        world.node_tree.links.new(tex.outputs["Color"], bg.inputs["Color"])
+    else:
+        sky = env.get("radiance", [0.0, 0.0, 0.0])
+        bg.inputs["Color"].default_value = (*sky, 1.0)
+    bg.inputs["Strength"].default_value = float(env.get("intensity", 1.0))
+    return world
+
+
+def render_cycles(
+    name: str,
+    scene: dict,
+    glb: Path,
+    samples: int,
+    closest_texels: bool = False,
+    single_scatter: bool = False,
+) -> None:
+    """Cycles' image of ``scene`` with the asset ``glb`` as ``OUT/NAME.cycles.exr``;
+    ``closest_texels``: the material textures read texel by texel (Cycles otherwise
+    interpolates 8-bit sRGB texels before decoding them, darker than gi's decoded texels
+    where a texture has sharp contrasts, e.g. thin emissive lines); ``single_scatter``: the
+    Principled BSDFs with single-scattering GGX (gi's model) instead of Multiscatter GGX."""
     import bpy
 
     bpy.ops.wm.read_factory_settings(use_empty=True)
     bpy.ops.import_scene.gltf(filepath=str(glb))
+    for mat in bpy.data.materials:
+        for node in mat.node_tree.nodes if mat.use_nodes else []:
+            if node.type == "TEX_IMAGE" and closest_texels:
+                node.interpolation = "Closest"
+            if node.type == "BSDF_PRINCIPLED" and single_scatter:
+                node.distribution = "GGX"
     s = bpy.context.scene
     cam = scene["camera"]
     data = bpy.data.cameras.new("camera")
@@ -127,13 +166,7 @@ def render_cycles(name: str, scene: dict, glb: Path, samples: int) -> None:
         lo = bpy.data.objects.new("sun", sun)
         s.collection.objects.link(lo)
         lo.rotation_euler = to_blender(light["direction"]).to_track_quat("-Z", "Y").to_euler()
-    world = bpy.data.worlds.new("world")
-    world.use_nodes = True
-    bg = world.node_tree.nodes["Background"]
-    sky = scene.get("environment", {}).get("radiance", [0.0, 0.0, 0.0])
-    bg.inputs["Color"].default_value = (*sky, 1.0)
-    bg.inputs["Strength"].default_value = 1.0
-    s.world = world
+    s.world = world_of(scene.get("environment", {}))
     s.render.engine = "CYCLES"
     s.cycles.device = "CPU"
     s.cycles.samples = samples
