@@ -294,6 +294,8 @@ class Renderer:
         ``"sky"`` or a dict with strength, rotation, sun and mode), starting from the
         scene's own lights and environment as loaded (calls do not accumulate; light
         updates made before it are dropped); ``"none"`` gives the scene its own light back.
+        The GPU methods keep their scene on the GPU and upload the environment's tables and
+        the lights (a lighting with another number of lights or shadow maps builds it anew).
 
         ``camera`` and each ``lights[i]``, ``objects[name or index]`` and
         ``materials[name]`` give the fields that change (``{"position": [0, 1, 3]}``); the
