@@ -5,9 +5,11 @@
 //! approximated by ... a traditional photon map gather"): next-event estimation for direct
 //! light and a k-nearest-neighbour gather over the frame's stored photons (which exclude
 //! the bounce-map hits, i.e. direct light) wherever the specular path lands; on Lambertian
-//! surfaces, the estimate precomputed at a nearby photon (`photon::irradiance`).
+//! surfaces, the estimate precomputed at a nearby photon (`photon::irradiance`). The light
+//! the paths meet beyond the first surface is added too (emitting surfaces they land on, the
+//! sky and suns' discs where they leave the scene): no rasterized pass sees it.
 
-use super::camera_pass::{delta_image, CameraSamples};
+use super::camera_pass::{delta_image, CameraSamples, Collect};
 use super::delta_paths::{
     adaptive_delta_image, shade_landings, trace_landings, Landings, SpecularSampling,
 };
@@ -86,6 +88,7 @@ pub fn specular_paths(
                 scene,
                 bvh,
                 settings,
+                Collect::BeyondFirst,
                 progress,
                 |it, wo, scratch: &mut Vec<Neighbour>| {
                     direct_light(scene, bvh, it, wo) + map.radiance(it, wo, &gather, scratch)
@@ -121,6 +124,7 @@ fn shade(
     shade_landings(
         scene,
         landings,
+        Collect::BeyondFirst,
         progress,
         |it, wo| direct_light(scene, bvh, it, wo),
         Some(&gather),
@@ -142,14 +146,21 @@ pub fn specular_paths_direct(
             scene,
             bvh,
             settings,
+            Collect::BeyondFirstEstimates,
             progress,
             |it, wo| direct_light(scene, bvh, it, wo),
             None,
         ),
         SpecularSampling::Full => {
-            delta_image(scene, bvh, settings, progress, |it, wo, _: &mut ()| {
-                direct_light(scene, bvh, it, wo)
-            })
+            let collect = Collect::BeyondFirstEstimates;
+            delta_image(
+                scene,
+                bvh,
+                settings,
+                collect,
+                progress,
+                |it, wo, _: &mut ()| direct_light(scene, bvh, it, wo),
+            )
         }
     }
 }
