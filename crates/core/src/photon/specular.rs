@@ -133,7 +133,9 @@ fn shade(
 
 /// Radiance reaching the camera through the delta lobes of the first surface seen, with
 /// next-event estimation of the scene's lights only where the path lands (method `bidir`,
-/// which keeps no photon map): the indirect light behind mirrors and glass is missing.
+/// which keeps no photon map; its `delta_camera_paths` add the indirect light behind
+/// mirrors and glass), and the light the paths meet (emitters they land on, the sky and
+/// suns' discs where they leave the scene: no other part of `bidir` counts those paths).
 pub fn specular_paths_direct(
     scene: &Scene,
     bvh: &SceneBvh,
@@ -146,13 +148,13 @@ pub fn specular_paths_direct(
             scene,
             bvh,
             settings,
-            Collect::BeyondFirstEstimates,
+            Collect::BeyondFirst,
             progress,
             |it, wo| direct_light(scene, bvh, it, wo),
             None,
         ),
         SpecularSampling::Full => {
-            let collect = Collect::BeyondFirstEstimates;
+            let collect = Collect::BeyondFirst;
             delta_image(
                 scene,
                 bvh,
