@@ -27,16 +27,13 @@ pub struct CameraSamples {
 /// What a camera path gathers besides the estimates at the non-delta surfaces it reaches
 /// through delta lobes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Collect {
+enum Collect {
     /// The whole image: the first surface's estimate too, and the light the path meets
     /// (emitting surfaces, the sky and suns' discs where it leaves the scene).
     Everything,
-    /// The specular image: beyond the first surface only, with the light the path meets
-    /// there (a method whose own passes see none of it through delta lobes).
+    /// The specular image: beyond the first surface only, the light the path meets there
+    /// included (the rasterized passes see none of it through delta lobes).
     BeyondFirst,
-    /// The specular image without the light the path meets (a method that counts it
-    /// elsewhere).
-    BeyondFirstEstimates,
 }
 
 impl Collect {
@@ -45,11 +42,7 @@ impl Collect {
     }
     /// Whether the light met at scattering depth `depth` counts.
     fn light_at(self, depth: u32) -> bool {
-        match self {
-            Collect::Everything => true,
-            Collect::BeyondFirst => depth > 0,
-            Collect::BeyondFirstEstimates => false,
-        }
+        self == Collect::Everything || depth > 0
     }
 }
 
@@ -118,13 +111,12 @@ pub fn render_image<S: Default + Send>(
 /// that shades the first surface cannot give (ISPM section 4: "backwards recursive ray
 /// tracing on the CPU, with recursive global illumination approximated by ... a
 /// traditional photon map gather"). Pixels whose first surface has no delta lobe cost one
-/// ray per sample and stay black. `collect`: [`Collect::BeyondFirst`] or
-/// [`Collect::BeyondFirstEstimates`].
+/// ray per sample and stay black. The light the paths meet beyond the first surface is
+/// added ([`Collect::BeyondFirst`]).
 pub fn delta_image<S: Default + Send>(
     scene: &Scene,
     bvh: &SceneBvh,
     settings: &CameraSamples,
-    collect: Collect,
     progress: &dyn Progress,
     estimate: impl Fn(&Interaction, Vec3, &mut S) -> Vec3 + Sync,
 ) -> Result<Image> {
@@ -149,7 +141,7 @@ pub fn delta_image<S: Default + Send>(
                     bvh,
                     settings,
                     (x as u32, y as u32),
-                    collect,
+                    Collect::BeyondFirst,
                     |it, wo, _| estimate(it, wo, scratch),
                 );
             }

@@ -32,7 +32,7 @@
 //!    geometry, the materials and the seed only, so the frame engine keeps them while the
 //!    lights alone change and only shades them again.
 
-use super::camera_pass::{CameraSamples, Collect};
+use super::camera_pass::CameraSamples;
 use crate::cancel::{Progress, StageProgress};
 use crate::error::Result;
 use crate::image::Image;
@@ -484,15 +484,13 @@ pub fn trace_landings(
 }
 
 /// The specular image of `landings`: per pixel, the mean over its samples of the
-/// next-event estimates `direct(it, wo)` at their landings (with
-/// [`Collect::BeyondFirst`], plus the radiance the landed surfaces emit and the sky's and
-/// suns' discs where the paths leave the scene), plus the mean over its first
+/// next-event estimates `direct(it, wo)` at their landings, the radiance the landed
+/// surfaces emit and the sky's and suns' discs where the paths leave the scene, plus the mean over its first
 /// [`EDGE_GATHERS`] samples of the photon estimates `gather(it, wo, scratch)` (`None`:
 /// none); `S` is per-thread scratch space.
 pub fn shade_landings<S: Default + Send>(
     scene: &Scene,
     landings: &Landings,
-    collect: Collect,
     progress: &dyn Progress,
     direct: impl Fn(&Interaction, Vec3) -> Vec3 + Sync,
     gather: Option<&Gather<'_, S>>,
@@ -512,19 +510,14 @@ pub fn shade_landings<S: Default + Send>(
                     let gathers = n.min(EDGE_GATHERS);
                     let (mut l_direct, mut l_gather) = (Vec3::ZERO, Vec3::ZERO);
                     let range = chunk.offsets[k] as usize..chunk.offsets[k + 1] as usize;
-                    let light = collect == Collect::BeyondFirst;
                     for l in &chunk.landings[range] {
                         let Some(hit) = &l.hit else {
-                            if light {
-                                l_direct += l.beta * escaped(scene, l.dir, None, true);
-                            }
+                            l_direct += l.beta * escaped(scene, l.dir, None, true);
                             continue;
                         };
                         let it = Interaction::new(scene, hit, l.dir);
                         let wo = -l.dir;
-                        if light {
-                            l_direct += l.beta * it.material.emitted(it.ng, wo);
-                        }
+                        l_direct += l.beta * it.material.emitted(it.ng, wo);
                         if it.material.is_purely_specular() {
                             continue;
                         }
@@ -555,13 +548,12 @@ pub fn adaptive_delta_image<S: Default + Send>(
     scene: &Scene,
     bvh: &SceneBvh,
     settings: &CameraSamples,
-    collect: Collect,
     progress: &dyn Progress,
     direct: impl Fn(&Interaction, Vec3) -> Vec3 + Sync,
     gather: Option<&Gather<'_, S>>,
 ) -> Result<Image> {
     let landings = trace_landings(scene, bvh, settings, progress)?;
-    shade_landings(scene, &landings, collect, progress, direct, gather)
+    shade_landings(scene, &landings, progress, direct, gather)
 }
 
 #[cfg(test)]
@@ -636,7 +628,6 @@ mod tests {
                     &scene,
                     &bvh,
                     &s,
-                    Collect::BeyondFirst,
                     &Silent,
                     |it, wo, sc: &mut Vec<Neighbour>| {
                         direct_light(&scene, &bvh, it, wo) + map.radiance(it, wo, &g, sc)
@@ -646,16 +637,7 @@ mod tests {
             );
             let direct = |it: &Interaction, wo: Vec3| direct_light(&scene, &bvh, it, wo);
             adaptive.push(
-                adaptive_delta_image(
-                    &scene,
-                    &bvh,
-                    &s,
-                    Collect::BeyondFirst,
-                    &Silent,
-                    direct,
-                    Some(&gather),
-                )
-                .unwrap(),
+                adaptive_delta_image(&scene, &bvh, &s, &Silent, direct, Some(&gather)).unwrap(),
             );
         }
         let (w, h) = (96usize, 72usize);
@@ -719,8 +701,7 @@ mod tests {
     /// The light met through a mirror: a perfect mirror sphere (reflectance 1) under a
     /// constant sky of radiance L, no lights, seen from outside. Every specular path leaves
     /// the scene after one reflection (a convex sphere never sees itself), so the specular
-    /// image is exactly L on pixels whose samples all hit the sphere, in both samplings,
-    /// with [`Collect::BeyondFirst`]; without it (bidir's), it is black.
+    /// image is exactly L on pixels whose samples all hit the sphere, in both samplings.
     #[test]
     fn mirrors_show_the_sky_they_reflect() {
         let json = r#"{
@@ -743,23 +724,12 @@ mod tests {
         };
         let sky = Vec3::new(0.25, 0.5, 1.0);
         let none = |_: &Interaction, _: Vec3| Vec3::ZERO;
-        let full = delta_image(
-            &scene,
-            &bvh,
-            &settings,
-            Collect::BeyondFirst,
-            &Silent,
-            |_, _, _: &mut ()| Vec3::ZERO,
-        )
+        let full = delta_image(&scene, &bvh, &settings, &Silent, |_, _, _: &mut ()| {
+            Vec3::ZERO
+        })
         .unwrap();
-        let adaptive = |collect| {
-            adaptive_delta_image::<()>(&scene, &bvh, &settings, collect, &Silent, none, None)
-                .unwrap()
-        };
-        let (with, without) = (
-            adaptive(Collect::BeyondFirst),
-            adaptive(Collect::BeyondFirstEstimates),
-        );
+        let with =
+            adaptive_delta_image::<()>(&scene, &bvh, &settings, &Silent, none, None).unwrap();
         // The central 8×8 pixels lie well inside the sphere's disc (radius ~9 pixels).
         let mut inside = 0;
         for y in 8..16 {
@@ -769,7 +739,6 @@ mod tests {
                     let e = (img.pixels[i] - sky).abs().max_element();
                     assert!(e < 1e-5, "pixel ({x}, {y}): {} vs {sky}", img.pixels[i]);
                 }
-                assert_eq!(without.pixels[i], Vec3::ZERO);
                 inside += 1;
             }
         }

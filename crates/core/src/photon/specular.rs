@@ -9,7 +9,7 @@
 //! the paths meet beyond the first surface is added too (emitting surfaces they land on, the
 //! sky and suns' discs where they leave the scene): no rasterized pass sees it.
 
-use super::camera_pass::{delta_image, CameraSamples, Collect};
+use super::camera_pass::{delta_image, CameraSamples};
 use super::delta_paths::{
     adaptive_delta_image, shade_landings, trace_landings, Landings, SpecularSampling,
 };
@@ -88,7 +88,6 @@ pub fn specular_paths(
                 scene,
                 bvh,
                 settings,
-                Collect::BeyondFirst,
                 progress,
                 |it, wo, scratch: &mut Vec<Neighbour>| {
                     direct_light(scene, bvh, it, wo) + map.radiance(it, wo, &gather, scratch)
@@ -124,7 +123,6 @@ fn shade(
     shade_landings(
         scene,
         landings,
-        Collect::BeyondFirst,
         progress,
         |it, wo| direct_light(scene, bvh, it, wo),
         Some(&gather),
@@ -148,21 +146,14 @@ pub fn specular_paths_direct(
             scene,
             bvh,
             settings,
-            Collect::BeyondFirst,
             progress,
             |it, wo| direct_light(scene, bvh, it, wo),
             None,
         ),
         SpecularSampling::Full => {
-            let collect = Collect::BeyondFirst;
-            delta_image(
-                scene,
-                bvh,
-                settings,
-                collect,
-                progress,
-                |it, wo, _: &mut ()| direct_light(scene, bvh, it, wo),
-            )
+            delta_image(scene, bvh, settings, progress, |it, wo, _: &mut ()| {
+                direct_light(scene, bvh, it, wo)
+            })
         }
     }
 }
