@@ -7,7 +7,8 @@ The references are Mitsuba 3.9.1 `path` (scalar_rgb), 64×64, 4096 samples per p
 batches: their means are known to better than 0.05% (references.json). Both renderers use
 a box pixel filter; Mitsuba's sphere is exact, gi's the importer's tessellated one with
 smooth normals (its silhouette differs by a fraction of a pixel). gi's `path` at 256 spp.
-The GPU methods shade these models as uber stand-ins and say so with a RenderWarning."""
+The GPU methods shade these models' non-delta lobes as uber stand-ins and say so with a
+RenderWarning; `ispm` and `bidir` are held to 5% of Mitsuba's mean."""
 
 import json
 import warnings
@@ -49,6 +50,26 @@ def test_path_matches_mitsuba(name):
     error = flip(ref, img)
     assert np.all(np.abs(ratio - 1) <= 0.02), f"{name}: ratio per channel {ratio}"
     assert error <= 0.05, f"{name}: FLIP {error:.4f}"
+
+
+@pytest.mark.parametrize(
+    "name, method",
+    [(name, "ispm") for name in NAMES] + [("conductor-au", "bidir"), ("plastic", "bidir")],
+)
+def test_gpu_methods_match_mitsuba(name, method):
+    """`ispm` on every sphere, `bidir` on the smooth ones (the sky and the area light seen in
+    their mirror lobe come from the CPU specular image; before it added them, 0.50–0.73 and
+    0.93–0.95): the image mean within 5% of Mitsuba's per channel (issue 42; measured within
+    3.5%, the rough spheres' residue being the GPU's uber stand-ins, docs/bench/materials.md)."""
+    scene = gi.load_scene(SCENES / f"{name}.xml")
+    settings = {"ispm": {"photons": 100_000, "spp": 8}, "bidir": {"spp": 8}}[method]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gi.RenderWarning)  # the stand-ins, tested below
+        r = gi.Renderer(scene, method, size=(64, 64), seed=7, **settings)
+    img = r.render().radiance[..., :3]
+    ref = gi.read_image(SCENES / f"{name}-reference.exr")[..., :3]
+    ratio = img.reshape(-1, 3).mean(0) / ref.reshape(-1, 3).mean(0)
+    assert np.all(np.abs(ratio - 1) <= 0.05), f"{name} {method}: ratio per channel {ratio}"
 
 
 def test_gpu_methods_name_their_stand_ins():

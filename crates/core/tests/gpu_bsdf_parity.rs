@@ -1,6 +1,8 @@
-//! CPU/GPU parity of the uber BSDF: a compute shader evaluates `bsdf.wgsl` on a table of
-//! (normal, wo, wi, material) cases and must match `Material::eval(wo, wi)·|cos θi|` (of the
-//! uber stand-in, for Mitsuba's models).
+//! CPU/GPU parity of the BSDFs: a compute shader evaluates `bsdf.wgsl` (the uber BSDF) or
+//! `models.wgsl` (Mitsuba's coated plastics, conductors, Beckmann) on a table of
+//! (normal, wo, wi, material) cases and must match `Material::eval(wo, wi)·|cos θi|`: of the
+//! uber stand-in (`Material::uber_equivalent`) for `bsdf.wgsl`, of the material itself for
+//! `models.wgsl`.
 //!
 //! Tolerance per channel: |gpu − cpu| ≤ 1e-4·|cpu| + 1e-6 + 4·s, where the absolute floor
 //! 1e-6 guards values near zero and `s` is the case's own f32 sensitivity: the largest change
@@ -11,7 +13,8 @@
 
 use bytemuck::{Pod, Zeroable};
 use gi_core::bsdf::{Coating, Conductor, Distribution, Material};
-use gi_core::gpu::{self, raw::MaterialRaw, shaders};
+use gi_core::gpu::raw::{MaterialRaw, ModelMaterialRaw};
+use gi_core::gpu::{self, shaders};
 use gi_core::sampling::{uniform_sphere, Frame, Rng};
 use glam::Vec3;
 use wgpu::util::DeviceExt;
@@ -25,6 +28,16 @@ struct CaseRaw {
     wi: [f32; 4],
 }
 
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct ModelCaseRaw {
+    material: ModelMaterialRaw,
+    normal: [f32; 4],
+    wo: [f32; 4],
+    wi: [f32; 4],
+}
+
+#[derive(Clone, Copy)]
 struct Case {
     material: Material,
     normal: Vec3,
@@ -108,13 +121,63 @@ fn materials() -> Vec<Material> {
     out
 }
 
+/// Mitsuba's models: smooth and rough plastics (GGX and Beckmann, linear and `nonlinear`,
+/// white and coloured bases), conductors (gold and Mitsuba's "none") at several roughnesses,
+/// the uber BSDF with Beckmann's distribution, and the uber materials above (which
+/// `models.wgsl` must shade as `bsdf.wgsl` does).
+fn models() -> Vec<Material> {
+    let au = (
+        Vec3::new(0.143036, 0.375307, 1.44205),
+        Vec3::new(3.983, 2.38556, 1.60336),
+    );
+    let mut out = Vec::new();
+    for dist in [Distribution::Ggx, Distribution::Beckmann] {
+        for roughness in [0.0f32, 0.1, 0.3162, 0.7] {
+            for (rho, nonlinear) in [
+                (Vec3::new(0.8, 0.3, 0.05), false),
+                (Vec3::new(0.8, 0.3, 0.05), true),
+                (Vec3::ONE, false),
+            ] {
+                out.push(Material {
+                    diffuse: rho,
+                    specular: Vec3::new(1.0, 0.9, 0.7),
+                    roughness,
+                    distribution: dist,
+                    coating: Some(Coating::new(1.49, nonlinear, roughness * roughness, dist)),
+                    ..Default::default()
+                });
+            }
+            for (eta, k) in [au, (Vec3::ZERO, Vec3::ONE)] {
+                out.push(Material {
+                    diffuse: Vec3::ZERO,
+                    specular: Vec3::ONE,
+                    roughness,
+                    distribution: dist,
+                    conductor: Some(Conductor::new(eta, k)),
+                    ..Default::default()
+                });
+            }
+            out.push(Material {
+                diffuse: Vec3::splat(0.5),
+                specular: Vec3::splat(0.04),
+                fresnel: true,
+                roughness,
+                distribution: dist,
+                ..Default::default()
+            });
+        }
+    }
+    out.extend(materials());
+    out
+}
+
 /// Directions: random pairs, grazing ones (cos 1e-3 and 1e-2), pairs across the horizon,
-/// and pairs near the mirror direction (the glossy peak).
-fn cases() -> Vec<Case> {
+/// and pairs near the mirror direction (the glossy peak), `per` per material.
+fn cases(materials: &[Material], per: usize) -> Vec<Case> {
     let mut rng = Rng::new(11, 0, 0);
     let mut out = Vec::new();
-    for material in materials() {
-        for k in 0..48 {
+    for &material in materials {
+        for k in 0..per {
             let normal = uniform_sphere(rng.next_2d());
             let frame = Frame::new(normal);
             let mut wo_l = uniform_sphere(rng.next_2d());
@@ -150,17 +213,27 @@ fn cases() -> Vec<Case> {
     out
 }
 
-/// The CPU value the GPU must give: the BSDF of the material's GPU copy (`to_raw`), the
-/// uber stand-in of Mitsuba's models (`Material::uber_equivalent`; the material itself
-/// for uber materials).
-fn cpu(c: &Case) -> Vec3 {
+/// `Material::eval(wo, wi)·|cos θi|` of `m` for the case's directions.
+fn cpu_of(m: &Material, c: &Case) -> Vec3 {
     let frame = Frame::new(c.normal);
     let (wo, wi) = (frame.to_local(c.wo), frame.to_local(c.wi));
-    c.material.uber_equivalent().eval(wo, wi) * wi.z.abs()
+    m.eval(wo, wi) * wi.z.abs()
+}
+
+/// The CPU value `bsdf.wgsl` must give: the BSDF of the material's GPU copy (`to_raw`), the
+/// uber stand-in of Mitsuba's models (`Material::uber_equivalent`; the material itself
+/// for uber materials).
+fn cpu_uber(c: &Case) -> Vec3 {
+    cpu_of(&c.material.uber_equivalent(), c)
+}
+
+/// The CPU value `models.wgsl` must give: the material's own BSDF.
+fn cpu_exact(c: &Case) -> Vec3 {
+    cpu_of(&c.material, c)
 }
 
 /// The largest change of the CPU value when an input moves by about 8 ULPs.
-fn sensitivity(c: &Case) -> Vec3 {
+fn sensitivity(c: &Case, cpu: fn(&Case) -> Vec3) -> Vec3 {
     let base = cpu(c);
     let mut s = Vec3::ZERO;
     for axis in 0..9 {
@@ -184,24 +257,17 @@ fn sensitivity(c: &Case) -> Vec3 {
     s
 }
 
-fn gpu_eval(cases: &[Case]) -> Vec<Vec3> {
+/// Runs the compute kernel `source` (after `shaders`) over `n` cases packed in `input`
+/// (binding 0), one vec4 result per case (binding 1).
+fn run_kernel(parts: &[&str], input: &[u8], n: usize) -> Vec<Vec3> {
     let ctx = gpu::context(None).expect("a GPU adapter (lavapipe in CI)");
     let device = &ctx.device;
-    let raw: Vec<CaseRaw> = cases
-        .iter()
-        .map(|c| CaseRaw {
-            material: c.material.to_raw(),
-            normal: c.normal.extend(0.0).into(),
-            wo: c.wo.extend(0.0).into(),
-            wi: c.wi.extend(0.0).into(),
-        })
-        .collect();
     let input = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some("parity cases"),
-        contents: bytemuck::cast_slice(&raw),
+        contents: input,
         usage: wgpu::BufferUsages::STORAGE,
     });
-    let size = cases.len() as u64 * 16;
+    let size = n as u64 * 16;
     let output = device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("parity results"),
         size,
@@ -214,15 +280,7 @@ fn gpu_eval(cases: &[Case]) -> Vec<Vec3> {
         usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     });
-    let module = shaders::module(
-        device,
-        "bsdf parity shader",
-        &[
-            shaders::COMMON,
-            shaders::BSDF,
-            include_str!("gpu_bsdf_parity.wgsl"),
-        ],
-    );
+    let module = shaders::module(device, "bsdf parity shader", parts);
     let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
         label: Some("bsdf parity pipeline"),
         layout: None,
@@ -255,7 +313,7 @@ fn gpu_eval(cases: &[Case]) -> Vec<Vec3> {
         });
         pass.set_pipeline(&pipeline);
         pass.set_bind_group(0, &bind_group, &[]);
-        pass.dispatch_workgroups((cases.len() as u32).div_ceil(64), 1, 1);
+        pass.dispatch_workgroups((n as u32).div_ceil(64), 1, 1);
     }
     encoder.copy_buffer_to_buffer(&output, 0, &readback, 0, size);
     ctx.queue.submit([encoder.finish()]);
@@ -266,18 +324,20 @@ fn gpu_eval(cases: &[Case]) -> Vec<Vec3> {
         .collect()
 }
 
-#[test]
-fn wgsl_bsdf_matches_cpu() {
-    let cases = cases();
-    let gpu = gpu_eval(&cases);
+fn dir4(v: Vec3) -> [f32; 4] {
+    v.extend(0.0).into()
+}
+
+/// Checks `gpu` against `cpu` case by case (tolerance in the module's doc).
+fn compare(cases: &[Case], gpu: &[Vec3], cpu: fn(&Case) -> Vec3) {
     let mut failures = Vec::new();
     let mut nonzero = 0;
-    for (i, (c, g)) in cases.iter().zip(&gpu).enumerate() {
+    for (i, (c, g)) in cases.iter().zip(gpu).enumerate() {
         let r = cpu(c);
         if r.max_element() > 0.0 {
             nonzero += 1;
         }
-        let tol = r.abs() * 1e-4 + Vec3::splat(1e-6) + 4.0 * sensitivity(c);
+        let tol = r.abs() * 1e-4 + Vec3::splat(1e-6) + 4.0 * sensitivity(c, cpu);
         if (*g - r).abs().cmpgt(tol).any() || !g.is_finite() {
             failures.push(format!(
                 "case {i}: {:?} n={} wo={} wi={}: gpu {g} cpu {r}",
@@ -296,4 +356,48 @@ fn wgsl_bsdf_matches_cpu() {
         cases.len(),
         failures.join("\n")
     );
+}
+
+#[test]
+fn wgsl_bsdf_matches_cpu() {
+    let cases = cases(&materials(), 48);
+    let raw: Vec<CaseRaw> = cases
+        .iter()
+        .map(|c| CaseRaw {
+            material: c.material.to_raw(),
+            normal: dir4(c.normal),
+            wo: dir4(c.wo),
+            wi: dir4(c.wi),
+        })
+        .collect();
+    let parts = [
+        shaders::COMMON,
+        shaders::BSDF,
+        include_str!("gpu_bsdf_parity.wgsl"),
+    ];
+    let gpu = run_kernel(&parts, bytemuck::cast_slice(&raw), cases.len());
+    compare(&cases, &gpu, cpu_uber);
+}
+
+/// `models.wgsl` against the CPU's exact models (no stand-in).
+#[test]
+fn wgsl_models_match_cpu() {
+    let cases = cases(&models(), 60);
+    let raw: Vec<ModelCaseRaw> = cases
+        .iter()
+        .map(|c| ModelCaseRaw {
+            material: c.material.to_model_raw(),
+            normal: dir4(c.normal),
+            wo: dir4(c.wo),
+            wi: dir4(c.wi),
+        })
+        .collect();
+    let parts = [
+        shaders::COMMON,
+        shaders::BSDF,
+        shaders::MODELS,
+        include_str!("gpu_model_parity.wgsl"),
+    ];
+    let gpu = run_kernel(&parts, bytemuck::cast_slice(&raw), cases.len());
+    compare(&cases, &gpu, cpu_exact);
 }

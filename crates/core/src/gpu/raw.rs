@@ -1,6 +1,6 @@
 //! GPU-facing data: `#[repr(C)]` Pod mirrors of the structs in `shaders/common/types.wgsl`.
 
-use crate::bsdf::Material;
+use crate::bsdf::{coated, Distribution, Material};
 use crate::scene::light_views::LightView;
 use crate::scene::Light;
 use bytemuck::{Pod, Zeroable};
@@ -41,6 +41,96 @@ impl Material {
             emission: self.emission.into(),
             two_sided: self.two_sided as u32,
         }
+    }
+}
+
+/// `ModelMaterial` of `shaders/common/models.wgsl`: a material as the CPU's
+/// [`Material`] holds it (Mitsuba's coated plastics and conductors, Beckmann), for the
+/// passes that shade the exact models; one per scene material, beside the uber stand-in
+/// [`MaterialRaw`]. 224 bytes.
+///
+/// Layout (each row 16 bytes): `diffuse` + `flags`, `specular` + `roughness`,
+/// `transmission` + `ior`, `conductor_eta` + `coat_eta`, `conductor_k` + `coat_internal`,
+/// `conductor_average` + `coat_external_mean`, then the coating's transmittance table.
+/// A new model (e.g. a rough dielectric) takes the next bit of [`model_flags`] and reuses
+/// `roughness`, `ior` and the distribution bit; fields it needs beyond those are appended
+/// as whole rows after the table (and `ModelMaterial` in WGSL gains the same).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct ModelMaterialRaw {
+    pub diffuse: [f32; 3],
+    /// [`model_flags`].
+    pub flags: u32,
+    pub specular: [f32; 3],
+    pub roughness: f32,
+    pub transmission: [f32; 3],
+    pub ior: f32,
+    pub conductor_eta: [f32; 3],
+    pub coat_eta: f32,
+    pub conductor_k: [f32; 3],
+    pub coat_internal: f32,
+    pub conductor_average: [f32; 3],
+    pub coat_external_mean: f32,
+    /// The rough coating's T(μ) at μ = i/([`coated::TABLE`] − 1), 4 entries a row.
+    pub coat_t: [[f32; 4]; coated::TABLE / 4],
+}
+
+/// Bits of [`ModelMaterialRaw::flags`] (`MODEL_*` in `models.wgsl`).
+pub mod model_flags {
+    /// Schlick's Fresnel on the uber specular lobe.
+    pub const FRESNEL: u32 = 1;
+    /// Beckmann's distribution (else GGX).
+    pub const BECKMANN: u32 = 2;
+    /// A plastic: `diffuse` under a dielectric coating.
+    pub const COATED: u32 = 4;
+    /// A conductor's Fresnel term of complex index.
+    pub const CONDUCTOR: u32 = 8;
+    /// The coating's `nonlinear` option.
+    pub const NONLINEAR: u32 = 16;
+    /// A rough coating (its transmittance from the table).
+    pub const ROUGH_COAT: u32 = 32;
+}
+
+impl Material {
+    /// The exact model's GPU record (`ModelMaterial` in WGSL).
+    pub fn to_model_raw(&self) -> ModelMaterialRaw {
+        use model_flags::*;
+        let mut raw = ModelMaterialRaw::zeroed();
+        raw.diffuse = self.diffuse.into();
+        raw.specular = self.specular.into();
+        raw.roughness = self.roughness;
+        raw.transmission = self.transmission.into();
+        raw.ior = self.ior;
+        let mut flags = 0;
+        if self.fresnel {
+            flags |= FRESNEL;
+        }
+        if self.distribution == Distribution::Beckmann {
+            flags |= BECKMANN;
+        }
+        if let Some(c) = &self.conductor {
+            flags |= CONDUCTOR;
+            raw.conductor_eta = c.eta.into();
+            raw.conductor_k = c.k.into();
+            raw.conductor_average = c.average.into();
+        }
+        if let Some(c) = &self.coating {
+            flags |= COATED;
+            if c.nonlinear {
+                flags |= NONLINEAR;
+            }
+            if c.rough {
+                flags |= ROUGH_COAT;
+            }
+            raw.coat_eta = c.eta;
+            raw.coat_internal = c.internal;
+            raw.coat_external_mean = c.external_mean;
+            for (i, t) in c.transmittance.iter().enumerate() {
+                raw.coat_t[i / 4][i % 4] = *t;
+            }
+        }
+        raw.flags = flags;
+        raw
     }
 }
 

@@ -7,6 +7,9 @@
 pub const COMMON: &str = include_str!("shaders/common/types.wgsl");
 /// The uber BSDF: the formulas of `bsdf::Material::eval`.
 pub const BSDF: &str = include_str!("shaders/common/bsdf.wgsl");
+/// Mitsuba's models (coated plastics, conductors, Beckmann) as the CPU evaluates them; after
+/// [`BSDF`].
+pub const MODELS: &str = include_str!("shaders/common/models.wgsl");
 /// Texture lookups and textured materials (group 1 of the passes that rasterize the scene).
 pub const TEXTURE: &str = include_str!("shaders/common/texture.wgsl");
 /// Order-independent (fixed-point) sums of non-negative RGB terms.

@@ -24,6 +24,28 @@ pub struct CameraSamples {
     pub first_hit_aovs: bool,
 }
 
+/// What a camera path gathers besides the estimates at the non-delta surfaces it reaches
+/// through delta lobes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Collect {
+    /// The whole image: the first surface's estimate too, and the light the path meets
+    /// (emitting surfaces, the sky and suns' discs where it leaves the scene).
+    Everything,
+    /// The specular image: beyond the first surface only, the light the path meets there
+    /// included (the rasterized passes see none of it through delta lobes).
+    BeyondFirst,
+}
+
+impl Collect {
+    fn estimate_first(self) -> bool {
+        self == Collect::Everything
+    }
+    /// Whether the light met at scattering depth `depth` counts.
+    fn light_at(self, depth: u32) -> bool {
+        self == Collect::Everything || depth > 0
+    }
+}
+
 /// Most delta scatterings a camera path follows before giving up.
 const MAX_DELTA_BOUNCES: u32 = 8;
 
@@ -52,9 +74,14 @@ pub fn render_image<S: Default + Send>(
                     if stage.stopped() {
                         return None;
                     }
-                    let l = pixel_radiance(scene, bvh, settings, x, y, true, |it, wo, rng| {
-                        estimate(it, wo, rng, scratch)
-                    });
+                    let l = pixel_radiance(
+                        scene,
+                        bvh,
+                        settings,
+                        (x, y),
+                        Collect::Everything,
+                        |it, wo, rng| estimate(it, wo, rng, scratch),
+                    );
                     let centre = cam.direction(x as f32 + 0.5, y as f32 + 0.5);
                     let first = if settings.first_hit_aovs {
                         path::first_hit(scene, bvh, cam.position, centre)
@@ -84,7 +111,8 @@ pub fn render_image<S: Default + Send>(
 /// that shades the first surface cannot give (ISPM section 4: "backwards recursive ray
 /// tracing on the CPU, with recursive global illumination approximated by ... a
 /// traditional photon map gather"). Pixels whose first surface has no delta lobe cost one
-/// ray per sample and stay black.
+/// ray per sample and stay black. The light the paths meet beyond the first surface is
+/// added ([`Collect::BeyondFirst`]).
 pub fn delta_image<S: Default + Send>(
     scene: &Scene,
     bvh: &SceneBvh,
@@ -112,9 +140,8 @@ pub fn delta_image<S: Default + Send>(
                     scene,
                     bvh,
                     settings,
-                    x as u32,
-                    y as u32,
-                    false,
+                    (x as u32, y as u32),
+                    Collect::BeyondFirst,
                     |it, wo, _| estimate(it, wo, scratch),
                 );
             }
@@ -125,14 +152,13 @@ pub fn delta_image<S: Default + Send>(
 }
 
 /// Mean radiance of `settings.spp` jittered camera samples through pixel (`x`, `y`),
-/// estimating at the first surface only when `estimate_first` (see [`radiance`]).
+/// gathering what `collect` says (see [`radiance`]).
 fn pixel_radiance(
     scene: &Scene,
     bvh: &SceneBvh,
     settings: &CameraSamples,
-    x: u32,
-    y: u32,
-    estimate_first: bool,
+    (x, y): (u32, u32),
+    collect: Collect,
     mut estimate: impl FnMut(&Interaction, Vec3, &mut Rng) -> Vec3,
 ) -> Vec3 {
     let cam = &scene.camera;
@@ -149,7 +175,7 @@ fn pixel_radiance(
             cam.position,
             dir,
             max_delta,
-            estimate_first,
+            collect,
             &mut rng,
             &mut estimate,
         );
@@ -159,11 +185,10 @@ fn pixel_radiance(
 
 /// Radiance arriving at `origin` from `-dir`: estimates at every non-delta surface the ray
 /// reaches through up to `max_delta` delta scatterings (the first surface only when
-/// `estimate_first`). The estimate covers a surface's non-delta lobes; its delta lobe (if
+/// [`Collect::Everything`]). The estimate covers a surface's non-delta lobes; its delta lobe (if
 /// any) is followed when `Material::sample` picks it, with the sample weight accounting for
-/// that choice. With `estimate_first` (the whole image), the light the path meets is added
-/// too: emitting surfaces, and the sky and suns' discs where it leaves the scene (the
-/// specular image alone leaves them to the methods' own passes).
+/// that choice. The light the path meets (emitting surfaces, and the sky and suns' discs
+/// where it leaves the scene) is added where `collect` says.
 #[allow(clippy::too_many_arguments)]
 fn radiance(
     scene: &Scene,
@@ -171,7 +196,7 @@ fn radiance(
     origin: Vec3,
     dir: Vec3,
     max_delta: u32,
-    estimate_first: bool,
+    collect: Collect,
     rng: &mut Rng,
     mut estimate: impl FnMut(&Interaction, Vec3, &mut Rng) -> Vec3,
 ) -> Vec3 {
@@ -180,16 +205,17 @@ fn radiance(
     let (mut o, mut d) = (origin, dir);
     for depth in 0..=max_delta {
         let Some(hit) = bvh.intersect(o, d, f32::INFINITY) else {
-            if estimate_first {
+            if collect.light_at(depth) {
                 l += beta * crate::trace::direct::escaped(scene, d, None, true);
             }
             break;
         };
         let it = Interaction::new(scene, &hit, d);
         let wo = -d;
-        if estimate_first {
+        if collect.light_at(depth) {
             l += beta * it.material.emitted(it.ng, wo);
         }
+        let estimate_first = collect.estimate_first();
         if (depth > 0 || estimate_first) && !it.material.is_purely_specular() {
             l += beta * estimate(&it, wo, rng);
         }

@@ -38,6 +38,7 @@ use crate::error::Result;
 use crate::image::Image;
 use crate::sampling::Rng;
 use crate::scene::Scene;
+use crate::trace::direct::escaped;
 use crate::trace::{Hit, Interaction, SceneBvh};
 use glam::Vec3;
 use rayon::prelude::*;
@@ -161,8 +162,9 @@ struct Pending {
 
 /// Follows the camera ray `dir` from the camera through delta lobes, splitting at the
 /// first `SPLIT_DEPTH` scatterings (sampling deeper ones with `rng`), and calls
-/// `land(hit, ray direction, beta)` at every non-delta surface reached after at least one
-/// delta scattering; `hit(key, object)` sees every ray up to depth `SPLIT_DEPTH` (`key`:
+/// `land(hit, ray direction, beta)` at every non-delta or emitting surface reached after at
+/// least one delta scattering, and with no hit where such a ray leaves the scene;
+/// `hit(key, object)` sees every ray up to depth `SPLIT_DEPTH` (`key`:
 /// its depth and the lobes taken; `object`: what it hits, `None` on a miss).
 fn follow(
     scene: &Scene,
@@ -170,7 +172,7 @@ fn follow(
     dir: Vec3,
     max_delta: u32,
     rng: Option<&mut Rng>,
-    mut land: impl FnMut(&Hit, Vec3, Vec3),
+    mut land: impl FnMut(Option<&Hit>, Vec3, Vec3),
     mut hit: impl FnMut(u64, Option<u64>),
 ) {
     let mut rng = rng;
@@ -187,12 +189,15 @@ fn follow(
             hit(p.key, found.map(|h| object_of(scene, h.triangle)));
         }
         let Some(h) = found else {
+            if p.depth > 0 {
+                land(None, p.dir, p.beta);
+            }
             continue;
         };
         let it = Interaction::new(scene, &h, p.dir);
         let wo = -p.dir;
-        if p.depth > 0 && !it.material.is_purely_specular() {
-            land(&h, p.dir, p.beta);
+        if p.depth > 0 && (!it.material.is_purely_specular() || it.material.emits()) {
+            land(Some(&h), p.dir, p.beta);
         }
         if (p.depth == 0 && !it.material.has_delta_lobe()) || p.depth >= max_delta {
             continue;
@@ -226,11 +231,12 @@ fn follow(
     }
 }
 
-/// A non-delta surface reached from the camera through delta scatterings: the hit, the
-/// ray that reached it, the path throughput, and which sample of its pixel it belongs to.
+/// A non-delta (or emitting) surface reached from the camera through delta scatterings:
+/// the hit (none where the ray left the scene), the ray that reached it, the path
+/// throughput, and which sample of its pixel it belongs to.
 #[derive(Clone, Copy, Debug)]
 struct Landing {
-    hit: Hit,
+    hit: Option<Hit>,
     dir: Vec3,
     beta: Vec3,
     sample: u32,
@@ -260,7 +266,7 @@ fn sample(
         Some(&mut rng),
         |hit, dir, beta| {
             out.push(Landing {
-                hit: *hit,
+                hit: hit.copied(),
                 dir,
                 beta,
                 sample: s,
@@ -470,7 +476,7 @@ pub fn trace_landings(
         .map(|(c, k)| {
             let own = &c.landings[c.offsets[k] as usize..c.offsets[k + 1] as usize];
             own.iter()
-                .filter(|l| gathers_at(l.sample, c.samples[k]))
+                .filter(|l| l.hit.is_some() && gathers_at(l.sample, c.samples[k]))
                 .count() as u64
         })
         .sum();
@@ -478,7 +484,8 @@ pub fn trace_landings(
 }
 
 /// The specular image of `landings`: per pixel, the mean over its samples of the
-/// next-event estimates `direct(it, wo)` at their landings, plus the mean over its first
+/// next-event estimates `direct(it, wo)` at their landings, the radiance the landed
+/// surfaces emit and the sky's and suns' discs where the paths leave the scene, plus the mean over its first
 /// [`EDGE_GATHERS`] samples of the photon estimates `gather(it, wo, scratch)` (`None`:
 /// none); `S` is per-thread scratch space.
 pub fn shade_landings<S: Default + Send>(
@@ -504,8 +511,16 @@ pub fn shade_landings<S: Default + Send>(
                     let (mut l_direct, mut l_gather) = (Vec3::ZERO, Vec3::ZERO);
                     let range = chunk.offsets[k] as usize..chunk.offsets[k + 1] as usize;
                     for l in &chunk.landings[range] {
-                        let it = Interaction::new(scene, &l.hit, l.dir);
+                        let Some(hit) = &l.hit else {
+                            l_direct += l.beta * escaped(scene, l.dir, None, true);
+                            continue;
+                        };
+                        let it = Interaction::new(scene, hit, l.dir);
                         let wo = -l.dir;
+                        l_direct += l.beta * it.material.emitted(it.ng, wo);
+                        if it.material.is_purely_specular() {
+                            continue;
+                        }
                         l_direct += l.beta * direct(&it, wo);
                         if let Some(gather) = gather.filter(|_| gathers_at(l.sample, n)) {
                             l_gather += l.beta * gather(&it, wo, scratch);
@@ -681,5 +696,55 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// The light met through a mirror: a perfect mirror sphere (reflectance 1) under a
+    /// constant sky of radiance L, no lights, seen from outside. Every specular path leaves
+    /// the scene after one reflection (a convex sphere never sees itself), so the specular
+    /// image is exactly L on pixels whose samples all hit the sphere, in both samplings.
+    #[test]
+    fn mirrors_show_the_sky_they_reflect() {
+        let json = r#"{
+            "camera": {"position": [0, 0, 3], "look_at": [0, 0, 0], "fov": 40,
+                       "width": 24, "height": 24},
+            "environment": {"radiance": [0.25, 0.5, 1]},
+            "materials": {"mirror": {"diffuse": [0, 0, 0], "specular": [1, 1, 1],
+                                     "roughness": 0}},
+            "objects": [{"shape": {"type": "sphere", "radius": 0.8, "subdivisions": 5},
+                         "material": "mirror"}]
+        }"#;
+        let scene =
+            Scene::from_json(json, "mirror-sky", &std::collections::HashMap::new()).unwrap();
+        let bvh = SceneBvh::build(&scene);
+        let settings = CameraSamples {
+            spp: 4,
+            seed: 3,
+            max_depth: 8,
+            first_hit_aovs: false,
+        };
+        let sky = Vec3::new(0.25, 0.5, 1.0);
+        let none = |_: &Interaction, _: Vec3| Vec3::ZERO;
+        let full = delta_image(&scene, &bvh, &settings, &Silent, |_, _, _: &mut ()| {
+            Vec3::ZERO
+        })
+        .unwrap();
+        let with =
+            adaptive_delta_image::<()>(&scene, &bvh, &settings, &Silent, none, None).unwrap();
+        // The central 8×8 pixels lie well inside the sphere's disc (radius ~9 pixels).
+        let mut inside = 0;
+        for y in 8..16 {
+            for x in 8..16 {
+                let i = y * 24 + x;
+                for img in [&full, &with] {
+                    let e = (img.pixels[i] - sky).abs().max_element();
+                    assert!(e < 1e-5, "pixel ({x}, {y}): {} vs {sky}", img.pixels[i]);
+                }
+                inside += 1;
+            }
+        }
+        assert_eq!(inside, 64);
+        // Outside the sphere nothing is added (the background is the GPU passes').
+        assert_eq!(with.pixels[0], Vec3::ZERO);
+        assert_eq!(full.pixels[0], Vec3::ZERO);
     }
 }

@@ -5,7 +5,9 @@
 //! approximated by ... a traditional photon map gather"): next-event estimation for direct
 //! light and a k-nearest-neighbour gather over the frame's stored photons (which exclude
 //! the bounce-map hits, i.e. direct light) wherever the specular path lands; on Lambertian
-//! surfaces, the estimate precomputed at a nearby photon (`photon::irradiance`).
+//! surfaces, the estimate precomputed at a nearby photon (`photon::irradiance`). The light
+//! the paths meet beyond the first surface is added too (emitting surfaces they land on, the
+//! sky and suns' discs where they leave the scene): no rasterized pass sees it.
 
 use super::camera_pass::{delta_image, CameraSamples};
 use super::delta_paths::{
@@ -129,7 +131,9 @@ fn shade(
 
 /// Radiance reaching the camera through the delta lobes of the first surface seen, with
 /// next-event estimation of the scene's lights only where the path lands (method `bidir`,
-/// which keeps no photon map): the indirect light behind mirrors and glass is missing.
+/// which keeps no photon map; its `delta_camera_paths` add the indirect light behind
+/// mirrors and glass), and the light the paths meet (emitters they land on, the sky and
+/// suns' discs where they leave the scene: no other part of `bidir` counts those paths).
 pub fn specular_paths_direct(
     scene: &Scene,
     bvh: &SceneBvh,
