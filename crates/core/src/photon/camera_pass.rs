@@ -205,7 +205,7 @@ fn radiance(
         }
         let wi = it.frame.to_world(bs.wi);
         let same_side = wi.dot(it.ng) * wo.dot(it.ng) > 0.0;
-        if same_side == matches!(bs.lobe, crate::bsdf::Lobe::GlassRefract) {
+        if same_side == bs.lobe.crosses() {
             break;
         }
         beta *= bs.weight;
