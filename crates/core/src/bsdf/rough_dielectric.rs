@@ -134,7 +134,7 @@ pub fn sample(m: &Material, wo: Vec3, rng: &mut Rng) -> Option<BsdfSample> {
     }
     let wi = (wi_up * sign).normalize();
     let pdf = pdf(m, wo, wi);
-    if !(pdf > 0.0) || !pdf.is_finite() {
+    if !(pdf.is_finite() && pdf > 0.0) {
         return None;
     }
     let weight = eval(m, wo, wi) * wi.z.abs() / pdf;

@@ -161,7 +161,7 @@ fn pixel_radiance(
 /// reaches through up to `max_delta` delta scatterings (the first surface only when
 /// `estimate_first`). The estimate covers a surface's non-delta lobes; its delta lobe (if
 /// any) is followed when `Material::sample` picks it, with the sample weight accounting for
-/// that choice. With `estimate_first` (the whole image), the light the path meets is added
+/// that choice. Rough glass is followed through whatever lobe is sampled, never estimated. With `estimate_first` (the whole image), the light the path meets is added
 /// too: emitting surfaces, and the sky and suns' discs where it leaves the scene (the
 /// specular image alone leaves them to the methods' own passes).
 #[allow(clippy::too_many_arguments)]
@@ -190,7 +190,11 @@ fn radiance(
         if estimate_first {
             l += beta * it.material.emitted(it.ng, wo);
         }
-        if (depth > 0 || estimate_first) && !it.material.is_purely_specular() {
+        // Rough glass is followed like a delta lobe (its light arrives through the glass,
+        // which neither the photons on its surface nor next-event estimation resolve: the
+        // sky seen through it is no photon).
+        let followed = it.material.rough_glass;
+        if (depth > 0 || estimate_first) && !it.material.is_purely_specular() && !followed {
             l += beta * estimate(&it, wo, rng);
         }
         if depth == 0 && !estimate_first && !it.material.has_delta_lobe() {
@@ -200,7 +204,7 @@ fn radiance(
         let Some(bs) = it.material.sample(it.frame.to_local(wo), rng) else {
             break;
         };
-        if !bs.lobe.is_delta() {
+        if !bs.lobe.is_delta() && !followed {
             break;
         }
         let wi = it.frame.to_world(bs.wi);
