@@ -33,6 +33,7 @@ def test_every_sphere_has_a_reference():
         "conductor-au",
         "roughconductor-cu",
         "roughconductor-al-ggx",
+        "roughdielectric",
     }
     for name in NAMES:
         assert (SCENES / f"{name}-reference.exr").stat().st_size < 80_000
@@ -72,10 +73,39 @@ def test_gpu_methods_match_mitsuba(name, method):
     assert np.all(np.abs(ratio - 1) <= 0.05), f"{name} {method}: ratio per channel {ratio}"
 
 
+@pytest.mark.parametrize(
+    "method",
+    [
+        pytest.param(
+            "photon",
+            marks=pytest.mark.xfail(
+                strict=True,
+                reason="photon: image mean 1.033 of Mitsuba's; the floor in front of the "
+                "sphere, lit through the rough glass's lobes, 2x too bright (gather: 1.004)",
+            ),
+        ),
+        "gather",
+    ],
+)
+def test_photon_methods_render_rough_glass(method):
+    """`photon` and `gather` scatter photons and camera paths through the rough glass with
+    the CPU BSDF (photons with its adjoint): the image mean within 3% of Mitsuba's per
+    channel (measured: see docs/bench/materials.md)."""
+    scene = gi.load_scene(SCENES / "roughdielectric.xml")
+    r = gi.Renderer(scene, method, size=(64, 64), spp=16, photons=200_000, seed=7)
+    img = r.render().radiance[..., :3]
+    ref = gi.read_image(SCENES / "roughdielectric-reference.exr")[..., :3]
+    ratio = img.reshape(-1, 3).mean(0) / ref.reshape(-1, 3).mean(0)
+    assert np.all(np.abs(ratio - 1) <= 0.03), f"{method}: ratio per channel {ratio}"
+
+
 def test_gpu_methods_name_their_stand_ins():
     scene = gi.load_scene(SCENES / "plastic.xml")
     with pytest.warns(gi.RenderWarning, match="uber stand-ins"):
         gi.Renderer(scene, "direct", size=(16, 16))
+    glass = gi.load_scene(SCENES / "roughdielectric.xml")
+    with pytest.warns(gi.RenderWarning, match="smooth glass"):
+        gi.Renderer(glass, "direct", size=(16, 16))
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         gi.Renderer(scene, "path", size=(16, 16), spp=1)
@@ -106,6 +136,20 @@ def test_gpu_methods_name_their_stand_ins():
             '<bsdf type="plastic"><float name="int_ior" value="1.2"/>'
             '<float name="ext_ior" value="1.33"/></bsdf>',
             '<bsdf type="plastic">',
+        ),
+        (
+            '<bsdf type="roughdielectric"><float name="alpha_u" value="0.1"/>'
+            '<float name="alpha_v" value="0.3"/></bsdf>',
+            '<float name="alpha_u">',
+        ),
+        (
+            '<bsdf type="roughdielectric"><float name="int_ior" value="1.0"/>'
+            '<float name="ext_ior" value="1.33"/></bsdf>',
+            '<bsdf type="roughdielectric">',
+        ),
+        (
+            '<bsdf type="roughdielectric"><string name="distribution" value="phong"/></bsdf>',
+            '<string name="distribution">',
         ),
     ],
 )

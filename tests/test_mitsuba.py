@@ -143,7 +143,7 @@ def write(tmp_path, body):
 @pytest.mark.parametrize(
     "body, element, line",
     [
-        ('<bsdf type="roughdielectric" id="g"/>', '<bsdf type="roughdielectric">', 6),
+        ('<bsdf type="thindielectric" id="g"/>', '<bsdf type="thindielectric">', 6),
         ('<shape type="serialized"/>', '<shape type="serialized">', 6),
         (
             '<shape type="cube">\n<emitter type="point"/></shape>',

@@ -233,41 +233,5 @@ def test_normal_map_y_and_rectangle_uv_as_mitsuba(tmp_path, light, expected):
     assert r.radiance[6:10, 6:10].mean() == pytest.approx(expected, rel=0.01)
 
 
-MATERIALS = Path(__file__).parent / "scenes" / "mitsuba-materials"
-# Measured today (the sphere's disc, 64 spp; within 0.5% over seeds): plastic 1.002, 0.988,
-# 0.971; roughplastic GGX 1.097, 1.072, 1.044; Beckmann 1.032, 1.012, 0.989; conductor Au
-# 1.048, 0.967, 1.029; roughconductor Cu 0.933, 0.957, 0.975 before branch `materials`
-# (Mitsuba's plastic coating, Beckmann, complex-IOR Fresnel), which they now pass;
-# roughdielectric is refused (no rough transmission yet): a strict xfail.
-MATERIAL_SPHERES = [
-    "plastic",
-    "roughplastic-ggx",
-    "roughplastic-beckmann",
-    "conductor-au",
-    "roughconductor-cu",
-    "roughdielectric",
-]
-
-
-@pytest.mark.parametrize(
-    "name",
-    [
-        pytest.param(n, marks=pytest.mark.xfail(strict=True, reason="rough transmission"))
-        if n == "roughdielectric"
-        else n
-        for n in MATERIAL_SPHERES
-    ],
-)
-def test_material_sphere_matches_mitsuba(name):
-    """One sphere per BSDF of issue 42 (`scripts/data/mitsuba_materials.py`, Mitsuba 3.9.1
-    at 4096 spp): loads without an AssetWarning (nothing approximated) and the sphere's disc
-    (radius 15 px about the image centre) matches Mitsuba's mean within 2% per channel."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")
-        scene = gi.load_scene(MATERIALS / f"{name}.xml")
-    img = gi.render(scene, "path", spp=64, seed=1).radiance
-    ref = gi.read_image(MATERIALS / f"{name}.exr")[..., :3]
-    ys, xs = np.mgrid[0:64, 0:64] + 0.5
-    disc = (xs - 32) ** 2 + (ys - 32) ** 2 < 15**2
-    ratio = img[disc].mean(axis=0) / ref[disc].mean(axis=0)
-    assert np.all(np.abs(ratio - 1) <= 0.02), (name, ratio)
+# The material spheres (one per BSDF of issue 42, roughdielectric included) are
+# tests/scenes/materials/, checked by tests/test_materials_mitsuba.py.

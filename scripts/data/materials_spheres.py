@@ -1,17 +1,23 @@
 """Single-material spheres of issue 42 (Mitsuba's plastic, roughplastic with GGX and
-Beckmann, conductor and roughconductor with named metals) and their Mitsuba 3 references.
+Beckmann, conductor and roughconductor with named metals, roughdielectric) and their
+Mitsuba 3 references: the one corpus of material spheres (tests/test_materials_mitsuba.py,
+scripts/probe/materials_vs_mitsuba.py).
 
 Writes tests/scenes/materials/<name>.xml (Mitsuba 3 XML: a unit sphere under a constant
-environment and a small rectangular area light, 64×64, box pixel filter) and
+environment and a small rectangular area light, 64×64, box pixel filter; the glass sphere
+stands on a grey floor, which it refracts, since a uniform environment seen through glass
+looks the same whatever the glass) and
 <name>-reference.exr (Mitsuba's `path`, max_depth 65 = gi's 64 scattering events, the mean
 of BATCHES renders of different seeds), plus references.json: each reference's mean per
 channel and its standard error (from the batches).
 
-Run: /work/main/.venv/bin/python scripts/data/materials_spheres.py  (pip install
-mitsuba==3.9.1; CI never runs Mitsuba)."""
+Run: /work/main/.venv/bin/python scripts/data/materials_spheres.py [NAME ...]  (pip
+install mitsuba==3.9.1; CI never runs Mitsuba). With names, only those spheres are
+written and their entries of references.json replaced."""
 
 import json
 import pathlib
+import sys
 
 import numpy as np
 
@@ -46,7 +52,23 @@ MATERIALS = {
         <string name="distribution" value="ggx"/>
         <float name="alpha" value="0.3"/>
     </bsdf>""",
+    "roughdielectric": """<bsdf type="roughdielectric">
+        <float name="alpha" value="0.1"/>
+        <float name="int_ior" value="1.5"/>
+    </bsdf>""",
 }
+# Spheres that stand on a floor (y = -1, 20 m square, grey diffuse).
+FLOOR = """<shape type="rectangle">
+        <transform name="to_world">
+            <scale value="10"/>
+            <rotate x="1" angle="-90"/>
+            <translate y="-1"/>
+        </transform>
+        <bsdf type="diffuse">
+            <rgb name="reflectance" value="0.4"/>
+        </bsdf>
+    </shape>"""
+FLOORED = {"roughdielectric"}
 
 SCENE = """<scene version="3.0.0">
     <!-- Issue 42's single-material sphere: {name} (scripts/data/materials_spheres.py). -->
@@ -81,7 +103,7 @@ SCENE = """<scene version="3.0.0">
     </shape>
     <shape type="sphere">
         {bsdf}
-    </shape>
+    </shape>{floor}
 </scene>
 """
 
@@ -91,9 +113,12 @@ def main() -> None:
 
     mi.set_variant("scalar_rgb")
     OUT.mkdir(parents=True, exist_ok=True)
-    meta = {}
-    for name, bsdf in MATERIALS.items():
-        xml = SCENE.format(name=name, spp=SPP, size=SIZE, bsdf=bsdf)
+    names = sys.argv[1:] or list(MATERIALS)
+    meta = json.loads((OUT / "references.json").read_text()) if sys.argv[1:] else {}
+    for name in names:
+        bsdf = MATERIALS[name]
+        floor = "\n    " + FLOOR if name in FLOORED else ""
+        xml = SCENE.format(name=name, spp=SPP, size=SIZE, bsdf=bsdf, floor=floor)
         path = OUT / f"{name}.xml"
         path.write_text(xml)
         scene = mi.load_file(str(path))
@@ -109,6 +134,7 @@ def main() -> None:
             "mitsuba": mi.__version__,
         }
         print(name, meta[name]["mean"], se / img.reshape(-1, 3).mean(0))
+    meta = dict(sorted(meta.items(), key=lambda kv: list(MATERIALS).index(kv[0])))
     (OUT / "references.json").write_text(json.dumps(meta, indent=1) + "\n")
 
 

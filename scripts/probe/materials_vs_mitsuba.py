@@ -55,10 +55,11 @@ def main() -> None:
         "# Mitsuba's materials: gi against Mitsuba 3.9.1",
         "",
         "Single-material spheres of `tests/scenes/materials/` (64×64, a constant environment",
-        "and a small area light; references: Mitsuba `path`, 4096 spp, box filter). Ratio: gi's",
-        "image mean over Mitsuba's per channel (R, G, B). `direct` renders direct light only",
-        "(its ratio is not 1 by design); `direct`, `ispm` and `bidir` shade the models as uber",
-        "stand-ins on the GPU (docs/scene-format.md). Settings: "
+        "and a small area light, the rough glass on a grey floor; references: Mitsuba `path`,",
+        "4096 spp, box filter). Ratio: gi's image mean over Mitsuba's per channel (R, G, B).",
+        "`direct` renders direct light only (its ratio is not 1 by design); `direct`, `ispm` and",
+        "`bidir` shade the models as uber stand-ins on the GPU and render rough glass as smooth",
+        "glass (docs/scene-format.md). Settings: "
         + ", ".join(f"`{m}` {s}" for m, s in SETTINGS.items()),
         "",
         "Command: `/work/wt/dev.sh python scripts/probe/materials_vs_mitsuba.py` (lavapipe).",

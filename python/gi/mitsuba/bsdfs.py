@@ -57,6 +57,8 @@ KNOWN = {
     "conductor": _CONDUCTOR,
     "roughconductor": _CONDUCTOR | _ROUGH,
     "dielectric": {"int_ior", "ext_ior", "specular_transmittance"},
+    "roughdielectric": {"int_ior", "ext_ior", "specular_reflectance", "specular_transmittance"}
+    | _ROUGH,
     "plastic": _PLASTIC,
     "roughplastic": _PLASTIC | _ROUGH,
 }
@@ -142,6 +144,33 @@ def dielectric(r: Reader, el: Element, props: Props) -> dict[str, Any]:
     }
 
 
+def roughdielectric(r: Reader, el: Element, props: Props) -> dict[str, Any]:
+    """Mitsuba's roughdielectric (Walter et al. 2007): gi's `rough_glass` of index
+    int_ior/ext_ior, `specular` = `specular_reflectance` and `transmission` =
+    `specular_transmittance` (both default 1). Anisotropic roughness (αu ≠ αv) is refused."""
+    if ("alpha_u" in props or "alpha_v" in props) and "alpha" not in props:
+        au = r.float(el, props, "alpha_u", 0.1)
+        av = r.float(el, props, "alpha_v", 0.1)
+        if not math.isclose(au, av, rel_tol=1e-6):
+            key = "alpha_u" if "alpha_u" in props else "alpha_v"
+            raise r.error(props[key], "anisotropic roughness (alpha_u ≠ alpha_v) is not supported")
+        alpha = au
+    else:
+        alpha = r.float(el, props, "alpha", 0.1)
+    n = ior(r, props, "int_ior", 1.5046) / ior(r, props, "ext_ior", 1.000277)
+    if not 1.0 < n <= 4.0:
+        raise r.error(el, f"the relative index int_ior/ext_ior = {n:.4g} is not in (1, 4]")
+    return {
+        "diffuse": np.zeros(3),
+        "specular": r.color(props, "specular_reflectance", 1.0),
+        "transmission": r.color(props, "specular_transmittance", 1.0),
+        "ior": n,
+        "roughness": min(math.sqrt(max(alpha, 1e-4)), 1.0),
+        "distribution": distribution(r, props),
+        "rough_glass": True,
+    }
+
+
 def plastic(r: Reader, el: Element, props: Props) -> dict[str, Any]:
     """Mitsuba's plastic: the diffuse base under a dielectric coating of index
     int_ior/ext_ior (gi's `coating_ior`), `specular_reflectance` multiplying its Fresnel
@@ -169,6 +198,7 @@ BSDFS: dict[str, Callable[[Reader, Element, Props], dict[str, Any]]] = {
     "conductor": conductor,
     "roughconductor": roughconductor,
     "dielectric": dielectric,
+    "roughdielectric": roughdielectric,
     "plastic": plastic,
     "roughplastic": roughplastic,
 }

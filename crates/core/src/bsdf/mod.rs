@@ -18,6 +18,7 @@
 pub mod coated;
 pub mod fresnel;
 pub mod microfacet;
+pub mod rough_dielectric;
 
 pub use coated::Coating;
 pub use microfacet::Distribution;
@@ -56,6 +57,10 @@ pub struct Material {
     pub coating: Option<Coating>,
     /// A conductor's Fresnel term in place of Schlick's: `specular` multiplies it.
     pub conductor: Option<Conductor>,
+    /// Mitsuba's roughdielectric: the glass of index `ior` is rough (`roughness`,
+    /// `distribution`), `specular` multiplying its reflection and `transmission` its
+    /// transmission ([`rough_dielectric`]). Replaces the uber's lobes.
+    pub rough_glass: bool,
 }
 
 /// The complex index of refraction `eta + i·k` (relative to the outside, per channel) of a
@@ -92,6 +97,7 @@ impl Default for Material {
             distribution: Distribution::Ggx,
             coating: None,
             conductor: None,
+            rough_glass: false,
         }
     }
 }
@@ -104,12 +110,18 @@ pub enum Lobe {
     Mirror,
     GlassReflect,
     GlassRefract,
+    /// Refraction through rough glass (non-delta).
+    RoughRefract,
 }
 
 impl Lobe {
     /// Delta lobes can't be evaluated or reached by next-event estimation.
     pub fn is_delta(self) -> bool {
         matches!(self, Lobe::Mirror | Lobe::GlassReflect | Lobe::GlassRefract)
+    }
+    /// Whether the sampled direction crosses the surface (the other side of the geometry).
+    pub fn crosses(self) -> bool {
+        matches!(self, Lobe::GlassRefract | Lobe::RoughRefract)
     }
 }
 
@@ -141,7 +153,7 @@ impl Material {
     /// side of the surface (and 0 across it): no specular lobe and no Fresnel coupling of
     /// the diffuse lobe.
     pub fn lambertian(&self) -> Option<Vec3> {
-        (!self.has_specular() && !self.fresnel && self.coating.is_none())
+        (!self.has_specular() && !self.fresnel && self.coating.is_none() && !self.rough_glass)
             .then(|| self.diffuse * FRAC_1_PI)
     }
 
@@ -164,6 +176,15 @@ impl Material {
                 specular: self.specular * fresnel::conductor(1.0, c.eta, c.k),
                 fresnel: true,
                 conductor: None,
+                ..*self
+            }
+        } else if self.rough_glass {
+            // Smooth glass of the same index and transmittance: the reflection's Fresnel
+            // term is the glass lobe's own (the uber's specular lobe stays off).
+            Material {
+                specular: Vec3::ZERO,
+                roughness: 0.0,
+                rough_glass: false,
                 ..*self
             }
         } else {
@@ -202,8 +223,9 @@ impl Material {
     pub fn has_specular(&self) -> bool {
         self.specular.max_element() > 0.0
     }
+    /// Whether the material has the uber's smooth (delta) glass lobe.
     pub fn has_transmission(&self) -> bool {
-        self.transmission.max_element() > 0.0
+        self.transmission.max_element() > 0.0 && !self.rough_glass
     }
     /// True when the material can scatter into a delta lobe (perfect mirror or smooth
     /// glass): what a rasterizer that shades the first surface cannot give.
@@ -213,7 +235,9 @@ impl Material {
 
     /// True when every lobe is a delta lobe (nothing for next-event estimation to evaluate).
     pub fn is_purely_specular(&self) -> bool {
-        self.diffuse.max_element() <= 0.0 && (!self.has_specular() || self.is_mirror())
+        !self.rough_glass
+            && self.diffuse.max_element() <= 0.0
+            && (!self.has_specular() || self.is_mirror())
     }
 
     /// Whether the surface emits light.
@@ -269,6 +293,9 @@ impl Material {
 
     /// The non-delta part of the BSDF, f(wo, wi). Two-sided: evaluated in the hemisphere of `wo`.
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> Vec3 {
+        if self.rough_glass {
+            return rough_dielectric::eval(self, wo, wi);
+        }
         if wo.z * wi.z <= 0.0 {
             return Vec3::ZERO;
         }
@@ -311,6 +338,9 @@ impl Material {
 
     /// Density of [`Material::sample`] producing the non-delta direction `wi`.
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        if self.rough_glass {
+            return rough_dielectric::pdf(self, wo, wi);
+        }
         if wo.z * wi.z <= 0.0 {
             return 0.0;
         }
@@ -338,12 +368,28 @@ impl Material {
     /// Importance-samples a direction. `None` when the sample is absorbed (no lobe has any
     /// energy, or a GGX sample fell below the horizon).
     pub fn sample(&self, wo: Vec3, rng: &mut Rng) -> Option<BsdfSample> {
+        if self.rough_glass {
+            return rough_dielectric::sample(self, wo, rng);
+        }
         let flip = wo.z < 0.0;
         let sign = if flip { -1.0 } else { 1.0 };
         if self.is_lambertian() {
             return self.sample_lambertian(sign, rng);
         }
         self.sample_general(wo, sign, rng)
+    }
+
+    /// [`Material::sample`] for a particle carried from the light (photons, light
+    /// subpaths): `wo` points back along the particle's path and the weight is the adjoint
+    /// BSDF's, `f(wi, wo)·|cos θi|/pdf`. It differs from [`Material::sample`]'s only through
+    /// rough glass (the η'² of [`rough_dielectric::importance_factor`]); the uber's smooth
+    /// glass weighs both transports alike (radiance carried as L/η² inside the glass).
+    pub fn sample_adjoint(&self, wo: Vec3, rng: &mut Rng) -> Option<BsdfSample> {
+        let mut s = self.sample(wo, rng)?;
+        if self.rough_glass {
+            s.weight *= rough_dielectric::importance_factor(self, wo, s.wi);
+        }
+        Some(s)
     }
 
     /// [`Material::sample`] for every material.
@@ -430,7 +476,7 @@ impl Material {
         let coated = self
             .coating
             .and_then(|c| coated::delta_lobe(self, &c, wo_up, sign));
-        let [ps, _, pg] = if self.coating.is_some() {
+        let [ps, _, pg] = if self.coating.is_some() || self.rough_glass {
             [0.0; 3]
         } else {
             self.lobe_probabilities(wo_up.z)
@@ -475,6 +521,9 @@ impl Material {
     /// The scatter probability ρs = ∫ f cos dωi for viewing direction `wo` (exact for the
     /// diffuse, mirror and glass lobes; the GGX lobe's is bounded by its Fresnel term).
     pub fn scatter_probability(&self, wo: Vec3) -> Vec3 {
+        if self.rough_glass {
+            return rough_dielectric::scatter_probability(self, wo);
+        }
         if let Some(c) = &self.coating {
             return coated::scatter_probability(self, c, wo.z.abs());
         }
@@ -487,3 +536,5 @@ impl Material {
 mod tests;
 #[cfg(test)]
 mod tests_models;
+#[cfg(test)]
+mod tests_rough_dielectric;

@@ -11,6 +11,7 @@ mod bidir;
 mod context;
 mod direct;
 pub mod gather;
+mod glass_stand_in;
 mod gpu;
 mod ispm;
 pub mod options;
@@ -124,6 +125,9 @@ pub struct Renderer {
     environment_changed: bool,
     /// The number of lights the GPU scene's light buffer was made for.
     gpu_lights: usize,
+    /// Materials of rough glass that a GPU method renders as smooth glass
+    /// ([`glass_stand_in`]).
+    glass_stand_ins: Vec<String>,
 }
 
 /// Light transport `options` ask for that their method does not compute, one message each
@@ -191,12 +195,16 @@ impl Renderer {
             options.common.height.unwrap_or(scene.camera.height),
         );
         options::check_image_memory(&camera, method)?;
-        let warnings = transport_omissions(scene, options);
+        let mut scene = Scene {
+            camera,
+            ..scene.clone()
+        };
+        let glass_stand_ins = glass_stand_in::replace(&mut scene, method.uses_gpu());
+        let mut warnings = transport_omissions(&scene, options);
+        warnings.extend(glass_stand_in::warning(method.name(), &glass_stand_ins));
         Ok(Renderer {
-            scene: Scene {
-                camera,
-                ..scene.clone()
-            },
+            scene,
+            glass_stand_ins,
             options: options.clone(),
             warnings,
             bvh: None,
@@ -254,6 +262,16 @@ impl Renderer {
             _ => None,
         };
         let c = self.scene.apply(update)?;
+        let gpu = self.method().uses_gpu();
+        for name in glass_stand_in::replace(&mut self.scene, gpu) {
+            if !self.glass_stand_ins.contains(&name) {
+                self.glass_stand_ins.push(name);
+                self.warnings = transport_omissions(&self.scene, &self.options);
+                let method = self.method().name();
+                self.warnings
+                    .extend(glass_stand_in::warning(method, &self.glass_stand_ins));
+            }
+        }
         self.changes = self.changes.union(c);
         if c.any() {
             self.accum = None;
@@ -287,6 +305,9 @@ impl Renderer {
         scene.set_lighting(lighting);
         self.scene = scene;
         self.warnings = transport_omissions(&self.scene, &self.options);
+        let method = self.method().name();
+        self.warnings
+            .extend(glass_stand_in::warning(method, &self.glass_stand_ins));
         self.environment_changed = true;
         self.accum = None;
         self.ring = PhotonRing::new(self.options.method.temporal_frames() as usize);

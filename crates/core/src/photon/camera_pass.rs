@@ -187,8 +187,9 @@ fn pixel_radiance(
 /// reaches through up to `max_delta` delta scatterings (the first surface only when
 /// [`Collect::Everything`]). The estimate covers a surface's non-delta lobes; its delta lobe (if
 /// any) is followed when `Material::sample` picks it, with the sample weight accounting for
-/// that choice. The light the path meets (emitting surfaces, and the sky and suns' discs
-/// where it leaves the scene) is added where `collect` says.
+/// that choice. Rough glass is followed through whatever lobe is sampled, never estimated.
+/// The light the path meets (emitting surfaces, and the sky and suns' discs where it leaves
+/// the scene) is added where `collect` says.
 #[allow(clippy::too_many_arguments)]
 fn radiance(
     scene: &Scene,
@@ -216,7 +217,11 @@ fn radiance(
             l += beta * it.material.emitted(it.ng, wo);
         }
         let estimate_first = collect.estimate_first();
-        if (depth > 0 || estimate_first) && !it.material.is_purely_specular() {
+        // Rough glass is followed like a delta lobe (its light arrives through the glass,
+        // which neither the photons on its surface nor next-event estimation resolve: the
+        // sky seen through it is no photon).
+        let followed = it.material.rough_glass;
+        if (depth > 0 || estimate_first) && !it.material.is_purely_specular() && !followed {
             l += beta * estimate(&it, wo, rng);
         }
         if depth == 0 && !estimate_first && !it.material.has_delta_lobe() {
@@ -226,12 +231,12 @@ fn radiance(
         let Some(bs) = it.material.sample(it.frame.to_local(wo), rng) else {
             break;
         };
-        if !bs.lobe.is_delta() {
+        if !bs.lobe.is_delta() && !followed {
             break;
         }
         let wi = it.frame.to_world(bs.wi);
         let same_side = wi.dot(it.ng) * wo.dot(it.ng) > 0.0;
-        if same_side == matches!(bs.lobe, crate::bsdf::Lobe::GlassRefract) {
+        if same_side == bs.lobe.crosses() {
             break;
         }
         beta *= bs.weight;

@@ -206,7 +206,7 @@ fn follow(
         let mut push = |bs: crate::bsdf::BsdfSample, weight: Vec3| {
             let wi = it.frame.to_world(bs.wi);
             let same_side = wi.dot(it.ng) * wo.dot(it.ng) > 0.0;
-            if same_side == matches!(bs.lobe, crate::bsdf::Lobe::GlassRefract) {
+            if same_side == bs.lobe.crosses() {
                 return;
             }
             stack.push(Pending {

@@ -203,6 +203,7 @@ pub fn path_density_factor(m: &Material, lobe: Lobe) -> f32 {
     match lobe {
         Lobe::Diffuse => mean(m.diffuse) / 1000.0,
         Lobe::Glossy => mean(m.specular) / 10.0,
+        Lobe::RoughRefract => mean(m.transmission) / 10.0,
         Lobe::Mirror => mean(m.specular),
         Lobe::GlassReflect | Lobe::GlassRefract => mean(m.transmission),
     }

@@ -638,10 +638,10 @@ pub(crate) fn scatter(
     power: glam::Vec3,
     rng: &mut Rng,
 ) -> Option<Scattered> {
-    let bs = it.material.sample(it.frame.to_local(wo), rng)?;
+    let bs = it.material.sample_adjoint(it.frame.to_local(wo), rng)?;
     let wi = it.frame.to_world(bs.wi);
     let same_side = wi.dot(it.ng) * wo.dot(it.ng) > 0.0;
-    if same_side == matches!(bs.lobe, Lobe::GlassRefract) {
+    if same_side == bs.lobe.crosses() {
         return None;
     }
     let scattered = power * bs.weight;
@@ -679,7 +679,7 @@ fn scatter_differentials(
             let eta = if sign > 0.0 { 1.0 / ior } else { ior };
             diff.refract(d, wi, n, eta, dn);
         }
-        Lobe::Diffuse | Lobe::Glossy => diff.reemit(wi),
+        Lobe::Diffuse | Lobe::Glossy | Lobe::RoughRefract => diff.reemit(wi),
     }
 }
 

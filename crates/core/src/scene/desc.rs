@@ -162,6 +162,10 @@ pub struct MaterialDesc {
     pub conductor_eta: Option<V3>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub conductor_k: Option<V3>,
+    /// Mitsuba's roughdielectric: the glass lobe (`transmission`, `ior`) is rough with
+    /// `roughness` (√α) and `distribution`, and `specular` multiplies its reflection.
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub rough_glass: bool,
 }
 
 /// `"ggx"` or `"beckmann"`.

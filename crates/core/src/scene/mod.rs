@@ -918,6 +918,9 @@ pub(crate) fn material_from_desc(m: &MaterialDesc) -> std::result::Result<Materi
         (Some(_), None) => return Err(("conductor_k".into(), "needed with conductor_eta")),
         (None, Some(_)) => return Err(("conductor_eta".into(), "needed with conductor_k")),
     };
+    if m.rough_glass {
+        rough_glass_valid(m, coating.is_some() || conductor.is_some())?;
+    }
     Ok(Material {
         diffuse: m.diffuse.into(),
         specular: m.specular.into(),
@@ -930,7 +933,35 @@ pub(crate) fn material_from_desc(m: &MaterialDesc) -> std::result::Result<Materi
         distribution,
         coating,
         conductor,
+        rough_glass: m.rough_glass,
     })
+}
+
+/// Rough glass (Mitsuba's roughdielectric) has no diffuse base, no other Fresnel model and
+/// a rough surface (Mitsuba clamps α to 1e-4: roughness ≥ 0.01).
+fn rough_glass_valid(m: &MaterialDesc, other_model: bool) -> std::result::Result<(), FieldError> {
+    if other_model {
+        return Err((
+            "rough_glass".into(),
+            "excludes coating_ior and conductor_* (one model a material)",
+        ));
+    }
+    if m.diffuse.iter().any(|d| *d > 0.0) {
+        return Err((
+            "rough_glass".into(),
+            "needs diffuse 0 (glass has no diffuse base)",
+        ));
+    }
+    if m.roughness < 0.01 {
+        return Err((
+            "roughness".into(),
+            "must be at least 0.01 (α ≥ 1e-4) with rough_glass; smooth glass is roughness 0 without it",
+        ));
+    }
+    if m.ior <= 1.0 {
+        return Err(("ior".into(), "must exceed 1 with rough_glass"));
+    }
+    Ok(())
 }
 
 pub(crate) fn transform_matrix(t: &desc::TransformDesc) -> std::result::Result<Mat4, FieldError> {

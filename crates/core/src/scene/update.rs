@@ -341,6 +341,7 @@ impl Scene {
             coating_nonlinear: m.coating.is_some_and(|c| c.nonlinear),
             conductor_eta: m.conductor.map(|c| c.eta.into()),
             conductor_k: m.conductor.map(|c| c.k.into()),
+            rough_glass: m.rough_glass,
         })
     }
 }

@@ -121,7 +121,7 @@ pub fn trace_path(
                 }
             }
         }
-        let Some(bs) = it.material.sample(it.frame.to_local(w_prev), rng) else {
+        let Some(bs) = it.material.sample_adjoint(it.frame.to_local(w_prev), rng) else {
             return;
         };
         // Only paths whose first bounce is specular belong to this estimator.
@@ -130,7 +130,7 @@ pub fn trace_path(
         }
         let wi = it.frame.to_world(bs.wi);
         let same_side = wi.dot(it.ng) * w_prev.dot(it.ng) > 0.0;
-        if same_side == matches!(bs.lobe, crate::bsdf::Lobe::GlassRefract) {
+        if same_side == bs.lobe.crosses() {
             return;
         }
         power *= bs.weight;

@@ -310,7 +310,7 @@ pub fn radiance(
         // The sample must agree with the geometry: reflections stay on the viewer's side,
         // refractions cross.
         let same_side = wi.dot(it.ng) * wo.dot(it.ng) > 0.0;
-        if same_side == matches!(bs.lobe, crate::bsdf::Lobe::GlassRefract) {
+        if same_side == bs.lobe.crosses() {
             break;
         }
         beta *= bs.weight;

@@ -151,7 +151,7 @@ fn sample(
     while let Some(bs) = it.material.sample(it.frame.to_local(wo), rng) {
         let wi = it.frame.to_world(bs.wi);
         let same_side = wi.dot(it.ng) * wo.dot(it.ng) > 0.0;
-        if same_side == matches!(bs.lobe, crate::bsdf::Lobe::GlassRefract) {
+        if same_side == bs.lobe.crosses() {
             break;
         }
         let vertex = delta + 1;
@@ -211,7 +211,7 @@ fn through_x2(
     };
     let wi = it.frame.to_world(bs.wi);
     let same_side = wi.dot(it.ng) * wo.dot(it.ng) > 0.0;
-    if !bs.lobe.is_delta() || same_side == matches!(bs.lobe, crate::bsdf::Lobe::GlassRefract) {
+    if !bs.lobe.is_delta() || same_side == bs.lobe.crosses() {
         return Vec3::ZERO;
     }
     // x3 is vertex 3: the path tracer from there takes max_depth − 2 more scatterings.

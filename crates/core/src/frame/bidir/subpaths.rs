@@ -208,7 +208,7 @@ fn trace(
     let (mut q_mis, mut ns_prev, mut specular_prev) =
         (1.0f32, h.ns, h.material.is_purely_specular());
     while (out.len() as u32) < max_len {
-        let Some(bs) = material.sample(frame.to_local(w_prev), rng) else {
+        let Some(bs) = material.sample_adjoint(frame.to_local(w_prev), rng) else {
             break;
         };
         if light_traced && out.is_empty() && bs.lobe.is_delta() {
@@ -216,7 +216,7 @@ fn trace(
         }
         let wi = frame.to_world(bs.wi);
         let same_side = wi.dot(ng) * w_prev.dot(ng) > 0.0;
-        if same_side == matches!(bs.lobe, crate::bsdf::Lobe::GlassRefract) {
+        if same_side == bs.lobe.crosses() {
             break;
         }
         // Roulette only past the first RR_FREE vertices: every subpath reaches y2 … y4
