@@ -579,7 +579,7 @@ fn specular(
         // silhouettes and edges: 16 by default, as many over the whole image would cost
         // seconds a frame on the CPU at 512²). At 48² the first frame's relMSE against
         // `path` falls from 0.27 to 0.085 on `cornell-glass` and from 0.41 to 0.14 on
-        // `ring-room` with 4 samples instead of 1 (`examples/bidir_scenes`).
+        // `ring-room` with 4 samples instead of 1 (`benches/measure/bidir_scenes`).
         let (w, h) = (targets.width as u64, targets.height as u64);
         let paths = (w * h).max(specular_paths::MIN_LIGHT_PATHS);
         let (seed, depth) = (frame.seed, options.max_depth);

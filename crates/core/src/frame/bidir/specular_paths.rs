@@ -40,7 +40,7 @@ use rayon::prelude::*;
 /// `caustic-ring`'s mirror ring. Paths whose first bounce is not a delta lobe end after one
 /// ray. At 48² (2304 pixels) 2^18 instead of 2^16 paths take the first frame's relMSE
 /// against `path` from 0.030 to 0.017 on `mirror-shadow` and from 0.075 to 0.036 on
-/// `caustic-ring` (`examples/bidir_scenes`) for about 0.06 s more a frame.
+/// `caustic-ring` (`benches/measure/bidir_scenes`) for about 0.06 s more a frame.
 pub(super) const MIN_LIGHT_PATHS: u64 = 1 << 18;
 
 /// The sources of [`caustics`]: the point and spot lights (those whose light subpaths the
