@@ -13,17 +13,10 @@ pub(super) fn frame(
     draw: LightDraw,
     images: Images,
 ) -> Result<RenderOutput> {
-    let GpuState {
-        ctx,
-        scene,
-        targets,
-        timer,
-        ..
-    } = g;
-    if !targets.has_composite() {
-        targets.bind_composite(ctx, None);
+    if !g.targets.has_composite() {
+        g.targets.bind_composite(&g.ctx, None);
     }
-    let mut gpu = GpuFrame::begin(ctx, scene, targets, timer, &mut fc);
+    let mut gpu = GpuFrame::begin(&g.ctx, &mut g.scene, &mut g.targets, &mut g.timer, &mut fc);
     let mut encoder = gpu.encoder("direct frame");
     gpu.record_shadows(&mut encoder, &fc, draw);
     let encoder = gpu.record_direct(encoder, &fc)?;

@@ -21,29 +21,27 @@ pub(crate) type FieldError = (String, &'static str);
 
 /// The texture fields of the materials in [`parse_materials`]'s format, in order.
 pub fn parse_material_textures(json: &str, source_name: &str) -> Result<Vec<desc::TextureRefs>> {
+    let descs = material_descs(json, source_name)?;
+    Ok(descs.iter().map(|(_, d)| d.texture_refs()).collect())
+}
+
+/// The `[name, material]` pairs of [`parse_materials`]'s format; errors name the field.
+fn material_descs(json: &str, source_name: &str) -> Result<Vec<(String, MaterialDesc)>> {
     let de = &mut serde_json::Deserializer::from_str(json);
-    let descs: Vec<(String, MaterialDesc)> = serde_path_to_error::deserialize(de).map_err(|e| {
+    serde_path_to_error::deserialize(de).map_err(|e| {
         Error::scene(
             source_name,
             format!("materials{}", e.path()),
             e.inner().to_string(),
         )
-    })?;
-    Ok(descs.iter().map(|(_, d)| d.texture_refs()).collect())
+    })
 }
 
 /// Parses the materials carried by a mesh file (e.g. OBJ + MTL), as turned into descriptions
 /// by its loader: a JSON array of `[name, material]` pairs in the `materials` section's
 /// format. The order is kept: per-face material indices refer to it.
 pub fn parse_materials(json: &str, source_name: &str) -> Result<Vec<(String, Material)>> {
-    let de = &mut serde_json::Deserializer::from_str(json);
-    let descs: Vec<(String, MaterialDesc)> = serde_path_to_error::deserialize(de).map_err(|e| {
-        Error::scene(
-            source_name,
-            format!("materials{}", e.path()),
-            e.inner().to_string(),
-        )
-    })?;
+    let descs = material_descs(json, source_name)?;
     descs
         .iter()
         .map(|(name, d)| {

@@ -6,10 +6,9 @@
 //! photons that only overlap its leaf (`estimate/shaders/cluster.wgsl`). The hierarchy and
 //! the walk are [`super::directional`]'s too.
 
-use super::passes::BinnedPasses;
+use super::passes::{BinnedPasses, TILED_PARTS};
 use super::{Binned, Dispatch};
 use crate::estimate::wgsl;
-use crate::gpu::shaders;
 use crate::gpu::timer::Timer;
 
 /// The hierarchy's pipelines: building, walking, binning, and the two shadings (cluster
@@ -56,14 +55,7 @@ impl BinnedPasses {
             ] = self.pipelines(
                 device,
                 "cluster shader",
-                &[
-                    shaders::COMMON,
-                    shaders::BSDF,
-                    wgsl::PHOTON_VOLUME,
-                    shaders::FIXED_SUM,
-                    wgsl::TILED,
-                    wgsl::CLUSTER,
-                ],
+                &[&TILED_PARTS[..], &[wgsl::CLUSTER]].concat(),
                 [
                     "cluster_leaves",
                     "cluster_parents1",
@@ -163,21 +155,26 @@ pub(super) fn record_binning(
     }
 }
 
-/// Records the shading: the accepted photons summed per node as a quadratic, then each
-/// view sample's sum over its nodes and its leaf's test list.
-pub(super) fn record_shading(
+/// The shading's pipelines: the accepted photons summed per node as a quadratic, then each
+/// view sample's sum over its nodes and its leaf's test list ([`record_node_shading`]).
+pub(super) fn shading(p: &ClusterPipelines) -> [&wgpu::ComputePipeline; 2] {
+    [&p.accumulate, &p.shade]
+}
+
+/// Records a shading over the hierarchy under stage `stage`: `accumulate` once per node,
+/// then `shade` once per tile.
+pub(super) fn record_node_shading(
     b: &Binned,
-    passes: &BinnedPasses,
-    device: &wgpu::Device,
+    [accumulate, shade]: [&wgpu::ComputePipeline; 2],
     encoder: &mut wgpu::CommandEncoder,
     timer: &mut Timer,
+    stage: &'static str,
     nodes: Dispatch,
 ) {
-    let p = passes.cluster_pipelines(device);
     let [tx, ty] = b.grid.tiles;
-    let mut pass = b.compute_pass(encoder, timer, "cluster shading", "cluster shading");
-    pass.set_pipeline(&p.accumulate);
+    let mut pass = b.compute_pass(encoder, timer, stage, stage);
+    pass.set_pipeline(accumulate);
     pass.dispatch_workgroups(nodes.gx, nodes.gy, 1);
-    pass.set_pipeline(&p.shade);
+    pass.set_pipeline(shade);
     pass.dispatch_workgroups(tx, ty, 1);
 }

@@ -2,11 +2,11 @@
 //! the same photons, kernels, BSDF and normal test as the raster photon volumes
 //! ([`super::Volumes`]), so the same image up to the order of the float sums; the work runs
 //! on compute units instead of the rasterizer. One module per estimator over the shared
-//! binning ([`bins`]), resources ([`resources`]) and pipelines ([`passes`]):
-//! - [`tiled`]: the photons binned to screen tiles, every view sample summing its tile's list;
-//! - [`cluster`]: a hierarchy of view-sample clusters per tile walked by each photon, with
+//! binning (`bins`), resources (`resources`) and pipelines (`passes`):
+//! - `tiled`: the photons binned to screen tiles, every view sample summing its tile's list;
+//! - `cluster`: a hierarchy of view-sample clusters per tile walked by each photon, with
 //!   trivial acceptance of whole nodes;
-//! - [`directional`]: the cluster hierarchy with per-node octant flux buckets.
+//! - `directional`: the cluster hierarchy with per-node octant flux buckets.
 //!
 //! The photon lists are sized when photons are uploaded, from a CPU estimate of the tiles
 //! under each photon's projected kernel (usually 2–4× what the GPU writes); a frame whose
@@ -315,9 +315,15 @@ impl Binned {
         let nodes = Dispatch::of(self.grid.nodes, max);
         match self.mode {
             Mode::Tiled => tiled::record_shading(self, &passes, device, encoder, timer),
-            Mode::Cluster => cluster::record_shading(self, &passes, device, encoder, timer, nodes),
+            Mode::Cluster => {
+                let p = cluster::shading(passes.cluster_pipelines(device));
+                let stage = "cluster shading";
+                cluster::record_node_shading(self, p, encoder, timer, stage, nodes)
+            }
             Mode::Directional => {
-                directional::record_shading(self, &passes, device, encoder, timer, nodes)
+                let p = directional::shading(passes.cluster_pipelines(device));
+                let stage = "directional shading";
+                cluster::record_node_shading(self, p, encoder, timer, stage, nodes)
             }
         }
         self.record_totals_copy(encoder);

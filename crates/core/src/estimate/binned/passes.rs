@@ -4,11 +4,22 @@
 
 use super::cluster::ClusterPipelines;
 use super::tiled::TiledPipelines;
+use crate::estimate::wgsl;
 use crate::gpu::layout::{
     storage_rw_entry, storage_texture_entry, texture_entry, uint_texture_entry, uniform_entry_sized,
 };
 use crate::gpu::{self, shaders};
 use std::sync::OnceLock;
+
+/// The WGSL every binned estimator's module starts with (the tiled binning's, which the
+/// cluster hierarchy's reuses).
+pub(super) const TILED_PARTS: [&str; 5] = [
+    shaders::COMMON,
+    shaders::BSDF,
+    wgsl::PHOTON_VOLUME,
+    shaders::FIXED_SUM,
+    wgsl::TILED,
+];
 
 /// The binding layout and the pipelines (see the module).
 pub struct BinnedPasses {

@@ -3,10 +3,8 @@
 //! each tile bounded by the world-space box of its view samples) and every view sample
 //! sums its tile's list (`estimate/shaders/tiled.wgsl`).
 
-use super::passes::BinnedPasses;
+use super::passes::{BinnedPasses, TILED_PARTS};
 use super::{Binned, Dispatch};
-use crate::estimate::wgsl;
-use crate::gpu::shaders;
 use crate::gpu::timer::Timer;
 
 /// The tiled estimator's pipelines.
@@ -24,13 +22,7 @@ impl BinnedPasses {
             let [tile_bounds, bin_count, scan, bin_fill, shade] = self.pipelines(
                 device,
                 "tiled shader",
-                &[
-                    shaders::COMMON,
-                    shaders::BSDF,
-                    wgsl::PHOTON_VOLUME,
-                    shaders::FIXED_SUM,
-                    wgsl::TILED,
-                ],
+                &TILED_PARTS,
                 ["tile_bounds", "bin_count", "scan", "bin_fill", "shade"],
             );
             TiledPipelines {
