@@ -4,8 +4,9 @@
 LAYERS, so that no import runs upwards and no two modules import each other; no
 function may be longer than MAX_FN lines; inside `frame/`, no method module (METHODS)
 imports another method's module (what methods share lives in `frame/gpu/`,
-`frame/options/` or a lower layer), and no `too_many_arguments` allowance is added (the
-ones left, TOO_MANY_ARGUMENTS, may only go). Prints what it finds; exits 1 on a violation.
+`frame/options/` or a lower layer), no function allows `clippy::too_many_arguments` and
+none takes a tuple parameter (pass a struct of what belongs together). Prints what it
+finds; exits 1 on a violation.
 
     scripts/ci/check_layers.py [SRC]        (default crates/core/src; run by `make test`)
 """
@@ -36,13 +37,6 @@ LAYERS = [
 MAX_FN = 150
 # The method modules of `frame/`: none may import another.
 METHODS = {"direct", "ispm", "bidir", "path", "photon", "gather"}
-# `allow(clippy::too_many_arguments)` left in `frame/`, per file: the count may only fall
-# (a file that drops one must lower its number here; a new one fails).
-TOO_MANY_ARGUMENTS = {
-    "frame/bidir/mod.rs": 1,
-    "frame/bidir/subpaths.rs": 1,
-    "frame/bidir/vpls.rs": 1,
-}
 
 USE_GROUP = re.compile(r"use\s+crate::\{([^;]*)\};", re.S)
 PATH = re.compile(r"crate::(\w+)")
@@ -50,6 +44,7 @@ TEST_MODULE = re.compile(r"#\[cfg\(test\)\]\s*(pub\s+)?mod\s+\w+\s*\{")
 RELATIVE = re.compile(
     r"\b((?:crate|self|super)(?:::(?:self|super))*)((?:::\w+)*)(?:::(\{[^;]*?\}))?", re.S
 )
+FN_PARAMS = re.compile(r"\bfn\s+(\w+)\s*(?:<[^>{]*>)?\s*\(")
 FN = re.compile(r"(\s*)(pub(\([^)]*\))?\s+)?(const\s+)?(async\s+)?(unsafe\s+)?fn\s+(\w+)")
 
 
@@ -95,8 +90,40 @@ def resolved_paths(rel: str, body: str) -> set[tuple[str, ...]]:
     return out
 
 
+def parameters(body: str, open_paren: int) -> list[str]:
+    """The top-level comma-separated parameters of the list opening at `open_paren`."""
+    depth, part, out = 0, "", []
+    for ch in body[open_paren + 1 :]:
+        if ch in "([<":
+            depth += 1
+        elif ch in ")]>" and not (ch == ">" and part.endswith("-")):
+            if depth == 0:
+                break
+            depth -= 1
+        if ch == "," and depth == 0:
+            out.append(part.strip())
+            part = ""
+        else:
+            part += ch
+    out.append(part.strip())
+    return [p for p in out if p]
+
+
+def tuple_parameters(body: str) -> list[str]:
+    """`name: param` of every function parameter that is a tuple (a pattern or a type)."""
+    out = []
+    for m in FN_PARAMS.finditer(body):
+        for param in parameters(body, m.end() - 1):
+            pattern, _, ty = param.partition(":")
+            ty = ty.strip().removeprefix("&").removeprefix("mut ").strip()
+            if pattern.strip().startswith("(") or ty.startswith("("):
+                out.append(f"{m.group(1)}: {' '.join(param.split())}")
+    return out
+
+
 def frame_problems(rel: str, body: str) -> list[str]:
-    """A method module importing a sibling method; `too_many_arguments` beyond the list."""
+    """A method module importing a sibling method; a `too_many_arguments` allowance or a
+    tuple parameter."""
     problems = []
     here = module_path(rel)
     if here[0] != "frame":
@@ -109,17 +136,16 @@ def frame_problems(rel: str, body: str) -> list[str]:
                     f"{rel}: method `{own}` imports method `{path[1]}` ({'::'.join(path)});"
                     " what methods share belongs in frame/gpu/, frame/options/ or below"
                 )
-    allowed = TOO_MANY_ARGUMENTS.get(rel, 0)
     found = body.count("too_many_arguments")
-    if found > allowed:
+    if found:
         problems.append(
-            f"{rel}: {found} `too_many_arguments` allowance(s), at most {allowed}: pass a"
-            " struct of what belongs together"
+            f"{rel}: {found} `too_many_arguments` allowance(s): pass a struct of what"
+            " belongs together"
         )
-    elif found < allowed:
+    for param in tuple_parameters(body):
         problems.append(
-            f"{rel}: {found} `too_many_arguments` allowance(s) left; lower its number in"
-            f" TOO_MANY_ARGUMENTS (scripts/ci/check_layers.py) to {found}"
+            f"{rel}: tuple parameter ({param}): pass a struct of what belongs together,"
+            " or the values apart"
         )
     return problems
 

@@ -2,65 +2,30 @@
 //! an eye G-buffer and deferred lighting accumulated on the GPU, the G-buffer at the pixel
 //! centres, the composite, and the readback of what was asked for.
 
-use super::gpu::{assemble, normalized, readback_names, rgb_image, LightDraw, Stale};
-use super::{GpuState, Images};
-use super::{RenderOutput, RenderStats};
-use crate::cancel::Progress;
+use super::context::FrameCtx;
+use super::gpu::{normalized, readback_names, rgb_image, GpuFrame, LightDraw};
+use super::{GpuState, Images, RenderOutput};
 use crate::error::Result;
-use crate::scene::Scene;
-use std::time::Instant;
 
 pub(super) fn frame(
     g: &mut GpuState,
-    scene: &Scene,
+    mut fc: FrameCtx,
     draw: LightDraw,
     images: Images,
-    progress: &dyn Progress,
 ) -> Result<RenderOutput> {
-    let ctx = g.ctx.clone();
-    g.timer.reset();
     if !g.targets.has_composite() {
-        g.targets.bind_composite(&ctx, None);
+        g.targets.bind_composite(&g.ctx, None);
     }
-    let t = Instant::now();
-    g.targets.write_eye(&ctx, scene, &g.scene.cull);
-    let upload = t.elapsed().as_secs_f64();
-
-    let mut encoder = ctx
-        .device
-        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("direct frame"),
-        });
-    if g.scene
-        .record_shadows(&ctx, &mut encoder, &mut g.timer, scene, draw)
-    {
-        g.targets.invalidate(Stale::SHADOWS);
-    }
-    let mut encoder = g
-        .targets
-        .record_direct(&ctx, &g.scene, encoder, &mut g.timer, progress)?;
-    g.targets.record_composite(&ctx, &mut encoder, &mut g.timer);
+    let mut gpu = GpuFrame::begin(&g.ctx, &mut g.scene, &mut g.targets, &mut g.timer, &mut fc);
+    let mut encoder = gpu.encoder("direct frame");
+    gpu.record_shadows(&mut encoder, &fc, draw);
+    let encoder = gpu.record_direct(encoder, &fc)?;
     let names = readback_names(images, false);
-    g.targets.record_readback(&ctx, &mut encoder, &names, None);
-    g.timer.resolve(&mut encoder);
-    ctx.queue.submit([encoder.finish()]);
-
-    let t = Instant::now();
-    let data = g.targets.read(&ctx, &names)?;
-    let readback = t.elapsed().as_secs_f64();
-    g.timer.collect(&ctx)?;
-    let mut stats = RenderStats {
-        triangles: scene.triangle_count() as u64,
-        samples_per_pixel: g.targets.spp(),
-        ..Default::default()
-    };
-    stats.stages.push(("upload".into(), upload));
-    stats.stages.append(&mut g.timer.totals);
-    stats.stages.push(("readback".into(), readback));
-    let mut out = assemble(scene, &g.targets, &data, stats);
+    let data = gpu.finish(encoder, &names, None, &mut fc)?;
+    let mut out = gpu.output(&data, fc);
     if images.extras {
         if let Some(a) = data.get("accum") {
-            out.aovs.push(("direct".into(), normalized(&g.targets, a)));
+            out.aovs.push(("direct".into(), normalized(gpu.targets, a)));
         }
     }
     Ok(out)
@@ -71,44 +36,43 @@ pub(super) fn frame(
 /// the frame left in its targets, and replaces its radiance and `direct` AOV.
 pub(super) fn redo(
     g: &mut GpuState,
+    mut fc: FrameCtx,
     images: Images,
-    progress: &dyn Progress,
     out: &mut RenderOutput,
 ) -> Result<()> {
-    let ctx = g.ctx.clone();
-    let t = Instant::now();
-    g.timer.reset();
-    let encoder = ctx
-        .device
-        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("direct light again"),
-        });
-    let mut encoder = g
-        .targets
-        .record_direct(&ctx, &g.scene, encoder, &mut g.timer, progress)?;
-    g.targets.record_composite(&ctx, &mut encoder, &mut g.timer);
-    let mut names = vec!["radiance"];
-    if images.extras {
-        names.push("accum");
-    }
-    g.targets.record_readback(&ctx, &mut encoder, &names, None);
-    g.timer.resolve(&mut encoder);
-    ctx.queue.submit([encoder.finish()]);
-    let data = g.targets.read(&ctx, &names)?;
-    g.timer.collect(&ctx)?;
-    let (w, h) = (g.targets.width, g.targets.height);
+    let GpuState {
+        ctx,
+        scene,
+        targets,
+        timer,
+        ..
+    } = g;
+    let data = fc.timed("edge buffers regrown", |fc| {
+        timer.reset();
+        let mut gpu = GpuFrame {
+            ctx: ctx.clone(),
+            scene,
+            targets,
+            timer,
+        };
+        let encoder = gpu.encoder("direct light again");
+        let encoder = gpu.record_direct(encoder, fc)?;
+        let mut names = vec!["radiance"];
+        if images.extras {
+            names.push("accum");
+        }
+        gpu.finish(encoder, &names, None, fc)
+    })?;
+    let (w, h) = (targets.width, targets.height);
     out.radiance = rgb_image(w, h, &data["radiance"]);
     if let Some(a) = data.get("accum") {
-        let direct = normalized(&g.targets, a);
+        let direct = normalized(targets, a);
         for (name, img) in &mut out.aovs {
             if name == "direct" {
                 *img = direct.clone();
             }
         }
     }
-    out.stats.stages.append(&mut g.timer.totals);
-    out.stats
-        .stages
-        .push(("edge buffers regrown".into(), t.elapsed().as_secs_f64()));
+    out.stats.stages.append(&mut fc.stats.stages);
     Ok(())
 }

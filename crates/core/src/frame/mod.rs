@@ -28,6 +28,7 @@ use crate::photon::lbvh::Aabb;
 use crate::photon::ring::PhotonRing;
 use crate::scene::{Changes, Scene, SceneUpdate};
 use crate::trace::SceneBvh;
+use context::FrameCtx;
 pub use ispm::bounce_map;
 use options::DirectLightOptions;
 pub use options::{Method, MethodOptions, RenderOptions};
@@ -486,7 +487,15 @@ impl Renderer {
                 } else {
                     // More edge pixels than their buffers held: grown, and the direct light
                     // and the composite redone over the frame's indirect and specular light.
-                    direct::redo(g, images, progress, &mut out)?;
+                    let fc = FrameCtx {
+                        scene: &self.scene,
+                        bvh: self.bvh.as_ref(),
+                        params: frame,
+                        progress,
+                        serial: g.serial,
+                        stats: RenderStats::default(),
+                    };
+                    direct::redo(g, fc, images, &mut out)?;
                 }
             }
             Ok(out)
@@ -501,8 +510,20 @@ impl Renderer {
         progress: &dyn Progress,
     ) -> Result<RenderOutput> {
         let gpu = self.gpu.as_mut().ok_or_else(no_gpu_state)?;
-        // Built by `render` for the methods that use it (not `direct`).
-        let bvh = || self.bvh.as_ref().ok_or_else(no_bvh);
+        let scene = &self.scene;
+        let fc = FrameCtx {
+            scene,
+            // Built by `render` for the methods that use it (not `direct`).
+            bvh: self.bvh.as_ref(),
+            params: frame,
+            progress,
+            serial: gpu.serial,
+            stats: RenderStats {
+                triangles: scene.triangle_count() as u64,
+                samples_per_pixel: gpu.targets.spp(),
+                ..Default::default()
+            },
+        };
         // The sampled lights: drawn once from the options' seed (a still view re-draws
         // nothing), anew per progressive pass.
         let draw = gpu::LightDraw {
@@ -523,24 +544,18 @@ impl Renderer {
                 };
                 ispm::frame(ispm::FrameInputs {
                     gpu,
+                    fc,
                     ring: &mut self.ring,
                     invalid,
-                    scene: &self.scene,
-                    bvh: bvh()?,
                     options,
-                    params: frame,
                     frame: self.frame_index,
                     changes: self.changes,
                     draw,
                     images,
-                    progress,
                 })
             }
-            MethodOptions::Bidir(options) => {
-                let inputs = (frame, draw);
-                bidir::frame(gpu, &self.scene, bvh()?, options, inputs, images, progress)
-            }
-            _ => direct::frame(gpu, &self.scene, draw, images, progress),
+            MethodOptions::Bidir(options) => bidir::frame(gpu, fc, options, draw, images),
+            _ => direct::frame(gpu, fc, draw, images),
         }
     }
 

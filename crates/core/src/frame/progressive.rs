@@ -237,8 +237,8 @@ pub(super) fn direct_image(
                     match bvh.intersect(cam.position, dir, f32::INFINITY) {
                         Some(hit) => {
                             let it = Interaction::new(scene, &hit, dir);
-                            let sources = (scene, bvh, &emitters);
-                            sum += first_surface_light(sources, &it, -dir, &mut rng);
+                            let e = &emitters;
+                            sum += first_surface_light(scene, bvh, e, &it, -dir, &mut rng);
                         }
                         None => {
                             if let Some(env) = &scene.environment {
@@ -264,7 +264,9 @@ pub(super) fn direct_image(
 /// (f·|cos θ|·L / p). Unbiased; reflection only (the light on the viewer's side of the
 /// geometry), as the rasterized direct light.
 pub(super) fn first_surface_light(
-    (scene, bvh, emitters): (&Scene, &SceneBvh, &Emitters),
+    scene: &Scene,
+    bvh: &SceneBvh,
+    emitters: &Emitters,
     it: &Interaction,
     wo: Vec3,
     rng: &mut Rng,

@@ -96,7 +96,7 @@ impl VolumeRadius {
     /// (the normal axis is shorter): the footprint when traced with differentials, else
     /// from the path density (section 5.1), r_base·clamp(ρp^(−α), 1, G). Dense (caustic)
     /// paths get the base radius; one Lambertian bounce (ρp = ρL/1000 ≈ 7·10⁻⁴) widens it
-    /// to the cap G, glossy ones less. α and G come from `examples/ispm_kernel_sweep.rs` on
+    /// to the cap G, glossy ones less. α and G come from `benches/measure/ispm_kernel_sweep.rs` on
     /// cornell with boundary compensation: RMSE against the converged image at 200k photons
     /// falls from 0.0430 at 4× (the earlier α = 0.2, G = 4) to 0.0249 at 12× and flattens
     /// beyond (0.0244 at 16×), the 8×8-block error from 3.15% to 2.67%.

@@ -10,6 +10,7 @@
 //! levels are placed on shelves by decreasing height.
 
 use crate::error::{Error, Result};
+use crate::gpu::layout::{buffer, texture};
 use crate::gpu::{self, GpuContext};
 use crate::scene::{MaterialMaps, Scene};
 use crate::texture::Texture;
@@ -222,149 +223,25 @@ impl GpuTextures {
     /// larger or more pages than the adapter allows.
     pub fn new(ctx: &GpuContext, scene: &Scene, layout: &wgpu::BindGroupLayout) -> Result<Self> {
         let atlas = Atlas::pack(&scene.textures);
-        let limits = ctx.device.limits();
-        if atlas.page_size > limits.max_texture_dimension_2d {
-            return Err(Error::Gpu(format!(
-                "a {}-texel texture exceeds the GPU's {} texels a side",
-                atlas.page_size, limits.max_texture_dimension_2d
-            )));
-        }
-        if atlas.pages > limits.max_texture_array_layers {
-            return Err(Error::Gpu(format!(
-                "the textures need {} atlas pages of {}², more than the GPU's {} layers",
-                atlas.pages, atlas.page_size, limits.max_texture_array_layers
-            )));
-        }
-        let bytes = atlas.page_size as u64 * atlas.page_size as u64 * 8 * atlas.pages as u64;
-        crate::memory::check(|| "the texture atlas".to_string(), bytes)?;
-        let size = wgpu::Extent3d {
-            width: atlas.page_size,
-            height: atlas.page_size,
-            // A D2Array view needs its dimension; a single layer is fine.
-            depth_or_array_layers: atlas.pages,
-        };
-        let pages = gpu::create_texture(
-            &ctx.device,
-            &wgpu::TextureDescriptor {
-                label: Some("texture atlas"),
-                size,
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: PAGE_FORMAT,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-                view_formats: &[],
-            },
-        );
-        for (t, tex) in scene.textures.iter().enumerate() {
-            let first = atlas.info[t][0] as usize;
-            for (l, level) in tex.levels.iter().enumerate() {
-                let r = atlas.levels[first + l];
-                let texels: Vec<u16> = level
-                    .texels
-                    .iter()
-                    .flat_map(|v| v.to_array().map(|x| half::f16::from_f32(x).to_bits()))
-                    .collect();
-                let bytes: &[u8] = bytemuck::cast_slice(&texels);
-                crate::gpu::alloc::note_upload("texture atlas", bytes.len() as u64);
-                ctx.queue.write_texture(
-                    wgpu::TexelCopyTextureInfo {
-                        texture: &pages,
-                        mip_level: 0,
-                        origin: wgpu::Origin3d {
-                            x: r.x,
-                            y: r.y,
-                            z: r.page,
-                        },
-                        aspect: wgpu::TextureAspect::All,
-                    },
-                    bytes,
-                    wgpu::TexelCopyBufferLayout {
-                        offset: 0,
-                        bytes_per_row: Some(r.width * 8),
-                        rows_per_image: Some(r.height),
-                    },
-                    wgpu::Extent3d {
-                        width: r.width,
-                        height: r.height,
-                        depth_or_array_layers: 1,
-                    },
-                );
-            }
-        }
+        let pages = atlas_pages(ctx, scene, &atlas)?;
         let view = pages.create_view(&wgpu::TextureViewDescriptor {
             label: Some("texture atlas"),
             dimension: Some(wgpu::TextureViewDimension::D2Array),
             ..Default::default()
         });
-        let storage = |label: &str, bytes: &[u8]| {
-            super::buffer_init(
-                ctx,
-                label,
-                bytes,
-                wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-            )
-        };
-        let table = atlas.table();
-        let rows = (table.len() as u32).div_ceil(TABLE_WIDTH).max(1);
-        if rows > limits.max_texture_dimension_2d {
-            return Err(Error::Gpu(format!(
-                "{} texture levels exceed the GPU's texture table",
-                atlas.levels.len()
-            )));
-        }
-        let mut padded = table;
-        padded.resize((rows * TABLE_WIDTH) as usize, [0; 4]);
-        let table_texture = gpu::create_texture(
-            &ctx.device,
-            &wgpu::TextureDescriptor {
-                label: Some("texture table"),
-                size: wgpu::Extent3d {
-                    width: TABLE_WIDTH,
-                    height: rows,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: wgpu::TextureFormat::Rgba32Uint,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-                view_formats: &[],
-            },
+        let table_view = level_table(ctx, &atlas)?.create_view(&Default::default());
+        let maps = super::buffer_init(
+            ctx,
+            "material maps",
+            bytemuck::cast_slice(&maps_raw(scene)),
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
         );
-        let bytes: &[u8] = bytemuck::cast_slice(&padded);
-        crate::gpu::alloc::note_upload("texture table", bytes.len() as u64);
-        ctx.queue.write_texture(
-            table_texture.as_image_copy(),
-            bytes,
-            wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(TABLE_WIDTH * 16),
-                rows_per_image: Some(rows),
-            },
-            table_texture.size(),
-        );
-        let table_view = table_texture.create_view(&Default::default());
-        let maps = storage("material maps", bytemuck::cast_slice(&maps_raw(scene)));
         let group = gpu::create_bind_group(
             &ctx.device,
             &wgpu::BindGroupDescriptor {
                 label: Some("textures bind group"),
                 layout,
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: wgpu::BindingResource::TextureView(&view),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: wgpu::BindingResource::TextureView(&table_view),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 2,
-                        resource: maps.as_entire_binding(),
-                    },
-                ],
+                entries: &[texture(0, &view), texture(1, &table_view), buffer(2, &maps)],
             },
         );
         Ok(GpuTextures { group, maps, atlas })
@@ -380,6 +257,110 @@ impl GpuTextures {
             bytemuck::cast_slice(&maps_raw(scene)),
         );
     }
+}
+
+/// The atlas's pages as a texture array with every texture's levels uploaded (half floats),
+/// after checking that the adapter holds pages of that size and number and that memory
+/// allows them.
+fn atlas_pages(ctx: &GpuContext, scene: &Scene, atlas: &Atlas) -> Result<wgpu::Texture> {
+    let limits = ctx.device.limits();
+    if atlas.page_size > limits.max_texture_dimension_2d {
+        return Err(Error::Gpu(format!(
+            "a {}-texel texture exceeds the GPU's {} texels a side",
+            atlas.page_size, limits.max_texture_dimension_2d
+        )));
+    }
+    if atlas.pages > limits.max_texture_array_layers {
+        return Err(Error::Gpu(format!(
+            "the textures need {} atlas pages of {}², more than the GPU's {} layers",
+            atlas.pages, atlas.page_size, limits.max_texture_array_layers
+        )));
+    }
+    let bytes = atlas.page_size as u64 * atlas.page_size as u64 * 8 * atlas.pages as u64;
+    crate::memory::check(|| "the texture atlas".to_string(), bytes)?;
+    let size = wgpu::Extent3d {
+        width: atlas.page_size,
+        height: atlas.page_size,
+        // A D2Array view needs its dimension; a single layer is fine.
+        depth_or_array_layers: atlas.pages,
+    };
+    let usage = wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST;
+    let pages = gpu::texture_array(&ctx.device, "texture atlas", size, PAGE_FORMAT, usage);
+    for (t, tex) in scene.textures.iter().enumerate() {
+        let first = atlas.info[t][0] as usize;
+        for (l, level) in tex.levels.iter().enumerate() {
+            let r = atlas.levels[first + l];
+            let texels: Vec<u16> = level
+                .texels
+                .iter()
+                .flat_map(|v| v.to_array().map(|x| half::f16::from_f32(x).to_bits()))
+                .collect();
+            let bytes: &[u8] = bytemuck::cast_slice(&texels);
+            crate::gpu::alloc::note_upload("texture atlas", bytes.len() as u64);
+            ctx.queue.write_texture(
+                wgpu::TexelCopyTextureInfo {
+                    texture: &pages,
+                    mip_level: 0,
+                    origin: wgpu::Origin3d {
+                        x: r.x,
+                        y: r.y,
+                        z: r.page,
+                    },
+                    aspect: wgpu::TextureAspect::All,
+                },
+                bytes,
+                wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(r.width * 8),
+                    rows_per_image: Some(r.height),
+                },
+                wgpu::Extent3d {
+                    width: r.width,
+                    height: r.height,
+                    depth_or_array_layers: 1,
+                },
+            );
+        }
+    }
+    Ok(pages)
+}
+
+/// The atlas's level table ([`Atlas::table`]) as a texture of `TABLE_WIDTH` entries a row,
+/// uploaded; fails when it needs more rows than the adapter allows.
+fn level_table(ctx: &GpuContext, atlas: &Atlas) -> Result<wgpu::Texture> {
+    let table = atlas.table();
+    let rows = (table.len() as u32).div_ceil(TABLE_WIDTH).max(1);
+    if rows > ctx.device.limits().max_texture_dimension_2d {
+        return Err(Error::Gpu(format!(
+            "{} texture levels exceed the GPU's texture table",
+            atlas.levels.len()
+        )));
+    }
+    let mut padded = table;
+    padded.resize((rows * TABLE_WIDTH) as usize, [0; 4]);
+    let usage = wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST;
+    let format = wgpu::TextureFormat::Rgba32Uint;
+    let table_texture = gpu::texture_2d(
+        &ctx.device,
+        "texture table",
+        TABLE_WIDTH,
+        rows,
+        format,
+        usage,
+    );
+    let bytes: &[u8] = bytemuck::cast_slice(&padded);
+    crate::gpu::alloc::note_upload("texture table", bytes.len() as u64);
+    ctx.queue.write_texture(
+        table_texture.as_image_copy(),
+        bytes,
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(TABLE_WIDTH * 16),
+            rows_per_image: Some(rows),
+        },
+        table_texture.size(),
+    );
+    Ok(table_texture)
 }
 
 fn maps_raw(scene: &Scene) -> Vec<MapsRaw> {

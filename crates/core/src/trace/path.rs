@@ -9,7 +9,7 @@
 //! sky's stay here.
 
 use super::direct::{escaped, BsdfVertex, DirectLight, Nee};
-use super::light_vertex::{self, Connection};
+use super::light_vertex::{self, Connection, LightVertices};
 use super::{Interaction, SceneBvh};
 use crate::image::Image;
 use crate::sampling::Rng;
@@ -194,6 +194,43 @@ pub fn first_hit(scene: &Scene, bvh: &SceneBvh, origin: Vec3, dir: Vec3) -> Firs
     }
 }
 
+/// The non-delta BSDF samples that led to a surface: the vertex the ray to it left, and the
+/// vertex that one was reached from (`None` for camera rays and delta scatterings).
+#[derive(Clone, Copy)]
+struct BsdfRays {
+    from: Option<BsdfVertex>,
+    prev_from: Option<BsdfVertex>,
+}
+
+/// The weight of the light of the emitter the path reached at `it`: 1 for a camera ray or
+/// after a delta scattering, 0 when only next-event estimation finds emitters, else the
+/// multiple-importance weight against next-event estimation and, where the ray left a
+/// vertex a non-delta sample reached, the light vertices' connection.
+fn emission_weight(
+    lights: &DirectLight,
+    light_vertices: Option<&LightVertices>,
+    rays: BsdfRays,
+    it: &Interaction,
+    s: &PathSettings,
+) -> f32 {
+    match (rays.from, s.strategy) {
+        (None, _) => 1.0,
+        (Some(_), Strategy::Light) => 0.0,
+        (Some(f), strategy) => {
+            // Light vertices find this emitter's light too where the ray left a
+            // vertex that a non-delta sample reached.
+            let other = match (light_vertices, rays.prev_from) {
+                (Some(lv), Some(x)) => {
+                    lv.emitter_hit_pdf((&x, &f), (it.position, it.triangle), s.light_vertex)
+                }
+                _ => 0.0,
+            };
+            let hit = (it.triangle, it.position, it.ng);
+            lights.emitter_weight(&f, hit, strategy == Strategy::Mis, other)
+        }
+    }
+}
+
 /// Radiance arriving at `origin` from direction `-dir`.
 pub fn radiance(
     scene: &Scene,
@@ -241,22 +278,8 @@ pub fn radiance(
         let it = Interaction::new(scene, &hit, d);
         let wo = -d;
         if it.material.emits() && !light_traced {
-            let w = match (from, s.strategy) {
-                (None, _) => 1.0,
-                (Some(_), Strategy::Light) => 0.0,
-                (Some(f), strategy) => {
-                    // Light vertices find this emitter's light too where the ray left a
-                    // vertex that a non-delta sample reached.
-                    let other = match (light_vertices, prev_from) {
-                        (Some(lv), Some(x)) => {
-                            lv.emitter_hit_pdf((&x, &f), (it.position, it.triangle), s.light_vertex)
-                        }
-                        _ => 0.0,
-                    };
-                    let hit = (it.triangle, it.position, it.ng);
-                    lights.emitter_weight(&f, hit, strategy == Strategy::Mis, other)
-                }
-            };
+            let rays = BsdfRays { from, prev_from };
+            let w = emission_weight(lights, light_vertices, rays, &it, s);
             l += beta * it.material.emitted(it.ng, wo) * w;
         }
         if depth == s.max_depth {

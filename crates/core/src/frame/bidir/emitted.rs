@@ -18,7 +18,7 @@
 //! VPLs).
 
 use super::subpaths::Head;
-use super::vpls::VplMaps;
+use super::vpls::{Records, VplMaps};
 use crate::raster::vpl::{cube_views, VplRaw};
 use crate::sampling::Rng;
 use crate::scene::light::{Emission, Light};
@@ -194,12 +194,12 @@ pub(super) fn append_records(
     scene: &Scene,
     heads: &[Option<Head>],
     maps: &VplMaps,
-    records: &mut (Vec<VplRaw>, Vec<Mat4>),
+    records: &mut Records,
 ) {
     let (lo, hi) = light_views::bounds(scene);
     let diag = (hi - lo).length().max(1e-6);
     for h in heads {
-        let slot = records.0.len();
+        let slot = records.raws.len();
         let mut raw = VplRaw::zeroed();
         let mut m = [Mat4::IDENTITY; 6];
         if let Some(h) = h {
@@ -236,7 +236,7 @@ pub(super) fn append_records(
             };
         }
         raw.first_layer = slot as u32 * 6;
-        records.0.push(raw);
-        records.1.extend_from_slice(&m);
+        records.raws.push(raw);
+        records.matrices.extend_from_slice(&m);
     }
 }

@@ -29,11 +29,11 @@ mod spikes;
 mod subpaths;
 mod vpls;
 
-use super::gpu::{assemble, normalized, readback_names, Stale};
-use super::gpu::{rgb_image, GpuScene, LightDraw};
+use super::context::FrameCtx;
+use super::gpu::{normalized, readback_names, rgb_image};
+use super::gpu::{GpuFrame, GpuScene, LightDraw, Readback};
 use super::options::{BidirOptions, BidirStrategy};
-use super::{FrameParams, GpuState, Images, RenderOutput, RenderStats};
-use crate::cancel::Progress;
+use super::{FrameParams, GpuState, Images, RenderOutput};
 use crate::error::{Error, Result};
 use crate::gpu::layout::{buffer_init, texture};
 use crate::gpu::{self, GpuContext, Pipelines};
@@ -42,14 +42,13 @@ use crate::photon::specular::specular_paths_direct;
 use crate::raster::bundles::{BundleBuffers, BundlePass};
 use crate::raster::direct::DirectPass;
 use crate::raster::rsm::{RsmPass, RsmTargets};
-use crate::raster::vpl::{BidirParamsRaw, VplPass, VplRaw, TARGET};
+use crate::raster::vpl::{BidirParamsRaw, VplPass, TARGET};
 use crate::sampling::Rng;
 use crate::scene::light_views::{self, light_views, LightView};
 use crate::scene::Scene;
 use crate::trace::SceneBvh;
 use bytemuck::Zeroable;
-use std::time::Instant;
-use vpls::{sample_vpls, vpl_records, VplMaps};
+use vpls::{sample_vpls, vpl_records, Records, VplMaps};
 
 /// What `bidir` keeps between frames: the RSM targets, the VPLs and their shadow maps, the
 /// ray bundles, the lighting pass's inputs and its target. Rebuilt when the image size,
@@ -59,8 +58,8 @@ pub(super) struct BidirState {
     rsm: Option<RsmTargets>,
     vpls: VplMaps,
     bundles: BundleBuffers,
-    /// (bundles, resolution, memory MiB) the bundle buffers were made for.
-    bundle_key: (u32, u32, u32),
+    /// What the VPL maps and the bundle buffers were made for.
+    sizes: Sizes,
     /// 1 / ∫ lum(L_env) dω of an image environment drawn by importance (§3.3); 0 otherwise.
     env_pdf_scale: f32,
     /// The lighting pass's parameters and bind group, and its target.
@@ -80,16 +79,29 @@ fn rsm_layers(scene: &Scene, rsm_size: u32) -> Vec<LightView> {
     light_views(scene, texels)
 }
 
+/// What a [`BidirState`] is made for: kept while the options and the scene's lights ask
+/// for the same.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Sizes {
+    /// VPL slots (the first VPLs' and the subpath vertices').
+    capacity: u32,
+    /// Side of a VPL's cube shadow-map face.
+    vpl_size: u32,
+    /// Ray bundles (at least 1), their resolution and their fragment memory in MiB.
+    bundles: u32,
+    bundle_resolution: u32,
+    bundle_memory_mb: u32,
+}
+
 impl BidirState {
     fn new(
         ctx: &GpuContext,
         g: &GpuState,
         layers: Vec<LightView>,
-        (capacity, vpl_size): (u32, u32),
-        bundle_key: (u32, u32, u32),
+        sizes: Sizes,
         scene: &Scene,
     ) -> Result<Self> {
-        let vpls = VplMaps::new(ctx, capacity, vpl_size)?;
+        let vpls = VplMaps::new(ctx, sizes.capacity, sizes.vpl_size)?;
         let rsm = RsmTargets::new(ctx, &RsmPass::get(ctx), &layers, &g.scene.materials)?;
         let params = buffer_init(
             ctx,
@@ -97,14 +109,13 @@ impl BidirState {
             bytemuck::bytes_of(&BidirParamsRaw::zeroed()),
             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         );
-        let (n_bundles, res, mb) = bundle_key;
         let bundles = BundleBuffers::new(
             ctx,
             &BundlePass::get(ctx),
             &g.scene.materials,
-            n_bundles,
-            res,
-            mb as u64 * (1 << 20),
+            sizes.bundles,
+            sizes.bundle_resolution,
+            sizes.bundle_memory_mb as u64 * (1 << 20),
         )?;
         let env = bundles::env_tables(ctx, scene.environment.as_deref());
         let env_pdf_scale = env.pdf_scale;
@@ -115,7 +126,7 @@ impl BidirState {
             rsm,
             vpls,
             bundles,
-            bundle_key,
+            sizes,
             env_pdf_scale,
             params,
             group,
@@ -138,16 +149,8 @@ impl BidirState {
         n_env
     }
 
-    fn fits(
-        &self,
-        layers: &[LightView],
-        capacity: u32,
-        vpl_size: u32,
-        bundle_key: (u32, u32, u32),
-    ) -> bool {
-        self.vpls.capacity == capacity
-            && self.vpls.size == vpl_size
-            && self.bundle_key == bundle_key
+    fn fits(&self, layers: &[LightView], sizes: Sizes) -> bool {
+        self.sizes == sizes
             && self.layers.len() == layers.len()
             && self.rsm.as_ref().is_none_or(|r| r.fits(layers))
     }
@@ -232,16 +235,17 @@ fn pair_offset(frame: &FrameParams) -> f32 {
     Rng::new(frame.seed, 0xfa17, 0).next_f32()
 }
 
-/// The lighting pass's parameters for the frame's records (`vpl_count` first VPLs, then
-/// `sub_count` subpath vertices) and `n_env` environment bundles.
+/// The lighting pass's parameters for the frame's records (`v.count` first VPLs, then
+/// `v.used` subpath vertices) and `n_env` environment bundles.
 fn lighting_params(
     scene: &Scene,
     options: &BidirOptions,
     frame: &FrameParams,
-    (vpl_count, sub_count): (u32, u32),
+    v: &FrameVpls,
     n_env: u32,
     env_pdf_scale: f32,
 ) -> BidirParamsRaw {
+    let (vpl_count, sub_count) = (v.count, v.used);
     let (lo, hi) = light_views::bounds(scene);
     let min_dist = TWO_BOUNCE_MIN_DIST * (hi - lo).length();
     let env_rot = scene
@@ -291,8 +295,7 @@ fn vpl_groups(scene: &Scene) -> u32 {
 /// A frame's VPL records (the first VPLs', then the light subpaths' vertices) and their
 /// cube faces.
 struct FrameVpls {
-    raws: Vec<VplRaw>,
-    matrices: Vec<glam::Mat4>,
+    records: Records,
     /// The first VPLs' records (`vpl_groups` × `vpls_per_light`), and those that carry light.
     count: u32,
     lit: usize,
@@ -300,36 +303,33 @@ struct FrameVpls {
     placed: usize,
     /// Records of subpath vertices after the first VPLs' (the slots up to the last used).
     used: u32,
-    /// Seconds to draw the first VPLs and to trace the subpaths.
-    seconds: (f64, f64),
 }
 
-type Records = (Vec<VplRaw>, Vec<glam::Mat4>);
-
+/// The frame's VPLs: the first ones drawn (stage "vpl sampling"), then the light subpaths
+/// traced from them (stage "light subpaths").
 fn frame_vpls(
-    scene: &Scene,
-    bvh: &SceneBvh,
+    fc: &mut FrameCtx,
     options: &BidirOptions,
-    frame: &FrameParams,
     texels: &[crate::raster::rsm::RsmTexel],
     maps: &VplMaps,
-) -> FrameVpls {
-    let t = Instant::now();
-    let (mut records, groups) = first_vpls(scene, bvh, options, frame.seed, texels, maps);
-    let lit = records.0.iter().filter(|r| r.flux != [0.0; 3]).count();
-    let count = records.0.len() as u32;
-    let first = t.elapsed().as_secs_f64();
-    let t = Instant::now();
-    let (placed, used) = subpaths::append(scene, bvh, &groups, options, frame, maps, &mut records);
-    FrameVpls {
-        raws: records.0,
-        matrices: records.1,
+) -> Result<FrameVpls> {
+    let (scene, bvh, frame) = (fc.scene, fc.bvh()?, fc.params);
+    let (mut records, groups, lit, count) = fc.timed("vpl sampling", |_| {
+        let (records, groups) = first_vpls(scene, bvh, options, frame.seed, texels, maps);
+        let lit = records.raws.iter().filter(|r| r.flux != [0.0; 3]).count();
+        let count = records.raws.len() as u32;
+        (records, groups, lit, count)
+    });
+    let (placed, used) = fc.timed("light subpaths", |_| {
+        subpaths::append(scene, bvh, &groups, options, frame, maps, &mut records)
+    });
+    Ok(FrameVpls {
+        records,
         count,
         lit,
         placed,
         used: used as u32,
-        seconds: (first, t.elapsed().as_secs_f64()),
-    }
+    })
 }
 
 /// The frame's first VPLs y1 and their records, group by group (`vpl_groups`): drawn from
@@ -382,27 +382,19 @@ fn state<'a>(
     let lights = vpl_groups(scene);
     let first = options.vpls_per_light * lights;
     let max_slots = ctx.device.limits().max_texture_array_layers / 6;
-    let capacity = first
-        + subpaths::slots(
-            lights,
-            (options.vpls_per_light, options.bundles),
-            options.max_depth,
-            first,
-            max_slots,
-        );
-    let size = options.vpl_shadow_map_size;
-    let bundle_key = (
-        options.bundles.max(1),
-        options.bundle_resolution,
-        options.bundle_memory_mb,
-    );
-    if !g
-        .bidir
-        .as_ref()
-        .is_some_and(|b| b.fits(&layers, capacity, size, bundle_key))
-    {
+    let (n1, bundles) = (options.vpls_per_light, options.bundles);
+    let capacity =
+        first + subpaths::slots(lights, n1, bundles, options.max_depth, first, max_slots);
+    let sizes = Sizes {
+        capacity,
+        vpl_size: options.vpl_shadow_map_size,
+        bundles: options.bundles.max(1),
+        bundle_resolution: options.bundle_resolution,
+        bundle_memory_mb: options.bundle_memory_mb,
+    };
+    if !g.bidir.as_ref().is_some_and(|b| b.fits(&layers, sizes)) {
         g.bidir = None;
-        let state = BidirState::new(&ctx, g, layers.clone(), (capacity, size), bundle_key, scene)?;
+        let state = BidirState::new(&ctx, g, layers.clone(), sizes, scene)?;
         let view = state.indirect.create_view(&Default::default());
         g.targets.bind_composite(&ctx, Some(&view));
         g.bidir = Some(state);
@@ -414,22 +406,15 @@ fn state<'a>(
 
 pub(super) fn frame(
     g: &mut GpuState,
-    scene: &Scene,
-    bvh: &SceneBvh,
+    mut fc: FrameCtx,
     options: &BidirOptions,
-    (frame, draw): (&FrameParams, LightDraw),
+    draw: LightDraw,
     images: Images,
-    progress: &dyn Progress,
 ) -> Result<RenderOutput> {
-    let ctx = g.ctx.clone();
-    g.timer.reset();
-    let mut stats = RenderStats {
-        triangles: scene.triangle_count() as u64,
-        samples_per_pixel: g.targets.spp(),
-        ..Default::default()
-    };
+    let (scene, params) = (fc.scene, fc.params);
     state(g, scene, options)?;
     let GpuState {
+        ctx,
         scene: gs,
         targets,
         timer,
@@ -437,141 +422,102 @@ pub(super) fn frame(
         ..
     } = g;
     let state = bidir.as_mut().ok_or_else(no_state)?;
-    let t = Instant::now();
-    targets.write_eye(&ctx, scene, &gs.cull);
-    let n_env = state.write_views(&ctx, scene, options.bundles, frame.seed);
-    let mut upload = t.elapsed().as_secs_f64();
+    let mut gpu = GpuFrame::begin(ctx, gs, targets, timer, &mut fc);
+    let ctx = gpu.ctx.clone();
+    let n_env = fc.timed("upload", |_| {
+        state.write_views(&ctx, scene, options.bundles, params.seed)
+    });
 
     // 1. Shadow maps and reflective shadow maps, read back.
-    let mut encoder = ctx
-        .device
-        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("bidir lights"),
-        });
-    if gs.record_shadows(&ctx, &mut encoder, timer, scene, draw) {
-        targets.invalidate(Stale::SHADOWS);
-    }
-    let textures = (&gs.textures.group, gs.variant);
+    let mut encoder = gpu.encoder("bidir lights");
+    gpu.record_shadows(&mut encoder, &fc, draw);
+    let textures = (&gpu.scene.textures.group, gpu.scene.variant);
     if let Some(rsm) = &state.rsm {
         let pass = RsmPass::get(&ctx);
         rsm.record(
             &pass,
             &mut encoder,
             &state.layers,
-            &gs.geometry,
-            &gs.cull,
+            &gpu.scene.geometry,
+            &gpu.scene.cull,
             textures,
-            timer,
+            gpu.timer,
         );
     }
     let index = ctx.queue.submit([encoder.finish()]);
-    let t = Instant::now();
-    let texels = match &state.rsm {
-        Some(rsm) => rsm.read(&ctx, &state.layers, Some(index))?,
-        None => Vec::new(),
-    };
-    let rsm_readback = t.elapsed().as_secs_f64();
-    crate::cancel::check(progress)?;
+    let texels = fc.timed("rsm readback", |_| match &state.rsm {
+        Some(rsm) => rsm.read(&ctx, &state.layers, Some(index)),
+        None => Ok(Vec::new()),
+    })?;
+    crate::cancel::check(fc.progress)?;
 
     // 2. VPLs and their shadow maps.
-    let v = frame_vpls(scene, bvh, options, frame, &texels, &state.vpls);
-    let (raws, matrices, vpl_count, lit, placed) = (v.raws, v.matrices, v.count, v.lit, v.placed);
-    let (vpl_seconds, subpath_seconds) = v.seconds;
-    let t = Instant::now();
-    state.vpls.upload(&ctx, &raws, &matrices);
-    let counts = (vpl_count, v.used);
-    let params = lighting_params(scene, options, frame, counts, n_env, state.env_pdf_scale);
-    gpu::write_buffer(
-        &ctx.queue,
-        "bidir params",
-        &state.params,
-        0,
-        bytemuck::bytes_of(&params),
-    );
-    upload += t.elapsed().as_secs_f64();
-    let mut encoder = ctx
-        .device
-        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("bidir frame"),
-        });
+    let v = frame_vpls(&mut fc, options, &texels, &state.vpls)?;
+    fc.timed("upload", |_| {
+        let (raws, matrices) = (&v.records.raws, &v.records.matrices);
+        state.vpls.upload(&ctx, raws, matrices);
+        let p = lighting_params(scene, options, params, &v, n_env, state.env_pdf_scale);
+        gpu::write_buffer(
+            &ctx.queue,
+            "bidir params",
+            &state.params,
+            0,
+            bytemuck::bytes_of(&p),
+        );
+    });
+    let mut encoder = gpu.encoder("bidir frame");
     state
         .vpls
-        .record_shadows(&ctx, &mut encoder, gs, &raws, &matrices, lit, timer);
+        .record_shadows(&ctx, &mut encoder, gpu.scene, &v.records, v.lit, gpu.timer);
 
     // 3. Ray bundles.
     let bundle_pass = BundlePass::get(&ctx);
+    let textures = (&gpu.scene.textures.group, gpu.scene.variant);
     state.bundles.record(
         &bundle_pass,
         &mut encoder,
         options.bundles,
-        &gs.geometry,
+        &gpu.scene.geometry,
         textures,
-        timer,
+        gpu.timer,
     );
 
     // 4. Direct light, the indirect light, composite.
-    let mut encoder = targets.record_direct(&ctx, gs, encoder, timer, progress)?;
+    let mut encoder = gpu.record_direct(encoder, &fc)?;
     let indirect_view = state.indirect.create_view(&Default::default());
-    let ts = timer.pass("bidir lighting");
-    let groups = [&state.group, targets.lighting_group()];
+    let ts = gpu.timer.pass("bidir lighting");
+    let groups = [&state.group, gpu.targets.lighting_group()];
     VplPass::get(&ctx).record(&mut encoder, &indirect_view, groups, ts);
-    targets.record_composite(&ctx, &mut encoder, timer);
     // 5. The paths through mirrors and glass (`specular_paths`), traced on the CPU while the
     // GPU works on the lights (uploaded before the composite runs: queue writes precede the
     // submission).
-    let t = Instant::now();
-    let (specular, cpu_split) =
-        specular(&ctx, targets, state, scene, bvh, options, frame, progress)?;
-    let specular_seconds = t.elapsed().as_secs_f64();
+    let specular = specular(&gpu, state, &mut fc, options)?;
     let names = spikes::with_indirect(readback_names(images, true));
-    targets.record_readback(&ctx, &mut encoder, &names, Some(&state.indirect));
-    timer.resolve(&mut encoder);
-    let index = ctx.queue.submit([encoder.finish()]);
-    let t = Instant::now();
-    let data = targets.read(&ctx, &names)?;
-    let (fragments, overflow) = if options.bundles > 0 {
-        state.bundles.fragments(&ctx, Some(index))?
-    } else {
-        (0, 0)
-    };
-    let readback = t.elapsed().as_secs_f64();
-    timer.collect(&ctx)?;
+    let data = gpu.finish(encoder, &names, Some(&state.indirect), &mut fc)?;
+    let (fragments, overflow) = fc.timed("readback", |_| match options.bundles {
+        0 => Ok((0, 0)),
+        _ => state.bundles.fragments(&ctx, None),
+    })?;
 
-    stats.vpls = lit as u64;
-    stats.light_paths = placed as u64;
-    stats.bundles = options.bundles as u64;
-    stats.bundle_fragments = fragments;
-    stats.bundle_overflow = overflow;
-    let mut stages = vec![
-        ("upload".into(), upload),
-        ("rsm readback".into(), rsm_readback),
-        ("vpl sampling".into(), vpl_seconds),
-        ("light subpaths".into(), subpath_seconds),
-    ];
-    if specular.is_some() {
-        let (light, camera) = cpu_split;
-        let nee = (specular_seconds - light - camera).max(0.0);
-        stages.push(("specular paths".into(), nee));
-        stages.push(("caustic light paths".into(), light));
-        stages.push(("delta camera paths".into(), camera));
-    }
-    stages.append(&mut timer.totals);
-    stages.push(("readback".into(), readback));
-    stats.stages = stages;
-    Ok(output(scene, targets, &data, specular, images, stats))
+    fc.stats.vpls = v.lit as u64;
+    fc.stats.light_paths = v.placed as u64;
+    fc.stats.bundles = options.bundles as u64;
+    fc.stats.bundle_fragments = fragments;
+    fc.stats.bundle_overflow = overflow;
+    Ok(output(&gpu, &data, specular, images, fc))
 }
 
 /// The frame's images from the read-back textures, with `bidir`'s own (`direct`,
 /// `specular`, `indirect`) when asked for.
 fn output(
-    scene: &Scene,
-    targets: &super::gpu::Targets,
-    data: &std::collections::HashMap<&'static str, Vec<glam::Vec4>>,
+    gpu: &GpuFrame,
+    data: &Readback,
     specular: Option<Image>,
     images: Images,
-    stats: RenderStats,
+    fc: FrameCtx,
 ) -> RenderOutput {
-    let mut out = assemble(scene, targets, data, stats);
+    let mut out = gpu.output(data, fc);
+    let targets = &*gpu.targets;
     let (w, h) = (targets.width, targets.height);
     // The lighting pass's image with its spikes spread (`spikes`), the difference added
     // to the radiance.
@@ -605,47 +551,45 @@ fn output(
 }
 
 /// Step 5: the light of the paths through mirrors and glass that the GPU passes leave out
-/// ([`specular_paths`]: next-event estimation where the camera's paths through them land, the
-/// light tracer's caustics, the camera paths through a delta lobe continued by the path
-/// tracer) written to the specular target; the target cleared once when the
-/// scene no longer has them. Also the seconds of the light tracer and of the camera paths
-/// (stages of their own, apart from "specular paths").
-#[allow(clippy::too_many_arguments)]
+/// ([`specular_paths`]: next-event estimation where the camera's paths through them land
+/// (stage "specular paths"), the light tracer's caustics ("caustic light paths"), the camera
+/// paths through a delta lobe continued by the path tracer ("delta camera paths")) written
+/// to the specular target; the target cleared once when the scene no longer has them.
 fn specular(
-    ctx: &GpuContext,
-    targets: &super::gpu::Targets,
+    gpu: &GpuFrame,
     state: &mut BidirState,
-    scene: &Scene,
-    bvh: &SceneBvh,
+    fc: &mut FrameCtx,
     options: &BidirOptions,
-    frame: &FrameParams,
-    progress: &dyn Progress,
-) -> Result<(Option<Image>, (f64, f64))> {
+) -> Result<Option<Image>> {
+    let (scene, frame, progress) = (fc.scene, fc.params, fc.progress);
+    let targets = &*gpu.targets;
     if scene.has_delta_materials() {
-        let samples =
-            super::options::derived::camera_samples(options.direct.spp, options.max_depth, frame);
-        let sampling = options.specular_sampling;
-        let mut img = specular_paths_direct(scene, bvh, &samples, sampling, progress)?;
+        let bvh = fc.bvh()?;
+        let mut img = fc.timed("specular paths", |_| {
+            let samples = super::options::derived::camera_samples(
+                options.direct.spp,
+                options.max_depth,
+                frame,
+            );
+            let sampling = options.specular_sampling;
+            specular_paths_direct(scene, bvh, &samples, sampling, progress)
+        })?;
         // One light path a pixel (at least MIN_LIGHT_PATHS), and ⌈spp/4⌉ camera samples a
         // pixel for the delta camera paths (`spp` is the direct light's, taken at
         // silhouettes and edges: 16 by default, as many over the whole image would cost
         // seconds a frame on the CPU at 512²). At 48² the first frame's relMSE against
         // `path` falls from 0.27 to 0.085 on `cornell-glass` and from 0.41 to 0.14 on
-        // `ring-room` with 4 samples instead of 1 (`examples/bidir_scenes`).
+        // `ring-room` with 4 samples instead of 1 (`benches/measure/bidir_scenes`).
         let (w, h) = (targets.width as u64, targets.height as u64);
         let paths = (w * h).max(specular_paths::MIN_LIGHT_PATHS);
-        let t = Instant::now();
-        let light = (paths, frame.seed, options.max_depth);
-        let caustics = specular_paths::caustics(scene, bvh, light, progress)?;
-        let light_seconds = t.elapsed().as_secs_f64();
-        let t = Instant::now();
-        let camera = (
-            options.direct.spp.div_ceil(4),
-            frame.seed,
-            options.max_depth,
-        );
-        let through = specular_paths::delta_camera_paths(scene, bvh, camera, progress)?;
-        let camera_seconds = t.elapsed().as_secs_f64();
+        let (seed, depth) = (frame.seed, options.max_depth);
+        let caustics = fc.timed("caustic light paths", |_| {
+            specular_paths::caustics(scene, bvh, paths, seed, depth, progress)
+        })?;
+        let spp = options.direct.spp.div_ceil(4);
+        let through = fc.timed("delta camera paths", |_| {
+            specular_paths::delta_camera_paths(scene, bvh, spp, seed, depth, progress)
+        })?;
         for ((p, c), t) in img
             .pixels
             .iter_mut()
@@ -654,15 +598,15 @@ fn specular(
         {
             *p += *c + *t;
         }
-        targets.write_specular(ctx, &img);
+        targets.write_specular(&gpu.ctx, &img);
         state.specular_written = true;
-        return Ok((Some(img), (light_seconds, camera_seconds)));
+        return Ok(Some(img));
     }
     if state.specular_written {
-        targets.write_specular(ctx, &Image::new(targets.width, targets.height));
+        targets.write_specular(&gpu.ctx, &Image::new(targets.width, targets.height));
         state.specular_written = false;
     }
-    Ok((None, (0.0, 0.0)))
+    Ok(None)
 }
 
 /// The error of a `bidir` frame that finds no `bidir` state (`state` makes it first).

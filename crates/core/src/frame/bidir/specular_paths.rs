@@ -40,7 +40,7 @@ use rayon::prelude::*;
 /// `caustic-ring`'s mirror ring. Paths whose first bounce is not a delta lobe end after one
 /// ray. At 48² (2304 pixels) 2^18 instead of 2^16 paths take the first frame's relMSE
 /// against `path` from 0.030 to 0.017 on `mirror-shadow` and from 0.075 to 0.036 on
-/// `caustic-ring` (`examples/bidir_scenes`) for about 0.06 s more a frame.
+/// `caustic-ring` (`benches/measure/bidir_scenes`) for about 0.06 s more a frame.
 pub(super) const MIN_LIGHT_PATHS: u64 = 1 << 18;
 
 /// The sources of [`caustics`]: the point and spot lights (those whose light subpaths the
@@ -57,7 +57,9 @@ fn local_lights(scene: &Scene) -> Sources {
 pub(super) fn caustics(
     scene: &Scene,
     bvh: &SceneBvh,
-    (paths, seed, max_depth): (u64, u64, u32),
+    paths: u64,
+    seed: u64,
+    max_depth: u32,
     progress: &dyn Progress,
 ) -> Result<Image> {
     let sources = local_lights(scene);
@@ -81,7 +83,9 @@ pub(super) fn caustics(
 pub(super) fn delta_camera_paths(
     scene: &Scene,
     bvh: &SceneBvh,
-    (spp, seed, max_depth): (u32, u64, u32),
+    spp: u32,
+    seed: u64,
+    max_depth: u32,
     progress: &dyn Progress,
 ) -> Result<Image> {
     let cam = &scene.camera;
@@ -108,14 +112,7 @@ pub(super) fn delta_camera_paths(
                     let mut rng = Rng::new(seed, 0xde17_a000 ^ pixel, s as u64);
                     let j = rng.next_2d();
                     let dir = cam.direction(x as f32 + j.x, y as f32 + j.y);
-                    sum += sample(
-                        scene,
-                        bvh,
-                        &lights,
-                        (cam.position, dir),
-                        max_depth,
-                        &mut rng,
-                    );
+                    sum += sample(scene, bvh, &lights, cam.position, dir, max_depth, &mut rng);
                 }
                 *px = sum / spp as f32;
             }
@@ -135,7 +132,8 @@ fn sample(
     scene: &Scene,
     bvh: &SceneBvh,
     lights: &DirectLight,
-    (origin, dir): (Vec3, Vec3),
+    origin: Vec3,
+    dir: Vec3,
     max_depth: u32,
     rng: &mut Rng,
 ) -> Vec3 {
@@ -181,7 +179,7 @@ fn sample(
             l += weight * path::radiance(scene, bvh, lights, (it.spawn(wi), wi), rng, &ps);
         } else if max_depth >= 2 {
             // (b) x1's non-delta lobe towards a delta lobe at x2.
-            l += weight * through_x2(scene, bvh, lights, (it.spawn(wi), wi), max_depth, rng);
+            l += weight * through_x2(scene, bvh, lights, it.spawn(wi), wi, max_depth, rng);
         }
         break;
     }
@@ -194,7 +192,8 @@ fn through_x2(
     scene: &Scene,
     bvh: &SceneBvh,
     lights: &DirectLight,
-    (o, d): (Vec3, Vec3),
+    o: Vec3,
+    d: Vec3,
     max_depth: u32,
     rng: &mut Rng,
 ) -> Vec3 {

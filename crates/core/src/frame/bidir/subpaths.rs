@@ -36,7 +36,7 @@
 
 use super::super::options::BidirOptions;
 use super::super::FrameParams;
-use super::vpls::{Vpl, VplMaps};
+use super::vpls::{Records, Vpl, VplMaps};
 use crate::bsdf::Material;
 use crate::raster::vpl::{cube_views, VplRaw};
 use crate::sampling::{Frame, Rng};
@@ -117,7 +117,8 @@ struct Subpaths {
 /// of depth d takes y_{d−1}) or there are no bundles.
 pub(super) fn slots(
     lights: u32,
-    (n1, bundles): (u32, u32),
+    n1: u32,
+    bundles: u32,
     max_depth: u32,
     first: u32,
     max_slots: u32,
@@ -196,7 +197,8 @@ fn trace(
     scene: &Scene,
     bvh: &SceneBvh,
     h: &Head,
-    (max_len, light_traced): (u32, bool),
+    max_len: u32,
+    light_traced: bool,
     rng: &mut Rng,
 ) -> Vec<Vertex> {
     let mut alpha = h.alpha;
@@ -281,21 +283,12 @@ pub(super) fn append(
     options: &BidirOptions,
     frame: &FrameParams,
     maps: &VplMaps,
-    records: &mut (Vec<VplRaw>, Vec<Mat4>),
+    records: &mut Records,
 ) -> (usize, usize) {
-    let first = records.0.len() as u32;
-    let out = subpaths(
-        scene,
-        bvh,
-        groups,
-        options.vpls_per_light,
-        options.max_depth,
-        (first, maps.capacity.saturating_sub(first)),
-        maps.size,
-        frame.seed,
-    );
-    records.0.extend(out.raws);
-    records.1.extend(out.matrices);
+    let first = records.raws.len() as u32;
+    let out = subpaths(scene, bvh, groups, options, maps, first, frame.seed);
+    records.raws.extend(out.raws);
+    records.matrices.extend(out.matrices);
     (out.placed, out.used)
 }
 
@@ -306,17 +299,17 @@ pub(super) fn append(
 /// `light_dist2` holding the slot of the subpath's next vertex (0: none; the field is
 /// unused beyond the RSM's VPLs). Later vertices are placed order by order, so that a full
 /// budget drops the highest orders.
-#[allow(clippy::too_many_arguments)]
 fn subpaths(
     scene: &Scene,
     bvh: &SceneBvh,
     groups: &[Vec<Option<Head>>],
-    n1: u32,
-    max_depth: u32,
-    (first, slots): (u32, u32),
-    size: u32,
+    options: &BidirOptions,
+    maps: &VplMaps,
+    first: u32,
     seed: u64,
 ) -> Subpaths {
+    let (n1, max_depth) = (options.vpls_per_light, options.max_depth);
+    let (slots, size) = (maps.capacity.saturating_sub(first), maps.size);
     let lights = groups.len();
     let heads = lights * n1 as usize;
     let mut out = Subpaths {
@@ -336,7 +329,7 @@ fn subpaths(
                 let i = light * n1 as usize + k;
                 let mut rng = Rng::new(seed, 0x5b9a, i as u64);
                 let light_traced = scene.lights.get(light).is_some_and(|l| l.is_local());
-                paths[i] = trace(scene, bvh, v, (max_len, light_traced), &mut rng);
+                paths[i] = trace(scene, bvh, v, max_len, light_traced, &mut rng);
             }
         }
     }
@@ -399,12 +392,12 @@ mod tests {
 
     #[test]
     fn slots_fit_the_budget_and_the_gpu() {
-        assert_eq!(slots(1, (64, 16), 2, 64, 1000), 0);
-        assert_eq!(slots(1, (64, 0), 7, 64, 1000), 0);
-        assert_eq!(slots(2, (16, 4), 3, 32, 1000), 32);
-        assert_eq!(slots(2, (16, 4), 7, 32, 1000), 32 * (1 + EXTRA_PER_SUBPATH));
+        assert_eq!(slots(1, 64, 16, 2, 64, 1000), 0);
+        assert_eq!(slots(1, 64, 0, 7, 64, 1000), 0);
+        assert_eq!(slots(2, 16, 4, 3, 32, 1000), 32);
+        assert_eq!(slots(2, 16, 4, 7, 32, 1000), 32 * (1 + EXTRA_PER_SUBPATH));
         // The extra slots shrink to what the GPU holds.
-        assert_eq!(slots(1, (16, 4), 64, 64, 100), 36);
+        assert_eq!(slots(1, 16, 4, 64, 64, 100), 36);
     }
 
     #[test]

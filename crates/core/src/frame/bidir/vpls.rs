@@ -62,15 +62,17 @@ pub fn sample_vpls(texels: &[RsmTexel], lights: usize, per_light: u32, seed: u64
     out
 }
 
+/// VPL records for the GPU and their cube faces' matrices (six a record), slot by slot.
+#[derive(Default)]
+pub(super) struct Records {
+    pub raws: Vec<VplRaw>,
+    pub matrices: Vec<Mat4>,
+}
+
 /// VPL records and their cube-face matrices for the GPU: `per_light` slots per light, light
 /// by light (the lighting pass finds a light's VPLs and covered flux by slot); a light
 /// without covered texels keeps zero-flux slots.
-pub(super) fn vpl_records(
-    scene: &Scene,
-    vpls: &[Vpl],
-    per_light: u32,
-    size: u32,
-) -> (Vec<VplRaw>, Vec<Mat4>) {
+pub(super) fn vpl_records(scene: &Scene, vpls: &[Vpl], per_light: u32, size: u32) -> Records {
     let (lo, hi) = light_views::bounds(scene);
     let diag = (hi - lo).length().max(1e-6);
     let slots = per_light as usize * scene.lights.len();
@@ -114,7 +116,7 @@ pub(super) fn vpl_records(
     for (slot, r) in raws.iter_mut().enumerate() {
         r.first_layer = slot as u32 * 6;
     }
-    (raws, matrices)
+    Records { raws, matrices }
 }
 
 /// The VPLs' GPU resources for `capacity` VPLs with `size`² cube faces: the records as a
@@ -236,20 +238,19 @@ impl VplMaps {
         );
     }
 
-    /// Records the cube shadow maps of the VPLs `raws` (`lit` of them drawn from texels;
+    /// Records the cube shadow maps of the VPLs `records` (`lit` of them drawn from texels;
     /// zero-flux slots are skipped when some are lit), each face drawing only the triangle
     /// runs that reach into its view.
-    #[allow(clippy::too_many_arguments)]
     pub fn record_shadows(
         &self,
         ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
         gs: &GpuScene,
-        raws: &[VplRaw],
-        matrices: &[Mat4],
+        records: &Records,
         lit: usize,
         timer: &mut Timer,
     ) {
+        let (raws, matrices) = (&records.raws, &records.matrices);
         let pass = ShadowPass::get(ctx);
         let draws = gs.cull.draws(matrices);
         for (slot, chunk) in self.layer_views.chunks(6).take(raws.len()).enumerate() {

@@ -262,7 +262,9 @@ impl LightSamples {
         &mut self,
         ctx: &GpuContext,
         scene: &Scene,
-        (seed, disc_scale, ratio): (u64, f32, bool),
+        seed: u64,
+        disc_scale: f32,
+        ratio: bool,
     ) -> bool {
         let c = self.counts;
         if c.area + c.sky == 0 || self.drawn == Some((seed, disc_scale)) {
@@ -402,7 +404,9 @@ impl LightSamples {
         ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
         timer: &mut Timer,
-        (geometry, cull, masks): (&Geometry, &CullUnits, Option<&wgpu::BindGroup>),
+        geometry: &Geometry,
+        cull: &CullUnits,
+        masks: Option<&wgpu::BindGroup>,
     ) {
         if !std::mem::take(&mut self.shadows_stale) {
             return;
@@ -509,12 +513,12 @@ mod tests {
             background: false,
         };
         let mut samples = LightSamples::new(ctx, scene, counts).expect("samples");
-        assert!(samples.prepare(ctx, scene, (1, 1.0, true)));
+        assert!(samples.prepare(ctx, scene, 1, 1.0, true));
         let cull = CullUnits::of(scene);
         let geometry = Geometry::upload(ctx, scene, &cull);
         let mut timer = Timer::new(ctx, sky);
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        samples.record_shadows(ctx, &mut encoder, &mut timer, (&geometry, &cull, None));
+        samples.record_shadows(ctx, &mut encoder, &mut timer, &geometry, &cull, None);
         let layers = samples.clip.len() as u32;
         let row = (size * 4).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
         let buffer = crate::gpu::readback_buffer(

@@ -231,11 +231,12 @@ impl GpuScene {
             self.write_lights(ctx, scene, jitter);
         }
         let mut changed = self.shadows_stale && !scene.lights.is_empty();
-        let sampling = (draw.seed, draw.disc_scale, !draw.progressive);
-        changed |= self.samples.prepare(ctx, scene, sampling);
+        let (seed, disc_scale, ratio) = (draw.seed, draw.disc_scale, !draw.progressive);
+        changed |= self.samples.prepare(ctx, scene, seed, disc_scale, ratio);
         let masks = self.masked.then_some(&self.textures.group);
+        let (geometry, cull) = (&self.geometry, &self.cull);
         self.samples
-            .record_shadows(ctx, encoder, timer, (&self.geometry, &self.cull, masks));
+            .record_shadows(ctx, encoder, timer, geometry, cull, masks);
         if !self.shadows_stale || scene.lights.is_empty() {
             return changed;
         }

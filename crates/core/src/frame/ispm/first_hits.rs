@@ -4,34 +4,36 @@
 //! ([`crate::photon::bounce`], cheaper on CPU devices).
 
 use super::super::context::FrameCtx;
+use super::super::gpu::GpuFrame;
 use crate::error::{Error, Result};
-use crate::gpu::timer::Timer;
 use crate::gpu::{GpuContext, Pipelines};
 use crate::photon::bounce::{trace_bounce_maps, BounceMap, FirstBounce};
 use crate::photon::trace::Checked;
 use crate::raster::bounce::{BouncePass, BounceTargets};
 use crate::scene::light_views::LightView;
 use crate::scene::Scene;
-use std::time::Instant;
 
 /// Where the first hits are found, and the bounce maps' resources.
 pub(super) struct FirstHits {
-    /// The choice, and why (`FirstBounce::resolve`).
-    pub choice: (FirstBounce, String),
+    /// The choice ([`FirstBounce::resolve`]).
+    pub bounce: FirstBounce,
+    /// Why it was chosen.
+    pub reason: String,
     /// The rasterized bounce maps' resources (`FirstBounce::Raster` only).
     targets: Option<BounceTargets>,
 }
 
 impl FirstHits {
-    pub fn new(choice: (FirstBounce, String)) -> Self {
+    pub fn new(bounce: FirstBounce, reason: String) -> Self {
         FirstHits {
-            choice,
+            bounce,
+            reason,
             targets: None,
         }
     }
 
     fn raster(&self) -> bool {
-        self.choice.0 == FirstBounce::Raster
+        self.bounce == FirstBounce::Raster
     }
 
     /// Makes the bounce maps' resources fit `layers` and uploads their views with the
@@ -61,36 +63,36 @@ impl FirstHits {
     /// traced or reused); in `serial` frames waits and times them.
     pub fn submit(
         &self,
-        ctx: &GpuContext,
-        gs: &super::super::gpu::GpuScene,
+        gpu: &mut GpuFrame,
+        fc: &mut FrameCtx,
         layers: &[LightView],
         reuse: bool,
-        timer: &mut Timer,
-        fc: &mut FrameCtx,
     ) -> Result<wgpu::SubmissionIndex> {
-        let t = Instant::now();
-        let mut encoder = ctx
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("bounce maps"),
-            });
-        if let (false, Some(b)) = (reuse, &self.targets) {
-            b.record(
-                &BouncePass::get(ctx),
-                &mut encoder,
-                layers,
-                &gs.geometry,
-                &gs.cull,
-                (&gs.textures.group, gs.variant),
-                timer,
-            );
-        }
-        let submission = ctx.queue.submit([encoder.finish()]);
+        let mut record = |fc: &mut FrameCtx| {
+            let (ctx, gs) = (&gpu.ctx, &gpu.scene);
+            let mut encoder = gpu.encoder("bounce maps");
+            if let (false, Some(b)) = (reuse, &self.targets) {
+                b.record(
+                    &BouncePass::get(ctx),
+                    &mut encoder,
+                    layers,
+                    &gs.geometry,
+                    &gs.cull,
+                    (&gs.textures.group, gs.variant),
+                    gpu.timer,
+                );
+            }
+            let submission = ctx.queue.submit([encoder.finish()]);
+            if fc.serial {
+                ctx.wait()?;
+            }
+            Ok(submission)
+        };
         if fc.serial {
-            ctx.wait()?;
-            fc.stage("bounce maps (wall)", t);
+            fc.timed("bounce maps (wall)", record)
+        } else {
+            record(fc)
         }
-        Ok(submission)
     }
 
     /// The first scatter of the frame's photons: the bounce maps read back once
@@ -104,24 +106,22 @@ impl FirstHits {
         submission: wgpu::SubmissionIndex,
         reuse: bool,
     ) -> Result<BounceMap> {
-        let (scene, bvh, seed, progress) = (fc.scene, fc.bvh, fc.params.seed, fc.progress);
-        let t = Instant::now();
+        let (scene, bvh, seed, progress) = (fc.scene, fc.bvh()?, fc.params.seed, fc.progress);
         let raster = self.raster();
-        let bm = match (reuse, &self.targets) {
-            (true, _) => Default::default(),
-            (false, Some(b)) if raster => b.finish(ctx, layers, Some(submission))?,
-            (false, _) if raster => Default::default(),
-            (false, _) => {
-                let control = Checked::new(progress, "bounce maps");
-                trace_bounce_maps(scene, bvh, layers, seed, &control)?
-            }
-        };
         let name = if raster {
             "bounce readback"
         } else {
             "bounce trace"
         };
-        fc.stage(name, t);
+        let bm = fc.timed(name, |_| match (reuse, &self.targets) {
+            (true, _) => Ok(Default::default()),
+            (false, Some(b)) if raster => b.finish(ctx, layers, Some(submission)),
+            (false, _) if raster => Ok(Default::default()),
+            (false, _) => {
+                let control = Checked::new(progress, "bounce maps");
+                trace_bounce_maps(scene, bvh, layers, seed, &control)
+            }
+        })?;
         fc.stats.photons_emitted = bm.covered;
         fc.stats.photons_first_bounce = bm.rays.len() as u64;
         if !progress.update("bounce maps", 1.0) {

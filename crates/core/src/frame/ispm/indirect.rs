@@ -12,14 +12,12 @@
 //! `scripts/probe/caustic_breakdown.py`). The paper's upsampling is the step it calls
 //! inconsistent (section 5.2); the diffuse photons' smooth light keeps it.
 
-use super::super::gpu::Targets;
+use super::super::context::FrameCtx;
+use super::super::gpu::{GpuFrame, Readback, Targets};
 use super::super::options::IspmOptions;
-use super::super::RenderStats;
-use super::stage;
 use crate::error::{Error, Result};
 use crate::estimate::volume_shape::partition;
 use crate::estimate::{Binned, CpuEstimate, Estimator, IndirectEstimate, Mode, Volumes};
-use crate::gpu::timer::Timer;
 use crate::gpu::GpuContext;
 use crate::photon::density::is_caustic;
 use crate::photon::radius::VolumeRadius;
@@ -27,12 +25,7 @@ use crate::photon::ring::RingPhotons;
 use crate::photon::Photon;
 use crate::raster::gbuffer::GBuffer;
 use crate::scene::{Changes, Scene};
-use glam::Vec4;
-use std::collections::HashMap;
 use std::time::Instant;
-
-/// The read-back textures of a frame, by name.
-pub(super) type Readback = HashMap<&'static str, Vec<Vec4>>;
 
 /// The indirect estimator of a renderer, kept across frames.
 pub(super) struct Indirect {
@@ -103,27 +96,25 @@ impl Indirect {
 
     /// Uploads the frame's photons and parameters, splats them (unless a still frame keeps
     /// last frame's estimate), composites and reads back `f.names`; returns the read-back
-    /// textures and the radii the photons were splatted with.
+    /// textures.
     pub fn render(
         &mut self,
-        ctx: &GpuContext,
-        targets: &mut Targets,
-        timer: &mut Timer,
+        gpu: &mut GpuFrame,
+        fc: &mut FrameCtx,
         f: &IndirectFrame,
-        stats: &mut RenderStats,
     ) -> Result<Readback> {
         let mut t = Instant::now();
         let scene = f.scene;
         let radius = f.radius;
-        let centre = targets.sample_centre();
+        let centre = gpu.targets.sample_centre();
         self.estimate.set_sample_centre(centre);
         if let Some(c) = &mut self.caustics {
             c.set_sample_centre(centre);
         }
-        stats.estimator = self.estimate.kind().name().into();
-        stats.estimator_reason = self.reason.clone();
-        self.upload(ctx, targets, f, radius, stats)?;
-        stats.estimator_memory = self.memory();
+        fc.stats.estimator = self.estimate.kind().name().into();
+        fc.stats.estimator_reason = self.reason.clone();
+        self.upload(&gpu.ctx, gpu.targets, f, radius, fc)?;
+        fc.stats.estimator_memory = self.memory();
         // A still frame (same photons, nothing moved) keeps last frame's estimate.
         let splat = f.photons_changed || f.changes.any() || !f.was_current;
         if splat && self.estimate.kind() == Estimator::Cpu {
@@ -131,59 +122,50 @@ impl Indirect {
             // was redrawn; in serial frames, whose direct light was waited on, this is part
             // of "splat (wall)".
             let mut waited = None;
-            let generation = targets.gbuffer_generation;
+            let generation = gpu.targets.gbuffer_generation;
             for e in std::iter::once(&mut self.estimate).chain(&mut self.caustics) {
                 if let IndirectEstimate::Cpu(c) = e {
-                    if let Some(w) = c.compute(ctx, &targets.gbuf, generation)? {
+                    if let Some(w) = c.compute(&gpu.ctx, &gpu.targets.gbuf, generation)? {
                         waited = Some(waited.unwrap_or(0.0) + w);
                     }
                 }
             }
             if !f.serial {
+                // The estimate's time less the G-buffer readback it waited for.
                 if let Some(w) = waited {
-                    stats.stages.push(("gbuffer readback".into(), w));
+                    fc.add_stage("gbuffer readback", w);
                 }
                 let estimate = t.elapsed().as_secs_f64() - waited.unwrap_or(0.0);
-                stats.stages.push(("cpu estimate".into(), estimate));
+                fc.add_stage("cpu estimate", estimate);
                 t = Instant::now();
             }
-            stats.estimator_memory = self.memory();
+            fc.stats.estimator_memory = self.memory();
         }
         let data = loop {
-            let mut encoder = ctx
-                .device
-                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                    label: Some("indirect estimate"),
-                });
+            let mut encoder = gpu.encoder("indirect estimate");
             if splat && f.serial {
-                (encoder, t) = splat_serially(ctx, self, encoder, timer, stats, t)?;
+                (encoder, t) = splat_serially(gpu, self, encoder, fc, t)?;
             } else if splat {
                 // The caustic estimate first: the main one's upsampling adds it.
                 if let Some(c) = &self.caustics {
-                    c.record(ctx, &mut encoder, timer);
+                    c.record(&gpu.ctx, &mut encoder, gpu.timer);
                 }
-                self.estimate.record(ctx, &mut encoder, timer);
+                self.estimate.record(&gpu.ctx, &mut encoder, gpu.timer);
             }
-            targets.record_composite(ctx, &mut encoder, timer);
+            fc.add_stage("photon upload", t.elapsed().as_secs_f64());
             let indirect = Some(self.estimate.output().0);
-            targets.record_readback(ctx, &mut encoder, f.names, indirect);
-            timer.resolve(&mut encoder);
-            ctx.queue.submit([encoder.finish()]);
-            stage(stats, "photon upload", t);
-            let t = Instant::now();
-            let data = targets.read(ctx, f.names)?;
-            stage(stats, "readback", t);
-            timer.collect(ctx)?;
+            let data = gpu.finish(encoder, f.names, indirect, fc)?;
             // The binned estimators' lists are sized from the last frame: when they
             // overflowed, they have grown and the estimate is redone.
-            if splat && self.regrown(ctx, targets, scene, radius, stats)? {
+            if splat && self.regrown(gpu, fc, scene, radius)? {
+                t = Instant::now();
                 continue;
             }
             break data;
         };
         if splat {
             let entries = self.estimates().map(|e| e.list_entries());
-            (stats.list_entries, stats.trivial_accepts) =
+            (fc.stats.list_entries, fc.stats.trivial_accepts) =
                 entries.fold((0, 0), |(a, b), (c, d)| (a + c, b + d));
         }
         Ok(data)
@@ -193,25 +175,24 @@ impl Indirect {
     /// overflowed (then they have grown, and the caller records again).
     fn regrown(
         &mut self,
-        ctx: &GpuContext,
-        targets: &Targets,
+        gpu: &GpuFrame,
+        fc: &mut FrameCtx,
         scene: &Scene,
         radius: VolumeRadius,
-        stats: &mut RenderStats,
     ) -> Result<bool> {
         let t = Instant::now();
         let mut regrown = false;
         for e in std::iter::once(&mut self.estimate).chain(&mut self.caustics) {
             if let IndirectEstimate::Binned(tl) = e {
-                if tl.overflowed(ctx, &targets.gbuf)? {
-                    tl.write_params(ctx, scene, radius);
+                if tl.overflowed(&gpu.ctx, &gpu.targets.gbuf)? {
+                    tl.write_params(&gpu.ctx, scene, radius);
                     regrown = true;
                 }
             }
         }
         if regrown {
-            stats.estimator_memory = self.memory();
-            stage(stats, "photon lists regrown", t);
+            fc.stats.estimator_memory = self.memory();
+            fc.add_stage("photon lists regrown", t.elapsed().as_secs_f64());
         }
         Ok(regrown)
     }
@@ -236,8 +217,9 @@ impl Indirect {
         targets: &Targets,
         f: &IndirectFrame,
         radius: VolumeRadius,
-        stats: &mut RenderStats,
+        fc: &mut FrameCtx,
     ) -> Result<()> {
+        let stats = &mut fc.stats;
         let (mut caustic, mut rest): (Vec<Photon>, Vec<Photon>) =
             f.photons.splat.iter().partition(|p| is_caustic(p));
         at_least_a_pixel(&mut caustic, &f.scene.camera, targets.height);
@@ -341,31 +323,28 @@ fn upload(
 /// each submitted and waited on and timed as "splat (wall)" and "upsample (wall)"
 /// (`FrameDesc::serial`); returns the encoder for the rest of the frame and its start.
 fn splat_serially(
-    ctx: &GpuContext,
+    gpu: &mut GpuFrame,
     indirect: &Indirect,
     mut encoder: wgpu::CommandEncoder,
-    timer: &mut Timer,
-    stats: &mut RenderStats,
+    fc: &mut FrameCtx,
     t: Instant,
 ) -> Result<(wgpu::CommandEncoder, Instant)> {
+    // Each wall stage runs from the end of the last one (the first from `t`).
+    let ctx = gpu.ctx.clone();
     let mut timed = |name: &str, t: Instant, encoder: wgpu::CommandEncoder| {
         ctx.queue.submit([encoder.finish()]);
         ctx.wait()?;
-        stats
-            .stages
-            .push((name.to_string(), t.elapsed().as_secs_f64()));
+        fc.add_stage(name, t.elapsed().as_secs_f64());
         Ok::<_, Error>(Instant::now())
     };
-    let new_encoder = |label| {
-        ctx.device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(label) })
-    };
     for e in indirect.estimates() {
-        e.record_splat(ctx, &mut encoder, timer);
+        e.record_splat(&gpu.ctx, &mut encoder, gpu.timer);
     }
     let t = timed("splat (wall)", t, encoder)?;
-    let mut upsample = new_encoder("upsampling");
-    indirect.estimate.record_upsample(ctx, &mut upsample, timer);
+    let mut upsample = gpu.encoder("upsampling");
+    indirect
+        .estimate
+        .record_upsample(&gpu.ctx, &mut upsample, gpu.timer);
     let t = timed("upsample (wall)", t, upsample)?;
-    Ok((new_encoder("composite"), t))
+    Ok((gpu.encoder("composite"), t))
 }

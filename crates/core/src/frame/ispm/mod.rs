@@ -19,13 +19,11 @@ mod photons;
 mod specular;
 
 use super::context::FrameCtx;
-use super::gpu::{assemble, normalized, readback_names, Stale};
-use super::gpu::{rgb_image, GpuScene, LightDraw, Targets};
+use super::gpu::{normalized, readback_names, rgb_image};
+use super::gpu::{GpuFrame, LightDraw, Readback, Targets};
 use super::options::IspmOptions;
-use super::{FrameParams, GpuState, Images, RenderOutput, RenderStats};
-use crate::cancel::Progress;
+use super::{GpuState, Images, RenderOutput};
 use crate::error::{Error, Result};
-use crate::gpu::timer::Timer;
 use crate::gpu::GpuContext;
 use crate::image::Image;
 use crate::photon::bounce::BounceMap;
@@ -33,13 +31,11 @@ use crate::photon::radius::{SceneExtent, VolumeRadius};
 use crate::photon::ring::{PhotonRing, RingPhotons};
 use crate::scene::light_views::light_views;
 use crate::scene::{Changes, Scene};
-use crate::trace::SceneBvh;
 use first_hits::FirstHits;
 use glam::Vec3;
-use indirect::{Indirect, IndirectFrame, Readback};
+use indirect::{Indirect, IndirectFrame};
 pub(super) use photons::Invalidation;
 use specular::Specular;
-use std::time::Instant;
 
 /// What `ispm` keeps from one frame to the next beyond the direct light's resources.
 pub(super) struct IspmState {
@@ -53,8 +49,9 @@ pub(super) struct IspmState {
 
 impl IspmState {
     fn new(ctx: &GpuContext, targets: &mut Targets, scene: &Scene, o: &IspmOptions) -> Self {
+        let (bounce, reason) = o.first_bounce.resolve(&ctx.info);
         IspmState {
-            first_hits: FirstHits::new(o.first_bounce.resolve(&ctx.info)),
+            first_hits: FirstHits::new(bounce, reason),
             specular: Specular::new(scene),
             indirect: Indirect::new(ctx, targets, o),
             traced_seed: None,
@@ -64,40 +61,27 @@ impl IspmState {
 
 pub(super) struct FrameInputs<'a> {
     pub gpu: &'a mut GpuState,
+    pub fc: FrameCtx<'a>,
     pub ring: &'a mut PhotonRing,
     pub invalid: Invalidation<'a>,
-    pub scene: &'a Scene,
-    pub bvh: &'a SceneBvh,
     pub options: &'a IspmOptions,
-    pub params: &'a FrameParams,
     pub frame: u64,
     pub changes: Changes,
     pub draw: LightDraw,
     pub images: Images,
-    pub progress: &'a dyn Progress,
-}
-
-/// Adds stage `name`, begun at `t`.
-fn stage(stats: &mut RenderStats, name: &str, t: Instant) {
-    stats
-        .stages
-        .push((name.to_string(), t.elapsed().as_secs_f64()));
 }
 
 pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     let FrameInputs {
         gpu,
+        mut fc,
         ring,
         invalid,
-        scene,
-        bvh,
         options,
-        params,
         frame,
         changes,
         draw,
         images,
-        progress,
     } = f;
     let GpuState {
         ctx,
@@ -105,28 +89,13 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         targets,
         timer,
         ispm,
-        serial,
         ..
     } = gpu;
-    let (ctx, serial) = (ctx.clone(), *serial);
-    timer.reset();
-    let mut fc = FrameCtx {
-        scene,
-        bvh,
-        params,
-        progress,
-        serial,
-        stats: RenderStats {
-            triangles: scene.triangle_count() as u64,
-            samples_per_pixel: targets.spp(),
-            ..Default::default()
-        },
-    };
+    let (scene, params) = (fc.scene, fc.params);
 
     // Resources: created on the first frame at this size, else kept. Marked current again
     // only when the frame completes: a cancelled or failed frame leaves the next one to
     // redo its work.
-    let t = Instant::now();
     // The bounce maps' share of the photons: the point and spot lights' of the power.
     // Derived once a frame and passed down: the photon budget (the bounce maps' layers are
     // sized from its share) and the volume radii of the frame's photons.
@@ -135,23 +104,24 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     let radius = VolumeRadius::of_extent(extent, options.photons, options.kernel_scale)
         .scaled(params.radius_scale);
     let layers = light_views(scene, budget.maps);
-    let state = ispm.get_or_insert_with(|| IspmState::new(&ctx, targets, scene, options));
+    let state = ispm.get_or_insert_with(|| IspmState::new(ctx, targets, scene, options));
     let traced_seed = state.traced_seed.take();
     let was_current = state.indirect.take_current();
     state.specular.invalidate(changes);
     // A still scene with frame-coherent random numbers has this frame's photons already.
     let reuse = ring.frames() == 1 && !changes.lighting() && traced_seed == Some(params.seed);
     let first_hits = &mut state.first_hits;
-    first_hits.prepare(&ctx, scene, &gs.materials, &layers, params.seed, reuse)?;
-    targets.write_eye(&ctx, scene, &gs.cull);
-    fc.stage("upload", t);
+    fc.timed("upload", |_| {
+        first_hits.prepare(ctx, scene, &gs.materials, &layers, params.seed, reuse)
+    })?;
+    let mut gpu = GpuFrame::begin(ctx, gs, targets, timer, &mut fc);
 
     // 1. Bounce maps, submitted first with their readback copies.
-    let bounce = first_hits.submit(&ctx, gs, &layers, reuse, timer, &mut fc)?;
+    let bounce = first_hits.submit(&mut gpu, &mut fc, &layers, reuse)?;
     // 2. Direct light and the eye G-buffer, not waited on.
-    record_direct_light(&ctx, gs, targets, timer, &mut fc, draw)?;
+    record_direct_light(&mut gpu, &mut fc, draw)?;
     // 3. The first hits: the bounce-map readback (or the traced first bounce).
-    let bm = first_hits.finish(&ctx, &mut fc, &layers, bounce, reuse)?;
+    let bm = first_hits.finish(&gpu.ctx, &mut fc, &layers, bounce, reuse)?;
     // 4. Temporal reuse: drop what moved, trace this frame's photons per light, keep them.
     photons::invalidate(ring, &invalid, scene, radius);
     // Progressive mode normalises the kernels' boundary loss per pixel (query side) instead
@@ -163,7 +133,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         params.progressive && options.refine.boundary_compensation && options.subsample <= 1;
     let trace = photons::Trace {
         scene,
-        bvh,
+        bvh: fc.bvh()?,
         options,
         params,
         layers: &layers,
@@ -171,23 +141,22 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         extent,
         frame,
         compensate: options.refine.boundary_compensation && !query_side,
-        progress,
+        progress: fc.progress,
     };
-    trace_or_reuse(&trace, &bm, reuse, ring, &mut fc.stats)?;
+    trace_or_reuse(&trace, &bm, reuse, ring, &mut fc)?;
     // Progressive mode: the direct light ray traced on the CPU (the GPU rendered the eye
     // G-buffer alone), added to the composite below; shadow maps are a bias no pass removes.
-    let traced_direct = traced_direct_light(scene, bvh, options, params, progress, &mut fc.stats)?;
+    let traced_direct = traced_direct_light(&mut fc, options)?;
     let photons = ring.collect();
     fc.stats.photons_stored = photons.splat.len() as u64;
     // 5. Mirrors and glass seen by the camera; their gather uses the photons as traced.
-    let specular =
-        state
-            .specular
-            .render(&ctx, targets, &mut fc, options, photons.traced(), !reuse)?;
+    let specular = state
+        .specular
+        .render(&gpu, &mut fc, options, photons.traced(), !reuse)?;
     // 6. The indirect estimate, upsampling, composite, readback.
-    fc.stats.first_bounce = first_hits.choice.0.name().into();
-    fc.stats.first_bounce_reason = first_hits.choice.1.clone();
-    crate::cancel::check(progress)?;
+    fc.stats.first_bounce = first_hits.bounce.name().into();
+    fc.stats.first_bounce_reason = first_hits.reason.clone();
+    crate::cancel::check(fc.progress)?;
     let mut names = readback_names(images, true);
     if query_side {
         for n in ["position", "normals", "indirect"] {
@@ -204,13 +173,10 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         changes,
         was_current,
         names: &names,
-        serial,
+        serial: fc.serial,
         radius,
     };
-    let data = state
-        .indirect
-        .render(&ctx, targets, timer, &indirect, &mut fc.stats)?;
-    fc.stats.stages.append(&mut timer.totals);
+    let data = state.indirect.render(&mut gpu, &mut fc, &indirect)?;
     let parts = Parts {
         data: &data,
         radius,
@@ -219,7 +185,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         specular,
         photons: &photons,
     };
-    let out = output(scene, bvh, targets, params, parts, images, fc.stats);
+    let out = output(&gpu, parts, images, fc)?;
     state.traced_seed = Some(params.seed);
     state.indirect.mark_current();
     Ok(out)
@@ -228,36 +194,29 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
 /// Step 2: the direct light (shadow maps, eye G-buffers, deferred shading) or, in
 /// progressive mode (whose direct light is traced on the CPU), the eye G-buffer alone;
 /// submitted, waited on and timed only in `serial` frames.
-fn record_direct_light(
-    ctx: &GpuContext,
-    gs: &mut GpuScene,
-    targets: &mut Targets,
-    timer: &mut Timer,
-    fc: &mut FrameCtx,
-    draw: LightDraw,
-) -> Result<()> {
-    let (scene, progress) = (fc.scene, fc.progress);
-    let t = Instant::now();
-    let mut encoder = ctx
-        .device
-        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("direct frame"),
-        });
-    let encoder = if fc.params.progressive {
-        targets.record_gbuffer(ctx, gs, &mut encoder, timer);
-        encoder
-    } else {
-        if gs.record_shadows(ctx, &mut encoder, timer, scene, draw) {
-            targets.invalidate(Stale::SHADOWS);
+fn record_direct_light(gpu: &mut GpuFrame, fc: &mut FrameCtx, draw: LightDraw) -> Result<()> {
+    let mut record = |fc: &mut FrameCtx| {
+        let mut encoder = gpu.encoder("direct frame");
+        let encoder = if fc.params.progressive {
+            let (ctx, timer) = (&gpu.ctx, &mut *gpu.timer);
+            gpu.targets
+                .record_gbuffer(ctx, gpu.scene, &mut encoder, timer);
+            encoder
+        } else {
+            gpu.record_shadows(&mut encoder, fc, draw);
+            gpu.record_direct(encoder, fc)?
+        };
+        gpu.ctx.queue.submit([encoder.finish()]);
+        if fc.serial {
+            gpu.ctx.wait()?;
         }
-        targets.record_direct(ctx, gs, encoder, timer, progress)?
+        Ok(())
     };
-    ctx.queue.submit([encoder.finish()]);
     if fc.serial {
-        ctx.wait()?;
-        fc.stage("direct light (wall)", t);
+        fc.timed("direct light (wall)", record)
+    } else {
+        record(fc)
     }
-    Ok(())
 }
 
 /// Step 4's trace, unless the frame reuses the photons it has (or traces no later bounce):
@@ -267,34 +226,28 @@ fn trace_or_reuse(
     bm: &BounceMap,
     reuse: bool,
     ring: &mut PhotonRing,
-    stats: &mut RenderStats,
+    fc: &mut FrameCtx,
 ) -> Result<()> {
     if !reuse && trace.options.max_depth >= 2 {
-        return trace.run(bm, ring, stats);
+        return trace.run(bm, ring, fc);
     }
-    stats.stages.push(("cpu trace".into(), 0.0));
+    fc.add_stage("cpu trace", 0.0);
     if trace.compensate {
-        stats.stages.push(("boundary compensation".into(), 0.0));
+        fc.add_stage("boundary compensation", 0.0);
     }
     Ok(())
 }
 
 /// The direct light ray traced on the CPU, in progressive mode.
-fn traced_direct_light(
-    scene: &Scene,
-    bvh: &SceneBvh,
-    options: &IspmOptions,
-    params: &FrameParams,
-    progress: &dyn Progress,
-    stats: &mut RenderStats,
-) -> Result<Option<Image>> {
-    if !params.progressive {
+fn traced_direct_light(fc: &mut FrameCtx, options: &IspmOptions) -> Result<Option<Image>> {
+    if !fc.params.progressive {
         return Ok(None);
     }
-    let t = Instant::now();
-    let seed = params.seed;
-    let d = super::progressive::direct_image(scene, bvh, options.direct.spp, seed, progress)?;
-    stage(stats, "direct light (ray traced)", t);
+    let (scene, bvh, seed, progress) = (fc.scene, fc.bvh()?, fc.params.seed, fc.progress);
+    let spp = options.direct.spp;
+    let d = fc.timed("direct light (ray traced)", |_| {
+        super::progressive::direct_image(scene, bvh, spp, seed, progress)
+    })?;
     Ok(Some(d))
 }
 
@@ -312,28 +265,25 @@ struct Parts<'a> {
 /// boundary loss (progressive, query side), with the ray-traced direct light added
 /// (progressive), and the method's own images (`direct`, `specular`, `indirect`,
 /// `photons`) when asked for.
-fn output(
-    scene: &Scene,
-    bvh: &SceneBvh,
-    targets: &Targets,
-    params: &FrameParams,
-    parts: Parts,
-    images: Images,
-    stats: RenderStats,
-) -> RenderOutput {
+fn output(gpu: &GpuFrame, parts: Parts, images: Images, mut fc: FrameCtx) -> Result<RenderOutput> {
+    let targets = &*gpu.targets;
     let (w, h) = (targets.width, targets.height);
     let data = parts.data;
-    let mut out = assemble(scene, targets, data, stats);
+    let (scene, bvh, seed) = (fc.scene, fc.bvh()?, fc.params.seed);
     let mut indirect = data.get("indirect").map(|a| rgb_image(w, h, a));
-    if let (true, Some(ind), Some(pos), Some(nrm)) = (
-        parts.query_side,
-        indirect.as_mut(),
-        data.get("position"),
-        data.get("normals"),
-    ) {
-        let t = Instant::now();
-        let r = parts.radius.diffuse();
-        let coverage = super::progressive::query_coverage(scene, bvh, pos, nrm, r, params.seed);
+    // The coverage is computed before the output is assembled (which takes the stats),
+    // and applied to it after.
+    let coverage = match (parts.query_side, data.get("position"), data.get("normals")) {
+        (true, Some(pos), Some(nrm)) if indirect.is_some() => {
+            let r = parts.radius.diffuse();
+            Some(fc.timed("boundary compensation", |_| {
+                super::progressive::query_coverage(scene, bvh, pos, nrm, r, seed)
+            }))
+        }
+        _ => None,
+    };
+    let mut out = gpu.output(data, fc);
+    if let (Some(ind), Some(coverage)) = (indirect.as_mut(), coverage) {
         for ((o, i), c) in out
             .radiance
             .pixels
@@ -345,7 +295,6 @@ fn output(
             *o += corrected - *i;
             *i = corrected;
         }
-        stage(&mut out.stats, "boundary compensation", t);
     }
     let raster_direct = data.get("accum").map(|a| normalized(targets, a));
     if let Some(traced) = &parts.traced_direct {
@@ -365,7 +314,7 @@ fn output(
         out.aovs.push(("indirect".into(), indirect));
         out.aovs.push(("photons".into(), hits));
     }
-    out
+    Ok(out)
 }
 
 /// The bounce maps of method `ispm` with `options` rendered on the GPU for `scene` and read

@@ -6,6 +6,7 @@
 //! paper's §7 limitation) get their share of the photons by power, emitted and traced whole
 //! on the CPU, and are kept in the ring after the lights.
 
+use super::super::context::FrameCtx;
 use super::super::options::IspmOptions;
 use super::super::{FrameParams, RenderStats};
 use crate::cancel::Progress;
@@ -108,12 +109,8 @@ impl Trace<'_> {
 
     /// Traces the rays of `bm` on per light and pushes each light's photons into `ring`;
     /// adds the stages "cpu trace" and "boundary compensation" (when compensating).
-    pub fn run(
-        &self,
-        bm: &BounceMap,
-        ring: &mut PhotonRing,
-        stats: &mut RenderStats,
-    ) -> Result<()> {
+    pub fn run(&self, bm: &BounceMap, ring: &mut PhotonRing, fc: &mut FrameCtx) -> Result<()> {
+        let stats = &mut fc.stats;
         let t = Instant::now();
         let mut compensation = 0.0;
         let pts = self.settings();
@@ -159,13 +156,10 @@ impl Trace<'_> {
             ring.push(self.frame, key, photons, compensated);
             crate::cancel::check(self.progress)?;
         }
-        stats
-            .stages
-            .push(("cpu trace".into(), t.elapsed().as_secs_f64() - compensation));
+        // The trace's time less the compensation's, which it interleaves.
+        fc.add_stage("cpu trace", t.elapsed().as_secs_f64() - compensation);
         if self.compensate {
-            stats
-                .stages
-                .push(("boundary compensation".into(), compensation));
+            fc.add_stage("boundary compensation", compensation);
         }
         Ok(())
     }

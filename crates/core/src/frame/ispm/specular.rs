@@ -3,16 +3,14 @@
 //! changes and their landings kept while only the lights change.
 
 use super::super::context::FrameCtx;
-use super::super::gpu::Targets;
+use super::super::gpu::GpuFrame;
 use super::super::options::IspmOptions;
 use crate::error::Result;
-use crate::gpu::GpuContext;
 use crate::image::Image;
 use crate::photon::delta_paths::Landings;
 use crate::photon::specular::{specular_paths, SpecularPaths};
 use crate::photon::Photon;
 use crate::scene::{Changes, Scene};
-use std::time::Instant;
 
 /// The specular paths' state across frames.
 pub(super) struct Specular {
@@ -48,18 +46,20 @@ impl Specular {
     /// image is kept; `None` for a scene without mirrors or glass.
     pub fn render(
         &mut self,
-        ctx: &GpuContext,
-        targets: &Targets,
+        gpu: &GpuFrame,
         fc: &mut FrameCtx,
         options: &IspmOptions,
         photons: &[Photon],
         photons_changed: bool,
     ) -> Result<Option<Image>> {
-        let (scene, bvh, params, progress) = (fc.scene, fc.bvh, fc.params, fc.progress);
-        let t = Instant::now();
-        let image = if self.enabled && self.image.is_some() && !photons_changed {
-            self.image.clone()
-        } else if self.enabled {
+        let image = fc.timed("specular paths", |fc| {
+            if self.enabled && self.image.is_some() && !photons_changed {
+                return Ok(self.image.clone());
+            }
+            if !self.enabled {
+                return Ok(None);
+            }
+            let (scene, bvh, params, progress) = (fc.scene, fc.bvh()?, fc.params, fc.progress);
             let paths = SpecularPaths {
                 samples: super::super::options::derived::camera_samples(
                     options.direct.spp,
@@ -78,13 +78,10 @@ impl Specular {
             let (img, camera_paths) =
                 specular_paths(scene, bvh, &paths, photons, &mut self.landings, progress)?;
             fc.stats.camera_paths = camera_paths;
-            targets.write_specular(ctx, &img);
-            Some(img)
-        } else {
-            None
-        };
+            gpu.targets.write_specular(&gpu.ctx, &img);
+            Ok::<_, crate::error::Error>(Some(img))
+        })?;
         self.image = image.clone();
-        fc.stage("specular paths", t);
         Ok(image)
     }
 }
