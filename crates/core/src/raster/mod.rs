@@ -192,7 +192,8 @@ mod tests {
         let jitter = Vec2::new(0.2, 0.9);
         let m = Mat4::from_cols_array_2d(&camera_view(&scene, jitter, 1.0).view_proj);
         for (x, y) in [(0u32, 0u32), (10, 40), (63, 47)] {
-            let p = cam.position + cam.direction(x as f32 + jitter.x, y as f32 + jitter.y) * 2.0;
+            // 4 units out: inside the box (the near plane sits just before it, 2.4 away).
+            let p = cam.position + cam.direction(x as f32 + jitter.x, y as f32 + jitter.y) * 4.0;
             let c = m * p.extend(1.0);
             let ndc = c.truncate() / c.w;
             let px = Vec2::new((ndc.x + 1.0) * 0.5 * 64.0, (1.0 - ndc.y) * 0.5 * 48.0);
