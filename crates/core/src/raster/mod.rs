@@ -100,7 +100,8 @@ fn near(eye: Vec3, (lo, hi): (Vec3, Vec3), far: f32) -> f32 {
         return far * 1e-5;
     }
     let outside = (lo - eye).max(eye - hi).max(Vec3::ZERO).length();
-    (0.99 * outside).clamp(far * 1e-5, far * 0.5)
+    // max/min, not clamp: no panic on a NaN `far`.
+    (0.99 * outside).max(far * 1e-5).min(far * 0.5)
 }
 
 /// The camera's world -> clip transform for culling the eye passes: a sample's jitter
