@@ -3,15 +3,20 @@
 - `docs/scenes/sun-sky/sun-sky.xml` (a ground plate and two boxes under a directional sun
   and an image sky), the sun alone and the sky alone: the mean of 4 `bidir` frames (seeds
   1–4) at `max_depth` 7 against `path` at the same depth, within 2% per channel.
-- The built-in `cornell` and Mitsuba's Cornell box (`docs/scenes/cornell-box`): the image
-  means of single frames (seeds 1–4) within 3% of each other, and no pixel of one frame's
-  indirect light above a stated multiple of the reference's largest.
+- The built-in `cornell` and Mitsuba's Cornell boxes (`tests/scenes/third_party/cbox`,
+  `docs/scenes/cornell-box`): the image means of single frames (seeds 1–4) within 3% of
+  each other (3.5% on the second), and no pixel of one frame's indirect light above a
+  stated multiple of the reference's largest.
+- Issue 42's material spheres: the roughness clamp keeps the rough conductors' albedo, and
+  a mirror shows the sky and the emitters it reflects (against Mitsuba 3.9.1).
 
 The breakdown by path length behind these numbers: `docs/bench/bidir-depth.md`
 (`scripts/bench/bench_bidir_depth.py --terms`).
 """
 
+import json
 import re
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -22,6 +27,7 @@ import gi
 ROOT = Path(__file__).resolve().parent.parent
 SUN_SKY = ROOT / "docs" / "scenes" / "sun-sky" / "sun-sky.xml"
 CORNELL_BOX = ROOT / "docs" / "scenes" / "cornell-box" / "cornell-box.xml"
+CBOX = ROOT / "tests" / "scenes" / "third_party" / "cbox" / "cbox.xml"
 SEEDS = range(1, 5)
 
 
@@ -64,18 +70,24 @@ def indirect_max(scene: gi.Scene, method: str, size, **settings) -> float:
     return float((full - direct).mean(axis=2).max())
 
 
-@pytest.mark.parametrize(("name", "max_spread"), [("cornell", 0.03), (str(CORNELL_BOX), 0.035)])
+@pytest.mark.parametrize(
+    ("name", "max_spread"),
+    [("cornell", 0.03), (str(CBOX), 0.03), (str(CORNELL_BOX), 0.035)],
+)
 def test_one_frame_is_steady_and_has_no_hot_spots(name, max_spread):
     # 48×48 at the defaults, seeds 1–4. Per-seed image means: before issue 48 they spread
-    # 13–14% (max − min over 8 seeds, σ 4.0% and 4.4%) on both boxes; the light subpaths
-    # from every VPL (64 a light instead of one per bundle, 16) and the emitters' photons
-    # with stratified directions bring σ to 1.5% and 1.6% (8 seeds). Seeds 1–4 spread 0.4%
-    # (`cornell`) and 3.3% (Cornell box): the issue's 3% is not met there, its bound is
-    # 3.5% (what remains is the one-bounce light of its area light's 64 VPLs, which have no
-    # bundle strategy). Hot spots: the largest pixel of one frame's light past the direct
-    # light over `path`'s (1024 spp, whose own largest pixel is noise above its smooth
-    # image): 1.6 and 2.5 at most over seeds 1–4 with `frame/bidir/spikes.rs` (2.3 and 2.9
-    # without; 4.3 and 15 over seeds 1–8 without, 3.8 and 3.2 with). Bound: 3 times.
+    # 13–14% (max − min over 8 seeds, σ 4.0% and 4.4%) on `cornell` and mitsuba.cornell_box()
+    # (`docs/scenes/cornell-box`); the light subpaths from every VPL (64 a light instead of
+    # one per bundle, 16) and the emitters' photons with stratified directions bring σ to
+    # 1.5% and 1.6% (8 seeds). Seeds 1–4 spread 0.4% (`cornell`), 2.5% (Mitsuba 3's `cbox`
+    # scene, `tests/scenes/third_party/cbox`; 2.8% over 8 seeds, σ 1.0%) and 3.3%
+    # (mitsuba.cornell_box(): the issue's 3% is not met there, its bound is 3.5%; what
+    # remains is the light of three and more bounces, σ 1.9% of the image over 8 seeds).
+    # Hot spots: the largest pixel of one frame's light past the direct light over `path`'s
+    # (1024 spp, whose own largest pixel is noise above its smooth image): 1.6, 2.2 and 2.5
+    # at most over seeds 1–4 with `frame/bidir/spikes.rs` (2.3 and 2.9 on `cornell` and
+    # mitsuba.cornell_box() without; 4.3 and 15 over seeds 1–8 without, 3.8 and 3.2 with).
+    # Bound: 3 times.
     scene = gi.load_scene(name)
     size = (48, 48)
     means = [float(gi.render(scene, "bidir", size=size, seed=s).radiance.mean()) for s in SEEDS]
@@ -95,3 +107,47 @@ def test_spread_spikes_stay_in_radiance_and_indirect_aov_alike():
     np.testing.assert_allclose(
         r.radiance, r.aov("direct") + r.aov("indirect") + r.aov("specular"), rtol=1e-4, atol=1e-5
     )
+
+
+MATERIALS = ROOT / "tests" / "scenes" / "materials"
+
+
+@pytest.mark.parametrize("name", ["roughconductor-cu", "roughconductor-al-ggx"])
+def test_roughness_clamp_keeps_the_lobes_albedo(name):
+    # Issue 42: the rough conductor spheres (GGX α 0.2 under a constant sky and a small area
+    # light; Mitsuba 3.9.1 references) were 14–19% dark in `bidir`: the roughness clamp
+    # (Tokuyoshi & Ogaki §5) widened the lobe the sky is reflected through (the bundles'
+    # density raised α to 1) and GGX at α 1 reflects 31–89% of the light it gets. The clamp
+    # now scales the widened lobe by E(α, μ)/E(α', μ) (`raster/shaders/roughness_clamp.wgsl`).
+    # Measured at 48×48, seed 3: clamped/unclamped 1.00 (0.83–0.86 before); against Mitsuba
+    # Cu 0.97 (the GPU's Schlick stand-in of the conductor's Fresnel, as without the clamp),
+    # Al 1.01. Tolerances: 2% between clamped and unclamped (the clamp's Fresnel and table
+    # approximations), 5% against Mitsuba (issue 42's bound for `bidir`).
+    scene = gi.load_scene(MATERIALS / f"{name}.xml")
+    ref = np.array(json.loads((MATERIALS / "references.json").read_text())[name]["mean"])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gi.RenderWarning)
+        on = gi.render(scene, "bidir", size=(48, 48), seed=3).radiance.mean(axis=(0, 1))
+        off = gi.render(scene, "bidir", size=(48, 48), seed=3, roughness_clamping=False)
+    off = off.radiance.mean(axis=(0, 1))
+    assert np.all(np.abs(on / off - 1) < 0.02), (on, off)
+    assert np.all(np.abs(on / ref - 1) < 0.05), on / ref
+
+
+def test_a_mirror_shows_the_sky_and_the_emitters_it_reflects():
+    # Issue 42's gold sphere (a smooth conductor under a constant sky and a small area
+    # light): `bidir` drew neither the sky nor the area light seen in the mirror (no
+    # strategy but `frame/bidir/specular_paths.rs`'s delta camera paths reaches them, and
+    # they stopped where the mirrored ray left the scene, and counted no emission where it
+    # landed): 0.50–0.72 of Mitsuba's image mean per channel. Measured after, 48×48 and
+    # 64×64, seeds 1–4: 0.995–1.005. Tolerance 5% (issue 42's bound for `bidir`; one frame's
+    # delta camera paths take 4 samples a pixel, and the area light's image in the mirror
+    # is a few pixels: its part of the mean varies by ±7% between seeds).
+    name = "conductor-au"
+    scene = gi.load_scene(MATERIALS / f"{name}.xml")
+    ref = np.array(json.loads((MATERIALS / "references.json").read_text())[name]["mean"])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gi.RenderWarning)
+        img = gi.render(scene, "bidir", size=(48, 48), seed=3).radiance
+    ratio = img.mean(axis=(0, 1)) / ref
+    assert np.all(np.abs(ratio - 1) < 0.05), ratio

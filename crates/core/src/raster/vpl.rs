@@ -189,6 +189,7 @@ impl VplPass {
                 wgsl::BUNDLE_TYPES,
                 shaders::FULLSCREEN,
                 wgsl::BIDIR,
+                wgsl::ROUGHNESS_CLAMP,
             ],
         );
         let pipeline = gpu::create_fullscreen_pipeline(

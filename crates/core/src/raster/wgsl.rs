@@ -20,4 +20,6 @@ pub const BOUNCE: &str = include_str!("shaders/bounce.wgsl");
 pub const COMPOSITE: &str = include_str!("shaders/composite.wgsl");
 pub const RSM: &str = include_str!("shaders/rsm.wgsl");
 pub const BIDIR: &str = include_str!("shaders/bidir.wgsl");
+/// `bidir`'s roughness clamp (§5), keeping the lobe's albedo.
+pub const ROUGHNESS_CLAMP: &str = include_str!("shaders/roughness_clamp.wgsl");
 pub const BUNDLES: &str = include_str!("shaders/bundles.wgsl");

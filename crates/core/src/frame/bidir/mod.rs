@@ -349,7 +349,7 @@ fn first_vpls(
         .map(|l| {
             vpls.iter()
                 .filter(|v| v.light == l)
-                .map(|v| Some(subpaths::Head::of_rsm(scene, v)))
+                .map(|v| Some(subpaths::Head::of_rsm(scene, bvh, v)))
                 .collect()
         })
         .collect();

@@ -163,29 +163,49 @@ pub(super) struct Head {
 }
 
 impl Head {
-    /// The head of RSM VPL `v` (its light a point or spot light).
-    pub fn of_rsm(scene: &Scene, v: &Vpl) -> Head {
+    /// The head of RSM VPL `v` (its light a point or spot light). Its material is the
+    /// scene's exact one (a Mitsuba conductor or coating, not the uber stand-in the RSM
+    /// holds: the subpath samples it on the CPU), found by the ray from the light to the
+    /// texel; the texel's uber parameters where that ray meets another surface first (a
+    /// texel the rasterizer saw past an edge).
+    pub fn of_rsm(scene: &Scene, bvh: &SceneBvh, v: &Vpl) -> Head {
         let t = &v.texel;
         let light = &scene.lights[v.light];
         let to_light = (light.position() - t.position).normalize_or_zero();
         let cos_g = t.ng.dot(to_light).abs().max(1e-6);
         let ratio = (t.ns.dot(to_light).abs() / cos_g).min(10.0);
+        let uber = Material {
+            diffuse: t.diffuse,
+            specular: t.specular,
+            roughness: t.roughness,
+            fresnel: t.fresnel,
+            transmission: Vec3::ZERO,
+            ..Material::default()
+        };
         Head {
             position: t.position,
             ng: t.ng,
             ns: t.ns,
             to_light,
-            material: Material {
-                diffuse: t.diffuse,
-                specular: t.specular,
-                roughness: t.roughness,
-                fresnel: t.fresnel,
-                transmission: Vec3::ZERO,
-                ..Material::default()
-            },
+            material: exact_material(scene, bvh, light.position(), t.position).unwrap_or(uber),
             alpha: v.flux * ratio,
         }
     }
+}
+
+/// The material of the surface at `point` as the ray from `from` meets it: `None` where the
+/// ray meets nothing within 0.1% of the distance (plus a 1e-4 floor) around `point`.
+fn exact_material(scene: &Scene, bvh: &SceneBvh, from: Vec3, point: Vec3) -> Option<Material> {
+    let d = point - from;
+    let dist = d.length();
+    if !(dist > 0.0 && dist.is_finite()) {
+        return None;
+    }
+    let dir = d / dist;
+    let tol = 1e-3 * dist + 1e-4;
+    let hit = bvh.intersect(from, dir, dist + tol)?;
+    let it = Interaction::new(scene, &hit, dir);
+    ((it.position - point).length() <= tol).then_some(it.material)
 }
 
 /// The first vertex after `h`'s and the ones after it, up to `max_len` (orders 2 … ≤

@@ -21,7 +21,8 @@
 //   distribution's peak D(0) = 1/(πα²) stays under d̂/m (kernel radius estimation, eq. 9),
 //   with d̂ the density of samples per unit solid angle there (eqs. 13–17, from the area
 //   density A = n1·p1 + n2·p2 of the middle vertex: d = A·dist²/cos towards either end)
-//   and m = 16 (the paper's m').
+//   and m = 16 (the paper's m'); the widened lobe scaled to keep its albedo
+//   (`roughness_clamp.wgsl`).
 // - environment light (§6): a bundle direction with no fragment along it sees the
 //   environment: f3·|n3·ω|·L_env(ω)/D(ω) (its direct light; its indirect light comes from
 //   the VPLs of `emitted.rs`). With an image environment (and its `importance`), part of the bundles are
@@ -180,7 +181,7 @@ fn light_visibility(l: Light, p: vec3<f32>, ng: vec3<f32>) -> f32 {
 
 // The light VPL `v` sends from x1 to a point `p` (normals `ns`, `ng`; material `m`, seen
 // from `wo`), visibility included: Φ1·f1·f·|ns·ωp,1|·|ng1·ω1,p|/d².
-fn vpl_light(v: Vpl, m1: Material, p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, wo: vec3<f32>, min_d2: f32) -> vec3<f32> {
+fn vpl_light(v: Vpl, m1: Clamped, p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Clamped, wo: vec3<f32>, min_d2: f32) -> vec3<f32> {
     let to_vpl = v.position - p;
     let d2 = dot(to_vpl, to_vpl);
     let wi = to_vpl / sqrt(d2);
@@ -188,30 +189,13 @@ fn vpl_light(v: Vpl, m1: Material, p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m
     if dot(wi, ng) <= 0.0 || cos1 <= 0.0 || max3(v.flux) <= 0.0 {
         return vec3<f32>(0.0);
     }
-    let f1 = bsdf_eval(m1, v.ns, -wi, v.to_light);
-    let f = bsdf_eval(m, ns, wo, wi);
+    let f1 = eval_clamped(m1, v.ns, -wi, v.to_light);
+    let f = eval_clamped(m, ns, wo, wi);
     let t = v.flux * f1 * f * (abs(dot(ns, wi)) * cos1 / max(d2, min_d2));
     if max3(t) <= 0.0 {
         return vec3<f32>(0.0);
     }
     return t * vpl_visibility(v, p, ng);
-}
-
-// §5: the material with its GGX α raised to √(m/(π·d̂)) (no change when off), where
-// m = m'·f·cos/D with m' = 16: for the GGX lobe f·cos θi/D = F·G2/(4 cos θo), taken with
-// G2 ≈ 1 and the mean Fresnel reflectance; `cos_o`: the cosine on the side the light leaves.
-fn clamped(m_in: Material, dhat: f32, cos_o: f32) -> Material {
-    var m = m_in;
-    // A mirror's delta lobe stays one (nothing here): its paths are traced on the CPU
-    // (`frame/bidir/specular_paths.rs`).
-    if params.clamp_roughness == 0u || max3(m.specular) <= 0.0 || !(dhat > 0.0)
-        || m.roughness < MIRROR_ROUGHNESS {
-        return m;
-    }
-    let weight = 16.0 * avg3(fresnel_avg(m)) / (4.0 * max(abs(cos_o), 0.05));
-    let alpha_min = sqrt(weight / (PI * dhat));
-    m.roughness = max(m.roughness, sqrt(min(alpha_min, 1.0)));
-    return m;
 }
 
 // Strategy B's area density of the vertex x next to x3 when the subpath draws it from `y`
@@ -494,7 +478,7 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
                 let l_env = env_radiance(dir) * (abs(dot(ns, dir)) * bv.inv_density);
                 sum -= diffuse_lobe(m, ns, wo, dir) * l_env;
                 if !hit.found {
-                    let f3 = bsdf_eval(clamped(m, 1.0 / bv.inv_density, dot(ns, wo)), ns, wo, dir);
+                    let f3 = eval_clamped(clamped(m, 1.0 / bv.inv_density, dot(ns, wo)), ns, wo, dir);
                     sum += f3 * l_env;
                 }
             }
@@ -542,9 +526,9 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
                     let p2 = max(cos23, 0.0) / (bv.inv_density * d23_2);
                     let d23s = (p1 + p2) * d23_2 / max(cos23, 1e-6);
                     let d20 = (p1 + p2) * dl2 / cos2l;
-                    let f3 = bsdf_eval(clamped(m, d23s, dot(ns, wo)), ns, wo, dir);
+                    let f3 = eval_clamped(clamped(m, d23s, dot(ns, wo)), ns, wo, dir);
                     let m2c = clamped(m2, combine(d20, d23s), cos23);
-                    let f2 = bsdf_eval(m2c, ns2, -dir, wl);
+                    let f2 = eval_clamped(m2c, ns2, -dir, wl);
                     var t = f3 * weight * f2 * abs(dot(ns2, wl)) * l.intensity * (falloff / dl2);
                     if max3(t) <= 0.0 {
                         continue;
@@ -562,13 +546,13 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
             if params.bounces >= 2u && params.vpls_per_light > 0u {
                 let k = min(u32((f32(b) + params.pair_offset) * n1 / n2), params.vpls_per_light - 1u);
                 // d̂ at x3 of eq. 14: the bundles' density n2·p_r.
-                let f3 = bsdf_eval(clamped(m, 1.0 / bv.inv_density, dot(ns, wo)), ns, wo, dir);
+                let f3 = eval_clamped(clamped(m, 1.0 / bv.inv_density, dot(ns, wo)), ns, wo, dir);
                 // Strategy A's area density of x2 (MIS against B; no clamp with MIS).
                 let pa = max(cos23, 0.0) / (bv.inv_density * d23_2);
                 let min_d2 = select(params.min_dist2, tiny_d2, mis);
                 for (var j = 0u; j * params.vpls_per_light < params.vpl_count; j++) {
                     let v = vpl_at(j * params.vpls_per_light + k);
-                    var t = vpl_light(v, vpl_material(v), x2, ns2, ng2, m2, -dir, min_d2);
+                    var t = vpl_light(v, unclamped(vpl_material(v)), x2, ns2, ng2, unclamped(m2), -dir, min_d2);
                     if mis && max3(t) > 0.0 {
                         // y1 continues without roulette (q = 1).
                         t *= pa / (pa + b_density(v, 1.0, x2, ng2));
@@ -581,7 +565,7 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
                     var row = params.vpl_count + j * params.vpls_per_light + k;
                     for (var o = 2u; o < params.bounces && row != 0u; o++) {
                         let y = vpl_at(row);
-                        var ty = vpl_light(y, vpl_material(y), x2, ns2, ng2, m2, -dir, min_d2);
+                        var ty = vpl_light(y, unclamped(vpl_material(y)), x2, ns2, ng2, unclamped(m2), -dir, min_d2);
                         if mis && max3(ty) > 0.0 {
                             ty *= pa / (pa + b_density(y, y.light_flux, x2, ng2));
                         }
