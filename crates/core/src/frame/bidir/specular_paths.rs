@@ -157,23 +157,16 @@ fn sample(
             if vertex >= max_depth {
                 break;
             }
-            // Follow the delta lobe; where it leaves the scene, the sky it sees (issue 42:
-            // the gold sphere under a constant sky was half as bright as `path`, no other
-            // strategy of `bidir` drawing the sky through a mirror).
+            // Follow the delta lobe. The sky, the suns' discs and the emitters met through
+            // delta lobes alone are `specular_paths_direct`'s (its specular image collects
+            // the light beyond the first surface), not this strategy's.
             let Some(next) = bvh.intersect(it.spawn(wi), wi, f32::INFINITY) else {
-                if let Some(env) = &scene.environment {
-                    l += beta * bs.weight * env.radiance(wi);
-                }
                 break;
             };
             beta *= bs.weight;
             it = Interaction::new(scene, &next, wi);
             wo = -wi;
             delta += 1;
-            // An emitter seen through the delta lobes (no other strategy draws it: the
-            // landing's shading is next-event estimation alone; issue 42's gold sphere
-            // showed its area light in `path` and nothing in `bidir`).
-            l += beta * it.material.emitted(it.ng, wo);
             continue;
         }
         let weight = beta * bs.weight;
