@@ -431,7 +431,11 @@ fn shade_pixel(g: GSample, fp: Footprint) -> vec3<f32> {
     let wo = normalize(view.eye - p);
     var sum = g.emission.xyz;
     if SAMPLED_LIGHTS {
-        sum += sampled_light(p, ns, ng, m, wo);
+        // A sub-pixel sample (one tap) of a pixel of `taps`² samples draws its share of the
+        // pixel's tree samples: the pixel's mean has as many as a pixel-centre sample's.
+        let t = penumbra_taps.x;
+        let count = direct_params.pixel_samples;
+        sum += sampled_light(p, ns, ng, m, wo, select(count, max(count / (t * t), 1u), fp.taps == 1u));
     }
     let taps = fp.taps;
     for (var i = 0u; i < arrayLength(&lights); i++) {
@@ -686,7 +690,7 @@ fn point_light(i: u32, p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, 
 
 // The light of the points drawn on the emitters and of the directions drawn from the sky
 // at `p` (see the header).
-fn sampled_light(p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, wo: vec3<f32>) -> vec3<f32> {
+fn sampled_light(p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, wo: vec3<f32>, tree_samples: u32) -> vec3<f32> {
     var sum = vec3<f32>(0.0);
     // Glossy lobe alone (the diffuse one is summed apart for the ratio estimator).
     var glossy = m;
@@ -722,7 +726,7 @@ fn sampled_light(p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, wo: ve
             lit += (l.fd + l.fs) * l.v;
             unshadowed += l.fd + l.fs;
         }
-        sum += tree_light(p, ns, ng, m, wo) * visible_ratio(lit, unshadowed);
+        sum += tree_light(p, ns, ng, m, wo, tree_samples) * visible_ratio(lit, unshadowed);
     } else {
         // The other points (every point without the ratio estimator), summed as they are.
         for (var i = plain; i < direct_params.area_count; i++) {

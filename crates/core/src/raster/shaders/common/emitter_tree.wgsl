@@ -162,12 +162,12 @@ fn widened(m: Material, spread2: f32) -> Material {
 }
 
 // The unshadowed light of the tree's emitters scattered towards the eye at `p` (shading
-// normal `ns`, geometric `ng`, material `m`, towards the eye `wo`): the mean of
-// `pixel_samples` samples, each L·f·|cos θi|·cos θ′/(d² + A/π) / p_A, p_A the triangle's
-// probability over its area. The point's own random stream comes from its position and the
-// frame's seed (a still view repeats its image; sub-pixel samples differ).
-fn tree_light(p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, wo: vec3<f32>) -> vec3<f32> {
-    let count = direct_params.pixel_samples;
+// normal `ns`, geometric `ng`, material `m`, towards the eye `wo`): the mean of `count`
+// samples (`pixel_samples`, or a sub-pixel sample's share of them), each
+// L·f·|cos θi|·cos θ′/(d² + A/π) / p_A, p_A the triangle's probability over its area. The
+// point's own random stream comes from its position and the frame's seed (a still view
+// repeats its image; sub-pixel samples differ).
+fn tree_light(p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, wo: vec3<f32>, count: u32) -> vec3<f32> {
     var state = pcg(bitcast<u32>(p.x) ^ pcg(bitcast<u32>(p.y) ^ pcg(bitcast<u32>(p.z) ^ direct_params.seed)));
     let shift = next_unit(&state);
     var sum = vec3<f32>(0.0);
@@ -205,9 +205,9 @@ fn tree_light(p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, wo: vec3<
         let g = abs(dot(ns, wi)) * cos_e / (d2 + t0.w) * t2.w / pick.prob;
         var f = diffuse_eval(m, ns, wo, wi);
         if has_glossy {
-            // The area this sample stands for, A/(n·p), seen as a disc of solid angle
-            // ≈ share/d² (its angular radius² share/(π d²)).
-            let spread2 = t2.w / (pick.prob * f32(count) * PI * d2);
+            // The area this sample stands for among the pixel's `pixel_samples`, A/(n·p),
+            // seen as a disc of solid angle ≈ share/d² (its angular radius² share/(π d²)).
+            let spread2 = t2.w / (pick.prob * f32(direct_params.pixel_samples) * PI * d2);
             f += bsdf_eval(widened(glossy, spread2), ns, wo, wi);
         }
         sum += f * radiance * g;
