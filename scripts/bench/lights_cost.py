@@ -6,7 +6,11 @@ direct light are redrawn). Prints the median frame time and median per-stage tim
 build, a Markdown table for ``docs/bench/lights-gpu.md``.
 
     python scripts/bench/lights_cost.py --build old=/tmp/old/python --build new=python \\
-        [--scene cornell] [--size 640x480] [--photons 20000] [--rounds 8] [--frames 4]
+        [--scene cornell] [--size 640x480] [--photons 20000] [--rounds 8] [--frames 4] \\
+        [--method ispm] [--move light|camera]
+
+``--move camera`` moves the camera instead (scenes lit by emitters alone, e.g. a scene
+file such as veach-mis: G-buffer, edges and direct light redone each frame).
 
 The machine may be shared: alternating rounds give the builds the same load, and the
 medians leave out the rounds a burst of other work slowed.
@@ -25,13 +29,18 @@ import time
 STAGES = ("direct light", "edge shading", "photon upload", "shadow maps")
 
 
-def worker(scene: str, size: str, photons: int) -> None:
+def worker(a: argparse.Namespace) -> None:
     """Reads a frame count per line, renders that many frames and answers a JSON line."""
+    import warnings
+
     import gi
 
-    w, h = (int(v) for v in size.split("x"))
-    r = gi.Renderer(gi.load_scene(scene), "ispm", size=(w, h), photons=photons)
-    p0 = r.describe("light", 0)["position"]
+    warnings.simplefilter("ignore", gi.RenderWarning)
+    w, h = (int(v) for v in a.size.split("x"))
+    options = {"photons": a.photons} if a.method == "ispm" else {}
+    r = gi.Renderer(gi.load_scene(a.scene), a.method, size=(w, h), **options)
+    target = "camera" if a.move == "camera" else "light"
+    p0 = r.describe(target, None if target == "camera" else 0)["position"]
     r.render()
     i = 0
     for line in sys.stdin:
@@ -39,7 +48,11 @@ def worker(scene: str, size: str, photons: int) -> None:
         for _ in range(int(line)):
             i += 1
             dx = 0.02 * ((i % 10) - 5)
-            r.update(lights={0: {"position": [p0[0] + dx, p0[1], p0[2]]}})
+            moved = {"position": [p0[0] + dx, p0[1], p0[2]]}
+            if target == "camera":
+                r.update(camera=moved)
+            else:
+                r.update(lights={0: moved})
             t = time.perf_counter()
             out = r.render()
             total = time.perf_counter() - t
@@ -53,7 +66,7 @@ def worker(scene: str, size: str, photons: int) -> None:
 def start(path: str, a: argparse.Namespace) -> subprocess.Popen[str]:
     env = dict(os.environ, PYTHONPATH=os.path.abspath(path))
     cmd = [sys.executable, __file__, "--worker", "--scene", a.scene, "--size", a.size]
-    cmd += ["--photons", str(a.photons)]
+    cmd += ["--photons", str(a.photons), "--method", a.method, "--move", a.move]
     return subprocess.Popen(cmd, env=env, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
 
 
@@ -65,10 +78,12 @@ def main() -> None:
     p.add_argument("--photons", type=int, default=20_000)
     p.add_argument("--rounds", type=int, default=8)
     p.add_argument("--frames", type=int, default=4, help="frames per round")
+    p.add_argument("--method", default="ispm")
+    p.add_argument("--move", choices=["light", "camera"], default="light")
     p.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     a = p.parse_args()
     if a.worker:
-        worker(a.scene, a.size, a.photons)
+        worker(a)
         return
     builds = {}
     for b in a.build:
@@ -92,7 +107,8 @@ def main() -> None:
         proc.stdin.close()
         proc.wait()
     n = a.rounds * a.frames
-    print(f"{a.scene} {a.size}, ispm, {a.photons} photons, light moving; median of {n} frames")
+    what = f"{a.method}, {a.photons} photons" if a.method == "ispm" else a.method
+    print(f"{a.scene} {a.size}, {what}, {a.move} moving; median of {n} frames")
     print(f"a build each, {a.rounds} alternating rounds of {a.frames} frames (ms)\n")
     print("| build | frame | " + " | ".join(STAGES) + " |")
     print("|---|---:|" + "---:|" * len(STAGES))

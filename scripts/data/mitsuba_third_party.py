@@ -15,6 +15,9 @@ counts path segments, gi scattering events), and `<lookAt>` renamed `<lookat>` a
 `ldrfilm` replaced, and a Mitsuba 0.x conductor's `extEta` of 1 (no effect) dropped, which
 Mitsuba 3.9 refuses. `scalar_rgb` needs nothing else; the faster
 `llvm_ad_rgb` needs libLLVM 19 (Debian's `libllvm19` unpacked with `dpkg -x`).
+
+With `--direct`, the direct light alone (`max_depth` 2: emission seen and one bounce, gi's
+`direct` method) into `reference-direct.exr` / `reference-direct.json`.
 """
 
 from __future__ import annotations
@@ -40,7 +43,13 @@ MAX_DEPTH = 65
 
 
 def mitsuba_copy(
-    path: Path, width: int, height: int, spp: int, seed: int, integrator: str = "path"
+    path: Path,
+    width: int,
+    height: int,
+    spp: int,
+    seed: int,
+    integrator: str = "path",
+    max_depth: int = MAX_DEPTH,
 ) -> str:
     """The scene's XML for Mitsuba at width×height (see the module doc)."""
     root = ET.parse(path).getroot()
@@ -48,7 +57,7 @@ def mitsuba_copy(
         if el.tag == "integrator":
             root.remove(el)
     element = ET.Element("integrator", {"type": integrator})
-    ET.SubElement(element, "integer", {"name": "max_depth", "value": str(MAX_DEPTH)})
+    ET.SubElement(element, "integer", {"name": "max_depth", "value": str(max_depth)})
     root.insert(0, element)
     for parent in root.iter():
         for el in list(parent):
@@ -74,16 +83,18 @@ def mitsuba_copy(
     return ET.tostring(root, encoding="unicode")
 
 
-def render(name: str, variant: str) -> None:
+def render(name: str, variant: str, direct: bool = False) -> None:
     import mitsuba as mi
 
     mi.set_variant(variant)
     file, width, height, spp, batches = SCENES[name]
+    depth = 2 if direct else MAX_DEPTH
+    stem = "reference-direct" if direct else "reference"
     path = THIRD_PARTY / name / file
     images = []
     t = time.perf_counter()
     for b in range(batches):
-        scene = mi.load_string(mitsuba_copy(path, width, height, spp, seed=b))
+        scene = mi.load_string(mitsuba_copy(path, width, height, spp, seed=b, max_depth=depth))
         images.append(np.array(mi.render(scene, spp=spp, seed=b), np.float64)[..., :3])
     seconds = time.perf_counter() - t
     img = np.mean(images, axis=0)
@@ -93,14 +104,14 @@ def render(name: str, variant: str) -> None:
         "variant": variant,
         "size": [width, height],
         "spp": spp * batches,
-        "max_depth": MAX_DEPTH,
+        "max_depth": depth,
         "rfilter": "box",
         "mean": img.mean(axis=(0, 1)).tolist(),
         "stderr": (means.std(axis=0, ddof=1) / np.sqrt(batches)).tolist(),
         "seconds": round(seconds, 1),
     }
-    write_exr(THIRD_PARTY / name / "reference.exr", img)
-    (THIRD_PARTY / name / "reference.json").write_text(json.dumps(info, indent=1) + "\n")
+    write_exr(THIRD_PARTY / name / f"{stem}.exr", img)
+    (THIRD_PARTY / name / f"{stem}.json").write_text(json.dumps(info, indent=1) + "\n")
     print(name, json.dumps(info), flush=True)
 
 
@@ -120,11 +131,12 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("scenes", nargs="*", default=list(SCENES))
     ap.add_argument("--variant", default="llvm_ad_rgb")
+    ap.add_argument("--direct", action="store_true", help="direct light only (max_depth 2)")
     args = ap.parse_args()
     for name in args.scenes:
         if name not in SCENES:
             sys.exit(f"unknown scene {name!r} (known: {', '.join(SCENES)})")
-        render(name, args.variant)
+        render(name, args.variant, args.direct)
 
 
 if __name__ == "__main__":

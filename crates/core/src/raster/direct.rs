@@ -103,6 +103,15 @@ pub struct DirectParamsRaw {
     pub polygons: u32,
     /// The groups (emitting objects) the polygons form, at most [`MAX_GROUPS`].
     pub groups: u32,
+    /// Nodes of the per-pixel emitter tree (`scene::emitters::PixelTree`; its triangles
+    /// follow them).
+    pub tree_nodes: u32,
+    /// Its triangles (0: no tree; the emitters of no group are the frame's points alone).
+    pub tree_triangles: u32,
+    /// Light samples per shading point drawn from the tree (with `ratio` only).
+    pub pixel_samples: u32,
+    /// Seed of the per-pixel samples (the frame's draw).
+    pub seed: u32,
     /// Per group its points [x, y) (the first records, group by group) and its polygons
     /// [z, w).
     pub group_ranges: [[u32; 4]; MAX_GROUPS],
@@ -117,6 +126,10 @@ pub const POLYGON_TEXELS: u32 = 5;
 /// Most emitting triangles whose unshadowed diffuse light the direct pass sums in closed
 /// form per pixel (beyond, their light is sampled only).
 pub const MAX_POLYGONS: usize = 64;
+
+/// Entries (nodes or triangles) per row of the emitter tree's texture (`TREE_ROW` of
+/// `emitter_tree.wgsl`).
+pub const TREE_ROW: u32 = 256;
 
 /// Most polygon groups (emitting objects), each with its own visibility ratio (`MAX_GROUPS`
 /// of `direct_shade.wgsl`).
@@ -203,6 +216,7 @@ impl DirectPass {
                 texture_entry(9, frag),
                 texture_entry(10, frag),
                 texture_entry(12, frag),
+                texture_entry(13, frag),
                 wgpu::BindGroupLayoutEntry {
                     binding: 11,
                     visibility: frag,
@@ -235,6 +249,7 @@ impl DirectPass {
                 shaders::BSDF,
                 wgsl::SHADOW_LOOKUP,
                 wgsl::DIRECT_SHADE,
+                wgsl::EMITTER_TREE,
                 shaders::FULLSCREEN,
                 wgsl::DIRECT,
             ],

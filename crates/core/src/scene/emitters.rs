@@ -6,9 +6,11 @@
 
 mod groups;
 pub mod quads;
+mod tree;
 
 pub use groups::PolygonGroups;
 pub use quads::EmitterPolygon;
+pub use tree::{PixelTree, TREE_ENTRY_TEXELS};
 
 use super::light::Emission;
 use super::light_bvh::{LightBounds, LightBvh};

@@ -280,6 +280,15 @@ impl LightBvh {
         self.nodes.is_empty()
     }
 
+    /// The nodes in depth-first order, each as its bounds, whether it is a leaf, and its
+    /// light (leaf) or its second child's index (interior; the first child follows it): for
+    /// a copy of the hierarchy on the GPU.
+    pub fn nodes(&self) -> impl Iterator<Item = (LightBounds, bool, u32)> + '_ {
+        self.nodes
+            .iter()
+            .map(|n| (n.bounds, n.leaf, n.child_or_light))
+    }
+
     /// A light chosen for point `p` (surface normal `n`, or zero) from `u` in [0, 1), and its
     /// probability; `None` when no light can reach the point.
     pub fn sample(&self, p: Vec3, n: Vec3, mut u: f32) -> Option<(usize, f32)> {

@@ -15,10 +15,11 @@ use crate::gpu::timer::Timer;
 use crate::gpu::{self, GpuContext, Pipelines};
 use crate::raster::direct::{
     DirectParamsRaw, SampledLightRaw, MAX_GROUPS, MAX_POLYGONS, POLYGON_TEXELS, SAMPLE_TEXELS,
+    TREE_ROW,
 };
 use crate::raster::shadow::{self, CullUnits, ShadowPass};
 use crate::raster::{buffer_init, Geometry, VIEW_SIZE};
-use crate::scene::emitters::{EmitterPolygon, Emitters, PolygonGroups};
+use crate::scene::emitters::{EmitterPolygon, Emitters, PolygonGroups, TREE_ENTRY_TEXELS};
 use crate::scene::light_views::{self, orthographic_view, CUBE_FACES};
 use crate::scene::{Environment, Scene};
 use bytemuck::Zeroable;
@@ -83,6 +84,13 @@ pub(crate) struct LightSamples {
     /// The emitting triangles (kept until geometry or materials change) and the polygon
     /// groups the polygons texture holds.
     emitters: Option<(Emitters, PolygonGroups)>,
+    /// The per-pixel emitter tree (`scene::emitters::PixelTree`), its capacity in entries
+    /// (sized for the scene's emitters when made) and the (nodes, triangles) it holds
+    /// ((0, 0): none, or more than the capacity after an edit).
+    tree: wgpu::Texture,
+    pub tree_view: wgpu::TextureView,
+    tree_capacity: u32,
+    tree_held: (u32, u32),
     /// CPU copies of the layers' matrices (for culling), and which layers to render.
     clip: Vec<Mat4>,
     render: Vec<bool>,
@@ -203,6 +211,21 @@ impl LightSamples {
             1
         };
         let polygons = float_texture(ctx, "emitter polygons", POLYGON_TEXELS, rows, None);
+        // The tree of the emitters outside the polygon groups: at most 2n − 1 nodes and n
+        // triangles for n emitting triangles.
+        let emitting = if counts.area > 0 {
+            Emitters::of(scene).len() as u32
+        } else {
+            0
+        };
+        let tree_rows = (3 * emitting).div_ceil(TREE_ROW).max(1);
+        let tree = float_texture(
+            ctx,
+            "emitter tree",
+            TREE_ROW * TREE_ENTRY_TEXELS,
+            tree_rows,
+            None,
+        );
         let params_raw = DirectParamsRaw::zeroed();
         let params = buffer_init(
             ctx,
@@ -228,6 +251,14 @@ impl LightSamples {
             params_raw,
             polygons_view: view(&polygons),
             polygons,
+            tree_view: view(&tree),
+            tree,
+            tree_capacity: if emitting > 0 {
+                tree_rows * TREE_ROW
+            } else {
+                0
+            },
+            tree_held: (0, 0),
             emitters: None,
             clip: Vec::new(),
             render: Vec::new(),
@@ -281,6 +312,7 @@ impl LightSamples {
                 POLYGON_TEXELS,
                 &texels,
             );
+            self.tree_held = self.write_tree(ctx, scene, &emitters, &groups);
             self.emitters = Some((emitters, groups));
         }
         let mut polygons = 0;
@@ -380,6 +412,10 @@ impl LightSamples {
             groups: self.emitters.as_ref().map_or(0, |(_, g)| g.groups),
             group_ranges,
             ratio: ratio as u32,
+            tree_nodes: self.tree_held.0,
+            tree_triangles: self.tree_held.1,
+            pixel_samples: c.area,
+            seed: (seed ^ (seed >> 32)) as u32,
             ..params_of(scene, c, area, sky)
         };
         if params != self.params_raw {
@@ -395,6 +431,35 @@ impl LightSamples {
         self.drawn = Some((seed, disc_scale));
         self.shadows_stale = true;
         true
+    }
+
+    /// Writes the per-pixel tree of the emitters outside `groups` into its texture; the
+    /// (nodes, triangles) written, (0, 0) when there is none or it exceeds the capacity
+    /// (those emitters are then lit by the frame's points alone).
+    fn write_tree(
+        &self,
+        ctx: &GpuContext,
+        scene: &Scene,
+        emitters: &Emitters,
+        groups: &PolygonGroups,
+    ) -> (u32, u32) {
+        let Some(tree) = emitters.pixel_tree(scene, groups) else {
+            return (0, 0);
+        };
+        if tree.entries() > self.tree_capacity {
+            return (0, 0);
+        }
+        let mut texels = tree.texels;
+        let row = (TREE_ROW * TREE_ENTRY_TEXELS) as usize;
+        texels.resize(texels.len().next_multiple_of(row), [0.0; 4]);
+        write_rows(
+            ctx,
+            &self.tree,
+            "emitter tree",
+            TREE_ROW * TREE_ENTRY_TEXELS,
+            &texels,
+        );
+        (tree.nodes, tree.triangles)
     }
 
     /// Renders the sampled lights' shadow maps if they were drawn anew (each layer only the
@@ -474,6 +539,10 @@ fn params_of(scene: &Scene, c: SampleCounts, area: u32, sky: u32) -> DirectParam
         env_sin,
         polygons: 0,
         groups: 0,
+        tree_nodes: 0,
+        tree_triangles: 0,
+        pixel_samples: 0,
+        seed: 0,
         group_ranges: [[0; 4]; MAX_GROUPS],
     }
 }

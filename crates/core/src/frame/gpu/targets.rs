@@ -170,6 +170,7 @@ fn direct_scene_group(
                     resource: gs.samples.params.as_entire_binding(),
                 },
                 texture(12, &gs.samples.polygons_view),
+                texture(13, &gs.samples.tree_view),
             ],
         },
     )

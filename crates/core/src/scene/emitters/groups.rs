@@ -44,6 +44,14 @@ impl PolygonGroups {
         first as u32..end as u32
     }
 
+    /// The emitters of no group (indices into `Emitters::triangles`), if any.
+    pub fn rest(&self) -> Option<&[u32]> {
+        self.strata
+            .iter()
+            .find(|s| s.group.is_none())
+            .map(|s| s.slots.as_slice())
+    }
+
     /// The range of `polygons` that group `g` holds.
     pub fn polygons_of(&self, g: u32) -> std::ops::Range<u32> {
         let first = self.polygons.partition_point(|t| t.group < g);

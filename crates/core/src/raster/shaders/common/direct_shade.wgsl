@@ -17,7 +17,11 @@
 //   polygon clipped to the horizon, i.e. linearly transformed cosines for the diffuse lobe,
 //   the Fresnel coupling taken at the object's mean direction) times Σ f_d·G·V / Σ f_d·G
 //   over the points drawn on that object; the other emitters' points are summed as they
-//   are;
+//   are, or with `ratio` and a per-pixel emitter tree (`tree_triangles`), by the ratio
+//   estimator too: their unshadowed light (both lobes) from samples each shading point
+//   draws by importance from a light BVH (emitter_tree.wgsl) times Σ f·G·V / Σ f·G over
+//   their shadow-mapped points (one ratio for all of them: where one such emitter is hidden
+//   and another not, the ratio mixes their visibilities by the points' weights);
 // - per direction drawn from the sky (`sky_count` records), a distant light of irradiance
 //   L/(n·p) with one tap of its orthographic shadow map; with `ratio` the diffuse lobe is
 //   the ratio estimator (Heitz, Hill & McGuire 2018): the unshadowed diffuse light from the
@@ -70,6 +74,12 @@ struct DirectParams {
     polygons: u32,
     // The emitting objects (groups) the polygons form, at most `MAX_GROUPS`.
     groups: u32,
+    // The per-pixel emitter tree (emitter_tree.wgsl): its nodes, its triangles (0: none),
+    // the samples a shading point draws from it and their seed.
+    tree_nodes: u32,
+    tree_triangles: u32,
+    pixel_samples: u32,
+    seed: u32,
     // Per group its points [x, y) (the first records, group by group) and its polygons
     // [z, w).
     group_ranges: array<vec4<u32>, MAX_GROUPS>,
@@ -421,7 +431,11 @@ fn shade_pixel(g: GSample, fp: Footprint) -> vec3<f32> {
     let wo = normalize(view.eye - p);
     var sum = g.emission.xyz;
     if SAMPLED_LIGHTS {
-        sum += sampled_light(p, ns, ng, m, wo);
+        // A sub-pixel sample (one tap) of a pixel of `taps`² samples draws its share of the
+        // pixel's tree samples: the pixel's mean has as many as a pixel-centre sample's.
+        let t = penumbra_taps.x;
+        let count = direct_params.pixel_samples;
+        sum += sampled_light(p, ns, ng, m, wo, select(count, max(count / (t * t), 1u), fp.taps == 1u));
     }
     let taps = fp.taps;
     for (var i = 0u; i < arrayLength(&lights); i++) {
@@ -676,7 +690,7 @@ fn point_light(i: u32, p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, 
 
 // The light of the points drawn on the emitters and of the directions drawn from the sky
 // at `p` (see the header).
-fn sampled_light(p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, wo: vec3<f32>) -> vec3<f32> {
+fn sampled_light(p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, wo: vec3<f32>, tree_samples: u32) -> vec3<f32> {
     var sum = vec3<f32>(0.0);
     // Glossy lobe alone (the diffuse one is summed apart for the ratio estimator).
     var glossy = m;
@@ -701,10 +715,24 @@ fn sampled_light(p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, wo: ve
             plain = max(plain, range.y);
         }
     }
-    // The other points (every point without the ratio estimator), summed as they are.
-    for (var i = plain; i < direct_params.area_count; i++) {
-        let l = point_light(i, p, ns, ng, m, glossy, wo);
-        sum += (l.fd + l.fs) * l.v;
+    if direct_params.ratio != 0u && direct_params.tree_triangles > 0u {
+        // The other emitters, selected per shading point: their unshadowed light from the
+        // tree (both lobes) times the visibility ratio of their shadow-mapped points,
+        // Σ f·G·V / Σ f·G (1 where none lights the point).
+        var lit = vec3<f32>(0.0);
+        var unshadowed = vec3<f32>(0.0);
+        for (var i = plain; i < direct_params.area_count; i++) {
+            let l = point_light(i, p, ns, ng, m, glossy, wo);
+            lit += (l.fd + l.fs) * l.v;
+            unshadowed += l.fd + l.fs;
+        }
+        sum += tree_light(p, ns, ng, m, wo, tree_samples) * visible_ratio(lit, unshadowed);
+    } else {
+        // The other points (every point without the ratio estimator), summed as they are.
+        for (var i = plain; i < direct_params.area_count; i++) {
+            let l = point_light(i, p, ns, ng, m, glossy, wo);
+            sum += (l.fd + l.fs) * l.v;
+        }
     }
     if direct_params.sky_count == 0u {
         return sum;
