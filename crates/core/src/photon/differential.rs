@@ -153,10 +153,10 @@ pub fn reference_length(lengths: impl IntoIterator<Item = f32>) -> Option<f32> {
 ///
 /// Differentials give conjugate semi-diameters: a photon arriving at a grazing angle θ has
 /// both stretched by 1/cos θ along the same direction, so they end up nearly parallel.
-/// Rescaling such skewed axes one by one ([`compress`], [`clamp_axis`]) keeps the ellipse's
-/// elongation (both shrink alike), and a footprint 20× longer than wide is splatted as a
-/// thin bright streak; on the principal axes the compression shrinks the long one most,
-/// taking the elongation to its fourth root.
+/// Rescaling such skewed axes one by one ([`compress`], [`clamp_axis`]) keeps most of the
+/// ellipse's elongation (both shrink by similar factors), and a footprint 20× longer than
+/// wide is splatted as a thin bright streak; on the principal axes the compression shrinks
+/// the long one most, taking the elongation to its fourth root.
 pub fn principal_axes(a: [Vec3; 2]) -> [Vec3; 2] {
     // Eigenvectors of the Gram matrix [[p, q], [q, r]] of the two axes.
     let (p, q, r) = (a[0].dot(a[0]), a[0].dot(a[1]), a[1].dot(a[1]));
@@ -342,10 +342,11 @@ mod tests {
         let area = |a: [Vec3; 2]| a[0].cross(a[1]).length();
         assert!((area([u, v]) - area(a)).abs() < 1e-3);
         assert!((elongation(a) - 20.0).abs() < 1e-2);
-        // Compressing against L = 1: principal axes → elongation 20^(1/4); skewed → 20.
+        // Compressing against L = 1: principal axes → elongation 20^(1/4) ≈ 2.1; the skewed
+        // ones (lengths 17.3 and 10.0, shrunk alike) stay 17.5× elongated.
         let squeezed = |a: [Vec3; 2]| elongation(a.map(|x| compress(x, 1.0)));
         assert!((squeezed([u, v]) - 20f32.powf(0.25)).abs() < 1e-2);
-        assert!(squeezed(a) > 19.0, "{}", squeezed(a));
+        assert!(squeezed(a) > 15.0, "{}", squeezed(a));
         // Already principal (or a circle) stays as it is.
         let b = [Vec3::X * 2.0, Vec3::Z];
         assert_eq!(principal_axes(b), b);
