@@ -451,7 +451,7 @@ pub fn footprint_radii(
         );
         ts.store_direct = true;
         let control = gi_core::photon::trace::Checked::new(progress, "photon trace");
-        let set = gi_core::photon::emit_and_trace_checked(
+        let mut set = gi_core::photon::emit_and_trace_checked(
             &scene.inner,
             &bvh,
             photons,
@@ -459,6 +459,12 @@ pub fn footprint_radii(
             seed,
             &control,
         )?;
+        // The diffuse footprints sized as method `gather` sizes them.
+        if let Some(ds) = &ts.differentials {
+            use gi_core::photon::footprint_scale::{scale_to_overlap, PHOTONS_PER_ESTIMATE};
+            let target = PHOTONS_PER_ESTIMATE * smoothing * smoothing;
+            scale_to_overlap(&mut set, target, ds.r_max);
+        }
         Ok(radius_percentiles(&set, &percentiles))
     })?;
     Ok(rows

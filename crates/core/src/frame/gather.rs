@@ -13,6 +13,7 @@ use crate::error::Result;
 use crate::image::Image;
 use crate::photon::camera_pass::render_image;
 use crate::photon::footprint_map::{FootprintMap, LeafSize};
+use crate::photon::footprint_scale::{scale_to_overlap, PHOTONS_PER_ESTIMATE};
 use crate::photon::trace::emit_and_trace_focused;
 use crate::photon::trace::Checked;
 use crate::scene::Scene;
@@ -54,6 +55,12 @@ pub(super) fn render(
     )?;
     if let (true, Some(ds)) = (refine.caustic_density_bound, &pts.differentials) {
         crate::photon::density::bound_footprints(&mut set, frame.radius_scale, ds.r_max);
+    }
+    if let Some(ds) = &pts.differentials {
+        // The diffuse footprints sized to hold s² × PHOTONS_PER_ESTIMATE photons each
+        // (shrunk with the progressive pass's kernels), whatever the scene and photon count.
+        let target = PHOTONS_PER_ESTIMATE * (refine.smoothing * frame.radius_scale).powi(2);
+        scale_to_overlap(&mut set, target, ds.r_max);
     }
     stage("photon trace", t);
     if refine.boundary_compensation {

@@ -15,6 +15,7 @@ pub mod differential;
 pub mod focus;
 pub mod footprint;
 pub mod footprint_map;
+pub mod footprint_scale;
 pub mod irradiance;
 pub mod kdtree;
 pub mod knn;

@@ -383,14 +383,20 @@ fn recast_first_segment(
     Some((diff, PathKind::Caustic))
 }
 
-/// Once all photons are traced (§4.3, "after photon tracing has completed"): compresses the
-/// footprints of diffusely reflected photons against their geometric-mean semi-axis (see
-/// [`differential::compress`] for why that reference), clamps every semi-axis to `r_max`
-/// and records each photon's footprint radius.
+/// Once all photons are traced (§4.3, "after photon tracing has completed"): turns each
+/// footprint's skewed semi-diameters into the ellipse's principal semi-axes (see
+/// [`differential::principal_axes`] for why), compresses those of diffusely reflected
+/// photons against their geometric-mean semi-axis (see [`differential::compress`] for why
+/// that reference), caps every footprint's elongation at
+/// [`differential::MAX_ELONGATION`], clamps every semi-axis to `r_max` and records each
+/// photon's footprint radius.
 fn finish_footprints(set: &mut PhotonSet, s: &PhotonTraceSettings) {
     let Some(ds) = &s.differentials else {
         return;
     };
+    for f in &mut set.footprints {
+        f.axes = differential::principal_axes(f.axes);
+    }
     let diffuse = |f: &&FootprintAxes| f.kind == PathKind::Diffuse;
     let reference = differential::reference_length(
         set.footprints
@@ -399,13 +405,12 @@ fn finish_footprints(set: &mut PhotonSet, s: &PhotonTraceSettings) {
             .flat_map(|f| f.axes.map(|a| a.length())),
     );
     for (p, f) in set.photons.iter_mut().zip(&mut set.footprints) {
-        f.axes = f.axes.map(|a| {
-            let a = match reference {
-                Some(l) if f.kind == PathKind::Diffuse => differential::compress(a, l),
-                _ => a,
-            };
-            differential::clamp_axis(a, ds.r_max)
+        f.axes = f.axes.map(|a| match reference {
+            Some(l) if f.kind == PathKind::Diffuse => differential::compress(a, l),
+            _ => a,
         });
+        f.axes = differential::cap_elongation(f.axes, differential::MAX_ELONGATION)
+            .map(|a| differential::clamp_axis(a, ds.r_max));
         p.footprint_radius = f.radius();
     }
 }

@@ -223,7 +223,9 @@ pub const OPTIONS: &[OptionSpec] = &[
         open_closed(0.0, 100.0),
         Default::Float(1.0),
         REFINED,
-        "footprint scale s of photon differentials (ispm: with footprint_volumes)",
+        "footprint scale s of photon differentials (gather: each shading point gathers about \
+         240·s² diffuse photons, whatever the scene and photon count; ispm: the scale of \
+         footprint_volumes)",
     ),
     row(
         "leaf_size",
