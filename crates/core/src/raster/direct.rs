@@ -235,6 +235,7 @@ impl DirectPass {
                 shaders::BSDF,
                 wgsl::SHADOW_LOOKUP,
                 wgsl::DIRECT_SHADE,
+                wgsl::ENV_GLOSSY,
                 shaders::FULLSCREEN,
                 wgsl::DIRECT,
             ],

@@ -116,6 +116,7 @@ impl EdgePass {
                 shaders::BSDF,
                 wgsl::SHADOW_LOOKUP,
                 wgsl::DIRECT_SHADE,
+                wgsl::ENV_GLOSSY,
                 wgsl::DIRECT_EDGES,
             ],
         );

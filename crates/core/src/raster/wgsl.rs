@@ -9,6 +9,8 @@ pub const BUNDLE_TYPES: &str = include_str!("shaders/common/bundle_types.wgsl");
 pub const SHADOW_LOOKUP: &str = include_str!("shaders/common/shadow_lookup.wgsl");
 /// Deferred direct lighting of one G-buffer sample (groups 0 and 1 of the direct passes).
 pub const DIRECT_SHADE: &str = include_str!("shaders/common/direct_shade.wgsl");
+/// The glossy lobe's environment light for `DIRECT_SHADE` (after it: uses its helpers).
+pub const ENV_GLOSSY: &str = include_str!("shaders/common/env_glossy.wgsl");
 
 pub const GBUFFER: &str = include_str!("shaders/gbuffer.wgsl");
 pub const SHADOW: &str = include_str!("shaders/shadow.wgsl");
