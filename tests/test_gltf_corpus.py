@@ -100,6 +100,14 @@ GLOSSY_GAP = {
 }
 
 
+@pytest.mark.parametrize("name", NAMES)
+def test_path_matches_cycles(name):
+    ref = cycles(name)
+    path = render(CORPUS / f"{name}.json")
+    assert path.mean() == pytest.approx(ref.mean(), rel=0.03)
+    assert flip(ref, path) < 0.08
+
+
 @functools.cache
 def path_mean(name):
     return render(CORPUS / f"{name}.json").mean()
