@@ -416,7 +416,7 @@ fn shade_pixel(g: GSample, fp: Footprint) -> vec3<f32> {
     let ng = oct_decode(g.normals.zw);
     var m: Material;
     m.diffuse = g.diffuse.xyz;
-    m.roughness = g.diffuse.w;
+    m.roughness = gbuffer_roughness(g.diffuse.w);
     m.specular = g.specular.xyz;
     m.fresnel = u32(g.specular.w > 0.5);
     let wo = normalize(view.eye - p);

@@ -18,6 +18,16 @@
 
 const ENV_GLOSSY_TAPS: u32 = 16u;
 
+// A roughness read back from the G-buffer (16-bit float): the glossy clamp of textured
+// roughness (1e-3, `TEX_MIRROR_ROUGHNESS`: a glossy material stays glossy where its map is
+// black) comes back as 0.99945e-3 on lavapipe (rounded towards zero), which the BSDF then
+// took for a perfect mirror and `direct` rendered black (NormalTangentMirrorTest's gold
+// tiles; a sphere of roughness 0.001 under a sky: −100%). Values within that rounding are
+// the clamp; a mirror (roughness 0, or below 0.999e-3 on the CPU too) stays a mirror.
+fn gbuffer_roughness(r: f32) -> f32 {
+    return select(r, MIRROR_ROUGHNESS, r >= 0.999e-3 && r < MIRROR_ROUGHNESS);
+}
+
 // Van der Corput radical inverse in base 2 of `i`.
 fn env_glossy_radical_inverse(i: u32) -> f32 {
     return f32(reverseBits(i)) * 2.3283064365386963e-10;
