@@ -26,8 +26,9 @@ model (single-scattering GGX): image means −0.2%, −0.4%, −0.9%, −1.3%, H
 0.058, 0.024, 0.025. With Cycles' defaults (Multiscatter GGX, interpolated 8-bit sRGB
 texels) the boxes are −2.4% and −3.2% (the light of a rough dielectric that single
 scattering loses) and the helmet's emission +12%. The other methods against `path`: see
-GLOSSY_GAP."""
+GLOSSY_GAP (tests/test_glossy_sky.py: the analytic case)."""
 
+import functools
 import json
 import warnings
 from pathlib import Path
@@ -78,12 +79,22 @@ def test_corpus_is_complete():
         assert (CORPUS / f"{name}.cycles.exr").is_file(), name
 
 
-# Khronos' metallic, glossy models lit by the sky: every method but `path` renders the
+# Khronos' metallic, glossy models lit by the sky: every method but `path` rendered the
 # models darker (measured on the model's pixels, 64×64: DamagedHelmet direct −64%, ispm
-# −64%, bidir −28%, photon −43%, gather −21%; NormalTangentMirrorTest −28% to −46%; under
-# a constant sky too), so their image means are 3–21% below `path`'s. Not fixed here:
-# strict, so that the test says when they are.
-GLOSSY_GAP = {"khronos_damaged_helmet", "khronos_normal_tangent_mirror"}
+# −64%, bidir −28%, photon −43%, gather −21%; NormalTangentMirrorTest −28% to −46%), the
+# glossy reflection of the sky lost (tests/test_glossy_sky.py; docs/bench/glossy-sky.md).
+# Fixed in `gather`, `photon`, `direct` and `ispm` (the mirror test's gold tiles, roughness
+# at the glossy clamp 1e-3, were black in `direct` and `ispm`: the G-buffer's 16-bit
+# roughness read back as a mirror); what is left, measured on the image mean against
+# `path` (this test's measure), is a strict xfail per method:
+GLOSSY_GAP = {
+    # bidir shades with its own WGSL (bidir.wgsl), not changed here: model's pixels −28%
+    # (helmet, whose image mean is within 5%) and −31%.
+    ("khronos_normal_tangent_mirror", "bidir"): "-10.4% (bidir.wgsl's glossy sky)",
+    # The sun's photons on the mirror test's small normal-mapped tiles: −21% of the sun's
+    # light at 50k photons, −5% at 500k, 0% at 500k with k = 10 (k-NN convergence).
+    ("khronos_normal_tangent_mirror", "photon"): "-5.3% (k-NN bias of the sun's photons)",
+}
 
 
 @pytest.mark.parametrize("name", NAMES)
@@ -94,25 +105,28 @@ def test_path_matches_cycles(name):
     assert flip(ref, path) < 0.08
 
 
+@functools.cache
+def path_mean(name):
+    return render(CORPUS / f"{name}.json").mean()
+
+
 @pytest.mark.parametrize(
-    "name",
+    ("name", "method"),
     [
         pytest.param(
             n,
-            marks=pytest.mark.xfail(
-                strict=True, reason="the other methods miss glossy light from the sky"
-            ),
+            m,
+            marks=pytest.mark.xfail(strict=True, reason=GLOSSY_GAP[(n, m)]),
         )
-        if n in GLOSSY_GAP
-        else n
+        if (n, m) in GLOSSY_GAP
+        else (n, m)
         for n in NAMES
+        for m in OTHERS
     ],
 )
-def test_every_method_matches_path(name):
-    path = render(CORPUS / f"{name}.json")
-    for method in OTHERS:
-        img = render(CORPUS / f"{name}.json", method)
-        assert img.mean() == pytest.approx(path.mean(), rel=0.05), method
+def test_every_method_matches_path(name, method):
+    img = render(CORPUS / f"{name}.json", method)
+    assert img.mean() == pytest.approx(path_mean(name), rel=0.05), method
 
 
 @pytest.mark.parametrize("name", [n for n in NAMES if n.startswith("bumps")])

@@ -1,6 +1,6 @@
 //! Method `gather`: photons traced with photon differentials, a linear-BVH footprint photon
 //! map, and a CPU gather estimate (Fabianowski & Dingliana 2009). Direct light comes from
-//! next-event estimation at each shading point; the photons carry indirect light and
+//! next-event estimation and one BSDF ray at each shading point (`trace::direct_mis`); the photons carry indirect light and
 //! caustics. Camera rays follow mirrors and glass (`camera_pass`), so reflections and
 //! refractions show indirect light too.
 
@@ -17,7 +17,8 @@ use crate::photon::footprint_scale::{scale_to_overlap, PHOTONS_PER_ESTIMATE};
 use crate::photon::trace::emit_and_trace_focused;
 use crate::photon::trace::Checked;
 use crate::scene::Scene;
-use crate::trace::direct::{DirectLight, Nee};
+use crate::trace::direct::DirectLight;
+use crate::trace::direct_mis::{mis_direct, Sources};
 use crate::trace::SceneBvh;
 use std::time::Instant;
 
@@ -96,12 +97,13 @@ pub(super) fn render(
 
     let t = Instant::now();
     let samples = camera_samples(options.spp, options.max_depth, frame);
-    // Direct light by next-event estimation from every source, at full weight (the camera
-    // paths end here: no BSDF ray finds the same light).
+    // Direct light by next-event estimation and one BSDF ray, weighted by multiple
+    // importance sampling: the glossy lobes' light from the sky and emitters too.
     let lights = DirectLight::of(scene);
     let (radiance, first) =
         render_image(scene, bvh, &samples, progress, |it, wo, rng, _: &mut ()| {
-            lights.estimate(scene, bvh, it, wo, rng, Nee::Alone, None) + map.radiance(it, wo)
+            let direct = mis_direct(scene, bvh, &lights, (it, wo), rng, Sources::All);
+            direct + map.radiance(it, wo)
         })?;
     let caustics = Image::new(radiance.width, radiance.height);
     let mut out = RenderOutput::of_cpu(radiance, first, caustics, stats);

@@ -250,6 +250,7 @@ impl DirectPass {
                 wgsl::SHADOW_LOOKUP,
                 wgsl::DIRECT_SHADE,
                 wgsl::EMITTER_TREE,
+                wgsl::ENV_GLOSSY,
                 shaders::FULLSCREEN,
                 wgsl::DIRECT,
             ],

@@ -117,6 +117,7 @@ impl EdgePass {
                 wgsl::SHADOW_LOOKUP,
                 wgsl::DIRECT_SHADE,
                 wgsl::EMITTER_TREE,
+                wgsl::ENV_GLOSSY,
                 wgsl::DIRECT_EDGES,
             ],
         );

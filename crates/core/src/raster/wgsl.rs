@@ -11,6 +11,8 @@ pub const SHADOW_LOOKUP: &str = include_str!("shaders/common/shadow_lookup.wgsl"
 pub const DIRECT_SHADE: &str = include_str!("shaders/common/direct_shade.wgsl");
 /// Per-pixel light samples of the emitters outside the polygon groups (a light BVH).
 pub const EMITTER_TREE: &str = include_str!("shaders/common/emitter_tree.wgsl");
+/// The glossy lobe's environment light for `DIRECT_SHADE` (after it: uses its helpers).
+pub const ENV_GLOSSY: &str = include_str!("shaders/common/env_glossy.wgsl");
 
 pub const GBUFFER: &str = include_str!("shaders/gbuffer.wgsl");
 pub const SHADOW: &str = include_str!("shaders/shadow.wgsl");

@@ -3,6 +3,7 @@
 
 pub mod bvh;
 pub mod direct;
+pub mod direct_mis;
 pub mod interaction;
 pub mod light_tracer;
 pub mod light_vertex;

@@ -26,7 +26,8 @@
 //   L/(n·p) with one tap of its orthographic shadow map; with `ratio` the diffuse lobe is
 //   the ratio estimator (Heitz, Hill & McGuire 2018): the unshadowed diffuse light from the
 //   irradiance table times Σ f_d·cos·E·V / Σ f_d·cos·E over the directions (exact where
-//   every direction is unoccluded), the glossy lobe the plain sum;
+//   every direction is unoccluded), the glossy lobe the ratio estimator too
+//   (env_glossy.wgsl: its unshadowed light by a quadrature of the lobe);
 // - where no surface covers the sample, the environment seen along the view ray
 //   (`background`).
 
@@ -425,7 +426,7 @@ fn shade_pixel(g: GSample, fp: Footprint) -> vec3<f32> {
     let ng = oct_decode(g.normals.zw);
     var m: Material;
     m.diffuse = g.diffuse.xyz;
-    m.roughness = g.diffuse.w;
+    m.roughness = gbuffer_roughness(g.diffuse.w);
     m.specular = g.specular.xyz;
     m.fresnel = u32(g.specular.w > 0.5);
     let wo = normalize(view.eye - p);
@@ -739,6 +740,11 @@ fn sampled_light(p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, wo: ve
     }
     var lit = vec3<f32>(0.0);
     var unshadowed = vec3<f32>(0.0);
+    // The glossy lobe's and the cosine's shadowed and unshadowed sums (env_glossy.wgsl).
+    var glit = vec3<f32>(0.0);
+    var gun = vec3<f32>(0.0);
+    var clit = vec3<f32>(0.0);
+    var cun = vec3<f32>(0.0);
     let end = direct_params.area_count + direct_params.sky_count;
     for (var i = direct_params.area_count; i < end; i++) {
         let t0 = textureLoad(sample_records, vec2<u32>(0u, i), 0);
@@ -749,12 +755,13 @@ fn sampled_light(p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, wo: ve
         }
         let t1 = textureLoad(sample_records, vec2<u32>(1u, i), 0);
         let e = t1.xyz * abs(dot(ns, wi));
+        cun += e;
         let fd = diffuse_eval(m, ns, wo, wi) * e;
         var fs = vec3<f32>(0.0);
         if has_glossy {
             fs = bsdf_eval(glossy, ns, wo, wi) * e;
         }
-        if max3(fd + fs) <= 0.0 {
+        if max3(fd + fs + e) <= 0.0 {
             continue;
         }
         // The sky's layers follow the emitter points' six each, in order (`samples.rs`).
@@ -767,10 +774,15 @@ fn sampled_light(p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, wo: ve
         let v = shadow_tap(sample_maps, shadow_sampler, sample_view(layer), layer, q);
         lit += fd * v;
         unshadowed += fd;
-        sum += fs * v;
+        glit += fs * v;
+        gun += fs;
+        clit += e * v;
     }
     if direct_params.ratio == 0u {
-        return sum + lit;
+        return sum + lit + glit;
+    }
+    if has_glossy {
+        sum += env_glossy_unshadowed(m, ns, ng, wo) * env_glossy_visibility(glit, gun, clit, cun);
     }
     // The ratio estimator of the diffuse lobe: its unshadowed light in closed form (the
     // irradiance table; the Fresnel coupling's mean over the incident cosines is 1 − F_avg,

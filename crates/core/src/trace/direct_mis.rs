@@ -1,0 +1,93 @@
+//! Direct light at a surface by both strategies, for camera paths that end there (`gather`,
+//! the camera half of `photon`'s sky light): next-event estimation ([`Nee::Mis`]) and one
+//! BSDF-sampled ray, whose escape finds the environment and the suns' discs and whose hit
+//! finds emitters, combined by the power heuristic as the path tracer combines them.
+//!
+//! Light sampling alone misses the glossy (GGX) lobe: a lobe of α = 0.04 covers about
+//! 10⁻³ of the sky's directions, so one sky direction per sample finds it rarely and the
+//! estimate, unbiased but heavy-tailed, reads 30% dark at 16 samples per pixel on a glossy
+//! sphere under a constant sky. The BSDF ray finds the lobe's light at every sample.
+
+use super::direct::{escaped, BsdfVertex, DirectLight, Nee};
+use super::{Interaction, SceneBvh};
+use crate::sampling::Rng;
+use crate::scene::Scene;
+use glam::Vec3;
+
+/// Which sources [`mis_direct`] covers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Sources {
+    /// Every source: point, spot and directional lights, emitters, suns' discs, the sky.
+    All,
+    /// Only the environment (the sky), for a caller whose photons carry the rest.
+    Environment,
+}
+
+/// Light arriving at `it` directly from `sources`, times the BSDF's non-delta lobes towards
+/// `wo` (world space, away from the surface): next-event estimation and one BSDF ray,
+/// weighted by the power heuristic. Unbiased for every lobe.
+pub fn mis_direct(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    lights: &DirectLight,
+    (it, wo): (&Interaction, Vec3),
+    rng: &mut Rng,
+    sources: Sources,
+) -> Vec3 {
+    if it.material.is_purely_specular() {
+        return Vec3::ZERO;
+    }
+    let nee = match sources {
+        Sources::All => lights.estimate(scene, bvh, it, wo, rng, Nee::Mis, None),
+        Sources::Environment => match scene.environment.as_deref() {
+            Some(env) if env.importance => {
+                super::path::environment_light(env, bvh, it, wo, rng, true)
+            }
+            _ => Vec3::ZERO,
+        },
+    };
+    nee + bsdf_ray(scene, bvh, lights, (it, wo), rng, sources)
+}
+
+/// The light one non-delta BSDF sample finds where its ray leaves the scene or meets an
+/// emitter, weighted against next-event estimation's samples of the same light.
+fn bsdf_ray(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    lights: &DirectLight,
+    (it, wo): (&Interaction, Vec3),
+    rng: &mut Rng,
+    sources: Sources,
+) -> Vec3 {
+    if !lights.found_by_rays {
+        return Vec3::ZERO;
+    }
+    let Some(bs) = it.material.sample(it.frame.to_local(wo), rng) else {
+        return Vec3::ZERO;
+    };
+    // Delta lobes are the camera pass's own (it follows them); refraction is not direct
+    // reflected light.
+    let wi = it.frame.to_world(bs.wi);
+    if bs.lobe.is_delta() || wi.dot(it.ng) * wo.dot(it.ng) <= 0.0 {
+        return Vec3::ZERO;
+    }
+    let suns = sources == Sources::All;
+    let Some(hit) = bvh.intersect(it.spawn(wi), wi, f32::INFINITY) else {
+        return bs.weight * escaped(scene, wi, Some(bs.pdf), suns);
+    };
+    if sources != Sources::All {
+        return Vec3::ZERO;
+    }
+    let at = Interaction::new(scene, &hit, wi);
+    if !at.material.emits() {
+        return Vec3::ZERO;
+    }
+    let from = BsdfVertex {
+        position: it.position,
+        normal: it.frame.n,
+        ng: it.ng,
+        pdf: bs.pdf,
+    };
+    let w = lights.emitter_weight(&from, (at.triangle, at.position, at.ng), true, 0.0);
+    bs.weight * at.material.emitted(at.ng, -wi) * w
+}
