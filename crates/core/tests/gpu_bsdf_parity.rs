@@ -11,31 +11,12 @@
 //! lobe (roughness 0.05) one ULP in the half vector changes D by percent, so no two f32
 //! implementations can agree there to 1e-4; everywhere else `s` is negligible.
 
-use bytemuck::{Pod, Zeroable};
+use bytemuck::Pod;
 use gi_core::bsdf::{Coating, Conductor, Distribution, Material};
-use gi_core::gpu::raw::{MaterialRaw, ModelMaterialRaw};
 use gi_core::gpu::{self, shaders};
 use gi_core::sampling::{uniform_sphere, Frame, Rng};
 use glam::Vec3;
 use wgpu::util::DeviceExt;
-
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct CaseRaw {
-    material: MaterialRaw,
-    normal: [f32; 4],
-    wo: [f32; 4],
-    wi: [f32; 4],
-}
-
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct ModelCaseRaw {
-    material: ModelMaterialRaw,
-    normal: [f32; 4],
-    wo: [f32; 4],
-    wi: [f32; 4],
-}
 
 #[derive(Clone, Copy)]
 struct Case {
@@ -358,24 +339,36 @@ fn compare(cases: &[Case], gpu: &[Vec3], cpu: fn(&Case) -> Vec3) {
     );
 }
 
+/// The kernel's `Case` array: each case's GPU material record (`material`) followed by its
+/// normal, wo and wi as vec4s (the WGSL struct's layout: the records are multiples of 16
+/// bytes).
+fn case_bytes<M: Pod>(cases: &[Case], material: impl Fn(&Material) -> M) -> Vec<u8> {
+    let mut bytes = Vec::new();
+    for c in cases {
+        let m = material(&c.material);
+        assert_eq!(std::mem::size_of::<M>() % 16, 0, "a record of whole vec4s");
+        bytes.extend_from_slice(bytemuck::bytes_of(&m));
+        for v in [c.normal, c.wo, c.wi] {
+            bytes.extend_from_slice(bytemuck::bytes_of(&dir4(v)));
+        }
+    }
+    bytes
+}
+
+/// The evaluation kernel for the material type `material` and its `eval` function.
+fn eval_kernel(material: &str, eval: &str) -> String {
+    include_str!("gpu_eval_parity.wgsl")
+        .replace("MATERIAL_T", material)
+        .replace("EVAL_FN", eval)
+}
+
 #[test]
 fn wgsl_bsdf_matches_cpu() {
     let cases = cases(&materials(), 48);
-    let raw: Vec<CaseRaw> = cases
-        .iter()
-        .map(|c| CaseRaw {
-            material: c.material.to_raw(),
-            normal: dir4(c.normal),
-            wo: dir4(c.wo),
-            wi: dir4(c.wi),
-        })
-        .collect();
-    let parts = [
-        shaders::COMMON,
-        shaders::BSDF,
-        include_str!("gpu_bsdf_parity.wgsl"),
-    ];
-    let gpu = run_kernel(&parts, bytemuck::cast_slice(&raw), cases.len());
+    let raw = case_bytes(&cases, Material::to_raw);
+    let kernel = eval_kernel("Material", "bsdf_eval");
+    let parts = [shaders::COMMON, shaders::BSDF, kernel.as_str()];
+    let gpu = run_kernel(&parts, &raw, cases.len());
     compare(&cases, &gpu, cpu_uber);
 }
 
@@ -383,21 +376,14 @@ fn wgsl_bsdf_matches_cpu() {
 #[test]
 fn wgsl_models_match_cpu() {
     let cases = cases(&models(), 60);
-    let raw: Vec<ModelCaseRaw> = cases
-        .iter()
-        .map(|c| ModelCaseRaw {
-            material: c.material.to_model_raw(),
-            normal: dir4(c.normal),
-            wo: dir4(c.wo),
-            wi: dir4(c.wi),
-        })
-        .collect();
+    let raw = case_bytes(&cases, Material::to_model_raw);
+    let kernel = eval_kernel("ModelMaterial", "model_eval");
     let parts = [
         shaders::COMMON,
         shaders::BSDF,
         shaders::MODELS,
-        include_str!("gpu_model_parity.wgsl"),
+        kernel.as_str(),
     ];
-    let gpu = run_kernel(&parts, bytemuck::cast_slice(&raw), cases.len());
+    let gpu = run_kernel(&parts, &raw, cases.len());
     compare(&cases, &gpu, cpu_exact);
 }

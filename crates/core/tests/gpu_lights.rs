@@ -674,6 +674,14 @@ fn progressive_sun_converges_to_the_disc() {
     }
 }
 
+/// `path`'s direct light of the sky scene (512 spp) and the pixels off its geometric edges.
+fn sky_path_reference(scene: &Scene) -> (RenderOutput, Vec<bool>) {
+    let o = options(Method::Path).with("spp", 512).with("max_depth", 1);
+    let path = render(scene, &o, &Silent).expect("path");
+    let keep = geometric_keep(&path);
+    (path, keep)
+}
+
 /// Progressive passes under the sky converge to `path`'s direct light (`max_depth` 1, 512
 /// samples) on the sphere-on-a-floor scene: `direct` (16 new directions per pass, summed
 /// plainly: unbiased but for the shadow maps' texels) and `ispm`'s ray-traced direct light
@@ -684,13 +692,7 @@ fn progressive_sun_converges_to_the_disc() {
 #[test]
 fn progressive_sky_converges_to_path() {
     let scene = sky_scene(true);
-    let path = render(
-        &scene,
-        &options(Method::Path).with("spp", 512).with("max_depth", 1),
-        &Silent,
-    )
-    .expect("path");
-    let keep = geometric_keep(&path);
+    let (path, keep) = sky_path_reference(&scene);
     for method in [Method::Direct, Method::Ispm] {
         let o = options(method).with("photons", 2000);
         let frames = progressive_passes(&scene, o, 16);
@@ -786,13 +788,7 @@ fn convex_object_under_constant_sky() {
 #[test]
 fn sky_occlusion_matches_path() {
     let scene = sky_scene(true);
-    let path = render(
-        &scene,
-        &options(Method::Path).with("spp", 512).with("max_depth", 1),
-        &Silent,
-    )
-    .expect("path");
-    let keep = geometric_keep(&path);
+    let (path, keep) = sky_path_reference(&scene);
     for (n, max_err, max_bias) in [(16, 0.07, 0.03), (64, 0.035, 0.015)] {
         let o = options(Method::Direct).with("sky_samples", n);
         let direct = render(&scene, &o, &Silent).expect("direct");

@@ -84,6 +84,28 @@ pub fn texture_entry(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::Bind
     texture_2d_entry(binding, visibility, sample_type)
 }
 
+/// A 2D array of depth textures (shadow maps), read with a comparison sampler.
+pub fn depth_array_entry(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+) -> wgpu::BindGroupLayoutEntry {
+    let ty = wgpu::BindingType::Texture {
+        sample_type: wgpu::TextureSampleType::Depth,
+        view_dimension: wgpu::TextureViewDimension::D2Array,
+        multisampled: false,
+    };
+    entry(binding, visibility, ty)
+}
+
+/// A comparison sampler (shadow-map lookups).
+pub fn comparison_sampler_entry(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+) -> wgpu::BindGroupLayoutEntry {
+    let ty = wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison);
+    entry(binding, visibility, ty)
+}
+
 /// A 2D unsigned-integer texture read with `textureLoad`.
 pub fn uint_texture_entry(
     binding: u32,

@@ -474,6 +474,20 @@ pub fn create_fullscreen_pipeline(
     entry: &str,
     target: wgpu::ColorTargetState,
 ) -> wgpu::RenderPipeline {
+    let options = Default::default();
+    create_fullscreen_pipeline_with(device, label, layout, module, (entry, options), target)
+}
+
+/// [`create_fullscreen_pipeline`] with the fragment stage's compilation options (override
+/// constants).
+pub fn create_fullscreen_pipeline_with(
+    device: &wgpu::Device,
+    label: &str,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    (entry, options): (&str, wgpu::PipelineCompilationOptions),
+    target: wgpu::ColorTargetState,
+) -> wgpu::RenderPipeline {
     create_render_pipeline(
         device,
         &wgpu::RenderPipelineDescriptor {
@@ -491,7 +505,7 @@ pub fn create_fullscreen_pipeline(
             fragment: Some(wgpu::FragmentState {
                 module,
                 entry_point: Some(entry),
-                compilation_options: Default::default(),
+                compilation_options: options,
                 targets: &[Some(target)],
             }),
             multiview_mask: None,

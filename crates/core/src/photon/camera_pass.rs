@@ -112,7 +112,7 @@ pub fn render_image<S: Default + Send>(
 /// tracing on the CPU, with recursive global illumination approximated by ... a
 /// traditional photon map gather"). Pixels whose first surface has no delta lobe cost one
 /// ray per sample and stay black. The light the paths meet beyond the first surface is
-/// added ([`Collect::BeyondFirst`]).
+/// added (`Collect::BeyondFirst`).
 pub fn delta_image<S: Default + Send>(
     scene: &Scene,
     bvh: &SceneBvh,

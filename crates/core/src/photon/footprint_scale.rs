@@ -34,7 +34,7 @@ const MAX_FACTOR: f32 = 4.0;
 const NORMAL_AGREEMENT: f32 = 0.5;
 
 /// Mean number of diffuse photons' footprints that contain the position of a diffuse photon
-/// (up to [`SAMPLES`] of them, evenly spread through the set), counting its own. `None`
+/// (up to `SAMPLES` of them, evenly spread through the set), counting its own. `None`
 /// without diffuse photons.
 pub fn mean_overlap(set: &PhotonSet) -> Option<f64> {
     let diffuse: Vec<(Vec3, Vec3, Footprint)> = set
@@ -74,7 +74,7 @@ pub fn mean_overlap(set: &PhotonSet) -> Option<f64> {
 }
 
 /// Scales the footprints of the diffusely reflected photons of `set` uniformly so that their
-/// mean overlap ([`mean_overlap`]) becomes about `target` (by at most [`MAX_FACTOR`] either
+/// mean overlap ([`mean_overlap`]) becomes about `target` (by at most `MAX_FACTOR` either
 /// way), each semi-axis kept within `r_max`; returns the factor (1 when there is nothing to
 /// scale).
 pub fn scale_to_overlap(set: &mut PhotonSet, target: f32, r_max: f32) -> f32 {

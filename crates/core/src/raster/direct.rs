@@ -12,7 +12,9 @@
 
 use super::direct_variant::{DirectVariant, VariantCache};
 use super::wgsl;
-use crate::gpu::layout::texture_entry;
+use crate::gpu::layout::{
+    comparison_sampler_entry, depth_array_entry, texture_entry, uniform_entry_sized,
+};
 use crate::gpu::shaders;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
@@ -175,44 +177,12 @@ impl DirectPass {
                 view,
                 super::storage_entry(1, frag),
                 super::storage_entry(2, frag),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 3,
-                    visibility: frag,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Depth,
-                        view_dimension: wgpu::TextureViewDimension::D2Array,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 4,
-                    visibility: frag,
-                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison),
-                    count: None,
-                },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 5,
-                    visibility: frag,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: wgpu::BufferSize::new(16),
-                    },
-                    count: None,
-                },
+                depth_array_entry(3, frag),
+                comparison_sampler_entry(4, frag),
+                uniform_entry_sized(5, frag, false, 16),
                 texture_entry(6, frag),
                 texture_entry(7, frag),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 8,
-                    visibility: frag,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Depth,
-                        view_dimension: wgpu::TextureViewDimension::D2Array,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
+                depth_array_entry(8, frag),
                 texture_entry(9, frag),
                 texture_entry(10, frag),
                 texture_entry(12, frag),
@@ -245,15 +215,11 @@ impl DirectPass {
             device,
             "direct shader",
             &[
-                shaders::COMMON,
-                shaders::BSDF,
-                wgsl::SHADOW_LOOKUP,
-                wgsl::DIRECT_SHADE,
-                wgsl::EMITTER_TREE,
-                wgsl::ENV_GLOSSY,
-                shaders::FULLSCREEN,
-                wgsl::DIRECT,
-            ],
+                &[shaders::COMMON, shaders::BSDF][..],
+                &wgsl::DIRECT_SHADING,
+                &[shaders::FULLSCREEN, wgsl::DIRECT],
+            ]
+            .concat(),
         );
         let shadow_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("shadow comparison sampler"),
@@ -296,29 +262,13 @@ impl DirectPass {
                     constants: &constants,
                     ..Default::default()
                 };
-                crate::gpu::create_render_pipeline(
+                crate::gpu::create_fullscreen_pipeline_with(
                     &self.device,
-                    &wgpu::RenderPipelineDescriptor {
-                        label: Some(entry),
-                        layout: Some(&self.pipeline_layout),
-                        vertex: wgpu::VertexState {
-                            module: &self.module,
-                            entry_point: Some("vs_main"),
-                            compilation_options: Default::default(),
-                            buffers: &[],
-                        },
-                        primitive: wgpu::PrimitiveState::default(),
-                        depth_stencil: None,
-                        multisample: Default::default(),
-                        fragment: Some(wgpu::FragmentState {
-                            module: &self.module,
-                            entry_point: Some(entry),
-                            compilation_options,
-                            targets: &[Some(target)],
-                        }),
-                        multiview_mask: None,
-                        cache: None,
-                    },
+                    entry,
+                    &self.pipeline_layout,
+                    &self.module,
+                    (entry, compilation_options),
+                    target,
                 )
             };
             (

@@ -112,14 +112,11 @@ impl EdgePass {
             device,
             "direct edges shader",
             &[
-                shaders::COMMON,
-                shaders::BSDF,
-                wgsl::SHADOW_LOOKUP,
-                wgsl::DIRECT_SHADE,
-                wgsl::EMITTER_TREE,
-                wgsl::ENV_GLOSSY,
-                wgsl::DIRECT_EDGES,
-            ],
+                &[shaders::COMMON, shaders::BSDF][..],
+                &wgsl::DIRECT_SHADING,
+                &[wgsl::DIRECT_EDGES],
+            ]
+            .concat(),
         );
         let pipeline = |entry: &str| {
             gpu::create_compute_pipeline(

@@ -204,13 +204,7 @@ impl ShadowPass {
                     ],
                 },
                 primitive: wgpu::PrimitiveState::default(),
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: FORMAT,
-                    depth_write_enabled: Some(true),
-                    depth_compare: Some(wgpu::CompareFunction::Less),
-                    stencil: Default::default(),
-                    bias: DEPTH_BIAS,
-                }),
+                depth_stencil: Some(depth_state()),
                 multisample: Default::default(),
                 fragment: Some(wgpu::FragmentState {
                     module: &masked_module,
@@ -243,13 +237,7 @@ impl ShadowPass {
                     ],
                 },
                 primitive: wgpu::PrimitiveState::default(),
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: FORMAT,
-                    depth_write_enabled: Some(true),
-                    depth_compare: Some(wgpu::CompareFunction::Less),
-                    stencil: Default::default(),
-                    bias: DEPTH_BIAS,
-                }),
+                depth_stencil: Some(depth_state()),
                 multisample: Default::default(),
                 fragment: None,
                 multiview_mask: None,
@@ -312,6 +300,17 @@ impl crate::gpu::Pipelines for ShadowPass {
             &ctx.device,
             &super::textures::TexturesLayout::get(ctx).layout,
         )
+    }
+}
+
+/// The shadow maps' depth test: nearest wins, written, with the slope-scaled bias.
+fn depth_state() -> wgpu::DepthStencilState {
+    wgpu::DepthStencilState {
+        format: FORMAT,
+        depth_write_enabled: Some(true),
+        depth_compare: Some(wgpu::CompareFunction::Less),
+        stencil: Default::default(),
+        bias: DEPTH_BIAS,
     }
 }
 

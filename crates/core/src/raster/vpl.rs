@@ -4,7 +4,7 @@
 //! (`bidir.wgsl`).
 
 use super::wgsl;
-use crate::gpu::layout::texture_entry;
+use crate::gpu::layout::{comparison_sampler_entry, depth_array_entry, texture_entry};
 use crate::gpu::{self, shaders};
 use crate::scene::light_views::{corners, look_to, square_perspective, CUBE_FACES};
 use bytemuck::{Pod, Zeroable};
@@ -132,16 +132,7 @@ impl VplPass {
     /// `gbuffer_layout`: the direct pass's group 1 (the G-buffer's lighting inputs).
     pub fn new(device: &wgpu::Device, gbuffer_layout: &wgpu::BindGroupLayout) -> Self {
         let frag = wgpu::ShaderStages::FRAGMENT;
-        let depth_array = |binding| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: frag,
-            ty: wgpu::BindingType::Texture {
-                sample_type: wgpu::TextureSampleType::Depth,
-                view_dimension: wgpu::TextureViewDimension::D2Array,
-                multisampled: false,
-            },
-            count: None,
-        };
+        let depth_array = |binding| depth_array_entry(binding, frag);
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("bidir bind group layout"),
             entries: &[
@@ -158,12 +149,7 @@ impl VplPass {
                 texture_entry(1, frag),
                 super::storage_entry(2, frag),
                 depth_array(3),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 4,
-                    visibility: frag,
-                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison),
-                    count: None,
-                },
+                comparison_sampler_entry(4, frag),
                 super::storage_entry(5, frag),
                 super::storage_entry(6, frag),
                 depth_array(7),

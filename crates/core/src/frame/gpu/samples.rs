@@ -19,7 +19,9 @@ use crate::raster::direct::{
 };
 use crate::raster::shadow::{self, CullUnits, ShadowPass};
 use crate::raster::{buffer_init, Geometry, VIEW_SIZE};
-use crate::scene::emitters::{EmitterPolygon, Emitters, PolygonGroups, TREE_ENTRY_TEXELS};
+use crate::scene::emitters::{
+    EmitterPoint, EmitterPolygon, Emitters, PolygonGroups, TREE_ENTRY_TEXELS,
+};
 use crate::scene::light_views::{self, orthographic_view, CUBE_FACES};
 use crate::scene::{Environment, Scene};
 use bytemuck::Zeroable;
@@ -174,6 +176,9 @@ fn env_tables(ctx: &GpuContext, env: Option<&Environment>) -> (wgpu::Texture, wg
     }
 }
 
+/// Each polygon group's [first, end) emitter points and [first, end) polygons.
+type GroupRanges = [[u32; 4]; MAX_GROUPS];
+
 impl LightSamples {
     /// Resources for `counts` (already fitted to the scene by [`SampleCounts::of`]), or a
     /// setting error when the GPU cannot hold their shadow maps.
@@ -302,88 +307,15 @@ impl LightSamples {
             return false;
         }
         if self.emitters.is_none() && c.area > 0 {
-            let emitters = Emitters::of(scene);
-            let groups = emitters.polygon_groups(scene, (MAX_POLYGONS, MAX_GROUPS), c.area);
-            let texels: Vec<[f32; 4]> = groups.polygons.iter().flat_map(polygon_texels).collect();
-            write_rows(
-                ctx,
-                &self.polygons,
-                "emitter polygons",
-                POLYGON_TEXELS,
-                &texels,
-            );
-            self.tree_held = self.write_tree(ctx, scene, &emitters, &groups);
-            self.emitters = Some((emitters, groups));
+            self.upload_emitters(ctx, scene, c.area);
         }
-        let mut polygons = 0;
-        let mut group_ranges = [[0u32; 4]; MAX_GROUPS];
-        // The points of the polygon groups first, group by group, then the others'.
-        let mut points = Vec::new();
-        if let Some((e, groups)) = &self.emitters {
-            points = e.stratified_points(scene, groups, seed);
-            polygons = groups.polygons.len() as u32;
-            for (g, range) in group_ranges
-                .iter_mut()
-                .enumerate()
-                .take(groups.groups as usize)
-            {
-                let polygons = groups.polygons_of(g as u32);
-                range[2..].copy_from_slice(&[polygons.start, polygons.end]);
-            }
-            for (i, (g, _)) in points.iter().enumerate() {
-                if let Some(range) = g.map(|g| &mut group_ranges[g as usize]) {
-                    if range[1] == 0 {
-                        range[0] = i as u32;
-                    }
-                    range[1] = i as u32 + 1;
-                }
-            }
-        }
-        let (lo, hi) = light_views::bounds(scene);
+        let (points, polygons, group_ranges) = self.points(scene, seed);
         let mut records = Vec::new();
         self.clip.clear();
         self.render.clear();
-        for (_, p) in points {
-            // Just off the emitter, so that its own surface is behind the cube's centre.
-            let origin = p.position + p.normal * (1e-4 * (hi - lo).length());
-            let (faces, texel_scale) = crate::raster::vpl::cube_views(origin, lo, hi, c.size);
-            let first_layer = self.clip.len() as u32;
-            for (m, (forward, up)) in faces.iter().zip(CUBE_FACES) {
-                self.clip.push(*m);
-                self.render
-                    .push(p.two_sided || faces_front(forward, up, p.normal));
-            }
-            records.push(SampledLightRaw::Point {
-                position: origin,
-                first_layer,
-                normal: p.normal,
-                texel_scale,
-                intensity: p.intensity,
-                disc_r2: p.area / PI * disc_scale * disc_scale,
-                two_sided: p.two_sided,
-            });
-        }
+        self.point_records(scene, points, disc_scale, &mut records);
         let area = records.len() as u32;
-        let area_points = records.len();
-        if let Some(env) = scene.environment.as_deref().filter(|_| c.sky > 0) {
-            let grow = 1.0 + 2.0 * MARGIN_TEXELS / c.size as f32;
-            for d in env.directions(c.sky, seed) {
-                // The direct pass computes this layer as 6 × points + k (direct_shade.wgsl).
-                debug_assert_eq!(
-                    self.clip.len(),
-                    6 * area_points + records.len() - area_points
-                );
-                let (m, side, _) = orthographic_view(-d.towards, scene.bounds(), grow);
-                records.push(SampledLightRaw::Sky {
-                    towards: d.towards,
-                    layer: self.clip.len() as u32,
-                    irradiance: d.irradiance,
-                    texel: side / c.size as f32,
-                });
-                self.clip.push(m);
-                self.render.push(true);
-            }
-        }
+        self.sky_records(scene, seed, &mut records);
         let sky = records.len() as u32 - area;
         let texels: Vec<[f32; 4]> = records.iter().flat_map(|r| r.texels()).collect();
         write_rows(ctx, &self.records, "sampled lights", SAMPLE_TEXELS, &texels);
@@ -431,6 +363,114 @@ impl LightSamples {
         self.drawn = Some((seed, disc_scale));
         self.shadows_stale = true;
         true
+    }
+
+    /// Finds the emitters' polygon groups and uploads their polygons and the per-pixel tree
+    /// of the others (once, until [`Self::invalidate`] drops them).
+    fn upload_emitters(&mut self, ctx: &GpuContext, scene: &Scene, area: u32) {
+        let emitters = Emitters::of(scene);
+        let groups = emitters.polygon_groups(scene, (MAX_POLYGONS, MAX_GROUPS), area);
+        let texels: Vec<[f32; 4]> = groups.polygons.iter().flat_map(polygon_texels).collect();
+        write_rows(
+            ctx,
+            &self.polygons,
+            "emitter polygons",
+            POLYGON_TEXELS,
+            &texels,
+        );
+        self.tree_held = self.write_tree(ctx, scene, &emitters, &groups);
+        self.emitters = Some((emitters, groups));
+    }
+
+    /// The frame's emitter points of `seed` (the polygon groups' first, group by group,
+    /// then the others'), the number of polygons, and each group's [points, polygons)
+    /// ranges.
+    fn points(
+        &self,
+        scene: &Scene,
+        seed: u64,
+    ) -> (Vec<(Option<u32>, EmitterPoint)>, u32, GroupRanges) {
+        let mut polygons = 0;
+        let mut group_ranges = [[0u32; 4]; MAX_GROUPS];
+        let mut points = Vec::new();
+        if let Some((e, groups)) = &self.emitters {
+            points = e.stratified_points(scene, groups, seed);
+            polygons = groups.polygons.len() as u32;
+            for (g, range) in group_ranges
+                .iter_mut()
+                .enumerate()
+                .take(groups.groups as usize)
+            {
+                let polygons = groups.polygons_of(g as u32);
+                range[2..].copy_from_slice(&[polygons.start, polygons.end]);
+            }
+            for (i, (g, _)) in points.iter().enumerate() {
+                if let Some(range) = g.map(|g| &mut group_ranges[g as usize]) {
+                    if range[1] == 0 {
+                        range[0] = i as u32;
+                    }
+                    range[1] = i as u32 + 1;
+                }
+            }
+        }
+        (points, polygons, group_ranges)
+    }
+
+    /// A cube of shadow views and a record for each emitter point.
+    fn point_records(
+        &mut self,
+        scene: &Scene,
+        points: Vec<(Option<u32>, EmitterPoint)>,
+        disc_scale: f32,
+        records: &mut Vec<SampledLightRaw>,
+    ) {
+        let c = self.counts;
+        let (lo, hi) = light_views::bounds(scene);
+        for (_, p) in points {
+            // Just off the emitter, so that its own surface is behind the cube's centre.
+            let origin = p.position + p.normal * (1e-4 * (hi - lo).length());
+            let (faces, texel_scale) = crate::raster::vpl::cube_views(origin, lo, hi, c.size);
+            let first_layer = self.clip.len() as u32;
+            for (m, (forward, up)) in faces.iter().zip(CUBE_FACES) {
+                self.clip.push(*m);
+                self.render
+                    .push(p.two_sided || faces_front(forward, up, p.normal));
+            }
+            records.push(SampledLightRaw::Point {
+                position: origin,
+                first_layer,
+                normal: p.normal,
+                texel_scale,
+                intensity: p.intensity,
+                disc_r2: p.area / PI * disc_scale * disc_scale,
+                two_sided: p.two_sided,
+            });
+        }
+    }
+
+    /// An orthographic shadow view and a record for each of the sky's directions of `seed`.
+    fn sky_records(&mut self, scene: &Scene, seed: u64, records: &mut Vec<SampledLightRaw>) {
+        let c = self.counts;
+        let area_points = records.len();
+        if let Some(env) = scene.environment.as_deref().filter(|_| c.sky > 0) {
+            let grow = 1.0 + 2.0 * MARGIN_TEXELS / c.size as f32;
+            for d in env.directions(c.sky, seed) {
+                // The direct pass computes this layer as 6 × points + k (direct_shade.wgsl).
+                debug_assert_eq!(
+                    self.clip.len(),
+                    6 * area_points + records.len() - area_points
+                );
+                let (m, side, _) = orthographic_view(-d.towards, scene.bounds(), grow);
+                records.push(SampledLightRaw::Sky {
+                    towards: d.towards,
+                    layer: self.clip.len() as u32,
+                    irradiance: d.irradiance,
+                    texel: side / c.size as f32,
+                });
+                self.clip.push(m);
+                self.render.push(true);
+            }
+        }
     }
 
     /// Writes the per-pixel tree of the emitters outside `groups` into its texture; the

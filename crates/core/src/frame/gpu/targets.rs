@@ -4,7 +4,7 @@
 
 use super::scene::GpuScene;
 use crate::error::{Error, Result};
-use crate::gpu::layout::texture;
+use crate::gpu::layout::{buffer, texture};
 use crate::gpu::raw::ViewRaw;
 use crate::gpu::timer::Timer;
 use crate::gpu::Pipelines;
@@ -115,10 +115,7 @@ fn gbuffer_group(ctx: &GpuContext, eye: &wgpu::Buffer, gs: &GpuScene) -> wgpu::B
                     binding: 0,
                     resource: view_binding(eye),
                 },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: gs.materials.as_entire_binding(),
-                },
+                buffer(1, &gs.materials),
             ],
         },
     )
@@ -143,32 +140,20 @@ fn direct_scene_group(
                     binding: 0,
                     resource: view_binding(eye),
                 },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: gs.lights.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: gs.shadow_matrices.as_entire_binding(),
-                },
+                buffer(1, &gs.lights),
+                buffer(2, &gs.shadow_matrices),
                 texture(3, &gs.shadow_array),
                 wgpu::BindGroupEntry {
                     binding: 4,
                     resource: wgpu::BindingResource::Sampler(&direct_pass.shadow_sampler),
                 },
-                wgpu::BindGroupEntry {
-                    binding: 5,
-                    resource: penumbra.as_entire_binding(),
-                },
+                buffer(5, penumbra),
                 texture(6, &gs.samples.records_view),
                 texture(7, &gs.samples.matrices_view),
                 texture(8, &gs.samples.array),
                 texture(9, &gs.samples.env_view),
                 texture(10, &gs.samples.irradiance_view),
-                wgpu::BindGroupEntry {
-                    binding: 11,
-                    resource: gs.samples.params.as_entire_binding(),
-                },
+                buffer(11, &gs.samples.params),
                 texture(12, &gs.samples.polygons_view),
                 texture(13, &gs.samples.tree_view),
             ],
@@ -588,6 +573,18 @@ impl Targets {
         self.direct_current = true;
     }
 
+    /// Writes the eye views of the sub-pixel samples `samples` after the frame's own view.
+    fn write_eye_views(&self, ctx: &GpuContext, samples: std::ops::Range<u32>) {
+        let views = &self.sample_views[samples.start as usize..samples.end as usize];
+        gpu::write_buffer(
+            &ctx.queue,
+            "eye views",
+            &self.eye,
+            VIEW_SIZE,
+            bytemuck::cast_slice(views),
+        );
+    }
+
     /// Records `record(encoder, sample, view offset)` for every sub-pixel sample, writing
     /// their eye views in batches (submitting the encoder between batches, whose views are
     /// then in use); reports progress.
@@ -603,27 +600,13 @@ impl Targets {
         let per_submit = crate::raster::samples_per_submit(self.width, self.height);
         if spp > per_submit {
             // An earlier frame left its last batch's views; no pass recorded so far reads them.
-            let views = &self.sample_views[..per_submit as usize];
-            gpu::write_buffer(
-                &ctx.queue,
-                "eye views",
-                &self.eye,
-                VIEW_SIZE,
-                bytemuck::cast_slice(views),
-            );
+            self.write_eye_views(ctx, 0..per_submit);
         }
         while done < spp {
             let batch = per_submit.min(spp - done);
             if done > 0 {
                 ctx.queue.submit([encoder.finish()]);
-                let views = &self.sample_views[done as usize..(done + batch) as usize];
-                gpu::write_buffer(
-                    &ctx.queue,
-                    "eye views",
-                    &self.eye,
-                    VIEW_SIZE,
-                    bytemuck::cast_slice(views),
-                );
+                self.write_eye_views(ctx, done..done + batch);
                 encoder = ctx
                     .device
                     .create_command_encoder(&wgpu::CommandEncoderDescriptor {

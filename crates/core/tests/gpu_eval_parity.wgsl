@@ -1,8 +1,10 @@
-// Test kernel: evaluates the WGSL uber BSDF times |cos θi| for a table of cases.
-// Prepended at load time: common/types.wgsl and common/bsdf.wgsl.
+// Test kernel: evaluates a WGSL BSDF times |cos θi| for a table of cases. A template:
+// `MATERIAL_T` and `EVAL_FN` are replaced at load time (the uber BSDF's `Material` and
+// `bsdf_eval`, or models.wgsl's `ModelMaterial` and `model_eval`), and the sources those
+// need (common/types.wgsl, common/bsdf.wgsl, common/models.wgsl) prepended.
 
 struct Case {
-    material: Material,
+    material: MATERIAL_T,
     normal: vec3<f32>,
     wo: vec3<f32>,
     wi: vec3<f32>,
@@ -18,6 +20,6 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let c = cases[i];
-    let f = bsdf_eval(c.material, c.normal, c.wo, c.wi);
+    let f = EVAL_FN(c.material, c.normal, c.wo, c.wi);
     results[i] = vec4<f32>(f * abs(dot(c.normal, c.wi)), 0.0);
 }
