@@ -163,6 +163,9 @@
     while (frameTimes.length && now - frameTimes[0] > 2000) frameTimes.shift();
     lastMeta = meta;
     giViewer.frames += 1;
+    const { doing, width, height, progressive, passes, seq: frameSeq } = meta;
+    giViewer.metas.push({ doing, width, height, progressive, passes, seq: frameSeq });
+    if (giViewer.metas.length > 200) giViewer.metas.splice(0, giViewer.metas.length - 200);
     showMeta(meta);
     for (const waiter of waiters.splice(0)) waiter();
   }
@@ -536,6 +539,9 @@
   const waiters = [];
   const giViewer = {
     frames: 0,
+    // The last 200 frames' meta (doing, size, progressive, passes, seq), oldest first: a
+    // frame may be replaced by the next before a script looks at giViewer.meta.
+    metas: [],
     state: null,
     get meta() { return lastMeta; },
     get camera() { return camera; },
