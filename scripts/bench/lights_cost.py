@@ -35,7 +35,8 @@ def worker(a: argparse.Namespace) -> None:
 
     import gi
 
-    warnings.simplefilter("ignore", gi.RenderWarning)
+    # Builds older than the RenderWarning category warn with a plain UserWarning.
+    warnings.simplefilter("ignore", getattr(gi, "RenderWarning", UserWarning))
     w, h = (int(v) for v in a.size.split("x"))
     options = {"photons": a.photons} if a.method == "ispm" else {}
     r = gi.Renderer(gi.load_scene(a.scene), a.method, size=(w, h), **options)

@@ -1,16 +1,31 @@
-//! Which kinds of light the direct-light shaders are compiled for: a scene pays only for
-//! the lights it has. `common/direct_shade.wgsl` holds every kind's code behind
+//! Which kinds of light and material the direct-light shaders are compiled for: a scene
+//! pays only for what it has. `common/direct_shade.wgsl` holds every kind's code behind
 //! pipeline-overridable constants; a pipeline compiled with one of them false has none of
 //! that code. lavapipe pays for code behind branches that no pixel takes (both sides of a
 //! per-lane branch run masked; the inlined loops cost registers), so a scene with one point
 //! light paid about twice for the sampled lights, the sun's soft shadows and the
 //! environment (docs/bench/lights-gpu.md). The pipelines of each variant are compiled on
-//! first use ([`VariantCache`]).
+//! first use and kept for the device ([`VariantCache`]: 20–360 ms a pipeline on lavapipe,
+//! once).
+//!
+//! A feature of the direct shading plugs in by four lines, so that scenes without it pay
+//! nothing for it:
+//! 1. an `override NAME: bool = true;` in `direct_shade.wgsl` (true: the default, every
+//!    pass that does not specialize compiles everything), and `if NAME { … }` (or
+//!    `NAME && …` in a condition) around the feature's code;
+//! 2. a field of [`DirectVariant`] (true in [`DirectVariant::ALL`]);
+//! 3. its entry in [`DirectVariant::constants`] (the tests check that every override of
+//!    the shader has one, and each entry an override);
+//! 4. where the frame decides it from the scene (`GpuScene::direct_variant`, or
+//!    [`MaterialKinds`] for a property of the materials): true whenever any pixel may
+//!    need the code, since a kind left out is never evaluated.
 
 use std::collections::HashMap;
 use std::sync::Mutex;
 
-/// The kinds of light a direct-light pipeline handles (the overrides of
+use crate::gpu::raw::MaterialRaw;
+
+/// The kinds of light and material a direct-light pipeline handles (the overrides of
 /// `direct_shade.wgsl`). A variant must cover the scene it shades: a kind left out is
 /// never evaluated.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -21,24 +36,53 @@ pub struct DirectVariant {
     pub directional: bool,
     /// The environment behind uncovered samples (`BACKGROUND`).
     pub background: bool,
+    /// Emitting surfaces: the G-buffer's emission read (`EMISSION`).
+    pub emission: bool,
+    /// Specular lobes or Fresnel-weighted diffuse lobes (`GLOSSY`): without, Lambert's
+    /// lobe alone.
+    pub glossy: bool,
 }
 
 impl DirectVariant {
-    /// Every kind of light.
+    /// Every kind of light and material.
     pub const ALL: DirectVariant = DirectVariant {
         sampled: true,
         directional: true,
         background: true,
+        emission: true,
+        glossy: true,
     };
 
     /// The pipeline-overridable constants of this variant.
-    pub fn constants(&self) -> [(&'static str, f64); 3] {
+    pub fn constants(&self) -> [(&'static str, f64); 5] {
         let f = |b: bool| if b { 1.0 } else { 0.0 };
         [
             ("SAMPLED_LIGHTS", f(self.sampled)),
             ("DIRECTIONAL_LIGHTS", f(self.directional)),
             ("BACKGROUND", f(self.background)),
+            ("EMISSION", f(self.emission)),
+            ("GLOSSY", f(self.glossy)),
         ]
+    }
+}
+
+/// What the scene's materials need of the direct shading (their GPU records, the uber
+/// parameters: textures only scale a specular colour or an emission that the record has).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MaterialKinds {
+    /// Some material emits.
+    pub emission: bool,
+    /// Some material has a specular colour or a Fresnel flag.
+    pub glossy: bool,
+}
+
+impl MaterialKinds {
+    pub fn of(materials: &[MaterialRaw]) -> MaterialKinds {
+        let any = |v: [f32; 3]| v.iter().any(|&c| c != 0.0);
+        MaterialKinds {
+            emission: materials.iter().any(|m| any(m.emission)),
+            glossy: materials.iter().any(|m| any(m.specular) || m.fresnel != 0),
+        }
     }
 }
 
@@ -78,12 +122,46 @@ mod tests {
     #[test]
     fn constants_name_every_override_of_the_shader() {
         let src = super::super::wgsl::DIRECT_SHADE;
+        let names: Vec<_> = DirectVariant::ALL.constants().map(|(n, _)| n).to_vec();
         for (name, value) in DirectVariant::ALL.constants() {
             assert!(
                 src.contains(&format!("override {name}: bool = true;")),
                 "{name}"
             );
             assert_eq!(value, 1.0);
+        }
+        // And every override of the shaders that the variants compile has its constant.
+        for src in super::super::wgsl::DIRECT_SHADING {
+            for line in src.lines().filter(|l| l.starts_with("override ")) {
+                let name = line["override ".len()..].split(':').next().unwrap_or("");
+                assert!(names.contains(&name), "{name} has no DirectVariant field");
+            }
+        }
+    }
+
+    #[test]
+    fn material_kinds_see_emission_specular_and_fresnel() {
+        let lambert = MaterialRaw {
+            diffuse: [0.5; 3],
+            ..bytemuck::Zeroable::zeroed()
+        };
+        let none = MaterialKinds::of(&[lambert]);
+        assert!(!none.emission && !none.glossy);
+        let mut fresnel = lambert;
+        fresnel.fresnel = 1;
+        let mut shiny = lambert;
+        shiny.specular = [0.0, 0.0, 0.04];
+        let mut lamp = lambert;
+        lamp.emission = [0.0, 2.0, 0.0];
+        for (m, emission, glossy) in [
+            (fresnel, false, true),
+            (shiny, false, true),
+            (lamp, true, false),
+        ] {
+            assert_eq!(
+                MaterialKinds::of(&[lambert, m]),
+                MaterialKinds { emission, glossy }
+            );
         }
     }
 
@@ -95,6 +173,8 @@ mod tests {
             sampled: false,
             directional: false,
             background: false,
+            emission: false,
+            glossy: false,
         };
         for v in [DirectVariant::ALL, none, DirectVariant::ALL] {
             cache.get(v, |_| {

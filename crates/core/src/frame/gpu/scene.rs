@@ -58,6 +58,8 @@ pub(crate) struct GpuScene {
     lights_jitter: Option<u64>,
     /// Whether any light is directional (the direct pass's variant).
     directional: bool,
+    /// What the materials need of the direct shading (the direct pass's variant).
+    material_kinds: raster::direct_variant::MaterialKinds,
 }
 
 fn storage_init(ctx: &GpuContext, label: &str, bytes: &[u8]) -> wgpu::Buffer {
@@ -110,6 +112,7 @@ impl GpuScene {
             shadow_map_size,
             lights_jitter: None,
             directional: raster::direct_variant::any_directional(&shadows.lights),
+            material_kinds: raster::direct_variant::MaterialKinds::of(&materials),
         })
     }
 
@@ -138,6 +141,7 @@ impl GpuScene {
             0,
             bytemuck::cast_slice(&materials),
         );
+        self.material_kinds = raster::direct_variant::MaterialKinds::of(&materials);
         self.textures.write_maps(ctx, scene);
         let masked = scene.has_alpha_masks();
         if masked || self.masked {
@@ -190,6 +194,8 @@ impl GpuScene {
             sampled: c.area > 0 || c.sky > 0,
             directional: self.directional,
             background: c.background,
+            emission: self.material_kinds.emission,
+            glossy: self.material_kinds.glossy,
         }
     }
 

@@ -144,7 +144,9 @@ fn shade_edges(@builtin(global_invocation_id) id: vec3<u32>) {
         g.normals = bitcast<vec4<f32>>(cache[base + 1u]);
         g.diffuse = vec4<f32>(unpack2x16float(m.x), unpack2x16float(m.y));
         g.specular = vec4<f32>(unpack2x16float(m.z), unpack2x16float(m.w));
-        g.emission = bitcast<vec4<f32>>(cache[base + 3u]);
+        if EMISSION {
+            g.emission = bitcast<vec4<f32>>(cache[base + 3u]);
+        }
         g.ray = ray;
         sum += shade(g);
     }

@@ -97,6 +97,11 @@ override SAMPLED_LIGHTS: bool = true;
 override DIRECTIONAL_LIGHTS: bool = true;
 // The environment behind uncovered samples (`background`).
 override BACKGROUND: bool = true;
+// Some material emits (the G-buffer's emission target is read; else it is all zero).
+override EMISSION: bool = true;
+// Some material has a specular lobe or a Fresnel-weighted diffuse lobe (else every G-buffer
+// sample has specular 0 and no Fresnel flag, and the BSDF is Lambert's alone).
+override GLOSSY: bool = true;
 
 // Most polygon groups (`MAX_GROUPS` of raster/direct.rs).
 const MAX_GROUPS: u32 = 8u;
@@ -123,7 +128,9 @@ fn load_sample(px: vec2<i32>) -> GSample {
     g.normals = textureLoad(g_normals, px, 0);
     g.diffuse = textureLoad(g_diffuse, px, 0);
     g.specular = textureLoad(g_specular, px, 0);
-    g.emission = textureLoad(g_emission, px, 0);
+    if EMISSION {
+        g.emission = textureLoad(g_emission, px, 0);
+    }
     return g;
 }
 
@@ -280,7 +287,19 @@ fn light_term(l: Light, m: Material, p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>)
         return vec3<f32>(0.0);
     }
     let wo = normalize(view.eye - p);
-    return bsdf_eval(m, ns, wo, wi) * abs(dot(ns, wi)) * li;
+    return direct_bsdf(m, ns, wo, wi) * abs(dot(ns, wi)) * li;
+}
+
+// `bsdf_eval`, compiled as Lambert's lobe alone where no material has another (`GLOSSY`
+// false: specular 0 and no Fresnel flag, so the coupling is exactly 1).
+fn direct_bsdf(m: Material, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
+    if GLOSSY {
+        return bsdf_eval(m, n, wo, wi);
+    }
+    if dot(n, wo) * dot(n, wi) <= 0.0 {
+        return vec3<f32>(0.0);
+    }
+    return m.diffuse / PI;
 }
 
 // The unit direction from `p` towards light `l` and its distance (a directional light's
@@ -388,7 +407,7 @@ fn tap_offset(j: u32, taps: u32) -> vec2<f32> {
 // times a constant, whose box-filter error relative to the centre value is about
 // (s/d)²/4 ≈ 2·10⁻⁴ (s: the footprint's size), below what the corners' rule resolves.
 fn flat_across(l: Light, m: Material, p: vec3<f32>, fp: Footprint) -> bool {
-    if max3(m.specular) > 0.0 || m.fresnel != 0u {
+    if GLOSSY && (max3(m.specular) > 0.0 || m.fresnel != 0u) {
         return false;
     }
     if length(fp.dndx) + length(fp.dndy) > 0.03 {
@@ -496,6 +515,9 @@ fn diffuse_eval(m: Material, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec3
     let ci = dot(n, wi);
     if co * ci <= 0.0 || max3(m.diffuse) <= 0.0 {
         return vec3<f32>(0.0);
+    }
+    if !GLOSSY {
+        return m.diffuse / PI;
     }
     let one_minus_avg = vec3<f32>(1.0) - fresnel_avg(m);
     let num = (vec3<f32>(1.0) - fresnel_spec(m, abs(co))) * (vec3<f32>(1.0) - fresnel_spec(m, abs(ci)));
@@ -676,7 +698,7 @@ fn point_light(i: u32, p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, 
     let t2 = textureLoad(sample_records, vec2<u32>(2u, i), 0);
     let g = t2.xyz * (abs(dot(ns, wi)) * cos_e / (d2 + t2.w));
     out.fd = diffuse_eval(m, ns, wo, wi) * g;
-    if max3(m.specular) > 0.0 {
+    if GLOSSY && max3(m.specular) > 0.0 {
         out.fs = bsdf_eval(glossy, ns, wo, wi) * g;
     }
     if max3(out.fd + out.fs) <= 0.0 {
@@ -696,7 +718,7 @@ fn sampled_light(p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, wo: ve
     // Glossy lobe alone (the diffuse one is summed apart for the ratio estimator).
     var glossy = m;
     glossy.diffuse = vec3<f32>(0.0);
-    let has_glossy = max3(m.specular) > 0.0;
+    let has_glossy = GLOSSY && max3(m.specular) > 0.0;
     // The polygon groups' points come first, group by group: per group the ratio estimator.
     var plain = 0u;
     if direct_params.ratio != 0u && direct_params.polygons > 0u {
