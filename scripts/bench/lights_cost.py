@@ -9,6 +9,10 @@ build, a Markdown table for ``docs/bench/lights-gpu.md``.
         [--scene cornell] [--size 640x480] [--photons 20000] [--rounds 8] [--frames 4] \\
         [--method ispm] [--move light|camera]
 
+On a machine shared with builds, ``chrt -f 50`` before it (as root) runs the workers and
+lavapipe's threads ahead of the other work, so that the frames measure the renderer rather
+than the load.
+
 ``--move camera`` moves the camera instead (scenes lit by emitters alone, e.g. a scene
 file such as veach-mis: G-buffer, edges and direct light redone each frame).
 
@@ -26,7 +30,9 @@ import subprocess
 import sys
 import time
 
-STAGES = ("direct light", "edge shading", "photon upload", "shadow maps")
+# `photon upload` waited for the GPU work queued before it up to 0e18125; later builds wait
+# in `readback`.
+STAGES = ("direct light", "edge shading", "shadow maps", "photon upload", "readback")
 
 
 def worker(a: argparse.Namespace) -> None:
