@@ -37,7 +37,9 @@ ORBIT_JS = """async ([n, pause]) => {
     const t0 = performance.now();
     const s = giViewer.orbit(0.05, 0);
     const t1 = await giViewer.waitSeq(s);
-    out.push([t1 - t0, giViewer.meta.total_seconds * 1000, giViewer.meta.width]);
+    // The frame that showed the step (a refining frame may already have replaced it).
+    const m = giViewer.metas.find((m) => m.seq !== null && m.seq >= s);
+    out.push([t1 - t0, m.total_seconds * 1000, m.width]);
   }
   return out;
 }"""
@@ -53,13 +55,14 @@ def measure(browser, scene: str, method: str, size: tuple[int, int], samples: in
         page.goto(url)
         page.wait_for_function("giViewer.frames > 0")
         first = time.monotonic() - start
-        first_meta = page.evaluate("giViewer.meta")
+        # The page keeps every frame's meta: refining frames may follow before this looks.
+        first_meta = page.evaluate("giViewer.metas[0]")
         refined = float("nan")
         if (
             "progressive" in {row["name"] for row in gi.options_table(method)}
             and method != "photon"
         ):
-            page.wait_for_function(f"giViewer.meta.progressive && giViewer.meta.width === {w}")
+            page.wait_for_function(f"giViewer.metas.some(m => m.progressive && m.width === {w})")
             refined = time.monotonic() - start
         orbits = page.evaluate(ORBIT_JS, [samples, 1500])
         page.close()
@@ -96,7 +99,8 @@ def main(argv: list[str] | None = None) -> int:
             refined = "–" if r["refined"] != r["refined"] else f"{r['refined']:.1f}"
             row = (
                 f"| {method} | {r['first']:.1f} | {r['doing'].removeprefix('moving: ')}"
-                f" | {refined} | {r['orbit'] / 1000:.2f} | {r['orbit_render'] / 1000:.2f} |"
+                f" | {refined} | {r['orbit'] / 1000:.2f} | {r['orbit_render'] / 1000:.2f}"
+                f" | {os.getloadavg()[0]:.1f} |"
             )
             print(row, flush=True)
             rows.append(row)
@@ -104,8 +108,8 @@ def main(argv: list[str] | None = None) -> int:
     load_after = os.getloadavg()
     head = [
         "| method | first frame (s) | interactive frame | refined at full size (s)"
-        " | orbit → drawn (s) | its render (s) |",
-        "|---|---:|---|---:|---:|---:|",
+        " | orbit → drawn (s) | its render (s) | load average |",
+        "|---|---:|---|---:|---:|---:|---:|",
     ]
     note = (
         f"`{' '.join(['scripts/bench/view_methods.py', *(argv or sys.argv[1:])])}`: scene"

@@ -12,6 +12,7 @@ pub mod camera_pass;
 pub mod delta_paths;
 pub mod density;
 pub mod differential;
+pub mod final_gather;
 pub mod focus;
 pub mod footprint;
 pub mod footprint_map;
@@ -160,6 +161,22 @@ impl PhotonSet {
             sums[p.bounce as usize] += p.power().as_dvec3();
         }
         sums
+    }
+
+    /// The photons of path kind `kind` with their footprints (the counts left at zero).
+    pub fn of_kind(&self, kind: PathKind) -> PhotonSet {
+        let (photons, footprints) = self
+            .photons
+            .iter()
+            .zip(&self.footprints)
+            .filter(|(_, f)| f.kind == kind)
+            .map(|(p, f)| (*p, *f))
+            .unzip();
+        PhotonSet {
+            photons,
+            footprints,
+            ..PhotonSet::default()
+        }
     }
 
     /// Appends `other`, summing the counts.
