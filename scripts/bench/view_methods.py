@@ -12,7 +12,10 @@ Per method:
   pass under way) to the page having drawn the frame that shows it, median of `--samples`;
   beside it, that frame's own render time (`stats.total_seconds`) and its size.
 
-    .venv/bin/python scripts/bench/view_methods.py --out docs/bench/view-methods.md
+    .venv/bin/python scripts/bench/view_methods.py --out docs/bench/view.md
+
+writes the table and its note between the `<!-- view_methods -->` and
+`<!-- /view_methods -->` lines of an existing file (docs/bench/view.md), or a new file.
 """
 
 from __future__ import annotations
@@ -121,8 +124,22 @@ def main(argv: list[str] | None = None) -> int:
     text = "\n".join(head + rows)
     print(note)
     if args.out:
-        args.out.write_text(text + "\n\n" + note + "\n")
+        write(args.out, text + "\n\n" + note + "\n")
     return 0
+
+
+BEGIN, END = "<!-- view_methods -->", "<!-- /view_methods -->"
+
+
+def write(out: Path, block: str) -> None:
+    """`block` between the markers of `out` when it has them, else as the whole file."""
+    old = out.read_text() if out.is_file() else ""
+    if BEGIN in old and END in old:
+        before, rest = old.split(BEGIN, 1)
+        after = rest.split(END, 1)[1]
+        out.write_text(f"{before}{BEGIN}\n{block}{END}{after}")
+    else:
+        out.write_text(block)
 
 
 if __name__ == "__main__":
