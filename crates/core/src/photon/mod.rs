@@ -232,6 +232,31 @@ mod tests {
     use super::*;
 
     #[test]
+    fn of_kind_keeps_the_photons_of_that_kind_with_their_footprints() {
+        let mut set = PhotonSet::default();
+        for (i, kind) in [PathKind::Diffuse, PathKind::Caustic, PathKind::Diffuse]
+            .into_iter()
+            .enumerate()
+        {
+            set.store(Photon {
+                bounce: i as u32 + 1,
+                ..Photon::default()
+            });
+            let axes = [Vec3::X * (i + 1) as f32, Vec3::Y];
+            set.footprints.push(FootprintAxes { axes, kind });
+        }
+        let caustic = set.of_kind(PathKind::Caustic);
+        assert_eq!(caustic.photons.len(), 1);
+        assert_eq!(caustic.photons[0].bounce, 2);
+        assert_eq!(caustic.footprints[0].axes[0], Vec3::X * 2.0);
+        let diffuse = set.of_kind(PathKind::Diffuse);
+        let bounces: Vec<u32> = diffuse.photons.iter().map(|p| p.bounce).collect();
+        assert_eq!(bounces, [1, 3]);
+        assert_eq!(diffuse.footprints.len(), 2);
+        assert!(set.of_kind(PathKind::Direct).photons.is_empty());
+    }
+
+    #[test]
     fn gpu_layout() {
         assert_eq!(std::mem::size_of::<Photon>(), 64);
         assert_eq!(std::mem::size_of::<PhotonRay>(), 48);
