@@ -26,7 +26,8 @@ model (single-scattering GGX): image means −0.2%, −0.4%, −0.9%, −1.3%, H
 0.058, 0.024, 0.025. With Cycles' defaults (Multiscatter GGX, interpolated 8-bit sRGB
 texels) the boxes are −2.4% and −3.2% (the light of a rough dielectric that single
 scattering loses) and the helmet's emission +12%. The other methods against `path`: see
-GLOSSY_GAP (tests/test_glossy_sky.py: the analytic case)."""
+GLOSSY_GAP (tests/test_glossy_sky.py: the analytic case) and CONVERGED (a method compared
+where its smoothing bias has converged, the bias stated)."""
 
 import functools
 import json
@@ -91,9 +92,21 @@ GLOSSY_GAP = {
     # bidir shades with its own WGSL (bidir.wgsl), not changed here: model's pixels −28%
     # (helmet, whose image mean is within 5%) and −31%.
     ("khronos_normal_tangent_mirror", "bidir"): "-10.4% (bidir.wgsl's glossy sky)",
-    # The sun's photons on the mirror test's small normal-mapped tiles: −21% of the sun's
-    # light at 50k photons, −5% at 500k, 0% at 500k with k = 10 (k-NN convergence).
-    ("khronos_normal_tangent_mirror", "photon"): "-5.3% (k-NN bias of the sun's photons)",
+}
+
+# Where a method's estimate at the corpus's settings is biased by its own smoothing and
+# converges as the smoothing shrinks, the comparison is made where it has converged.
+# `photon` on NormalTangentMirrorTest: the k-NN density estimate blurs the sun's light over
+# a disc of the k-th photon's radius, and the model's relief (9 cm deep, 5% of its area
+# tilted 60–75°: bevels and walls, lit or shadowed by the sun at 45°) varies faster than
+# that: −5.4% at 50k photons with k = 100. The bias follows the radius, not the photon
+# count: −5.5% at 500k photons with k = 1000 (the same radius), −0.8% at 50k with
+# max_radius 0.02, −2.3% at 50k with k = 10, −0.8% at 500k with k = 10. The normal-agreement
+# test (cos > 0.5; the estimate's normalisation by πr² counts the disc it rejects) is a
+# small part: −4.7% with it off at 50k. Compared at 500k photons, k = 10: bias −0.8%
+# (within the 5% of every method; 1.4 s).
+CONVERGED = {
+    ("khronos_normal_tangent_mirror", "photon"): {"photons": 500_000, "k": 10},
 }
 
 
@@ -125,7 +138,7 @@ def path_mean(name):
     ],
 )
 def test_every_method_matches_path(name, method):
-    img = render(CORPUS / f"{name}.json", method)
+    img = render(CORPUS / f"{name}.json", method, **CONVERGED.get((name, method), {}))
     assert img.mean() == pytest.approx(path_mean(name), rel=0.05), method
 
 

@@ -12,7 +12,10 @@ Per method:
   pass under way) to the page having drawn the frame that shows it, median of `--samples`;
   beside it, that frame's own render time (`stats.total_seconds`) and its size.
 
-    .venv/bin/python scripts/bench/view_methods.py --out docs/bench/view-methods.md
+    .venv/bin/python scripts/bench/view_methods.py --out docs/bench/view.md
+
+writes the table and its note between the `<!-- view_methods -->` and
+`<!-- /view_methods -->` lines of an existing file (docs/bench/view.md), or a new file.
 """
 
 from __future__ import annotations
@@ -37,7 +40,9 @@ ORBIT_JS = """async ([n, pause]) => {
     const t0 = performance.now();
     const s = giViewer.orbit(0.05, 0);
     const t1 = await giViewer.waitSeq(s);
-    out.push([t1 - t0, giViewer.meta.total_seconds * 1000, giViewer.meta.width]);
+    // The frame that showed the step (a refining frame may already have replaced it).
+    const m = giViewer.metas.find((m) => m.seq !== null && m.seq >= s);
+    out.push([t1 - t0, m.total_seconds * 1000, m.width]);
   }
   return out;
 }"""
@@ -53,13 +58,14 @@ def measure(browser, scene: str, method: str, size: tuple[int, int], samples: in
         page.goto(url)
         page.wait_for_function("giViewer.frames > 0")
         first = time.monotonic() - start
-        first_meta = page.evaluate("giViewer.meta")
+        # The page keeps every frame's meta: refining frames may follow before this looks.
+        first_meta = page.evaluate("giViewer.metas[0]")
         refined = float("nan")
         if (
             "progressive" in {row["name"] for row in gi.options_table(method)}
             and method != "photon"
         ):
-            page.wait_for_function(f"giViewer.meta.progressive && giViewer.meta.width === {w}")
+            page.wait_for_function(f"giViewer.metas.some(m => m.progressive && m.width === {w})")
             refined = time.monotonic() - start
         orbits = page.evaluate(ORBIT_JS, [samples, 1500])
         page.close()
@@ -96,7 +102,8 @@ def main(argv: list[str] | None = None) -> int:
             refined = "–" if r["refined"] != r["refined"] else f"{r['refined']:.1f}"
             row = (
                 f"| {method} | {r['first']:.1f} | {r['doing'].removeprefix('moving: ')}"
-                f" | {refined} | {r['orbit'] / 1000:.2f} | {r['orbit_render'] / 1000:.2f} |"
+                f" | {refined} | {r['orbit'] / 1000:.2f} | {r['orbit_render'] / 1000:.2f}"
+                f" | {os.getloadavg()[0]:.1f} |"
             )
             print(row, flush=True)
             rows.append(row)
@@ -104,8 +111,8 @@ def main(argv: list[str] | None = None) -> int:
     load_after = os.getloadavg()
     head = [
         "| method | first frame (s) | interactive frame | refined at full size (s)"
-        " | orbit → drawn (s) | its render (s) |",
-        "|---|---:|---|---:|---:|---:|",
+        " | orbit → drawn (s) | its render (s) | load average |",
+        "|---|---:|---|---:|---:|---:|---:|",
     ]
     note = (
         f"`{' '.join(['scripts/bench/view_methods.py', *(argv or sys.argv[1:])])}`: scene"
@@ -117,8 +124,22 @@ def main(argv: list[str] | None = None) -> int:
     text = "\n".join(head + rows)
     print(note)
     if args.out:
-        args.out.write_text(text + "\n\n" + note + "\n")
+        write(args.out, text + "\n\n" + note + "\n")
     return 0
+
+
+BEGIN, END = "<!-- view_methods -->", "<!-- /view_methods -->"
+
+
+def write(out: Path, block: str) -> None:
+    """`block` between the markers of `out` when it has them, else as the whole file."""
+    old = out.read_text() if out.is_file() else ""
+    if BEGIN in old and END in old:
+        before, rest = old.split(BEGIN, 1)
+        after = rest.split(END, 1)[1]
+        out.write_text(f"{before}{BEGIN}\n{block}{END}{after}")
+    else:
+        out.write_text(block)
 
 
 if __name__ == "__main__":

@@ -372,6 +372,7 @@ def render_settings(draw: st.DrawFn) -> dict[str, Any]:
                 "kernel": pick(st.sampled_from(["box", "cone", "epanechnikov"])),
                 "smoothing": pick(st.floats(0.01, 100.0)),
                 "leaf_size": pick(st.integers(1, 4096)),
+                "final_gather": pick(st.booleans()),
                 "kernel_scale": pick(st.floats(0.01, 10.0)),
                 "subsample": pick(st.integers(1, 8)),
                 "footprint_volumes": pick(st.booleans()),

@@ -461,8 +461,8 @@ pub fn footprint_radii(
         )?;
         // The diffuse footprints sized as method `gather` sizes them.
         if let Some(ds) = &ts.differentials {
-            use gi_core::photon::footprint_scale::{scale_to_overlap, PHOTONS_PER_ESTIMATE};
-            let target = PHOTONS_PER_ESTIMATE * smoothing * smoothing;
+            use gi_core::photon::footprint_scale::{photons_per_estimate, scale_to_overlap};
+            let target = photons_per_estimate(gather.final_gather, smoothing);
             scale_to_overlap(&mut set, target, ds.r_max);
         }
         Ok(radius_percentiles(&set, &percentiles))

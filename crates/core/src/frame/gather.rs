@@ -1,7 +1,11 @@
 //! Method `gather`: photons traced with photon differentials, a linear-BVH footprint photon
 //! map, and a CPU gather estimate (Fabianowski & Dingliana 2009). Direct light comes from
-//! next-event estimation and one BSDF ray at each shading point (`trace::direct_mis`); the photons carry indirect light and
-//! caustics. Camera rays follow mirrors and glass (`camera_pass`), so reflections and
+//! next-event estimation and one BSDF ray at each shading point (`trace::direct_mis`); the
+//! photons carry indirect light and caustics. By default the indirect light is read one
+//! bounce further, by a final gather (`photon::final_gather`): the caustic photons at the
+//! shading point, every other photon where its one BSDF ray lands; with `final_gather` off,
+//! every photon at the shading point (blotchier: every sample of a pixel reads the same
+//! footprints). Camera rays follow mirrors and glass (`camera_pass`), so reflections and
 //! refractions show indirect light too.
 
 use super::options::derived::camera_samples;
@@ -12,14 +16,17 @@ use crate::cancel::Progress;
 use crate::error::Result;
 use crate::image::Image;
 use crate::photon::camera_pass::render_image;
+use crate::photon::final_gather::FinalGather;
 use crate::photon::footprint_map::{FootprintMap, LeafSize};
-use crate::photon::footprint_scale::{scale_to_overlap, PHOTONS_PER_ESTIMATE};
+use crate::photon::footprint_scale::{photons_per_estimate, scale_to_overlap};
 use crate::photon::trace::emit_and_trace_focused;
 use crate::photon::trace::Checked;
+use crate::photon::{PathKind, PhotonSet};
 use crate::scene::Scene;
 use crate::trace::direct::DirectLight;
 use crate::trace::direct_mis::{mis_direct, Sources};
 use crate::trace::SceneBvh;
+use glam::Vec3;
 use std::time::Instant;
 
 pub(super) fn render(
@@ -58,9 +65,11 @@ pub(super) fn render(
         crate::photon::density::bound_footprints(&mut set, frame.radius_scale, ds.r_max);
     }
     if let Some(ds) = &pts.differentials {
-        // The diffuse footprints sized to hold s² × PHOTONS_PER_ESTIMATE photons each
-        // (shrunk with the progressive pass's kernels), whatever the scene and photon count.
-        let target = PHOTONS_PER_ESTIMATE * (refine.smoothing * frame.radius_scale).powi(2);
+        // The diffuse footprints sized to hold s² × 240 photons each (30 with the final
+        // gather; shrunk with the progressive pass's kernels), whatever the scene and photon
+        // count.
+        let smoothing = refine.smoothing * frame.radius_scale;
+        let target = photons_per_estimate(options.final_gather, smoothing);
         scale_to_overlap(&mut set, target, ds.r_max);
     }
     stage("photon trace", t);
@@ -85,14 +94,17 @@ pub(super) fn render(
     let leaf = options
         .leaf_size
         .map_or(LeafSize::Auto, |n| LeafSize::Fixed(n as usize));
-    let map = FootprintMap::try_build(
-        &set,
-        1,
-        scene.surface_area(),
-        leaf,
-        options.kernel.kernel,
-        progress,
-    )?;
+    let build = |set: &PhotonSet| {
+        let area = scene.surface_area();
+        FootprintMap::try_build(set, 1, area, leaf, options.kernel.kernel, progress)
+    };
+    let map = build(&set)?;
+    // With a final gather, the surface the camera sees reads only the caustic photons.
+    let caustics = set.of_kind(PathKind::Caustic);
+    let caustic_map = match options.final_gather && !caustics.photons.is_empty() {
+        true => Some(build(&caustics)?),
+        false => None,
+    };
     stage("photon map build", t);
 
     let t = Instant::now();
@@ -100,10 +112,25 @@ pub(super) fn render(
     // Direct light by next-event estimation and one BSDF ray, weighted by multiple
     // importance sampling: the glossy lobes' light from the sky and emitters too.
     let lights = DirectLight::of(scene);
+    let fg = FinalGather {
+        scene,
+        bvh,
+        lights: &lights,
+        map: &map,
+        max_depth: options.max_depth,
+    };
     let (radiance, first) =
         render_image(scene, bvh, &samples, progress, |it, wo, rng, _: &mut ()| {
             let direct = mis_direct(scene, bvh, &lights, (it, wo), rng, Sources::All);
-            direct + map.radiance(it, wo)
+            let indirect = if options.final_gather {
+                let caustic = caustic_map
+                    .as_ref()
+                    .map_or(Vec3::ZERO, |c| c.radiance(it, wo));
+                caustic + fg.indirect(it, wo, rng)
+            } else {
+                map.radiance(it, wo)
+            };
+            direct + indirect
         })?;
     let caustics = Image::new(radiance.width, radiance.height);
     let mut out = RenderOutput::of_cpu(radiance, first, caustics, stats);

@@ -34,15 +34,23 @@ enum Collect {
     /// The specular image: beyond the first surface only, the light the path meets there
     /// included (the rasterized passes see none of it through delta lobes).
     BeyondFirst,
+    /// A final-gather ray's: the estimates at every non-delta surface it reaches (the first
+    /// one included), none of the light it meets (next-event estimation at the surface it
+    /// leaves, or the caustic photons there, count that).
+    EstimatesOnly,
 }
 
 impl Collect {
     fn estimate_first(self) -> bool {
-        self == Collect::Everything
+        self != Collect::BeyondFirst
     }
     /// Whether the light met at scattering depth `depth` counts.
     fn light_at(self, depth: u32) -> bool {
-        self == Collect::Everything || depth > 0
+        match self {
+            Collect::Everything => true,
+            Collect::BeyondFirst => depth > 0,
+            Collect::EstimatesOnly => false,
+        }
     }
 }
 
@@ -149,6 +157,30 @@ pub fn delta_image<S: Default + Send>(
         });
     stage.finish()?;
     Ok(image)
+}
+
+/// The radiance a final-gather ray from `origin` along `dir` brings back: `estimate` at the
+/// first non-delta surface it meets and at those it reaches from there through delta lobes
+/// (mirrors, glass; up to `max_delta` scatterings), none of the light it meets itself.
+pub fn gather_ray(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    (origin, dir): (Vec3, Vec3),
+    max_delta: u32,
+    rng: &mut Rng,
+    estimate: impl FnMut(&Interaction, Vec3, &mut Rng) -> Vec3,
+) -> Vec3 {
+    let max_delta = MAX_DELTA_BOUNCES.min(max_delta);
+    radiance(
+        scene,
+        bvh,
+        origin,
+        dir,
+        max_delta,
+        Collect::EstimatesOnly,
+        rng,
+        estimate,
+    )
 }
 
 /// Mean radiance of `settings.spp` jittered camera samples through pixel (`x`, `y`),

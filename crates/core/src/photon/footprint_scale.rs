@@ -21,8 +21,26 @@ use super::{differential, PathKind, PhotonSet};
 use glam::Vec3;
 use rayon::prelude::*;
 
-/// Diffuse photon footprints containing a shading point, on average, at smoothing s = 1.
+/// Diffuse photon footprints containing a shading point, on average, at smoothing s = 1,
+/// where the camera's surfaces read the map.
 pub const PHOTONS_PER_ESTIMATE: f32 = 240.0;
+/// The same where a final gather reads the map one bounce further
+/// ([`super::final_gather`]): each camera sample reads it at another point, so the
+/// estimates' noise averages out with the samples and smaller footprints (less blur, a
+/// cheaper gather) serve. `cornell` at 128², 64 spp, 200k photons: relMSE (3×3 box) and
+/// the low-frequency error (8×8 blocks) the same at 30 and 60 photons, at 0.6 times the
+/// time (docs/bench/gather-smoothing.md).
+pub const PHOTONS_PER_ESTIMATE_FINAL_GATHER: f32 = 30.0;
+
+/// The photons per estimate `gather` sizes its diffuse footprints for: s² times
+/// [`PHOTONS_PER_ESTIMATE`], or [`PHOTONS_PER_ESTIMATE_FINAL_GATHER`] with a final gather.
+pub fn photons_per_estimate(final_gather: bool, smoothing: f32) -> f32 {
+    let base = match final_gather {
+        true => PHOTONS_PER_ESTIMATE_FINAL_GATHER,
+        false => PHOTONS_PER_ESTIMATE,
+    };
+    base * smoothing * smoothing
+}
 /// Stored photons at whose positions the overlap is counted.
 const SAMPLES: usize = 1024;
 /// Footprints per leaf of the counting hierarchy.

@@ -12,6 +12,7 @@ pub mod camera_pass;
 pub mod delta_paths;
 pub mod density;
 pub mod differential;
+pub mod final_gather;
 pub mod focus;
 pub mod footprint;
 pub mod footprint_map;
@@ -162,6 +163,22 @@ impl PhotonSet {
         sums
     }
 
+    /// The photons of path kind `kind` with their footprints (the counts left at zero).
+    pub fn of_kind(&self, kind: PathKind) -> PhotonSet {
+        let (photons, footprints) = self
+            .photons
+            .iter()
+            .zip(&self.footprints)
+            .filter(|(_, f)| f.kind == kind)
+            .map(|(p, f)| (*p, *f))
+            .unzip();
+        PhotonSet {
+            photons,
+            footprints,
+            ..PhotonSet::default()
+        }
+    }
+
     /// Appends `other`, summing the counts.
     pub fn append(&mut self, mut other: PhotonSet) {
         self.photons.append(&mut other.photons);
@@ -213,6 +230,31 @@ pub fn path_density_factor(m: &Material, lobe: Lobe) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn of_kind_keeps_the_photons_of_that_kind_with_their_footprints() {
+        let mut set = PhotonSet::default();
+        for (i, kind) in [PathKind::Diffuse, PathKind::Caustic, PathKind::Diffuse]
+            .into_iter()
+            .enumerate()
+        {
+            set.store(Photon {
+                bounce: i as u32 + 1,
+                ..Photon::default()
+            });
+            let axes = [Vec3::X * (i + 1) as f32, Vec3::Y];
+            set.footprints.push(FootprintAxes { axes, kind });
+        }
+        let caustic = set.of_kind(PathKind::Caustic);
+        assert_eq!(caustic.photons.len(), 1);
+        assert_eq!(caustic.photons[0].bounce, 2);
+        assert_eq!(caustic.footprints[0].axes[0], Vec3::X * 2.0);
+        let diffuse = set.of_kind(PathKind::Diffuse);
+        let bounces: Vec<u32> = diffuse.photons.iter().map(|p| p.bounce).collect();
+        assert_eq!(bounces, [1, 3]);
+        assert_eq!(diffuse.footprints.len(), 2);
+        assert!(set.of_kind(PathKind::Direct).photons.is_empty());
+    }
 
     #[test]
     fn gpu_layout() {

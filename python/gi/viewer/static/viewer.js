@@ -164,7 +164,8 @@
     lastMeta = meta;
     giViewer.frames += 1;
     const { doing, width, height, progressive, passes, seq: frameSeq } = meta;
-    giViewer.metas.push({ doing, width, height, progressive, passes, seq: frameSeq });
+    const { total_seconds } = meta;
+    giViewer.metas.push({ doing, width, height, progressive, passes, seq: frameSeq, total_seconds });
     if (giViewer.metas.length > 200) giViewer.metas.splice(0, giViewer.metas.length - 200);
     showMeta(meta);
     for (const waiter of waiters.splice(0)) waiter();
@@ -539,7 +540,8 @@
   const waiters = [];
   const giViewer = {
     frames: 0,
-    // The last 200 frames' meta (doing, size, progressive, passes, seq), oldest first: a
+    // The last 200 frames' meta (doing, size, progressive, passes, seq, render seconds),
+    // oldest first: a
     // frame may be replaced by the next before a script looks at giViewer.meta.
     metas: [],
     state: null,

@@ -130,6 +130,9 @@ pub struct GatherOptions {
     pub refine: RefineOptions,
     /// `None`: the automatic T_auto.
     pub leaf_size: Option<u32>,
+    /// Indirect light by one final-gather ray per camera sample into the photon map
+    /// ([`crate::photon::final_gather`]); `false`: the map read where the camera looks.
+    pub final_gather: bool,
 }
 
 /// Method `direct`.
@@ -208,6 +211,7 @@ impl MethodOptions {
                 kernel: KernelOptions::read(v),
                 refine: RefineOptions::read(v),
                 leaf_size: v.opt_u32("leaf_size"),
+                final_gather: v.bool("final_gather"),
             }),
             Method::Direct => MethodOptions::Direct(DirectOptions {
                 direct: DirectLightOptions::read(v, true),

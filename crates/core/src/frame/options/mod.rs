@@ -365,6 +365,7 @@ impl RenderOptions {
                 kernel(&o.kernel, &mut out);
                 refine(&o.refine, &mut out);
                 out.push(("leaf_size", opt_int(o.leaf_size.map(u64::from))));
+                out.push(("final_gather", Value::Bool(o.final_gather)));
             }
             MethodOptions::Direct(o) => {
                 direct(&o.direct, &mut out);

@@ -224,8 +224,8 @@ pub const OPTIONS: &[OptionSpec] = &[
         Default::Float(1.0),
         REFINED,
         "footprint scale s of photon differentials (gather: each shading point gathers about \
-         240·s² diffuse photons, whatever the scene and photon count; ispm: the scale of \
-         footprint_volumes)",
+         30·s² diffuse photons with the final gather, 240·s² without, whatever the scene and \
+         photon count; ispm: the scale of footprint_volumes)",
     ),
     row(
         "leaf_size",
@@ -233,6 +233,14 @@ pub const OPTIONS: &[OptionSpec] = &[
         Default::None,
         &[Gather],
         "footprints per photon-map BVH leaf (None: the automatic T_auto)",
+    ),
+    row(
+        "final_gather",
+        Kind::Bool,
+        Default::Bool(true),
+        &[Gather],
+        "indirect light by one BSDF ray per camera sample into the photon map (a final \
+         gather; False: the photon map read at the surface seen, blotchier and faster)",
     ),
     row(
         "adapter",
