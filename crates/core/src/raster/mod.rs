@@ -14,6 +14,8 @@ pub mod instances;
 pub mod layers;
 pub mod rsm;
 pub mod shadow;
+pub mod splat;
+pub mod subpixel;
 pub mod textures;
 pub mod vpl;
 pub mod wgsl;

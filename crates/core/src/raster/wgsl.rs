@@ -23,6 +23,8 @@ pub const SHADOW_MASKED: &str = include_str!("shaders/shadow_masked.wgsl");
 pub const DIRECT: &str = include_str!("shaders/direct.wgsl");
 pub const DIRECT_EDGES: &str = include_str!("shaders/direct_edges.wgsl");
 pub const EDGE_MASK: &str = include_str!("shaders/edge_mask.wgsl");
+/// The light of emitters smaller than a pixel (`raster::splat`).
+pub const EMITTER_SPLAT: &str = include_str!("shaders/emitter_splat.wgsl");
 pub const BOUNCE: &str = include_str!("shaders/bounce.wgsl");
 pub const COMPOSITE: &str = include_str!("shaders/composite.wgsl");
 pub const RSM: &str = include_str!("shaders/rsm.wgsl");

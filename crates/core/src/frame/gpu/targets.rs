@@ -70,6 +70,9 @@ pub(crate) struct Targets {
     edges: Option<edges::EdgeBuffers>,
     /// The last frame listed its edge pixels; their count is to be checked.
     edges_found: bool,
+    /// The light of the emitters under a pixel that the eye views leave out
+    /// (`raster::subpixel`), written with the views; `None` where there are none.
+    splats: Option<raster::splat::Splats>,
     accum: wgpu::Texture,
     accum_view: wgpu::TextureView,
     pub specular: wgpu::Texture,
@@ -202,7 +205,9 @@ impl Stale {
     /// After the scene changes `c`.
     pub fn of_changes(c: Changes) -> Stale {
         Stale {
-            eye: c.camera || c.geometry,
+            // Materials too: which objects are small emitters left out of the eye views
+            // (`raster::subpixel`) and their splats' radiance follow the materials.
+            eye: c.camera || c.geometry || c.materials,
             samples: c.camera || c.geometry || c.materials,
             direct: c.any(),
         }
@@ -295,6 +300,7 @@ impl Targets {
             sub_gbuffer_group,
             edges,
             edges_found: false,
+            splats: None,
             accum,
             accum_view,
             specular,
@@ -397,10 +403,14 @@ impl Targets {
         if self.eye_current {
             return;
         }
-        self.eye_draws = cull
+        let draws = cull
             .draws(&[raster::eye_cull_view(scene)])
             .pop()
             .unwrap_or_default();
+        // Emitters under a pixel are splatted instead (`raster::subpixel`).
+        self.eye_draws = raster::subpixel::without(draws, &raster::subpixel::small_objects(scene));
+        self.splats =
+            raster::splat::SplatPass::get(ctx).splats(ctx, scene, &raster::subpixel::splats(scene));
         let spp = self.spp;
         let o = self.sample_offset;
         let shift = |j: Vec2| (j + o).fract();
@@ -527,6 +537,16 @@ impl Targets {
                 let ts = timer.compute_pass("edge shading");
                 edge_p.record_shade(&mut encoder, (groups, variant), ts);
             }
+        }
+        if let Some(splats) = &self.splats {
+            let ts = timer.pass("emitter splats");
+            raster::splat::SplatPass::get(ctx).record(
+                &mut encoder,
+                &self.accum_view,
+                splats,
+                &self.direct_gbuffer_group,
+                ts,
+            );
         }
         // Current once recorded in full (a cancelled frame leaves it to the next).
         self.edges_found |= !self.samples_current && self.edges.is_some();
