@@ -14,8 +14,11 @@ OUT = Path(__file__).resolve().parents[2] / "tests" / "scenes" / "openings"
 
 
 def box(size, at, material):
-    return {"shape": {"type": "box", "size": size}, "material": material,
-            "transform": {"translate": at}}
+    return {
+        "shape": {"type": "box", "size": size},
+        "material": material,
+        "transform": {"translate": at},
+    }
 
 
 def room(window: bool):
@@ -42,8 +45,13 @@ def room(window: bool):
 MATERIALS = {"white": {"diffuse": [0.7, 0.7, 0.7]}, "floor": {"diffuse": [0.6, 0.55, 0.5]}}
 
 window = {
-    "camera": {"position": [-1.8, 1.7, 1.7], "look_at": [0.9, 0.3, -0.6], "fov": 60,
-               "width": 96, "height": 72},
+    "camera": {
+        "position": [-1.8, 1.7, 1.7],
+        "look_at": [0.9, 0.3, -0.6],
+        "fov": 60,
+        "width": 96,
+        "height": 72,
+    },
     "lights": [],
     "materials": MATERIALS,
     "objects": room(True),
@@ -51,17 +59,26 @@ window = {
 }
 
 glass = {
-    "camera": {"position": [-1.8, 1.8, 1.7], "look_at": [0.4, 0.2, -0.4], "fov": 60,
-               "width": 96, "height": 72},
+    "camera": {
+        "position": [-1.8, 1.8, 1.7],
+        "look_at": [0.4, 0.2, -0.4],
+        "fov": 60,
+        "width": 96,
+        "height": 72,
+    },
     "lights": [],
     "materials": {
         **MATERIALS,
         "lamp": {"diffuse": [0, 0, 0], "emission": [12, 12, 12]},
         "glass": {"diffuse": [0, 0, 0], "transmission": [1, 1, 1], "ior": 1.5},
     },
-    "objects": room(False) + [
-        {"shape": {"type": "quad", "size": [0.8, 0.8]}, "material": "lamp",
-         "transform": {"translate": [0.3, 2.49, -0.3], "rotate": [180, 0, 0]}},
+    "objects": room(False)
+    + [
+        {
+            "shape": {"type": "quad", "size": [0.8, 0.8]},
+            "material": "lamp",
+            "transform": {"translate": [0.3, 2.49, -0.3], "rotate": [180, 0, 0]},
+        },
         box([1.4, 0.03, 1.4], [0.3, 1.1, -0.3], "glass"),
     ],
 }

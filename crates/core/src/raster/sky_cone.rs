@@ -9,7 +9,7 @@ const MAX_TAN: f32 = 1.0;
 /// tan α of the cone of solid angle `solid_angle` (sr): 2π(1 − cos α) = Ω, capped at 45°
 /// (0 for no solid angle).
 pub fn tan_half_angle(solid_angle: f32) -> f32 {
-    if !(solid_angle > 0.0) {
+    if solid_angle.is_nan() || solid_angle <= 0.0 {
         return 0.0;
     }
     let cos = (1.0 - solid_angle / std::f32::consts::TAU).max(0.0);
@@ -26,7 +26,11 @@ mod tests {
     #[test]
     fn sixteen_uniform_directions_stand_for_29_degree_cones() {
         let t = tan_half_angle(4.0 * PI / 16.0);
-        assert!((t.atan().to_degrees() - 28.955).abs() < 0.01, "{}", t.atan().to_degrees());
+        assert!(
+            (t.atan().to_degrees() - 28.955).abs() < 0.01,
+            "{}",
+            t.atan().to_degrees()
+        );
         assert_eq!(tan_half_angle(0.0), 0.0);
         assert_eq!(tan_half_angle(f32::NAN), 0.0);
         assert_eq!(tan_half_angle(4.0 * PI), MAX_TAN);
