@@ -746,8 +746,10 @@ fn sampled_light(p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, wo: ve
     var gun = vec3<f32>(0.0);
     var clit = vec3<f32>(0.0);
     var cun = vec3<f32>(0.0);
-    let end = direct_params.area_count + direct_params.sky_count;
-    for (var i = direct_params.area_count; i < end; i++) {
+    // In ordinary frames a per-pixel share of the directions (sky_cone.wgsl).
+    let sub = sky_subset(p);
+    for (var k = 0u; k < sub.z; k++) {
+        let i = direct_params.area_count + sub.x + k * sub.y;
         let t0 = textureLoad(sample_records, vec2<u32>(0u, i), 0);
         let wi = t0.xyz;
         let cos_g = dot(wi, ng);
