@@ -7,7 +7,7 @@ build, a Markdown table for ``docs/bench/lights-gpu.md``.
 
     python scripts/bench/lights_cost.py --build old=/tmp/old/python --build new=python \\
         [--scene cornell] [--size 640x480] [--photons 20000] [--rounds 8] [--frames 4] \\
-        [--method ispm] [--move light|camera]
+        [--method ispm] [--move light|camera] [--option sky_samples=64 ...]
 
 On a machine shared with builds, ``chrt -f 50`` before it (as root) runs the workers and
 lavapipe's threads ahead of the other work, so that the frames measure the renderer rather
@@ -45,6 +45,7 @@ def worker(a: argparse.Namespace) -> None:
     warnings.simplefilter("ignore", getattr(gi, "RenderWarning", UserWarning))
     w, h = (int(v) for v in a.size.split("x"))
     options = {"photons": a.photons} if a.method == "ispm" else {}
+    options.update(json.loads(a.options))
     r = gi.Renderer(gi.load_scene(a.scene), a.method, size=(w, h), **options)
     target = "camera" if a.move == "camera" else "light"
     p0 = r.describe(target, None if target == "camera" else 0)["position"]
@@ -74,6 +75,7 @@ def start(path: str, a: argparse.Namespace) -> subprocess.Popen[str]:
     env = dict(os.environ, PYTHONPATH=os.path.abspath(path))
     cmd = [sys.executable, __file__, "--worker", "--scene", a.scene, "--size", a.size]
     cmd += ["--photons", str(a.photons), "--method", a.method, "--move", a.move]
+    cmd += ["--options", json.dumps(a.parsed)]
     return subprocess.Popen(cmd, env=env, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
 
 
@@ -87,8 +89,11 @@ def main() -> None:
     p.add_argument("--frames", type=int, default=4, help="frames per round")
     p.add_argument("--method", default="ispm")
     p.add_argument("--move", choices=["light", "camera"], default="light")
+    p.add_argument("--option", action="append", default=[], help="KEY=INT for every build")
+    p.add_argument("--options", default="{}", help=argparse.SUPPRESS)
     p.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     a = p.parse_args()
+    a.parsed = {k: int(v) for k, v in (o.split("=", 1) for o in a.option)}
     if a.worker:
         worker(a)
         return

@@ -48,6 +48,10 @@ pub enum SampledLightRaw {
         irradiance: Vec3,
         /// World size of a shadow texel.
         texel: f32,
+        /// World depth of the view (depth 0 → 1) and tan α of the cone of directions the
+        /// record stands for (sky_cone.wgsl).
+        depth: f32,
+        tan_cone: f32,
     },
 }
 
@@ -75,10 +79,12 @@ impl SampledLightRaw {
                 layer,
                 irradiance,
                 texel,
+                depth,
+                tan_cone,
             } => [
                 v(towards, layer as f32),
                 v(irradiance, texel),
-                [0.0; 4],
+                [depth, tan_cone, texel, 0.0],
                 [0.0; 4],
             ],
         }

@@ -14,6 +14,7 @@ pub mod instances;
 pub mod layers;
 pub mod rsm;
 pub mod shadow;
+pub mod sky_cone;
 pub mod splat;
 pub mod subpixel;
 pub mod textures;

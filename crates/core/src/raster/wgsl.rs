@@ -13,9 +13,17 @@ pub const DIRECT_SHADE: &str = include_str!("shaders/common/direct_shade.wgsl");
 pub const EMITTER_TREE: &str = include_str!("shaders/common/emitter_tree.wgsl");
 /// The glossy lobe's environment light for `DIRECT_SHADE` (after it: uses its helpers).
 pub const ENV_GLOSSY: &str = include_str!("shaders/common/env_glossy.wgsl");
+/// The sampled sky directions' visibility over their cones for `DIRECT_SHADE` (after it).
+pub const SKY_CONE: &str = include_str!("shaders/common/sky_cone.wgsl");
 /// The deferred direct light's sources in order, for a pass that shades with it (after
 /// `gpu::shaders::COMMON` and `BSDF`, before the pass's own entry points).
-pub const DIRECT_SHADING: [&str; 4] = [SHADOW_LOOKUP, DIRECT_SHADE, EMITTER_TREE, ENV_GLOSSY];
+pub const DIRECT_SHADING: [&str; 5] = [
+    SHADOW_LOOKUP,
+    DIRECT_SHADE,
+    EMITTER_TREE,
+    ENV_GLOSSY,
+    SKY_CONE,
+];
 
 pub const GBUFFER: &str = include_str!("shaders/gbuffer.wgsl");
 pub const SHADOW: &str = include_str!("shaders/shadow.wgsl");

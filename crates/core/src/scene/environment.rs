@@ -478,6 +478,8 @@ fn lattice(i: u32, n: u32, offset: Vec2) -> Vec2 {
 pub struct SkyDirection {
     pub towards: Vec3,
     pub irradiance: Vec3,
+    /// The solid angle it stands for, 1/(n·p(ω)) (sr).
+    pub solid_angle: f32,
 }
 
 impl Environment {
@@ -505,6 +507,7 @@ impl Environment {
                 (pdf > 0.0 && pdf.is_finite()).then(|| SkyDirection {
                     towards,
                     irradiance: self.radiance(towards) / (n as f32 * pdf),
+                    solid_angle: 1.0 / (n as f32 * pdf),
                 })
             })
             .collect()

@@ -460,12 +460,14 @@ impl LightSamples {
                     self.clip.len(),
                     6 * area_points + records.len() - area_points
                 );
-                let (m, side, _) = orthographic_view(-d.towards, scene.bounds(), grow);
+                let (m, side, depth) = orthographic_view(-d.towards, scene.bounds(), grow);
                 records.push(SampledLightRaw::Sky {
                     towards: d.towards,
                     layer: self.clip.len() as u32,
                     irradiance: d.irradiance,
                     texel: side / c.size as f32,
+                    depth,
+                    tan_cone: crate::raster::sky_cone::tan_half_angle(d.solid_angle),
                 });
                 self.clip.push(m);
                 self.render.push(true);

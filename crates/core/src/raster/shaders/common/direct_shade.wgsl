@@ -23,7 +23,8 @@
 //   their shadow-mapped points (one ratio for all of them: where one such emitter is hidden
 //   and another not, the ratio mixes their visibilities by the points' weights);
 // - per direction drawn from the sky (`sky_count` records), a distant light of irradiance
-//   L/(n·p) with one tap of its orthographic shadow map; with `ratio` the diffuse lobe is
+//   L/(n·p) with one tap of its orthographic shadow map (with `ratio`: its visibility over
+//   the cone of directions it stands for, sky_cone.wgsl); with `ratio` the diffuse lobe is
 //   the ratio estimator (Heitz, Hill & McGuire 2018): the unshadowed diffuse light from the
 //   irradiance table times Σ f_d·cos·E·V / Σ f_d·cos·E over the directions (exact where
 //   every direction is unoccluded), the glossy lobe the ratio estimator too
@@ -767,8 +768,10 @@ fn sampled_light(p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, wo: ve
     var gun = vec3<f32>(0.0);
     var clit = vec3<f32>(0.0);
     var cun = vec3<f32>(0.0);
-    let end = direct_params.area_count + direct_params.sky_count;
-    for (var i = direct_params.area_count; i < end; i++) {
+    // In ordinary frames a per-pixel share of the directions (sky_cone.wgsl).
+    let sub = sky_subset(p);
+    for (var k = 0u; k < sub.z; k++) {
+        let i = direct_params.area_count + sub.x + k * sub.y;
         let t0 = textureLoad(sample_records, vec2<u32>(0u, i), 0);
         let wi = t0.xyz;
         let cos_g = dot(wi, ng);
@@ -793,7 +796,7 @@ fn sampled_light(p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, wo: ve
         // docs/gpu-check.md), while the index-derived one is right on every adapter.
         let layer = 6u * direct_params.area_count + (i - direct_params.area_count);
         let q = p + ng * (t1.w * (1.0 - cos_g) + 0.5 * t1.w);
-        let v = shadow_tap(sample_maps, shadow_sampler, sample_view(layer), layer, q);
+        let v = sky_visibility(i, layer, p, ng, q);
         lit += fd * v;
         unshadowed += fd;
         glit += fs * v;
