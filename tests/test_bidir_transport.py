@@ -84,16 +84,17 @@ def test_one_frame_is_steady_and_has_no_hot_spots(name, max_spread):
     # (mitsuba.cornell_box(): the issue's 3% is not met there, its bound is 3.5%; what
     # remains is the light of three and more bounces, σ 1.9% of the image over 8 seeds).
     # Hot spots: the largest pixel of one frame's light past the direct light over `path`'s
-    # (1024 spp, whose own largest pixel is noise above its smooth image): 1.6, 2.2 and 2.5
-    # at most over seeds 1–4 with `frame/bidir/spikes.rs` (2.3 and 2.9 on `cornell` and
-    # mitsuba.cornell_box() without; 4.3 and 15 over seeds 1–8 without, 3.8 and 3.2 with).
-    # Bound: 3 times.
+    # (1024 spp, whose own largest pixel is noise above its smooth image), seeds 1–8: with
+    # `frame/bidir/spikes.rs` at factor 3 on single pixels 3.8, 2.2 and 3.2 at most (4.3, –
+    # and 15 without it); at factor 2, 2×2 blocks first, 2.56, 1.39 and 2.21 (seed by seed in
+    # docs/bench/bidir-depth.md, `scripts/probe/bidir_frames.py spread --seeds 8`). Bound:
+    # 3 times, over 8 seeds.
     scene = gi.load_scene(name)
     size = (48, 48)
     means = [float(gi.render(scene, "bidir", size=size, seed=s).radiance.mean()) for s in SEEDS]
     spread = (max(means) - min(means)) / np.mean(means)
     ref = indirect_max(scene, "path", size, spp=1024, seed=5)
-    peaks = [indirect_max(scene, "bidir", size, seed=s) / ref for s in SEEDS]
+    peaks = [indirect_max(scene, "bidir", size, seed=s) / ref for s in range(1, 9)]
     assert spread <= max_spread, (means, spread)
     assert max(peaks) <= 3.0, peaks
 

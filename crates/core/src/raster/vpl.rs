@@ -176,6 +176,7 @@ impl VplPass {
                 shaders::FULLSCREEN,
                 wgsl::BIDIR,
                 wgsl::ROUGHNESS_CLAMP,
+                wgsl::ENV_GLOSSY,
             ],
         );
         let pipeline = gpu::create_fullscreen_pipeline(

@@ -1,0 +1,65 @@
+"""One `bidir` frame's image mean from seed to seed (issue 48) on the built-in `cornell`,
+Mitsuba 3's `cbox` and mitsuba.cornell_box(), 48×48 at the defaults, for one or more builds
+(each in its own process, `--build LABEL=PYTHONPATH`): the spread (max − min over the
+mean) of seeds 1–4 (the test's) and of 1–N, and σ over N seeds. Prints a Markdown table.
+
+    python scripts/probe/bidir_spread.py [--seeds 16] [--build LABEL=PYTHONPATH ...]
+"""
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[2]
+BOXES = {
+    "cornell": "cornell",
+    "cbox": str(ROOT / "tests/scenes/third_party/cbox/cbox.xml"),
+    "cornell_box()": str(ROOT / "docs/scenes/cornell-box/cornell-box.xml"),
+}
+
+
+def means(seeds: int) -> dict:
+    import gi
+
+    out = {}
+    for name, path in BOXES.items():
+        scene = gi.load_scene(path)
+        out[name] = [
+            float(gi.render(scene, "bidir", size=(48, 48), seed=s).radiance.mean())
+            for s in range(1, seeds + 1)
+        ]
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--seeds", type=int, default=16)
+    ap.add_argument("--build", action="append", default=[], help="LABEL=PYTHONPATH")
+    ap.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
+    a = ap.parse_args()
+    if a.child:
+        print(json.dumps(means(a.seeds)))
+        return
+    builds = [b.split("=", 1) for b in a.build] or [["this", os.pathsep.join(sys.path)]]
+    print(f"| build | scene | seeds 1–4 spread | seeds 1–{a.seeds} spread | σ |")
+    print("|---|---|---|---|---|")
+    for label, path in builds:
+        cmd = [sys.executable, __file__, "--child", "--seeds", str(a.seeds)]
+        env = {**os.environ, "PYTHONPATH": path}
+        run = subprocess.run(cmd, env=env, check=True, capture_output=True, text=True)
+        got = json.loads(run.stdout.splitlines()[-1])
+        for name, m in got.items():
+            m = np.array(m)
+            sp4 = (m[:4].max() - m[:4].min()) / m[:4].mean()
+            sp = (m.max() - m.min()) / m.mean()
+            sd = m.std(ddof=1) / m.mean()
+            print(f"| {label} | {name} | {sp4:.1%} | {sp:.1%} | {sd:.2%} |", flush=True)
+
+
+if __name__ == "__main__":
+    main()
