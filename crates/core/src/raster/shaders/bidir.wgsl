@@ -313,11 +313,6 @@ fn sky_share_add(s: ptr<function, SkyShare>, fs: vec3<f32>, e: vec3<f32>, missed
     }
 }
 
-// lit / unshadowed per channel, 1 where nothing lights the point (direct_shade.wgsl's).
-fn visible_ratio(lit: vec3<f32>, unshadowed: vec3<f32>) -> vec3<f32> {
-    return select(vec3<f32>(1.0), lit / max(unshadowed, vec3<f32>(1e-30)), unshadowed > vec3<f32>(0.0));
-}
-
 fn luminance(c: vec3<f32>) -> f32 {
     return dot(c, vec3<f32>(0.2126, 0.7152, 0.0722));
 }

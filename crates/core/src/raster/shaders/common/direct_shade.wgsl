@@ -663,12 +663,6 @@ fn polygons_diffuse(p: vec3<f32>, ns: vec3<f32>, m: Material, wo: vec3<f32>, fir
     return diffuse_eval(m, ns, wo, dir / len) * e;
 }
 
-// The visibility ratio Σ f_d·G·V / Σ f_d·G per channel, 1 where no sample lit the point
-// (nothing known of its visibility).
-fn visible_ratio(lit: vec3<f32>, unshadowed: vec3<f32>) -> vec3<f32> {
-    return select(vec3<f32>(1.0), lit / max(unshadowed, vec3<f32>(1e-30)), unshadowed > vec3<f32>(0.0));
-}
-
 // The light at `p` of emitter point `i`: its diffuse lobe unshadowed (`fd`), its glossy
 // lobe unshadowed (`fs`) and its shadow map's visibility (`v`).
 struct PointLight {

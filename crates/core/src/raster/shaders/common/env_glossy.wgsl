@@ -89,3 +89,9 @@ fn env_glossy_visibility(glossy_lit: vec3<f32>, glossy_unshadowed: vec3<f32>, co
     }
     return visible_ratio(cos_lit, cos_unshadowed);
 }
+
+// The visibility ratio Σ f·G·V / Σ f·G per channel, 1 where no sample lit the point (nothing
+// known of its visibility): the direct light's and bidir's shadowing of unshadowed sums.
+fn visible_ratio(lit: vec3<f32>, unshadowed: vec3<f32>) -> vec3<f32> {
+    return select(vec3<f32>(1.0), lit / max(unshadowed, vec3<f32>(1e-30)), unshadowed > vec3<f32>(0.0));
+}
