@@ -13,9 +13,18 @@ pub const DIRECT_SHADE: &str = include_str!("shaders/common/direct_shade.wgsl");
 pub const EMITTER_TREE: &str = include_str!("shaders/common/emitter_tree.wgsl");
 /// The glossy lobe's environment light for `DIRECT_SHADE` (after it: uses its helpers).
 pub const ENV_GLOSSY: &str = include_str!("shaders/common/env_glossy.wgsl");
+/// Mitsuba's exact models in the direct light: the G-buffer's material records (group 1).
+pub const EXACT_MODELS: &str = include_str!("shaders/common/exact_models.wgsl");
 /// The deferred direct light's sources in order, for a pass that shades with it (after
 /// `gpu::shaders::COMMON` and `BSDF`, before the pass's own entry points).
-pub const DIRECT_SHADING: [&str; 4] = [SHADOW_LOOKUP, DIRECT_SHADE, EMITTER_TREE, ENV_GLOSSY];
+pub const DIRECT_SHADING: [&str; 6] = [
+    crate::gpu::shaders::MODELS,
+    SHADOW_LOOKUP,
+    DIRECT_SHADE,
+    EXACT_MODELS,
+    EMITTER_TREE,
+    ENV_GLOSSY,
+];
 
 pub const GBUFFER: &str = include_str!("shaders/gbuffer.wgsl");
 pub const SHADOW: &str = include_str!("shaders/shadow.wgsl");

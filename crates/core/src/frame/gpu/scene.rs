@@ -28,6 +28,8 @@ pub(crate) struct LightDraw {
 pub(crate) struct GpuScene {
     pub geometry: Geometry,
     pub materials: wgpu::Buffer,
+    /// Mitsuba's exact models of the materials, per material (`raster::exact_models`).
+    pub model_materials: wgpu::Buffer,
     /// Textures and material maps (group 1 of the passes that rasterize the scene).
     pub textures: raster::textures::GpuTextures,
     /// Whether any material is alpha-masked (the shadow pass then discards cut-outs).
@@ -93,6 +95,11 @@ impl GpuScene {
         Ok(GpuScene {
             geometry: Geometry::upload(ctx, scene, &cull),
             materials: storage_init(ctx, "materials", bytemuck::cast_slice(&materials)),
+            model_materials: storage_init(
+                ctx,
+                "model materials",
+                bytemuck::cast_slice(&raster::exact_models::records(scene)),
+            ),
             textures,
             masked: scene.has_alpha_masks(),
             variant: raster::textures::Variant::of(scene),
@@ -137,6 +144,13 @@ impl GpuScene {
             &self.materials,
             0,
             bytemuck::cast_slice(&materials),
+        );
+        gpu::write_buffer(
+            &ctx.queue,
+            "model materials",
+            &self.model_materials,
+            0,
+            bytemuck::cast_slice(&raster::exact_models::records(scene)),
         );
         self.textures.write_maps(ctx, scene);
         let masked = scene.has_alpha_masks();

@@ -161,8 +161,9 @@ fn direct_scene_group(
     )
 }
 
-/// The direct pass's G-buffer group of `g`: its lighting inputs and its emission.
-fn lighting_group(ctx: &GpuContext, g: &gbuffer::GBuffer) -> wgpu::BindGroup {
+/// The direct pass's G-buffer group of `g`: its lighting inputs, its emission and the
+/// materials' exact models of `gs`.
+fn lighting_group(ctx: &GpuContext, g: &gbuffer::GBuffer, gs: &GpuScene) -> wgpu::BindGroup {
     let mut entries: Vec<_> = g
         .lighting_inputs()
         .iter()
@@ -170,6 +171,7 @@ fn lighting_group(ctx: &GpuContext, g: &gbuffer::GBuffer) -> wgpu::BindGroup {
         .map(|(i, v)| texture(i as u32, v))
         .collect();
     entries.push(texture(entries.len() as u32, g.emission()));
+    entries.push(buffer(entries.len() as u32, &gs.model_materials));
     gpu::create_bind_group(
         &ctx.device,
         &wgpu::BindGroupDescriptor {
@@ -264,7 +266,7 @@ impl Targets {
             wgpu::BufferUsages::UNIFORM,
         );
         let direct_scene_group = direct_scene_group(ctx, &eye, gs, &penumbra);
-        let lighting_group = |g: &gbuffer::GBuffer| lighting_group(ctx, g);
+        let lighting_group = |g: &gbuffer::GBuffer| lighting_group(ctx, g, gs);
         let direct_gbuffer_group = lighting_group(&gbuf);
         let sub_gbuffer_group = lighting_group(&sub);
         let edges = if spp > 1 && edge_supersampling {
