@@ -144,6 +144,68 @@ def test_gpu_direct_light_shades_the_exact_models(name, method):
     assert error <= 0.035, f"{name} {method}: FLIP {error:.4f}"
 
 
+INDIRECT_SCENE = """<scene version="3.0.0">
+    <sensor type="perspective">
+        <float name="fov" value="45"/>
+        <transform name="to_world">
+            <lookat origin="0, 2.5, 5" target="0, -0.5, 0" up="0, 1, 0"/>
+        </transform>
+        <film type="hdrfilm">
+            <integer name="width" value="48"/><integer name="height" value="48"/>
+        </film>
+    </sensor>
+    <shape type="rectangle">
+        <transform name="to_world">
+            <scale value="0.5"/><lookat origin="0, 3, 0" target="0, 0, 0" up="0, 0, 1"/>
+        </transform>
+        <emitter type="area"><rgb name="radiance" value="20"/></emitter>
+    </shape>
+    <shape type="sphere">
+        <bsdf type="diffuse"><rgb name="reflectance" value="0.8, 0.6, 0.4"/></bsdf>
+    </shape>
+    <shape type="rectangle">
+        <transform name="to_world">
+            <scale value="4"/><rotate x="1" angle="-90"/><translate y="-1"/>
+        </transform>
+        FLOOR
+    </shape>
+</scene>
+"""
+FLOORS = {
+    "roughplastic-beckmann": '<bsdf type="roughplastic"><boolean name="nonlinear" value="true"/>'
+    '<rgb name="diffuse_reflectance" value="0.8, 0.7, 0.2"/></bsdf>',
+    "roughconductor-cu": '<bsdf type="roughconductor"><string name="material" value="Cu"/>'
+    '<float name="alpha" value="0.2"/></bsdf>',
+}
+
+
+@pytest.mark.parametrize("floor", sorted(FLOORS))
+def test_ispm_estimators_shade_the_exact_models(tmp_path, floor):
+    """The photon estimates of `ispm` at a Mitsuba model (a floor lit by the light a diffuse
+    sphere reflects): the GPU estimators (`volumes`, `tiled`, `cluster`: models.wgsl through
+    the G-buffer's material index) equal the CPU estimator, which evaluates the CPU's
+    `Material` itself (matched to Mitsuba to 1e-3 in crates/core/src/bsdf/tests_models.rs),
+    to 1e-4 of the image's peak, as the estimators agree on uber materials
+    (test_api.py); measured 3e-6 (Cu) and 6e-7 (plastic). The uber stand-ins' estimate
+    (before the estimators read the G-buffer's material index) differs from the exact one by
+    26% (Cu: its mean 19% low) and 0.7% (plastic) of the peak."""
+    path = tmp_path / "floor.xml"
+    path.write_text(INDIRECT_SCENE.replace("FLOOR", FLOORS[floor]))
+    scene = gi.load_scene(path)
+    images = {}
+    for est in ("volumes", "tiled", "cluster", "cpu"):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", gi.RenderWarning)  # the first bounce's
+            r = gi.render(
+                scene, "ispm", spp=1, photons=20_000, estimator=est, first_bounce="traced"
+            )
+        images[est] = r.aov("indirect")
+    scale = images["cpu"].max()
+    assert scale > 0
+    for est in ("volumes", "tiled", "cluster"):
+        np.testing.assert_allclose(images[est], images["cpu"], rtol=0, atol=1e-4 * scale)
+
+
 def test_gpu_methods_name_their_stand_ins():
     scene = gi.load_scene(SCENES / "plastic.xml")
     with warnings.catch_warnings():

@@ -1,8 +1,9 @@
 //! The RenderWarning of the GPU methods (`direct`, `ispm`, `bidir`) for Mitsuba's material
 //! models (coatings, conductors of complex index, Beckmann's distribution). Their direct
-//! light shades the exact models (`raster::exact_models`) unless a texture varies the
-//! BSDF's parameters; `ispm`'s photon estimates and first bounce and `bidir`'s VPLs still
-//! shade the uber stand-in ([`crate::bsdf::Material::uber_equivalent`]).
+//! light and `ispm`'s photon estimates shade the exact models (`raster::exact_models`)
+//! unless a texture varies the BSDF's parameters; `ispm`'s rasterized first bounce
+//! (`bounce.wgsl`) and `bidir`'s VPLs and bundles still shade the uber stand-in
+//! ([`crate::bsdf::Material::uber_equivalent`]).
 
 use super::Method;
 use crate::raster::exact_models::shades_exactly;
@@ -42,15 +43,22 @@ pub(super) fn warning(scene: &Scene, method: Method) -> Option<String> {
             textured.join(", ")
         ));
     }
-    let indirect = match method {
-        Method::Ispm => "their indirect light (photon estimates, first bounce)",
-        Method::Bidir => "the light of their VPLs and ray bundles (the sky's included)",
-        _ => "",
+    let (exact_in, rest) = match method {
+        Method::Ispm => (
+            "direct light and photon estimates",
+            "the photons' first bounce when rasterized (`first_bounce` \"raster\", the default \
+             on GPUs) samples them",
+        ),
+        Method::Bidir => (
+            "direct light",
+            "the light of their VPLs and ray bundles (the sky's included) shades them",
+        ),
+        _ => ("", ""),
     };
-    if !exact.is_empty() && !indirect.is_empty() {
+    if !exact.is_empty() && !rest.is_empty() {
         parts.push(format!(
-            "method `{name}` shades the direct light of the Mitsuba models of materials {} \
-             exactly on the GPU but {indirect} {stand_in}",
+            "method `{name}` shades the {exact_in} of the Mitsuba models of materials {} \
+             exactly on the GPU, but {rest} {stand_in}",
             exact.join(", ")
         ));
     }

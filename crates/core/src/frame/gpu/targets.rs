@@ -59,6 +59,9 @@ pub(crate) struct Targets {
     /// The G-buffer at the pixel centres (AOVs, photon estimates, the direct light of
     /// pixels off edges).
     pub gbuf: gbuffer::GBuffer,
+    /// The scene's materials' exact models (`GpuScene::model_materials`), which the
+    /// estimators bind beside the G-buffer.
+    pub model_materials: wgpu::Buffer,
     /// Which rendering of `gbuf` it holds: a new number, unique in the process, each time
     /// its pass is recorded (what was read back of an equal generation is still valid).
     pub gbuffer_generation: u64,
@@ -267,6 +270,7 @@ impl Targets {
         );
         let direct_scene_group = direct_scene_group(ctx, &eye, gs, &penumbra);
         let lighting_group = |g: &gbuffer::GBuffer| lighting_group(ctx, g, gs);
+        let model_materials = gs.model_materials.clone();
         let direct_gbuffer_group = lighting_group(&gbuf);
         let sub_gbuffer_group = lighting_group(&sub);
         let edges = if spp > 1 && edge_supersampling {
@@ -308,6 +312,7 @@ impl Targets {
             direct_scene_group,
             penumbra,
             direct_gbuffer_group,
+            model_materials,
             composite_group: None,
             readback: HashMap::new(),
         })

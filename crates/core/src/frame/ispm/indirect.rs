@@ -64,8 +64,9 @@ impl Indirect {
         let (kind, reason) = options.estimator.resolve(&ctx.info);
         let (gbuf, k) = (&targets.gbuf, options.subsample.max(1));
         let size = [targets.width, targets.height];
-        let caustics = (k > 1).then(|| estimator(ctx, gbuf, kind, size, 1));
-        let mut estimate = estimator(ctx, gbuf, kind, size, k);
+        let g = (gbuf, &targets.model_materials);
+        let caustics = (k > 1).then(|| estimator(ctx, g, kind, size, 1));
+        let mut estimate = estimator(ctx, g, kind, size, k);
         if let Some(c) = &caustics {
             estimate.add_full_resolution(ctx, gbuf, c);
         }
@@ -125,7 +126,7 @@ impl Indirect {
             let generation = gpu.targets.gbuffer_generation;
             for e in std::iter::once(&mut self.estimate).chain(&mut self.caustics) {
                 if let IndirectEstimate::Cpu(c) = e {
-                    if let Some(w) = c.compute(&gpu.ctx, &gpu.targets.gbuf, generation)? {
+                    if let Some(w) = c.compute(&gpu.ctx, (&gpu.targets.gbuf, scene), generation)? {
                         waited = Some(waited.unwrap_or(0.0) + w);
                     }
                 }
@@ -261,19 +262,19 @@ const PIXEL_RADII: f32 = 1.0;
 /// The estimator `kind` over the eye G-buffer `gbuf` of `size`, at 1/`k` resolution.
 fn estimator(
     ctx: &GpuContext,
-    gbuf: &GBuffer,
+    (gbuf, models): (&GBuffer, &wgpu::Buffer),
     kind: Estimator,
     [w, h]: [u32; 2],
     k: u32,
 ) -> IndirectEstimate {
-    let binned = |mode| IndirectEstimate::Binned(Box::new(Binned::new(ctx, gbuf, mode, [w, h], k)));
+    let binned = |mode| IndirectEstimate::Binned(Box::new(Binned::new(ctx, (gbuf, models), mode, [w, h], k)));
     match kind {
         Estimator::Tiled => binned(Mode::Tiled),
         Estimator::Cluster => binned(Mode::Cluster),
         Estimator::Directional => binned(Mode::Directional),
         Estimator::Cpu => IndirectEstimate::Cpu(Box::new(CpuEstimate::new(ctx, gbuf, w, h, k))),
         Estimator::Volumes | Estimator::Auto => {
-            IndirectEstimate::Volumes(Box::new(Volumes::new(ctx, gbuf, w, h, k)))
+            IndirectEstimate::Volumes(Box::new(Volumes::new(ctx, (gbuf, models), w, h, k)))
         }
     }
 }

@@ -9,7 +9,8 @@
 // diffuse/glossy split is the model's (`model_diffuse`, `model_glossy`): the coating's base
 // and its dielectric reflection, as the ratio estimators of direct_shade.wgsl need it.
 
-@group(1) @binding(5) var<storage, read> model_materials: array<ModelMaterial>;
+// `model_materials: array<ModelMaterial>`, the records, is declared by each pass at its own
+// binding (exact_models_direct.wgsl for the direct passes; the estimators' shaders).
 
 // The flags of a record the uber BSDF does not render exactly.
 const EXACT_MODEL_FLAGS: u32 = MODEL_BECKMANN | MODEL_COATED | MODEL_CONDUCTOR;
@@ -25,8 +26,12 @@ fn exact_load(index: f32) {
     if i == 0u || i > arrayLength(&model_materials) {
         return;
     }
+    // The flags first: one word a sample where the material is the uber BSDF's.
+    if (model_materials[i - 1u].flags & EXACT_MODEL_FLAGS) == 0u {
+        return;
+    }
     exact_model = model_materials[i - 1u];
-    exact_on = (exact_model.flags & EXACT_MODEL_FLAGS) != 0u;
+    exact_on = true;
 }
 
 // f(wo, wi) of the shading point's material (`bsdf_eval` of `m` unless exact).
