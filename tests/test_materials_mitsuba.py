@@ -131,10 +131,7 @@ def test_gpu_direct_light_shades_the_exact_models(name, method):
     scene = gi.load_scene(SCENES / f"{name}.xml")
     settings = {"direct": {"spp": 16}, "ispm": {"spp": 16, "photons": 100_000}}[method]
     with warnings.catch_warnings():
-        if method == "direct":
-            warnings.simplefilter("error")  # nothing approximated: no stand-in warning
-        else:
-            warnings.simplefilter("ignore", gi.RenderWarning)  # its indirect light's
+        warnings.simplefilter("error")  # nothing approximated: no stand-in warning
         r = gi.Renderer(scene, method, size=(64, 64), seed=7, **settings)
     img = r.render().radiance[..., :3]
     ref = gi.read_image(SCENES / f"{name}-reference.exr")[..., :3]
@@ -171,6 +168,20 @@ INDIRECT_SCENE = """<scene version="3.0.0">
     </shape>
 </scene>
 """
+
+
+def point_lit(xml: str) -> str:
+    """`xml` with its area light replaced by a point light above the sphere (the bounce
+    maps of `first_bounce` "raster" are the point and spot lights')."""
+    start = xml.index('    <shape type="rectangle">')
+    end = xml.index("    </shape>", start) + len("    </shape>\n")
+    point = (
+        '    <emitter type="point"><point name="position" x="0.5" y="3" z="0.5"/>'
+        '<rgb name="intensity" value="20"/></emitter>\n'
+    )
+    return xml[:start] + point + xml[end:]
+
+
 FLOORS = {
     "roughplastic-beckmann": '<bsdf type="roughplastic"><boolean name="nonlinear" value="true"/>'
     '<rgb name="diffuse_reflectance" value="0.8, 0.7, 0.2"/></bsdf>',
@@ -195,7 +206,7 @@ def test_ispm_estimators_shade_the_exact_models(tmp_path, floor):
     images = {}
     for est in ("volumes", "tiled", "cluster", "cpu"):
         with warnings.catch_warnings():
-            warnings.simplefilter("ignore", gi.RenderWarning)  # the first bounce's
+            warnings.simplefilter("error")  # no stand-in left
             r = gi.render(
                 scene, "ispm", spp=1, photons=20_000, estimator=est, first_bounce="traced"
             )
@@ -208,12 +219,12 @@ def test_ispm_estimators_shade_the_exact_models(tmp_path, floor):
 
 def test_gpu_methods_name_their_stand_ins():
     scene = gi.load_scene(SCENES / "plastic.xml")
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")  # `direct` shades the exact model
-        gi.Renderer(scene, "direct", size=(16, 16))
-    for method in ["ispm", "bidir"]:
-        with pytest.warns(gi.RenderWarning, match="direct light .* exactly .* uber stand-ins"):
+    for method in ["direct", "ispm"]:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")  # they shade the exact model
             gi.Renderer(scene, method, size=(16, 16))
+    with pytest.warns(gi.RenderWarning, match="direct light .* exactly .* uber stand-ins"):
+        gi.Renderer(scene, "bidir", size=(16, 16))
     glass = gi.load_scene(SCENES / "roughdielectric.xml")
     with pytest.warns(gi.RenderWarning, match="smooth glass"):
         gi.Renderer(glass, "direct", size=(16, 16))

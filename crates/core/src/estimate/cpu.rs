@@ -309,8 +309,7 @@ impl CpuEstimate {
                 };
                 let exact = exact_material(scene, f32x4(4, x, y).w);
                 let material = exact.unwrap_or(uber);
-                let plain =
-                    exact.is_none() && material.specular == Vec3::ZERO && !material.fresnel;
+                let plain = exact.is_none() && material.specular == Vec3::ZERO && !material.fresnel;
                 Some(ViewSample {
                     position,
                     frame: Frame::new(oct_decode(Vec2::new(normals.x, normals.y))),

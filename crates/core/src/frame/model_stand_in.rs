@@ -1,9 +1,8 @@
 //! The RenderWarning of the GPU methods (`direct`, `ispm`, `bidir`) for Mitsuba's material
 //! models (coatings, conductors of complex index, Beckmann's distribution). Their direct
-//! light and `ispm`'s photon estimates shade the exact models (`raster::exact_models`)
-//! unless a texture varies the BSDF's parameters; `ispm`'s rasterized first bounce
-//! (`bounce.wgsl`) and `bidir`'s VPLs and bundles still shade the uber stand-in
-//! ([`crate::bsdf::Material::uber_equivalent`]).
+//! light and `ispm`'s photon estimates and rasterized first bounce shade the exact models
+//! (`raster::exact_models`) unless a texture varies the BSDF's parameters; `bidir`'s VPLs
+//! and bundles still shade the uber stand-in ([`crate::bsdf::Material::uber_equivalent`]).
 
 use super::Method;
 use crate::raster::exact_models::shades_exactly;
@@ -44,11 +43,6 @@ pub(super) fn warning(scene: &Scene, method: Method) -> Option<String> {
         ));
     }
     let (exact_in, rest) = match method {
-        Method::Ispm => (
-            "direct light and photon estimates",
-            "the photons' first bounce when rasterized (`first_bounce` \"raster\", the default \
-             on GPUs) samples them",
-        ),
         Method::Bidir => (
             "direct light",
             "the light of their VPLs and ray bundles (the sky's included) shades them",

@@ -51,6 +51,27 @@ fn exact_glossy(glossy: Material, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) ->
     return bsdf_eval(glossy, n, wo, wi);
 }
 
+// The scatter probability towards viewing cosine `cos_o`: `uber` unless exact.
+fn exact_scatter(uber: vec3<f32>, cos_o: f32) -> vec3<f32> {
+    if !exact_on {
+        return uber;
+    }
+    return model_scatter_probability(exact_model, cos_o);
+}
+
+// A smooth material's mirror reflectance at viewing cosine `cos_o`: `uber` (the uber's
+// Fresnel term) unless exact; a smooth coating's dielectric Fresnel term times its
+// specular tint, a conductor's complex-index Fresnel term else.
+fn exact_mirror(uber: vec3<f32>, cos_o: f32) -> vec3<f32> {
+    if !exact_on {
+        return uber;
+    }
+    if has_flag(exact_model, MODEL_COATED) {
+        return exact_model.specular * fresnel_dielectric(cos_o, exact_model.coat_eta).x;
+    }
+    return model_fresnel(exact_model, cos_o);
+}
+
 // The glossy lobe widened for a light sample of angular radius² `spread2`: `bsdf_eval` of
 // `wide` (the uber lobe widened by emitter_tree.wgsl `widened`) unless exact; the
 // model's lobe widened the same way (α² + spread2/4, mirrors kept) else.
