@@ -7,8 +7,9 @@ The references are Mitsuba 3.9.1 `path` (scalar_rgb), 64×64, 4096 samples per p
 batches: their means are known to better than 0.05% (references.json). Both renderers use
 a box pixel filter; Mitsuba's sphere is exact, gi's the importer's tessellated one with
 smooth normals (its silhouette differs by a fraction of a pixel). gi's `path` at 256 spp.
-The GPU methods' direct light shades the exact models (raster/exact_models.rs); their
-indirect light still shades uber stand-ins and says so with a RenderWarning. `ispm` and
+The GPU methods' direct light and `ispm`'s photon estimates and first bounce shade the exact
+models (raster/exact_models.rs); `bidir`'s VPLs and ray bundles still shade uber stand-ins
+and say so with a RenderWarning. `ispm` and
 `bidir` are held to 5% of Mitsuba's mean; `direct` on the rough spheres (its direct light is
 the whole image there) to 1%."""
 
@@ -75,7 +76,8 @@ def test_gpu_methods_match_mitsuba(name, method):
     """`ispm` on every sphere, `bidir` on the smooth ones (the sky and the area light seen in
     their mirror lobe come from the CPU specular image; before it added them, 0.50–0.73 and
     0.93–0.95): the image mean within 5% of Mitsuba's per channel (issue 42; measured within
-    3.5%, the rough spheres' residue being the GPU's uber stand-ins, docs/bench/materials.md)."""
+    3.5% with the uber stand-ins, within 0.8% with the exact models;
+    docs/bench/materials.md)."""
     scene = gi.load_scene(SCENES / f"{name}.xml")
     settings = {"ispm": {"photons": 100_000, "spp": 8}, "bidir": {"spp": 8}}[method]
     with warnings.catch_warnings():
