@@ -57,9 +57,10 @@ def main() -> None:
         "Single-material spheres of `tests/scenes/materials/` (64×64, a constant environment",
         "and a small area light, the rough glass on a grey floor; references: Mitsuba `path`,",
         "4096 spp, box filter). Ratio: gi's image mean over Mitsuba's per channel (R, G, B).",
-        "`direct` renders direct light only (its ratio is not 1 by design); `direct`, `ispm` and",
-        "`bidir` shade the models as uber stand-ins on the GPU and render rough glass as smooth",
-        "glass (docs/scene-format.md). Settings: "
+        "`direct` renders direct light only (its ratio is not 1 by design on the smooth spheres",
+        "and the glass); the GPU direct light and `ispm`'s estimates and first bounce shade the",
+        "exact models, `bidir`'s VPLs and bundles uber stand-ins; the GPU methods render rough",
+        "glass as smooth glass (docs/scene-format.md). Settings: "
         + ", ".join(f"`{m}` {s}" for m, s in SETTINGS.items()),
         "",
         "Command: `/work/wt/dev.sh python scripts/probe/materials_vs_mitsuba.py` (lavapipe).",

@@ -32,8 +32,9 @@ use rayon::prelude::*;
 const TILE: u32 = 8;
 /// Relative slack of the sphere-box test (a photon wrongly kept costs one rejected test).
 const SLACK: f32 = 1e-4;
-/// The G-buffer textures read back: position, normals (f32), diffuse, specular (f16).
-const GBUFFER_TEXTURES: [(usize, u32); 4] = [(0, 16), (1, 16), (2, 8), (3, 8)];
+/// The G-buffer textures read back: position, normals (f32), diffuse, specular (f16),
+/// emission (f32; w: the material's index + 1, for its exact model).
+const GBUFFER_TEXTURES: [(usize, u32); 5] = [(0, 16), (1, 16), (2, 8), (3, 8), (5, 16)];
 
 /// One view sample of the low-resolution target.
 #[derive(Clone, Copy)]
@@ -148,10 +149,12 @@ impl CpuEstimate {
     /// `generation` is that of the last estimate's, computes the estimate and writes it into
     /// the low-resolution target. Returns the seconds spent waiting for the G-buffer (with
     /// the GPU work submitted before it), `None` where it was not read back.
+    /// The view samples' BSDF is their G-buffer's uber material, or `scene`'s material
+    /// itself where the GPU passes shade its exact model (`raster::exact_models`).
     pub fn compute(
         &mut self,
         ctx: &GpuContext,
-        gbuf: &GBuffer,
+        (gbuf, scene): (&GBuffer, &Scene),
         generation: u64,
     ) -> Result<Option<f64>> {
         let params = self
@@ -175,7 +178,7 @@ impl CpuEstimate {
         if self.samples_generation != Some(generation) {
             let t = std::time::Instant::now();
             self.samples_generation = None;
-            self.samples = self.read_samples(ctx, gbuf, params.eye)?;
+            self.samples = self.read_samples(ctx, (gbuf, scene), params.eye)?;
             self.samples_generation = Some(generation);
             waited = Some(t.elapsed().as_secs_f64());
         }
@@ -244,7 +247,7 @@ impl CpuEstimate {
     fn read_samples(
         &self,
         ctx: &GpuContext,
-        gbuf: &GBuffer,
+        (gbuf, scene): (&GBuffer, &Scene),
         eye: Vec3,
     ) -> Result<Vec<Option<ViewSample>>> {
         let [w, h] = self.size;
@@ -296,7 +299,7 @@ impl CpuEstimate {
                 let normals = f32x4(1, x, y);
                 let (diffuse, specular) = (f16x4(2, x, y), f16x4(3, x, y));
                 let position = pos.truncate();
-                let material = Material {
+                let uber = Material {
                     diffuse: diffuse.truncate(),
                     roughness: diffuse.w,
                     specular: specular.truncate(),
@@ -304,7 +307,9 @@ impl CpuEstimate {
                     transmission: Vec3::ZERO,
                     ..Default::default()
                 };
-                let plain = material.specular == Vec3::ZERO && !material.fresnel;
+                let exact = exact_material(scene, f32x4(4, x, y).w);
+                let material = exact.unwrap_or(uber);
+                let plain = exact.is_none() && material.specular == Vec3::ZERO && !material.fresnel;
                 Some(ViewSample {
                     position,
                     frame: Frame::new(oct_decode(Vec2::new(normals.x, normals.y))),
@@ -315,6 +320,15 @@ impl CpuEstimate {
             })
             .collect())
     }
+}
+
+/// The material of G-buffer index `w` (its index + 1) where the GPU passes shade its exact
+/// model ([`crate::raster::exact_models::shades_exactly`]).
+fn exact_material(scene: &Scene, w: f32) -> Option<Material> {
+    let i = (w.max(0.0) + 0.5) as usize;
+    let m = scene.materials.get(i.checked_sub(1)?)?;
+    let maps = scene.material_maps.get(i - 1).copied().unwrap_or_default();
+    crate::raster::exact_models::shades_exactly(m, &maps).then_some(*m)
 }
 
 /// A photon in a tile's list: its index and the tile's texels under its screen rectangle

@@ -68,6 +68,8 @@ impl Pipelines for VolumePass {
                 texture_entry(2, FRAGMENT),
                 texture_entry(3, FRAGMENT),
                 texture_entry(4, FRAGMENT),
+                texture_entry(5, FRAGMENT),
+                crate::gpu::layout::storage_entry(6, FRAGMENT),
             ],
         );
         let module = shaders::module(
@@ -76,6 +78,8 @@ impl Pipelines for VolumePass {
             &[
                 shaders::COMMON,
                 shaders::BSDF,
+                shaders::MODELS,
+                crate::raster::wgsl::EXACT_MODELS,
                 wgsl::PHOTON_VOLUME,
                 wgsl::VOLUME,
             ],
@@ -207,7 +211,14 @@ fn photon_buffer(ctx: &GpuContext, capacity: usize) -> wgpu::Buffer {
 
 impl Volumes {
     /// Targets for a `width × height` image over the G-buffer `gbuf`.
-    pub fn new(ctx: &GpuContext, gbuf: &GBuffer, width: u32, height: u32, subsample: u32) -> Self {
+    /// `models`: the materials' exact models (`raster::exact_models`).
+    pub fn new(
+        ctx: &GpuContext,
+        (gbuf, models): (&GBuffer, &wgpu::Buffer),
+        width: u32,
+        height: u32,
+        subsample: u32,
+    ) -> Self {
         let passes = VolumePass::get(ctx);
         let target = IndirectTarget::new(ctx, gbuf, width, height, subsample);
         let params = buffer_init(
@@ -231,6 +242,11 @@ impl Volumes {
                     tex(2, &inputs[1]),
                     tex(3, &inputs[2]),
                     tex(4, &inputs[3]),
+                    tex(5, gbuf.emission()),
+                    wgpu::BindGroupEntry {
+                        binding: 6,
+                        resource: models.as_entire_binding(),
+                    },
                 ],
             },
         );

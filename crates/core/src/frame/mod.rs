@@ -14,6 +14,7 @@ pub mod gather;
 mod glass_stand_in;
 mod gpu;
 mod ispm;
+mod model_stand_in;
 pub mod options;
 pub mod output;
 mod path;
@@ -151,24 +152,7 @@ fn transport_omissions(scene: &Scene, options: &RenderOptions) -> Vec<String> {
             );
         }
     }
-    if options.method().uses_gpu() {
-        let stand_ins: Vec<&str> = scene
-            .materials
-            .iter()
-            .zip(&scene.material_names)
-            .filter(|(m, _)| m.uber_equivalent() != **m)
-            .map(|(_, name)| name.as_str())
-            .collect();
-        if !stand_ins.is_empty() {
-            out.push(format!(
-                "method `{}` shades the Mitsuba models of materials {} as uber stand-ins on \
-                 the GPU (Schlick's Fresnel for coatings and conductors, GGX for Beckmann; \
-                 docs/scene-format.md); `path`, `photon` and `gather` render them exactly",
-                options.method().name(),
-                stand_ins.join(", ")
-            ));
-        }
-    }
+    out.extend(model_stand_in::warning(scene, options.method()));
     out
 }
 

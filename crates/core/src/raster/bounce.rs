@@ -53,6 +53,7 @@ impl Pipelines for BouncePass {
                     BOUNCE_VIEW_SIZE,
                 ),
                 storage_entry(1, wgpu::ShaderStages::FRAGMENT),
+                storage_entry(2, wgpu::ShaderStages::FRAGMENT),
             ],
         );
         let module = shaders::module(
@@ -61,6 +62,8 @@ impl Pipelines for BouncePass {
             &[
                 shaders::COMMON,
                 shaders::BSDF,
+                shaders::MODELS,
+                wgsl::EXACT_MODELS,
                 shaders::TEXTURE,
                 shaders::SCENE_VERTEX,
                 wgsl::LIGHT_VIEW,
@@ -112,7 +115,13 @@ pub fn render_bounce_map(
         let layers = light_views(scene, photons);
         let textures =
             super::textures::GpuTextures::new(&ctx, scene, &TexturesLayout::get(&ctx).layout)?;
-        let Some(targets) = BounceTargets::new(&ctx, &layers, &materials)? else {
+        let models = buffer_init(
+            &ctx,
+            "model materials",
+            bytemuck::cast_slice(&super::exact_models::records(scene)),
+            wgpu::BufferUsages::STORAGE,
+        );
+        let Some(targets) = BounceTargets::new(&ctx, &layers, (&materials, &models))? else {
             return Ok(BounceMap::default());
         };
         targets.write_views(&ctx, scene, &layers, seed);
@@ -152,11 +161,12 @@ pub struct BounceTargets {
 }
 
 impl BounceTargets {
-    /// Resources for `layers` (`None` when there are none: no light emits).
+    /// Resources for `layers` (`None` when there are none: no light emits), reading the
+    /// scene's `materials` and their exact `models` (`exact_models::records`).
     pub fn new(
         ctx: &GpuContext,
         layers: &[LightView],
-        materials: &wgpu::Buffer,
+        (materials, models): (&wgpu::Buffer, &wgpu::Buffer),
     ) -> Result<Option<Self>> {
         if layers.is_empty() {
             return Ok(None);
@@ -186,6 +196,10 @@ impl BounceTargets {
                     wgpu::BindGroupEntry {
                         binding: 1,
                         resource: materials.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: models.as_entire_binding(),
                     },
                 ],
             },

@@ -161,7 +161,8 @@ pub struct DirectPass {
     /// lights' records, shadow matrices (a texture) and maps, the environment's radiance and
     /// irradiance tables, the [`DirectParamsRaw`] and the emitting polygons.
     pub scene_layout: wgpu::BindGroupLayout,
-    /// Group 1: the G-buffer's position, normals, diffuse, specular and emission textures.
+    /// Group 1: the G-buffer's position, normals, diffuse, specular and emission textures,
+    /// and the materials' exact models (`exact_models`).
     pub gbuffer_layout: wgpu::BindGroupLayout,
     pub shadow_sampler: wgpu::Sampler,
 }
@@ -210,7 +211,14 @@ impl DirectPass {
         let texture = |binding| texture_entry(binding, frag);
         let gbuffer_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("direct gbuffer bind group layout"),
-            entries: &[texture(0), texture(1), texture(2), texture(3), texture(4)],
+            entries: &[
+                texture(0),
+                texture(1),
+                texture(2),
+                texture(3),
+                texture(4),
+                super::storage_entry(5, frag),
+            ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("direct pipeline layout"),

@@ -23,7 +23,7 @@
 use std::collections::HashMap;
 use std::sync::Mutex;
 
-use crate::gpu::raw::MaterialRaw;
+use crate::gpu::raw::{MaterialRaw, ModelMaterialRaw};
 
 /// The kinds of light and material a direct-light pipeline handles (the overrides of
 /// `direct_shade.wgsl`). A variant must cover the scene it shades: a kind left out is
@@ -77,11 +77,16 @@ pub struct MaterialKinds {
 }
 
 impl MaterialKinds {
-    pub fn of(materials: &[MaterialRaw]) -> MaterialKinds {
+    /// The kinds of `materials` with their exact-model records `models`
+    /// (`raster::exact_models`): a material shaded by its exact model needs the emission
+    /// read (the G-buffer's `emission.w` holds its index) and the glossy code (its model's
+    /// lobes).
+    pub fn of(materials: &[MaterialRaw], models: &[ModelMaterialRaw]) -> MaterialKinds {
         let any = |v: [f32; 3]| v.iter().any(|&c| c != 0.0);
+        let exact = models.iter().any(|r| r.flags != 0);
         MaterialKinds {
-            emission: materials.iter().any(|m| any(m.emission)),
-            glossy: materials.iter().any(|m| any(m.specular) || m.fresnel != 0),
+            emission: exact || materials.iter().any(|m| any(m.emission)),
+            glossy: exact || materials.iter().any(|m| any(m.specular) || m.fresnel != 0),
         }
     }
 }
@@ -145,7 +150,7 @@ mod tests {
             diffuse: [0.5; 3],
             ..bytemuck::Zeroable::zeroed()
         };
-        let none = MaterialKinds::of(&[lambert]);
+        let none = MaterialKinds::of(&[lambert], &[ModelMaterialRaw::zeroed()]);
         assert!(!none.emission && !none.glossy);
         let mut fresnel = lambert;
         fresnel.fresnel = 1;
@@ -159,10 +164,18 @@ mod tests {
             (lamp, true, false),
         ] {
             assert_eq!(
-                MaterialKinds::of(&[lambert, m]),
+                MaterialKinds::of(&[lambert, m], &[ModelMaterialRaw::zeroed()]),
                 MaterialKinds { emission, glossy }
             );
         }
+        // A material shaded by its exact model: its index is in the emission read, its
+        // lobes in the glossy code.
+        let mut exact = ModelMaterialRaw::zeroed();
+        exact.flags = 1;
+        assert_eq!(
+            MaterialKinds::of(&[lambert], &[exact]),
+            MaterialKinds { emission: true, glossy: true }
+        );
     }
 
     #[test]

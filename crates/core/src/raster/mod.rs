@@ -9,6 +9,7 @@ pub mod composite;
 pub mod direct;
 pub mod direct_variant;
 pub mod edges;
+pub mod exact_models;
 pub mod gbuffer;
 pub mod instances;
 pub mod layers;

@@ -15,11 +15,18 @@ pub const EMITTER_TREE: &str = include_str!("shaders/common/emitter_tree.wgsl");
 pub const ENV_GLOSSY: &str = include_str!("shaders/common/env_glossy.wgsl");
 /// The sampled sky directions' visibility over their cones for `DIRECT_SHADE` (after it).
 pub const SKY_CONE: &str = include_str!("shaders/common/sky_cone.wgsl");
+/// Mitsuba's exact models in the direct light: the G-buffer's material records (group 1).
+pub const EXACT_MODELS: &str = include_str!("shaders/common/exact_models.wgsl");
+/// The direct passes' binding of the records `EXACT_MODELS` reads.
+pub const EXACT_MODELS_DIRECT: &str = include_str!("shaders/common/exact_models_direct.wgsl");
 /// The deferred direct light's sources in order, for a pass that shades with it (after
 /// `gpu::shaders::COMMON` and `BSDF`, before the pass's own entry points).
-pub const DIRECT_SHADING: [&str; 5] = [
+pub const DIRECT_SHADING: [&str; 8] = [
+    crate::gpu::shaders::MODELS,
     SHADOW_LOOKUP,
     DIRECT_SHADE,
+    EXACT_MODELS,
+    EXACT_MODELS_DIRECT,
     EMITTER_TREE,
     ENV_GLOSSY,
     SKY_CONE,

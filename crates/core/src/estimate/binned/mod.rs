@@ -115,6 +115,8 @@ pub struct Binned {
     capacity: Capacity,
     /// Photons uploaded for this frame.
     count: u32,
+    /// The materials' exact models (`raster::exact_models`), bound beside the G-buffer.
+    models: wgpu::Buffer,
     /// List entries of the last estimate: all, and those of trivially accepted photons.
     entries: (u64, u64),
 }
@@ -123,7 +125,7 @@ impl Binned {
     /// Resources for a `width × height` image over the G-buffer `gbuf`.
     pub fn new(
         ctx: &GpuContext,
-        gbuf: &GBuffer,
+        (gbuf, models): (&GBuffer, &wgpu::Buffer),
         mode: Mode,
         size: [u32; 2],
         subsample: u32,
@@ -132,7 +134,7 @@ impl Binned {
         let grid = Grid::new(target.low_size, mode);
         let capacity = Capacity::initial(mode);
         let res = Resources::new(ctx, &target, &grid, mode, capacity);
-        let group = res.bind_group(ctx, gbuf, &target);
+        let group = res.bind_group(ctx, (gbuf, models), &target);
         Binned {
             mode,
             target,
@@ -143,6 +145,7 @@ impl Binned {
             capacity,
             count: 0,
             entries: (0, 0),
+            models: models.clone(),
         }
     }
 
@@ -183,7 +186,7 @@ impl Binned {
         }
         // The photon texture keeps its contents unless it grows (then the caller uploads).
         self.res.grow(ctx, self.capacity, capacity);
-        self.group = self.res.bind_group(ctx, gbuf, &self.target);
+        self.group = self.res.bind_group(ctx, (gbuf, &self.models), &self.target);
         self.capacity = capacity;
         self.last_params = None;
         Ok(())

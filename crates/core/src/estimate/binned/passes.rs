@@ -13,9 +13,11 @@ use std::sync::OnceLock;
 
 /// The WGSL every binned estimator's module starts with (the tiled binning's, which the
 /// cluster hierarchy's reuses).
-pub(super) const TILED_PARTS: [&str; 5] = [
+pub(super) const TILED_PARTS: [&str; 7] = [
     shaders::COMMON,
     shaders::BSDF,
+    shaders::MODELS,
+    crate::raster::wgsl::EXACT_MODELS,
     wgsl::PHOTON_VOLUME,
     shaders::FIXED_SUM,
     wgsl::TILED,
@@ -54,6 +56,8 @@ impl BinnedPasses {
                 storage(14),
                 float(15),
                 storage(16),
+                float(17),
+                crate::gpu::layout::storage_entry(18, compute),
             ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {

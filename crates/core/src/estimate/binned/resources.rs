@@ -168,11 +168,12 @@ impl Resources {
         }
     }
 
-    /// The bind group over the resources, the G-buffer's lighting inputs and the target.
+    /// The bind group over the resources, the G-buffer's lighting inputs and emission, the
+    /// materials' exact models (`models`, `raster::exact_models`) and the target.
     pub fn bind_group(
         &self,
         ctx: &GpuContext,
-        gbuf: &GBuffer,
+        (gbuf, models): (&GBuffer, &wgpu::Buffer),
         target: &IndirectTarget,
     ) -> wgpu::BindGroup {
         let inputs = gbuf.lighting_inputs();
@@ -202,6 +203,8 @@ impl Resources {
                     buf(14, &self.cluster_of),
                     tex(15, &node_texels),
                     buf(16, &self.jobs),
+                    tex(17, gbuf.emission()),
+                    buf(18, models),
                 ],
             },
         )

@@ -46,7 +46,7 @@ fn volume_normal_agrees(p: VolumePhoton, ns: vec3<f32>) -> bool {
 
 // The estimate term of photon `p` at view sample `s` for its kernel weight `kernel`.
 fn volume_shade(p: VolumePhoton, s: ViewSample, kernel: f32) -> vec3<f32> {
-    let f = bsdf_eval(s.material, s.normal, s.wo, p.incident);
+    let f = exact_eval(s.material, s.normal, s.wo, p.incident);
     return f * p.power * kernel;
 }
 
@@ -79,5 +79,8 @@ fn view_sample(
     s.material.specular = sp.xyz;
     s.material.fresnel = u32(sp.w > 0.5);
     s.wo = normalize(eye - pos.xyz);
+    // Mitsuba's exact model of the sample's material, if it has one (its index + 1 in the
+    // G-buffer's emission.w; raster/shaders/common/exact_models.wgsl): `exact_eval`.
+    exact_load(textureLoad(g_emission, px, 0).w);
     return s;
 }

@@ -72,6 +72,10 @@ struct TiledParams {
 @group(0) @binding(14) var<storage, read_write> cluster_of: array<u32>;
 // A copy of `nodes` made once they are built (NODE_ROW nodes a row, 3 texels each).
 @group(0) @binding(15) var node_texels: texture_2d<f32>;
+// The G-buffer's emission (w: the material's index + 1) and the materials' exact models
+// (photon_volume.wgsl `view_sample`, raster/shaders/common/exact_models.wgsl).
+@group(0) @binding(17) var g_emission: texture_2d<f32>;
+@group(0) @binding(18) var<storage, read> model_materials: array<ModelMaterial>;
 
 fn sample_pixel(texel: vec2<u32>) -> vec2<i32> {
     let k = params.subsample;

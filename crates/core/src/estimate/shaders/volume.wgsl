@@ -33,6 +33,10 @@ struct VolumeParams {
 @group(0) @binding(2) var g_normals: texture_2d<f32>;
 @group(0) @binding(3) var g_diffuse: texture_2d<f32>;
 @group(0) @binding(4) var g_specular: texture_2d<f32>;
+// The G-buffer's emission (w: the material's index + 1) and the materials' exact models
+// (photon_volume.wgsl `view_sample`, raster/shaders/common/exact_models.wgsl).
+@group(0) @binding(5) var g_emission: texture_2d<f32>;
+@group(0) @binding(6) var<storage, read> model_materials: array<ModelMaterial>;
 
 // The photon attributes (an instance-rate vertex buffer); location 0 is the icosahedron's
 // corner.

@@ -28,6 +28,8 @@ pub(crate) struct LightDraw {
 pub(crate) struct GpuScene {
     pub geometry: Geometry,
     pub materials: wgpu::Buffer,
+    /// Mitsuba's exact models of the materials, per material (`raster::exact_models`).
+    pub model_materials: wgpu::Buffer,
     /// Textures and material maps (group 1 of the passes that rasterize the scene).
     pub textures: raster::textures::GpuTextures,
     /// Whether any material is alpha-masked (the shadow pass then discards cut-outs).
@@ -80,6 +82,7 @@ impl GpuScene {
         let shadows = shadow::ShadowViews::new(scene, shadow_map_size, None);
         let layers = (shadows.matrices.len() as u32).max(1);
         let materials: Vec<_> = scene.materials.iter().map(|m| m.to_raw()).collect();
+        let records = raster::exact_models::records(scene);
         let matrices: Vec<[f32; 16]> = shadows.matrices.iter().map(|m| m.to_cols_array()).collect();
         let shadow_views = buffer_init(
             ctx,
@@ -95,6 +98,7 @@ impl GpuScene {
         Ok(GpuScene {
             geometry: Geometry::upload(ctx, scene, &cull),
             materials: storage_init(ctx, "materials", bytemuck::cast_slice(&materials)),
+            model_materials: storage_init(ctx, "model materials", bytemuck::cast_slice(&records)),
             textures,
             masked: scene.has_alpha_masks(),
             variant: raster::textures::Variant::of(scene),
@@ -112,7 +116,7 @@ impl GpuScene {
             shadow_map_size,
             lights_jitter: None,
             directional: raster::direct_variant::any_directional(&shadows.lights),
-            material_kinds: raster::direct_variant::MaterialKinds::of(&materials),
+            material_kinds: raster::direct_variant::MaterialKinds::of(&materials, &records),
         })
     }
 
@@ -141,7 +145,15 @@ impl GpuScene {
             0,
             bytemuck::cast_slice(&materials),
         );
-        self.material_kinds = raster::direct_variant::MaterialKinds::of(&materials);
+        let records = raster::exact_models::records(scene);
+        gpu::write_buffer(
+            &ctx.queue,
+            "model materials",
+            &self.model_materials,
+            0,
+            bytemuck::cast_slice(&records),
+        );
+        self.material_kinds = raster::direct_variant::MaterialKinds::of(&materials, &records);
         self.textures.write_maps(ctx, scene);
         let masked = scene.has_alpha_masks();
         if masked || self.masked {

@@ -59,6 +59,9 @@ pub(crate) struct Targets {
     /// The G-buffer at the pixel centres (AOVs, photon estimates, the direct light of
     /// pixels off edges).
     pub gbuf: gbuffer::GBuffer,
+    /// The scene's materials' exact models (`GpuScene::model_materials`), which the
+    /// estimators bind beside the G-buffer.
+    pub model_materials: wgpu::Buffer,
     /// Which rendering of `gbuf` it holds: a new number, unique in the process, each time
     /// its pass is recorded (what was read back of an equal generation is still valid).
     pub gbuffer_generation: u64,
@@ -164,8 +167,9 @@ fn direct_scene_group(
     )
 }
 
-/// The direct pass's G-buffer group of `g`: its lighting inputs and its emission.
-fn lighting_group(ctx: &GpuContext, g: &gbuffer::GBuffer) -> wgpu::BindGroup {
+/// The direct pass's G-buffer group of `g`: its lighting inputs, its emission and the
+/// materials' exact models of `gs`.
+fn lighting_group(ctx: &GpuContext, g: &gbuffer::GBuffer, gs: &GpuScene) -> wgpu::BindGroup {
     let mut entries: Vec<_> = g
         .lighting_inputs()
         .iter()
@@ -173,6 +177,7 @@ fn lighting_group(ctx: &GpuContext, g: &gbuffer::GBuffer) -> wgpu::BindGroup {
         .map(|(i, v)| texture(i as u32, v))
         .collect();
     entries.push(texture(entries.len() as u32, g.emission()));
+    entries.push(buffer(entries.len() as u32, &gs.model_materials));
     gpu::create_bind_group(
         &ctx.device,
         &wgpu::BindGroupDescriptor {
@@ -269,7 +274,8 @@ impl Targets {
             wgpu::BufferUsages::UNIFORM,
         );
         let direct_scene_group = direct_scene_group(ctx, &eye, gs, &penumbra);
-        let lighting_group = |g: &gbuffer::GBuffer| lighting_group(ctx, g);
+        let lighting_group = |g: &gbuffer::GBuffer| lighting_group(ctx, g, gs);
+        let model_materials = gs.model_materials.clone();
         let direct_gbuffer_group = lighting_group(&gbuf);
         let sub_gbuffer_group = lighting_group(&sub);
         let edges = if spp > 1 && edge_supersampling {
@@ -312,6 +318,7 @@ impl Targets {
             direct_scene_group,
             penumbra,
             direct_gbuffer_group,
+            model_materials,
             composite_group: None,
             readback: HashMap::new(),
         })

@@ -4,7 +4,7 @@
 //! ([`crate::photon::bounce`], cheaper on CPU devices).
 
 use super::super::context::FrameCtx;
-use super::super::gpu::GpuFrame;
+use super::super::gpu::{GpuFrame, GpuScene};
 use crate::error::{Error, Result};
 use crate::gpu::{GpuContext, Pipelines};
 use crate::photon::bounce::{trace_bounce_maps, BounceMap, FirstBounce};
@@ -42,7 +42,7 @@ impl FirstHits {
         &mut self,
         ctx: &GpuContext,
         scene: &Scene,
-        materials: &wgpu::Buffer,
+        gs: &GpuScene,
         layers: &[LightView],
         seed: u64,
         reuse: bool,
@@ -51,7 +51,8 @@ impl FirstHits {
             return Ok(());
         }
         if !self.targets.as_ref().is_some_and(|b| b.fits(layers)) {
-            self.targets = BounceTargets::new(ctx, layers, materials)?;
+            let buffers = (&gs.materials, &gs.model_materials);
+            self.targets = BounceTargets::new(ctx, layers, buffers)?;
         }
         if let Some(b) = &self.targets {
             b.write_views(ctx, scene, layers, seed);

@@ -23,7 +23,6 @@ use crate::photon::density::is_caustic;
 use crate::photon::radius::VolumeRadius;
 use crate::photon::ring::RingPhotons;
 use crate::photon::Photon;
-use crate::raster::gbuffer::GBuffer;
 use crate::scene::{Changes, Scene};
 use std::time::Instant;
 
@@ -63,9 +62,8 @@ impl Indirect {
     pub fn new(ctx: &GpuContext, targets: &mut Targets, options: &IspmOptions) -> Self {
         let (kind, reason) = options.estimator.resolve(&ctx.info);
         let (gbuf, k) = (&targets.gbuf, options.subsample.max(1));
-        let size = [targets.width, targets.height];
-        let caustics = (k > 1).then(|| estimator(ctx, gbuf, kind, size, 1));
-        let mut estimate = estimator(ctx, gbuf, kind, size, k);
+        let caustics = (k > 1).then(|| estimator(ctx, targets, kind, 1));
+        let mut estimate = estimator(ctx, targets, kind, k);
         if let Some(c) = &caustics {
             estimate.add_full_resolution(ctx, gbuf, c);
         }
@@ -125,7 +123,7 @@ impl Indirect {
             let generation = gpu.targets.gbuffer_generation;
             for e in std::iter::once(&mut self.estimate).chain(&mut self.caustics) {
                 if let IndirectEstimate::Cpu(c) = e {
-                    if let Some(w) = c.compute(&gpu.ctx, &gpu.targets.gbuf, generation)? {
+                    if let Some(w) = c.compute(&gpu.ctx, (&gpu.targets.gbuf, scene), generation)? {
                         waited = Some(waited.unwrap_or(0.0) + w);
                     }
                 }
@@ -258,22 +256,21 @@ fn at_least_a_pixel(photons: &mut [Photon], cam: &crate::scene::Camera, height: 
 /// The least caustic kernel radius, in pixel footprints ([`at_least_a_pixel`]).
 const PIXEL_RADII: f32 = 1.0;
 
-/// The estimator `kind` over the eye G-buffer `gbuf` of `size`, at 1/`k` resolution.
-fn estimator(
-    ctx: &GpuContext,
-    gbuf: &GBuffer,
-    kind: Estimator,
-    [w, h]: [u32; 2],
-    k: u32,
-) -> IndirectEstimate {
-    let binned = |mode| IndirectEstimate::Binned(Box::new(Binned::new(ctx, gbuf, mode, [w, h], k)));
+/// The estimator `kind` over the eye G-buffer of `targets` (and its materials' exact
+/// models), at 1/`k` resolution.
+fn estimator(ctx: &GpuContext, targets: &Targets, kind: Estimator, k: u32) -> IndirectEstimate {
+    let (gbuf, models) = (&targets.gbuf, &targets.model_materials);
+    let [w, h] = [targets.width, targets.height];
+    let binned = |mode| {
+        IndirectEstimate::Binned(Box::new(Binned::new(ctx, (gbuf, models), mode, [w, h], k)))
+    };
     match kind {
         Estimator::Tiled => binned(Mode::Tiled),
         Estimator::Cluster => binned(Mode::Cluster),
         Estimator::Directional => binned(Mode::Directional),
         Estimator::Cpu => IndirectEstimate::Cpu(Box::new(CpuEstimate::new(ctx, gbuf, w, h, k))),
         Estimator::Volumes | Estimator::Auto => {
-            IndirectEstimate::Volumes(Box::new(Volumes::new(ctx, gbuf, w, h, k)))
+            IndirectEstimate::Volumes(Box::new(Volumes::new(ctx, (gbuf, models), w, h, k)))
         }
     }
 }

@@ -112,7 +112,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     let reuse = ring.frames() == 1 && !changes.lighting() && traced_seed == Some(params.seed);
     let first_hits = &mut state.first_hits;
     fc.timed("upload", |_| {
-        first_hits.prepare(ctx, scene, &gs.materials, &layers, params.seed, reuse)
+        first_hits.prepare(ctx, scene, gs, &layers, params.seed, reuse)
     })?;
     let mut gpu = GpuFrame::begin(ctx, gs, targets, timer, &mut fc);
 

@@ -109,9 +109,11 @@ fn bounce(in: VertexOut, textured: bool) -> BounceOut {
     if textured {
         m = textured_material(maps, m, uv, point, point);
     }
+    // Mitsuba's exact model of the material, if it has one (common/exact_models.wgsl).
+    exact_load(f32(in.material + 1u));
     var o: BounceOut;
     o.incident = vec4<f32>(phi, 1.0);
-    o.expected = vec4<f32>(phi * scatter_probability(m, dot(wo, ns)), 1.0);
+    o.expected = vec4<f32>(phi * exact_scatter(scatter_probability(m, dot(wo, ns)), dot(wo, ns)), 1.0);
     o.origin = vec4<f32>(0.0);
     o.direction = vec4<f32>(0.0);
     o.power = vec4<f32>(0.0);
@@ -154,6 +156,9 @@ fn bounce(in: VertexOut, textured: bool) -> BounceOut {
 // ---- First scatter (port of `bsdf::Material::sample` and `photon::trace::follow`) ----
 
 @group(0) @binding(1) var<storage, read> materials: array<Material>;
+// The materials' exact models (raster/exact_models.rs): `sample_bsdf` draws by the uber
+// material's lobes and weighs by the model's f·cos/pdf.
+@group(0) @binding(2) var<storage, read> model_materials: array<ModelMaterial>;
 
 var<private> rng_state: u32;
 
@@ -237,7 +242,7 @@ fn sample_bsdf(m: Material, wo: vec3<f32>) -> BsdfSample {
     if u < p.x + p.y {
         if u < p.x && m.roughness < MIRROR_ROUGHNESS {
             s.wi = vec3<f32>(-wo.x, -wo.y, wo.z);
-            s.weight = fresnel_spec(m, wo_up.z) / p.x;
+            s.weight = exact_mirror(fresnel_spec(m, wo_up.z), wo_up.z) / p.x;
             s.lobe = 2u;
             s.ok = true;
             return s;
@@ -268,7 +273,7 @@ fn sample_bsdf(m: Material, wo: vec3<f32>) -> BsdfSample {
             return s;
         }
         s.wi = wi;
-        s.weight = bsdf_eval(m, n, wo, wi) * wi_up.z / pdf;
+        s.weight = exact_eval(m, n, wo, wi) * wi_up.z / pdf;
         s.ok = true;
         return s;
     }

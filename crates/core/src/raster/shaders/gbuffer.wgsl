@@ -20,7 +20,8 @@ struct GBufferOut {
     @location(3) specular: vec4<f32>,
     // Scatter probability towards the viewer (the albedo AOV).
     @location(4) albedo: vec4<f32>,
-    // Radiance emitted towards the viewer.
+    // Radiance emitted towards the viewer; w = the material's index + 1 (its exact model:
+    // common/exact_models.wgsl).
     @location(5) emission: vec4<f32>,
 }
 
@@ -87,6 +88,6 @@ fn gbuffer(in: VertexOut, textured: bool, duvdx: vec2<f32>, duvdy: vec2<f32>) ->
     o.diffuse = vec4<f32>(m.diffuse, m.roughness);
     o.specular = vec4<f32>(m.specular, f32(m.fresnel));
     o.albedo = vec4<f32>(scatter_probability(m, dot(wo, ns)), 1.0);
-    o.emission = vec4<f32>(select(vec3<f32>(0.0), m.emission, emits), 0.0);
+    o.emission = vec4<f32>(select(vec3<f32>(0.0), m.emission, emits), f32(in.material + 1u));
     return o;
 }

@@ -132,20 +132,6 @@ fn coat_base(m: ModelMaterial) -> vec3<f32> {
     return m.diffuse / (vec3<f32>(1.0) - r);
 }
 
-// `coated::eval` for local cosines `co`, `ci` (> 0), `ih` = wi·h and `nh` = n·h.
-fn coated_eval(m: ModelMaterial, co: f32, ci: f32, ih: f32, nh: f32) -> vec3<f32> {
-    let eta = m.coat_eta;
-    let diffuse = coat_base(m) * (coat_t(m, co) * coat_t(m, ci) / (PI * eta * eta));
-    if !has_flag(m, MODEL_ROUGH_COAT) || max3(m.specular) <= 0.0 {
-        return diffuse;
-    }
-    let alpha = m.roughness * m.roughness;
-    let beckmann = has_flag(m, MODEL_BECKMANN);
-    let g = 1.0 / ((1.0 + mf_lambda(co, alpha, beckmann)) * (1.0 + mf_lambda(ci, alpha, beckmann)));
-    let dg = mf_d(nh, alpha, beckmann) * g / (4.0 * co * ci);
-    return diffuse + m.specular * (fresnel_dielectric(ih, eta).x * dg);
-}
-
 // `Material::fresnel_spec`: the specular lobe's Fresnel term.
 fn model_fresnel(m: ModelMaterial, cos_t: f32) -> vec3<f32> {
     if has_flag(m, MODEL_CONDUCTOR) {
@@ -168,11 +154,46 @@ fn model_fresnel_avg(m: ModelMaterial) -> vec3<f32> {
     return m.specular;
 }
 
-// f(wo, wi) of `Material::eval`, two-sided (in the hemisphere of `wo`); delta lobes are 0.
+// f(wo, wi) of `Material::eval`, two-sided (in the hemisphere of `wo`); delta lobes are 0:
+// the diffuse lobe plus the glossy one.
 fn model_eval(m: ModelMaterial, n: vec3<f32>, wo_in: vec3<f32>, wi_in: vec3<f32>) -> vec3<f32> {
+    return model_diffuse(m, n, wo_in, wi_in) + model_glossy(m, n, wo_in, wi_in);
+}
+
+// The diffuse lobe of `model_eval`: a coating's base (`coated::eval`'s first term), or
+// Lambert with the Fresnel coupling of the uber BSDF (`Material::eval`).
+fn model_diffuse(m: ModelMaterial, n: vec3<f32>, wo_in: vec3<f32>, wi_in: vec3<f32>) -> vec3<f32> {
     let co_raw = dot(n, wo_in);
     let ci_raw = dot(n, wi_in);
     if co_raw * ci_raw <= 0.0 {
+        return vec3<f32>(0.0);
+    }
+    let co = abs(co_raw);
+    let ci = abs(ci_raw);
+    if has_flag(m, MODEL_COATED) {
+        let eta = m.coat_eta;
+        return coat_base(m) * (coat_t(m, co) * coat_t(m, ci) / (PI * eta * eta));
+    }
+    if max3(m.diffuse) <= 0.0 {
+        return vec3<f32>(0.0);
+    }
+    let one_minus_avg = vec3<f32>(1.0) - model_fresnel_avg(m);
+    let num = (vec3<f32>(1.0) - model_fresnel(m, co)) * (vec3<f32>(1.0) - model_fresnel(m, ci));
+    let coupling = select(vec3<f32>(0.0), num / one_minus_avg, one_minus_avg > vec3<f32>(1e-6));
+    return m.diffuse / PI * coupling;
+}
+
+// The glossy (microfacet) lobe of `model_eval`: a rough coating's dielectric reflection
+// (`coated::eval`'s second term), or the specular lobe of a conductor (separable masking)
+// or of the uber BSDF (height-correlated); 0 for a smooth one.
+fn model_glossy(m: ModelMaterial, n: vec3<f32>, wo_in: vec3<f32>, wi_in: vec3<f32>) -> vec3<f32> {
+    let co_raw = dot(n, wo_in);
+    let ci_raw = dot(n, wi_in);
+    if co_raw * ci_raw <= 0.0 || max3(m.specular) <= 0.0 {
+        return vec3<f32>(0.0);
+    }
+    let coated = has_flag(m, MODEL_COATED);
+    if (coated && !has_flag(m, MODEL_ROUGH_COAT)) || (!coated && m.roughness < MIRROR_ROUGHNESS) {
         return vec3<f32>(0.0);
     }
     let s = sign(co_raw);
@@ -181,27 +202,19 @@ fn model_eval(m: ModelMaterial, n: vec3<f32>, wo_in: vec3<f32>, wi_in: vec3<f32>
     let h = normalize(wo_in * s + wi_in * s);
     let ih = dot(wi_in * s, h);
     let nh = dot(n, h);
-    if has_flag(m, MODEL_COATED) {
-        return coated_eval(m, co, ci, ih, nh);
+    let alpha = m.roughness * m.roughness;
+    let beckmann = has_flag(m, MODEL_BECKMANN);
+    let lo = mf_lambda(co, alpha, beckmann);
+    let li = mf_lambda(ci, alpha, beckmann);
+    // Mitsuba's separable masking for coatings and conductors, the uber BSDF's
+    // height-correlated G2.
+    let separable = coated || has_flag(m, MODEL_CONDUCTOR);
+    let g = select(1.0 / (1.0 + lo + li), 1.0 / ((1.0 + lo) * (1.0 + li)), separable);
+    let dg = mf_d(nh, alpha, beckmann) * g / (4.0 * co * ci);
+    if coated {
+        return m.specular * (fresnel_dielectric(ih, m.coat_eta).x * dg);
     }
-    var f = vec3<f32>(0.0);
-    if max3(m.diffuse) > 0.0 {
-        let one_minus_avg = vec3<f32>(1.0) - model_fresnel_avg(m);
-        let num = (vec3<f32>(1.0) - model_fresnel(m, co)) * (vec3<f32>(1.0) - model_fresnel(m, ci));
-        let coupling = select(vec3<f32>(0.0), num / one_minus_avg, one_minus_avg > vec3<f32>(1e-6));
-        f += m.diffuse / PI * coupling;
-    }
-    if max3(m.specular) > 0.0 && m.roughness >= MIRROR_ROUGHNESS {
-        let alpha = m.roughness * m.roughness;
-        let beckmann = has_flag(m, MODEL_BECKMANN);
-        let lo = mf_lambda(co, alpha, beckmann);
-        let li = mf_lambda(ci, alpha, beckmann);
-        // Mitsuba's separable masking for conductors, the uber BSDF's height-correlated G2.
-        let g = select(1.0 / (1.0 + lo + li), 1.0 / ((1.0 + lo) * (1.0 + li)), has_flag(m, MODEL_CONDUCTOR));
-        let dg = mf_d(nh, alpha, beckmann) * g / (4.0 * co * ci);
-        f += model_fresnel(m, ih) * dg;
-    }
-    return f;
+    return model_fresnel(m, ih) * dg;
 }
 
 // `Material::scatter_probability` for a viewing cosine `cos_o` (the albedo AOV).

@@ -291,11 +291,12 @@ fn light_term(l: Light, m: Material, p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>)
     return direct_bsdf(m, ns, wo, wi) * abs(dot(ns, wi)) * li;
 }
 
-// `bsdf_eval`, compiled as Lambert's lobe alone where no material has another (`GLOSSY`
-// false: specular 0 and no Fresnel flag, so the coupling is exactly 1).
+// The pixel's BSDF (`exact_eval`: its exact model, or the uber BSDF), compiled as Lambert's
+// lobe alone where no material has another (`GLOSSY` false: specular 0, no Fresnel flag and
+// no exact model, so the coupling is exactly 1).
 fn direct_bsdf(m: Material, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
     if GLOSSY {
-        return bsdf_eval(m, n, wo, wi);
+        return exact_eval(m, n, wo, wi);
     }
     if dot(n, wo) * dot(n, wi) <= 0.0 {
         return vec3<f32>(0.0);
@@ -450,6 +451,8 @@ fn shade_pixel(g: GSample, fp: Footprint) -> vec3<f32> {
     m.specular = g.specular.xyz;
     m.fresnel = u32(g.specular.w > 0.5);
     let wo = normalize(view.eye - p);
+    // Mitsuba's exact models in place of the uber stand-in (exact_models.wgsl).
+    exact_load(g.emission.w);
     var sum = g.emission.xyz;
     if SAMPLED_LIGHTS {
         // A sub-pixel sample (one tap) of a pixel of `taps`² samples draws its share of the
@@ -514,6 +517,9 @@ fn sample_view(layer: u32) -> mat4x4<f32> {
 fn diffuse_eval(m: Material, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
     let co = dot(n, wo);
     let ci = dot(n, wi);
+    if exact_on {
+        return model_diffuse(exact_model, n, wo, wi);
+    }
     if co * ci <= 0.0 || max3(m.diffuse) <= 0.0 {
         return vec3<f32>(0.0);
     }
@@ -694,7 +700,7 @@ fn point_light(i: u32, p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, 
     let g = t2.xyz * (abs(dot(ns, wi)) * cos_e / (d2 + t2.w));
     out.fd = diffuse_eval(m, ns, wo, wi) * g;
     if GLOSSY && max3(m.specular) > 0.0 {
-        out.fs = bsdf_eval(glossy, ns, wo, wi) * g;
+        out.fs = exact_glossy(glossy, ns, wo, wi) * g;
     }
     if max3(out.fd + out.fs) <= 0.0 {
         return out;
@@ -778,7 +784,7 @@ fn sampled_light(p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, wo: ve
         let fd = diffuse_eval(m, ns, wo, wi) * e;
         var fs = vec3<f32>(0.0);
         if has_glossy {
-            fs = bsdf_eval(glossy, ns, wo, wi) * e;
+            fs = exact_glossy(glossy, ns, wo, wi) * e;
         }
         if max3(fd + fs + e) <= 0.0 {
             continue;
@@ -809,7 +815,7 @@ fn sampled_light(p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, wo: ve
     if max3(m.diffuse) > 0.0 {
         let one_minus_avg = vec3<f32>(1.0) - fresnel_avg(m);
         let coupling = select(vec3<f32>(0.0), (vec3<f32>(1.0) - fresnel_spec(m, abs(dot(ns, wo)))), one_minus_avg > vec3<f32>(1e-6));
-        let u = m.diffuse / PI * coupling * env_irradiance(ns);
+        let u = exact_env_diffuse(m.diffuse / PI * coupling, ns, wo) * env_irradiance(ns);
         sum += u * visible_ratio(lit, unshadowed);
     }
     return sum;

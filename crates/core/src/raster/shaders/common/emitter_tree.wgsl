@@ -208,7 +208,7 @@ fn tree_light(p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, wo: vec3<
             // The area this sample stands for among the pixel's `pixel_samples`, A/(n·p),
             // seen as a disc of solid angle ≈ share/d² (its angular radius² share/(π d²)).
             let spread2 = t2.w / (pick.prob * f32(direct_params.pixel_samples) * PI * d2);
-            f += bsdf_eval(widened(glossy, spread2), ns, wo, wi);
+            f += exact_widened_glossy(widened(glossy, spread2), spread2, ns, wo, wi);
         }
         sum += f * radiance * g;
     }

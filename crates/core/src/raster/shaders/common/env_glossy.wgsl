@@ -75,7 +75,7 @@ fn env_glossy_unshadowed(m: Material, ns: vec3<f32>, ng: vec3<f32>, wo: vec3<f32
             continue;
         }
         let g2 = 1.0 / (1.0 + lambda_o + smith_lambda(ci, alpha));
-        sum += fresnel_spec(m, oh) * (g2 * oh / (co * ch)) * env_radiance(wi);
+        sum += exact_glossy_tap(fresnel_spec(m, oh) * (g2 * oh / (co * ch)), n, wo, wi, alpha) * env_radiance(wi);
     }
     return sum / f32(ENV_GLOSSY_TAPS);
 }
