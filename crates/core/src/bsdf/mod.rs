@@ -240,6 +240,16 @@ impl Material {
             && (!self.has_specular() || self.is_mirror())
     }
 
+    /// Whether photons arriving here are stored: the surface has a non-delta lobe that a
+    /// density estimate can shade. Rough glass has none such: every camera path follows it
+    /// by sampling its lobes (its light arrives through the glass, which no density
+    /// estimate on its surface resolves), and its photons, stored on the inside of the
+    /// glass with normals facing in, would count at the nearby floor beneath a sphere whose
+    /// normal agrees (`photon` 2× too bright in front of the roughdielectric sphere).
+    pub fn stores_photons(&self) -> bool {
+        !self.is_purely_specular() && !self.rough_glass
+    }
+
     /// Whether the surface emits light.
     pub fn emits(&self) -> bool {
         self.emission.max_element() > 0.0
