@@ -233,6 +233,14 @@ impl Material {
         (self.has_specular() && self.is_mirror()) || self.has_transmission()
     }
 
+    /// Whether camera paths and photons are traced through it on the CPU where the GPU
+    /// passes cannot shade it: a delta lobe, or rough glass (whose light arrives through
+    /// the glass; the GPU passes see its smooth stand-in, [`Material::uber_equivalent`],
+    /// which they leave black as they leave smooth glass).
+    pub fn is_specular_traced(&self) -> bool {
+        self.has_delta_lobe() || self.rough_glass
+    }
+
     /// True when every lobe is a delta lobe (nothing for next-event estimation to evaluate).
     pub fn is_purely_specular(&self) -> bool {
         !self.rough_glass

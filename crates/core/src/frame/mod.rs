@@ -156,7 +156,9 @@ fn transport_omissions(scene: &Scene, options: &RenderOptions) -> Vec<String> {
             .materials
             .iter()
             .zip(&scene.material_names)
+            // `ispm` renders rough glass with its own lobes (`glass_stand_in`).
             .filter(|(m, _)| m.uber_equivalent() != **m)
+            .filter(|(m, _)| !(m.rough_glass && options.method() == Method::Ispm))
             .map(|(_, name)| name.as_str())
             .collect();
         if !stand_ins.is_empty() {
@@ -200,7 +202,7 @@ impl Renderer {
             camera,
             ..scene.clone()
         };
-        let glass_stand_ins = glass_stand_in::replace(&mut scene, method.uses_gpu());
+        let glass_stand_ins = glass_stand_in::replace(&mut scene, method);
         let mut warnings = transport_omissions(&scene, options);
         warnings.extend(glass_stand_in::warning(method.name(), &glass_stand_ins));
         Ok(Renderer {
@@ -263,8 +265,8 @@ impl Renderer {
             _ => None,
         };
         let c = self.scene.apply(update)?;
-        let gpu = self.method().uses_gpu();
-        for name in glass_stand_in::replace(&mut self.scene, gpu) {
+        let method = self.method();
+        for name in glass_stand_in::replace(&mut self.scene, method) {
             if !self.glass_stand_ins.contains(&name) {
                 self.glass_stand_ins.push(name);
                 self.warnings = transport_omissions(&self.scene, &self.options);

@@ -53,7 +53,7 @@ impl Collect {
 /// reflected there many times: the former cap of 8 delta scatterings left the rim of the
 /// roughdielectric sphere 7% dark in `photon` and `gather` (0.983 and 0.972 of Mitsuba's
 /// image mean; 1.005 and 0.996 followed to 64).
-const ROULETTE_DEPTH: u32 = 8;
+pub(crate) const ROULETTE_DEPTH: u32 = 8;
 
 /// Renders the image whose non-delta surfaces get their outgoing radiance from `estimate`
 /// `(interaction, wo, rng, scratch)`, and the first-hit images (empty without
@@ -124,12 +124,12 @@ pub fn delta_image<S: Default + Send>(
     bvh: &SceneBvh,
     settings: &CameraSamples,
     progress: &dyn Progress,
-    estimate: impl Fn(&Interaction, Vec3, &mut S) -> Vec3 + Sync,
+    estimate: impl Fn(&Interaction, Vec3, &mut Rng, &mut S) -> Vec3 + Sync,
 ) -> Result<Image> {
     let cam = &scene.camera;
     let (w, h) = (cam.width, cam.height);
     let mut image = Image::new(w, h);
-    if !scene.has_delta_materials() {
+    if !scene.has_specular_traced() {
         return Ok(image);
     }
     let stage = StageProgress::new(progress, "specular paths", h as u64);
@@ -148,7 +148,7 @@ pub fn delta_image<S: Default + Send>(
                     settings,
                     (x as u32, y as u32),
                     Collect::BeyondFirst,
-                    |it, wo, _| estimate(it, wo, scratch),
+                    |it, wo, rng| estimate(it, wo, rng, scratch),
                 );
             }
             stage.advance(1);
@@ -230,7 +230,7 @@ fn radiance(
         if (depth > 0 || estimate_first) && !it.material.is_purely_specular() && !followed {
             l += beta * estimate(&it, wo, rng);
         }
-        if depth == 0 && !estimate_first && !it.material.has_delta_lobe() {
+        if depth == 0 && !estimate_first && !it.material.is_specular_traced() {
             break;
         }
         // Continue only through a delta lobe, geometrically consistent.

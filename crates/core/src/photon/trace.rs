@@ -256,7 +256,7 @@ pub fn emit_aimed_caustics(
         };
         if !Interaction::new(scene, &hit, direction)
             .material
-            .has_delta_lobe()
+            .is_specular_traced()
         {
             out.absorbed += 1;
             return;
