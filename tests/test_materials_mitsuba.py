@@ -1,7 +1,8 @@
 """Mitsuba 3's material models in gi (issue 42, item 3): single-material spheres
 (tests/scenes/materials/, written with their references by
 scripts/data/materials_spheres.py; CI never runs Mitsuba) load without a warning and `path`
-renders each within 2% of Mitsuba's image mean per channel and FLIP ≤ 0.05.
+renders each within 2% of Mitsuba's image mean per channel and FLIP ≤ 0.05, each 8×8 block
+within 7%.
 
 The references are Mitsuba 3.9.1 `path` (scalar_rgb), 64×64, 4096 samples per pixel in 8
 batches: their means are known to better than 0.05% (references.json). Both renderers use
@@ -51,6 +52,13 @@ def test_path_matches_mitsuba(name):
     error = flip(ref, img)
     assert np.all(np.abs(ratio - 1) <= 0.02), f"{name}: ratio per channel {ratio}"
     assert error <= 0.05, f"{name}: FLIP {error:.4f}"
+    # Where the light is, not only how much: every 8×8 block's mean within 7% per channel
+    # (measured at most 3.4%, the noise of the rough glass's caustic; 1.1% elsewhere). The
+    # caustic was 12–25% dark while the image mean was 0.983 (light samples refused across
+    # rough glass, issue 42).
+    blocks = img.reshape(8, 8, 8, 8, 3).mean((1, 3)) / ref.reshape(8, 8, 8, 8, 3).mean((1, 3))
+    worst = np.abs(blocks - 1).max()
+    assert worst <= 0.07, f"{name}: an 8x8 block off by {worst:.3f}"
 
 
 @pytest.mark.parametrize(
