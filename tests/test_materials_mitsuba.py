@@ -1,7 +1,8 @@
 """Mitsuba 3's material models in gi (issue 42, item 3): single-material spheres
 (tests/scenes/materials/, written with their references by
 scripts/data/materials_spheres.py; CI never runs Mitsuba) load without a warning and `path`
-renders each within 2% of Mitsuba's image mean per channel and FLIP ≤ 0.05.
+renders each within 2% of Mitsuba's image mean per channel and FLIP ≤ 0.05, each 8×8 block
+within 7%.
 
 The references are Mitsuba 3.9.1 `path` (scalar_rgb), 64×64, 4096 samples per pixel in 8
 batches: their means are known to better than 0.05% (references.json). Both renderers use
@@ -54,30 +55,28 @@ def test_path_matches_mitsuba(name):
     error = flip(ref, img)
     assert np.all(np.abs(ratio - 1) <= 0.02), f"{name}: ratio per channel {ratio}"
     assert error <= 0.05, f"{name}: FLIP {error:.4f}"
+    # Where the light is, not only how much: every 8×8 block's mean within 7% per channel
+    # (measured at most 3.4%, the noise of the rough glass's caustic; 1.1% elsewhere). The
+    # caustic was 12–25% dark while the image mean was 0.983 (light samples refused across
+    # rough glass, issue 42).
+    blocks = img.reshape(8, 8, 8, 8, 3).mean((1, 3)) / ref.reshape(8, 8, 8, 8, 3).mean((1, 3))
+    worst = np.abs(blocks - 1).max()
+    assert worst <= 0.07, f"{name}: an 8x8 block off by {worst:.3f}"
 
 
 @pytest.mark.parametrize(
     "name, method",
-    [(name, "ispm") for name in NAMES if name != "roughdielectric"]
-    + [("conductor-au", "bidir"), ("plastic", "bidir")]
-    + [
-        pytest.param(
-            "roughdielectric",
-            "ispm",
-            marks=pytest.mark.xfail(
-                strict=True,
-                reason="ispm renders rough glass as smooth glass of the same index: 0.85 of "
-                "Mitsuba's mean (open, issue 42)",
-            ),
-        )
-    ],
+    [(name, "ispm") for name in NAMES] + [("conductor-au", "bidir"), ("plastic", "bidir")],
 )
 def test_gpu_methods_match_mitsuba(name, method):
     """`ispm` on every sphere, `bidir` on the smooth ones (the sky and the area light seen in
     their mirror lobe come from the CPU specular image; before it added them, 0.50–0.73 and
     0.93–0.95): the image mean within 5% of Mitsuba's per channel (issue 42; measured within
     3.5% with the uber stand-ins, within 0.8% with the exact models;
-    docs/bench/materials.md)."""
+    docs/bench/materials.md). `ispm` renders the rough glass with its own lobes: its
+    specular image follows camera paths through them and lights where they land by every
+    source (measured 0.992; 0.85 with the smooth stand-in and the landings lit by the point
+    lights alone, the floor seen through the sphere at 0.15 of Mitsuba's)."""
     scene = gi.load_scene(SCENES / f"{name}.xml")
     settings = {"ispm": {"photons": 100_000, "spp": 8}, "bidir": {"spp": 8}}[method]
     with warnings.catch_warnings():
@@ -89,24 +88,14 @@ def test_gpu_methods_match_mitsuba(name, method):
     assert np.all(np.abs(ratio - 1) <= 0.05), f"{name} {method}: ratio per channel {ratio}"
 
 
-@pytest.mark.parametrize(
-    "method",
-    [
-        pytest.param(
-            "photon",
-            marks=pytest.mark.xfail(
-                strict=True,
-                reason="photon: image mean 1.03-1.05 of Mitsuba's; the floor in front of the "
-                "sphere, lit through the rough glass's lobes, 2x too bright (gather: 1.02)",
-            ),
-        ),
-        "gather",
-    ],
-)
+@pytest.mark.parametrize("method", ["photon", "gather"])
 def test_photon_methods_render_rough_glass(method):
     """`photon` and `gather` scatter photons and camera paths through the rough glass with
     the CPU BSDF (photons with its adjoint): the image mean within 3% of Mitsuba's per
-    channel (measured: see docs/bench/materials.md)."""
+    channel, issue 42's bound for these methods (measured 1.001 and 0.990 at these
+    settings, docs/bench/materials.md; before, photons stored on the inside of the glass
+    lit the floor beneath it 2× and camera paths stopped after 8 scatterings in the glass,
+    7% dark at the rim: 1.047 and 1.021)."""
     scene = gi.load_scene(SCENES / "roughdielectric.xml")
     r = gi.Renderer(scene, method, size=(64, 64), spp=16, photons=200_000, seed=7)
     img = r.render().radiance[..., :3]
@@ -231,6 +220,9 @@ def test_gpu_methods_name_their_stand_ins():
     with pytest.warns(gi.RenderWarning, match="smooth glass"):
         gi.Renderer(glass, "direct", size=(16, 16))
     with warnings.catch_warnings():
+        warnings.simplefilter("error")  # ispm renders the rough lobes: no stand-in
+        gi.Renderer(glass, "ispm", size=(16, 16))
+    with warnings.catch_warnings():
         warnings.simplefilter("error")
         gi.Renderer(scene, "path", size=(16, 16), spp=1)
 
@@ -286,3 +278,18 @@ def test_material_properties_gi_cannot_render_are_errors(tmp_path, bsdf, element
         gi.load_scene(path)
     assert e.value.field == f"{element} (line 3)", e.value.field
     assert e.value.file.endswith("s.xml")
+
+
+def test_progressive_ispm_renders_rough_glass():
+    """Progressive `ispm` traces the first surface's direct light on the CPU; on rough glass
+    it leaves it to the specular image, whose camera paths follow the glass's lobes and meet
+    that light (counted once): the image mean within 5% of Mitsuba's (issue 42's bound for
+    ispm; measured 1.016 at these settings)."""
+    scene = gi.load_scene(SCENES / "roughdielectric.xml")
+    r = gi.Renderer(
+        scene, "ispm", size=(64, 64), seed=7, photons=50_000, spp=4, subsample=1, progressive=True
+    )
+    img = r.render_progressive(passes=6).radiance[..., :3]
+    ref = gi.read_image(SCENES / "roughdielectric-reference.exr")[..., :3]
+    ratio = img.reshape(-1, 3).mean(0) / ref.reshape(-1, 3).mean(0)
+    assert np.all(np.abs(ratio - 1) <= 0.05), f"ratio per channel {ratio}"

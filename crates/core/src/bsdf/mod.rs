@@ -233,11 +233,29 @@ impl Material {
         (self.has_specular() && self.is_mirror()) || self.has_transmission()
     }
 
+    /// Whether camera paths and photons are traced through it on the CPU where the GPU
+    /// passes cannot shade it: a delta lobe, or rough glass (whose light arrives through
+    /// the glass; the GPU passes see its smooth stand-in, [`Material::uber_equivalent`],
+    /// which they leave black as they leave smooth glass).
+    pub fn is_specular_traced(&self) -> bool {
+        self.has_delta_lobe() || self.rough_glass
+    }
+
     /// True when every lobe is a delta lobe (nothing for next-event estimation to evaluate).
     pub fn is_purely_specular(&self) -> bool {
         !self.rough_glass
             && self.diffuse.max_element() <= 0.0
             && (!self.has_specular() || self.is_mirror())
+    }
+
+    /// Whether photons arriving here are stored: the surface has a non-delta lobe that a
+    /// density estimate can shade. Rough glass has none such: every camera path follows it
+    /// by sampling its lobes (its light arrives through the glass, which no density
+    /// estimate on its surface resolves), and its photons, stored on the inside of the
+    /// glass with normals facing in, would count at the nearby floor beneath a sphere whose
+    /// normal agrees (`photon` 2× too bright in front of the roughdielectric sphere).
+    pub fn stores_photons(&self) -> bool {
+        !self.is_purely_specular() && !self.rough_glass
     }
 
     /// Whether the surface emits light.

@@ -1,17 +1,25 @@
-//! Rough glass in the GPU methods (`direct`, `ispm`, `bidir`): their rasterized passes and
-//! the CPU paths they trace through glass (`photon::delta_paths`, `bidir::specular_paths`)
-//! follow delta lobes only, so they render Mitsuba's roughdielectric as the smooth glass of
-//! the same index and transmittance ([`Material::uber_equivalent`]), on the GPU and on the
-//! CPU alike, and say so with a RenderWarning. `path`, `photon` and `gather` render the
-//! rough lobes ([`crate::bsdf::rough_dielectric`]).
+//! Rough glass in `direct` and `bidir`: their rasterized passes and the CPU paths `bidir`
+//! traces through glass (`bidir::specular_paths`) follow delta lobes only, so they render
+//! Mitsuba's roughdielectric as the smooth glass of the same index and transmittance
+//! ([`Material::uber_equivalent`]), on the GPU and on the CPU alike, and say so with a
+//! RenderWarning. `path`, `photon` and `gather` render the rough lobes
+//! ([`crate::bsdf::rough_dielectric`]); so does `ispm`, whose GPU passes see the smooth
+//! stand-in (black: no lobe they shade) while its CPU specular image follows camera paths
+//! through the rough lobes (`photon::delta_paths`) and its photons scatter by them.
 
+use super::options::Method;
 use crate::bsdf::Material;
 use crate::scene::Scene;
 
-/// Replaces the rough glass of `scene` by its smooth stand-in when `gpu` (the method is a
-/// GPU one); returns the names of the materials replaced.
-pub(super) fn replace(scene: &mut Scene, gpu: bool) -> Vec<String> {
-    if !gpu {
+/// Whether `method` renders rough glass by its smooth stand-in.
+pub(super) fn stands_in(method: Method) -> bool {
+    matches!(method, Method::Direct | Method::Bidir)
+}
+
+/// Replaces the rough glass of `scene` by its smooth stand-in where `method` needs it
+/// ([`stands_in`]); returns the names of the materials replaced.
+pub(super) fn replace(scene: &mut Scene, method: Method) -> Vec<String> {
+    if !stands_in(method) {
         return Vec::new();
     }
     let mut names = Vec::new();

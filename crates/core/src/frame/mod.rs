@@ -184,7 +184,7 @@ impl Renderer {
             camera,
             ..scene.clone()
         };
-        let glass_stand_ins = glass_stand_in::replace(&mut scene, method.uses_gpu());
+        let glass_stand_ins = glass_stand_in::replace(&mut scene, method);
         let mut warnings = transport_omissions(&scene, options);
         warnings.extend(glass_stand_in::warning(method.name(), &glass_stand_ins));
         Ok(Renderer {
@@ -247,8 +247,8 @@ impl Renderer {
             _ => None,
         };
         let c = self.scene.apply(update)?;
-        let gpu = self.method().uses_gpu();
-        for name in glass_stand_in::replace(&mut self.scene, gpu) {
+        let method = self.method();
+        for name in glass_stand_in::replace(&mut self.scene, method) {
             if !self.glass_stand_ins.contains(&name) {
                 self.glass_stand_ins.push(name);
                 self.warnings = transport_omissions(&self.scene, &self.options);

@@ -21,7 +21,9 @@ pub(super) fn warning(scene: &Scene, method: Method) -> Option<String> {
         .zip(&scene.material_names)
         .enumerate()
     {
-        if m.uber_equivalent() == *m {
+        // Rough glass is `glass_stand_in`'s: `direct` and `bidir` replace it (and say so),
+        // `ispm` renders its lobes (its CPU specular image and photons).
+        if m.uber_equivalent() == *m || m.rough_glass {
             continue;
         }
         if shades_exactly(m, scene.material_maps.get(i).unwrap_or(&none)) {

@@ -273,7 +273,9 @@ pub(super) fn first_surface_light(
 ) -> Vec3 {
     let mut sum = it.material.emitted(it.ng, wo);
     let m = it.material;
-    if m.is_purely_specular() {
+    // Rough glass is the specular image's: its camera paths follow the glass's lobes and
+    // find this light by meeting it (as the GPU's direct light sees the smooth stand-in).
+    if m.is_purely_specular() || m.rough_glass {
         return sum;
     }
     let wo_l = it.frame.to_local(wo);

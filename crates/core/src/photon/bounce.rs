@@ -220,5 +220,5 @@ fn texel(
         1,
     ));
     out.ray_lights.push(l.light as u32);
-    out.first_delta.push(it.material.has_delta_lobe());
+    out.first_delta.push(it.material.is_specular_traced());
 }

@@ -32,7 +32,7 @@
 //!    geometry, the materials and the seed only, so the frame engine keeps them while the
 //!    lights alone change and only shades them again.
 
-use super::camera_pass::CameraSamples;
+use super::camera_pass::{CameraSamples, ROULETTE_DEPTH};
 use crate::cancel::{Progress, StageProgress};
 use crate::error::Result;
 use crate::image::Image;
@@ -43,8 +43,6 @@ use crate::trace::{Hit, Interaction, SceneBvh};
 use glam::Vec3;
 use rayon::prelude::*;
 
-/// Most delta scatterings a camera path follows (as `camera_pass`).
-const MAX_DELTA_BOUNCES: u32 = 8;
 /// Delta scatterings (counted from the first surface) at which every delta lobe is
 /// followed rather than one picked at random. Measured on `cornell-glass` at 320×240,
 /// 20k photons (error of the specular image against a 256-sample reference, one
@@ -56,6 +54,8 @@ pub const SPLIT_DEPTH: u32 = 2;
 pub const EDGE_GATHERS: u32 = 4;
 /// Pixels per parallel work item.
 const CHUNK: usize = 64;
+/// Random stream of the next-event estimates at the landings (xor the pixel index).
+const STREAM_NEE: u64 = 0x5bec_0000_0000_0000;
 
 /// A photon gather `(interaction, wo, scratch)` at a landing point.
 pub type Gather<'a, S> = dyn Fn(&Interaction, Vec3, &mut S) -> Vec3 + Sync + 'a;
@@ -84,13 +84,19 @@ impl SpecularSampling {
 
 /// Marks the pixels whose footprint may see a triangle with a delta lobe first.
 pub fn delta_footprint(scene: &Scene) -> Vec<bool> {
+    footprint(scene, |i| delta_capable(scene, i))
+}
+
+/// Marks the pixels whose footprint may see a triangle `i` for which `marked(i)` holds
+/// (the projected bounding rectangle of each, conservative).
+fn footprint(scene: &Scene, marked: impl Fn(usize) -> bool) -> Vec<bool> {
     let cam = &scene.camera;
     let (w, h) = (cam.width as usize, cam.height as usize);
     let mut mask = vec![false; w * h];
     let t = cam.tan_half_fov();
     let (sx, sy) = (0.5 * w as f32 / (t * cam.aspect()), 0.5 * h as f32 / t);
     for i in 0..scene.triangle_count() {
-        if !delta_capable(scene, i) {
+        if !marked(i) {
             continue;
         }
         let tri = scene.triangle(i);
@@ -137,7 +143,14 @@ fn delta_capable(scene: &Scene, i: usize) -> bool {
         .material_maps
         .get(scene.triangle_material(i) as usize)
         .is_some_and(|maps| !maps.is_empty());
-    m.has_delta_lobe() || (mapped && m.has_specular())
+    m.is_specular_traced() || (mapped && m.has_specular())
+}
+
+/// Marks the pixels onto which rough glass projects (as [`delta_footprint`]): their first
+/// samples' paths through it are drawn at random, so the neighbours' signatures say
+/// nothing of their content and they take every sample.
+fn rough_footprint(scene: &Scene) -> Vec<bool> {
+    footprint(scene, |i| scene.material_of(i).rough_glass)
 }
 
 /// The object holding triangle `t` (its index in `Scene::objects`), else its material
@@ -196,10 +209,14 @@ fn follow(
         };
         let it = Interaction::new(scene, &h, p.dir);
         let wo = -p.dir;
-        if p.depth > 0 && (!it.material.is_purely_specular() || it.material.emits()) {
+        // Rough glass is followed through the lobe its sampling picks, never landed on
+        // (as `camera_pass::radiance`).
+        let rough = it.material.rough_glass;
+        let shaded = !it.material.is_purely_specular() && !rough;
+        if p.depth > 0 && (shaded || it.material.emits()) {
             land(Some(&h), p.dir, p.beta);
         }
-        if (p.depth == 0 && !it.material.has_delta_lobe()) || p.depth >= max_delta {
+        if (p.depth == 0 && !it.material.is_specular_traced()) || p.depth >= max_delta {
             continue;
         }
         let wo_l = it.frame.to_local(wo);
@@ -217,14 +234,23 @@ fn follow(
                 key: p.key << 3 | bs.lobe as u64,
             });
         };
-        if p.depth < SPLIT_DEPTH {
+        if p.depth < SPLIT_DEPTH && !rough {
             for bs in it.material.delta_lobes(wo_l) {
                 push(bs, bs.weight);
             }
         } else if let Some(rng) = rng.as_deref_mut() {
             if let Some(bs) = it.material.sample(wo_l, rng) {
-                if bs.lobe.is_delta() {
-                    push(bs, bs.weight);
+                if bs.lobe.is_delta() || rough {
+                    // Russian roulette past ROULETTE_DEPTH (as `camera_pass`).
+                    let beta = p.beta * bs.weight;
+                    let q = if p.depth + 1 >= ROULETTE_DEPTH {
+                        beta.max_element().min(1.0)
+                    } else {
+                        1.0
+                    };
+                    if q > 0.0 && (q >= 1.0 || rng.next_f32() < q) {
+                        push(bs, bs.weight / q);
+                    }
                 }
             }
         }
@@ -256,7 +282,7 @@ fn sample(
     let mut rng = Rng::new(settings.seed, i as u64, s as u64);
     let j = rng.next_2d();
     let dir = cam.direction(x as f32 + j.x, y as f32 + j.y);
-    let max_delta = MAX_DELTA_BOUNCES.min(settings.max_depth);
+    let max_delta = settings.max_depth;
     let mut signature = 0u64;
     follow(
         scene,
@@ -371,10 +397,11 @@ pub fn trace_landings(
         spp: settings.spp,
         ..Default::default()
     };
-    if !scene.has_delta_materials() {
+    if !scene.has_specular_traced() {
         return Ok(result);
     }
     let mask = delta_footprint(scene);
+    let rough = rough_footprint(scene);
     let marked: Vec<u32> = (0..(w * h) as u32).filter(|&i| mask[i as usize]).collect();
     let stage = StageProgress::new(progress, "specular paths", 2 * marked.len() as u64);
 
@@ -433,7 +460,7 @@ pub fn trace_landings(
     let first_landings: u64 = first.iter().map(|(c, _)| c.landings.len() as u64).sum();
     let mut edge = vec![false; w * h];
     for &i in &marked {
-        edge[i as usize] = is_edge(i as usize);
+        edge[i as usize] = rough[i as usize] || is_edge(i as usize);
     }
     let edges = edge.iter().filter(|&&e| e).count() as u64;
     let per_sample = first_landings as f64 / marked.len().max(1) as f64;
@@ -484,7 +511,8 @@ pub fn trace_landings(
 }
 
 /// The specular image of `landings`: per pixel, the mean over its samples of the
-/// next-event estimates `direct(it, wo)` at their landings, the radiance the landed
+/// next-event estimates `direct(it, wo, rng)` at their landings (`rng` drawn per landing
+/// from the landings' seed), the radiance the landed
 /// surfaces emit and the sky's and suns' discs where the paths leave the scene, plus the mean over its first
 /// [`EDGE_GATHERS`] samples of the photon estimates `gather(it, wo, scratch)` (`None`:
 /// none); `S` is per-thread scratch space.
@@ -492,7 +520,7 @@ pub fn shade_landings<S: Default + Send>(
     scene: &Scene,
     landings: &Landings,
     progress: &dyn Progress,
-    direct: impl Fn(&Interaction, Vec3) -> Vec3 + Sync,
+    direct: impl Fn(&Interaction, Vec3, &mut Rng) -> Vec3 + Sync,
     gather: Option<&Gather<'_, S>>,
 ) -> Result<Image> {
     let mut image = Image::new(landings.width, landings.height);
@@ -510,7 +538,9 @@ pub fn shade_landings<S: Default + Send>(
                     let gathers = n.min(EDGE_GATHERS);
                     let (mut l_direct, mut l_gather) = (Vec3::ZERO, Vec3::ZERO);
                     let range = chunk.offsets[k] as usize..chunk.offsets[k + 1] as usize;
-                    for l in &chunk.landings[range] {
+                    let pixel = chunk.pixels[k] as u64;
+                    for (j, l) in chunk.landings[range].iter().enumerate() {
+                        let mut rng = Rng::new(landings.seed, STREAM_NEE ^ pixel, j as u64);
                         let Some(hit) = &l.hit else {
                             l_direct += l.beta * escaped(scene, l.dir, None, true);
                             continue;
@@ -521,7 +551,7 @@ pub fn shade_landings<S: Default + Send>(
                         if it.material.is_purely_specular() {
                             continue;
                         }
-                        l_direct += l.beta * direct(&it, wo);
+                        l_direct += l.beta * direct(&it, wo, &mut rng);
                         if let Some(gather) = gather.filter(|_| gathers_at(l.sample, n)) {
                             l_gather += l.beta * gather(&it, wo, scratch);
                         }
@@ -549,7 +579,7 @@ pub fn adaptive_delta_image<S: Default + Send>(
     bvh: &SceneBvh,
     settings: &CameraSamples,
     progress: &dyn Progress,
-    direct: impl Fn(&Interaction, Vec3) -> Vec3 + Sync,
+    direct: impl Fn(&Interaction, Vec3, &mut Rng) -> Vec3 + Sync,
     gather: Option<&Gather<'_, S>>,
 ) -> Result<Image> {
     let landings = trace_landings(scene, bvh, settings, progress)?;
@@ -629,13 +659,14 @@ mod tests {
                     &bvh,
                     &s,
                     &Silent,
-                    |it, wo, sc: &mut Vec<Neighbour>| {
+                    |it, wo, _, sc: &mut Vec<Neighbour>| {
                         direct_light(&scene, &bvh, it, wo) + map.radiance(it, wo, &g, sc)
                     },
                 )
                 .unwrap(),
             );
-            let direct = |it: &Interaction, wo: Vec3| direct_light(&scene, &bvh, it, wo);
+            let direct =
+                |it: &Interaction, wo: Vec3, _: &mut Rng| direct_light(&scene, &bvh, it, wo);
             adaptive.push(
                 adaptive_delta_image(&scene, &bvh, &s, &Silent, direct, Some(&gather)).unwrap(),
             );
@@ -723,8 +754,8 @@ mod tests {
             first_hit_aovs: false,
         };
         let sky = Vec3::new(0.25, 0.5, 1.0);
-        let none = |_: &Interaction, _: Vec3| Vec3::ZERO;
-        let full = delta_image(&scene, &bvh, &settings, &Silent, |_, _, _: &mut ()| {
+        let none = |_: &Interaction, _: Vec3, _: &mut Rng| Vec3::ZERO;
+        let full = delta_image(&scene, &bvh, &settings, &Silent, |_, _, _, _: &mut ()| {
             Vec3::ZERO
         })
         .unwrap();

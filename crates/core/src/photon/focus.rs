@@ -48,7 +48,7 @@ pub struct Focus {
 fn specular_spheres(scene: &Scene) -> Vec<(Vec3, f32)> {
     // Per object its materials, not per placed triangle (O(objects) for single-material
     // objects; a face table's distinct offsets found once per shared table).
-    let delta = |m: u32| scene.materials[m as usize].has_delta_lobe();
+    let delta = |m: u32| scene.materials[m as usize].is_specular_traced();
     let mut tables: HashMap<*const Vec<u32>, Vec<u32>> = HashMap::new();
     let mut out = Vec::new();
     for o in &scene.objects {

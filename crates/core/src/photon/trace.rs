@@ -256,7 +256,7 @@ pub fn emit_aimed_caustics(
         };
         if !Interaction::new(scene, &hit, direction)
             .material
-            .has_delta_lobe()
+            .is_specular_traced()
         {
             out.absorbed += 1;
             return;
@@ -582,7 +582,7 @@ fn follow(
         }
 
         // Store the photon where a non-delta lobe can reflect it towards a viewer.
-        if !it.material.is_purely_specular() && (bounce > 0 || s.store_direct) {
+        if it.material.stores_photons() && (bounce > 0 || s.store_direct) {
             let normal = it.frame.n * it.ng.dot(wo).signum();
             out.store(Photon {
                 position: it.position.into(),

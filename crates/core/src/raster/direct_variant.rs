@@ -150,7 +150,7 @@ mod tests {
             diffuse: [0.5; 3],
             ..bytemuck::Zeroable::zeroed()
         };
-        let none = MaterialKinds::of(&[lambert], &[ModelMaterialRaw::zeroed()]);
+        let none = MaterialKinds::of(&[lambert], &[bytemuck::Zeroable::zeroed()]);
         assert!(!none.emission && !none.glossy);
         let mut fresnel = lambert;
         fresnel.fresnel = 1;
@@ -164,17 +164,20 @@ mod tests {
             (lamp, true, false),
         ] {
             assert_eq!(
-                MaterialKinds::of(&[lambert, m], &[ModelMaterialRaw::zeroed()]),
+                MaterialKinds::of(&[lambert, m], &[bytemuck::Zeroable::zeroed()]),
                 MaterialKinds { emission, glossy }
             );
         }
         // A material shaded by its exact model: its index is in the emission read, its
         // lobes in the glossy code.
-        let mut exact = ModelMaterialRaw::zeroed();
+        let mut exact: ModelMaterialRaw = bytemuck::Zeroable::zeroed();
         exact.flags = 1;
         assert_eq!(
             MaterialKinds::of(&[lambert], &[exact]),
-            MaterialKinds { emission: true, glossy: true }
+            MaterialKinds {
+                emission: true,
+                glossy: true
+            }
         );
     }
 

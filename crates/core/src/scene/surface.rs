@@ -204,6 +204,14 @@ impl Scene {
             .any(crate::bsdf::Material::has_delta_lobe)
     }
 
+    /// Whether any material is traced through on the CPU by the GPU methods' specular
+    /// paths ([`crate::bsdf::Material::is_specular_traced`]: delta lobes, rough glass).
+    pub fn has_specular_traced(&self) -> bool {
+        self.materials
+            .iter()
+            .any(crate::bsdf::Material::is_specular_traced)
+    }
+
     /// Whether any material is alpha-masked.
     pub fn has_alpha_masks(&self) -> bool {
         self.material_maps.iter().any(|m| m.alpha.is_some())

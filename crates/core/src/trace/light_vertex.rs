@@ -227,9 +227,11 @@ impl LightVertices {
                     let to_e = point - v.it.position;
                     let d2 = to_e.length_squared();
                     let cos_e = front.dot(to_e).abs() / d2.sqrt();
-                    let pdf_area = lights
-                        .emitters
-                        .pdf_area(v.it.position, v.it.frame.n, triangle);
+                    let pdf_area = lights.emitters.pdf_area(
+                        v.it.position,
+                        super::direct::sampling_normal(&v.it),
+                        triangle,
+                    );
                     if cos_e > 0.0 {
                         pdf_area * d2 / cos_e
                     } else {

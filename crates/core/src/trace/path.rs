@@ -158,7 +158,7 @@ pub fn environment_light(
     let Some(s) = env.sample(u) else {
         return Vec3::ZERO;
     };
-    if s.pdf <= 0.0 || s.radiance == Vec3::ZERO || s.wi.dot(it.ng) * wo.dot(it.ng) <= 0.0 {
+    if s.pdf <= 0.0 || s.radiance == Vec3::ZERO || !super::direct::reaches(it, wo, s.wi) {
         return Vec3::ZERO;
     }
     let (wo_l, wi_l) = (it.frame.to_local(wo), it.frame.to_local(s.wi));
@@ -345,7 +345,7 @@ pub fn radiance(
         prev_from = from;
         from = (!delta).then_some(BsdfVertex {
             position: it.position,
-            normal: it.frame.n,
+            normal: super::direct::sampling_normal(&it),
             ng: it.ng,
             pdf: bs.pdf,
         });

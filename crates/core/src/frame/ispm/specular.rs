@@ -25,7 +25,7 @@ pub(super) struct Specular {
 impl Specular {
     pub fn new(scene: &Scene) -> Self {
         Specular {
-            enabled: scene.has_delta_materials(),
+            enabled: scene.has_specular_traced(),
             image: None,
             landings: None,
         }
