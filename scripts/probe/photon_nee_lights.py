@@ -13,8 +13,11 @@ import gi
 
 ROOT = Path(__file__).resolve().parents[2]
 CASES = [
-    ("khronos_normal_tangent_mirror", ROOT / "tests/scenes/gltf/khronos_normal_tangent_mirror.json",
-     {"spp": 16, "photons": 50_000}),
+    (
+        "khronos_normal_tangent_mirror",
+        ROOT / "tests/scenes/gltf/khronos_normal_tangent_mirror.json",
+        {"spp": 16, "photons": 50_000},
+    ),
     ("cornell", "cornell", {"spp": 16, "photons": 50_000}),
 ]
 
