@@ -95,18 +95,11 @@ GLOSSY_GAP: dict[tuple[str, str], str] = {}
 
 # Where a method's estimate at the corpus's settings is biased by its own smoothing and
 # converges as the smoothing shrinks, the comparison is made where it has converged.
-# `photon` on NormalTangentMirrorTest: the k-NN density estimate blurs the sun's light over
-# a disc of the k-th photon's radius, and the model's relief (9 cm deep, 5% of its area
-# tilted 60–75°: bevels and walls, lit or shadowed by the sun at 45°) varies faster than
-# that: −5.4% at 50k photons with k = 100. The bias follows the radius, not the photon
-# count: −5.5% at 500k photons with k = 1000 (the same radius), −0.8% at 50k with
-# max_radius 0.02, −2.3% at 50k with k = 10, −0.8% at 500k with k = 10. The normal-agreement
-# test (cos > 0.5; the estimate's normalisation by πr² counts the disc it rejects) is a
-# small part: −4.7% with it off at 50k. Compared at 500k photons, k = 10: bias −0.8%
-# (within the 5% of every method; 1.4 s).
-CONVERGED = {
-    ("khronos_normal_tangent_mirror", "photon"): {"photons": 500_000, "k": 10},
-}
+# (None now. `photon` on NormalTangentMirrorTest was −5.4% at 50k photons, k = 100: the
+# k-NN estimate blurred the sun's direct light over the model's 9 cm relief, the bias
+# following the radius, not the photon count. Its lights' direct light is now ray traced
+# (frame/photon.rs): −0.4% at the corpus's settings.)
+CONVERGED: dict[tuple[str, str], dict] = {}
 
 
 @pytest.mark.parametrize("name", NAMES)

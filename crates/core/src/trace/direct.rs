@@ -283,6 +283,27 @@ impl DirectLight {
     }
 }
 
+/// Light of every point, spot and directional light of `scene` arriving at `it`, times the
+/// BSDF towards `wo`: the delta lights exactly (one shadow ray each), a sun with a disc by
+/// one direction in it, weighted against BSDF rays with `mis`.
+pub fn analytic_lights(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    it: &Interaction,
+    wo: Vec3,
+    rng: &mut Rng,
+    mis: bool,
+) -> Vec3 {
+    let mut sum = Vec3::ZERO;
+    for light in &scene.lights {
+        sum += match light.disc_radiance() {
+            Some(l) => sun_disc(light, l, bvh, it, wo, rng, mis),
+            None => analytic_light(light, bvh, it, wo),
+        };
+    }
+    sum
+}
+
 /// Light of a point, spot or parallel directional light arriving at `it`, times the BSDF
 /// towards `wo` (a directional light with a disc: along its axis).
 pub fn analytic_light(light: &Light, bvh: &SceneBvh, it: &Interaction, wo: Vec3) -> Vec3 {

@@ -1,5 +1,5 @@
 //! Direct light at a surface by both strategies, for camera paths that end there (`gather`,
-//! the camera half of `photon`'s sky light): next-event estimation ([`Nee::Mis`]) and one
+//! the camera half of `photon`'s sky and lights): next-event estimation ([`Nee::Mis`]) and one
 //! BSDF-sampled ray, whose escape finds the environment and the suns' discs and whose hit
 //! finds emitters, combined by the power heuristic as the path tracer combines them.
 //!
@@ -8,7 +8,7 @@
 //! estimate, unbiased but heavy-tailed, reads 30% dark at 16 samples per pixel on a glossy
 //! sphere under a constant sky. The BSDF ray finds the lobe's light at every sample.
 
-use super::direct::{escaped, BsdfVertex, DirectLight, Nee};
+use super::direct::{analytic_lights, escaped, BsdfVertex, DirectLight, Nee};
 use super::{Interaction, SceneBvh};
 use crate::sampling::Rng;
 use crate::scene::Scene;
@@ -21,6 +21,9 @@ pub enum Sources {
     All,
     /// Only the environment (the sky), for a caller whose photons carry the rest.
     Environment,
+    /// The environment and the point, spot and directional lights (suns' discs included):
+    /// every source but the emitting triangles, for a caller whose photons carry theirs.
+    Lights,
 }
 
 /// Light arriving at `it` directly from `sources`, times the BSDF's non-delta lobes towards
@@ -37,14 +40,14 @@ pub fn mis_direct(
     if it.material.is_purely_specular() {
         return Vec3::ZERO;
     }
+    let sky = |rng: &mut Rng| match scene.environment.as_deref() {
+        Some(env) if env.importance => super::path::environment_light(env, bvh, it, wo, rng, true),
+        _ => Vec3::ZERO,
+    };
     let nee = match sources {
         Sources::All => lights.estimate(scene, bvh, it, wo, rng, Nee::Mis, None),
-        Sources::Environment => match scene.environment.as_deref() {
-            Some(env) if env.importance => {
-                super::path::environment_light(env, bvh, it, wo, rng, true)
-            }
-            _ => Vec3::ZERO,
-        },
+        Sources::Environment => sky(rng),
+        Sources::Lights => analytic_lights(scene, bvh, it, wo, rng, true) + sky(rng),
     };
     nee + bsdf_ray(scene, bvh, lights, (it, wo), rng, sources)
 }
@@ -71,7 +74,7 @@ fn bsdf_ray(
     if bs.lobe.is_delta() || wi.dot(it.ng) * wo.dot(it.ng) <= 0.0 {
         return Vec3::ZERO;
     }
-    let suns = sources == Sources::All;
+    let suns = sources != Sources::Environment;
     let Some(hit) = bvh.intersect(it.spawn(wi), wi, f32::INFINITY) else {
         return bs.weight * escaped(scene, wi, Some(bs.pdf), suns);
     };
