@@ -61,7 +61,7 @@ impl Collect {
 /// reflected there many times: the former cap of 8 delta scatterings left the rim of the
 /// roughdielectric sphere 7% dark in `photon` and `gather` (0.983 and 0.972 of Mitsuba's
 /// image mean; 1.005 and 0.996 followed to 64).
-pub(crate) const ROULETTE_DEPTH: u32 = 8;
+pub const ROULETTE_DEPTH: u32 = 8;
 
 /// Renders the image whose non-delta surfaces get their outgoing radiance from `estimate`
 /// `(interaction, wo, rng, scratch)`, and the first-hit images (empty without
