@@ -177,6 +177,11 @@ impl VplPass {
                 wgsl::BIDIR,
                 wgsl::ROUGHNESS_CLAMP,
                 wgsl::ENV_GLOSSY,
+                // env_glossy.wgsl's taps go through exact_glossy_tap: with no record loaded
+                // (bidir never calls exact_load) it is the uber lobe's weight.
+                shaders::MODELS,
+                wgsl::EXACT_MODELS,
+                wgsl::EXACT_MODELS_DIRECT,
             ],
         );
         let pipeline = gpu::create_fullscreen_pipeline(
