@@ -15,6 +15,7 @@ use super::footprint_map::FootprintMap;
 use crate::sampling::Rng;
 use crate::scene::Scene;
 use crate::trace::direct::{DirectLight, Nee};
+use crate::trace::direct_mis::reflection_sample;
 use crate::trace::{Interaction, SceneBvh};
 use glam::Vec3;
 
@@ -40,14 +41,9 @@ impl FinalGather<'_> {
         if it.material.is_purely_specular() {
             return Vec3::ZERO;
         }
-        let Some(bs) = it.material.sample(it.frame.to_local(wo), rng) else {
+        let Some((bs, wi)) = reflection_sample(it, wo, rng) else {
             return Vec3::ZERO;
         };
-        // Delta lobes are the camera pass's own (it follows them).
-        let wi = it.frame.to_world(bs.wi);
-        if bs.lobe.is_delta() || wi.dot(it.ng) * wo.dot(it.ng) <= 0.0 {
-            return Vec3::ZERO;
-        }
         let at = |y: &Interaction, wo_y: Vec3, rng: &mut Rng| {
             let direct = self
                 .lights

@@ -52,6 +52,19 @@ pub fn mis_direct(
     nee + bsdf_ray(scene, bvh, lights, (it, wo), rng, sources)
 }
 
+/// One BSDF sample at `it` towards `wo` and its world direction, where it is a non-delta
+/// reflection: delta lobes are the camera pass's own (it follows them), and refraction is
+/// neither reflected direct light nor a final-gather ray of the reflected light.
+pub fn reflection_sample(
+    it: &Interaction,
+    wo: Vec3,
+    rng: &mut Rng,
+) -> Option<(crate::bsdf::BsdfSample, Vec3)> {
+    let bs = it.material.sample(it.frame.to_local(wo), rng)?;
+    let wi = it.frame.to_world(bs.wi);
+    (!bs.lobe.is_delta() && wi.dot(it.ng) * wo.dot(it.ng) > 0.0).then_some((bs, wi))
+}
+
 /// The light one non-delta BSDF sample finds where its ray leaves the scene or meets an
 /// emitter, weighted against next-event estimation's samples of the same light.
 fn bsdf_ray(
@@ -65,15 +78,9 @@ fn bsdf_ray(
     if !lights.found_by_rays {
         return Vec3::ZERO;
     }
-    let Some(bs) = it.material.sample(it.frame.to_local(wo), rng) else {
+    let Some((bs, wi)) = reflection_sample(it, wo, rng) else {
         return Vec3::ZERO;
     };
-    // Delta lobes are the camera pass's own (it follows them); refraction is not direct
-    // reflected light.
-    let wi = it.frame.to_world(bs.wi);
-    if bs.lobe.is_delta() || wi.dot(it.ng) * wo.dot(it.ng) <= 0.0 {
-        return Vec3::ZERO;
-    }
     let suns = sources != Sources::Environment;
     let Some(hit) = bvh.intersect(it.spawn(wi), wi, f32::INFINITY) else {
         return bs.weight * escaped(scene, wi, Some(bs.pdf), suns);
