@@ -769,7 +769,8 @@ fn sampled_light(p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, wo: ve
     var clit = vec3<f32>(0.0);
     var cun = vec3<f32>(0.0);
     // In ordinary frames a per-pixel share of the directions (sky_cone.wgsl).
-    let sub = sky_subset(p);
+    let cone = sky_cone_frame(p, ng);
+    let sub = sky_subset(cone);
     for (var k = 0u; k < sub.z; k++) {
         let i = direct_params.area_count + sub.x + k * sub.y;
         let t0 = textureLoad(sample_records, vec2<u32>(0u, i), 0);
@@ -796,7 +797,7 @@ fn sampled_light(p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, wo: ve
         // docs/gpu-check.md), while the index-derived one is right on every adapter.
         let layer = 6u * direct_params.area_count + (i - direct_params.area_count);
         let q = p + ng * (t1.w * (1.0 - cos_g) + 0.5 * t1.w);
-        let v = sky_visibility(i, layer, p, ng, q);
+        let v = sky_visibility(i, layer, cone, p, ng, q);
         lit += fd * v;
         unshadowed += fd;
         glit += fs * v;
