@@ -17,7 +17,9 @@ than the load.
 file such as veach-mis: G-buffer, edges and direct light redone each frame).
 
 The machine may be shared: alternating rounds give the builds the same load, and the
-medians leave out the rounds a burst of other work slowed.
+medians leave out the rounds a burst of other work slowed. ``CPU`` is the worker's CPU time
+a frame (user + system, every thread: lavapipe's too), which a loaded machine changes far
+less than the wall time.
 """
 
 from __future__ import annotations
@@ -25,6 +27,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -61,13 +64,16 @@ def worker(a: argparse.Namespace) -> None:
                 r.update(camera=moved)
             else:
                 r.update(lights={0: moved})
+            u = resource.getrusage(resource.RUSAGE_SELF)
             t = time.perf_counter()
             out = r.render()
             total = time.perf_counter() - t
+            v = resource.getrusage(resource.RUSAGE_SELF)
+            cpu = v.ru_utime - u.ru_utime + v.ru_stime - u.ru_stime
             stages: dict[str, float] = {}
             for name, s in out.stats.stages:
                 stages[name] = stages.get(name, 0.0) + s
-            frames.append({"frame": total, "stages": stages})
+            frames.append({"frame": total, "cpu": cpu, "stages": stages})
         print(json.dumps(frames), flush=True)
 
 
@@ -122,13 +128,15 @@ def main() -> None:
     what = f"{a.method}, {a.photons} photons" if a.method == "ispm" else a.method
     print(f"{a.scene} {a.size}, {what}, {a.move} moving; median of {n} frames")
     print(f"a build each, {a.rounds} alternating rounds of {a.frames} frames (ms)\n")
-    print("| build | frame | " + " | ".join(STAGES) + " |")
-    print("|---|---:|" + "---:|" * len(STAGES))
+    print("| build | frame | CPU | " + " | ".join(STAGES) + " |")
+    print("|---|---:|---:|" + "---:|" * len(STAGES))
     for k in builds:
         f = [x["frame"] for x in got[k]]
         cells = [statistics.median(x["stages"].get(s, 0.0) for x in got[k]) for s in STAGES]
         lo, hi = min(f), max(f)
-        row = f"| {k} | {statistics.median(f) * 1e3:.0f} ({lo * 1e3:.0f}–{hi * 1e3:.0f}) | "
+        cpu = statistics.median(x["cpu"] for x in got[k]) * 1e3
+        row = f"| {k} | {statistics.median(f) * 1e3:.0f} ({lo * 1e3:.0f}–{hi * 1e3:.0f}) "
+        row += f"| {cpu:.0f} | "
         print(row + " | ".join(f"{c * 1e3:.1f}" for c in cells) + " |")
 
 

@@ -761,54 +761,17 @@ fn sampled_light(p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, wo: ve
     if direct_params.sky_count == 0u {
         return sum;
     }
-    var lit = vec3<f32>(0.0);
-    var unshadowed = vec3<f32>(0.0);
-    // The glossy lobe's and the cosine's shadowed and unshadowed sums (env_glossy.wgsl).
-    var glit = vec3<f32>(0.0);
-    var gun = vec3<f32>(0.0);
-    var clit = vec3<f32>(0.0);
-    var cun = vec3<f32>(0.0);
-    // In ordinary frames a per-pixel share of the directions (sky_cone.wgsl).
-    let cone = sky_cone_frame(p, ng);
-    let sub = sky_subset(cone);
-    for (var k = 0u; k < sub.z; k++) {
-        let i = direct_params.area_count + sub.x + k * sub.y;
-        let t0 = textureLoad(sample_records, vec2<u32>(0u, i), 0);
-        let wi = t0.xyz;
-        let cos_g = dot(wi, ng);
-        if cos_g <= 0.0 {
-            continue;
-        }
-        let t1 = textureLoad(sample_records, vec2<u32>(1u, i), 0);
-        let e = t1.xyz * abs(dot(ns, wi));
-        cun += e;
-        let fd = diffuse_eval(m, ns, wo, wi) * e;
-        var fs = vec3<f32>(0.0);
-        if has_glossy {
-            fs = exact_glossy(glossy, ns, wo, wi) * e;
-        }
-        if max3(fd + fs + e) <= 0.0 {
-            continue;
-        }
-        // The sky's layers follow the emitter points' six each, in order (`samples.rs`).
-        // Computed from the loop index, not read from the record: on an NVIDIA H100 the
-        // record's layer (a value the same for every pixel, loaded from a texture) passed to
-        // `shadow_tap` looked up the wrong map from the second direction on (18-29% dark;
-        // docs/gpu-check.md), while the index-derived one is right on every adapter.
-        let layer = 6u * direct_params.area_count + (i - direct_params.area_count);
-        let q = p + ng * (t1.w * (1.0 - cos_g) + 0.5 * t1.w);
-        let v = sky_visibility(i, layer, cone, p, ng, q);
-        lit += fd * v;
-        unshadowed += fd;
-        glit += fs * v;
-        gun += fs;
-        clit += e * v;
-    }
+    // The sky's sums (sky_cone.wgsl; in ordinary frames a per-pixel share of the directions,
+    // each visibility over its cone).
+    let sky = sky_sums(p, ns, ng, m, glossy, wo, has_glossy);
+    let lit = sky.lit;
+    let unshadowed = sky.unshadowed;
+    let glit = sky.glit;
     if direct_params.ratio == 0u {
         return sum + lit + glit;
     }
     if has_glossy {
-        sum += env_glossy_unshadowed(m, ns, ng, wo) * env_glossy_visibility(glit, gun, clit, cun);
+        sum += env_glossy_unshadowed(m, ns, ng, wo) * env_glossy_visibility(glit, sky.gun, sky.clit, sky.cun);
     }
     // The ratio estimator of the diffuse lobe: its unshadowed light in closed form (the
     // irradiance table; the Fresnel coupling's mean over the incident cosines is 1 − F_avg,

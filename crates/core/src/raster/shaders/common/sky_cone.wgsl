@@ -1,7 +1,7 @@
 // The visibility of one sampled sky direction over the cone of directions it stands for
 // (after direct_shade.wgsl: uses its bindings, `sample_view` and `on_plane`).
 //
-// A frame draws `sky_count` directions (16 by default), each standing for a solid angle
+// A frame draws `sky_count` directions (64 by default), each standing for a solid angle
 // Ω = 1/(N·p(ω)) of the sky. Looked up with one tap of its orthographic shadow map, each
 // direction shadows as a parallel light: a room lit through a window got one hard,
 // window-shaped patch per direction that passes the opening, moving with the seed (Bitterli's
@@ -27,6 +27,15 @@
 // points the camera sees (a disc partly hidden or off screen averages the rest); cones of
 // neighbouring directions overlap or leave gaps where the lattice is uneven. Measured on
 // tests/scenes/openings/window_room.json: see tests/test_sky_openings.py.
+//
+// Cost (`sky_sums`): a pixel takes the cones of one direction in `SKY_CONE_SHARE` (2: the
+// even or the odd ones, by a checkerboard of pixels) and the drawn direction's tap for the
+// others; the taken cone corrects the tap by twice its difference, clamped to a visibility
+// in [0, 1]. Unclamped, a pair of neighbouring pixels would have the mean of both cones (the
+// sums are linear in each direction's visibility: no ratio over fewer directions, which
+// spread the frame mean over seeds); the clamp keeps every pixel's light non-negative (3-4%
+// of window_room's pixels went below 0 without it) and biases the frame mean up by ~0.8%
+// there (direct 0.991-1.006 of `path` with every cone, 0.999-1.013 with half).
 
 // The blocker search's widest disc, in texels of the sampled lights' maps.
 const SKY_CONE_MAX: f32 = 40.0;
@@ -45,6 +54,9 @@ struct SkyCone {
     clip_t1: vec4<f32>,
     clip_t2: vec4<f32>,
     size: vec2<i32>,
+    // Which of the directions the pixel takes the cones of (`sky_sums`): those with
+    // k ≡ phase (mod `SKY_CONE_SHARE`).
+    phase: u32,
 }
 
 fn sky_cone_frame(p: vec3<f32>, ng: vec3<f32>) -> SkyCone {
@@ -57,7 +69,10 @@ fn sky_cone_frame(p: vec3<f32>, ng: vec3<f32>) -> SkyCone {
     let noise = fract(52.9829189 * fract(dot(px, vec2<f32>(0.06711056, 0.00583715))));
     let ct1 = view.view_proj * vec4<f32>(t1, 0.0);
     let ct2 = view.view_proj * vec4<f32>(t2, 0.0);
-    return SkyCone(noise, t1, t2, clip, ct1, ct2, size);
+    // Each 2×2 block of pixels holds every phase of 4 (a checkerboard for 2).
+    let ip = vec2<u32>(max(px, vec2<f32>(0.0)));
+    let phase = select((ip.x + ip.y) & 1u, (ip.x & 1u) + 2u * (ip.y & 1u), SKY_CONE_SHARE == 4u) % SKY_CONE_SHARE;
+    return SkyCone(noise, t1, t2, clip, ct1, ct2, size, phase);
 }
 
 // The window position (pixels) of clip-space point `clip` in the eye view.
@@ -71,6 +86,11 @@ fn sky_cone_window(clip: vec4<f32>, size: vec2<i32>) -> vec2<f32> {
 // the default 64 per pixel was tried on window_room, seeds 1-4: 16 a pixel cut the frame's
 // time ~4x but spread its mean over seeds 1.98% and 32 2.11%, against 1.57% with all 64.)
 const SKY_PIXEL_DIRECTIONS: u32 = 64u;
+
+// One in this many of the directions a pixel looks up takes its cone there (1, 2 or 4; see
+// the header). 4 was tried on window_room: frame mean 1.010-1.026 of `path` (the clamp), floor
+// patch error 0.40-0.54 (over the test's 0.5), against 1.000-1.013 and 0.31-0.45 with 2.
+const SKY_CONE_SHARE: u32 = 2u;
 
 // The sky records a shading point at `p` looks up, as (first, step, count) from the first
 // sky record: all of them in progressive passes (their plain sums must converge) or when
@@ -130,36 +150,50 @@ fn sky_cone_tap(m: mat4x4<f32>, layer: u32, p: vec3<f32>) -> f32 {
     return select(0.0, 1.0, clip.z <= textureLoad(sample_maps, t, layer, 0));
 }
 
-// The visibility of sky record `i` (shadow layer `layer`) at receiver `p` (geometric normal
-// `ng`, its cone frame `c`; `q`: `p` moved off the surface for the lookup): one bilinear tap
-// of the drawn direction unless the ratio estimator is on and the record holds its cone (see
-// the header).
-fn sky_visibility(i: u32, layer: u32, c: SkyCone, p: vec3<f32>, ng: vec3<f32>, q: vec3<f32>) -> f32 {
-    let m = sample_view(layer);
-    let tap = shadow_tap(sample_maps, shadow_sampler, m, layer, q);
+// Where sky record `i`'s cone meets its shadow layer `layer` (view `m`) for the receiver
+// moved to `q`: (map uv, depth z, `spread`: texels per depth unit at the cone's rim), or
+// spread 0 where the drawn direction's tap stands for the cone (progressive passes, a record
+// without a cone, a cone narrower than a texel at that depth).
+fn sky_cone_site(i: u32, m: mat4x4<f32>, q: vec3<f32>) -> vec4<f32> {
     // x: world units of depth 0 → 1; y: tan α; z: world size of a texel.
     let cone = textureLoad(sample_records, vec2<u32>(2u, i), 0);
-    if direct_params.ratio == 0u || cone.y <= 0.0 {
-        return tap;
-    }
     let clip = m * vec4<f32>(q, 1.0);
-    let z = clip.z;
-    let spread = cone.x * cone.y / cone.z;
-    if z * spread < 1.0 {
-        return tap;
-    }
+    let spread = cone.x * cone.y / max(cone.z, 1e-30);
     let uv = clip.xy * vec2<f32>(0.5, -0.5) + 0.5;
+    let on = direct_params.ratio != 0u && cone.y > 0.0 && clip.z * spread >= 1.0;
+    return vec4<f32>(uv, clip.z, select(0.0, spread, on));
+}
+
+// The first point's angle (cos, sin) of sky record `i`'s Vogel discs at the pixel of `c`.
+fn sky_cone_start(i: u32, c: SkyCone) -> vec2<f32> {
     let angle = TWO_PI * c.noise + f32(i) * 1.7;
-    let turn = vec2<f32>(cos(angle), sin(angle));
-    let b = sky_cone_blockers(layer, uv, z, spread, turn);
-    if b.y == 0.0 {
-        return tap;
+    return vec2<f32>(cos(angle), sin(angle));
+}
+
+// The blockers (`sky_cone_blockers`) of sky record `i` at `site` (`sky_cone_site`) where its
+// cone's visibility may differ from `tap`, the drawn direction's: some blocker, and not all
+// of them over a shadowed receiver; (0, 0) elsewhere.
+fn sky_cone_penumbra(i: u32, layer: u32, c: SkyCone, site: vec4<f32>, tap: f32) -> vec2<f32> {
+    if site.w == 0.0 {
+        return vec2<f32>(0.0);
     }
+    let b = sky_cone_blockers(layer, site.xy, site.z, site.w, sky_cone_start(i, c));
     if b.y == f32(SKY_CONE_SEARCH) && tap == 0.0 {
-        return 0.0;
+        return vec2<f32>(0.0);
     }
+    return b;
+}
+
+// The visibility over its cone of sky record `i` (shadow layer `layer`, its view `m`) at
+// receiver `p` (geometric normal `ng`, cone frame `c`; `q`: `p` moved off the surface for
+// the lookup; `tap`: the drawn direction's visibility there; `zb`: its blockers' mean
+// depth): the drawn direction's taps at the receiver points on the penumbra's disc (see the
+// header).
+fn sky_cone_visibility(i: u32, layer: u32, m: mat4x4<f32>, c: SkyCone, p: vec3<f32>, ng: vec3<f32>, q: vec3<f32>, tap: f32, zb: f32) -> f32 {
+    let cone = textureLoad(sample_records, vec2<u32>(2u, i), 0);
+    let z = (m * vec4<f32>(q, 1.0)).z;
     // The penumbra's radius on the receiver: the blockers' height above it times tan α.
-    let rho = (z - b.x) * cone.x * cone.y;
+    let rho = (z - zb) * cone.x * cone.y;
     // Receiver points on the disc of that radius in the tangent plane, each replaced by the
     // G-buffer sample of its pixel when that lies on the same plane and within the disc
     // (a surface the camera sees: the disc never reaches through a wall), each looked up
@@ -168,7 +202,7 @@ fn sky_visibility(i: u32, layer: u32, c: SkyCone, p: vec3<f32>, ng: vec3<f32>, q
     let offset = q - p;
     var v = tap;
     var n = 1.0;
-    var dir = sky_cone_turn(turn, vec2<f32>(0.6216100, 0.7833269));
+    var dir = sky_cone_turn(sky_cone_start(i, c), vec2<f32>(0.6216100, 0.7833269));
     for (var j = 0u; j < SKY_CONE_TAPS; j++) {
         let d = dir * (sqrt((f32(j) + 0.5) / f32(SKY_CONE_TAPS)) * rho);
         dir = sky_cone_turn(dir, SKY_GOLDEN);
@@ -184,4 +218,104 @@ fn sky_visibility(i: u32, layer: u32, c: SkyCone, p: vec3<f32>, ng: vec3<f32>, q
         n += 1.0;
     }
     return v / n;
+}
+
+// The sampled sky directions' sums at a shading point: the diffuse lobe's, the glossy
+// lobe's and the cosine's light, shadowed (`lit`, `glit`, `clit`) and not.
+struct SkySums {
+    lit: vec3<f32>,
+    unshadowed: vec3<f32>,
+    glit: vec3<f32>,
+    gun: vec3<f32>,
+    clit: vec3<f32>,
+    cun: vec3<f32>,
+}
+
+// One sampled sky direction's terms at a shading point: f_d·cos·E, f_s·cos·E, cos·E, its
+// shadow layer, the lookup point and the drawn direction's tap; `used` false where it does
+// not light the point.
+struct SkyTerm {
+    fd: vec3<f32>,
+    fs: vec3<f32>,
+    e: vec3<f32>,
+    layer: u32,
+    q: vec3<f32>,
+    tap: f32,
+    used: bool,
+}
+
+fn sky_term(i: u32, p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, glossy: Material, wo: vec3<f32>, has_glossy: bool) -> SkyTerm {
+    var t: SkyTerm;
+    let t0 = textureLoad(sample_records, vec2<u32>(0u, i), 0);
+    let wi = t0.xyz;
+    let cos_g = dot(wi, ng);
+    let t1 = textureLoad(sample_records, vec2<u32>(1u, i), 0);
+    t.e = select(vec3<f32>(0.0), t1.xyz * abs(dot(ns, wi)), cos_g > 0.0);
+    t.fd = diffuse_eval(m, ns, wo, wi) * t.e;
+    if has_glossy {
+        t.fs = exact_glossy(glossy, ns, wo, wi) * t.e;
+    }
+    t.used = cos_g > 0.0 && max3(t.fd + t.fs + t.e) > 0.0;
+    // The sky's layers follow the emitter points' six each, in order (`samples.rs`).
+    // Computed from the loop index, not read from the record: on an NVIDIA H100 the
+    // record's layer (a value the same for every pixel, loaded from a texture) passed to
+    // `shadow_tap` looked up the wrong map from the second direction on (18-29% dark;
+    // docs/gpu-check.md), while the index-derived one is right on every adapter.
+    t.layer = 6u * direct_params.area_count + (i - direct_params.area_count);
+    t.q = p + ng * (t1.w * (1.0 - cos_g) + 0.5 * t1.w);
+    return t;
+}
+
+// The sums over the sky directions a shading point looks up (`sky_subset`) in two passes:
+// every direction with its drawn direction's tap, noting those of the pixel's share
+// (`SkyCone::phase`) whose cone may differ from it (`sky_cone_penumbra`) with their tap and
+// blockers; then those alone, each sum corrected by `SKY_CONE_SHARE` times the cone's
+// visibility less the tap, clamped to a visibility in [0, 1] (see the header).
+fn sky_sums(p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, glossy: Material, wo: vec3<f32>, has_glossy: bool) -> SkySums {
+    var s: SkySums;
+    let c = sky_cone_frame(p, ng);
+    let sub = sky_subset(c);
+    var todo = vec2<u32>(0u);
+    // The penumbra directions' drawn taps and mean blocker depths, by `k`.
+    var taps: array<f32, SKY_PIXEL_DIRECTIONS>;
+    var depths: array<f32, SKY_PIXEL_DIRECTIONS>;
+    for (var k = 0u; k < sub.z; k++) {
+        let i = direct_params.area_count + sub.x + k * sub.y;
+        let t = sky_term(i, p, ns, ng, m, glossy, wo, has_glossy);
+        if !t.used {
+            continue;
+        }
+        let mv = sample_view(t.layer);
+        let tap = shadow_tap(sample_maps, shadow_sampler, mv, t.layer, t.q);
+        s.lit += t.fd * tap;
+        s.unshadowed += t.fd;
+        s.glit += t.fs * tap;
+        s.gun += t.fs;
+        s.clit += t.e * tap;
+        s.cun += t.e;
+        let b = sky_cone_penumbra(i, t.layer, c, sky_cone_site(i, mv, t.q), tap);
+        if b.y > 0.0 && k % SKY_CONE_SHARE == c.phase {
+            taps[k] = tap;
+            depths[k] = b.x;
+            todo |= select(vec2<u32>(0u, 1u << (k - 32u)), vec2<u32>(1u << k, 0u), k < 32u);
+        }
+    }
+    // The penumbra directions (k < 64: `SKY_PIXEL_DIRECTIONS`).
+    loop {
+        if all(todo == vec2<u32>(0u)) {
+            break;
+        }
+        let low = todo.x != 0u;
+        let k = select(32u + firstTrailingBit(todo.y), firstTrailingBit(todo.x), low);
+        todo = select(vec2<u32>(todo.x, todo.y & (todo.y - 1u)), vec2<u32>(todo.x & (todo.x - 1u), todo.y), low);
+        let i = direct_params.area_count + sub.x + k * sub.y;
+        let t = sky_term(i, p, ns, ng, m, glossy, wo, has_glossy);
+        let tap = taps[k];
+        let cone = sky_cone_visibility(i, t.layer, sample_view(t.layer), c, p, ng, t.q, tap, depths[k]);
+        let dv = clamp(tap + f32(SKY_CONE_SHARE) * (cone - tap), 0.0, 1.0) - tap;
+        s.lit += t.fd * dv;
+        s.glit += t.fs * dv;
+        s.clit += t.e * dv;
+    }
+    return s;
 }
