@@ -23,11 +23,12 @@ pub(super) fn frame(
     let mut gpu = GpuFrame::begin(&g.ctx, &mut g.scene, &mut g.targets, &mut g.timer, &mut fc);
     let mut encoder = gpu.encoder("direct frame");
     gpu.record_shadows(&mut encoder, &fc, draw);
-    let redo = !gpu.targets.direct_current();
-    let encoder = gpu.record_direct(encoder, &fc)?;
-    if redo {
+    // Before the direct light is recorded (and marked current): a frame cancelled while
+    // tracing leaves both to be redone.
+    if !gpu.targets.direct_current() {
         one_bounce_light(&gpu, &mut fc)?;
     }
+    let encoder = gpu.record_direct(encoder, &fc)?;
     let names = readback_names(images, false);
     let data = gpu.finish(encoder, &names, None, &mut fc)?;
     let mut out = gpu.output(&data, fc);
