@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import platform
 import sys
 import time
@@ -95,7 +96,8 @@ def run(name: str, method: str, with_mitsuba: bool) -> dict:
     }
 
 
-def table(rows: list[dict], command: str) -> str:
+def table(rows: list[dict], command: str, run: str) -> str:
+    """The markdown table of `rows`; `run`: the size, wall time and load it ran at."""
     out = [
         "# gi on published Mitsuba scenes",
         "",
@@ -104,8 +106,11 @@ def table(rows: list[dict], command: str) -> str:
         "reference, and gi's render time at the reference's size. Mitsuba's references: "
         f"{rows[0]['mitsuba_spp']} spp,",
         "`llvm_ad_rgb`, box filter, max_depth 65 (gi's 64), on the same machine (their time is",
-        "a converged render's, not an equal-time one). `warnings`: AssetWarnings at load (the",
-        "uber BSDF's approximations of veach-mis's rough conductors until branch `materials`).",
+        "a converged render's, not an equal-time one). `warnings`: distinct warnings at load and",
+        "at the renderer's creation (AssetWarning, RenderWarning: e.g. `bidir`'s uber stand-ins",
+        "for Mitsuba's exact models in its VPLs and bundles).",
+        "",
+        run,
         "",
         "| scene | method | settings | mean ratio (R, G, B) | FLIP | Mitsuba's FLIP at equal "
         "spp | Mitsuba's FLIP at equal time | gi s | Mitsuba s (4096 spp) | warnings |",
@@ -136,11 +141,22 @@ def main() -> None:
     ap.add_argument("--mitsuba-flip", action="store_true")
     args = ap.parse_args()
     rows = []
+    start, load = time.perf_counter(), os.getloadavg()[0]
     for name in args.scenes:
         for method in args.methods:
             rows.append(run(name, method, args.mitsuba_flip))
             print(json.dumps(rows[-1]), flush=True)
-    TABLE.write_text(table(rows, " ".join(["scripts/bench/real_scenes.py", *sys.argv[1:]])))
+    sizes = ", ".join(
+        f"{n} {'×'.join(map(str, gi.read_image(THIRD_PARTY / n / 'reference.exr').shape[1::-1]))}"
+        for n in args.scenes
+    )
+    header = (
+        f"This run: at the references' sizes ({sizes}), {time.perf_counter() - start:.0f} s "
+        f"in all, load average {load:.1f} at its start (times are those of a loaded machine)."
+        + ("" if args.mitsuba_flip else " Mitsuba's FLIP columns not measured (`--mitsuba-flip`).")
+    )
+    command = " ".join(["scripts/bench/real_scenes.py", *sys.argv[1:]])
+    TABLE.write_text(table(rows, command, header))
     print(f"wrote {TABLE}")
 
 

@@ -9,11 +9,16 @@ stands on a grey floor, which it refracts, since a uniform environment seen thro
 looks the same whatever the glass) and
 <name>-reference.exr (Mitsuba's `path`, max_depth 65 = gi's 64 scattering events, the mean
 of BATCHES renders of different seeds), plus references.json: each reference's mean per
-channel and its standard error (from the batches).
+channel and its standard error (from the batches), and under "direct" the same for
+Mitsuba's `direct` integrator (its defaults: one emitter and one BSDF sample per pixel
+sample, at the first hit only; DIRECT_SPP in each of BATCHES renders; no image kept), the
+reference of gi's `direct` (its image, <name>-direct-reference.exr, for the spheres on a
+floor only).
 
-Run: /work/main/.venv/bin/python scripts/data/materials_spheres.py [NAME ...]  (pip
-install mitsuba==3.9.1; CI never runs Mitsuba). With names, only those spheres are
-written and their entries of references.json replaced."""
+Run: /work/main/.venv/bin/python scripts/data/materials_spheres.py [--direct] [NAME ...]
+(pip install mitsuba==3.9.1; CI never runs Mitsuba). With names, only those spheres are
+written and their entries of references.json replaced; with --direct, only the `direct`
+references are rendered (from the committed XML) and added to the entries."""
 
 import json
 import pathlib
@@ -26,6 +31,7 @@ OUT = ROOT / "tests" / "scenes" / "materials"
 SIZE = 64
 SPP = 512
 BATCHES = 8
+DIRECT_SPP = 128
 
 MATERIALS = {
     "plastic": """<bsdf type="plastic">
@@ -108,13 +114,53 @@ SCENE = """<scene version="3.0.0">
 """
 
 
+def batch_means(mi, scene, spp: int, integrator=None) -> tuple[np.ndarray, dict]:
+    """BATCHES renders of `scene` (seeds 0..): their mean image, and its mean per channel
+    with the standard error over the batches."""
+    imgs = [
+        np.array(mi.render(scene, integrator=integrator, seed=s, spp=spp)) for s in range(BATCHES)
+    ]
+    img = np.mean(imgs, axis=0)
+    means = np.array([i.reshape(-1, 3).mean(0) for i in imgs])
+    se = means.std(0, ddof=1) / np.sqrt(BATCHES)
+    return img, {
+        "mean": img.reshape(-1, 3).mean(0).tolist(),
+        "standard_error": se.tolist(),
+        "spp": spp * BATCHES,
+        "mitsuba": mi.__version__,
+    }
+
+
+def direct_references(mi, names: list[str], meta: dict) -> None:
+    """Mitsuba's `direct` on each committed sphere: its means go to meta[name]["direct"];
+    its image to <name>-direct-reference.exr where it differs from `path`'s (the spheres on
+    a floor: a lone convex sphere under a sky receives direct light only)."""
+    integrator = mi.load_dict({"type": "direct"})
+    for name in names:
+        scene = mi.load_file(str(OUT / f"{name}.xml"))
+        img, meta[name]["direct"] = batch_means(mi, scene, DIRECT_SPP, integrator)
+        if name in FLOORED:
+            mi.Bitmap(img.astype(np.float32)).write(str(OUT / f"{name}-direct-reference.exr"))
+        print(name, "direct", meta[name]["direct"]["mean"])
+
+
 def main() -> None:
     import mitsuba as mi
 
     mi.set_variant("scalar_rgb")
     OUT.mkdir(parents=True, exist_ok=True)
-    names = sys.argv[1:] or list(MATERIALS)
-    meta = json.loads((OUT / "references.json").read_text()) if sys.argv[1:] else {}
+    args = [a for a in sys.argv[1:] if a != "--direct"]
+    names = args or list(MATERIALS)
+    old = (
+        json.loads((OUT / "references.json").read_text())
+        if (OUT / "references.json").exists()
+        else {}
+    )
+    if "--direct" in sys.argv[1:]:
+        direct_references(mi, names, old)
+        (OUT / "references.json").write_text(json.dumps(old, indent=1) + "\n")
+        return
+    meta = old if args else {}
     for name in names:
         bsdf = MATERIALS[name]
         floor = "\n    " + FLOOR if name in FLOORED else ""
@@ -122,18 +168,10 @@ def main() -> None:
         path = OUT / f"{name}.xml"
         path.write_text(xml)
         scene = mi.load_file(str(path))
-        imgs = [np.array(mi.render(scene, seed=s)) for s in range(BATCHES)]
-        img = np.mean(imgs, axis=0)
-        means = np.array([i.reshape(-1, 3).mean(0) for i in imgs])
-        se = means.std(0, ddof=1) / np.sqrt(BATCHES)
+        img, meta[name] = batch_means(mi, scene, SPP)
         mi.Bitmap(img.astype(np.float32)).write(str(OUT / f"{name}-reference.exr"))
-        meta[name] = {
-            "mean": img.reshape(-1, 3).mean(0).tolist(),
-            "standard_error": se.tolist(),
-            "spp": SPP * BATCHES,
-            "mitsuba": mi.__version__,
-        }
-        print(name, meta[name]["mean"], se / img.reshape(-1, 3).mean(0))
+        print(name, meta[name]["mean"], meta[name]["standard_error"])
+    direct_references(mi, names, meta)
     meta = dict(sorted(meta.items(), key=lambda kv: list(MATERIALS).index(kv[0])))
     (OUT / "references.json").write_text(json.dumps(meta, indent=1) + "\n")
 

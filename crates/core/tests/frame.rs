@@ -378,6 +378,12 @@ fn direct_builds_no_cpu_bvh() {
     assert_eq!(moved.radiance.pixels, one_shot.radiance.pixels);
     let ispm = render(&scene, &settings(Method::Ispm), &Silent).expect("ispm");
     assert_eq!(bvh_stages(&ispm), vec!["bvh build".to_string()]);
+    // Mirrors and glass: `direct` traces the light met one scattering from the camera.
+    let glass = builtin::load("cornell-glass").expect("scene");
+    let traced = render(&glass, &s, &Silent).expect("direct");
+    assert_eq!(bvh_stages(&traced), vec!["bvh build".to_string()]);
+    let specular = |o: &RenderOutput| o.stats.stages.iter().any(|(n, _)| n == "specular paths");
+    assert!(specular(&traced) && !specular(&first) && !specular(&moved));
 }
 
 /// Cancels at the first update of stage `at`.
@@ -389,11 +395,17 @@ impl gi_core::Progress for CancelAt {
 }
 
 /// A frame cancelled half-way (after the direct light was recorded, during the photon
-/// trace) leaves the renderer consistent: the next frame equals the one-shot render.
+/// trace; `direct` on `cornell-glass` while tracing what its mirror and glass show) leaves
+/// the renderer consistent: the next frame equals the one-shot render.
 #[test]
 fn cancelled_frame_leaves_the_renderer_consistent() {
-    let scene = builtin::load("cornell").expect("scene");
-    for (method, stage) in [(Method::Ispm, "cpu trace"), (Method::Direct, "direct")] {
+    let cases = [
+        ("cornell", Method::Ispm, "cpu trace"),
+        ("cornell", Method::Direct, "direct"),
+        ("cornell-glass", Method::Direct, "specular paths"),
+    ];
+    for (name, method, stage) in cases {
+        let scene = builtin::load(name).expect("scene");
         let s = settings(method);
         let mut r = Renderer::new(&scene, &s).expect("renderer");
         r.render(&all(), &Silent).expect("frame 0");

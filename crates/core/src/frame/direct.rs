@@ -1,11 +1,15 @@
 //! Method `direct`: shadow maps (only when lights or geometry moved), per sub-pixel sample
 //! an eye G-buffer and deferred lighting accumulated on the GPU, the G-buffer at the pixel
-//! centres, the composite, and the readback of what was asked for.
+//! centres, the light met one delta scattering from the camera (mirrors, glass: traced on
+//! the CPU, [`crate::photon::delta_light`]), the composite, and the readback of what was
+//! asked for.
 
 use super::context::FrameCtx;
 use super::gpu::{normalized, readback_names, rgb_image, GpuFrame, LightDraw};
+use super::options::derived::camera_samples;
 use super::{GpuState, Images, RenderOutput};
 use crate::error::Result;
+use crate::photon::delta_light;
 
 pub(super) fn frame(
     g: &mut GpuState,
@@ -19,6 +23,11 @@ pub(super) fn frame(
     let mut gpu = GpuFrame::begin(&g.ctx, &mut g.scene, &mut g.targets, &mut g.timer, &mut fc);
     let mut encoder = gpu.encoder("direct frame");
     gpu.record_shadows(&mut encoder, &fc, draw);
+    // Before the direct light is recorded (and marked current): a frame cancelled while
+    // tracing leaves both to be redone.
+    if !gpu.targets.direct_current() {
+        one_bounce_light(&gpu, &mut fc)?;
+    }
     let encoder = gpu.record_direct(encoder, &fc)?;
     let names = readback_names(images, false);
     let data = gpu.finish(encoder, &names, None, &mut fc)?;
@@ -29,6 +38,24 @@ pub(super) fn frame(
         }
     }
     Ok(out)
+}
+
+/// Mitsuba's `direct` counts the light its BSDF sample at the first surface finds through
+/// a delta lobe (a mirror, a smooth coating, glass) and through rough glass; the GPU's
+/// direct light shades the non-delta lobes alone: the rest is traced on the CPU
+/// ([`crate::photon::delta_light`]) into the specular texture, which the composite adds.
+/// Nothing runs in a scene without mirrors or glass (the texture stays black); the image is
+/// kept while the direct light is (a still view).
+fn one_bounce_light(gpu: &GpuFrame, fc: &mut FrameCtx) -> Result<()> {
+    if !fc.scene.has_specular_traced() {
+        return Ok(());
+    }
+    fc.timed("specular paths", |fc| {
+        let samples = camera_samples(gpu.targets.spp(), 1, fc.params);
+        let img = delta_light::one_bounce_light(fc.scene, fc.bvh()?, &samples, fc.progress)?;
+        gpu.targets.write_specular(&gpu.ctx, &img);
+        Ok(())
+    })
 }
 
 /// Renders the direct light and the composite of the frame `out` again (after the edge

@@ -1,11 +1,12 @@
-//! Rough glass in `direct` and `bidir`: their rasterized passes and the CPU paths `bidir`
-//! traces through glass (`bidir::specular_paths`) follow delta lobes only, so they render
-//! Mitsuba's roughdielectric as the smooth glass of the same index and transmittance
-//! ([`Material::uber_equivalent`]), on the GPU and on the CPU alike, and say so with a
+//! Rough glass in `bidir`: its rasterized passes and the CPU paths it traces through glass
+//! (`bidir::specular_paths`) follow delta lobes only, so it renders Mitsuba's
+//! roughdielectric as the smooth glass of the same index and transmittance
+//! ([`Material::uber_equivalent`]), on the GPU and on the CPU alike, and says so with a
 //! RenderWarning. `path`, `photon` and `gather` render the rough lobes
-//! ([`crate::bsdf::rough_dielectric`]); so does `ispm`, whose GPU passes see the smooth
-//! stand-in (black: no lobe they shade) while its CPU specular image follows camera paths
-//! through the rough lobes (`photon::delta_paths`) and its photons scatter by them.
+//! ([`crate::bsdf::rough_dielectric`]); so do `ispm` and `direct`, whose GPU passes see the
+//! smooth stand-in (black: no lobe they shade) while their CPU images follow camera paths
+//! through the rough lobes (`photon::delta_paths`: `ispm`'s specular image,
+//! `direct`'s light met one scattering from the camera) and `ispm`'s photons scatter by them.
 
 use super::options::Method;
 use crate::bsdf::Material;
@@ -13,7 +14,7 @@ use crate::scene::Scene;
 
 /// Whether `method` renders rough glass by its smooth stand-in.
 pub(super) fn stands_in(method: Method) -> bool {
-    matches!(method, Method::Direct | Method::Bidir)
+    method == Method::Bidir
 }
 
 /// Replaces the rough glass of `scene` by its smooth stand-in where `method` needs it
@@ -37,8 +38,8 @@ pub(super) fn warning(method: &str, names: &[String]) -> Option<String> {
     (!names.is_empty()).then(|| {
         format!(
             "method `{method}` renders the rough glass (roughdielectric) of materials {} as \
-             smooth glass of the same index and transmittance; `path`, `photon` and `gather` \
-             render its rough reflection and transmission",
+             smooth glass of the same index and transmittance; `path`, `photon`, `gather`, \
+             `ispm` and `direct` render its rough reflection and transmission",
             names.join(", ")
         )
     })

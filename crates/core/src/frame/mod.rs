@@ -339,8 +339,11 @@ impl Renderer {
         let t0 = Instant::now();
         let mut stages = Vec::new();
         crate::cancel::check(progress)?;
-        // Only the methods that trace rays on the CPU build (and keep updating) the BVH.
-        if self.method().uses_cpu_bvh() && (self.bvh.is_none() || self.changes.geometry) {
+        // Only the methods that trace rays on the CPU build (and keep updating) the BVH:
+        // `direct` where mirrors or glass are seen (`direct::one_bounce_light`).
+        if !self.method().uses_cpu_bvh_in(&self.scene) {
+            self.bvh = None;
+        } else if self.bvh.is_none() || self.changes.geometry {
             stages.push(self.update_bvh()?);
         }
         if self.changes.materials {
@@ -497,7 +500,8 @@ impl Renderer {
         let scene = &self.scene;
         let fc = FrameCtx {
             scene,
-            // Built by `render` for the methods that use it (not `direct`).
+            // Built by `render` for the methods that use it (`direct` only with mirrors
+            // or glass).
             bvh: self.bvh.as_ref(),
             params: frame,
             progress,

@@ -21,8 +21,8 @@ pub(super) fn warning(scene: &Scene, method: Method) -> Option<String> {
         .zip(&scene.material_names)
         .enumerate()
     {
-        // Rough glass is `glass_stand_in`'s: `direct` and `bidir` replace it (and say so),
-        // `ispm` renders its lobes (its CPU specular image and photons).
+        // Rough glass is `glass_stand_in`'s: `bidir` replaces it (and says so), `ispm` and
+        // `direct` render its lobes (their CPU images; `ispm`'s photons).
         if m.uber_equivalent() == *m || m.rough_glass {
             continue;
         }

@@ -16,7 +16,7 @@ use rayon::prelude::*;
 /// drawn from `seed`, each following delta lobes through up to `max_depth` scatterings
 /// (Russian roulette beyond [`ROULETTE_DEPTH`]); with `first_hit_aovs`, one more ray through each
 /// pixel centre for the first-hit images.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct CameraSamples {
     pub spp: u32,
     pub seed: u64,

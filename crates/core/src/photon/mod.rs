@@ -9,6 +9,7 @@
 pub mod bounce;
 pub mod boundary;
 pub mod camera_pass;
+pub mod delta_light;
 pub mod delta_paths;
 pub mod density;
 pub mod differential;

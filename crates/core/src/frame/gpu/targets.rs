@@ -375,6 +375,11 @@ impl Targets {
         &self.direct_gbuffer_group
     }
 
+    /// Whether the accumulated direct light is the current scene's (nothing changed since).
+    pub fn direct_current(&self) -> bool {
+        self.direct_current
+    }
+
     pub fn has_composite(&self) -> bool {
         self.composite_group.is_some()
     }

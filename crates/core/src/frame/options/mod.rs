@@ -85,6 +85,12 @@ impl Method {
     pub fn uses_cpu_bvh(self) -> bool {
         self != Method::Direct
     }
+
+    /// Whether the method traces rays on the CPU in `scene`: `direct` only where mirrors
+    /// or glass may be seen (the light met one delta scattering from the camera).
+    pub fn uses_cpu_bvh_in(self, scene: &crate::scene::Scene) -> bool {
+        self.uses_cpu_bvh() || scene.has_specular_traced()
+    }
 }
 
 impl FromStr for Method {
