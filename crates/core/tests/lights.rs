@@ -11,7 +11,7 @@
 
 use gi_core::sampling::Rng;
 use gi_core::scene::emitters::Selection;
-use gi_core::trace::direct::DirectLight;
+use gi_core::trace::direct::{DirectLight, LightQuery};
 use gi_core::trace::light_vertex::Connection;
 use gi_core::trace::path::{self, PathSettings, Strategy};
 use gi_core::trace::SceneBvh;
@@ -174,9 +174,13 @@ fn emitter_facing_a_close_surface_is_not_shadowed_by_itself() {
         let n = 400_000;
         let sum: f64 = (0..n)
             .map(|_| {
-                lights
-                    .emitter_light(&s, &bvh, &it, Vec3::Y, &mut rng, false)
-                    .x as f64
+                let q = LightQuery {
+                    bvh: &bvh,
+                    it: &it,
+                    wo: Vec3::Y,
+                    mis: false,
+                };
+                lights.emitter_light(&s, q, &mut rng).x as f64
             })
             .sum();
         let m = sum / n as f64;

@@ -6,6 +6,7 @@
 
 use super::wgsl;
 use crate::gpu::layout::{buffer_init, texture as tex, texture_entry, uniform_entry};
+use crate::gpu::pipeline::{bind_group_layout, pipeline_layout};
 use crate::gpu::raw::UpsampleParamsRaw;
 use crate::gpu::timer::Timer;
 use crate::gpu::{self, shaders, GpuContext, Pipelines};
@@ -28,20 +29,8 @@ pub struct UpsamplePass {
 impl Pipelines for UpsamplePass {
     fn create(ctx: &GpuContext) -> Self {
         let device = &ctx.device;
-        let layout = |label, entries: &[wgpu::BindGroupLayoutEntry]| {
-            device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some(label),
-                entries,
-            })
-        };
-        let pipeline_layout = |bgl: &wgpu::BindGroupLayout| {
-            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("upsample pipeline layout"),
-                bind_group_layouts: &[Some(bgl)],
-                immediate_size: 0,
-            })
-        };
-        let upsample_layout = layout(
+        let upsample_layout = bind_group_layout(
+            device,
             "upsample bind group layout",
             &[
                 uniform_entry(0),
@@ -66,7 +55,7 @@ impl Pipelines for UpsamplePass {
         let upsample = crate::gpu::create_fullscreen_pipeline(
             device,
             "upsample pipeline",
-            &pipeline_layout(&upsample_layout),
+            &pipeline_layout(device, "upsample pipeline layout", &[&upsample_layout]),
             &module,
             "fs_main",
             TARGET.into(),

@@ -16,6 +16,7 @@ use super::wgsl;
 use super::{buffer_init, gbuffer, Geometry};
 use crate::error::{Error, Result};
 use crate::gpu::layout::{storage_entry, uniform_entry_sized};
+use crate::gpu::pipeline::bind_group_layout;
 use crate::gpu::raw::BounceViewRaw;
 use crate::gpu::timer::Timer;
 use crate::gpu::{self, shaders, GpuContext, Pipelines};
@@ -37,13 +38,8 @@ impl Pipelines for BouncePass {
     fn create(ctx: &GpuContext) -> Self {
         let device = &ctx.device;
         let textures = &TexturesLayout::get(ctx).layout;
-        let layout = |label, entries: &[wgpu::BindGroupLayoutEntry]| {
-            device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some(label),
-                entries,
-            })
-        };
-        let bounce_layout = layout(
+        let bounce_layout = bind_group_layout(
+            device,
             "bounce bind group layout",
             &[
                 uniform_entry_sized(

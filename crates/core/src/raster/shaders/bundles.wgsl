@@ -36,16 +36,7 @@ fn insert(in: VertexOut, textured: bool) {
     let duvdx = dpdx(in.uv);
     let duvdy = dpdy(in.uv);
     let ng = in.geometric_normal;
-    var ns = in.normal;
-    let len = length(ns);
-    if !(len > 0.0) {
-        ns = ng;
-    } else {
-        ns = ns / len;
-        if dot(ns, ng) < 0.0 {
-            ns = -ns;
-        }
-    }
+    var ns = shading_normal(in.normal, ng);
     var m = materials[in.material];
     if textured {
         let maps = material_maps[in.material];
