@@ -8,7 +8,7 @@
 
 use super::target::{IndirectTarget, TARGET};
 use super::wgsl;
-use crate::gpu::layout::{buffer_init, texture as tex, texture_entry, uniform_entry};
+use crate::gpu::layout::{buffer, buffer_init, texture as tex, texture_entry, uniform_entry};
 use crate::gpu::pipeline::{additive_target, bind_group_layout, pipeline_layout, RenderSpec};
 use crate::gpu::raw::VolumeParamsRaw;
 use crate::gpu::timer::Timer;
@@ -203,19 +203,13 @@ impl Volumes {
                 label: Some("volume bind group"),
                 layout: &passes.layout,
                 entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: params.as_entire_binding(),
-                    },
+                    buffer(0, &params),
                     tex(1, &inputs[0]),
                     tex(2, &inputs[1]),
                     tex(3, &inputs[2]),
                     tex(4, &inputs[3]),
                     tex(5, gbuf.emission()),
-                    wgpu::BindGroupEntry {
-                        binding: 6,
-                        resource: models.as_entire_binding(),
-                    },
+                    buffer(6, models),
                 ],
             },
         );

@@ -15,7 +15,7 @@ use super::textures::{TexturesLayout, Variant};
 use super::wgsl;
 use super::{buffer_init, gbuffer, Geometry};
 use crate::error::{Error, Result};
-use crate::gpu::layout::{storage_entry, uniform_entry_sized};
+use crate::gpu::layout::{buffer, dynamic_buffer, storage_entry, uniform_entry_sized};
 use crate::gpu::pipeline::bind_group_layout;
 use crate::gpu::raw::BounceViewRaw;
 use crate::gpu::timer::Timer;
@@ -181,22 +181,9 @@ impl BounceTargets {
                 label: Some("bounce bind group"),
                 layout: &passes.layout,
                 entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                            buffer: &views,
-                            offset: 0,
-                            size: wgpu::BufferSize::new(BOUNCE_VIEW_SIZE),
-                        }),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: materials.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 2,
-                        resource: models.as_entire_binding(),
-                    },
+                    dynamic_buffer(0, &views, BOUNCE_VIEW_SIZE),
+                    buffer(1, materials),
+                    buffer(2, models),
                 ],
             },
         );

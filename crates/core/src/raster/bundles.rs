@@ -10,7 +10,7 @@
 use super::wgsl;
 use super::{buffer_init, gbuffer, Geometry};
 use crate::error::{Error, Result};
-use crate::gpu::layout::uniform_entry_sized;
+use crate::gpu::layout::{buffer, dynamic_buffer, uniform_entry_sized};
 use crate::gpu::pipeline::{bind_group_layout, pipeline_layout};
 use crate::gpu::timer::Timer;
 use crate::gpu::{self, shaders, GpuContext};
@@ -228,30 +228,11 @@ impl BundleBuffers {
                 label: Some("bundle bind group"),
                 layout: &pass.layout,
                 entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                            buffer: &views,
-                            offset: 0,
-                            size: wgpu::BufferSize::new(VIEW_BYTES),
-                        }),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: materials.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 2,
-                        resource: heads.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 3,
-                        resource: nodes.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 4,
-                        resource: counter.as_entire_binding(),
-                    },
+                    dynamic_buffer(0, &views, VIEW_BYTES),
+                    buffer(1, materials),
+                    buffer(2, &heads),
+                    buffer(3, &nodes),
+                    buffer(4, &counter),
                 ],
             },
         );

@@ -9,7 +9,7 @@ use super::layers::{LayerTargets, TARGET};
 use super::wgsl;
 use super::{buffer_init, gbuffer, Geometry};
 use crate::error::{Error, Result};
-use crate::gpu::layout::uniform_entry_sized;
+use crate::gpu::layout::{buffer, dynamic_buffer, uniform_entry_sized};
 use crate::gpu::pipeline::{bind_group_layout, pipeline_layout};
 use crate::gpu::raw::BounceViewRaw;
 use crate::gpu::timer::Timer;
@@ -127,20 +127,7 @@ impl RsmTargets {
             &wgpu::BindGroupDescriptor {
                 label: Some("rsm bind group"),
                 layout: &pass.layout,
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                            buffer: &views,
-                            offset: 0,
-                            size: wgpu::BufferSize::new(VIEW_SIZE),
-                        }),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: materials.as_entire_binding(),
-                    },
-                ],
+                entries: &[dynamic_buffer(0, &views, VIEW_SIZE), buffer(1, materials)],
             },
         );
         Ok(Some(RsmTargets {

@@ -100,3 +100,28 @@ fn facing_normals(wo: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>) -> FacingNormals 
     }
     return o;
 }
+
+// A fragment's shading normal and material.
+struct FragmentSurface {
+    ns: vec3<f32>,
+    m: Material,
+}
+
+// Fragment `in`'s shading normal (`shading_normal`) and material `base`, with its
+// textures (common/texture.wgsl, `material_maps`) applied where `textured`: the normal map,
+// then the textured material, at the mip level of the uv derivatives `duvdx`, `duvdy`.
+fn fragment_surface(
+    in: VertexOut,
+    base: Material,
+    textured: bool,
+    duvdx: vec2<f32>,
+    duvdy: vec2<f32>,
+) -> FragmentSurface {
+    var o = FragmentSurface(shading_normal(in.normal, in.geometric_normal), base);
+    if textured {
+        let maps = material_maps[in.material];
+        o.ns = mapped_normal(maps, o.ns, in.tangent, in.uv, duvdx, duvdy);
+        o.m = textured_material(maps, o.m, in.uv, duvdx, duvdy);
+    }
+    return o;
+}
