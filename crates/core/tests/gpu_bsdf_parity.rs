@@ -243,8 +243,7 @@ fn sensitivity(c: &Case, cpu: fn(&Case) -> Vec3) -> Vec3 {
 /// packed in `input`, one vec4 result per case.
 fn run_kernel(parts: &[&str], input: &[u8], n: usize) -> Vec<Vec3> {
     let ctx = gpu::context(None).expect("a GPU adapter (lavapipe in CI)");
-    let module = shaders::module(&ctx.device, "bsdf parity shader", parts);
-    common::kernel::run(&ctx, &module, input, n, None)
+    common::kernel::run(&ctx, parts, input, n, None)
         .iter()
         .map(|v| Vec3::new(v[0], v[1], v[2]))
         .collect()

@@ -115,7 +115,6 @@ fn wgsl_texture_lookup_matches_cpu() {
 
 fn gpu_sample(scene: &Scene, queries: &[(u32, Vec2, f32)]) -> Vec<Vec4> {
     let ctx = gpu::context(None).expect("a GPU adapter (lavapipe in CI)");
-    let device = &ctx.device;
     let textures_layout = &TexturesLayout::get(&ctx).layout;
     let textures = GpuTextures::new(&ctx, scene, textures_layout).unwrap();
     let raw: Vec<QueryRaw> = queries
@@ -126,18 +125,14 @@ fn gpu_sample(scene: &Scene, queries: &[(u32, Vec2, f32)]) -> Vec<Vec4> {
             texture: t,
         })
         .collect();
-    let module = gpu::shaders::module(
-        device,
-        "texture parity shader",
-        &[
-            gpu::shaders::COMMON,
-            gpu::shaders::TEXTURE,
-            include_str!("gpu_texture_parity.wgsl"),
-        ],
-    );
+    let parts = [
+        gpu::shaders::COMMON,
+        gpu::shaders::TEXTURE,
+        include_str!("gpu_texture_parity.wgsl"),
+    ];
     let input = bytemuck::cast_slice(&raw);
     let textures = Some((textures_layout, &textures.group));
-    common::kernel::run(&ctx, &module, input, queries.len(), textures)
+    common::kernel::run(&ctx, &parts, input, queries.len(), textures)
         .iter()
         .map(|v| Vec4::from_array(*v))
         .collect()

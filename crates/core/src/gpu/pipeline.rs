@@ -1,5 +1,6 @@
-//! Layouts and render pipelines as every pass builds them: labelled bind-group and pipeline
-//! layouts, one module's vertex and fragment stages without multisampling, additive targets.
+//! Layouts, render pipelines and full-screen draws as every pass builds them: labelled
+//! bind-group and pipeline layouts, one module's vertex and fragment stages without
+//! multisampling, additive targets, one triangle over a cleared target.
 
 /// `Device::create_bind_group_layout` of `entries`, labelled.
 pub fn bind_group_layout(

@@ -1,20 +1,24 @@
-//! A test kernel on the GPU: a compute entry `main` over `n` items (64 a workgroup) reading
-//! its input from storage binding 0 and writing one vec4 per item to binding 1 of group 0,
-//! with group 1 bound where the kernel needs it (the scene's textures).
+//! A test kernel on the GPU: the test's WGSL computes one vec4 per input record
+//! (`kernel.wgsl`: `Item`, `evaluate`), run over `n` records (64 a workgroup) from storage
+//! binding 0 into binding 1 of group 0, with group 1 bound where the kernel needs it (the
+//! scene's textures).
 
-use gi_core::gpu::{self, GpuContext};
+use gi_core::gpu::{self, shaders, GpuContext};
 use wgpu::util::DeviceExt;
 
-/// Runs `module`'s `main` on `ctx` over `n` items packed in `input`; `group1`: a layout and
-/// group for group 1. Returns the `n` results.
+/// Runs the kernel of `parts` (the shared sources it needs, then its own) on `ctx` over `n`
+/// records packed in `input`; `group1`: a layout and group for group 1. Returns the `n`
+/// results.
 pub fn run(
     ctx: &GpuContext,
-    module: &wgpu::ShaderModule,
+    parts: &[&str],
     input: &[u8],
     n: usize,
     group1: Option<(&wgpu::BindGroupLayout, &wgpu::BindGroup)>,
 ) -> Vec<[f32; 4]> {
     let device = &ctx.device;
+    let parts = [parts, &[include_str!("kernel.wgsl")]].concat();
+    let module = &shaders::module(device, "test kernel", &parts);
     let input = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some("kernel input"),
         contents: input,
