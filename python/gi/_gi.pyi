@@ -19,33 +19,14 @@ class RenderWarning(UserWarning): ...
 
 # (vertices (N, 3), faces (M, 3), normals (N, 3) or None (zero rows: none for that vertex),
 # materials as JSON `[[name, material], ...]` or None, per-face index into them (M,) or None)
-_MeshArrays = tuple[
-    npt.NDArray[np.float32],
-    npt.NDArray[np.uint32],
-    npt.NDArray[np.float32] | None,
-    str | None,
-    npt.NDArray[np.uint32] | None,
-]
+_F32 = npt.NDArray[np.float32]
+_U32 = npt.NDArray[np.uint32]
+_MeshArrays = tuple[_F32, _U32, _F32 | None, str | None, _U32 | None]
 # ... optionally followed by texture coordinates per vertex (N, 2) or None (v runs down).
-_MeshArraysUV = tuple[
-    npt.NDArray[np.float32],
-    npt.NDArray[np.uint32],
-    npt.NDArray[np.float32] | None,
-    str | None,
-    npt.NDArray[np.uint32] | None,
-    npt.NDArray[np.float32] | None,
-]
+_MeshArraysUV = tuple[_F32, _U32, _F32 | None, str | None, _U32 | None, _F32 | None]
 # ... and tangents per vertex (N, 4) or None, in gi's convention: xyz along +u, the
 # bitangent along +v is w · n × t (glTF's TANGENT with w negated).
-_MeshArraysUVT = tuple[
-    npt.NDArray[np.float32],
-    npt.NDArray[np.uint32],
-    npt.NDArray[np.float32] | None,
-    str | None,
-    npt.NDArray[np.uint32] | None,
-    npt.NDArray[np.float32] | None,
-    npt.NDArray[np.float32] | None,
-]
+_MeshArraysUVT = tuple[_F32, _U32, _F32 | None, str | None, _U32 | None, _F32 | None, _F32 | None]
 
 @final
 class Scene:

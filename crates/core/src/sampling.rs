@@ -395,6 +395,9 @@ pub fn uniform_triangle(u: Vec2) -> (f32, f32) {
 }
 
 #[cfg(test)]
+pub(crate) mod chi_square;
+
+#[cfg(test)]
 mod tests {
     use super::*;
 

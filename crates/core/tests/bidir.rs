@@ -9,39 +9,15 @@
 
 mod common;
 
+use common::{block_means, load, mean, run};
 use gi_core::frame::options::BidirStrategy;
 use gi_core::Silent;
-use gi_core::{render, scene::builtin, Method, RenderOutput, Scene};
+use gi_core::{render, Method, RenderOutput, Scene};
 use glam::DVec3;
 use std::f64::consts::PI;
 
-fn load(name: &str) -> Scene {
-    builtin::load(name).expect("built-in scene")
-}
-
-fn mean(img: &gi_core::image::Image) -> DVec3 {
-    img.pixels.iter().map(|p| p.as_dvec3()).sum::<DVec3>() / img.pixels.len() as f64
-}
-
-fn run(scene: &Scene, s: &gi_core::RenderOptions) -> RenderOutput {
-    render(scene, s, &Silent).expect("render")
-}
-
 fn bidir_settings(size: u32) -> gi_core::RenderOptions {
     gi_core::options!(Bidir, spp: 1, width: size, height: size, seed: 3)
-}
-
-/// Means of the `block`×`block` pixel blocks.
-fn block_means(img: &gi_core::image::Image, block: u32) -> Vec<DVec3> {
-    let (bw, bh) = (img.width / block, img.height / block);
-    let mut out = vec![DVec3::ZERO; (bw * bh) as usize];
-    for y in 0..bh * block {
-        for x in 0..bw * block {
-            out[((y / block) * bw + x / block) as usize] +=
-                img.get(x, y).as_dvec3() / (block * block) as f64;
-        }
-    }
-    out
 }
 
 /// Relative error of each channel of `got` against `expected`.

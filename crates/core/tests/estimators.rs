@@ -2,39 +2,16 @@
 //! kernels, BSDF and normal test, so they must give the same image: raster photon volumes
 //! against tiled compute splatting, on lavapipe at small sizes.
 
+mod common;
+
+use common::{lit_pixels, max_difference};
 use gi_core::estimate::Estimator;
 use gi_core::Silent;
 use gi_core::{render, scene::builtin, RenderOutput, Scene};
-use std::collections::HashMap;
-
-/// A spot light over glossy and metallic surfaces (the BSDF's specular lobes are evaluated
-/// per photon, so they must agree too).
-const SPOT_SCENE: &str = r#"{
-  "camera": { "position": [0, 1.6, 3.6], "look_at": [0, 0.35, 0], "fov": 45, "width": 64, "height": 64 },
-  "lights": [
-    { "type": "spot", "position": [0.3, 2.6, 1.2], "direction": [-0.15, -1, -0.45],
-      "intensity": [20, 18, 15], "inner_angle": 20, "outer_angle": 38 }
-  ],
-  "materials": {
-    "floor": { "diffuse": [0.7, 0.7, 0.7], "specular": [0.04, 0.04, 0.04], "roughness": 0.5, "fresnel": true },
-    "wall": { "diffuse": [0.6, 0.55, 0.5] },
-    "ball": { "diffuse": [0.2, 0.35, 0.6], "specular": [0.05, 0.05, 0.05], "roughness": 0.3, "fresnel": true },
-    "metal": { "specular": [0.9, 0.7, 0.4], "roughness": 0.2 }
-  },
-  "objects": [
-    { "shape": { "type": "quad", "size": [4, 4] }, "material": "floor" },
-    { "shape": { "type": "quad", "size": [4, 3] }, "transform": { "rotate": [90, 0, 0], "translate": [0, 1.5, -1.5] },
-      "material": "wall" },
-    { "shape": { "type": "box", "size": [0.5, 0.7, 0.5] }, "transform": { "rotate": [0, 30, 0], "translate": [-0.6, 0.35, -0.2] },
-      "material": "metal" },
-    { "shape": { "type": "sphere", "radius": 0.4, "subdivisions": 3 }, "transform": { "translate": [0.5, 0.4, 0.2] },
-      "material": "ball" }
-  ]
-}"#;
 
 fn scene(name: &str) -> Scene {
     match name {
-        "spot-glossy" => Scene::from_json(SPOT_SCENE, name, &HashMap::new()).expect("scene"),
+        "spot-glossy" => common::spot_scene(name, 0.2, 3),
         _ => builtin::load(name).expect("built-in scene"),
     }
 }
@@ -53,19 +30,6 @@ fn indirect(out: &RenderOutput) -> &gi_core::Image {
         .find(|(n, _)| n == "indirect")
         .map(|(_, img)| img)
         .expect("indirect AOV")
-}
-
-/// Largest per-pixel difference of `a` and `b` relative to `scale`.
-fn max_difference(a: &gi_core::Image, b: &gi_core::Image, scale: f32) -> f32 {
-    a.pixels
-        .iter()
-        .zip(&b.pixels)
-        .map(|(p, q)| (*p - *q).abs().max_element() / scale)
-        .fold(0.0, f32::max)
-}
-
-fn lit_pixels(img: &gi_core::Image) -> usize {
-    img.pixels.iter().filter(|p| p.max_element() > 0.0).count()
 }
 
 /// `tiled`, `cluster` and `cpu` (the same estimate computed on the CPU) equal `volumes` on: the Cornell box at subsample 1 and 2 (the half-texel shift

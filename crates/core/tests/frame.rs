@@ -4,23 +4,16 @@
 //! reuse converges on a still scene.
 
 use gi_core::estimate::Estimator;
+mod common;
+
+use common::frames::{all, max_difference, mean, settings};
 use gi_core::frame::{FrameDesc, Images, Renderer};
 use gi_core::gpu::alloc::counters;
 use gi_core::scene::desc::{CameraDesc, LightDesc};
 use gi_core::scene::{builtin, SceneUpdate};
 use gi_core::Silent;
-use gi_core::{render, Image, Method, RenderOutput, Scene};
+use gi_core::{render, Method, RenderOutput, Scene};
 use glam::{Mat4, Vec3};
-
-fn settings(method: Method) -> gi_core::RenderOptions {
-    gi_core::RenderOptions::defaults(method)
-        .with("width", 40)
-        .with("height", 30)
-        .with("spp", 4)
-        .with("photons", 6_000)
-        .with("k", 20)
-        .with("max_depth", 4)
-}
 
 /// The light moved and dimmed, the camera turned, the last object (the tall box) moved.
 fn pose(scene: &Scene, t: f32) -> Vec<SceneUpdate> {
@@ -54,27 +47,6 @@ fn posed(scene: &Scene, t: f32) -> Scene {
         s.apply(&u).expect("valid update");
     }
     s
-}
-
-fn all() -> FrameDesc {
-    FrameDesc {
-        seed: None,
-        images: Images::ALL,
-        serial: false,
-    }
-}
-
-fn max_difference(a: &Image, b: &Image) -> f32 {
-    assert_eq!((a.width, a.height), (b.width, b.height));
-    a.pixels
-        .iter()
-        .zip(&b.pixels)
-        .map(|(x, y)| (*x - *y).abs().max_element())
-        .fold(0.0, f32::max)
-}
-
-fn mean(img: &Image) -> f32 {
-    img.pixels.iter().map(|p| p.element_sum()).sum::<f32>() / (3 * img.pixels.len()) as f32
 }
 
 /// Every method: a renderer that rendered other poses first (so its BVH, GPU buffers,

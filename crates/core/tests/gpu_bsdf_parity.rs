@@ -11,12 +11,13 @@
 //! lobe (roughness 0.05) one ULP in the half vector changes D by percent, so no two f32
 //! implementations can agree there to 1e-4; everywhere else `s` is negligible.
 
+mod common;
+
 use bytemuck::Pod;
 use gi_core::bsdf::{Coating, Conductor, Distribution, Material};
 use gi_core::gpu::{self, shaders};
 use gi_core::sampling::{uniform_sphere, Frame, Rng};
 use glam::Vec3;
-use wgpu::util::DeviceExt;
 
 #[derive(Clone, Copy)]
 struct Case {
@@ -238,68 +239,11 @@ fn sensitivity(c: &Case, cpu: fn(&Case) -> Vec3) -> Vec3 {
     s
 }
 
-/// Runs the compute kernel `source` (after `shaders`) over `n` cases packed in `input`
-/// (binding 0), one vec4 result per case (binding 1).
+/// Runs the compute kernel `parts` (the shared sources, then the kernel) over `n` cases
+/// packed in `input`, one vec4 result per case.
 fn run_kernel(parts: &[&str], input: &[u8], n: usize) -> Vec<Vec3> {
     let ctx = gpu::context(None).expect("a GPU adapter (lavapipe in CI)");
-    let device = &ctx.device;
-    let input = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some("parity cases"),
-        contents: input,
-        usage: wgpu::BufferUsages::STORAGE,
-    });
-    let size = n as u64 * 16;
-    let output = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("parity results"),
-        size,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        mapped_at_creation: false,
-    });
-    let readback = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("parity readback"),
-        size,
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    let module = shaders::module(device, "bsdf parity shader", parts);
-    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some("bsdf parity pipeline"),
-        layout: None,
-        module: &module,
-        entry_point: Some("main"),
-        compilation_options: Default::default(),
-        cache: None,
-    });
-    let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("bsdf parity bind group"),
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: input.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: output.as_entire_binding(),
-            },
-        ],
-    });
-    let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-        label: Some("bsdf parity"),
-    });
-    {
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("bsdf parity pass"),
-            timestamp_writes: None,
-        });
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &bind_group, &[]);
-        pass.dispatch_workgroups((n as u32).div_ceil(64), 1, 1);
-    }
-    encoder.copy_buffer_to_buffer(&output, 0, &readback, 0, size);
-    ctx.queue.submit([encoder.finish()]);
-    let bytes = ctx.read_buffer(&readback).expect("readback");
-    bytemuck::cast_slice::<u8, [f32; 4]>(&bytes)
+    common::kernel::run(&ctx, parts, input, n, None)
         .iter()
         .map(|v| Vec3::new(v[0], v[1], v[2]))
         .collect()

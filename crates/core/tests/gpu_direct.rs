@@ -20,32 +20,8 @@ mod common;
 
 use gi_core::Silent;
 use gi_core::{render, scene::builtin, Error, Method, RenderOutput, Scene};
-use std::collections::HashMap;
 
 const SIZE: u32 = 64;
-
-const SPOT_SCENE: &str = r#"{
-  "camera": { "position": [0, 1.6, 3.6], "look_at": [0, 0.35, 0], "fov": 45, "width": 64, "height": 64 },
-  "lights": [
-    { "type": "spot", "position": [0.3, 2.6, 1.2], "direction": [-0.15, -1, -0.45],
-      "intensity": [20, 18, 15], "inner_angle": 20, "outer_angle": 38 }
-  ],
-  "materials": {
-    "floor": { "diffuse": [0.7, 0.7, 0.7], "specular": [0.04, 0.04, 0.04], "roughness": 0.5, "fresnel": true },
-    "wall": { "diffuse": [0.6, 0.55, 0.5] },
-    "ball": { "diffuse": [0.2, 0.35, 0.6], "specular": [0.05, 0.05, 0.05], "roughness": 0.3, "fresnel": true },
-    "metal": { "specular": [0.9, 0.7, 0.4], "roughness": 0.4 }
-  },
-  "objects": [
-    { "shape": { "type": "quad", "size": [4, 4] }, "material": "floor" },
-    { "shape": { "type": "quad", "size": [4, 3] }, "transform": { "rotate": [90, 0, 0], "translate": [0, 1.5, -1.5] },
-      "material": "wall" },
-    { "shape": { "type": "box", "size": [0.5, 0.7, 0.5] }, "transform": { "rotate": [0, 30, 0], "translate": [-0.6, 0.35, -0.2] },
-      "material": "metal" },
-    { "shape": { "type": "sphere", "radius": 0.4, "subdivisions": 4 }, "transform": { "translate": [0.5, 0.4, 0.2] },
-      "material": "ball" }
-  ]
-}"#;
 
 fn settings(method: Method, spp: u32) -> gi_core::RenderOptions {
     gi_core::RenderOptions::defaults(method)
@@ -153,7 +129,7 @@ fn cornell_matches_path_tracer() {
 
 #[test]
 fn spot_scene_matches_path_tracer() {
-    let scene = Scene::from_json(SPOT_SCENE, "spot-test", &HashMap::new()).expect("valid scene");
+    let scene = common::spot_scene("spot-test", 0.4, 4);
     compare("spot", &scene);
 }
 

@@ -107,34 +107,7 @@ fn write_images(name: &str, images: &[(&str, &Image)]) {
 /// and depth steps (`common::edge_mask` without its shadow-edge test, which a noisy
 /// reference would trip everywhere; these comparisons average blocks of pixels instead).
 fn geometric_keep(reference: &RenderOutput) -> Vec<bool> {
-    let (w, h) = (
-        reference.radiance.width as i32,
-        reference.radiance.height as i32,
-    );
-    let idx = |x: i32, y: i32| (y.clamp(0, h - 1) * w + x.clamp(0, w - 1)) as usize;
-    let mut keep = vec![true; (w * h) as usize];
-    for y in 0..h {
-        for x in 0..w {
-            let i = idx(x, y);
-            let (d, n) = (reference.depth[i], reference.normal.pixels[i]);
-            let mut e = d <= 0.0;
-            for (dx, dy) in [(1, 0), (0, 1)] {
-                let (a, b) = (idx(x - dx, y - dy), idx(x + dx, y + dy));
-                let (da, db) = (reference.depth[a], reference.depth[b]);
-                e |= da <= 0.0 || db <= 0.0 || (da + db - 2.0 * d).abs() > 0.01 * d;
-                e |= reference.normal.pixels[a].dot(n) < 0.99
-                    || reference.normal.pixels[b].dot(n) < 0.99;
-            }
-            if e {
-                for dy in -1..=1 {
-                    for dx in -1..=1 {
-                        keep[idx(x + dx, y + dy)] = false;
-                    }
-                }
-            }
-        }
-    }
-    keep
+    common::away_from(reference, &common::edges(reference, false), 1)
 }
 
 /// Means over `b`×`b` blocks of pixels (kept where `keep`), per block with enough kept

@@ -9,6 +9,8 @@
 //! neighbouring texel pairs, but bilinear filtering is continuous there, so the results
 //! still agree to rounding. 8-bit sources are not involved: images arrive as floats.
 
+mod common;
+
 use gi_core::gpu;
 use gi_core::gpu::Pipelines;
 use gi_core::raster::textures::{GpuTextures, TexturesLayout};
@@ -19,7 +21,6 @@ use gi_core::Scene;
 use glam::{Vec2, Vec4};
 use std::collections::HashMap;
 use std::sync::Arc;
-use wgpu::util::DeviceExt;
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -114,7 +115,6 @@ fn wgsl_texture_lookup_matches_cpu() {
 
 fn gpu_sample(scene: &Scene, queries: &[(u32, Vec2, f32)]) -> Vec<Vec4> {
     let ctx = gpu::context(None).expect("a GPU adapter (lavapipe in CI)");
-    let device = &ctx.device;
     let textures_layout = &TexturesLayout::get(&ctx).layout;
     let textures = GpuTextures::new(&ctx, scene, textures_layout).unwrap();
     let raw: Vec<QueryRaw> = queries
@@ -125,86 +125,14 @@ fn gpu_sample(scene: &Scene, queries: &[(u32, Vec2, f32)]) -> Vec<Vec4> {
             texture: t,
         })
         .collect();
-    let input = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some("texture queries"),
-        contents: bytemuck::cast_slice(&raw),
-        usage: wgpu::BufferUsages::STORAGE,
-    });
-    let size = queries.len() as u64 * 16;
-    let output = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("texture results"),
-        size,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        mapped_at_creation: false,
-    });
-    let readback = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("texture readback"),
-        size,
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    let module = gpu::shaders::module(
-        device,
-        "texture parity shader",
-        &[
-            gpu::shaders::COMMON,
-            gpu::shaders::TEXTURE,
-            include_str!("gpu_texture_parity.wgsl"),
-        ],
-    );
-    let storage = |binding, read_only| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    };
-    let probe_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("texture parity layout"),
-        entries: &[storage(0, true), storage(1, false)],
-    });
-    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some("texture parity pipeline layout"),
-        bind_group_layouts: &[Some(&probe_layout), Some(textures_layout)],
-        immediate_size: 0,
-    });
-    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some("texture parity pipeline"),
-        layout: Some(&layout),
-        module: &module,
-        entry_point: Some("main"),
-        compilation_options: Default::default(),
-        cache: None,
-    });
-    let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("texture parity bind group"),
-        layout: &probe_layout,
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: input.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: output.as_entire_binding(),
-            },
-        ],
-    });
-    let mut encoder = device.create_command_encoder(&Default::default());
-    {
-        let mut pass = encoder.begin_compute_pass(&Default::default());
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        pass.set_bind_group(1, &textures.group, &[]);
-        pass.dispatch_workgroups((queries.len() as u32).div_ceil(64), 1, 1);
-    }
-    encoder.copy_buffer_to_buffer(&output, 0, &readback, 0, size);
-    ctx.queue.submit([encoder.finish()]);
-    let bytes = ctx.read_buffer(&readback).expect("readback");
-    bytemuck::cast_slice::<u8, [f32; 4]>(&bytes)
+    let parts = [
+        gpu::shaders::COMMON,
+        gpu::shaders::TEXTURE,
+        include_str!("gpu_texture_parity.wgsl"),
+    ];
+    let input = bytemuck::cast_slice(&raw);
+    let textures = Some((textures_layout, &textures.group));
+    common::kernel::run(&ctx, &parts, input, queries.len(), textures)
         .iter()
         .map(|v| Vec4::from_array(*v))
         .collect()

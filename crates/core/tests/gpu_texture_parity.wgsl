@@ -1,4 +1,5 @@
-// Samples textures at given (texture, uv, lod) queries with `tex_sample` of texture.wgsl.
+// Samples textures at given (texture, uv, lod) queries with `tex_sample` of texture.wgsl;
+// run by common/kernel.wgsl.
 
 struct Query {
     uv: vec2<f32>,
@@ -6,15 +7,8 @@ struct Query {
     texture: u32,
 }
 
-@group(0) @binding(0) var<storage, read> queries: array<Query>;
-@group(0) @binding(1) var<storage, read_write> results: array<vec4<f32>>;
+alias Item = Query;
 
-@compute @workgroup_size(64)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
-    let i = id.x;
-    if i >= arrayLength(&queries) {
-        return;
-    }
-    let q = queries[i];
-    results[i] = tex_sample(q.texture, q.uv, q.lod);
+fn evaluate(q: Query) -> vec4<f32> {
+    return tex_sample(q.texture, q.uv, q.lod);
 }

@@ -3,22 +3,15 @@
 //! (within rounding, every method); moving one instance moves its shadow and its indirect
 //! light in the `Renderer`; bad instance references are typed errors naming the field.
 
-use gi_core::frame::{FrameDesc, Images, Renderer};
+mod common;
+
+use common::frames::{all, max_difference, mean, settings};
+use gi_core::frame::Renderer;
 use gi_core::scene::{builtin, SceneUpdate};
 use gi_core::Silent;
 use gi_core::{render, Image, Method, Scene};
 use glam::{Mat4, Vec3};
 use std::collections::HashMap;
-
-fn settings(method: Method) -> gi_core::RenderOptions {
-    gi_core::RenderOptions::defaults(method)
-        .with("width", 40)
-        .with("height", 30)
-        .with("spp", 4)
-        .with("photons", 6_000)
-        .with("k", 20)
-        .with("max_depth", 4)
-}
 
 /// The glass Cornell box with four balls of one mesh: two named by equal built-in shapes,
 /// two explicit instances (one mirrored, one scaled and made of glass).
@@ -43,27 +36,6 @@ fn instanced_json() -> serde_json::Value {
 
 fn instanced() -> Scene {
     Scene::from_json(&instanced_json().to_string(), "instanced", &HashMap::new()).expect("scene")
-}
-
-fn frame() -> FrameDesc {
-    FrameDesc {
-        seed: None,
-        images: Images::ALL,
-        serial: false,
-    }
-}
-
-fn max_difference(a: &Image, b: &Image) -> f32 {
-    assert_eq!((a.width, a.height), (b.width, b.height));
-    a.pixels
-        .iter()
-        .zip(&b.pixels)
-        .map(|(x, y)| (*x - *y).abs().max_element())
-        .fold(0.0, f32::max)
-}
-
-fn mean(img: &Image) -> f32 {
-    img.pixels.iter().map(|p| p.element_sum()).sum::<f32>() / (3 * img.pixels.len()) as f32
 }
 
 /// The four balls are one mesh (so are the box's equal walls); the flat arrays place every
@@ -206,9 +178,9 @@ fn moved_instance_moves_its_shadow_and_indirect_light() {
         let pixel = y as usize * 40 + x as usize;
         let still = render(&scene, &o, &Silent).expect("still");
         let mut r = Renderer::new(&scene, &o).expect("renderer");
-        r.render(&frame(), &Silent).expect("frame 0");
+        r.render(&all(), &Silent).expect("frame 0");
         r.update(&update).expect("move");
-        let after = r.render(&frame(), &Silent).expect("moved");
+        let after = r.render(&all(), &Silent).expect("moved");
         let one_shot = render(&moved_scene, &o, &Silent).expect("one-shot");
         assert_eq!(
             max_difference(&after.radiance, &one_shot.radiance),
@@ -369,13 +341,13 @@ fn cpu_methods_never_build_the_flat_view() {
     assert!(!scene.flat_is_built());
     for method in [Method::Path, Method::Photon, Method::Gather] {
         let mut r = Renderer::new(&scene, &settings(method)).expect("renderer");
-        r.render(&frame(), &Silent).expect("frame");
+        r.render(&all(), &Silent).expect("frame");
         assert!(!r.scene().flat_is_built(), "{}", method.name());
     }
     // The GPU methods draw meshes and instance records (`raster::instances`).
     for method in [Method::Direct, Method::Ispm, Method::Bidir] {
         let mut r = Renderer::new(&scene, &settings(method)).expect("renderer");
-        r.render(&frame(), &Silent).expect("frame");
+        r.render(&all(), &Silent).expect("frame");
         let baked = method != Method::Direct && scene.triangle_count() <= 4096;
         assert_eq!(r.scene().flat_is_built(), baked, "{}", method.name());
     }

@@ -7,24 +7,13 @@
 
 mod common;
 
+use common::{block_means, lit_pixels, load, max_difference, mean, run};
 use gi_core::frame::options::IspmOptions;
 use gi_core::frame::options::VolumeShape;
 use gi_core::{render, scene::builtin, Method, RenderOutput, Scene};
 use gi_core::{MethodOptions, RenderOptions, Silent};
 use glam::DVec3;
 use std::f64::consts::PI;
-
-fn load(name: &str) -> Scene {
-    builtin::load(name).expect("built-in scene")
-}
-
-fn mean(img: &gi_core::image::Image) -> DVec3 {
-    img.pixels.iter().map(|p| p.as_dvec3()).sum::<DVec3>() / img.pixels.len() as f64
-}
-
-fn run(scene: &Scene, s: &gi_core::RenderOptions) -> RenderOutput {
-    render(scene, s, &Silent).expect("render")
-}
 
 /// ISPM at full-resolution splats (subsample 1): the accuracy tests measure the estimator,
 /// the subsampled path has its own comparison.
@@ -128,19 +117,6 @@ fn bounce_map_power_bookkeeping() {
             0.5 * prev
         );
     }
-}
-
-/// Means of the `block`×`block` pixel blocks.
-fn block_means(img: &gi_core::image::Image, block: u32) -> Vec<DVec3> {
-    let (bw, bh) = (img.width / block, img.height / block);
-    let mut out = vec![DVec3::ZERO; (bw * bh) as usize];
-    for y in 0..bh * block {
-        for x in 0..bw * block {
-            out[((y / block) * bw + x / block) as usize] +=
-                img.get(x, y).as_dvec3() / (block * block) as f64;
-        }
-    }
-    out
 }
 
 /// Mean radiance per channel over pixels `keep`.
@@ -489,19 +465,6 @@ fn indirect_with(
     (img, counts)
 }
 
-/// Largest per-pixel difference of `a` and `b` relative to `scale`.
-fn max_difference(a: &gi_core::Image, b: &gi_core::Image, scale: f32) -> f32 {
-    a.pixels
-        .iter()
-        .zip(&b.pixels)
-        .map(|(p, q)| (*p - *q).abs().max_element() / scale)
-        .fold(0.0, f32::max)
-}
-
-fn lit_pixels(img: &gi_core::Image) -> usize {
-    img.pixels.iter().filter(|p| p.max_element() > 0.0).count()
-}
-
 /// Photon volumes drawn as screen-aligned quads, as icosahedra, and per photon by size
 /// (`auto`) give the same indirect image: every shape feeds the same exact ellipsoid test,
 /// so a pixel that differs means a bound that is not conservative (a quad too small, a wrong
@@ -704,37 +667,38 @@ fn upsampling_keeps_texture_detail_in_indirect_light() {
 /// (no point or spot light: the bounce maps are empty and every photon is emitted on the
 /// CPU), with `extra` lights.
 fn area_lit_cornell(size: u32, extra: &str) -> Scene {
-    let json = format!(
-        r#"{{
-        "camera": {{"position": [0, 1, 3.4], "look_at": [0, 1, 0], "fov": 40,
-                    "width": {size}, "height": {size}}},
-        "lights": [{extra}],
-        "materials": {{
-            "white": {{"diffuse": [0.73, 0.73, 0.73]}},
-            "red": {{"diffuse": [0.63, 0.065, 0.05]}},
-            "green": {{"diffuse": [0.14, 0.45, 0.091]}},
-            "lamp": {{"diffuse": [0.5, 0.5, 0.5], "emission": [12, 12, 12]}}
-        }},
-        "objects": [
-            {{"shape": {{"type": "quad", "size": [2, 2]}}, "material": "white"}},
-            {{"shape": {{"type": "quad", "size": [2, 2]}}, "material": "white",
-              "transform": {{"rotate": [180, 0, 0], "translate": [0, 2, 0]}}}},
-            {{"shape": {{"type": "quad", "size": [2, 2]}}, "material": "white",
-              "transform": {{"rotate": [90, 0, 0], "translate": [0, 1, -1]}}}},
-            {{"shape": {{"type": "quad", "size": [2, 2]}}, "material": "red",
-              "transform": {{"rotate": [0, 0, -90], "translate": [-1, 1, 0]}}}},
-            {{"shape": {{"type": "quad", "size": [2, 2]}}, "material": "green",
-              "transform": {{"rotate": [0, 0, 90], "translate": [1, 1, 0]}}}},
-            {{"shape": {{"type": "quad", "size": [0.5, 0.5]}}, "material": "lamp",
-              "transform": {{"rotate": [180, 0, 0], "translate": [0, 1.98, 0]}}}},
-            {{"shape": {{"type": "box", "size": [0.6, 1.2, 0.6]}}, "material": "white",
-              "transform": {{"rotate": [0, 20, 0], "translate": [-0.35, 0.6, -0.3]}}}},
-            {{"shape": {{"type": "box", "size": [0.6, 0.6, 0.6]}}, "material": "white",
-              "transform": {{"rotate": [0, -20, 0], "translate": [0.35, 0.3, 0.3]}}}}
-        ]
-    }}"#
-    );
+    let boxes = r#"
+        {"shape": {"type": "box", "size": [0.6, 1.2, 0.6]}, "material": "white",
+         "transform": {"rotate": [0, 20, 0], "translate": [-0.35, 0.6, -0.3]}},
+        {"shape": {"type": "box", "size": [0.6, 0.6, 0.6]}, "material": "white",
+         "transform": {"rotate": [0, -20, 0], "translate": [0.35, 0.3, 0.3]}}"#;
+    let json = common::area_lit_box(size, extra, "", boxes);
     Scene::from_json(&json, "area-cornell", &std::collections::HashMap::new()).unwrap()
+}
+
+/// `ispm` on the 32² `scene` (400k photons, 4 spp), its indirect AOV's mean, and the path
+/// tracer's indirect light (256 spp: all bounces, the default depth 64, minus max_depth 1:
+/// direct light and the lamp seen).
+fn indirect_and_reference(scene: &Scene) -> (RenderOutput, DVec3, DVec3) {
+    let out = run(
+        scene,
+        &ispm_settings(32).with("photons", 400_000).with("spp", 4),
+    );
+    let indirect = out
+        .aovs
+        .iter()
+        .find(|(n, _)| n == "indirect")
+        .map(|(_, img)| mean(img))
+        .expect("indirect AOV");
+    let path = |depth: u32| {
+        let s = ispm_settings(32)
+            .with_method(gi_core::Method::Path)
+            .with("spp", 256)
+            .with("max_depth", depth);
+        mean(&run(scene, &s).radiance)
+    };
+    let reference = path(64) - path(1);
+    (out, indirect, reference)
 }
 
 /// `ispm`'s photons leave emitting surfaces too (their first hits traced on the CPU, the
@@ -751,24 +715,7 @@ fn area_light_photons_give_ispm_indirect_light() {
         r#"{"type": "point", "position": [0.5, 1.5, 0.5], "intensity": [1, 1, 1]}"#,
     ] {
         let scene = area_lit_cornell(32, extra);
-        let out = run(
-            &scene,
-            &ispm_settings(32).with("photons", 400_000).with("spp", 4),
-        );
-        let indirect = out
-            .aovs
-            .iter()
-            .find(|(n, _)| n == "indirect")
-            .map(|(_, img)| mean(img))
-            .expect("indirect AOV");
-        let path = |depth: u32| {
-            let s = ispm_settings(32)
-                .with_method(gi_core::Method::Path)
-                .with("spp", 256)
-                .with("max_depth", depth);
-            mean(&run(&scene, &s).radiance)
-        };
-        let reference = path(64) - path(1);
+        let (out, indirect, reference) = indirect_and_reference(&scene);
         let rel = (indirect / reference - DVec3::ONE).abs();
         eprintln!(
             "area-lit cornell (extra: {extra:?}): ispm indirect {indirect:?} vs path {reference:?}: \
@@ -806,24 +753,7 @@ fn sun_and_sky_photons_give_ispm_indirect_light() {
         ]
     }"#;
     let scene = Scene::from_json(json, "sun-sky", &std::collections::HashMap::new()).unwrap();
-    let out = run(
-        &scene,
-        &ispm_settings(32).with("photons", 400_000).with("spp", 4),
-    );
-    let indirect = out
-        .aovs
-        .iter()
-        .find(|(n, _)| n == "indirect")
-        .map(|(_, img)| mean(img))
-        .expect("indirect AOV");
-    let path = |depth: u32| {
-        let s = ispm_settings(32)
-            .with_method(gi_core::Method::Path)
-            .with("spp", 256)
-            .with("max_depth", depth);
-        mean(&run(&scene, &s).radiance)
-    };
-    let reference = path(64) - path(1);
+    let (out, indirect, reference) = indirect_and_reference(&scene);
     let rel = (indirect / reference - DVec3::ONE).abs();
     eprintln!("sun and sky: ispm indirect {indirect:?} vs path {reference:?}: {rel:?}");
     assert!(out.stats.photons_emitted > 0);

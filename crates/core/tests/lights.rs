@@ -9,9 +9,11 @@
 //! - `photon` and `gather` against `path` in an area-lit room, a sun-and-sky scene and an
 //!   environment-lit scene.
 
+mod common;
+
 use gi_core::sampling::Rng;
 use gi_core::scene::emitters::Selection;
-use gi_core::trace::direct::DirectLight;
+use gi_core::trace::direct::{DirectLight, LightQuery};
 use gi_core::trace::light_vertex::Connection;
 use gi_core::trace::path::{self, PathSettings, Strategy};
 use gi_core::trace::SceneBvh;
@@ -174,9 +176,13 @@ fn emitter_facing_a_close_surface_is_not_shadowed_by_itself() {
         let n = 400_000;
         let sum: f64 = (0..n)
             .map(|_| {
-                lights
-                    .emitter_light(&s, &bvh, &it, Vec3::Y, &mut rng, false)
-                    .x as f64
+                let q = LightQuery {
+                    bvh: &bvh,
+                    it: &it,
+                    wo: Vec3::Y,
+                    mis: false,
+                };
+                lights.emitter_light(&s, q, &mut rng).x as f64
             })
             .sum();
         let m = sum / n as f64;
@@ -215,36 +221,12 @@ fn area_cornell(spheres: Spheres, size: u32) -> Scene {
             r#""a": {"diffuse": [0.2, 0.2, 0.5]}, "b": {"diffuse": [0.6, 0.6, 0.6]}"#
         }
     };
-    scene(&format!(
-        r#"{{
-        "camera": {{"position": [0, 1, 3.4], "look_at": [0, 1, 0], "fov": 40,
-                    "width": {size}, "height": {size}}},
-        "materials": {{
-            "white": {{"diffuse": [0.73, 0.73, 0.73]}},
-            "red": {{"diffuse": [0.63, 0.065, 0.05]}},
-            "green": {{"diffuse": [0.14, 0.45, 0.091]}},
-            "lamp": {{"diffuse": [0.5, 0.5, 0.5], "emission": [12, 12, 12]}},
-            {spheres}
-        }},
-        "objects": [
-            {{"shape": {{"type": "quad", "size": [2, 2]}}, "material": "white"}},
-            {{"shape": {{"type": "quad", "size": [2, 2]}}, "material": "white",
-              "transform": {{"rotate": [180, 0, 0], "translate": [0, 2, 0]}}}},
-            {{"shape": {{"type": "quad", "size": [2, 2]}}, "material": "white",
-              "transform": {{"rotate": [90, 0, 0], "translate": [0, 1, -1]}}}},
-            {{"shape": {{"type": "quad", "size": [2, 2]}}, "material": "red",
-              "transform": {{"rotate": [0, 0, -90], "translate": [-1, 1, 0]}}}},
-            {{"shape": {{"type": "quad", "size": [2, 2]}}, "material": "green",
-              "transform": {{"rotate": [0, 0, 90], "translate": [1, 1, 0]}}}},
-            {{"shape": {{"type": "quad", "size": [0.5, 0.5]}}, "material": "lamp",
-              "transform": {{"rotate": [180, 0, 0], "translate": [0, 1.98, 0]}}}},
-            {{"shape": {{"type": "sphere", "radius": 0.4, "subdivisions": 4}}, "material": "a",
-              "transform": {{"translate": [0.4, 0.4, 0.25]}}}},
-            {{"shape": {{"type": "sphere", "radius": 0.4, "subdivisions": 4}}, "material": "b",
-              "transform": {{"translate": [-0.45, 0.4, -0.4]}}}}
-        ]
-    }}"#
-    ))
+    let spheres_placed = r#"
+        {"shape": {"type": "sphere", "radius": 0.4, "subdivisions": 4}, "material": "a",
+         "transform": {"translate": [0.4, 0.4, 0.25]}},
+        {"shape": {"type": "sphere", "radius": 0.4, "subdivisions": 4}, "material": "b",
+         "transform": {"translate": [-0.45, 0.4, -0.4]}}"#;
+    scene(&common::area_lit_box(size, "", spheres, spheres_placed))
 }
 
 /// Multiple importance sampling is consistent: in the area-lit box with glossy spheres, all

@@ -7,7 +7,7 @@ use gi_core::photon::{continue_paths, emit_and_trace, PhotonRay, PhotonSet, Phot
 use gi_core::scene::builtin;
 use gi_core::trace::{Interaction, SceneBvh};
 use gi_core::Silent;
-use gi_core::{render, Error, Method, Scene};
+use gi_core::{render, Error, Method, RenderOutput, Scene};
 use glam::{DVec3, Vec3};
 use std::collections::HashMap;
 
@@ -290,6 +290,34 @@ fn block_error(a: &gi_core::Image, b: &gi_core::Image, n: u32) -> Vec3 {
     sum / (n * n) as f32
 }
 
+/// Method `photon` (4 spp, `photons`, seed 2) and the reference path tracer (`path_spp`,
+/// seed 1) on the built-in scene `name` at `size`².
+fn photon_and_reference(
+    name: &str,
+    size: u32,
+    path_spp: u32,
+    photons: u64,
+) -> (RenderOutput, RenderOutput) {
+    let scene = builtin::load(name).unwrap();
+    let size = Some(size);
+    let reference = gi_core::options!(Path, spp: path_spp, width: size, height: size, seed: 1);
+    let reference = render(&scene, &reference, &Silent).unwrap();
+    let photon =
+        gi_core::options!(Photon, spp: 4, width: size, height: size, photons: photons, seed: 2);
+    let photon = render(&scene, &photon, &Silent).unwrap();
+    (photon, reference)
+}
+
+/// The relative error of `photon`'s image mean against `reference`'s and its 4×4-block
+/// mean relative error ([`block_error`]), per channel; printed.
+fn mean_and_block_errors(photon: &RenderOutput, reference: &RenderOutput) -> (Vec3, Vec3) {
+    let (a, b) = (photon.radiance.mean(), reference.radiance.mean());
+    let mean_err = ((a - b) / b).abs();
+    let block_err = block_error(&photon.radiance, &reference.radiance, 4);
+    println!("image mean: photon {a} reference {b}; rel err {mean_err}; 4x4 blocks mean rel err {block_err}");
+    (mean_err, block_err)
+}
+
 /// Method `photon` against the reference path tracer on the Cornell box (64², 1M photons,
 /// k = 100, 4 jittered samples per pixel). The reference's Monte Carlo error on a 16×16
 /// block at 256 spp is about 0.5%; the photon map's error is mostly the kNN bias along
@@ -298,18 +326,9 @@ fn block_error(a: &gi_core::Image, b: &gi_core::Image, n: u32) -> Vec3 {
 /// mean relative error 1.6–2.4% per channel.
 #[test]
 fn photon_cornell_matches_path() {
-    let scene = builtin::load("cornell").unwrap();
-    let size = Some(64);
-    let reference = gi_core::options!(Path, spp: 256, width: size, height: size, seed: 1);
-    let reference = render(&scene, &reference, &Silent).unwrap();
-    let photon =
-        gi_core::options!(Photon, spp: 4, width: size, height: size, photons: 1_000_000, seed: 2);
-    let photon = render(&scene, &photon, &Silent).unwrap();
+    let (photon, reference) = photon_and_reference("cornell", 64, 256, 1_000_000);
     println!("photon stages {:?}", photon.stats.stages);
-    let (a, b) = (photon.radiance.mean(), reference.radiance.mean());
-    let mean_err = ((a - b) / b).abs();
-    let block_err = block_error(&photon.radiance, &reference.radiance, 4);
-    println!("image mean: photon {a} reference {b}; rel err {mean_err}; 4x4 blocks mean rel err {block_err}");
+    let (mean_err, block_err) = mean_and_block_errors(&photon, &reference);
     assert!(
         mean_err.max_element() < 0.03,
         "image mean rel err {mean_err}"
@@ -326,22 +345,13 @@ fn photon_cornell_matches_path() {
 /// tracing + light tracing for caustics) on the Cornell box with a glass and a mirror sphere.
 #[test]
 fn photon_cornell_glass_matches_path() {
-    let scene = builtin::load("cornell-glass").unwrap();
-    let size = Some(48);
-    let reference = gi_core::options!(Path, spp: 128, width: size, height: size, seed: 1);
-    let reference = render(&scene, &reference, &Silent).unwrap();
-    let photon =
-        gi_core::options!(Photon, spp: 4, width: size, height: size, photons: 500_000, seed: 2);
-    let photon = render(&scene, &photon, &Silent).unwrap();
+    let (photon, reference) = photon_and_reference("cornell-glass", 48, 128, 500_000);
     assert!(photon
         .radiance
         .pixels
         .iter()
         .all(|p| p.is_finite() && p.min_element() >= 0.0));
-    let (a, b) = (photon.radiance.mean(), reference.radiance.mean());
-    let mean_err = ((a - b) / b).abs();
-    let block_err = block_error(&photon.radiance, &reference.radiance, 4);
-    println!("image mean: photon {a} reference {b}; rel err {mean_err}; 4x4 blocks mean rel err {block_err}");
+    let (mean_err, _) = mean_and_block_errors(&photon, &reference);
     assert!(
         mean_err.max_element() < 0.03,
         "image mean rel err {mean_err}"

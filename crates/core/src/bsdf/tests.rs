@@ -1,8 +1,7 @@
 //! Energy conservation, reciprocity and chi-square tests of the uber BSDF.
 
 use super::*;
-use crate::sampling::{uniform_sphere, Rng};
-use std::f64::consts::PI;
+use crate::sampling::{chi_square, uniform_sphere, Rng};
 
 pub(super) fn dir(cos_theta: f32, phi: f32) -> Vec3 {
     let s = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
@@ -126,11 +125,12 @@ fn mirror_and_glass_conserve_energy_exactly() {
     }
 }
 
-#[test]
-fn non_delta_part_is_reciprocal() {
+/// Checks f(a, b) = f(b, a) within 1e-4 of the larger for `pairs` random direction pairs per
+/// material (one random sequence over all).
+pub(super) fn assert_reciprocal(materials: &[Material], pairs: usize) {
     let mut rng = Rng::new(9, 0, 0);
-    for m in material_grid() {
-        for _ in 0..50 {
+    for m in materials {
+        for _ in 0..pairs {
             let a = uniform_sphere(rng.next_2d());
             let b = uniform_sphere(rng.next_2d());
             let (f1, f2) = (m.eval(a, b), m.eval(b, a));
@@ -143,29 +143,9 @@ fn non_delta_part_is_reciprocal() {
     }
 }
 
-/// Standard normal upper tail via erfc (Numerical Recipes' erfcc, |error| < 1.2e-7).
-fn normal_upper_tail(z: f64) -> f64 {
-    let x = z / std::f64::consts::SQRT_2;
-    let t = 1.0 / (1.0 + 0.5 * x.abs());
-    let y = t
-        * (-x * x - 1.265_512_23
-            + t * (1.000_023_68
-                + t * (0.374_091_96
-                    + t * (0.096_784_18
-                        + t * (-0.186_288_06
-                            + t * (0.278_868_07
-                                + t * (-1.135_203_98
-                                    + t * (1.488_515_87
-                                        + t * (-0.822_152_23 + t * 0.170_872_77)))))))))
-            .exp();
-    let erfc = if x >= 0.0 { y } else { 2.0 - y };
-    0.5 * erfc
-}
-
-/// p-value of a chi-square statistic with `k` degrees of freedom (Wilson–Hilferty).
-fn chi2_p_value(chi2: f64, k: f64) -> f64 {
-    let z = ((chi2 / k).powf(1.0 / 3.0) - (1.0 - 2.0 / (9.0 * k))) / (2.0 / (9.0 * k)).sqrt();
-    normal_upper_tail(z)
+#[test]
+fn non_delta_part_is_reciprocal() {
+    assert_reciprocal(&material_grid(), 50);
 }
 
 /// Pearson chi-square test of `sampler.sample` against `reference.pdf` over a (cos θ, φ)
@@ -189,44 +169,15 @@ pub(super) fn chi_square(sampler: &Material, reference: &Material, wo: Vec3, see
             observed[iz * NP + ip] += 1.0;
         }
     }
-    let mut expected = vec![0.0f64; NZ * NP];
-    for iz in 0..NZ {
-        for ip in 0..NP {
-            let mut e = 0.0;
-            for a in 0..SUB {
-                for b in 0..SUB {
-                    let z = -1.0 + 2.0 * (iz as f64 + (a as f64 + 0.5) / SUB as f64) / NZ as f64;
-                    let phi = 2.0 * PI * (ip as f64 + (b as f64 + 0.5) / SUB as f64) / NP as f64;
-                    let wi = dir(z as f32, phi as f32);
-                    e += reference.pdf(wo, wi) as f64;
-                }
-            }
-            let cell = (2.0 / NZ as f64) * (2.0 * PI / NP as f64) / (SUB * SUB) as f64;
-            expected[iz * NP + ip] = e * cell * n as f64;
-        }
-    }
-    // Pool cells with small expectations (pbrt's rule: below 5 counts).
-    let (mut chi2, mut dof) = (0.0f64, 0usize);
-    let (mut pool_o, mut pool_e) = (0.0f64, 0.0f64);
-    for (o, e) in observed.iter().zip(&expected) {
-        if *e < 5.0 {
-            pool_o += o;
-            pool_e += e;
-        } else {
-            chi2 += (o - e) * (o - e) / e;
-            dof += 1;
-        }
-    }
-    if pool_e >= 5.0 {
-        chi2 += (pool_o - pool_e) * (pool_o - pool_e) / pool_e;
-        dof += 1;
-    } else {
-        assert!(
-            pool_o < 20.0,
-            "samples where the pdf says there are none: {pool_o}"
-        );
-    }
-    chi2_p_value(chi2, (dof - 1) as f64)
+    let grid = chi_square::Grid {
+        rows: NZ,
+        columns: NP,
+        sub: SUB,
+    };
+    let expected = grid.expected(n, |z, phi| {
+        reference.pdf(wo, dir(z as f32, phi as f32)) as f64
+    });
+    chi_square::p_value(&observed, &expected)
 }
 
 #[test]

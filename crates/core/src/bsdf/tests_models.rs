@@ -1,9 +1,9 @@
 //! Mitsuba's models beside the uber BSDF (coated plastics, conductors, Beckmann): energy,
 //! reciprocity, sampling against the pdf, and the closed forms they must reproduce.
 
-use super::tests::{albedo_by_sampling, chi_square, dir};
+use super::tests::{albedo_by_sampling, assert_reciprocal, chi_square, dir};
 use super::*;
-use crate::sampling::{uniform_sphere, Rng};
+use crate::sampling::Rng;
 use std::f32::consts::PI;
 
 /// Gold's RGB complex index in Mitsuba 3.9.1's RGB variants (python/gi/mitsuba/metals.py).
@@ -117,19 +117,7 @@ fn sample_weight_is_eval_cos_over_pdf_and_pdf_integrates_to_at_most_one() {
 
 #[test]
 fn models_are_reciprocal() {
-    let mut rng = Rng::new(9, 0, 0);
-    for m in models() {
-        for _ in 0..100 {
-            let a = uniform_sphere(rng.next_2d());
-            let b = uniform_sphere(rng.next_2d());
-            let (f1, f2) = (m.eval(a, b), m.eval(b, a));
-            let scale = f1.max_element().max(f2.max_element()).max(1e-6);
-            assert!(
-                (f1 - f2).abs().max_element() / scale < 1e-4,
-                "{m:?}: {f1} vs {f2}"
-            );
-        }
-    }
+    assert_reciprocal(&models(), 100);
 }
 
 #[test]

@@ -5,7 +5,8 @@
 //! ([`IndirectTarget::set_full_resolution`]: the frame's caustic photons).
 
 use super::wgsl;
-use crate::gpu::layout::{buffer_init, texture as tex, texture_entry, uniform_entry};
+use crate::gpu::layout::{buffer, buffer_init, texture as tex, texture_entry, uniform_entry};
+use crate::gpu::pipeline::{bind_group_layout, draw_fullscreen, pipeline_layout};
 use crate::gpu::raw::UpsampleParamsRaw;
 use crate::gpu::timer::Timer;
 use crate::gpu::{self, shaders, GpuContext, Pipelines};
@@ -28,20 +29,8 @@ pub struct UpsamplePass {
 impl Pipelines for UpsamplePass {
     fn create(ctx: &GpuContext) -> Self {
         let device = &ctx.device;
-        let layout = |label, entries: &[wgpu::BindGroupLayoutEntry]| {
-            device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some(label),
-                entries,
-            })
-        };
-        let pipeline_layout = |bgl: &wgpu::BindGroupLayout| {
-            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("upsample pipeline layout"),
-                bind_group_layouts: &[Some(bgl)],
-                immediate_size: 0,
-            })
-        };
-        let upsample_layout = layout(
+        let upsample_layout = bind_group_layout(
+            device,
             "upsample bind group layout",
             &[
                 uniform_entry(0),
@@ -66,7 +55,7 @@ impl Pipelines for UpsamplePass {
         let upsample = crate::gpu::create_fullscreen_pipeline(
             device,
             "upsample pipeline",
-            &pipeline_layout(&upsample_layout),
+            &pipeline_layout(device, "upsample pipeline layout", &[&upsample_layout]),
             &module,
             "fs_main",
             TARGET.into(),
@@ -126,10 +115,7 @@ fn upsample_group(
             label: Some("upsample bind group"),
             layout: &UpsamplePass::get(ctx).layout,
             entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: params.as_entire_binding(),
-                },
+                buffer(0, params),
                 tex(1, &inputs[0]),
                 tex(2, &inputs[1]),
                 tex(3, low),
@@ -252,16 +238,13 @@ impl IndirectTarget {
         let (Some((_, full_view)), Some(group)) = (&self.full, &self.upsample_group) else {
             return;
         };
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("upsample pass"),
-            color_attachments: &[Some(crate::gpu::cleared(full_view))],
-            depth_stencil_attachment: None,
-            timestamp_writes: timer.pass("upsample"),
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
-        pass.set_pipeline(&UpsamplePass::get(ctx).pipeline);
-        pass.set_bind_group(0, group, &[]);
-        pass.draw(0..3, 0..1);
+        draw_fullscreen(
+            encoder,
+            "upsample pass",
+            full_view,
+            &UpsamplePass::get(ctx).pipeline,
+            &[group],
+            timer.pass("upsample"),
+        );
     }
 }

@@ -8,7 +8,8 @@
 
 use super::target::{IndirectTarget, TARGET};
 use super::wgsl;
-use crate::gpu::layout::{buffer_init, texture as tex, texture_entry, uniform_entry};
+use crate::gpu::layout::{buffer, buffer_init, texture as tex, texture_entry, uniform_entry};
+use crate::gpu::pipeline::{additive_target, bind_group_layout, pipeline_layout, RenderSpec};
 use crate::gpu::raw::VolumeParamsRaw;
 use crate::gpu::timer::Timer;
 use crate::gpu::{self, shaders, GpuContext, Pipelines};
@@ -47,20 +48,8 @@ fn photon_attributes() -> [wgpu::VertexAttribute; 6] {
 impl Pipelines for VolumePass {
     fn create(ctx: &GpuContext) -> Self {
         let device = &ctx.device;
-        let layout = |label, entries: &[wgpu::BindGroupLayoutEntry]| {
-            device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some(label),
-                entries,
-            })
-        };
-        let pipeline_layout = |bgl: &wgpu::BindGroupLayout| {
-            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("volume pipeline layout"),
-                bind_group_layouts: &[Some(bgl)],
-                immediate_size: 0,
-            })
-        };
-        let volume_layout = layout(
+        let volume_layout = bind_group_layout(
+            device,
             "volume bind group layout",
             &[
                 uniform_entry(0),
@@ -86,49 +75,29 @@ impl Pipelines for VolumePass {
         );
         let corner_attr = wgpu::vertex_attr_array![0 => Float32x3];
         let photon_attr = photon_attributes();
-        let additive = wgpu::BlendComponent {
-            src_factor: wgpu::BlendFactor::One,
-            dst_factor: wgpu::BlendFactor::One,
-            operation: wgpu::BlendOperation::Add,
-        };
         let photon_buffer = wgpu::VertexBufferLayout {
             array_stride: std::mem::size_of::<Photon>() as u64,
             step_mode: wgpu::VertexStepMode::Instance,
             attributes: &photon_attr,
         };
+        let volume_pipeline_layout =
+            pipeline_layout(device, "volume pipeline layout", &[&volume_layout]);
+        let targets = [Some(additive_target(TARGET))];
         let volume_pipeline =
-            |label, entry_point, buffers: &[Option<wgpu::VertexBufferLayout>], primitive| {
-                crate::gpu::create_render_pipeline(
-                    device,
-                    &wgpu::RenderPipelineDescriptor {
-                        label: Some(label),
-                        layout: Some(&pipeline_layout(&volume_layout)),
-                        vertex: wgpu::VertexState {
-                            module: &module,
-                            entry_point: Some(entry_point),
-                            compilation_options: Default::default(),
-                            buffers,
-                        },
-                        primitive,
-                        depth_stencil: None,
-                        multisample: Default::default(),
-                        fragment: Some(wgpu::FragmentState {
-                            module: &module,
-                            entry_point: Some("fs_main"),
-                            compilation_options: Default::default(),
-                            targets: &[Some(wgpu::ColorTargetState {
-                                format: TARGET,
-                                blend: Some(wgpu::BlendState {
-                                    color: additive,
-                                    alpha: additive,
-                                }),
-                                write_mask: wgpu::ColorWrites::ALL,
-                            })],
-                        }),
-                        multiview_mask: None,
-                        cache: None,
-                    },
-                )
+            |label, entry, buffers: &[Option<wgpu::VertexBufferLayout>], primitive| {
+                RenderSpec {
+                    buffers,
+                    primitive,
+                    targets: &targets,
+                    ..RenderSpec::new(
+                        label,
+                        &volume_pipeline_layout,
+                        &module,
+                        entry,
+                        Some("fs_main"),
+                    )
+                }
+                .create(device)
             };
         let volume = volume_pipeline(
             "volume pipeline (icosahedron)",
@@ -234,19 +203,13 @@ impl Volumes {
                 label: Some("volume bind group"),
                 layout: &passes.layout,
                 entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: params.as_entire_binding(),
-                    },
+                    buffer(0, &params),
                     tex(1, &inputs[0]),
                     tex(2, &inputs[1]),
                     tex(3, &inputs[2]),
                     tex(4, &inputs[3]),
                     tex(5, gbuf.emission()),
-                    wgpu::BindGroupEntry {
-                        binding: 6,
-                        resource: models.as_entire_binding(),
-                    },
+                    buffer(6, models),
                 ],
             },
         );

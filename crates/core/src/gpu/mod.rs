@@ -8,6 +8,7 @@
 
 pub mod alloc;
 pub mod layout;
+pub mod pipeline;
 pub mod raw;
 pub mod shaders;
 pub mod timer;
@@ -488,30 +489,12 @@ pub fn create_fullscreen_pipeline_with(
     (entry, options): (&str, wgpu::PipelineCompilationOptions),
     target: wgpu::ColorTargetState,
 ) -> wgpu::RenderPipeline {
-    create_render_pipeline(
-        device,
-        &wgpu::RenderPipelineDescriptor {
-            label: Some(label),
-            layout: Some(layout),
-            vertex: wgpu::VertexState {
-                module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: None,
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module,
-                entry_point: Some(entry),
-                compilation_options: options,
-                targets: &[Some(target)],
-            }),
-            multiview_mask: None,
-            cache: None,
-        },
-    )
+    pipeline::RenderSpec {
+        fragment_options: options,
+        targets: &[Some(target)],
+        ..pipeline::RenderSpec::new(label, layout, module, "vs_main", Some(entry))
+    }
+    .create(device)
 }
 
 /// `Device::create_compute_pipeline`, counted.

@@ -15,7 +15,8 @@ use super::textures::{TexturesLayout, Variant};
 use super::wgsl;
 use super::{buffer_init, gbuffer, Geometry};
 use crate::error::{Error, Result};
-use crate::gpu::layout::{storage_entry, uniform_entry_sized};
+use crate::gpu::layout::{buffer, dynamic_buffer, storage_entry, uniform_entry_sized};
+use crate::gpu::pipeline::bind_group_layout;
 use crate::gpu::raw::BounceViewRaw;
 use crate::gpu::timer::Timer;
 use crate::gpu::{self, shaders, GpuContext, Pipelines};
@@ -37,13 +38,8 @@ impl Pipelines for BouncePass {
     fn create(ctx: &GpuContext) -> Self {
         let device = &ctx.device;
         let textures = &TexturesLayout::get(ctx).layout;
-        let layout = |label, entries: &[wgpu::BindGroupLayoutEntry]| {
-            device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some(label),
-                entries,
-            })
-        };
-        let bounce_layout = layout(
+        let bounce_layout = bind_group_layout(
+            device,
             "bounce bind group layout",
             &[
                 uniform_entry_sized(
@@ -185,22 +181,9 @@ impl BounceTargets {
                 label: Some("bounce bind group"),
                 layout: &passes.layout,
                 entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                            buffer: &views,
-                            offset: 0,
-                            size: wgpu::BufferSize::new(BOUNCE_VIEW_SIZE),
-                        }),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: materials.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 2,
-                        resource: models.as_entire_binding(),
-                    },
+                    dynamic_buffer(0, &views, BOUNCE_VIEW_SIZE),
+                    buffer(1, materials),
+                    buffer(2, models),
                 ],
             },
         );

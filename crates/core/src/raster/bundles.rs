@@ -10,6 +10,8 @@
 use super::wgsl;
 use super::{buffer_init, gbuffer, Geometry};
 use crate::error::{Error, Result};
+use crate::gpu::layout::{buffer, dynamic_buffer, uniform_entry_sized};
+use crate::gpu::pipeline::{bind_group_layout, pipeline_layout};
 use crate::gpu::timer::Timer;
 use crate::gpu::{self, shaders, GpuContext};
 use bytemuck::{Pod, Zeroable};
@@ -87,25 +89,17 @@ fn rw_storage(binding: u32) -> wgpu::BindGroupLayoutEntry {
 
 impl BundlePass {
     pub fn new(device: &wgpu::Device, textures: &wgpu::BindGroupLayout) -> Self {
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("bundle bind group layout"),
-            entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: true,
-                        min_binding_size: wgpu::BufferSize::new(VIEW_BYTES),
-                    },
-                    count: None,
-                },
+        let layout = bind_group_layout(
+            device,
+            "bundle bind group layout",
+            &[
+                uniform_entry_sized(0, wgpu::ShaderStages::VERTEX_FRAGMENT, true, VIEW_BYTES),
                 super::storage_entry(1, wgpu::ShaderStages::FRAGMENT),
                 rw_storage(2),
                 rw_storage(3),
                 rw_storage(4),
             ],
-        });
+        );
         let module = shaders::module(
             device,
             "bundle shader",
@@ -118,11 +112,8 @@ impl BundlePass {
                 wgsl::BUNDLES,
             ],
         );
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("bundle pipeline layout"),
-            bind_group_layouts: &[Some(&layout), Some(textures)],
-            immediate_size: 0,
-        });
+        let pipeline_layout =
+            pipeline_layout(device, "bundle pipeline layout", &[&layout, textures]);
         let pipelines = gbuffer::scene_pipelines(
             device,
             "bundle pipeline",
@@ -237,30 +228,11 @@ impl BundleBuffers {
                 label: Some("bundle bind group"),
                 layout: &pass.layout,
                 entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                            buffer: &views,
-                            offset: 0,
-                            size: wgpu::BufferSize::new(VIEW_BYTES),
-                        }),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: materials.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 2,
-                        resource: heads.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 3,
-                        resource: nodes.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 4,
-                        resource: counter.as_entire_binding(),
-                    },
+                    dynamic_buffer(0, &views, VIEW_BYTES),
+                    buffer(1, materials),
+                    buffer(2, &heads),
+                    buffer(3, &nodes),
+                    buffer(4, &counter),
                 ],
             },
         );

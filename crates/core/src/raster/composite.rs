@@ -3,6 +3,7 @@
 
 use super::wgsl;
 use crate::gpu::layout::texture_entry;
+use crate::gpu::pipeline::draw_fullscreen;
 use crate::gpu::shaders;
 
 /// The radiance target (rgb; alpha 1).
@@ -50,17 +51,15 @@ impl CompositePass {
         group: &wgpu::BindGroup,
         timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) {
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("composite pass"),
-            color_attachments: &[Some(crate::gpu::cleared(target))],
-            depth_stencil_attachment: None,
-            timestamp_writes: timestamps,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, group, &[]);
-        pass.draw(0..3, 0..1);
+        let pipeline = &self.pipeline;
+        draw_fullscreen(
+            encoder,
+            "composite pass",
+            target,
+            pipeline,
+            &[group],
+            timestamps,
+        );
     }
 }
 

@@ -20,6 +20,7 @@
 use super::direct_variant::{DirectVariant, VariantCache};
 use super::wgsl;
 use crate::error::Result;
+use crate::gpu::pipeline::{pipeline_layout, RenderSpec};
 use crate::gpu::{self, shaders, GpuContext};
 
 /// Bytes kept per listed pixel and sub-pixel sample: position, normals, packed materials,
@@ -270,49 +271,34 @@ fn mask_pipeline(device: &wgpu::Device) -> (wgpu::RenderPipeline, wgpu::BindGrou
             count: None,
         }],
     });
-    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some("edge mask pipeline layout"),
-        bind_group_layouts: &[Some(&layout)],
-        immediate_size: 0,
-    });
+    let pipeline_layout = pipeline_layout(device, "edge mask pipeline layout", &[&layout]);
     let module = shaders::module(device, "edge mask shader", &[wgsl::EDGE_MASK]);
-    let pipeline = gpu::create_render_pipeline(
-        device,
-        &wgpu::RenderPipelineDescriptor {
-            label: Some("edge mask"),
-            layout: Some(&pipeline_layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("mask_vs"),
-                compilation_options: Default::default(),
-                buffers: &[Some(wgpu::VertexBufferLayout {
-                    array_stride: 4,
-                    step_mode: wgpu::VertexStepMode::Vertex,
-                    attributes: &wgpu::vertex_attr_array![0 => Uint32],
-                })],
-            },
-            primitive: wgpu::PrimitiveState {
-                topology: wgpu::PrimitiveTopology::PointList,
-                ..Default::default()
-            },
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: super::gbuffer::DEPTH,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Always),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("mask_fs"),
-                compilation_options: Default::default(),
-                targets: &[],
-            }),
-            multiview_mask: None,
-            cache: None,
+    let pipeline = RenderSpec {
+        buffers: &[Some(wgpu::VertexBufferLayout {
+            array_stride: 4,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &wgpu::vertex_attr_array![0 => Uint32],
+        })],
+        primitive: wgpu::PrimitiveState {
+            topology: wgpu::PrimitiveTopology::PointList,
+            ..Default::default()
         },
-    );
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: super::gbuffer::DEPTH,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(wgpu::CompareFunction::Always),
+            stencil: Default::default(),
+            bias: Default::default(),
+        }),
+        ..RenderSpec::new(
+            "edge mask",
+            &pipeline_layout,
+            &module,
+            "mask_vs",
+            Some("mask_fs"),
+        )
+    }
+    .create(device);
     (pipeline, layout)
 }
 

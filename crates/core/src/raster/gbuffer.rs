@@ -16,6 +16,7 @@
 //! - depth `Depth32Float`: visibility only; view depth is derived from `position`.
 
 use super::wgsl;
+use crate::gpu::pipeline::{bind_group_layout, pipeline_layout, RenderSpec};
 use crate::gpu::raw::{InstanceRaw, VertexRaw};
 use crate::gpu::shaders;
 
@@ -138,37 +139,21 @@ pub fn scene_pipelines(
     } else {
         (false, wgpu::CompareFunction::Always)
     };
+    let buffers = [Some(vertex_layout()), Some(instance_layout())];
     let pipeline = |entry: &str| {
-        crate::gpu::create_render_pipeline(
-            device,
-            &wgpu::RenderPipelineDescriptor {
-                label: Some(label),
-                layout: Some(layout),
-                vertex: wgpu::VertexState {
-                    module,
-                    entry_point: Some("vs_main"),
-                    compilation_options: Default::default(),
-                    buffers: &[Some(vertex_layout()), Some(instance_layout())],
-                },
-                primitive: wgpu::PrimitiveState::default(),
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: DEPTH,
-                    depth_write_enabled: Some(depth.0),
-                    depth_compare: Some(depth.1),
-                    stencil: Default::default(),
-                    bias: Default::default(),
-                }),
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module,
-                    entry_point: Some(entry),
-                    compilation_options: Default::default(),
-                    targets,
-                }),
-                multiview_mask: None,
-                cache: None,
-            },
-        )
+        RenderSpec {
+            buffers: &buffers,
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: DEPTH,
+                depth_write_enabled: Some(depth.0),
+                depth_compare: Some(depth.1),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            targets,
+            ..RenderSpec::new(label, layout, module, "vs_main", Some(entry))
+        }
+        .create(device)
     };
     super::textures::Variant::ALL
         .iter()
@@ -186,18 +171,16 @@ pub struct GBufferPass {
 
 impl GBufferPass {
     pub fn new(device: &wgpu::Device, textures: &wgpu::BindGroupLayout) -> Self {
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("gbuffer bind group layout"),
-            entries: &[
+        let layout = bind_group_layout(
+            device,
+            "gbuffer bind group layout",
+            &[
                 super::view_entry(0),
                 super::storage_entry(1, wgpu::ShaderStages::FRAGMENT),
             ],
-        });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("gbuffer pipeline layout"),
-            bind_group_layouts: &[Some(&layout), Some(textures)],
-            immediate_size: 0,
-        });
+        );
+        let pipeline_layout =
+            pipeline_layout(device, "gbuffer pipeline layout", &[&layout, textures]);
         let module = shaders::module(
             device,
             "gbuffer shader",

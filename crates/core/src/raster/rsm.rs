@@ -9,6 +9,8 @@ use super::layers::{LayerTargets, TARGET};
 use super::wgsl;
 use super::{buffer_init, gbuffer, Geometry};
 use crate::error::{Error, Result};
+use crate::gpu::layout::{buffer, dynamic_buffer, uniform_entry_sized};
+use crate::gpu::pipeline::{bind_group_layout, pipeline_layout};
 use crate::gpu::raw::BounceViewRaw;
 use crate::gpu::timer::Timer;
 use crate::gpu::{self, shaders, GpuContext};
@@ -47,22 +49,14 @@ pub struct RsmPass {
 
 impl RsmPass {
     pub fn new(device: &wgpu::Device, textures: &wgpu::BindGroupLayout) -> Self {
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("rsm bind group layout"),
-            entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: true,
-                        min_binding_size: wgpu::BufferSize::new(VIEW_SIZE),
-                    },
-                    count: None,
-                },
+        let layout = bind_group_layout(
+            device,
+            "rsm bind group layout",
+            &[
+                uniform_entry_sized(0, wgpu::ShaderStages::VERTEX_FRAGMENT, true, VIEW_SIZE),
                 super::storage_entry(1, wgpu::ShaderStages::FRAGMENT),
             ],
-        });
+        );
         let module = shaders::module(
             device,
             "rsm shader",
@@ -75,11 +69,7 @@ impl RsmPass {
                 wgsl::RSM,
             ],
         );
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("rsm pipeline layout"),
-            bind_group_layouts: &[Some(&layout), Some(textures)],
-            immediate_size: 0,
-        });
+        let pipeline_layout = pipeline_layout(device, "rsm pipeline layout", &[&layout, textures]);
         let targets: [_; TARGETS] =
             std::array::from_fn(|_| Some(wgpu::ColorTargetState::from(TARGET)));
         let pipelines = gbuffer::scene_pipelines(
@@ -137,20 +127,7 @@ impl RsmTargets {
             &wgpu::BindGroupDescriptor {
                 label: Some("rsm bind group"),
                 layout: &pass.layout,
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                            buffer: &views,
-                            offset: 0,
-                            size: wgpu::BufferSize::new(VIEW_SIZE),
-                        }),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: materials.as_entire_binding(),
-                    },
-                ],
+                entries: &[dynamic_buffer(0, &views, VIEW_SIZE), buffer(1, materials)],
             },
         );
         Ok(Some(RsmTargets {

@@ -7,6 +7,7 @@
 pub use super::instances::CullUnits;
 use super::instances::Draw;
 use super::wgsl;
+use crate::gpu::pipeline::{bind_group_layout, pipeline_layout, RenderSpec};
 use crate::gpu::raw::{LightRaw, ViewRaw};
 use crate::gpu::shaders;
 use crate::sampling::Rng;
@@ -153,21 +154,14 @@ impl ShadowPass {
     }
 
     pub fn new(device: &wgpu::Device, textures: &wgpu::BindGroupLayout) -> Self {
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("shadow bind group layout"),
-            entries: &[super::view_entry(0)],
-        });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("shadow pipeline layout"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
+        let layout = bind_group_layout(device, "shadow bind group layout", &[super::view_entry(0)]);
+        let shadow_layout = pipeline_layout(device, "shadow pipeline layout", &[&layout]);
         let module = shaders::module(device, "shadow shader", &[shaders::COMMON, wgsl::SHADOW]);
-        let masked_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("masked shadow pipeline layout"),
-            bind_group_layouts: &[Some(&layout), Some(textures)],
-            immediate_size: 0,
-        });
+        let masked_layout = pipeline_layout(
+            device,
+            "masked shadow pipeline layout",
+            &[&layout, textures],
+        );
         let masked_module = shaders::module(
             device,
             "masked shadow shader",
@@ -183,67 +177,42 @@ impl ShadowPass {
             instance[3],
             instance[7],
         ];
-        let masked = crate::gpu::create_render_pipeline(
-            device,
-            &wgpu::RenderPipelineDescriptor {
-                label: Some("masked shadow pipeline"),
-                layout: Some(&masked_layout),
-                vertex: wgpu::VertexState {
-                    module: &masked_module,
-                    entry_point: Some("vs_main"),
-                    compilation_options: Default::default(),
-                    buffers: &[
-                        Some(wgpu::VertexBufferLayout {
-                            attributes: &masked_attributes,
-                            ..super::gbuffer::vertex_layout()
-                        }),
-                        Some(wgpu::VertexBufferLayout {
-                            attributes: &masked_instance,
-                            ..super::gbuffer::instance_layout()
-                        }),
-                    ],
-                },
-                primitive: wgpu::PrimitiveState::default(),
-                depth_stencil: Some(depth_state()),
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &masked_module,
-                    entry_point: Some("fs_main"),
-                    compilation_options: Default::default(),
-                    targets: &[],
+        let masked = RenderSpec {
+            buffers: &[
+                Some(wgpu::VertexBufferLayout {
+                    attributes: &masked_attributes,
+                    ..super::gbuffer::vertex_layout()
                 }),
-                multiview_mask: None,
-                cache: None,
-            },
-        );
-        let pipeline = crate::gpu::create_render_pipeline(
-            device,
-            &wgpu::RenderPipelineDescriptor {
-                label: Some("shadow pipeline"),
-                layout: Some(&pipeline_layout),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("vs_main"),
-                    compilation_options: Default::default(),
-                    buffers: &[
-                        Some(wgpu::VertexBufferLayout {
-                            attributes: &super::gbuffer::VERTEX_ATTRIBUTES[..1],
-                            ..super::gbuffer::vertex_layout()
-                        }),
-                        Some(wgpu::VertexBufferLayout {
-                            attributes: &super::gbuffer::INSTANCE_ATTRIBUTES[..4],
-                            ..super::gbuffer::instance_layout()
-                        }),
-                    ],
-                },
-                primitive: wgpu::PrimitiveState::default(),
-                depth_stencil: Some(depth_state()),
-                multisample: Default::default(),
-                fragment: None,
-                multiview_mask: None,
-                cache: None,
-            },
-        );
+                Some(wgpu::VertexBufferLayout {
+                    attributes: &masked_instance,
+                    ..super::gbuffer::instance_layout()
+                }),
+            ],
+            depth_stencil: Some(depth_state()),
+            ..RenderSpec::new(
+                "masked shadow pipeline",
+                &masked_layout,
+                &masked_module,
+                "vs_main",
+                Some("fs_main"),
+            )
+        }
+        .create(device);
+        let pipeline = RenderSpec {
+            buffers: &[
+                Some(wgpu::VertexBufferLayout {
+                    attributes: &super::gbuffer::VERTEX_ATTRIBUTES[..1],
+                    ..super::gbuffer::vertex_layout()
+                }),
+                Some(wgpu::VertexBufferLayout {
+                    attributes: &super::gbuffer::INSTANCE_ATTRIBUTES[..4],
+                    ..super::gbuffer::instance_layout()
+                }),
+            ],
+            depth_stencil: Some(depth_state()),
+            ..RenderSpec::new("shadow pipeline", &shadow_layout, &module, "vs_main", None)
+        }
+        .create(device);
         ShadowPass {
             pipeline,
             masked,

@@ -6,6 +6,7 @@ use super::direct::{DirectPass, ACCUM};
 use super::subpixel::Splat;
 use super::wgsl;
 use crate::gpu::layout::{buffer, buffer_init};
+use crate::gpu::pipeline::{additive_target, bind_group_layout, pipeline_layout, RenderSpec};
 use crate::gpu::{self, shaders, GpuContext, Pipelines};
 use crate::scene::Scene;
 
@@ -35,60 +36,38 @@ pub struct Splats {
 impl SplatPass {
     fn new(ctx: &GpuContext) -> Self {
         let device = &ctx.device;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("emitter splat bind group layout"),
-            entries: &[crate::gpu::layout::uniform_entry(0)],
-        });
-        let direct = DirectPass::get(ctx);
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("emitter splat pipeline layout"),
-            bind_group_layouts: &[Some(&layout), Some(&direct.gbuffer_layout)],
-            immediate_size: 0,
-        });
-        let module = shaders::module(device, "emitter splat shader", &[wgsl::EMITTER_SPLAT]);
-        let add = wgpu::BlendComponent {
-            src_factor: wgpu::BlendFactor::One,
-            dst_factor: wgpu::BlendFactor::One,
-            operation: wgpu::BlendOperation::Add,
-        };
-        let pipeline = gpu::create_render_pipeline(
+        let layout = bind_group_layout(
             device,
-            &wgpu::RenderPipelineDescriptor {
-                label: Some("emitter splat"),
-                layout: Some(&pipeline_layout),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("splat_vs"),
-                    compilation_options: Default::default(),
-                    buffers: &[Some(wgpu::VertexBufferLayout {
-                        array_stride: std::mem::size_of::<Splat>() as u64,
-                        step_mode: wgpu::VertexStepMode::Vertex,
-                        attributes: &wgpu::vertex_attr_array![0 => Float32x4, 1 => Float32x4],
-                    })],
-                },
-                primitive: wgpu::PrimitiveState {
-                    topology: wgpu::PrimitiveTopology::PointList,
-                    ..Default::default()
-                },
-                depth_stencil: None,
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("splat_fs"),
-                    compilation_options: Default::default(),
-                    targets: &[Some(wgpu::ColorTargetState {
-                        format: ACCUM,
-                        blend: Some(wgpu::BlendState {
-                            color: add,
-                            alpha: add,
-                        }),
-                        write_mask: wgpu::ColorWrites::ALL,
-                    })],
-                }),
-                multiview_mask: None,
-                cache: None,
-            },
+            "emitter splat bind group layout",
+            &[crate::gpu::layout::uniform_entry(0)],
         );
+        let direct = DirectPass::get(ctx);
+        let pipeline_layout = pipeline_layout(
+            device,
+            "emitter splat pipeline layout",
+            &[&layout, &direct.gbuffer_layout],
+        );
+        let module = shaders::module(device, "emitter splat shader", &[wgsl::EMITTER_SPLAT]);
+        let pipeline = RenderSpec {
+            buffers: &[Some(wgpu::VertexBufferLayout {
+                array_stride: std::mem::size_of::<Splat>() as u64,
+                step_mode: wgpu::VertexStepMode::Vertex,
+                attributes: &wgpu::vertex_attr_array![0 => Float32x4, 1 => Float32x4],
+            })],
+            primitive: wgpu::PrimitiveState {
+                topology: wgpu::PrimitiveTopology::PointList,
+                ..Default::default()
+            },
+            targets: &[Some(additive_target(ACCUM))],
+            ..RenderSpec::new(
+                "emitter splat",
+                &pipeline_layout,
+                &module,
+                "splat_vs",
+                Some("splat_fs"),
+            )
+        }
+        .create(device);
         SplatPass { pipeline, layout }
     }
 

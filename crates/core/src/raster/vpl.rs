@@ -5,6 +5,7 @@
 
 use super::wgsl;
 use crate::gpu::layout::{comparison_sampler_entry, depth_array_entry, texture_entry};
+use crate::gpu::pipeline::draw_fullscreen;
 use crate::gpu::{self, shaders};
 use crate::scene::light_views::{corners, look_to, square_perspective, CUBE_FACES};
 use bytemuck::{Pod, Zeroable};
@@ -203,18 +204,14 @@ impl VplPass {
         [group, gbuffer_group]: [&wgpu::BindGroup; 2],
         timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) {
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("bidir lighting pass"),
-            color_attachments: &[Some(crate::gpu::cleared(target))],
-            depth_stencil_attachment: None,
-            timestamp_writes: timestamps,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, group, &[]);
-        pass.set_bind_group(1, gbuffer_group, &[]);
-        pass.draw(0..3, 0..1);
+        draw_fullscreen(
+            encoder,
+            "bidir lighting pass",
+            target,
+            &self.pipeline,
+            &[group, gbuffer_group],
+            timestamps,
+        );
     }
 }
 

@@ -45,6 +45,18 @@ pub struct DirectLight {
     pub light_vertices: Option<LightVertices>,
 }
 
+/// A shading point asking for direct light: the point `it` (shadow rays through `bvh`), the
+/// direction `wo` towards the viewer (world space, away from the surface), and whether the
+/// light samples are weighted against BSDF sampling (`mis`, power heuristic) or taken at
+/// full weight.
+#[derive(Clone, Copy)]
+pub struct LightQuery<'a> {
+    pub bvh: &'a SceneBvh,
+    pub it: &'a Interaction,
+    pub wo: Vec3,
+    pub mis: bool,
+}
+
 /// Where a BSDF-sampled ray left from, for the multiple-importance weight of an emitter it
 /// hits: the shading point and normal the light samples there were drawn for, its
 /// geometric normal, and the BSDF sample's density over solid angle.
@@ -151,11 +163,12 @@ impl DirectLight {
             return Vec3::ZERO;
         }
         let mis = nee == Nee::Mis;
+        let q = LightQuery { bvh, it, wo, mis };
         let mut sum = Vec3::ZERO;
         for (i, light) in scene.lights.iter().enumerate() {
             sum += match light.disc_radiance() {
                 Some(_) if nee == Nee::DeltaOnly => Vec3::ZERO,
-                Some(l) => sun_disc(light, l, bvh, it, wo, rng, mis),
+                Some(l) => sun_disc(light, l, q, rng),
                 None => {
                     let l = analytic_light(light, bvh, it, wo);
                     match shared {
@@ -168,7 +181,7 @@ impl DirectLight {
         if nee == Nee::DeltaOnly {
             return sum;
         }
-        sum += self.emitter_light_weighted(scene, bvh, it, (wo, rng), mis, shared);
+        sum += self.emitter_light_weighted(scene, q, rng, shared);
         // An environment that is not sampled by importance is left to the BSDF rays of the
         // path tracer (`EnvironmentDesc::importance`); without them it is sampled anyway.
         if let Some(env) = scene
@@ -176,34 +189,25 @@ impl DirectLight {
             .as_deref()
             .filter(|e| e.importance || !mis)
         {
-            sum += super::path::environment_light(env, bvh, it, wo, rng, mis);
+            sum += super::path::environment_light(env, q, rng);
         }
         sum
     }
 
     /// One point on the emitters, chosen for `it`: its light times the BSDF towards `wo`.
-    pub fn emitter_light(
-        &self,
-        scene: &Scene,
-        bvh: &SceneBvh,
-        it: &Interaction,
-        wo: Vec3,
-        rng: &mut Rng,
-        mis: bool,
-    ) -> Vec3 {
-        self.emitter_light_weighted(scene, bvh, it, (wo, rng), mis, None)
+    pub fn emitter_light(&self, scene: &Scene, q: LightQuery, rng: &mut Rng) -> Vec3 {
+        self.emitter_light_weighted(scene, q, rng, None)
     }
 
     /// [`DirectLight::emitter_light`], weighted against `shared` too.
     fn emitter_light_weighted(
         &self,
         scene: &Scene,
-        bvh: &SceneBvh,
-        it: &Interaction,
-        (wo, rng): (Vec3, &mut Rng),
-        mis: bool,
+        q: LightQuery,
+        rng: &mut Rng,
         shared: Option<&dyn SharedLight>,
     ) -> Vec3 {
+        let LightQuery { bvh, it, wo, mis } = q;
         if self.emitters.is_empty() {
             return Vec3::ZERO;
         }
@@ -286,19 +290,12 @@ impl DirectLight {
 /// Light of every point, spot and directional light of `scene` arriving at `it`, times the
 /// BSDF towards `wo`: the delta lights exactly (one shadow ray each), a sun with a disc by
 /// one direction in it, weighted against BSDF rays with `mis`.
-pub fn analytic_lights(
-    scene: &Scene,
-    bvh: &SceneBvh,
-    it: &Interaction,
-    wo: Vec3,
-    rng: &mut Rng,
-    mis: bool,
-) -> Vec3 {
+pub fn analytic_lights(scene: &Scene, q: LightQuery, rng: &mut Rng) -> Vec3 {
     let mut sum = Vec3::ZERO;
     for light in &scene.lights {
         sum += match light.disc_radiance() {
-            Some(l) => sun_disc(light, l, bvh, it, wo, rng, mis),
-            None => analytic_light(light, bvh, it, wo),
+            Some(l) => sun_disc(light, l, q, rng),
+            None => analytic_light(light, q.bvh, q.it, q.wo),
         };
     }
     sum
@@ -345,15 +342,8 @@ pub fn analytic_light(light: &Light, bvh: &SceneBvh, it: &Interaction, wo: Vec3)
 /// One direction in the disc of a directional light of radiance `radiance` (uniform in
 /// solid angle): its light at `it` times the BSDF towards `wo`, weighted against BSDF
 /// sampling with `mis`.
-fn sun_disc(
-    light: &Light,
-    radiance: Vec3,
-    bvh: &SceneBvh,
-    it: &Interaction,
-    wo: Vec3,
-    rng: &mut Rng,
-    mis: bool,
-) -> Vec3 {
+fn sun_disc(light: &Light, radiance: Vec3, q: LightQuery, rng: &mut Rng) -> Vec3 {
+    let LightQuery { bvh, it, wo, mis } = q;
     let Some((wi, pdf)) = light.sample_towards(rng.next_2d()) else {
         return Vec3::ZERO;
     };

@@ -8,7 +8,7 @@
 //! estimate, unbiased but heavy-tailed, reads 30% dark at 16 samples per pixel on a glossy
 //! sphere under a constant sky. The BSDF ray finds the lobe's light at every sample.
 
-use super::direct::{analytic_lights, escaped, BsdfVertex, DirectLight, Nee};
+use super::direct::{analytic_lights, escaped, BsdfVertex, DirectLight, LightQuery, Nee};
 use super::{Interaction, SceneBvh};
 use crate::sampling::Rng;
 use crate::scene::Scene;
@@ -40,16 +40,22 @@ pub fn mis_direct(
     if it.material.is_purely_specular() {
         return Vec3::ZERO;
     }
+    let q = LightQuery {
+        bvh,
+        it,
+        wo,
+        mis: true,
+    };
     let sky = |rng: &mut Rng| match scene.environment.as_deref() {
-        Some(env) if env.importance => super::path::environment_light(env, bvh, it, wo, rng, true),
+        Some(env) if env.importance => super::path::environment_light(env, q, rng),
         _ => Vec3::ZERO,
     };
     let nee = match sources {
         Sources::All => lights.estimate(scene, bvh, it, wo, rng, Nee::Mis, None),
         Sources::Environment => sky(rng),
-        Sources::Lights => analytic_lights(scene, bvh, it, wo, rng, true) + sky(rng),
+        Sources::Lights => analytic_lights(scene, q, rng) + sky(rng),
     };
-    nee + bsdf_ray(scene, bvh, lights, (it, wo), rng, sources)
+    nee + bsdf_ray(scene, lights, q, rng, sources)
 }
 
 /// One BSDF sample at `it` towards `wo` and its world direction, where it is a non-delta
@@ -69,12 +75,12 @@ pub fn reflection_sample(
 /// emitter, weighted against next-event estimation's samples of the same light.
 fn bsdf_ray(
     scene: &Scene,
-    bvh: &SceneBvh,
     lights: &DirectLight,
-    (it, wo): (&Interaction, Vec3),
+    q: LightQuery,
     rng: &mut Rng,
     sources: Sources,
 ) -> Vec3 {
+    let LightQuery { bvh, it, wo, .. } = q;
     if !lights.found_by_rays {
         return Vec3::ZERO;
     }

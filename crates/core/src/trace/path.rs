@@ -8,7 +8,7 @@
 //! left to the light tracer ([`super::light_tracer`]) when it runs (`light_traced`); the
 //! sky's stay here.
 
-use super::direct::{escaped, BsdfVertex, DirectLight, Nee};
+use super::direct::{escaped, BsdfVertex, DirectLight, LightQuery, Nee};
 use super::light_vertex::{self, Connection, LightVertices};
 use super::{Interaction, SceneBvh};
 use crate::image::Image;
@@ -142,14 +142,8 @@ pub fn power_heuristic(a: f32, b: f32) -> f32 {
 /// Environment light arriving at `it` from one direction sampled by importance, times the
 /// BSDF towards `wo`; with `mis`, weighted against BSDF sampling (the path's BSDF-sampled
 /// continuation, which may also escape to the environment) by the power heuristic.
-pub fn environment_light(
-    env: &Environment,
-    bvh: &SceneBvh,
-    it: &Interaction,
-    wo: Vec3,
-    rng: &mut Rng,
-    mis: bool,
-) -> Vec3 {
+pub fn environment_light(env: &Environment, q: LightQuery, rng: &mut Rng) -> Vec3 {
+    let LightQuery { bvh, it, wo, mis } = q;
     let u = rng.next_2d();
     let m = it.material;
     if m.is_purely_specular() {

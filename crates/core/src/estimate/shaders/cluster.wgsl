@@ -552,66 +552,48 @@ fn cluster_jobs1() {
 }
 
 @compute @workgroup_size(64)
-fn cluster_top_count(
-    @builtin(global_invocation_id) gid: vec3<u32>,
-    @builtin(num_workgroups) groups: vec3<u32>,
-) {
-    let i = photon_index(gid, groups);
+fn cluster_top_count(inv: ListInvocation) {
+    let i = photon_index(inv);
     if i < params.photons {
         walk_top(i, false);
     }
 }
 
 @compute @workgroup_size(64)
-fn cluster_top_fill(
-    @builtin(global_invocation_id) gid: vec3<u32>,
-    @builtin(num_workgroups) groups: vec3<u32>,
-) {
-    let i = photon_index(gid, groups);
+fn cluster_top_fill(inv: ListInvocation) {
+    let i = photon_index(inv);
     if i < params.photons {
         walk_top(i, true);
     }
 }
 
 @compute @workgroup_size(64)
-fn cluster_mid_count(
-    @builtin(global_invocation_id) gid: vec3<u32>,
-    @builtin(num_workgroups) groups: vec3<u32>,
-) {
-    let j = photon_index(gid, groups);
+fn cluster_mid_count(inv: ListInvocation) {
+    let j = photon_index(inv);
     if j < job_total(0u) {
         walk_mid(jobs[j], false);
     }
 }
 
 @compute @workgroup_size(64)
-fn cluster_mid_fill(
-    @builtin(global_invocation_id) gid: vec3<u32>,
-    @builtin(num_workgroups) groups: vec3<u32>,
-) {
-    let j = photon_index(gid, groups);
+fn cluster_mid_fill(inv: ListInvocation) {
+    let j = photon_index(inv);
     if j < job_total(0u) {
         walk_mid(jobs[j], true);
     }
 }
 
 @compute @workgroup_size(64)
-fn cluster_low_count(
-    @builtin(global_invocation_id) gid: vec3<u32>,
-    @builtin(num_workgroups) groups: vec3<u32>,
-) {
-    let j = photon_index(gid, groups);
+fn cluster_low_count(inv: ListInvocation) {
+    let j = photon_index(inv);
     if j < job_total(1u) {
         walk_low(jobs[params.jobs + j], false);
     }
 }
 
 @compute @workgroup_size(64)
-fn cluster_low_fill(
-    @builtin(global_invocation_id) gid: vec3<u32>,
-    @builtin(num_workgroups) groups: vec3<u32>,
-) {
-    let j = photon_index(gid, groups);
+fn cluster_low_fill(inv: ListInvocation) {
+    let j = photon_index(inv);
     if j < job_total(1u) {
         walk_low(jobs[params.jobs + j], true);
     }
@@ -623,11 +605,8 @@ fn node_centre(n: Node) -> vec3<f32> {
 
 // Each node's quadratic from its accepted photons (module comment), in list order.
 @compute @workgroup_size(64)
-fn cluster_accumulate(
-    @builtin(global_invocation_id) gid: vec3<u32>,
-    @builtin(num_workgroups) groups: vec3<u32>,
-) {
-    let k = gid.y * groups.x * 64u + gid.x;
+fn cluster_accumulate(inv: ListInvocation) {
+    let k = photon_index(inv);
     if k >= params.nodes {
         return;
     }
@@ -755,11 +734,8 @@ fn add_to_buckets(
 }
 
 @compute @workgroup_size(64)
-fn directional_accumulate(
-    @builtin(global_invocation_id) gid: vec3<u32>,
-    @builtin(num_workgroups) groups: vec3<u32>,
-) {
-    let k = gid.y * groups.x * 64u + gid.x;
+fn directional_accumulate(inv: ListInvocation) {
+    let k = photon_index(inv);
     if k >= params.nodes {
         return;
     }

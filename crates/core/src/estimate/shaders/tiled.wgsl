@@ -211,28 +211,46 @@ fn meets(p: VolumePhoton, t: u32) -> bool {
     return dot(d, d) <= r * r;
 }
 
-fn photon_index(gid: vec3<u32>, groups: vec3<u32>) -> u32 {
-    return (gid.y * groups.x * 64u) + gid.x;
-}
-
-@compute @workgroup_size(64)
-fn bin_count(
+// The builtins of an invocation of a pass over a list (photons, jobs, nodes): 64-wide
+// workgroups laid out over x, then rows of them over y.
+struct ListInvocation {
     @builtin(global_invocation_id) gid: vec3<u32>,
     @builtin(num_workgroups) groups: vec3<u32>,
-) {
-    let i = photon_index(gid, groups);
-    if i >= params.photons {
-        return;
-    }
+}
+
+// The list entry of invocation `inv`.
+fn photon_index(inv: ListInvocation) -> u32 {
+    return (inv.gid.y * inv.groups.x * 64u) + inv.gid.x;
+}
+
+// Photon `i` binned into the tiles its volume meets: counted there (`fill` false), or
+// written into their lists at the cursors the scan left (`fill` true).
+fn bin_photon(i: u32, fill: bool) {
     let p = load_photon_shape(i);
     let r = tile_range(p);
     for (var y = r.y; y <= r.w; y++) {
         for (var x = r.x; x <= r.z; x++) {
             let t = u32(y) * params.tiles.x + u32(x);
-            if meets(p, t) {
+            if !meets(p, t) {
+                continue;
+            }
+            if fill {
+                let slot = atomicAdd(&cursor[t], 1u);
+                if slot < params.capacity {
+                    list[slot] = i;
+                }
+            } else {
                 atomicAdd(&counts[t], 1u);
             }
         }
+    }
+}
+
+@compute @workgroup_size(64)
+fn bin_count(inv: ListInvocation) {
+    let i = photon_index(inv);
+    if i < params.photons {
+        bin_photon(i, false);
     }
 }
 
@@ -272,26 +290,10 @@ fn scan(@builtin(local_invocation_index) li: u32) {
 }
 
 @compute @workgroup_size(64)
-fn bin_fill(
-    @builtin(global_invocation_id) gid: vec3<u32>,
-    @builtin(num_workgroups) groups: vec3<u32>,
-) {
-    let i = photon_index(gid, groups);
-    if i >= params.photons {
-        return;
-    }
-    let p = load_photon_shape(i);
-    let r = tile_range(p);
-    for (var y = r.y; y <= r.w; y++) {
-        for (var x = r.x; x <= r.z; x++) {
-            let t = u32(y) * params.tiles.x + u32(x);
-            if meets(p, t) {
-                let slot = atomicAdd(&cursor[t], 1u);
-                if slot < params.capacity {
-                    list[slot] = i;
-                }
-            }
-        }
+fn bin_fill(inv: ListInvocation) {
+    let i = photon_index(inv);
+    if i < params.photons {
+        bin_photon(i, true);
     }
 }
 

@@ -76,35 +76,16 @@ fn bounce(in: VertexOut, textured: bool) -> BounceOut {
     let wo = normalize(to_light);
     // Normals as in the eye G-buffer, oriented towards the light.
     var ng = in.geometric_normal;
-    var ns = in.normal + jitter.x * dndx + jitter.y * dndy;
-    let len = length(ns);
-    if !(len > 0.0) {
-        ns = ng;
-    } else {
-        ns = ns / len;
-        if dot(ns, ng) < 0.0 {
-            ns = -ns;
-        }
-    }
+    var ns = shading_normal(in.normal + jitter.x * dndx + jitter.y * dndy, ng);
     var maps: MaterialMaps;
     if textured {
         maps = material_maps[in.material];
         ns = mapped_normal(maps, ns, in.tangent, uv, point, point);
     }
-    if dot(wo, ns) * dot(wo, ng) <= 0.0 {
-        ns = ng;
-    }
-    if dot(wo, ng) < 0.0 {
-        ng = -ng;
-        ns = -ns;
-    }
-    let d = -wo;
-    let c = max(dot(d, view.forward), 0.0);
-    var intensity = view.intensity;
-    if view.kind == 1u {
-        intensity *= falloff(dot(d, view.spot_direction));
-    }
-    let phi = intensity * view.texel_area * c * c * c;
+    let facing = facing_normals(wo, ns, ng);
+    ns = facing.shading;
+    ng = facing.geometric;
+    let phi = texel_flux(wo);
     var m = materials[in.material];
     if textured {
         m = textured_material(maps, m, uv, point, point);

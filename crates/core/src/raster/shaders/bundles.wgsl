@@ -36,22 +36,9 @@ fn insert(in: VertexOut, textured: bool) {
     let duvdx = dpdx(in.uv);
     let duvdy = dpdy(in.uv);
     let ng = in.geometric_normal;
-    var ns = in.normal;
-    let len = length(ns);
-    if !(len > 0.0) {
-        ns = ng;
-    } else {
-        ns = ns / len;
-        if dot(ns, ng) < 0.0 {
-            ns = -ns;
-        }
-    }
-    var m = materials[in.material];
-    if textured {
-        let maps = material_maps[in.material];
-        ns = mapped_normal(maps, ns, in.tangent, in.uv, duvdx, duvdy);
-        m = textured_material(maps, m, in.uv, duvdx, duvdy);
-    }
+    let surface = fragment_surface(in, materials[in.material], textured, duvdx, duvdy);
+    let ns = surface.ns;
+    let m = surface.m;
     let slot = atomicAdd(&counter, 1u);
     if slot >= bundle.capacity {
         return;

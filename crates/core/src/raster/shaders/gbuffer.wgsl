@@ -62,26 +62,13 @@ fn gbuffer(in: VertexOut, textured: bool, duvdx: vec2<f32>, duvdy: vec2<f32>) ->
     let emits = m.two_sided != 0u || dot(wo, ng) > 0.0;
     // Shading normal as in trace::Interaction::new: on the side of ng, and replaced by ng
     // where the two disagree about the side the view ray comes from.
-    var ns = in.normal;
-    let len = length(ns);
-    if !(len > 0.0) {
-        ns = ng;
-    } else {
-        ns = ns / len;
-        if dot(ns, ng) < 0.0 {
-            ns = -ns;
-        }
-    }
+    var ns = shading_normal(in.normal, ng);
     if textured {
         ns = mapped_normal(maps, ns, in.tangent, in.uv, duvdx, duvdy);
     }
-    if dot(wo, ns) * dot(wo, ng) <= 0.0 {
-        ns = ng;
-    }
-    if dot(wo, ng) < 0.0 {
-        ng = -ng;
-        ns = -ns;
-    }
+    let facing = facing_normals(wo, ns, ng);
+    ns = facing.shading;
+    ng = facing.geometric;
     var o: GBufferOut;
     o.position = vec4<f32>(in.world, 1.0);
     o.normals = vec4<f32>(oct_encode(ns), oct_encode(ng));

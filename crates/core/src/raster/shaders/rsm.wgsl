@@ -42,41 +42,14 @@ fn rsm(in: VertexOut, textured: bool) -> RsmOut {
     let duvdx = dpdx(in.uv);
     let duvdy = dpdy(in.uv);
     let wo = normalize(view.light_position - in.world);
-    var ng = in.geometric_normal;
-    var ns = in.normal;
-    let len = length(ns);
-    if !(len > 0.0) {
-        ns = ng;
-    } else {
-        ns = ns / len;
-        if dot(ns, ng) < 0.0 {
-            ns = -ns;
-        }
-    }
-    var m = materials[in.material];
-    if textured {
-        let maps = material_maps[in.material];
-        ns = mapped_normal(maps, ns, in.tangent, in.uv, duvdx, duvdy);
-        m = textured_material(maps, m, in.uv, duvdx, duvdy);
-    }
-    if dot(wo, ns) * dot(wo, ng) <= 0.0 {
-        ns = ng;
-    }
-    if dot(wo, ng) < 0.0 {
-        ng = -ng;
-        ns = -ns;
-    }
-    let d = -wo;
-    let c = max(dot(d, view.forward), 0.0);
-    var intensity = view.intensity;
-    if view.kind == 1u {
-        intensity *= falloff(dot(d, view.spot_direction));
-    }
+    let surface = fragment_surface(in, materials[in.material], textured, duvdx, duvdy);
+    let m = surface.m;
+    let facing = facing_normals(wo, surface.ns, in.geometric_normal);
     var o: RsmOut;
     o.position = vec4<f32>(in.world, 1.0);
-    o.normals = vec4<f32>(oct_encode(ns), oct_encode(ng));
+    o.normals = vec4<f32>(oct_encode(facing.shading), oct_encode(facing.geometric));
     o.diffuse = vec4<f32>(m.diffuse, m.roughness);
     o.specular = vec4<f32>(m.specular, f32(m.fresnel));
-    o.flux = vec4<f32>(intensity * view.texel_area * c * c * c, 0.0);
+    o.flux = vec4<f32>(texel_flux(wo), 0.0);
     return o;
 }

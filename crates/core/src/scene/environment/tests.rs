@@ -2,7 +2,7 @@
 //! the direction convention.
 
 use super::*;
-use crate::sampling::Rng;
+use crate::sampling::{chi_square, Rng};
 use std::collections::HashMap;
 use std::f64::consts::PI as PI64;
 
@@ -39,32 +39,6 @@ fn environments() -> Vec<Environment> {
     ]
 }
 
-/// Standard normal upper tail via erfc (Numerical Recipes' erfcc, |error| < 1.2e-7); as in
-/// the BSDF's chi-square tests.
-fn normal_upper_tail(z: f64) -> f64 {
-    let x = z / std::f64::consts::SQRT_2;
-    let t = 1.0 / (1.0 + 0.5 * x.abs());
-    let y = t
-        * (-x * x - 1.265_512_23
-            + t * (1.000_023_68
-                + t * (0.374_091_96
-                    + t * (0.096_784_18
-                        + t * (-0.186_288_06
-                            + t * (0.278_868_07
-                                + t * (-1.135_203_98
-                                    + t * (1.488_515_87
-                                        + t * (-0.822_152_23 + t * 0.170_872_77)))))))))
-            .exp();
-    let erfc = if x >= 0.0 { y } else { 2.0 - y };
-    0.5 * erfc
-}
-
-/// p-value of a chi-square statistic with `k` degrees of freedom (Wilson–Hilferty).
-fn chi2_p_value(chi2: f64, k: f64) -> f64 {
-    let z = ((chi2 / k).powf(1.0 / 3.0) - (1.0 - 2.0 / (9.0 * k))) / (2.0 / (9.0 * k)).sqrt();
-    normal_upper_tail(z)
-}
-
 /// World direction with y = `y` and azimuth `phi` about +y.
 fn dir(y: f64, phi: f64) -> Vec3 {
     let r = (1.0 - y * y).max(0.0).sqrt();
@@ -94,42 +68,13 @@ fn chi_square(env: &Environment, reference: &dyn Fn(Vec3) -> f32, seed: u64) -> 
         let ip = ((phi / (2.0 * PI64) * NP as f64) as usize).min(NP - 1);
         observed[iy * NP + ip] += 1.0;
     }
-    let mut expected = vec![0.0f64; NY * NP];
-    for iy in 0..NY {
-        for ip in 0..NP {
-            let mut e = 0.0;
-            for a in 0..SUB {
-                for b in 0..SUB {
-                    let y = -1.0 + 2.0 * (iy as f64 + (a as f64 + 0.5) / SUB as f64) / NY as f64;
-                    let phi = 2.0 * PI64 * (ip as f64 + (b as f64 + 0.5) / SUB as f64) / NP as f64;
-                    e += reference(dir(y, phi)) as f64;
-                }
-            }
-            let cell = (2.0 / NY as f64) * (2.0 * PI64 / NP as f64) / (SUB * SUB) as f64;
-            expected[iy * NP + ip] = e * cell * n as f64;
-        }
-    }
-    let (mut chi2, mut dof) = (0.0f64, 0usize);
-    let (mut pool_o, mut pool_e) = (0.0f64, 0.0f64);
-    for (o, e) in observed.iter().zip(&expected) {
-        if *e < 5.0 {
-            pool_o += o;
-            pool_e += e;
-        } else {
-            chi2 += (o - e) * (o - e) / e;
-            dof += 1;
-        }
-    }
-    if pool_e >= 5.0 {
-        chi2 += (pool_o - pool_e) * (pool_o - pool_e) / pool_e;
-        dof += 1;
-    } else {
-        assert!(
-            pool_o < 20.0,
-            "samples where the pdf says there are none: {pool_o}"
-        );
-    }
-    chi2_p_value(chi2, (dof - 1) as f64)
+    let grid = chi_square::Grid {
+        rows: NY,
+        columns: NP,
+        sub: SUB,
+    };
+    let expected = grid.expected(n, |y, phi| reference(dir(y, phi)) as f64);
+    chi_square::p_value(&observed, &expected)
 }
 
 /// The density the sampling should have: luminance · sin θ(texel centre) per texel, over

@@ -65,3 +65,63 @@ fn scene_vertex(v: VertexIn, i: InstanceIn, view_proj: mat4x4<f32>) -> VertexOut
     o.tangent = vec4<f32>(normalize_or_zero(linear * v.tangent.xyz), v.tangent.w * i.normal0.w);
     return o;
 }
+
+// The interpolated shading normal `n` as trace::Interaction::new starts it: normalized and
+// on the side of the geometric normal `ng`, or `ng` where it has no length.
+fn shading_normal(n: vec3<f32>, ng: vec3<f32>) -> vec3<f32> {
+    let len = length(n);
+    if !(len > 0.0) {
+        return ng;
+    }
+    let ns = n / len;
+    if dot(ns, ng) < 0.0 {
+        return -ns;
+    }
+    return ns;
+}
+
+// A fragment's normals seen from direction `wo` (towards the viewer or the light).
+struct FacingNormals {
+    shading: vec3<f32>,
+    geometric: vec3<f32>,
+}
+
+// Normals `ns` and `ng` turned towards `wo`, as trace::Interaction::new turns them: `ns`
+// replaced by `ng` where the two disagree about the side `wo` comes from, then both flipped
+// where `ng` faces away.
+fn facing_normals(wo: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>) -> FacingNormals {
+    var o = FacingNormals(ns, ng);
+    if dot(wo, ns) * dot(wo, ng) <= 0.0 {
+        o.shading = ng;
+    }
+    if dot(wo, ng) < 0.0 {
+        o.geometric = -ng;
+        o.shading = -o.shading;
+    }
+    return o;
+}
+
+// A fragment's shading normal and material.
+struct FragmentSurface {
+    ns: vec3<f32>,
+    m: Material,
+}
+
+// Fragment `in`'s shading normal (`shading_normal`) and material `base`, with its
+// textures (common/texture.wgsl, `material_maps`) applied where `textured`: the normal map,
+// then the textured material, at the mip level of the uv derivatives `duvdx`, `duvdy`.
+fn fragment_surface(
+    in: VertexOut,
+    base: Material,
+    textured: bool,
+    duvdx: vec2<f32>,
+    duvdy: vec2<f32>,
+) -> FragmentSurface {
+    var o = FragmentSurface(shading_normal(in.normal, in.geometric_normal), base);
+    if textured {
+        let maps = material_maps[in.material];
+        o.ns = mapped_normal(maps, o.ns, in.tangent, in.uv, duvdx, duvdy);
+        o.m = textured_material(maps, o.m, in.uv, duvdx, duvdy);
+    }
+    return o;
+}

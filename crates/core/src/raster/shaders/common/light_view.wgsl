@@ -29,3 +29,16 @@ fn vs_main(v: VertexIn, i: InstanceIn) -> VertexOut {
 fn falloff(cos_t: f32) -> f32 {
     return cone_falloff(cos_t, view.cos_inner, view.cos_outer);
 }
+
+// The light's power (W) through the texel seen in direction `wo` (from the surface towards
+// the light): intensity (times the spot falloff) × the texel's solid angle, which on the
+// unit-distance image plane is texel_area · cos³θ from the optical axis.
+fn texel_flux(wo: vec3<f32>) -> vec3<f32> {
+    let d = -wo;
+    let c = max(dot(d, view.forward), 0.0);
+    var intensity = view.intensity;
+    if view.kind == 1u {
+        intensity *= falloff(dot(d, view.spot_direction));
+    }
+    return intensity * view.texel_area * c * c * c;
+}
