@@ -219,10 +219,11 @@ fn lum(c: Vec3) -> f64 {
 /// The highlight of the emitter on the glossy floor: one `direct` frame per seed (1–4)
 /// against `path` with `max_depth` 2 (camera → floor → emitter is the only light path),
 /// 1024 samples, over the pixels of the highlight (the reference's floor pixels above a
-/// quarter of its brightest): the ratio of the means within 8% in every frame (the fit's
+/// quarter of its brightest): the ratio of the means within 6% in every frame (the fit's
 /// error in the lobe, ≤ 4.3% by `raster::ltc`'s test, plus the ratio estimator's
-/// visibility from 16 points, 1 in the unshadowed highlight) and the image means within
-/// 10%. Measured in the module's doc.
+/// visibility from the group's points, 1 in the unshadowed highlight, and the reference's
+/// noise) and the image means within 5%. Measured (lavapipe): highlight 1.004–1.013, image
+/// 1.004–1.008 over the four seeds. Not measured: the same frames before the LTC call site.
 #[test]
 fn glossy_highlight_of_an_area_light_matches_path() {
     use gi_core::scene::Scene;
@@ -270,11 +271,11 @@ fn glossy_highlight_of_an_area_light_matches_path() {
             spot.len()
         );
         assert!(
-            (spot_ratio - 1.0).abs() < 0.08,
+            (spot_ratio - 1.0).abs() < 0.06,
             "seed {seed}: highlight {spot_ratio}"
         );
         assert!(
-            (all_ratio - 1.0).abs() < 0.10,
+            (all_ratio - 1.0).abs() < 0.05,
             "seed {seed}: image {all_ratio}"
         );
     }
