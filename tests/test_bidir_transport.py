@@ -4,9 +4,9 @@
   and an image sky), the sun alone and the sky alone: the mean of 4 `bidir` frames (seeds
   1–4) at `max_depth` 7 against `path` at the same depth, within 2% per channel.
 - The built-in `cornell` and Mitsuba's Cornell boxes (`tests/scenes/third_party/cbox`,
-  `docs/scenes/cornell-box`): the image means of single frames (seeds 1–4) within 3% of
-  each other (3.5% on the second), and no pixel of one frame's indirect light above a
-  stated multiple of the reference's largest.
+  `docs/scenes/cornell-box`): the image means of single frames (seeds 1–8) within 3% of
+  each other (met on `cbox` alone: strict xfail on the two others), and no pixel of one
+  frame's indirect light above a stated multiple of the reference's largest.
 - Issue 42's material spheres: the roughness clamp keeps the rough conductors' albedo, and
   a mirror shows the sky and the emitters it reflects (against Mitsuba 3.9.1).
 
@@ -70,32 +70,54 @@ def indirect_max(scene: gi.Scene, method: str, size, **settings) -> float:
     return float((full - direct).mean(axis=2).max())
 
 
-@pytest.mark.parametrize(
-    ("name", "max_spread"),
-    [("cornell", 0.03), (str(CBOX), 0.03), (str(CORNELL_BOX), 0.035)],
+SPREAD_XFAIL = pytest.mark.xfail(
+    strict=True,
+    reason="issue 48: one frame's mean varies by σ 1.7–2.0% between seeds (32 seeds)",
 )
-def test_one_frame_is_steady_and_has_no_hot_spots(name, max_spread):
-    # 48×48 at the defaults, seeds 1–4. Per-seed image means: before issue 48 they spread
-    # 13–14% (max − min over 8 seeds, σ 4.0% and 4.4%) on `cornell` and mitsuba.cornell_box()
-    # (`docs/scenes/cornell-box`); the light subpaths from every VPL (64 a light instead of
-    # one per bundle, 16) and the emitters' photons with stratified directions bring σ to
-    # 1.5% and 1.6% (8 seeds). Seeds 1–4 spread 0.4% (`cornell`), 2.5% (Mitsuba 3's `cbox`
-    # scene, `tests/scenes/third_party/cbox`; 2.8% over 8 seeds, σ 1.0%) and 3.3%
-    # (mitsuba.cornell_box(): the issue's 3% is not met there, its bound is 3.5%; what
-    # remains is the light of three and more bounces, σ 1.9% of the image over 8 seeds).
-    # Hot spots: the largest pixel of one frame's light past the direct light over `path`'s
-    # (1024 spp, whose own largest pixel is noise above its smooth image), seeds 1–8: with
+
+
+@pytest.mark.parametrize(
+    "name",
+    [
+        pytest.param("cornell", marks=SPREAD_XFAIL),
+        str(CBOX),
+        pytest.param(str(CORNELL_BOX), marks=SPREAD_XFAIL),
+    ],
+)
+def test_one_frame_is_steady(name):
+    # Issue 48's bound: one frame's image means (48×48, the defaults) within 3% of each
+    # other, here over seeds 1–8. Before issue 48 they spread 13–14% (8 seeds, σ 4.0% and
+    # 4.4%) on `cornell` and mitsuba.cornell_box() (`docs/scenes/cornell-box`); the light
+    # subpaths from every VPL (64 a light instead of one per bundle, 16) and the emitters'
+    # photons with stratified directions brought σ down. Measured over 32 seeds
+    # (`scripts/probe/bidir_spread.py --seeds 32`, docs/bench/bidir-depth.md): σ 2.0%
+    # (`cornell`), 1.2% (Mitsuba 3's `cbox`, `tests/scenes/third_party/cbox`) and 1.7%
+    # (mitsuba.cornell_box()); seeds 1–8 spread 4.5%, 2.8% and 4.4%. Seeds 1–4, the bound's
+    # seeds before, spread 0.4%, 2.5% and 3.3%: `cornell` passed by luck (its 32 seeds
+    # spread 7.8%). Most of σ is the light of two and more bounces (σ at `max_depth` 2:
+    # 0.8% and 0.9%). The issue's 3% over 8 seeds needs σ under about 1% (the range of 8
+    # normal draws is about 2.8σ): not met on `cornell` and mitsuba.cornell_box() (strict
+    # xfail: the test fails once it passes).
+    scene = gi.load_scene(name)
+    means = [
+        float(gi.render(scene, "bidir", size=(48, 48), seed=s).radiance.mean()) for s in range(1, 9)
+    ]
+    spread = (max(means) - min(means)) / np.mean(means)
+    assert spread <= 0.03, (means, spread)
+
+
+@pytest.mark.parametrize("name", ["cornell", str(CBOX), str(CORNELL_BOX)])
+def test_one_frame_has_no_hot_spots(name):
+    # The largest pixel of one frame's light past the direct light over `path`'s (1024 spp,
+    # whose own largest pixel is noise above its smooth image), 48×48, seeds 1–8: with
     # `frame/bidir/spikes.rs` at factor 3 on single pixels 3.8, 2.2 and 3.2 at most (4.3, –
     # and 15 without it); at factor 2, 2×2 blocks first, 2.56, 1.39 and 2.21 (seed by seed in
     # docs/bench/bidir-depth.md, `scripts/probe/bidir_frames.py spread --seeds 8`). Bound:
     # 3 times, over 8 seeds.
     scene = gi.load_scene(name)
     size = (48, 48)
-    means = [float(gi.render(scene, "bidir", size=size, seed=s).radiance.mean()) for s in SEEDS]
-    spread = (max(means) - min(means)) / np.mean(means)
     ref = indirect_max(scene, "path", size, spp=1024, seed=5)
     peaks = [indirect_max(scene, "bidir", size, seed=s) / ref for s in range(1, 9)]
-    assert spread <= max_spread, (means, spread)
     assert max(peaks) <= 3.0, peaks
 
 

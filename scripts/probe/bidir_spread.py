@@ -1,7 +1,8 @@
 """One `bidir` frame's image mean from seed to seed (issue 48) on the built-in `cornell`,
 Mitsuba 3's `cbox` and mitsuba.cornell_box(), 48×48 at the defaults, for one or more builds
 (each in its own process, `--build LABEL=PYTHONPATH`): the spread (max − min over the
-mean) of seeds 1–4 (the test's) and of 1–N, and σ over N seeds. Prints a Markdown table.
+mean) of seeds 1–4, of 1–8 (the test's) and of 1–N, and σ over N seeds. Prints a Markdown
+table.
 
     python scripts/probe/bidir_spread.py [--seeds 16] [--build LABEL=PYTHONPATH ...]
 """
@@ -36,6 +37,11 @@ def means(seeds: int) -> dict:
     return out
 
 
+def spread(m: np.ndarray) -> float:
+    """max − min over the mean."""
+    return float((m.max() - m.min()) / m.mean())
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--seeds", type=int, default=16)
@@ -46,8 +52,8 @@ def main() -> None:
         print(json.dumps(means(a.seeds)))
         return
     builds = [b.split("=", 1) for b in a.build] or [["this", os.pathsep.join(sys.path)]]
-    print(f"| build | scene | seeds 1–4 spread | seeds 1–{a.seeds} spread | σ |")
-    print("|---|---|---|---|---|")
+    print(f"| build | scene | seeds 1–4 spread | seeds 1–8 spread | seeds 1–{a.seeds} spread | σ |")
+    print("|---|---|---|---|---|---|")
     for label, path in builds:
         cmd = [sys.executable, __file__, "--child", "--seeds", str(a.seeds)]
         env = {**os.environ, "PYTHONPATH": path}
@@ -55,10 +61,9 @@ def main() -> None:
         got = json.loads(run.stdout.splitlines()[-1])
         for name, m in got.items():
             m = np.array(m)
-            sp4 = (m[:4].max() - m[:4].min()) / m[:4].mean()
-            sp = (m.max() - m.min()) / m.mean()
+            sp4, sp8, sp = (spread(m[:k]) for k in (4, 8, len(m)))
             sd = m.std(ddof=1) / m.mean()
-            print(f"| {label} | {name} | {sp4:.1%} | {sp:.1%} | {sd:.2%} |", flush=True)
+            print(f"| {label} | {name} | {sp4:.1%} | {sp8:.1%} | {sp:.1%} | {sd:.2%} |", flush=True)
 
 
 if __name__ == "__main__":

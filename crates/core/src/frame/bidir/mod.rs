@@ -19,11 +19,14 @@
 //!    combined by MIS.
 //! 5. [`specular_paths`]: the paths through mirrors and glass, on the CPU (a light tracer
 //!    and camera paths through delta lobes), added to the specular target.
-//! 6. [`spikes`]: the lighting pass's image read back, its isolated spikes spread over
-//!    their neighbourhood (mean-preserving hot-spot control), the radiance corrected.
+//! 6. [`interleave`]: the lighting pass's image read back, the deep subpath vertices it
+//!    interleaved over pixel blocks filtered (mean-preserving); [`spikes`]: its isolated
+//!    spikes spread over their neighbourhood (mean-preserving hot-spot control), the
+//!    radiance corrected.
 
 mod bundles;
 mod emitted;
+mod interleave;
 mod specular_paths;
 mod spikes;
 mod subpaths;
@@ -504,16 +507,20 @@ pub(super) fn frame(
     fc.stats.bundles = options.bundles as u64;
     fc.stats.bundle_fragments = fragments;
     fc.stats.bundle_overflow = overflow;
-    Ok(output(&gpu, &data, specular, images, fc))
+    // The pass interleaves the subpath vertices past the first `v.count` (`interleave`).
+    let deep = v.used > v.count;
+    Ok(output(&gpu, &data, specular, images, deep, fc))
 }
 
 /// The frame's images from the read-back textures, with `bidir`'s own (`direct`,
-/// `specular`, `indirect`) when asked for.
+/// `specular`, `indirect`) when asked for; `deep`: the lighting pass interleaved deep
+/// subpath vertices (to be filtered).
 fn output(
     gpu: &GpuFrame,
     data: &Readback,
     specular: Option<Image>,
     images: Images,
+    deep: bool,
     fc: FrameCtx,
 ) -> RenderOutput {
     let mut out = gpu.output(data, fc);
@@ -525,6 +532,11 @@ fn output(
         let mut img = rgb_image(w, h, i);
         let covered: Vec<bool> = i.iter().map(|p| p.w > 0.5).collect();
         let original = img.pixels.clone();
+        // Alpha: 1 + the distance from the eye where the pass saw a surface.
+        let depth: Vec<Option<f32>> = i.iter().map(|p| (p.w > 0.5).then(|| p.w - 1.0)).collect();
+        if deep {
+            interleave::filter(&mut img.pixels, &depth, w as usize, h as usize);
+        }
         spikes::spread(&mut img.pixels, &covered, w as usize, h as usize);
         for ((r, new), old) in out
             .radiance

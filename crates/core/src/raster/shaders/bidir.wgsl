@@ -386,6 +386,48 @@ fn node_material(n: Node) -> Material {
     return m;
 }
 
+// Strategy B at x3 = `p` for subpath slot `i`: the vertex as a VPL, weighted by MIS against
+// the bundles' strategy A.
+fn subpath_vertex_light(i: u32, p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, wo: vec3<f32>, n1: f32, tiny_d2: f32) -> vec3<f32> {
+    // The flux first (one texel): empty slots and specular vertices cost no more.
+    if max3(textureLoad(vpl_tex, vec2<u32>(1u, i), 0).xyz) <= 0.0 {
+        return vec3<f32>(0.0);
+    }
+    let v = vpl_at(i);
+    let to_v = v.position - p;
+    let d2 = max(dot(to_v, to_v), 1e-20);
+    let cos_v = abs(dot(to_v, v.ng)) / sqrt(d2);
+    let pa = bundle_density(to_v / sqrt(d2)) * cos_v / d2;
+    let pb = n1 * v.pdf;
+    let d3 = (pa + pb) * d2 / max(cos_v, 1e-6);
+    let mv = clamped(vpl_material(v), d3, cos_v);
+    let t = vpl_light(v, mv, p, ns, ng, clamped(m, d3, dot(ns, wo)), wo, tiny_d2);
+    return t * (pb / (pa + pb));
+}
+
+// Interleaved sampling of the deep subpath vertices (issue 48's cost; Keller & Heidrich
+// 2001): the slots from `start` on (the vertices of order 3 and more: the first `vpl_count`
+// subpath slots hold the y2 of every subpath) light one pixel of each
+// INTERLEAVE×INTERLEAVE block each, weighted INTERLEAVE², the pixel chosen by the slot and a
+// per-frame offset (uniform over the block's cells: each pixel's estimate stays unbiased).
+// A pixel walks every INTERLEAVE²-th slot (its loop a quarter as long at 2: lavapipe, like a
+// GPU, runs neighbouring pixels together, and only a shorter loop, not a skipped iteration,
+// saves their time); `frame/bidir/interleave.rs` spreads each pixel's light over the block's
+// pixels of the same depth. Only where both sides of the image are multiples of INTERLEAVE.
+// Returns the pixel's first slot and the step (1: every slot).
+const INTERLEAVE: u32 = 2u;
+
+fn interleave(px: vec2<i32>, start: u32) -> vec2<u32> {
+    let size = textureDimensions(g_position);
+    if size.x % INTERLEAVE != 0u || size.y % INTERLEAVE != 0u {
+        return vec2<u32>(start, 1u);
+    }
+    let n = INTERLEAVE * INTERLEAVE;
+    let q = vec2<u32>(px) % INTERLEAVE;
+    let cell = (q.x + INTERLEAVE * q.y + u32(params.pair_offset * f32(n))) % n;
+    return vec2<u32>(start + (cell + n - start % n) % n, n);
+}
+
 @fragment
 fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
     let px = vec2<i32>(frag.xy);
@@ -451,21 +493,15 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
     let mis = params.mode == 0u;
     let tiny_d2 = params.min_dist2 * 1e-6;
     if mis && params.bundles > 0u && params.bounces >= 2u {
-        for (var i = params.vpl_count; i < params.vpl_count + params.sub_count; i++) {
-            // The flux first (one texel): empty slots and specular vertices cost no more.
-            if max3(textureLoad(vpl_tex, vec2<u32>(1u, i), 0).xyz) <= 0.0 {
-                continue;
-            }
-            let v = vpl_at(i);
-            let to_v = v.position - p;
-            let d2 = max(dot(to_v, to_v), 1e-20);
-            let cos_v = abs(dot(to_v, v.ng)) / sqrt(d2);
-            let pa = bundle_density(to_v / sqrt(d2)) * cos_v / d2;
-            let pb = n1 * v.pdf;
-            let d3 = (pa + pb) * d2 / max(cos_v, 1e-6);
-            let mv = clamped(vpl_material(v), d3, cos_v);
-            let t = vpl_light(v, mv, p, ns, ng, clamped(m, d3, dot(ns, wo)), wo, tiny_d2);
-            sum += t * (pb / (pa + pb));
+        let end = params.vpl_count + params.sub_count;
+        let deep = min(2u * params.vpl_count, end);
+        for (var i = params.vpl_count; i < deep; i++) {
+            sum += subpath_vertex_light(i, p, ns, ng, m, wo, n1, tiny_d2);
+        }
+        // The vertices of order 3 and more, interleaved over pixel blocks (below).
+        let il = interleave(px, deep);
+        for (var i = il.x; i < end; i += il.y) {
+            sum += subpath_vertex_light(i, p, ns, ng, m, wo, n1, tiny_d2) * f32(il.y);
         }
     }
 
@@ -615,5 +651,7 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
     if params.has_env != 0u && params.bundles > 0u {
         sum += env_glossy_unshadowed(m, ns, ng, wo) * env_glossy_visibility(sky.glit, sky.gun, sky.clit, sky.cun);
     }
-    return vec4<f32>(sum, 1.0);
+    // Alpha: 1 + the pixel's distance from the eye (over 0.5: a surface, for `spikes.rs`;
+    // the distance for the interleaved vertices' filter, `interleave.rs`).
+    return vec4<f32>(sum, 1.0 + length(params.eye - p));
 }
