@@ -137,8 +137,10 @@ pub struct Renderer {
 fn transport_omissions(scene: &Scene, options: &RenderOptions) -> Vec<String> {
     // `bidir`'s caustics of parallel suns seen directly are its delta-chain light tracer's
     // (`bidir/specular_paths.rs`) since issue 44: nothing to name there.
-    model_stand_in::warning(scene, options.method())
+    let method = options.method();
+    model_stand_in::warning(scene, method)
         .into_iter()
+        .chain(glass_stand_in::thin_warning(scene, method))
         .collect()
 }
 

@@ -23,7 +23,8 @@ pub(super) fn warning(scene: &Scene, method: Method) -> Option<String> {
     {
         // Rough glass is `glass_stand_in`'s: `direct` and `bidir` replace it (and say so),
         // `ispm` renders its lobes (its CPU specular image and photons).
-        if m.uber_equivalent() == *m || m.rough_glass {
+        // Thin glass likewise (`glass_stand_in::thin_warning`).
+        if m.uber_equivalent() == *m || m.rough_glass || m.thin.is_some() {
             continue;
         }
         if shades_exactly(m, scene.material_maps.get(i).unwrap_or(&none)) {
