@@ -143,7 +143,7 @@ def write(tmp_path, body):
 @pytest.mark.parametrize(
     "body, element, line",
     [
-        ('<bsdf type="thindielectric" id="g"/>', '<bsdf type="thindielectric">', 6),
+        ('<bsdf type="principled" id="g"/>', '<bsdf type="principled">', 6),
         ('<shape type="serialized"/>', '<shape type="serialized">', 6),
         (
             '<shape type="cube">\n<emitter type="point"/></shape>',

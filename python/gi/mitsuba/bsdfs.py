@@ -57,6 +57,7 @@ KNOWN = {
     "conductor": _CONDUCTOR,
     "roughconductor": _CONDUCTOR | _ROUGH,
     "dielectric": {"int_ior", "ext_ior", "specular_transmittance"},
+    "thindielectric": {"int_ior", "ext_ior", "specular_reflectance", "specular_transmittance"},
     "roughdielectric": {"int_ior", "ext_ior", "specular_reflectance", "specular_transmittance"}
     | _ROUGH,
     "plastic": _PLASTIC,
@@ -144,6 +145,25 @@ def dielectric(r: Reader, el: Element, props: Props) -> dict[str, Any]:
     }
 
 
+def thindielectric(r: Reader, el: Element, props: Props) -> dict[str, Any]:
+    """Mitsuba's thindielectric: a thin slab of index int_ior/ext_ior (defaults bk7 1.5046 /
+    air 1.000277), reflecting R' = R + T²R/(1 − R²) = 2R/(1 + R) times
+    `specular_reflectance` and passing the rest, times `specular_transmittance`, straight
+    through (gi's `thin_glass`; both default 1). A slab that transmits nothing is refused."""
+    n = ior(r, props, "int_ior", 1.5046) / ior(r, props, "ext_ior", 1.000277)
+    if not 1.0 <= n <= 4.0:
+        raise r.error(el, f"the relative index int_ior/ext_ior = {n:.4g} is not in [1, 4]")
+    transmission = r.color(props, "specular_transmittance", 1.0)
+    if float(np.max(transmission)) <= 0.0:
+        raise r.error(el, "a thindielectric with specular_transmittance 0 is not supported")
+    return {
+        "diffuse": np.zeros(3),
+        "transmission": transmission,
+        "ior": n,
+        "thin_glass": r.color(props, "specular_reflectance", 1.0),
+    }
+
+
 def roughdielectric(r: Reader, el: Element, props: Props) -> dict[str, Any]:
     """Mitsuba's roughdielectric (Walter et al. 2007): gi's `rough_glass` of index
     int_ior/ext_ior, `specular` = `specular_reflectance` and `transmission` =
@@ -198,6 +218,7 @@ BSDFS: dict[str, Callable[[Reader, Element, Props], dict[str, Any]]] = {
     "conductor": conductor,
     "roughconductor": roughconductor,
     "dielectric": dielectric,
+    "thindielectric": thindielectric,
     "roughdielectric": roughdielectric,
     "plastic": plastic,
     "roughplastic": roughplastic,

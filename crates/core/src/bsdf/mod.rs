@@ -61,6 +61,18 @@ pub struct Material {
     /// `distribution`), `specular` multiplying its reflection and `transmission` its
     /// transmission ([`rough_dielectric`]). Replaces the uber's lobes.
     pub rough_glass: bool,
+    /// Mitsuba's thindielectric: the smooth glass lobe is a thin slab of index `ior`
+    /// ([`thin_reflectance`]: reflection R' = 2R/(1 + R), times these factors; the rest,
+    /// times `transmission`, passes straight through, not bent).
+    pub thin: Option<Vec3>,
+}
+
+/// The reflectance of a thin slab of index `ior` seen at cosine `cos`: R' = R + T²R/(1 − R²)
+/// = 2R/(1 + R), R the dielectric Fresnel reflectance and T = 1 − R (the light reflected
+/// inside the slab any number of times; Mitsuba's thindielectric).
+pub fn thin_reflectance(cos: f32, ior: f32) -> f32 {
+    let r = fresnel::dielectric(cos.abs(), ior).0;
+    2.0 * r / (1.0 + r)
 }
 
 /// The complex index of refraction `eta + i·k` (relative to the outside, per channel) of a
@@ -98,6 +110,7 @@ impl Default for Material {
             coating: None,
             conductor: None,
             rough_glass: false,
+            thin: None,
         }
     }
 }
@@ -185,6 +198,15 @@ impl Material {
                 specular: Vec3::ZERO,
                 roughness: 0.0,
                 rough_glass: false,
+                ..*self
+            }
+        } else if self.thin.is_some() {
+            // A thin slab: glass of index 1 passes light straight through (its reflection
+            // is left out where a GPU pass samples the stand-in: the first scatter of the
+            // bounce maps).
+            Material {
+                ior: 1.0,
+                thin: None,
                 ..*self
             }
         } else {
@@ -457,6 +479,9 @@ impl Material {
         if pg <= 0.0 {
             return None;
         }
+        if let Some(reflection) = self.thin {
+            return Some(self.sample_thin(wo, reflection, pg, u2.x));
+        }
         // Smooth glass: the geometric side decides whether we enter or leave.
         let tint = self.transmission * (Vec3::ONE - self.fresnel_spec(wo_up.z)) / pg;
         let eta = if flip { 1.0 / self.ior } else { self.ior };
@@ -479,6 +504,27 @@ impl Material {
                 pdf: pg * (1.0 - fr),
                 lobe: Lobe::GlassRefract,
             })
+        }
+    }
+
+    /// The thin slab's lobes ([`Material::thin`]), picked with probability `pg` (the glass
+    /// lobe's): reflection with probability R' (`u` below it), else straight through.
+    fn sample_thin(&self, wo: Vec3, reflection: Vec3, pg: f32, u: f32) -> BsdfSample {
+        let r = thin_reflectance(wo.z, self.ior);
+        if u < r {
+            BsdfSample {
+                wi: Vec3::new(-wo.x, -wo.y, wo.z),
+                weight: reflection / pg,
+                pdf: pg * r,
+                lobe: Lobe::GlassReflect,
+            }
+        } else {
+            BsdfSample {
+                wi: -wo,
+                weight: self.transmission / pg,
+                pdf: pg * (1.0 - r),
+                lobe: Lobe::GlassRefract,
+            }
         }
     }
 
@@ -508,7 +554,17 @@ impl Material {
             lobe: Lobe::Mirror,
         });
         let (mut reflect, mut refract) = (None, None);
-        if pg > 0.0 {
+        if let Some(reflection) = self.thin.filter(|_| pg > 0.0) {
+            let r = thin_reflectance(wo.z, self.ior);
+            reflect = Some(BsdfSample {
+                weight: reflection * r,
+                ..self.sample_thin(wo, reflection, pg, 0.0)
+            });
+            refract = Some(BsdfSample {
+                weight: self.transmission * (1.0 - r),
+                ..self.sample_thin(wo, reflection, pg, 1.0)
+            });
+        } else if pg > 0.0 {
             let tint = self.transmission * (Vec3::ONE - f);
             let eta = if flip { 1.0 / self.ior } else { self.ior };
             let (fr, cos_t) = fresnel::dielectric(wo_up.z, eta);
@@ -544,6 +600,10 @@ impl Material {
         }
         if let Some(c) = &self.coating {
             return coated::scatter_probability(self, c, wo.z.abs());
+        }
+        if let Some(reflection) = self.thin {
+            let r = thin_reflectance(wo.z, self.ior);
+            return reflection * r + self.transmission * (1.0 - r);
         }
         let f = self.fresnel_spec(wo.z.abs());
         f + (Vec3::ONE - f) * (self.diffuse + self.transmission)

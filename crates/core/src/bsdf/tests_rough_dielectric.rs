@@ -293,3 +293,58 @@ fn eval_matches_mitsuba() {
         }
     }
 }
+
+/// Mitsuba's thindielectric (`Material::thin`): R' = R + T²R/(1 − R²) summed from the
+/// slab's inner reflections, light straight through, the lobes' expected weights
+/// R'·reflection and (1 − R')·transmission, sampled in those proportions.
+#[test]
+fn thin_slab_reflects_the_summed_series_and_passes_light_straight() {
+    let m = Material {
+        diffuse: Vec3::ZERO,
+        transmission: Vec3::new(0.9, 0.8, 0.7),
+        ior: 1.5,
+        thin: Some(Vec3::new(1.0, 0.5, 0.25)),
+        ..Material::default()
+    };
+    for cos in [1.0f32, 0.6, 0.2] {
+        let r = fresnel::dielectric(cos, 1.5).0;
+        let t = 1.0 - r;
+        let series = r + t * t * r / (1.0 - r * r);
+        assert!((crate::bsdf::thin_reflectance(cos, 1.5) - series).abs() < 1e-6);
+        let wo = Vec3::new((1.0 - cos * cos).sqrt(), 0.0, cos);
+        for side in [1.0f32, -1.0] {
+            let wo = wo * Vec3::new(1.0, 1.0, side);
+            let mut rng = Rng::new(3, 1, 0);
+            let (mut refl, mut trans, n) = (Vec3::ZERO, Vec3::ZERO, 200_000);
+            for _ in 0..n {
+                let s = m.sample(wo, &mut rng).expect("a thin slab always scatters");
+                if s.lobe == crate::bsdf::Lobe::GlassRefract {
+                    assert!((s.wi + wo).length() < 1e-6, "straight through");
+                    trans += s.weight / n as f32;
+                } else {
+                    assert!((s.wi - Vec3::new(-wo.x, -wo.y, wo.z)).length() < 1e-6);
+                    refl += s.weight / n as f32;
+                }
+            }
+            let want_r = Vec3::new(1.0, 0.5, 0.25) * series;
+            let want_t = m.transmission * (1.0 - series);
+            assert!(
+                (refl - want_r).abs().max_element() < 0.004,
+                "{refl} {want_r}"
+            );
+            assert!(
+                (trans - want_t).abs().max_element() < 0.004,
+                "{trans} {want_t}"
+            );
+            let lobes: Vec<_> = m.delta_lobes(wo).collect();
+            let sum: Vec3 = lobes.iter().map(|s| s.weight).sum();
+            assert!((sum - want_r - want_t).abs().max_element() < 1e-5);
+            assert!(
+                (m.scatter_probability(wo) - want_r - want_t)
+                    .abs()
+                    .max_element()
+                    < 1e-5
+            );
+        }
+    }
+}

@@ -44,3 +44,27 @@ pub(super) fn warning(method: &str, names: &[String]) -> Option<String> {
         )
     })
 }
+
+/// The RenderWarning of `ispm` for thin glass (Mitsuba's thindielectric) under a point or
+/// spot light: its GPU bounce maps take those lights' photons' first scatter on the uber
+/// stand-in ([`Material::uber_equivalent`]: glass of index 1, straight through without the
+/// slab's reflection); every other pass traces the thin slab itself on the CPU.
+pub(super) fn thin_warning(scene: &Scene, method: Method) -> Option<String> {
+    let local = scene.lights.iter().any(|l| l.is_local());
+    let names: Vec<&str> = scene
+        .materials
+        .iter()
+        .zip(&scene.material_names)
+        .filter(|(m, _)| m.thin.is_some())
+        .map(|(_, n)| n.as_str())
+        .collect();
+    (method == Method::Ispm && local && !names.is_empty()).then(|| {
+        format!(
+            "method `ispm` scatters the photons of point and spot lights that first meet the \
+             thin glass (thindielectric) of materials {} straight through it without its \
+             reflection (its GPU bounce maps); its other passes and every other method trace \
+             the thin slab exactly",
+            names.join(", ")
+        )
+    })
+}

@@ -135,25 +135,13 @@ pub struct Renderer {
 /// Light transport `options` ask for that their method does not compute, one message each
 /// (they become `gi.RenderWarning`s).
 fn transport_omissions(scene: &Scene, options: &RenderOptions) -> Vec<String> {
-    let mut out = Vec::new();
-    if let MethodOptions::Bidir(_) = &options.method {
-        // The paths through mirrors and glass are traced on the CPU
-        // (`bidir/specular_paths.rs`), its light tracer from the point and spot lights only:
-        // no ray finds a parallel sun, so its caustics seen directly have no estimator.
-        let parallel = scene
-            .lights
-            .iter()
-            .any(|l| matches!(l, crate::scene::Light::Directional { .. }) && l.disc_pdf() == 0.0);
-        if scene.has_delta_materials() && parallel {
-            out.push(
-                "method `bidir` leaves out the caustics of parallel directional lights seen \
-                 directly (light, then mirrors or glass, then a surface the camera sees)"
-                    .to_string(),
-            );
-        }
-    }
-    out.extend(model_stand_in::warning(scene, options.method()));
-    out
+    // `bidir`'s caustics of parallel suns seen directly are its delta-chain light tracer's
+    // (`bidir/specular_paths.rs`) since issue 44: nothing to name there.
+    let method = options.method();
+    model_stand_in::warning(scene, method)
+        .into_iter()
+        .chain(glass_stand_in::thin_warning(scene, method))
+        .collect()
 }
 
 /// Most refits before the BVH is built anew (a refitted tree keeps its topology and slows

@@ -23,7 +23,8 @@ pub(super) fn warning(scene: &Scene, method: Method) -> Option<String> {
     {
         // Rough glass is `glass_stand_in`'s: `bidir` replaces it (and says so), `ispm` and
         // `direct` render its lobes (their CPU images; `ispm`'s photons).
-        if m.uber_equivalent() == *m || m.rough_glass {
+        // Thin glass likewise (`glass_stand_in::thin_warning`).
+        if m.uber_equivalent() == *m || m.rough_glass || m.thin.is_some() {
             continue;
         }
         if shades_exactly(m, scene.material_maps.get(i).unwrap_or(&none)) {

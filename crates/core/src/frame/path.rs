@@ -116,6 +116,7 @@ pub fn render(
     let lts = LightTraceSettings {
         max_depth: options.max_depth,
         rr_depth: 3,
+        chain_only: false,
     };
     let seeds = (light_paths, frame.seed, u64::MAX - 1);
     let caustics = light_tracer::image(scene, bvh, &sources, seeds, &lts, &stage);

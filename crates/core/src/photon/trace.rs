@@ -685,7 +685,12 @@ fn scatter_differentials(
     match lobe {
         Lobe::Mirror | Lobe::GlassReflect => diff.reflect(d, n, dn),
         Lobe::GlassRefract => {
-            let ior = it.material.ior;
+            // A thin slab (`Material::thin`) passes light straight through.
+            let ior = if it.material.thin.is_some() {
+                1.0
+            } else {
+                it.material.ior
+            };
             let eta = if sign > 0.0 { 1.0 / ior } else { ior };
             diff.refract(d, wi, n, eta, dn);
         }

@@ -265,6 +265,9 @@ pub(crate) fn material_from_desc(m: &MaterialDesc) -> std::result::Result<Materi
     if m.rough_glass {
         rough_glass_valid(m, coating.is_some() || conductor.is_some())?;
     }
+    if let Some(r) = m.thin_glass {
+        thin_glass_valid(m, r, coating.is_some() || conductor.is_some())?;
+    }
     Ok(Material {
         diffuse: m.diffuse.into(),
         specular: m.specular.into(),
@@ -278,7 +281,36 @@ pub(crate) fn material_from_desc(m: &MaterialDesc) -> std::result::Result<Materi
         coating,
         conductor,
         rough_glass: m.rough_glass,
+        thin: m.thin_glass.map(Into::into),
     })
+}
+
+/// A thin slab (Mitsuba's thindielectric) is smooth glass alone: no diffuse base, no other
+/// model, no roughness, some transmission, reflection factors in [0, 1].
+fn thin_glass_valid(
+    m: &MaterialDesc,
+    r: [f32; 3],
+    other_model: bool,
+) -> std::result::Result<(), FieldError> {
+    if !finite3(r) || r.iter().any(|x| !(0.0..=1.0).contains(x)) {
+        return Err(("thin_glass".into(), "each channel must be in [0, 1]"));
+    }
+    if other_model || m.rough_glass {
+        return Err((
+            "thin_glass".into(),
+            "excludes coating_ior, conductor_* and rough_glass (one model a material)",
+        ));
+    }
+    if m.diffuse.iter().any(|d| *d > 0.0) || m.specular.iter().any(|s| *s > 0.0) {
+        return Err((
+            "thin_glass".into(),
+            "needs diffuse and specular 0 (a thin slab of glass alone)",
+        ));
+    }
+    if m.transmission.iter().all(|t| *t <= 0.0) {
+        return Err(("thin_glass".into(), "needs transmission > 0"));
+    }
+    Ok(())
 }
 
 /// Rough glass (Mitsuba's roughdielectric) has no diffuse base, no other Fresnel model and

@@ -166,6 +166,12 @@ pub struct MaterialDesc {
     /// `roughness` (√α) and `distribution`, and `specular` multiplies its reflection.
     #[serde(default, skip_serializing_if = "is_false")]
     pub rough_glass: bool,
+    /// Mitsuba's thindielectric: the smooth glass lobe (`transmission`, `ior`) is a thin
+    /// slab, reflecting R' = 2R/(1 + R) (R the Fresnel reflectance of `ior`, with the
+    /// slab's inner reflections) and passing the rest straight through; these per-channel
+    /// factors (Mitsuba's `specular_reflectance`) multiply its reflection.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub thin_glass: Option<V3>,
 }
 
 /// `"ggx"` or `"beckmann"`.

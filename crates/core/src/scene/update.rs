@@ -342,6 +342,7 @@ impl Scene {
             conductor_eta: m.conductor.map(|c| c.eta.into()),
             conductor_k: m.conductor.map(|c| c.k.into()),
             rough_glass: m.rough_glass,
+            thin_glass: m.thin.map(Into::into),
         })
     }
 }

@@ -25,6 +25,10 @@ pub const CHUNK: u64 = 1 << 14;
 pub struct LightTraceSettings {
     pub max_depth: u32,
     pub rr_depth: u32,
+    /// Only the delta chains: a path ends at its first non-delta scattering, so that it
+    /// connects to the camera the vertices reached through delta lobes alone (L S+ D E;
+    /// `bidir`'s emitters and suns, whose longer paths its VPLs carry).
+    pub chain_only: bool,
 }
 
 /// The sources light paths start from: every one but the environment, whose caustics the
@@ -124,8 +128,9 @@ pub fn trace_path(
         let Some(bs) = it.material.sample_adjoint(it.frame.to_local(w_prev), rng) else {
             return;
         };
-        // Only paths whose first bounce is specular belong to this estimator.
-        if depth == 0 && !bs.lobe.is_delta() {
+        // Only paths whose first bounce is specular belong to this estimator (with
+        // `chain_only`, only their delta scatterings).
+        if (depth == 0 || s.chain_only) && !bs.lobe.is_delta() {
             return;
         }
         let wi = it.frame.to_world(bs.wi);

@@ -230,9 +230,37 @@ pub fn radiance(
     scene: &Scene,
     bvh: &SceneBvh,
     lights: &DirectLight,
+    ray: (Vec3, Vec3),
+    rng: &mut Rng,
+    s: &PathSettings,
+) -> Vec3 {
+    radiance_from(scene, bvh, lights, ray, rng, s, false)
+}
+
+/// [`radiance`] of a ray that leaves a delta scattering which followed a non-delta one
+/// (`bidir`'s camera paths through glass seen from a lit surface): the emitters and suns'
+/// discs it meets while every scattering since has been a delta one are left out (the
+/// delta-chain light tracer of `light_tracer::LightTraceSettings::chain_only` carries
+/// them); the sky is kept.
+pub fn radiance_past_delta_chain(
+    (scene, bvh, lights): (&Scene, &SceneBvh, &DirectLight),
+    ray: (Vec3, Vec3),
+    rng: &mut Rng,
+    s: &PathSettings,
+) -> Vec3 {
+    radiance_from(scene, bvh, lights, ray, rng, s, true)
+}
+
+/// [`radiance`], with `chain`: the ray leaves a delta chain whose emitter and sun hits are
+/// left out ([`radiance_past_delta_chain`]).
+fn radiance_from(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    lights: &DirectLight,
     (origin, dir): (Vec3, Vec3),
     rng: &mut Rng,
     s: &PathSettings,
+    mut chain: bool,
 ) -> Vec3 {
     let mut l = Vec3::ZERO;
     let mut beta = Vec3::ONE;
@@ -259,7 +287,7 @@ pub fn radiance(
         // Light reached through a delta scattering after a non-delta first one belongs to
         // the light tracer (its paths start at the source, scatter through that delta lobe
         // first and connect to the camera from the first surface).
-        let light_traced = s.light_traced && after_delta && first_non_delta;
+        let light_traced = (s.light_traced && after_delta && first_non_delta) || chain;
         let pdf = from.map(|f| f.pdf);
         let Some(hit) = bvh.intersect(o, d, f32::INFINITY) else {
             if !(s.strategy == Strategy::Light && from.is_some()) {
@@ -336,6 +364,7 @@ pub fn radiance(
             first_non_delta = !delta;
         }
         after_delta = delta;
+        chain &= delta;
         prev_from = from;
         from = (!delta).then_some(BsdfVertex {
             position: it.position,

@@ -11,15 +11,20 @@
 //!   roughness clamp, so a mirror reflects nothing there);
 //! - [`caustics`]: the light tracer of `path` (`trace::light_tracer`) from the point and
 //!   spot lights, which connects to the camera every non-delta vertex after a first delta
-//!   bounce (L S … D E, the caustics seen directly among them);
+//!   bounce (L S … D E, the caustics seen directly among them); and its delta chains from
+//!   the emitters and suns (`chain_only`, issue 44): L S+ D E, the surfaces the camera sees
+//!   lit through glass or by a mirror alone (the longer paths through glass are the VPLs'
+//!   of [`super::emitted`], whose subpaths go on through delta lobes);
 //! - [`delta_camera_paths`]: camera paths through a delta lobe at x1 (mirrors and glass
 //!   seen by the camera, E S+ D …: beyond the next-event estimation of
 //!   `specular_paths_direct` where they land) or at x2 (E D S+ …: light reaching a surface
-//!   seen by the camera through a mirror or glass), continued by the path tracer.
+//!   seen by the camera through a mirror or glass), continued by the path tracer, less the
+//!   emitters and suns met from x2 through delta lobes alone (the delta chains'). Before,
+//!   these camera paths were the only estimator of an emitter's light through glass (the
+//!   floor under `glass_room`'s slab: fireflies, median 0.28 of `path`).
 //!
-//! Left out: caustics of parallel directional lights seen through nothing but delta lobes
-//! (L S+ D E with a parallel sun: no ray finds the sun, and the light tracer runs from the
-//! local lights only; `frame::transport_omissions` warns).
+//! Left out: a parallel sun's light through glass seen through glass (L S+ D S+ E), which
+//! `path` leaves out too.
 
 use crate::cancel::{Progress, StageProgress};
 use crate::error::Result;
@@ -52,8 +57,23 @@ fn local_lights(scene: &Scene) -> Sources {
     })
 }
 
+/// The sources of the delta-chain light tracer: the emitters and the directional lights,
+/// the sources of [`super::emitted`]'s VPLs but the sky (a sky is large: the camera paths
+/// through glass find it by themselves, as `path`'s do).
+fn chain_sources(scene: &Scene) -> Sources {
+    Sources::filtered(scene, |s| match s {
+        Source::Light(i) => !scene.lights[i].is_local(),
+        Source::Emitters => true,
+        Source::Environment => false,
+    })
+}
+
 /// The light tracer's image of `paths` light paths from the point and spot lights, up to
-/// `max_depth` scatterings (zero without a local light or delta materials).
+/// `max_depth` scatterings, plus that of `paths` delta chains from the emitters and suns
+/// ([`chain_sources`], `chain_only`: L S+ D E, the surfaces seen by the camera and lit
+/// through glass or by a mirror alone; their longer paths are the VPLs' of
+/// [`super::emitted`], whose subpaths go on through delta lobes). Zero without delta
+/// materials.
 pub(super) fn caustics(
     scene: &Scene,
     bvh: &SceneBvh,
@@ -62,18 +82,35 @@ pub(super) fn caustics(
     max_depth: u32,
     progress: &dyn Progress,
 ) -> Result<Image> {
-    let sources = local_lights(scene);
-    if sources.is_empty() || !scene.has_delta_materials() || max_depth < 2 {
-        return Ok(Image::new(scene.camera.width, scene.camera.height));
+    let mut image = Image::new(scene.camera.width, scene.camera.height);
+    if !scene.has_delta_materials() || max_depth < 2 {
+        return Ok(image);
     }
-    let settings = LightTraceSettings {
-        max_depth,
-        rr_depth: 3,
-    };
-    let chunks = paths.div_ceil(light_tracer::CHUNK);
+    let runs = [
+        (local_lights(scene), false, 0xca05_71c5),
+        (chain_sources(scene), true, 0xca05_71c6),
+    ];
+    let runs: Vec<_> = runs.into_iter().filter(|r| !r.0.is_empty()).collect();
+    let chunks = paths.div_ceil(light_tracer::CHUNK) * runs.len() as u64;
     let stage = StageProgress::new(progress, "caustic light paths", chunks);
-    let seeds = (paths, seed, 0xca05_71c5);
-    let image = light_tracer::image(scene, bvh, &sources, seeds, &settings, &stage);
+    for (sources, chain_only, stream) in runs {
+        let settings = LightTraceSettings {
+            max_depth,
+            rr_depth: 3,
+            chain_only,
+        };
+        let part = light_tracer::image(
+            scene,
+            bvh,
+            &sources,
+            (paths, seed, stream),
+            &settings,
+            &stage,
+        );
+        for (p, q) in image.pixels.iter_mut().zip(&part.pixels) {
+            *p += *q;
+        }
+    }
     stage.finish()?;
     Ok(image)
 }
@@ -215,9 +252,12 @@ fn through_x2(
     if !bs.lobe.is_delta() || same_side == bs.lobe.crosses() {
         return Vec3::ZERO;
     }
-    // x3 is vertex 3: the path tracer from there takes max_depth − 2 more scatterings.
+    // x3 is vertex 3: the path tracer from there takes max_depth − 2 more scatterings; the
+    // emitters and suns met through delta lobes alone are the delta-chain light tracer's
+    // ([`caustics`]).
     let ps = settings(max_depth - 2);
-    bs.weight * path::radiance(scene, bvh, lights, (it.spawn(wi), wi), rng, &ps)
+    let ray = (it.spawn(wi), wi);
+    bs.weight * path::radiance_past_delta_chain((scene, bvh, lights), ray, rng, &ps)
 }
 
 /// The path tracer continuing a camera path for `max_depth` more scatterings; nothing of
