@@ -116,6 +116,8 @@ struct Params {
 @group(1) @binding(1) var g_normals: texture_2d<f32>;
 @group(1) @binding(2) var g_diffuse: texture_2d<f32>;
 @group(1) @binding(3) var g_specular: texture_2d<f32>;
+// The sample's emission, its material index + 1 in `w` (bidir_models.wgsl `pixel_model`).
+@group(1) @binding(4) var g_emission: texture_2d<f32>;
 
 const TWO_PI: f32 = 6.28318530718;
 
@@ -190,7 +192,7 @@ fn vpl_light(v: Vpl, m1: Clamped, p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m:
     if dot(wi, ng) <= 0.0 || cos1 <= 0.0 || max3(v.flux) <= 0.0 {
         return vec3<f32>(0.0);
     }
-    let f1 = eval_clamped(m1, v.ns, -wi, v.to_light);
+    let f1 = eval_uber(m1, v.ns, -wi, v.to_light);
     let f = eval_clamped(m, ns, wo, wi);
     let t = v.flux * f1 * f * (abs(dot(ns, wi)) * cos1 / max(d2, min_d2));
     if max3(t) <= 0.0 {
@@ -278,11 +280,11 @@ fn diffuse_lobe(m: Material, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec3
 // 1 − F_avg: exact for a constant sky, as `direct_shade.wgsl`'s ratio estimator takes it).
 fn sky_diffuse_unshadowed(m: Material, ns: vec3<f32>, wo: vec3<f32>) -> vec3<f32> {
     let one_minus_avg = vec3<f32>(1.0) - fresnel_avg(m);
-    if max3(m.diffuse) <= 0.0 {
+    if max3(m.diffuse) <= 0.0 && !exact_on {
         return vec3<f32>(0.0);
     }
     let coupling = select(vec3<f32>(0.0), vec3<f32>(1.0) - fresnel_spec(m, abs(dot(ns, wo))), one_minus_avg > vec3<f32>(1e-6));
-    return m.diffuse / PI * coupling * env_irradiance(ns);
+    return exact_env_diffuse(m.diffuse / PI * coupling, ns, wo) * env_irradiance(ns);
 }
 
 // The sky's glossy light at a pixel (issue 47), as the `direct` frame's ratio estimator
@@ -412,6 +414,7 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
     m.roughness = gbuffer_roughness(d.w);
     m.specular = s.xyz;
     m.fresnel = u32(s.w > 0.5);
+    let model = pixel_model(textureLoad(g_emission, px, 0).w);
     let wo = normalize(params.eye - p);
     let n1 = f32(params.vpls_per_light);
     let n2 = f32(params.bundles);
@@ -436,7 +439,7 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
         let d10 = area * v.light_dist2 / max(abs(dot(v.ng, v.to_light)), 1e-6);
         let m1 = clamped(vpl_material(v), combine(d10, d13), cos13);
         let min_d2 = select(0.0, params.alone_min_dist2, alone);
-        var t = vpl_light(v, m1, p, ns, ng, clamped(m, d13, dot(ns, wo)), wo, min_d2);
+        var t = vpl_light(v, m1, p, ns, ng, clamped_model(m, model, d13, dot(ns, wo)), wo, min_d2);
         if max3(t) <= 0.0 {
             continue;
         }
@@ -464,7 +467,7 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
             let pb = n1 * v.pdf;
             let d3 = (pa + pb) * d2 / max(cos_v, 1e-6);
             let mv = clamped(vpl_material(v), d3, cos_v);
-            let t = vpl_light(v, mv, p, ns, ng, clamped(m, d3, dot(ns, wo)), wo, tiny_d2);
+            let t = vpl_light(v, mv, p, ns, ng, clamped_model(m, model, d3, dot(ns, wo)), wo, tiny_d2);
             sum += t * (pb / (pa + pb));
         }
     }
@@ -510,12 +513,12 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
                 // The glossy lobe's part is not summed here: `env_glossy_unshadowed` below,
                 // times the visibility these directions give it (`sky_share_add`).
                 let l_env = env_radiance(dir) * (abs(dot(ns, dir)) * bv.inv_density);
-                let fd = diffuse_lobe(m, ns, wo, dir);
+                let fd = pixel_diffuse(m, ns, wo, dir);
                 sum -= fd * l_env;
                 if !hit.found {
                     sum += fd * l_env;
                 }
-                let f3 = eval_clamped(clamped(m, 1.0 / bv.inv_density, dot(ns, wo)), ns, wo, dir);
+                let f3 = eval_clamped(clamped_model(m, model, 1.0 / bv.inv_density, dot(ns, wo)), ns, wo, dir);
                 sky_share_add(&sky, (f3 - fd) * l_env, l_env, !hit.found);
             }
             if !hit.found {
@@ -562,9 +565,9 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
                     let p2 = max(cos23, 0.0) / (bv.inv_density * d23_2);
                     let d23s = (p1 + p2) * d23_2 / max(cos23, 1e-6);
                     let d20 = (p1 + p2) * dl2 / cos2l;
-                    let f3 = eval_clamped(clamped(m, d23s, dot(ns, wo)), ns, wo, dir);
+                    let f3 = eval_clamped(clamped_model(m, model, d23s, dot(ns, wo)), ns, wo, dir);
                     let m2c = clamped(m2, combine(d20, d23s), cos23);
-                    let f2 = eval_clamped(m2c, ns2, -dir, wl);
+                    let f2 = eval_uber(m2c, ns2, -dir, wl);
                     var t = f3 * weight * f2 * abs(dot(ns2, wl)) * l.intensity * (falloff / dl2);
                     if max3(t) <= 0.0 {
                         continue;
@@ -582,7 +585,7 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
             if params.bounces >= 2u && params.vpls_per_light > 0u {
                 let k = min(u32((f32(b) + params.pair_offset) * n1 / n2), params.vpls_per_light - 1u);
                 // d̂ at x3 of eq. 14: the bundles' density n2·p_r.
-                let f3 = eval_clamped(clamped(m, 1.0 / bv.inv_density, dot(ns, wo)), ns, wo, dir);
+                let f3 = eval_clamped(clamped_model(m, model, 1.0 / bv.inv_density, dot(ns, wo)), ns, wo, dir);
                 // Strategy A's area density of x2 (MIS against B; no clamp with MIS).
                 let pa = max(cos23, 0.0) / (bv.inv_density * d23_2);
                 let min_d2 = select(params.min_dist2, tiny_d2, mis);
