@@ -24,6 +24,7 @@ model_energy.rs; `--check` prints the clamp factor's error for copper, gold, alu
 import sys
 
 import numpy as np
+from ggx_energy_table import reflect
 
 N = 16
 
@@ -49,14 +50,7 @@ def weights(alpha, mu, beckmann, n=384):
         cos_h = 1 / np.sqrt(1 + tan2)
     else:
         cos_h = np.sqrt((1 - u1) / (1 + (a2 - 1) * u1))
-    sin_h = np.sqrt(np.maximum(1 - cos_h * cos_h, 0))
-    phi = 2 * np.pi * u2
-    h = np.stack([sin_h * np.cos(phi), sin_h * np.sin(phi), cos_h], -1)
-    wo = np.array([np.sqrt(1 - mu * mu), 0, mu])
-    oh = h @ wo
-    wi = 2 * oh[..., None] * h - wo
-    ci = wi[..., 2]
-    ok = (ci > 0) & (oh > 0)
+    oh, ci, ok = reflect(cos_h, u2, mu)
     g = 1 / ((1 + lam(mu, alpha, beckmann)) * (1 + lam(np.where(ok, ci, 1.0), alpha, beckmann)))
     return np.where(ok, g * oh / (mu * cos_h), 0.0), np.clip(oh, 0, 1)
 

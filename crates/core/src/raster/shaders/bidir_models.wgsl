@@ -37,16 +37,11 @@ override MODELS: bool = true;
 
 // Bilinear lookup of table `t` (0: GGX A, 1: GGX B, 2: Beckmann A, 3: Beckmann B).
 fn model_energy_table(t: u32, roughness: f32, mu: f32) -> f32 {
-    let x = clamp(roughness, 0.0, 1.0) * 15.0;
-    let y = clamp(mu * 16.0 - 0.5, 0.0, 15.0);
-    let i = min(u32(x), 14u);
-    let j = min(u32(y), 14u);
-    let fx = x - f32(i);
-    let fy = y - f32(j);
-    let o = t * 256u;
-    let a = mix(model_energy[o + i * 16u + j], model_energy[o + i * 16u + j + 1u], fy);
-    let b = mix(model_energy[o + (i + 1u) * 16u + j], model_energy[o + (i + 1u) * 16u + j + 1u], fy);
-    return mix(a, b, fx);
+    let e = energy_tap(roughness, mu);
+    let k = t * 256u + e.k;
+    let a = mix(model_energy[k], model_energy[k + 1u], e.fy);
+    let b = mix(model_energy[k + 16u], model_energy[k + 17u], e.fy);
+    return mix(a, b, e.fx);
 }
 
 // The directional albedo of the pixel model's glossy lobe at roughness `roughness` seen at

@@ -42,16 +42,28 @@ var<private> GGX_ENERGY: array<f32, 256> = array<f32, 256>(
     0.8943, 0.7699, 0.6872, 0.6243, 0.5735, 0.5314, 0.4956, 0.4646, 0.4376, 0.4137, 0.3925, 0.3734, 0.3561, 0.3404, 0.3261, 0.3130
 );
 
-fn ggx_energy(roughness: f32, mu: f32) -> f32 {
+// The bilinear tap of a 16×16 energy table (rows: roughness i/15, columns: μ = (j + 0.5)/16)
+// at (`roughness`, `mu`): the entry of its lower corner and the weights towards the next
+// row and column.
+struct EnergyTap {
+    k: u32,
+    fx: f32,
+    fy: f32,
+}
+
+fn energy_tap(roughness: f32, mu: f32) -> EnergyTap {
     let x = clamp(roughness, 0.0, 1.0) * 15.0;
     let y = clamp(mu * 16.0 - 0.5, 0.0, 15.0);
     let i = min(u32(x), 14u);
     let j = min(u32(y), 14u);
-    let fx = x - f32(i);
-    let fy = y - f32(j);
-    let a = mix(GGX_ENERGY[i * 16u + j], GGX_ENERGY[i * 16u + j + 1u], fy);
-    let b = mix(GGX_ENERGY[(i + 1u) * 16u + j], GGX_ENERGY[(i + 1u) * 16u + j + 1u], fy);
-    return mix(a, b, fx);
+    return EnergyTap(i * 16u + j, x - f32(i), y - f32(j));
+}
+
+fn ggx_energy(roughness: f32, mu: f32) -> f32 {
+    let t = energy_tap(roughness, mu);
+    let a = mix(GGX_ENERGY[t.k], GGX_ENERGY[t.k + 1u], t.fy);
+    let b = mix(GGX_ENERGY[t.k + 16u], GGX_ENERGY[t.k + 17u], t.fy);
+    return mix(a, b, t.fx);
 }
 
 // `m` unchanged.
