@@ -18,6 +18,19 @@ def lam(c, a):
     return 0.5 * (np.sqrt(1 + a * a * t2) - 1)
 
 
+def reflect(cos_h, u2, mu):
+    """Half vectors of cosines `cos_h` and azimuths 2π·`u2`: ωo·h, cos θi of the reflected
+    direction, and where it lies above the surface (with ωo·h > 0)."""
+    sin_h = np.sqrt(np.maximum(1 - cos_h * cos_h, 0))
+    phi = 2 * np.pi * u2
+    h = np.stack([sin_h * np.cos(phi), sin_h * np.sin(phi), cos_h], -1)
+    wo = np.array([np.sqrt(1 - mu * mu), 0, mu])
+    oh = h @ wo
+    wi = 2 * oh[..., None] * h - wo
+    ci = wi[..., 2]
+    return oh, ci, (ci > 0) & (oh > 0)
+
+
 def energy(alpha: float, mu: float, n=384) -> float:
     """E = ∫ f·cos θi dωi with the half vectors drawn ∝ D·cos θh on an n×n stratified grid:
     each sample weighs G2·(ωo·h)/(μ·cos θh) where ωi lies above the surface."""
@@ -27,14 +40,7 @@ def energy(alpha: float, mu: float, n=384) -> float:
     u1, u2 = np.meshgrid(u, u, indexing="ij")
     a2 = alpha * alpha
     cos_h = np.sqrt((1 - u1) / (1 + (a2 - 1) * u1))
-    sin_h = np.sqrt(np.maximum(1 - cos_h * cos_h, 0))
-    phi = 2 * np.pi * u2
-    h = np.stack([sin_h * np.cos(phi), sin_h * np.sin(phi), cos_h], -1)
-    wo = np.array([np.sqrt(1 - mu * mu), 0, mu])
-    oh = h @ wo
-    wi = 2 * oh[..., None] * h - wo
-    ci = wi[..., 2]
-    ok = (ci > 0) & (oh > 0)
+    oh, ci, ok = reflect(cos_h, u2, mu)
     g2 = 1 / (1 + lam(mu, alpha) + lam(np.where(ok, ci, 1.0), alpha))
     w = np.where(ok, g2 * oh / (mu * cos_h), 0.0)
     return float(w.mean())

@@ -1,8 +1,10 @@
 //! The RenderWarning of the GPU methods (`direct`, `ispm`, `bidir`) for Mitsuba's material
 //! models (coatings, conductors of complex index, Beckmann's distribution). Their direct
 //! light and `ispm`'s photon estimates and rasterized first bounce shade the exact models
-//! (`raster::exact_models`) unless a texture varies the BSDF's parameters; `bidir`'s VPLs
-//! and bundles still shade the uber stand-in ([`crate::bsdf::Material::uber_equivalent`]).
+//! (`raster::exact_models`) unless a texture varies the BSDF's parameters, and so do
+//! `bidir`'s pixels in the light of its VPLs, bundles and sky (`bidir_models.wgsl`); its
+//! VPLs and bundle hits (the middle vertices of that light) still shade the uber stand-in
+//! ([`crate::bsdf::Material::uber_equivalent`]).
 
 use super::Method;
 use crate::raster::exact_models::shades_exactly;
@@ -47,8 +49,8 @@ pub(super) fn warning(scene: &Scene, method: Method) -> Option<String> {
     }
     let (exact_in, rest) = match method {
         Method::Bidir => (
-            "direct light",
-            "the light of their VPLs and ray bundles (the sky's included) shades them",
+            "direct light, the sky's light and the last bounce of the indirect light",
+            "the VPLs and ray bundles' hits (the vertices before the last bounce) shade them",
         ),
         _ => ("", ""),
     };

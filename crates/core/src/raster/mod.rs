@@ -14,6 +14,7 @@ pub mod gbuffer;
 pub mod instances;
 pub mod layers;
 pub mod ltc;
+pub mod model_energy;
 pub mod rsm;
 pub mod shadow;
 pub mod sky_cone;

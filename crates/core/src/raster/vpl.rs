@@ -119,11 +119,19 @@ pub fn cube_views(p: Vec3, lo: Vec3, hi: Vec3, size: u32) -> ([Mat4; 6], f32) {
 
 /// The VPL lighting pipeline and its layouts.
 pub struct VplPass {
-    pub pipeline: wgpu::RenderPipeline,
+    /// The pass without the exact models' code (`MODELS` off: no scene material is one),
+    /// and with it, made at the first frame that needs it (its code made the pass 70%
+    /// slower on lavapipe, and its first compile minutes long: `cornell` never pays either).
+    plain: wgpu::RenderPipeline,
+    models: std::sync::OnceLock<wgpu::RenderPipeline>,
+    module: wgpu::ShaderModule,
+    pipeline_layout: wgpu::PipelineLayout,
     /// Group 0: params (uniform), VPLs (texture), their shadow matrices and maps, comparison sampler,
     /// lights, their shadow matrices and maps, bundle views, heads, nodes, the environment's
-    /// radiance table.
+    /// radiance table, its irradiance table, the models' clamp-energy tables.
     pub layout: wgpu::BindGroupLayout,
+    /// The exact models' clamp-energy tables ([`super::model_energy::MODEL_ENERGY`]).
+    pub model_energy: wgpu::Buffer,
 }
 
 /// The target of the VPL pass.
@@ -159,6 +167,7 @@ impl VplPass {
                 super::storage_entry(10, frag),
                 texture_entry(11, frag),
                 texture_entry(12, frag),
+                super::storage_entry(13, frag),
             ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -178,41 +187,82 @@ impl VplPass {
                 wgsl::BIDIR,
                 wgsl::ROUGHNESS_CLAMP,
                 wgsl::ENV_GLOSSY,
-                // env_glossy.wgsl's taps go through exact_glossy_tap: with no record loaded
-                // (bidir never calls exact_load) it is the uber lobe's weight.
+                // The exact models at the pixels (env_glossy.wgsl's taps through
+                // exact_glossy_tap with the pixel's record).
                 shaders::MODELS,
                 wgsl::EXACT_MODELS,
                 wgsl::EXACT_MODELS_DIRECT,
+                wgsl::BIDIR_MODELS,
             ],
         );
-        let pipeline = gpu::create_fullscreen_pipeline(
+        let plain = lighting_pipeline(device, &pipeline_layout, &module, false);
+        let model_energy = gpu::create_buffer_init(
             device,
-            "bidir pipeline",
-            &pipeline_layout,
-            &module,
-            "fs_main",
-            TARGET.into(),
+            &wgpu::util::BufferInitDescriptor {
+                label: Some("bidir model energy"),
+                contents: bytemuck::cast_slice(&super::model_energy::MODEL_ENERGY),
+                usage: wgpu::BufferUsages::STORAGE,
+            },
         );
-        VplPass { pipeline, layout }
+        VplPass {
+            plain,
+            models: std::sync::OnceLock::new(),
+            module,
+            pipeline_layout,
+            layout,
+            model_energy,
+        }
     }
 
-    /// Records the pass into `target` (cleared).
+    /// Records the pass into `target` (cleared); `models`: some material of the scene is
+    /// shaded by its exact model (`raster::exact_models`).
     pub fn record(
         &self,
+        device: &wgpu::Device,
+        models: bool,
         encoder: &mut wgpu::CommandEncoder,
         target: &wgpu::TextureView,
         [group, gbuffer_group]: [&wgpu::BindGroup; 2],
         timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) {
+        let pipeline = if models {
+            self.models.get_or_init(|| {
+                lighting_pipeline(device, &self.pipeline_layout, &self.module, true)
+            })
+        } else {
+            &self.plain
+        };
         draw_fullscreen(
             encoder,
             "bidir lighting pass",
             target,
-            &self.pipeline,
+            pipeline,
             &[group, gbuffer_group],
             timestamps,
         );
     }
+}
+
+/// The lighting pipeline with the exact models' code (`MODELS` of bidir_models.wgsl) or not.
+fn lighting_pipeline(
+    device: &wgpu::Device,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    models: bool,
+) -> wgpu::RenderPipeline {
+    let constants = [("MODELS", if models { 1.0 } else { 0.0 })];
+    let options = wgpu::PipelineCompilationOptions {
+        constants: &constants,
+        ..Default::default()
+    };
+    gpu::create_fullscreen_pipeline_with(
+        device,
+        "bidir pipeline",
+        layout,
+        module,
+        ("fs_main", options),
+        TARGET.into(),
+    )
 }
 
 impl crate::gpu::Pipelines for VplPass {

@@ -55,4 +55,7 @@ pub const RSM: &str = include_str!("shaders/rsm.wgsl");
 pub const BIDIR: &str = include_str!("shaders/bidir.wgsl");
 /// `bidir`'s roughness clamp (§5), keeping the lobe's albedo.
 pub const ROUGHNESS_CLAMP: &str = include_str!("shaders/roughness_clamp.wgsl");
+/// `bidir`'s shading of Mitsuba's exact models at its pixels, with their own
+/// roughness-clamp energy (after `ROUGHNESS_CLAMP` and `EXACT_MODELS`).
+pub const BIDIR_MODELS: &str = include_str!("shaders/bidir_models.wgsl");
 pub const BUNDLES: &str = include_str!("shaders/bundles.wgsl");

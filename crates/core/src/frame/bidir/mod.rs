@@ -171,6 +171,7 @@ fn lighting_group(
 ) -> wgpu::BindGroup {
     let (light_views, light_maps) = gs.shadow_lookup();
     let sampler = &DirectPass::get(ctx).shadow_sampler;
+    let pass = VplPass::get(ctx);
     let records = vpls.records.create_view(&Default::default());
     let irradiance = env.irradiance.create_view(&Default::default());
     let env = env.radiance.create_view(&Default::default());
@@ -184,7 +185,7 @@ fn lighting_group(
         &ctx.device,
         &wgpu::BindGroupDescriptor {
             label: Some("vpl bind group"),
-            layout: &VplPass::get(ctx).layout,
+            layout: &pass.layout,
             entries: &[
                 buffer(0, params),
                 texture(1, &records),
@@ -202,6 +203,7 @@ fn lighting_group(
                 buffer(10, &bundles.nodes),
                 texture(11, &env),
                 texture(12, &irradiance),
+                buffer(13, &pass.model_energy),
             ],
         },
     )
@@ -490,7 +492,18 @@ pub(super) fn frame(
     let indirect_view = state.indirect.create_view(&Default::default());
     let ts = gpu.timer.pass("bidir lighting");
     let groups = [&state.group, gpu.targets.lighting_group()];
-    VplPass::get(&ctx).record(&mut encoder, &indirect_view, groups, ts);
+    let models = scene.materials.iter().enumerate().any(|(i, m)| {
+        let maps = scene.material_maps.get(i).cloned().unwrap_or_default();
+        crate::raster::exact_models::shades_exactly(m, &maps)
+    });
+    VplPass::get(&ctx).record(
+        &ctx.device,
+        models,
+        &mut encoder,
+        &indirect_view,
+        groups,
+        ts,
+    );
     // 5. The paths through mirrors and glass (`specular_paths`), traced on the CPU while the
     // GPU works on the lights (uploaded before the composite runs: queue writes precede the
     // submission).

@@ -116,6 +116,8 @@ struct Params {
 @group(1) @binding(1) var g_normals: texture_2d<f32>;
 @group(1) @binding(2) var g_diffuse: texture_2d<f32>;
 @group(1) @binding(3) var g_specular: texture_2d<f32>;
+// The sample's emission, its material index + 1 in `w` (bidir_models.wgsl `pixel_model`).
+@group(1) @binding(4) var g_emission: texture_2d<f32>;
 
 const TWO_PI: f32 = 6.28318530718;
 
@@ -190,7 +192,7 @@ fn vpl_light(v: Vpl, m1: Clamped, p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m:
     if dot(wi, ng) <= 0.0 || cos1 <= 0.0 || max3(v.flux) <= 0.0 {
         return vec3<f32>(0.0);
     }
-    let f1 = eval_clamped(m1, v.ns, -wi, v.to_light);
+    let f1 = eval_uber(m1, v.ns, -wi, v.to_light);
     let f = eval_clamped(m, ns, wo, wi);
     let t = v.flux * f1 * f * (abs(dot(ns, wi)) * cos1 / max(d2, min_d2));
     if max3(t) <= 0.0 {
@@ -278,11 +280,11 @@ fn diffuse_lobe(m: Material, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec3
 // 1 − F_avg: exact for a constant sky, as `direct_shade.wgsl`'s ratio estimator takes it).
 fn sky_diffuse_unshadowed(m: Material, ns: vec3<f32>, wo: vec3<f32>) -> vec3<f32> {
     let one_minus_avg = vec3<f32>(1.0) - fresnel_avg(m);
-    if max3(m.diffuse) <= 0.0 {
+    if max3(m.diffuse) <= 0.0 && !exact_on {
         return vec3<f32>(0.0);
     }
     let coupling = select(vec3<f32>(0.0), vec3<f32>(1.0) - fresnel_spec(m, abs(dot(ns, wo))), one_minus_avg > vec3<f32>(1e-6));
-    return m.diffuse / PI * coupling * env_irradiance(ns);
+    return exact_env_diffuse(m.diffuse / PI * coupling, ns, wo) * env_irradiance(ns);
 }
 
 // The sky's glossy light at a pixel (issue 47), as the `direct` frame's ratio estimator
@@ -388,7 +390,7 @@ fn node_material(n: Node) -> Material {
 
 // Strategy B at x3 = `p` for subpath slot `i`: the vertex as a VPL, weighted by MIS against
 // the bundles' strategy A.
-fn subpath_vertex_light(i: u32, p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, wo: vec3<f32>, n1: f32, tiny_d2: f32) -> vec3<f32> {
+fn subpath_vertex_light(i: u32, p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, model: u32, wo: vec3<f32>, n1: f32, tiny_d2: f32) -> vec3<f32> {
     // The flux first (one texel): empty slots and specular vertices cost no more.
     if max3(textureLoad(vpl_tex, vec2<u32>(1u, i), 0).xyz) <= 0.0 {
         return vec3<f32>(0.0);
@@ -401,7 +403,7 @@ fn subpath_vertex_light(i: u32, p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: M
     let pb = n1 * v.pdf;
     let d3 = (pa + pb) * d2 / max(cos_v, 1e-6);
     let mv = clamped(vpl_material(v), d3, cos_v);
-    let t = vpl_light(v, mv, p, ns, ng, clamped(m, d3, dot(ns, wo)), wo, tiny_d2);
+    let t = vpl_light(v, mv, p, ns, ng, clamped_model(m, model, d3, dot(ns, wo)), wo, tiny_d2);
     return t * (pb / (pa + pb));
 }
 
@@ -454,6 +456,7 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
     m.roughness = gbuffer_roughness(d.w);
     m.specular = s.xyz;
     m.fresnel = u32(s.w > 0.5);
+    let model = pixel_model(textureLoad(g_emission, px, 0).w);
     let wo = normalize(params.eye - p);
     let n1 = f32(params.vpls_per_light);
     let n2 = f32(params.bundles);
@@ -478,7 +481,7 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
         let d10 = area * v.light_dist2 / max(abs(dot(v.ng, v.to_light)), 1e-6);
         let m1 = clamped(vpl_material(v), combine(d10, d13), cos13);
         let min_d2 = select(0.0, params.alone_min_dist2, alone);
-        var t = vpl_light(v, m1, p, ns, ng, clamped(m, d13, dot(ns, wo)), wo, min_d2);
+        var t = vpl_light(v, m1, p, ns, ng, clamped_model(m, model, d13, dot(ns, wo)), wo, min_d2);
         if max3(t) <= 0.0 {
             continue;
         }
@@ -495,13 +498,19 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
     if mis && params.bundles > 0u && params.bounces >= 2u {
         let end = params.vpl_count + params.sub_count;
         let deep = min(2u * params.vpl_count, end);
-        for (var i = params.vpl_count; i < deep; i++) {
-            sum += subpath_vertex_light(i, p, ns, ng, m, wo, n1, tiny_d2);
-        }
-        // The vertices of order 3 and more, interleaved over pixel blocks (below).
+        // The vertices of order 3 and more, interleaved over pixel blocks (below); one loop
+        // and one call site, so the exact models' code is inlined once.
         let il = interleave(px, deep);
-        for (var i = il.x; i < end; i += il.y) {
-            sum += subpath_vertex_light(i, p, ns, ng, m, wo, n1, tiny_d2) * f32(il.y);
+        let near = deep - params.vpl_count;
+        let far = select(0u, (end - il.x + il.y - 1u) / il.y, il.x < end);
+        for (var k = 0u; k < near + far; k++) {
+            var i = params.vpl_count + k;
+            var w = 1.0;
+            if k >= near {
+                i = il.x + (k - near) * il.y;
+                w = f32(il.y);
+            }
+            sum += subpath_vertex_light(i, p, ns, ng, m, model, wo, n1, tiny_d2) * w;
         }
     }
 
@@ -546,12 +555,12 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
                 // The glossy lobe's part is not summed here: `env_glossy_unshadowed` below,
                 // times the visibility these directions give it (`sky_share_add`).
                 let l_env = env_radiance(dir) * (abs(dot(ns, dir)) * bv.inv_density);
-                let fd = diffuse_lobe(m, ns, wo, dir);
+                let fd = pixel_diffuse(m, ns, wo, dir);
                 sum -= fd * l_env;
                 if !hit.found {
                     sum += fd * l_env;
                 }
-                let f3 = eval_clamped(clamped(m, 1.0 / bv.inv_density, dot(ns, wo)), ns, wo, dir);
+                let f3 = eval_clamped(clamped_model(m, model, 1.0 / bv.inv_density, dot(ns, wo)), ns, wo, dir);
                 sky_share_add(&sky, (f3 - fd) * l_env, l_env, !hit.found);
             }
             if !hit.found {
@@ -598,9 +607,9 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
                     let p2 = max(cos23, 0.0) / (bv.inv_density * d23_2);
                     let d23s = (p1 + p2) * d23_2 / max(cos23, 1e-6);
                     let d20 = (p1 + p2) * dl2 / cos2l;
-                    let f3 = eval_clamped(clamped(m, d23s, dot(ns, wo)), ns, wo, dir);
+                    let f3 = eval_clamped(clamped_model(m, model, d23s, dot(ns, wo)), ns, wo, dir);
                     let m2c = clamped(m2, combine(d20, d23s), cos23);
-                    let f2 = eval_clamped(m2c, ns2, -dir, wl);
+                    let f2 = eval_uber(m2c, ns2, -dir, wl);
                     var t = f3 * weight * f2 * abs(dot(ns2, wl)) * l.intensity * (falloff / dl2);
                     if max3(t) <= 0.0 {
                         continue;
@@ -618,7 +627,7 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
             if params.bounces >= 2u && params.vpls_per_light > 0u {
                 let k = min(u32((f32(b) + params.pair_offset) * n1 / n2), params.vpls_per_light - 1u);
                 // d̂ at x3 of eq. 14: the bundles' density n2·p_r.
-                let f3 = eval_clamped(clamped(m, 1.0 / bv.inv_density, dot(ns, wo)), ns, wo, dir);
+                let f3 = eval_clamped(clamped_model(m, model, 1.0 / bv.inv_density, dot(ns, wo)), ns, wo, dir);
                 // Strategy A's area density of x2 (MIS against B; no clamp with MIS).
                 let pa = max(cos23, 0.0) / (bv.inv_density * d23_2);
                 let min_d2 = select(params.min_dist2, tiny_d2, mis);

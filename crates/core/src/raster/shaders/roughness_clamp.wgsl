@@ -10,10 +10,15 @@
 // is kept up to Fresnel (E is taken at F = 1; with Schlick's F the ratio holds at F0 = 1
 // and is within a few percent below) and the table's bilinear interpolation.
 
-// A material with its specular lobe widened (`m`) and the factor `k` on that lobe.
+// A material with its specular lobe widened (`m`) and the factor `k` on that lobe; where the
+// material is one of Mitsuba's models (`model`: its record's index + 1, 0 for the uber `m`),
+// the model's lobe widened to the same roughness and its own factor per channel `km`
+// (bidir_models.wgsl).
 struct Clamped {
     m: Material,
     k: f32,
+    model: u32,
+    km: vec3<f32>,
 }
 
 // E(α, μ) at roughness r = √α = i/15 (rows) and μ = cos θo = (j + 0.5)/16 (columns), from
@@ -37,21 +42,33 @@ var<private> GGX_ENERGY: array<f32, 256> = array<f32, 256>(
     0.8943, 0.7699, 0.6872, 0.6243, 0.5735, 0.5314, 0.4956, 0.4646, 0.4376, 0.4137, 0.3925, 0.3734, 0.3561, 0.3404, 0.3261, 0.3130
 );
 
-fn ggx_energy(roughness: f32, mu: f32) -> f32 {
+// The bilinear tap of a 16×16 energy table (rows: roughness i/15, columns: μ = (j + 0.5)/16)
+// at (`roughness`, `mu`): the entry of its lower corner and the weights towards the next
+// row and column.
+struct EnergyTap {
+    k: u32,
+    fx: f32,
+    fy: f32,
+}
+
+fn energy_tap(roughness: f32, mu: f32) -> EnergyTap {
     let x = clamp(roughness, 0.0, 1.0) * 15.0;
     let y = clamp(mu * 16.0 - 0.5, 0.0, 15.0);
     let i = min(u32(x), 14u);
     let j = min(u32(y), 14u);
-    let fx = x - f32(i);
-    let fy = y - f32(j);
-    let a = mix(GGX_ENERGY[i * 16u + j], GGX_ENERGY[i * 16u + j + 1u], fy);
-    let b = mix(GGX_ENERGY[(i + 1u) * 16u + j], GGX_ENERGY[(i + 1u) * 16u + j + 1u], fy);
-    return mix(a, b, fx);
+    return EnergyTap(i * 16u + j, x - f32(i), y - f32(j));
+}
+
+fn ggx_energy(roughness: f32, mu: f32) -> f32 {
+    let t = energy_tap(roughness, mu);
+    let a = mix(GGX_ENERGY[t.k], GGX_ENERGY[t.k + 1u], t.fy);
+    let b = mix(GGX_ENERGY[t.k + 16u], GGX_ENERGY[t.k + 17u], t.fy);
+    return mix(a, b, t.fx);
 }
 
 // `m` unchanged.
 fn unclamped(m: Material) -> Clamped {
-    return Clamped(m, 1.0);
+    return Clamped(m, 1.0, 0u, vec3<f32>(1.0));
 }
 
 // §5: the material with its GGX α raised to √(m/(π·d̂)) (no change when off), where
@@ -75,12 +92,21 @@ fn clamped(m_in: Material, dhat: f32, cos_o: f32) -> Clamped {
     let mu = abs(cos_o);
     let k = ggx_energy(m.roughness, mu) / max(ggx_energy(r, mu), 1e-3);
     m.roughness = r;
-    return Clamped(m, k);
+    return Clamped(m, k, 0u, vec3<f32>(1.0));
 }
 
 // f(wo, wi) of a clamped material: its diffuse part as is, its (widened) specular lobe
-// times `k`.
+// times `k` (a model's: bidir_models.wgsl `eval_clamped_model`).
 fn eval_clamped(c: Clamped, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
+    if MODELS && c.model != 0u {
+        return eval_clamped_model(c, n, wo, wi);
+    }
+    return eval_uber(c, n, wo, wi);
+}
+
+// `eval_clamped` of an uber material (`c.model` 0), for the vertices that never carry a
+// model (a VPL's, a bundle hit's): the model's code is not compiled in there.
+fn eval_uber(c: Clamped, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
     let f = bsdf_eval(c.m, n, wo, wi);
     if c.k == 1.0 {
         return f;
