@@ -96,6 +96,11 @@ def main() -> None:
     p.add_argument("--method", default="ispm")
     p.add_argument("--move", choices=["light", "camera"], default="light")
     p.add_argument("--option", action="append", default=[], help="KEY=INT for every build")
+    p.add_argument(
+        "--all-stages",
+        action="store_true",
+        help="a column for every stage any build times (else the direct light's five)",
+    )
     p.add_argument("--options", default="{}", help=argparse.SUPPRESS)
     p.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     a = p.parse_args()
@@ -128,11 +133,18 @@ def main() -> None:
     what = f"{a.method}, {a.photons} photons" if a.method == "ispm" else a.method
     print(f"{a.scene} {a.size}, {what}, {a.move} moving; median of {n} frames")
     print(f"a build each, {a.rounds} alternating rounds of {a.frames} frames (ms)\n")
-    print("| build | frame | CPU | " + " | ".join(STAGES) + " |")
-    print("|---|---:|---:|" + "---:|" * len(STAGES))
+    stages = list(STAGES)
+    if a.all_stages:
+        seen = {
+            s: max(x["stages"][s] for k in got for x in got[k] if s in x["stages"])
+            for s in {s for k in got for x in got[k] for s in x["stages"]}
+        }
+        stages = sorted(seen, key=lambda s: -seen[s])
+    print("| build | frame | CPU | " + " | ".join(stages) + " |")
+    print("|---|---:|---:|" + "---:|" * len(stages))
     for k in builds:
         f = [x["frame"] for x in got[k]]
-        cells = [statistics.median(x["stages"].get(s, 0.0) for x in got[k]) for s in STAGES]
+        cells = [statistics.median(x["stages"].get(s, 0.0) for x in got[k]) for s in stages]
         lo, hi = min(f), max(f)
         cpu = statistics.median(x["cpu"] for x in got[k]) * 1e3
         row = f"| {k} | {statistics.median(f) * 1e3:.0f} ({lo * 1e3:.0f}–{hi * 1e3:.0f}) "

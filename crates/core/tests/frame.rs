@@ -350,12 +350,49 @@ fn direct_builds_no_cpu_bvh() {
     assert_eq!(moved.radiance.pixels, one_shot.radiance.pixels);
     let ispm = render(&scene, &settings(Method::Ispm), &Silent).expect("ispm");
     assert_eq!(bvh_stages(&ispm), vec!["bvh build".to_string()]);
-    // Mirrors and glass: `direct` traces the light met one scattering from the camera.
+    // Mirrors and glass under a point light alone: a path one scattering from the camera
+    // meets no light, so nothing is traced (no BVH either).
     let glass = builtin::load("cornell-glass").expect("scene");
-    let traced = render(&glass, &s, &Silent).expect("direct");
+    let point_lit = render(&glass, &s, &Silent).expect("direct");
+    assert_eq!(bvh_stages(&point_lit), Vec::<String>::new());
+    // Under a sky: `direct` traces the light met one scattering from the camera.
+    let traced = render(&under_sky(&glass), &s, &Silent).expect("direct");
     assert_eq!(bvh_stages(&traced), vec!["bvh build".to_string()]);
     let specular = |o: &RenderOutput| o.stats.stages.iter().any(|(n, _)| n == "specular paths");
     assert!(specular(&traced) && !specular(&first) && !specular(&moved));
+    assert!(!specular(&point_lit));
+}
+
+/// `scene` with a constant sky added (seen through the open front of the Cornell boxes).
+fn under_sky(scene: &Scene) -> Scene {
+    let mut s = scene.clone();
+    let sky = gi_core::scene::Environment::constant(Vec3::new(0.3, 0.4, 0.5));
+    s.environment = Some(std::sync::Arc::new(sky));
+    s
+}
+
+/// `direct` on `cornell-glass` under a sky: the light its mirror and glass show one
+/// scattering from the camera is traced after a camera move, and kept (no "specular
+/// paths" stage) while only the point light moves; either frame equals a new renderer's
+/// frame of the same pose bitwise.
+#[test]
+fn direct_keeps_its_specular_image_while_only_point_lights_move() {
+    let scene = under_sky(&builtin::load("cornell-glass").expect("scene"));
+    let s = settings(Method::Direct);
+    let mut r = Renderer::new(&scene, &s).expect("renderer");
+    let specular = |o: &RenderOutput| o.stats.stages.iter().any(|(n, _)| n == "specular paths");
+    assert!(specular(&r.render(&all(), &Silent).expect("frame 0")));
+    let [camera, light, _] = <[SceneUpdate; 3]>::try_from(pose(&scene, 1.0)).expect("3");
+    let mut posed = scene.clone();
+    for (u, traces) in [(light, false), (camera, true)] {
+        r.update(&u).expect("update");
+        posed.apply(&u).expect("valid update");
+        let frame = r.render(&all(), &Silent).expect("frame");
+        assert_eq!(specular(&frame), traces, "{u:?}");
+        let one_shot = render(&posed, &s, &Silent).expect("one-shot");
+        let d = max_difference(&frame.radiance, &one_shot.radiance);
+        assert_eq!(d, 0.0, "{u:?}");
+    }
 }
 
 /// Cancels at the first update of stage `at`.
@@ -371,23 +408,24 @@ impl gi_core::Progress for CancelAt {
 /// the renderer consistent: the next frame equals the one-shot render.
 #[test]
 fn cancelled_frame_leaves_the_renderer_consistent() {
+    let cornell = builtin::load("cornell").expect("scene");
+    let glass = under_sky(&builtin::load("cornell-glass").expect("scene"));
     let cases = [
-        ("cornell", Method::Ispm, "cpu trace"),
-        ("cornell", Method::Direct, "direct"),
-        ("cornell-glass", Method::Direct, "specular paths"),
+        (&cornell, Method::Ispm, "cpu trace"),
+        (&cornell, Method::Direct, "direct"),
+        (&glass, Method::Direct, "specular paths"),
     ];
-    for (name, method, stage) in cases {
-        let scene = builtin::load(name).expect("scene");
+    for (scene, method, stage) in cases {
         let s = settings(method);
-        let mut r = Renderer::new(&scene, &s).expect("renderer");
+        let mut r = Renderer::new(scene, &s).expect("renderer");
         r.render(&all(), &Silent).expect("frame 0");
-        for u in pose(&scene, 1.0) {
+        for u in pose(scene, 1.0) {
             r.update(&u).expect("update");
         }
         let e = r.render(&all(), &CancelAt(stage)).expect_err("cancelled");
         assert!(matches!(e, gi_core::Error::Cancelled), "{e}");
         let frame = r.render(&all(), &Silent).expect("frame after");
-        let one_shot = render(&posed(&scene, 1.0), &s, &Silent).expect("one-shot");
+        let one_shot = render(&posed(scene, 1.0), &s, &Silent).expect("one-shot");
         let d = max_difference(&frame.radiance, &one_shot.radiance);
         assert_eq!(d, 0.0, "{}", method.name());
     }

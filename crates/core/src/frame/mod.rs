@@ -93,6 +93,8 @@ struct GpuState {
     timer: crate::gpu::timer::Timer,
     ispm: Option<ispm::IspmState>,
     bidir: Option<bidir::BidirState>,
+    /// What `direct`'s specular texture holds of the light met through mirrors and glass.
+    delta_light: direct::DeltaLightState,
     /// This frame waits after each stage ([`FrameDesc::serial`]).
     serial: bool,
 }
@@ -565,6 +567,7 @@ impl Renderer {
                 timer: gpu::frame_timer(ctx),
                 ispm: None,
                 bidir: None,
+                delta_light: Default::default(),
                 serial: false,
             });
             self.gpu_lights = scene.lights.len();
@@ -581,8 +584,12 @@ impl Renderer {
             g.targets.rebind_scene(ctx, &g.scene);
             // `bidir` binds the environment's tables in its own state.
             g.bidir = None;
+            g.delta_light.invalidate();
         }
         let c = self.changes;
+        if c.camera || c.geometry || c.materials {
+            g.delta_light.invalidate();
+        }
         if c.geometry {
             for (object, _) in &self.moved {
                 g.scene.write_instance(ctx, scene, *object);
@@ -601,6 +608,7 @@ impl Renderer {
                 gpu::Targets::new(ctx, &g.scene, scene, direct.spp, direct.edge_supersampling)?;
             g.ispm = None;
             g.bidir = None;
+            g.delta_light = Default::default();
         } else {
             g.targets.invalidate(gpu::Stale::of_changes(c));
         }

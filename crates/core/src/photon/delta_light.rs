@@ -31,11 +31,25 @@ pub fn one_bounce_light(
     settings: &CameraSamples,
     progress: &dyn Progress,
 ) -> Result<Image> {
+    if !can_meet_light(scene) {
+        let cam = &scene.camera;
+        return Ok(Image::new(cam.width, cam.height));
+    }
     let settings = CameraSamples {
         max_depth: 1,
         ..*settings
     };
     adaptive_delta_image::<()>(scene, bvh, &settings, progress, |_, _, _| Vec3::ZERO, None)
+}
+
+/// Whether a path one delta scattering from the camera can meet any light: an emitting
+/// surface, the environment or a sun's disc of directions. Without, [`one_bounce_light`]'s
+/// image is exactly black (point and spot lights and parallel suns are met by next-event
+/// estimation alone, which it leaves to the GPU), and nothing need be traced.
+pub fn can_meet_light(scene: &Scene) -> bool {
+    scene.environment.is_some()
+        || scene.materials.iter().any(|m| m.emits())
+        || scene.lights.iter().any(|l| l.disc_radiance().is_some())
 }
 
 #[cfg(test)]
@@ -52,6 +66,46 @@ mod tests {
         "camera": {"position": [0, 0, 3], "look_at": [0, 0, 0], "fov": 40, "width": 24,
                    "height": 24}
     }"#;
+
+    /// Under a point light alone, nothing a path meets one delta scattering from the camera
+    /// emits: the traced image (without the shortcut) is black, and the shortcut returns it
+    /// without a ray; the sky or a sun's disc make it trace.
+    #[test]
+    fn a_point_light_alone_traces_nothing() {
+        let settings = CameraSamples {
+            spp: 4,
+            seed: 3,
+            ..Default::default()
+        };
+        let no_files = std::collections::HashMap::new();
+        let text = GLASS_UNDER_SKY.replace(
+            r#""environment": {"radiance": [0.4, 0.4, 0.4]}"#,
+            r#""lights": [{"type": "point", "position": [0, 2, 2], "intensity": [5, 5, 5]}]"#,
+        );
+        let scene = Scene::from_json(&text, "glass", &no_files).expect("scene");
+        assert!(!can_meet_light(&scene));
+        let bvh = SceneBvh::build(&scene);
+        let one = CameraSamples {
+            max_depth: 1,
+            ..settings
+        };
+        let traced =
+            adaptive_delta_image::<()>(&scene, &bvh, &one, &Silent, |_, _, _| Vec3::ZERO, None)
+                .unwrap();
+        assert!(traced.pixels.iter().all(|&p| p == Vec3::ZERO));
+        let img = one_bounce_light(&scene, &bvh, &settings, &Silent).unwrap();
+        assert_eq!((img.width, img.height), (24, 24));
+        assert!(img.pixels.iter().all(|&p| p == Vec3::ZERO));
+        let sky = Scene::from_json(GLASS_UNDER_SKY, "glass", &no_files).expect("scene");
+        assert!(can_meet_light(&sky));
+        let sun = text.replace(
+            r#"{"type": "point", "position": [0, 2, 2], "intensity": [5, 5, 5]}"#,
+            r#"{"type": "directional", "direction": [0, -1, 0], "irradiance": [1, 1, 1],
+                "angular_diameter": 2}"#,
+        );
+        let sun = Scene::from_json(&sun, "glass", &no_files).expect("scene");
+        assert!(can_meet_light(&sun));
+    }
 
     /// A smooth glass sphere (η 1.5) under a constant sky L = 0.4, seen from outside: one
     /// scattering from the camera, its pixels show the sky reflected by the Fresnel term

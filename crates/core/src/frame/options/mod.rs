@@ -87,9 +87,11 @@ impl Method {
     }
 
     /// Whether the method traces rays on the CPU in `scene`: `direct` only where mirrors
-    /// or glass may be seen (the light met one delta scattering from the camera).
+    /// or glass may be seen and light met one delta scattering from the camera (emitters,
+    /// the environment, a sun's disc: `crate::photon::delta_light::can_meet_light`).
     pub fn uses_cpu_bvh_in(self, scene: &crate::scene::Scene) -> bool {
-        self.uses_cpu_bvh() || scene.has_specular_traced()
+        self.uses_cpu_bvh()
+            || (scene.has_specular_traced() && crate::photon::delta_light::can_meet_light(scene))
     }
 }
 
