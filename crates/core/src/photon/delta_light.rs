@@ -67,22 +67,30 @@ mod tests {
                    "height": 24}
     }"#;
 
+    /// Four samples a pixel, seed 3.
+    fn four_samples() -> CameraSamples {
+        CameraSamples {
+            spp: 4,
+            seed: 3,
+            ..Default::default()
+        }
+    }
+
+    fn glass(text: &str) -> Scene {
+        Scene::from_json(text, "glass", &std::collections::HashMap::new()).expect("scene")
+    }
+
     /// Under a point light alone, nothing a path meets one delta scattering from the camera
     /// emits: the traced image (without the shortcut) is black, and the shortcut returns it
     /// without a ray; the sky or a sun's disc make it trace.
     #[test]
     fn a_point_light_alone_traces_nothing() {
-        let settings = CameraSamples {
-            spp: 4,
-            seed: 3,
-            ..Default::default()
-        };
-        let no_files = std::collections::HashMap::new();
+        let settings = four_samples();
         let text = GLASS_UNDER_SKY.replace(
             r#""environment": {"radiance": [0.4, 0.4, 0.4]}"#,
             r#""lights": [{"type": "point", "position": [0, 2, 2], "intensity": [5, 5, 5]}]"#,
         );
-        let scene = Scene::from_json(&text, "glass", &no_files).expect("scene");
+        let scene = glass(&text);
         assert!(!can_meet_light(&scene));
         let bvh = SceneBvh::build(&scene);
         let one = CameraSamples {
@@ -96,15 +104,13 @@ mod tests {
         let img = one_bounce_light(&scene, &bvh, &settings, &Silent).unwrap();
         assert_eq!((img.width, img.height), (24, 24));
         assert!(img.pixels.iter().all(|&p| p == Vec3::ZERO));
-        let sky = Scene::from_json(GLASS_UNDER_SKY, "glass", &no_files).expect("scene");
-        assert!(can_meet_light(&sky));
+        assert!(can_meet_light(&glass(GLASS_UNDER_SKY)));
         let sun = text.replace(
             r#"{"type": "point", "position": [0, 2, 2], "intensity": [5, 5, 5]}"#,
             r#"{"type": "directional", "direction": [0, -1, 0], "irradiance": [1, 1, 1],
                 "angular_diameter": 2}"#,
         );
-        let sun = Scene::from_json(&sun, "glass", &no_files).expect("scene");
-        assert!(can_meet_light(&sun));
+        assert!(can_meet_light(&glass(&sun)));
     }
 
     /// A smooth glass sphere (η 1.5) under a constant sky L = 0.4, seen from outside: one
@@ -116,13 +122,8 @@ mod tests {
     /// Outside the sphere's footprint nothing is traced or added.
     #[test]
     fn glass_shows_the_fresnel_reflection_of_the_sky_alone() {
-        let settings = CameraSamples {
-            spp: 4,
-            seed: 3,
-            ..Default::default()
-        };
-        let no_files = std::collections::HashMap::new();
-        let scene = Scene::from_json(GLASS_UNDER_SKY, "glass", &no_files).expect("scene");
+        let settings = four_samples();
+        let scene = glass(GLASS_UNDER_SKY);
         let bvh = SceneBvh::build(&scene);
         let img = one_bounce_light(&scene, &bvh, &settings, &Silent).unwrap();
         let want = 0.4 * 0.04;

@@ -35,9 +35,11 @@ const MAX_CACHE_BYTES: u64 = 1 << 30;
 /// The edge passes' pipelines, compiled once per device.
 pub struct EdgePass {
     pub layout: wgpu::BindGroupLayout,
-    find: wgpu::ComputePipeline,
+    /// `find_edges` and `store_samples` per emission variant ([`EdgePass::reads`]): a
+    /// scene without emitters reads and keeps no emission texel.
+    find: VariantCache<wgpu::ComputePipeline>,
     args: wgpu::ComputePipeline,
-    store: wgpu::ComputePipeline,
+    store: VariantCache<wgpu::ComputePipeline>,
     /// `shade_edges` per [`DirectVariant`], compiled on first use.
     shade: VariantCache<wgpu::ComputePipeline>,
     device: wgpu::Device,
@@ -56,6 +58,9 @@ pub struct EdgeGroups<'a> {
     pub scene: &'a wgpu::BindGroup,
     pub gbuffer: &'a wgpu::BindGroup,
     pub edges: &'a EdgeBuffers,
+    /// The scene's direct-light variant (of it, finding and keeping the samples read the
+    /// emission flag alone).
+    pub variant: DirectVariant,
 }
 
 impl EdgePass {
@@ -134,9 +139,9 @@ impl EdgePass {
         };
         let (mask, mask_layout) = mask_pipeline(device);
         EdgePass {
-            find: pipeline("find_edges"),
+            find: VariantCache::default(),
             args: pipeline("edge_args"),
-            store: pipeline("store_samples"),
+            store: VariantCache::default(),
             shade: VariantCache::default(),
             device: device.clone(),
             module: module.clone(),
@@ -175,7 +180,7 @@ impl EdgePass {
         let e = groups.edges;
         encoder.clear_buffer(&e.count, 0, None);
         let mut pass = Self::begin(encoder, groups, 0, timestamps);
-        pass.set_pipeline(&self.find);
+        pass.set_pipeline(&self.specialized(&self.find, "find_edges", Self::reads(groups.variant)));
         pass.dispatch_workgroups(e.width.div_ceil(8), e.height.div_ceil(8), 1);
         pass.set_pipeline(&self.args);
         pass.dispatch_workgroups(1, 1, 1);
@@ -195,7 +200,11 @@ impl EdgePass {
         timestamps: Option<wgpu::ComputePassTimestampWrites<'_>>,
     ) {
         let mut pass = Self::begin(encoder, groups, sample, timestamps);
-        pass.set_pipeline(&self.store);
+        pass.set_pipeline(&self.specialized(
+            &self.store,
+            "store_samples",
+            Self::reads(groups.variant),
+        ));
         pass.dispatch_workgroups_indirect(&groups.edges.indirect, 0);
     }
 
@@ -220,22 +229,22 @@ impl EdgePass {
         pass.draw_indirect(&edges.indirect, DRAW_ARGS_OFFSET);
     }
 
-    /// Writes the mean direct light of the kept sub-pixel samples over the listed pixels.
-    pub fn record_shade(
+    /// Entry point `entry` compiled for `variant` (once, kept in `cache`).
+    fn specialized(
         &self,
-        encoder: &mut wgpu::CommandEncoder,
-        (groups, variant): (&EdgeGroups, DirectVariant),
-        timestamps: Option<wgpu::ComputePassTimestampWrites<'_>>,
-    ) {
-        let shade = self.shade.get(variant, |v| {
+        cache: &VariantCache<wgpu::ComputePipeline>,
+        entry: &'static str,
+        variant: DirectVariant,
+    ) -> wgpu::ComputePipeline {
+        cache.get(variant, |v| {
             let constants = v.constants();
             gpu::create_compute_pipeline(
                 &self.device,
                 &wgpu::ComputePipelineDescriptor {
-                    label: Some("shade_edges"),
+                    label: Some(entry),
                     layout: Some(&self.pipeline_layout),
                     module: &self.module,
-                    entry_point: Some("shade_edges"),
+                    entry_point: Some(entry),
                     compilation_options: wgpu::PipelineCompilationOptions {
                         constants: &constants,
                         ..Default::default()
@@ -243,7 +252,26 @@ impl EdgePass {
                     cache: None,
                 },
             )
-        });
+        })
+    }
+
+    /// What of `variant` finding edges and keeping samples depend on: whether the
+    /// G-buffer's emission is read (compared between neighbours, kept with the samples).
+    fn reads(variant: DirectVariant) -> DirectVariant {
+        DirectVariant {
+            emission: variant.emission,
+            ..DirectVariant::ALL
+        }
+    }
+
+    /// Writes the mean direct light of the kept sub-pixel samples over the listed pixels.
+    pub fn record_shade(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        (groups, variant): (&EdgeGroups, DirectVariant),
+        timestamps: Option<wgpu::ComputePassTimestampWrites<'_>>,
+    ) {
+        let shade = self.specialized(&self.shade, "shade_edges", variant);
         let mut pass = Self::begin(encoder, groups, 0, timestamps);
         pass.set_pipeline(&shade);
         pass.dispatch_workgroups_indirect(&groups.edges.indirect, 0);

@@ -493,6 +493,7 @@ impl Targets {
             scene: scene_group,
             gbuffer: &self.direct_gbuffer_group,
             edges,
+            variant,
         });
         if self.spp > 1 && self.edges.is_none() {
             encoder = self.for_each_sample(ctx, encoder, progress, |encoder, s, offset| {

@@ -122,7 +122,10 @@ fn store_samples(@builtin(global_invocation_id) id: vec3<u32>) {
         pack2x16float(g.specular.xy),
         pack2x16float(g.specular.zw),
     );
-    cache[base + 3u] = bitcast<vec4<u32>>(g.emission);
+    // Kept only where some material emits (else it is zero and `shade_edges` reads none).
+    if EMISSION {
+        cache[base + 3u] = bitcast<vec4<u32>>(g.emission);
+    }
 }
 
 @compute @workgroup_size(64)
