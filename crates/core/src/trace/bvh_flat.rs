@@ -29,31 +29,23 @@ pub struct FlatNode {
 }
 
 /// `BvhTri` in WGSL (48 bytes): a triangle as the CPU's Möller–Trumbore test holds it
-/// (corner 0 and the edges to corners 1 and 2, computed on the CPU so both sides test the
-/// same floats), and its index in its mesh.
+/// (corner 0, then the edges to corners 1 and 2, computed on the CPU so both sides test the
+/// same floats); the w of the corner row holds the bits of the triangle's index in its mesh.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct FlatTri {
-    pub v0: [f32; 3],
-    pub id: u32,
-    pub e1: [f32; 3],
-    pub pad0: u32,
-    pub e2: [f32; 3],
-    pub pad1: u32,
+    pub rows: [[f32; 4]; 3],
 }
 
 /// `BvhInstance` in WGSL (64 bytes): the world → mesh transform as three rows
-/// (`local.i = dot(row_i.xyz, p) + row_i.w`), the mesh's root node (`NONE`: an empty
-/// mesh), the instance's first flat triangle, and whether it is mirrored (barycentrics
-/// swap, as [`SceneBvh::intersect`] does).
+/// (`local.i = dot(row_i.xyz, p) + row_i.w`), then the mesh's root node (`NONE`: an empty
+/// mesh), the instance's first flat triangle, and 1 when it is mirrored (barycentrics swap,
+/// as [`SceneBvh::intersect`] does), and a zero.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct FlatInstance {
     pub rows: [[f32; 4]; 3],
-    pub root: u32,
-    pub first_triangle: u32,
-    pub flipped: u32,
-    pub pad: u32,
+    pub refs: [u32; 4],
 }
 
 /// The flattened BVH: the top level's nodes from `top_root` (`NONE`: no instance), then
@@ -98,12 +90,11 @@ impl FlatBvh {
             tris.extend(mesh.bvh2.primitive_indices.iter().map(|&id| {
                 let t = &mesh.triangles[id as usize];
                 FlatTri {
-                    v0: t.v0.into(),
-                    id,
-                    e1: (t.v1 - t.v0).into(),
-                    pad0: 0,
-                    e2: (t.v2 - t.v0).into(),
-                    pad1: 0,
+                    rows: [
+                        t.v0.extend(f32::from_bits(id)).into(),
+                        (t.v1 - t.v0).extend(0.0).into(),
+                        (t.v2 - t.v0).extend(0.0).into(),
+                    ],
                 }
             }));
         }
@@ -117,10 +108,12 @@ impl FlatBvh {
                 let row = |r: usize| [m.x_axis[r], m.y_axis[r], m.z_axis[r], t[r]];
                 FlatInstance {
                     rows: [row(0), row(1), row(2)],
-                    root: roots[i.mesh as usize],
-                    first_triangle: i.first_triangle,
-                    flipped: i.flipped as u32,
-                    pad: 0,
+                    refs: [
+                        roots[i.mesh as usize],
+                        i.first_triangle,
+                        i.flipped as u32,
+                        0,
+                    ],
                 }
             })
             .collect();

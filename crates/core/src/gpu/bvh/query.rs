@@ -8,6 +8,8 @@ use crate::gpu::layout::{buffer, buffer_init, storage_entry, storage_rw_entry};
 use crate::gpu::{self, GpuContext, Pipelines};
 use crate::sampling::{uniform_sphere, Rng};
 use crate::scene::Scene;
+use crate::trace::bvh_flat::NONE;
+use crate::trace::Hit;
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec3, Vec4};
 
@@ -39,17 +41,6 @@ impl QueryRay {
     pub fn any(&self) -> bool {
         self.dir_any[3] != 0.0
     }
-}
-
-/// A query's answer: the hit's distance, flat scene triangle
-/// ([`crate::trace::bvh_flat::NONE`]: none; for occlusion queries any blocker) and the
-/// barycentrics of its corners 1 and 2.
-#[derive(Clone, Copy, Debug)]
-pub struct QueryHit {
-    pub t: f32,
-    pub triangle: u32,
-    pub u: f32,
-    pub v: f32,
 }
 
 /// The query pipeline and its group-0 layout, compiled on first use.
@@ -97,9 +88,12 @@ impl Pipelines for QueryPipeline {
 /// Rays per dispatch (the workgroup count stays under the 65535 limit of one dimension).
 const CHUNK: usize = 64 * 65535;
 
-/// Traces `rays` over `bvh` on `ctx`; one hit per ray, in order. An error when a traversal
-/// stack overflowed (its hit may be missing).
-pub fn query(ctx: &GpuContext, bvh: &GpuBvh, rays: &[QueryRay]) -> Result<Vec<QueryHit>> {
+/// Traces `rays` over `bvh` on `ctx`; one answer per ray, in order: the closest hit (for
+/// occlusion queries any blocker) as a flat scene triangle, as [`SceneBvh::intersect`]
+/// gives it. An error when a traversal stack overflowed (its hit may be missing).
+///
+/// [`SceneBvh::intersect`]: crate::trace::SceneBvh::intersect
+pub fn query(ctx: &GpuContext, bvh: &GpuBvh, rays: &[QueryRay]) -> Result<Vec<Option<Hit>>> {
     let p = QueryPipeline::get(ctx);
     let mut out = Vec::with_capacity(rays.len());
     for chunk in rays.chunks(CHUNK) {
@@ -113,7 +107,7 @@ fn query_chunk(
     p: &QueryPipeline,
     bvh: &GpuBvh,
     rays: &[QueryRay],
-) -> Result<Vec<QueryHit>> {
+) -> Result<Vec<Option<Hit>>> {
     let device = &ctx.device;
     let size = (rays.len() * 16) as u64;
     ctx.check_buffer("the ray queries' hits", size)?;
@@ -173,11 +167,13 @@ fn query_chunk(
     }
     Ok(std::mem::take(&mut out[0])
         .into_iter()
-        .map(|[t, triangle, u, v]| QueryHit {
-            t: f32::from_bits(t),
-            triangle,
-            u: f32::from_bits(u),
-            v: f32::from_bits(v),
+        .map(|[t, triangle, u, v]| {
+            (triangle != NONE).then(|| Hit {
+                t: f32::from_bits(t),
+                triangle,
+                u: f32::from_bits(u),
+                v: f32::from_bits(v),
+            })
         })
         .collect())
 }

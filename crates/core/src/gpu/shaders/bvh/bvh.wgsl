@@ -17,13 +17,13 @@ struct BvhNode {
 }
 
 struct BvhTri {
+    // Corner 0, and the triangle's index in its mesh (read as an integer, never as a
+    // float: small indices are denormal floats).
     v0: vec3<f32>,
-    // The triangle's index in its mesh.
     id: u32,
-    e1: vec3<f32>,
-    pad0: u32,
-    e2: vec3<f32>,
-    pad1: u32,
+    // The edges to corners 1 and 2 (w: 0).
+    e1: vec4<f32>,
+    e2: vec4<f32>,
 }
 
 struct BvhInstance {
@@ -31,12 +31,9 @@ struct BvhInstance {
     row0: vec4<f32>,
     row1: vec4<f32>,
     row2: vec4<f32>,
-    // The mesh's root node (BVH_NONE: empty).
-    root: u32,
-    first_triangle: u32,
-    // 1: mirrored (the flat triangles swap corners 1 and 2, so the barycentrics swap).
-    flipped: u32,
-    pad: u32,
+    // The mesh's root node (BVH_NONE: empty), the instance's first flat triangle, 1 when
+    // mirrored (the flat triangles swap corners 1 and 2, so the barycentrics swap), 0.
+    refs: vec4<u32>,
 }
 
 struct BvhInfo {
@@ -154,8 +151,10 @@ fn bvh_start(root: u32, o: vec3<f32>, inv: vec3<f32>, tmax: f32) -> BvhStack {
 
 // Möller–Trumbore as `Tri::intersect` (trace/bvh.rs): (t, u, v), or t = -1 outside (0, tmax).
 fn bvh_triangle(tri: BvhTri, o: vec3<f32>, d: vec3<f32>, tmax: f32) -> vec3<f32> {
-    let p = cross(d, tri.e2);
-    let det = dot(tri.e1, p);
+    let e1 = tri.e1.xyz;
+    let e2 = tri.e2.xyz;
+    let p = cross(d, e2);
+    let det = dot(e1, p);
     if abs(det) < 1e-12 {
         return vec3<f32>(-1.0);
     }
@@ -165,12 +164,12 @@ fn bvh_triangle(tri: BvhTri, o: vec3<f32>, d: vec3<f32>, tmax: f32) -> vec3<f32>
     if u < 0.0 || u > 1.0 {
         return vec3<f32>(-1.0);
     }
-    let q = cross(s, tri.e1);
+    let q = cross(s, e1);
     let v = dot(d, q) * inv;
     if v < 0.0 || u + v > 1.0 {
         return vec3<f32>(-1.0);
     }
-    let t = dot(tri.e2, q) * inv;
+    let t = dot(e2, q) * inv;
     if t > 0.0 && t < tmax {
         return vec3<f32>(t, u, v);
     }
@@ -205,8 +204,9 @@ fn bvh_enter(s: ptr<function, BvhStack>, k: u32, world: BvhRay, tmax: f32) -> Bv
     let d = vec3<f32>(dot(inst.row0.xyz, world.d), dot(inst.row1.xyz, world.d), dot(inst.row2.xyz, world.d));
     let r = bvh_ray(o, d, k);
     bvh_push(s, BVH_LEAVE, -1.0);
-    if inst.root != BVH_NONE {
-        bvh_push(s, inst.root, bvh_node_box(inst.root, r.o, r.inv, tmax));
+    let root = inst.refs.x;
+    if root != BVH_NONE {
+        bvh_push(s, root, bvh_node_box(root, r.o, r.inv, tmax));
     }
     return r;
 }
@@ -215,8 +215,8 @@ fn bvh_enter(s: ptr<function, BvhStack>, k: u32, world: BvhRay, tmax: f32) -> Bv
 // triangle with barycentrics in its corner order.
 fn bvh_scene_hit(h: vec3<f32>, k: u32, instance: u32) -> BvhHit {
     let inst = bvh_instances[instance];
-    let triangle = inst.first_triangle + bvh_tris[k].id;
-    if inst.flipped != 0u {
+    let triangle = inst.refs.y + bvh_tris[k].id;
+    if inst.refs.z != 0u {
         return BvhHit(h.x, triangle, h.z, h.y);
     }
     return BvhHit(h.x, triangle, h.y, h.z);
