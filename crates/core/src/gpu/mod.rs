@@ -7,6 +7,7 @@
 //! name.
 
 pub mod alloc;
+pub mod bvh;
 pub mod layout;
 pub mod pipeline;
 pub mod raw;

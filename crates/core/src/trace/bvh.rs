@@ -31,10 +31,10 @@ pub struct Hit {
 
 /// Triangle pre-processed for Möller–Trumbore.
 #[derive(Clone, Copy, Debug)]
-struct Tri {
-    v0: Vec3A,
-    e1: Vec3A,
-    e2: Vec3A,
+pub(super) struct Tri {
+    pub(super) v0: Vec3A,
+    pub(super) e1: Vec3A,
+    pub(super) e2: Vec3A,
 }
 
 impl Tri {
@@ -80,8 +80,8 @@ pub struct MeshBvh {
     tris: Vec<Tri>,
     /// Mesh triangle index of each BVH-ordered triangle.
     ids: Vec<u32>,
-    bvh2: Bvh2,
-    triangles: Vec<Triangle>,
+    pub(super) bvh2: Bvh2,
+    pub(super) triangles: Vec<Triangle>,
 }
 
 /// The any-hit test of alpha-masked materials: a hit where the mask's coverage is below the
@@ -459,13 +459,13 @@ const BUILD_BYTES_PER_INSTANCE: u64 = 512;
 /// One object placed in the top level: its mesh's BVH, the world -> mesh transform, and
 /// where its triangles start in the scene's flat numbering.
 #[derive(Clone, Copy, Debug)]
-struct Instance {
-    to_local: Affine3A,
-    mesh: u32,
-    first_triangle: u32,
+pub(super) struct Instance {
+    pub(super) to_local: Affine3A,
+    pub(super) mesh: u32,
+    pub(super) first_triangle: u32,
     /// The flat arrays store a mirrored object's triangles with corners 1 and 2 swapped, so
     /// its barycentrics swap too.
-    flipped: bool,
+    pub(super) flipped: bool,
 }
 
 /// A mesh placed as it is (world space), its triangles numbered from 0.
@@ -482,8 +482,8 @@ const IDENTITY_INSTANCE: Instance = Instance {
 /// triangles. Hits name the scene's flat triangle index, with barycentrics in its corner
 /// order, so that the flat view and the instances agree.
 pub struct SceneBvh {
-    meshes: Vec<Arc<MeshBvh>>,
-    instances: Vec<Instance>,
+    pub(super) meshes: Vec<Arc<MeshBvh>>,
+    pub(super) instances: Vec<Instance>,
     /// The top level over instance boxes (BVH order -> instance in `order`).
     top: CwBvh,
     order: Vec<u32>,
@@ -553,6 +553,14 @@ fn placed_box(b: &Aabb, xf: &Affine3A) -> Aabb {
 
 /// The top level over `instances`: (wide BVH, instance of each BVH-ordered leaf).
 fn build_top(meshes: &[Arc<MeshBvh>], instances: &[Instance]) -> (CwBvh, Vec<u32>) {
+    let top = bvh2_to_cwbvh(&top_bvh2(meshes, instances), 1, true, false);
+    let order = top.primitive_indices.clone();
+    (top, order)
+}
+
+/// The binary tree over the boxes of `instances` that [`build_top`] converts (the GPU
+/// traverses it as it is, `trace::bvh_flat`).
+pub(super) fn top_bvh2(meshes: &[Arc<MeshBvh>], instances: &[Instance]) -> Bvh2 {
     let boxes: Vec<Aabb> = instances
         .iter()
         .map(|i| placed_box(&meshes[i.mesh as usize].bounds(), &i.to_local.inverse()))
@@ -576,9 +584,7 @@ fn build_top(meshes: &[Arc<MeshBvh>], instances: &[Instance]) -> (CwBvh, Vec<u32
         }
         bvh2.refit_all();
     }
-    let top = bvh2_to_cwbvh(&bvh2, 1, true, false);
-    let order = top.primitive_indices.clone();
-    (top, order)
+    bvh2
 }
 
 impl SceneBvh {
@@ -628,6 +634,11 @@ impl SceneBvh {
         let mut b = Self::from_parts(vec![Arc::new(mesh)], vec![IDENTITY_INSTANCE], None);
         b.baked = true;
         b
+    }
+
+    /// Whether any hit may be cut out by an alpha mask (the GPU traversal has no masks).
+    pub fn has_alpha_masks(&self) -> bool {
+        self.alpha.is_some()
     }
 
     /// Re-reads the alpha masks of the scene's materials (after a material update).

@@ -2,6 +2,7 @@
 //! reference path tracer and the light tracer that completes it for caustic paths.
 
 pub mod bvh;
+pub mod bvh_flat;
 pub mod direct;
 pub mod direct_mis;
 pub mod interaction;
