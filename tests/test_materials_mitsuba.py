@@ -9,9 +9,9 @@ batches: their means are known to better than 0.05% (references.json). Both rend
 a box pixel filter; Mitsuba's sphere is exact, gi's the importer's tessellated one with
 smooth normals (its silhouette differs by a fraction of a pixel). gi's `path` at 256 spp.
 The GPU methods' direct light, `ispm`'s photon estimates and first bounce and `bidir`'s
-pixels shade the exact models (raster/exact_models.rs, raster/shaders/bidir_models.wgsl);
-`bidir`'s VPLs and ray bundle hits still shade uber stand-ins and say so with a
-RenderWarning. `ispm` and `bidir` are held to 5% of Mitsuba's mean; `direct`, `ispm` and
+pixels, VPLs and ray bundle hits shade the exact models (raster/exact_models.rs,
+raster/shaders/bidir_models.wgsl; tests/test_bidir_models.py for the interreflections
+through them). `ispm` and `bidir` are held to 5% of Mitsuba's mean; `direct`, `ispm` and
 `bidir` on the rough spheres (the GPU direct light and, in `bidir`, the sky through its
 bundles are the whole image there) to 1%, and `direct` on every sphere to 2% of Mitsuba's
 `direct` integrator (the light met one delta scattering from the camera included)."""
@@ -123,8 +123,8 @@ def test_gpu_direct_light_shades_the_exact_models(name, method):
     already). With the exact models all within 0.8%, FLIP ≤ 0.030 (docs/bench/materials.md).
     `bidir` with the stand-ins at its pixels (before bidir_models.wgsl): Cu 0.977-0.981,
     FLIP 0.057; Al 1.011-1.012, FLIP 0.033; Beckmann plastic 0.990-0.995, FLIP 0.051; GGX
-    plastic 0.996-0.998, FLIP 0.036, and a RenderWarning for its pixels (one for its VPLs
-    and bundle hits remains: on a convex sphere they light nothing). Tolerances 1% and FLIP
+    plastic 0.996-0.998, FLIP 0.036, and a RenderWarning (none since its VPLs and bundle
+    hits shade the models too). Tolerances 1% and FLIP
     0.035: the tessellated silhouette, the area light's 16 shadow-mapped points, the sky's
     16-tap glossy quadrature, 16 spp of noise."""
     scene = gi.load_scene(SCENES / f"{name}.xml")
@@ -135,8 +135,6 @@ def test_gpu_direct_light_shades_the_exact_models(name, method):
     }[method]
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # nothing approximated: no stand-in warning
-        if method == "bidir":  # but its VPLs' (none light a convex sphere)
-            warnings.filterwarnings("ignore", "(?s).*VPLs and ray bundles' hits", gi.RenderWarning)
         r = gi.Renderer(scene, method, size=(64, 64), seed=7, **settings)
     img = r.render().radiance[..., :3]
     ref = gi.read_image(SCENES / f"{name}-reference.exr")[..., :3]
@@ -257,12 +255,10 @@ def test_ispm_estimators_shade_the_exact_models(tmp_path, floor):
 
 def test_gpu_methods_name_their_stand_ins():
     scene = gi.load_scene(SCENES / "plastic.xml")
-    for method in ["direct", "ispm"]:
+    for method in ["direct", "ispm", "bidir"]:
         with warnings.catch_warnings():
-            warnings.simplefilter("error")  # they shade the exact model
+            warnings.simplefilter("error")  # they shade the exact model (`bidir`: everywhere)
             gi.Renderer(scene, method, size=(16, 16))
-    with pytest.warns(gi.RenderWarning, match="sky's light .* exactly .* VPLs .* uber stand-ins"):
-        gi.Renderer(scene, "bidir", size=(16, 16))
     glass = gi.load_scene(SCENES / "roughdielectric.xml")
     with pytest.warns(gi.RenderWarning, match="smooth glass"):
         gi.Renderer(glass, "bidir", size=(16, 16))

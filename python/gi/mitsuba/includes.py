@@ -1,6 +1,8 @@
 """``<include filename="...">``: the top-level elements of another scene file, read in its
 place (each upgraded by its own ``version``, as Mitsuba 3 does, and naming its own file in
-errors). Relative paths inside it resolve against its folder first, then the scene's."""
+errors), at any level: inside a ``<shape>`` its elements become the shape's (a BSDF, an
+emitter), as Mitsuba 3 reads them. Relative paths inside it resolve against its folder
+first, then the scene's."""
 
 from __future__ import annotations
 
@@ -12,10 +14,12 @@ MAX_DEPTH = 16
 
 
 def expand_includes(r: Reader, root: Element, depth: int = 0) -> None:
-    """Replaces each top-level ``<include>`` of `root` by the included scene's elements."""
+    """Replaces each ``<include>`` in `root` (at any depth) by the included scene's
+    elements."""
     children: list[Element] = []
     for c in root.children:
         if c.tag != "include":
+            expand_includes(r, c, depth)
             children.append(c)
             continue
         unknown = set(c.attrs) - {"filename", "name"}

@@ -9,7 +9,14 @@ get_texture_impl`` and ``spectrum_list_to_srgb`` in its ``src/core``):
 - a single value (a uniform spectrum): that value as grey, except for an emitter, where
   Mitsuba takes ``value · xyz_to_srgb(1, 1, 1)`` (the slightly purple RGB of a flat
   spectrum under sRGB's D65 white), so that RGB variants match spectral ones;
-- ``filename``: a text file of ``wavelength value`` lines (``#`` comments), as pairs.
+- ``filename``: a text file of ``wavelength value`` lines (``#`` comments), as pairs;
+- ``type="blackbody"`` (``temperature`` in K, ``wavelength_min``/``wavelength_max``, 360 and
+  830 nm by default): Planck's spectral radiance per nanometre (W·m⁻²·sr⁻¹·nm⁻¹), zero
+  outside the range, as Mitsuba's ``blackbody`` plugin evaluates it, converted as pairs
+  sampled every 0.5 nm. Mitsuba's RGB variants refuse the plugin at render time ("not
+  implemented for non-spectral modes"); its spectral variants integrate it against the
+  CIE curves, which the pairs' conversion does (tests/test_mitsuba_spectra_more.py holds
+  `scalar_spectral`'s film values).
 
 The CIE tables are Mitsuba's own (``cie_tables.npz``, written by
 ``scripts/data/cie_tables.py``)."""
@@ -70,6 +77,26 @@ def pairs_to_srgb(
     if not (emitter or unbounded):
         return np.clip(rgb, 0.0, 1.0)
     return np.maximum(rgb, 0.0)
+
+
+# Planck's law: 2hc², hc/k (SI units).
+PLANCK_C1 = 2.0 * 6.62607015e-34 * 299792458.0**2
+PLANCK_C2 = 6.62607015e-34 * 299792458.0 / 1.380649e-23
+
+
+def blackbody_pairs(
+    temperature: float, w_min: float = 360.0, w_max: float = 830.0
+) -> tuple[np.ndarray, np.ndarray]:
+    """Planck's spectral radiance at `temperature` (K) per nm, sampled every 0.5 nm over
+    [`w_min`, `w_max`]; ValueError for a temperature ≤ 0 or an empty range."""
+    if not (temperature > 0 and np.isfinite(temperature)):
+        raise ValueError("the temperature must be positive")
+    if not (0 < w_min < w_max and np.isfinite(w_max)):
+        raise ValueError("wavelength_min must be below wavelength_max")
+    w = np.linspace(w_min, w_max, int(np.ceil((w_max - w_min) * 2)) + 1)
+    lam = w * 1e-9
+    v = PLANCK_C1 / (lam**5 * np.expm1(PLANCK_C2 / (lam * temperature))) * 1e-9
+    return w, v
 
 
 def uniform_to_srgb(value: float, emitter: bool) -> np.ndarray:

@@ -161,6 +161,8 @@ class Reader:
     def spectrum(self, p: Element, emitter: bool, unbounded: bool) -> np.ndarray:
         """``<spectrum value="...">`` (one value or wavelength:value pairs) or
         ``<spectrum filename="...">`` in linear sRGB."""
+        if p.attrs.get("type") == "blackbody":
+            return self.blackbody(p, emitter, unbounded)
         if "type" in p.attrs:
             raise self.error(p, f"spectrum plugins (type={p.attrs['type']!r}) are not supported")
         has_value, has_file = "value" in p.attrs, "filename" in p.attrs
@@ -177,6 +179,22 @@ class Reader:
                 w, v = spectra.parse_pairs(text)
         except (OSError, ValueError) as e:
             raise self.error(p, f"invalid spectrum: {e}") from None
+        return spectra.pairs_to_srgb(w, v, emitter, unbounded)
+
+    def blackbody(self, p: Element, emitter: bool, unbounded: bool) -> np.ndarray:
+        """``<spectrum type="blackbody">`` in linear sRGB (:func:`spectra.blackbody_pairs`)."""
+        props = self.props(p)
+        self.refuse_unknown(props, {"temperature", "wavelength_min", "wavelength_max"})
+        if "temperature" not in props:
+            raise self.error(p, "a blackbody spectrum needs a `temperature`")
+        try:
+            w, v = spectra.blackbody_pairs(
+                self.float(p, props, "temperature", 0.0),
+                self.float(p, props, "wavelength_min", 360.0),
+                self.float(p, props, "wavelength_max", 830.0),
+            )
+        except ValueError as e:
+            raise self.error(p, f"invalid blackbody spectrum: {e}") from None
         return spectra.pairs_to_srgb(w, v, emitter, unbounded)
 
     def refuse_unknown(

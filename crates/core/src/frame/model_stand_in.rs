@@ -2,9 +2,9 @@
 //! models (coatings, conductors of complex index, Beckmann's distribution). Their direct
 //! light and `ispm`'s photon estimates and rasterized first bounce shade the exact models
 //! (`raster::exact_models`) unless a texture varies the BSDF's parameters, and so do
-//! `bidir`'s pixels in the light of its VPLs, bundles and sky (`bidir_models.wgsl`); its
-//! VPLs and bundle hits (the middle vertices of that light) still shade the uber stand-in
-//! ([`crate::bsdf::Material::uber_equivalent`]).
+//! `bidir`'s pixels, VPLs and ray bundles' hits (`bidir_models.wgsl`); the textured ones
+//! are shaded as the uber stand-in ([`crate::bsdf::Material::uber_equivalent`]), and said
+//! so.
 
 use super::Method;
 use crate::raster::exact_models::shades_exactly;
@@ -16,7 +16,7 @@ pub(super) fn warning(scene: &Scene, method: Method) -> Option<String> {
         return None;
     }
     let none = MaterialMaps::default();
-    let (mut exact, mut textured) = (Vec::new(), Vec::new());
+    let mut textured = Vec::new();
     for (i, (m, name)) in scene
         .materials
         .iter()
@@ -29,37 +29,18 @@ pub(super) fn warning(scene: &Scene, method: Method) -> Option<String> {
         if m.uber_equivalent() == *m || m.rough_glass || m.thin.is_some() {
             continue;
         }
-        if shades_exactly(m, scene.material_maps.get(i).unwrap_or(&none)) {
-            exact.push(name.as_str());
-        } else {
+        if !shades_exactly(m, scene.material_maps.get(i).unwrap_or(&none)) {
             textured.push(name.as_str());
         }
     }
-    let name = method.name();
-    let stand_in = "as uber stand-ins (Schlick's Fresnel for coatings and conductors, GGX for \
-                    Beckmann; docs/scene-format.md); `path`, `photon` and `gather` render them \
-                    exactly";
-    let mut parts = Vec::new();
-    if !textured.is_empty() {
-        parts.push(format!(
-            "method `{name}` shades the Mitsuba models of materials {} (a texture varies their \
-             BSDF's parameters) {stand_in}",
-            textured.join(", ")
-        ));
+    if textured.is_empty() {
+        return None;
     }
-    let (exact_in, rest) = match method {
-        Method::Bidir => (
-            "direct light, the sky's light and the last bounce of the indirect light",
-            "the VPLs and ray bundles' hits (the vertices before the last bounce) shade them",
-        ),
-        _ => ("", ""),
-    };
-    if !exact.is_empty() && !rest.is_empty() {
-        parts.push(format!(
-            "method `{name}` shades the {exact_in} of the Mitsuba models of materials {} \
-             exactly on the GPU, but {rest} {stand_in}",
-            exact.join(", ")
-        ));
-    }
-    (!parts.is_empty()).then(|| parts.join("; "))
+    Some(format!(
+        "method `{}` shades the Mitsuba models of materials {} (a texture varies their BSDF's \
+         parameters) as uber stand-ins (Schlick's Fresnel for coatings and conductors, GGX for \
+         Beckmann; docs/scene-format.md); `path`, `photon` and `gather` render them exactly",
+        method.name(),
+        textured.join(", ")
+    ))
 }

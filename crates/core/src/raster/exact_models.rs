@@ -48,6 +48,31 @@ pub fn records_of(materials: &[Material], maps: &[MaterialMaps]) -> Vec<ModelMat
     out
 }
 
+/// The record index + 1 of the material of `scene`'s `triangle` where it is shaded exactly
+/// ([`shades_exactly`]), 0 where its uber parameters are shaded: `bidir`'s VPL records
+/// carry it ([`material_word`]; `shaders/bidir_models.wgsl`).
+pub fn model_of(scene: &Scene, triangle: u32) -> u32 {
+    let i = scene.triangle_material(triangle as usize) as usize;
+    let none = MaterialMaps::default();
+    let maps = scene.material_maps.get(i).unwrap_or(&none);
+    let exact = scene
+        .materials
+        .get(i)
+        .is_some_and(|m| shades_exactly(m, maps));
+    if exact {
+        i as u32 + 1
+    } else {
+        0
+    }
+}
+
+/// A `bidir` VPL record's material word ([`crate::raster::vpl::VplRaw::fresnel`]): the
+/// uber parameters' Fresnel flag in bit 0, the exact model's record index + 1 ([`model_of`])
+/// above it.
+pub fn material_word(fresnel: bool, model: u32) -> u32 {
+    fresnel as u32 | (model << 1)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -20,6 +20,9 @@ pub struct VplRaw {
     pub flux: [f32; 3],
     pub texel_scale: f32,
     pub to_light: [f32; 3],
+    /// The material word: bit 0 the uber parameters' Fresnel flag, bits 1… the exact
+    /// model's record index + 1 (`raster::exact_models::material_word`; 0: the uber
+    /// parameters are shaded). Read as a float: exact below 2^24.
     pub fresnel: u32,
     pub diffuse: [f32; 3],
     pub roughness: f32,

@@ -19,6 +19,7 @@
 
 use super::subpaths::Head;
 use super::vpls::{Records, VplMaps};
+use crate::raster::exact_models::{material_word, model_of};
 use crate::raster::vpl::{cube_views, VplRaw};
 use crate::sampling::Rng;
 use crate::scene::light::{Emission, Light};
@@ -183,6 +184,7 @@ fn hit_head(scene: &Scene, bvh: &SceneBvh, e: Emission, share: f32) -> Option<He
         ns: it.frame.n,
         to_light,
         material: it.material,
+        model: model_of(scene, it.triangle),
         alpha: power * ratio,
     })
 }
@@ -224,7 +226,7 @@ pub(super) fn append_records(
                 flux: flux.into(),
                 texel_scale,
                 to_light: h.to_light.into(),
-                fresnel: uber.fresnel as u32,
+                fresnel: material_word(uber.fresnel, h.model),
                 diffuse: uber.diffuse.into(),
                 roughness: uber.roughness,
                 specular: uber.specular.into(),

@@ -358,6 +358,7 @@ fn first_vpls(
                 .collect()
         })
         .collect();
+    vpls::mark_models(&mut records, &groups, per_light);
     if vpl_groups(scene) > scene.lights.len() as u32 {
         let heads = match emitted::sources(scene) {
             Some(sources) => emitted::heads(scene, bvh, &sources, per_light, seed),

@@ -38,6 +38,7 @@ use super::super::options::BidirOptions;
 use super::super::FrameParams;
 use super::vpls::{Records, Vpl, VplMaps};
 use crate::bsdf::Material;
+use crate::raster::exact_models::{material_word, model_of};
 use crate::raster::vpl::{cube_views, VplRaw};
 use crate::sampling::{Frame, Rng};
 use crate::scene::light_views;
@@ -64,6 +65,8 @@ struct Vertex {
     /// Unit direction towards y_{j−1}.
     to_prev: Vec3,
     material: Material,
+    /// Its exact model's record index + 1 (`model_of`; 0: uber).
+    model: u32,
     /// Flux of the record (zero on purely specular surfaces).
     flux: Vec3,
     /// Area density of this vertex per subpath as its predecessor's (MIS) sampling gives it:
@@ -158,6 +161,8 @@ pub(super) struct Head {
     /// Unit direction towards where the light came from (ω1,0).
     pub to_light: Vec3,
     pub material: Material,
+    /// Its exact model's record index + 1 (`raster::exact_models::model_of`; 0: uber).
+    pub model: u32,
     /// α1: the VPL's flux, shading-cosine corrected as its record.
     pub alpha: Vec3,
 }
@@ -182,20 +187,29 @@ impl Head {
             transmission: Vec3::ZERO,
             ..Material::default()
         };
+        let (material, model) =
+            exact_material(scene, bvh, light.position(), t.position).unwrap_or((uber, 0));
         Head {
             position: t.position,
             ng: t.ng,
             ns: t.ns,
             to_light,
-            material: exact_material(scene, bvh, light.position(), t.position).unwrap_or(uber),
+            material,
+            model,
             alpha: v.flux * ratio,
         }
     }
 }
 
-/// The material of the surface at `point` as the ray from `from` meets it: `None` where the
-/// ray meets nothing within 0.1% of the distance (plus a 1e-4 floor) around `point`.
-fn exact_material(scene: &Scene, bvh: &SceneBvh, from: Vec3, point: Vec3) -> Option<Material> {
+/// The material of the surface at `point` as the ray from `from` meets it, and its exact
+/// model's record index + 1 (`model_of`): `None` where the ray meets nothing within 0.1% of
+/// the distance (plus a 1e-4 floor) around `point`.
+fn exact_material(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    from: Vec3,
+    point: Vec3,
+) -> Option<(Material, u32)> {
     let d = point - from;
     let dist = d.length();
     if !(dist > 0.0 && dist.is_finite()) {
@@ -205,7 +219,7 @@ fn exact_material(scene: &Scene, bvh: &SceneBvh, from: Vec3, point: Vec3) -> Opt
     let tol = 1e-3 * dist + 1e-4;
     let hit = bvh.intersect(from, dir, dist + tol)?;
     let it = Interaction::new(scene, &hit, dir);
-    ((it.position - point).length() <= tol).then_some(it.material)
+    ((it.position - point).length() <= tol).then_some((it.material, model_of(scene, it.triangle)))
 }
 
 /// The first vertex after `h`'s and the ones after it, up to `max_len` (orders 2 … ≤
@@ -281,6 +295,7 @@ fn trace(
             ng: ng_f,
             to_prev,
             material: it.material,
+            model: model_of(scene, it.triangle),
             flux,
             density,
             continuation,
@@ -388,7 +403,7 @@ fn subpaths(
                 flux: v.flux.into(),
                 texel_scale,
                 to_light: v.to_prev.into(),
-                fresnel: uber.fresnel as u32,
+                fresnel: material_word(uber.fresnel, v.model),
                 diffuse: uber.diffuse.into(),
                 roughness: uber.roughness,
                 specular: uber.specular.into(),

@@ -2,11 +2,13 @@
 //! maps by flux, uploaded as texels, each with a cube shadow map.
 
 use super::super::gpu::GpuScene;
+use super::subpaths::Head;
 use crate::error::{Error, Result};
 use crate::gpu::layout::{buffer_init, VIEW_SIZE};
 use crate::gpu::raw::ViewRaw;
 use crate::gpu::timer::Timer;
 use crate::gpu::{self, GpuContext, Pipelines};
+use crate::raster::exact_models::material_word;
 use crate::raster::rsm::RsmTexel;
 use crate::raster::shadow::{self, ShadowPass};
 use crate::raster::vpl::{cube_views, VplRaw};
@@ -117,6 +119,19 @@ pub(super) fn vpl_records(scene: &Scene, vpls: &[Vpl], per_light: u32, size: u32
         r.first_layer = slot as u32 * 6;
     }
     Records { raws, matrices }
+}
+
+/// Marks the RSM VPLs' records (`per_light` slots a light, [`vpl_records`]) with the exact
+/// model their heads found (`heads[l][k]`: light l's k-th VPL, as `vpl_records` placed it):
+/// the RSM holds only the uber stand-in's parameters.
+pub(super) fn mark_models(records: &mut Records, heads: &[Vec<Option<Head>>], per_light: u32) {
+    for (l, group) in heads.iter().enumerate() {
+        for (k, h) in group.iter().enumerate() {
+            if let (Some(h), Some(r)) = (h, records.raws.get_mut(l * per_light as usize + k)) {
+                r.fresnel = material_word(r.fresnel & 1 != 0, h.model);
+            }
+        }
+    }
 }
 
 /// The VPLs' GPU resources for `capacity` VPLs with `size`² cube faces: the records as a

@@ -46,6 +46,8 @@ struct Vpl {
     // Unit direction from the VPL towards its light (ω1,0).
     to_light: vec3<f32>,
     fresnel: u32,
+    // The exact model's record index + 1 (bidir_models.wgsl; 0: the uber parameters).
+    model: u32,
     diffuse: vec3<f32>,
     roughness: f32,
     specular: vec3<f32>,
@@ -142,7 +144,10 @@ fn vpl_at(i: u32) -> Vpl {
     v.flux = t1.xyz;
     v.texel_scale = t1.w;
     v.to_light = t2.xyz;
-    v.fresnel = u32(t2.w + 0.5);
+    // The material word: the Fresnel flag, the model's record index + 1 above it.
+    let word = u32(t2.w + 0.5);
+    v.fresnel = word & 1u;
+    v.model = word_model(word);
     v.diffuse = t3.xyz;
     v.roughness = t3.w;
     v.specular = t4.xyz;
@@ -192,9 +197,8 @@ fn vpl_light(v: Vpl, m1: Clamped, p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m:
     if dot(wi, ng) <= 0.0 || cos1 <= 0.0 || max3(v.flux) <= 0.0 {
         return vec3<f32>(0.0);
     }
-    let f1 = eval_uber(m1, v.ns, -wi, v.to_light);
-    let f = eval_clamped(m, ns, wo, wi);
-    let t = v.flux * f1 * f * (abs(dot(ns, wi)) * cos1 / max(d2, min_d2));
+    let f = pair_f(m1, v.ns, -wi, v.to_light, m, ns, wo, wi);
+    let t = v.flux * f * (abs(dot(ns, wi)) * cos1 / max(d2, min_d2));
     if max3(t) <= 0.0 {
         return vec3<f32>(0.0);
     }
@@ -375,6 +379,11 @@ fn trace_bundle(bv: BundleView, p: vec3<f32>, dir: vec3<f32>, eps: f32, plane_ep
     return hit;
 }
 
+// The record index + 1 of a bundle fragment's exact model (0: its uber parameters).
+fn node_model(n: Node) -> u32 {
+    return word_model(n.m3 >> 16u);
+}
+
 fn node_material(n: Node) -> Material {
     let a = unpack2x16float(n.m0);
     let b = unpack2x16float(n.m1);
@@ -384,7 +393,9 @@ fn node_material(n: Node) -> Material {
     m.diffuse = vec3<f32>(a, b.x);
     m.roughness = gbuffer_roughness(b.y);
     m.specular = vec3<f32>(c, d.x);
-    m.fresnel = u32(d.y > 0.5);
+    // The high half of m3: the Fresnel flag, the model's record index + 1 above it
+    // (`node_model`).
+    m.fresnel = (n.m3 >> 16u) & 1u;
     return m;
 }
 
@@ -402,7 +413,7 @@ fn subpath_vertex_light(i: u32, p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: M
     let pa = bundle_density(to_v / sqrt(d2)) * cos_v / d2;
     let pb = n1 * v.pdf;
     let d3 = (pa + pb) * d2 / max(cos_v, 1e-6);
-    let mv = clamped(vpl_material(v), d3, cos_v);
+    let mv = clamped_model(vpl_material(v), v.model, d3, cos_v);
     let t = vpl_light(v, mv, p, ns, ng, clamped_model(m, model, d3, dot(ns, wo)), wo, tiny_d2);
     return t * (pb / (pa + pb));
 }
@@ -479,7 +490,7 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
         let area = p1 + select(p2, 0.0, params.mode == 1u);
         let d13 = area * d2 / max(cos13, 1e-6);
         let d10 = area * v.light_dist2 / max(abs(dot(v.ng, v.to_light)), 1e-6);
-        let m1 = clamped(vpl_material(v), combine(d10, d13), cos13);
+        let m1 = clamped_model(vpl_material(v), v.model, combine(d10, d13), cos13);
         let min_d2 = select(0.0, params.alone_min_dist2, alone);
         var t = vpl_light(v, m1, p, ns, ng, clamped_model(m, model, d13, dot(ns, wo)), wo, min_d2);
         if max3(t) <= 0.0 {
@@ -548,6 +559,12 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
             // samples lie up to 0.71 texels off the ray): skipped, at the cost of hits in the
             // last quarter texel of a corner.
             let hit = trace_bundle(bv, p, dir, 0.02 * texel, 0.25 * texel);
+            // The pixel's BSDF towards ω at the bundles' d̂ (eq. 14: n2·p_r), for the sky's
+            // glossy share and the two-bounce light (one call site for both).
+            var f3b = vec3<f32>(0.0);
+            if params.has_env != 0u || (hit.found && params.bounces >= 2u) {
+                f3b = eval_clamped(clamped_model(m, model, 1.0 / bv.inv_density, dot(ns, wo)), ns, wo, dir);
+            }
             if params.has_env != 0u {
                 // §6: nothing along ±ω, the environment is seen (the only strategy for it),
                 // less the control variate's sample (every bundle's, hit or not: its diffuse
@@ -560,8 +577,7 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
                 if !hit.found {
                     sum += fd * l_env;
                 }
-                let f3 = eval_clamped(clamped_model(m, model, 1.0 / bv.inv_density, dot(ns, wo)), ns, wo, dir);
-                sky_share_add(&sky, (f3 - fd) * l_env, l_env, !hit.found);
+                sky_share_add(&sky, (f3b - fd) * l_env, l_env, !hit.found);
             }
             if !hit.found {
                 continue;
@@ -577,6 +593,7 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
                 ns2 = -ns2;
             }
             let m2 = node_material(hit.node);
+            let model2 = node_model(hit.node);
             // Per bundle sample: |n3·ω|/p_r / n2, times f3 (clamped per path below).
             let weight = abs(dot(ns, dir)) * bv.inv_density;
             let cos23 = -dot(ng2, dir);
@@ -607,10 +624,10 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
                     let p2 = max(cos23, 0.0) / (bv.inv_density * d23_2);
                     let d23s = (p1 + p2) * d23_2 / max(cos23, 1e-6);
                     let d20 = (p1 + p2) * dl2 / cos2l;
-                    let f3 = eval_clamped(clamped_model(m, model, d23s, dot(ns, wo)), ns, wo, dir);
-                    let m2c = clamped(m2, combine(d20, d23s), cos23);
-                    let f2 = eval_uber(m2c, ns2, -dir, wl);
-                    var t = f3 * weight * f2 * abs(dot(ns2, wl)) * l.intensity * (falloff / dl2);
+                    let m3c = clamped_model(m, model, d23s, dot(ns, wo));
+                    let m2c = clamped_model(m2, model2, combine(d20, d23s), cos23);
+                    let f23 = pair_f(m3c, ns, wo, dir, m2c, ns2, -dir, wl);
+                    var t = f23 * weight * abs(dot(ns2, wl)) * l.intensity * (falloff / dl2);
                     if max3(t) <= 0.0 {
                         continue;
                     }
@@ -626,32 +643,30 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
             // of it is paired; each VPL is picked n2/n1 times in expectation).
             if params.bounces >= 2u && params.vpls_per_light > 0u {
                 let k = min(u32((f32(b) + params.pair_offset) * n1 / n2), params.vpls_per_light - 1u);
-                // d̂ at x3 of eq. 14: the bundles' density n2·p_r.
-                let f3 = eval_clamped(clamped_model(m, model, 1.0 / bv.inv_density, dot(ns, wo)), ns, wo, dir);
                 // Strategy A's area density of x2 (MIS against B; no clamp with MIS).
                 let pa = max(cos23, 0.0) / (bv.inv_density * d23_2);
                 let min_d2 = select(params.min_dist2, tiny_d2, mis);
                 for (var j = 0u; j * params.vpls_per_light < params.vpl_count; j++) {
-                    let v = vpl_at(j * params.vpls_per_light + k);
-                    var t = vpl_light(v, unclamped(vpl_material(v)), x2, ns2, ng2, unclamped(m2), -dir, min_d2);
-                    if mis && max3(t) > 0.0 {
-                        // y1 continues without roulette (q = 1).
-                        t *= pa / (pa + b_density(v, 1.0, x2, ng2));
-                    }
-                    sum += f3 * weight * t * n1;
-                    // Three or more bounces: the vertices y2, y3, … of the light subpath
-                    // continued from that VPL for this bundle (`subpaths.rs`), linked by
-                    // their records' `light_dist2` (0 ends the subpath; `light_flux` holds
-                    // the vertex's continuation for the MIS weight).
-                    var row = params.vpl_count + j * params.vpls_per_light + k;
-                    for (var o = 2u; o < params.bounces && row != 0u; o++) {
+                    // The VPL y1 (o = 1), then (three or more bounces) the vertices y2, y3, …
+                    // of the light subpath continued from it for this bundle (`subpaths.rs`),
+                    // linked by their records' `light_dist2` (0 ends the subpath;
+                    // `light_flux` holds the vertex's continuation q for the MIS weight; y1
+                    // continues without roulette, q = 1). One loop: one call site.
+                    let first = j * params.vpls_per_light + k;
+                    var row = first;
+                    for (var o = 1u; o < params.bounces; o++) {
                         let y = vpl_at(row);
-                        var ty = vpl_light(y, unclamped(vpl_material(y)), x2, ns2, ng2, unclamped(m2), -dir, min_d2);
-                        if mis && max3(ty) > 0.0 {
-                            ty *= pa / (pa + b_density(y, y.light_flux, x2, ng2));
+                        let my = unclamped_model(vpl_material(y), y.model);
+                        var t = vpl_light(y, my, x2, ns2, ng2, unclamped_model(m2, model2), -dir, min_d2);
+                        if mis && max3(t) > 0.0 {
+                            let q = select(y.light_flux, 1.0, o == 1u);
+                            t *= pa / (pa + b_density(y, q, x2, ng2));
                         }
-                        sum += f3 * weight * ty * n1;
-                        row = u32(y.light_dist2 + 0.5);
+                        sum += f3b * weight * t * n1;
+                        row = select(u32(y.light_dist2 + 0.5), params.vpl_count + first, o == 1u);
+                        if row == 0u {
+                            break;
+                        }
                     }
                 }
             }

@@ -54,7 +54,12 @@ fn insert(in: VertexOut, textured: bool) {
     node.m0 = pack2x16float(m.diffuse.xy);
     node.m1 = pack2x16float(vec2<f32>(m.diffuse.z, m.roughness));
     node.m2 = pack2x16float(m.specular.xy);
-    node.m3 = pack2x16float(vec2<f32>(m.specular.z, f32(m.fresnel)));
+    // Specular b (16-bit float) and, above it, the material word: the Fresnel flag and the
+    // material's index + 1 for bidir_models.wgsl's exact models (0 past 2^15 − 1 materials:
+    // the uber stand-in then).
+    let index = select(0u, in.material + 1u, in.material + 1u < 32768u);
+    let word = m.fresnel | (index << 1u);
+    node.m3 = (pack2x16float(vec2<f32>(m.specular.z, 0.0)) & 0xffffu) | (word << 16u);
     node.next = atomicExchange(&heads[head], slot + 1u);
     nodes[slot] = node;
 }

@@ -12,13 +12,13 @@
 
 // A material with its specular lobe widened (`m`) and the factor `k` on that lobe; where the
 // material is one of Mitsuba's models (`model`: its record's index + 1, 0 for the uber `m`),
-// the model's lobe widened to the same roughness and its own factor per channel `km`
-// (bidir_models.wgsl).
+// the model's lobe widened to the same roughness, its own factor per channel taken where it
+// is evaluated at the cosine `mu` (bidir_models.wgsl `eval_clamped_model`).
 struct Clamped {
     m: Material,
     k: f32,
     model: u32,
-    km: vec3<f32>,
+    mu: f32,
 }
 
 // E(α, μ) at roughness r = √α = i/15 (rows) and μ = cos θo = (j + 0.5)/16 (columns), from
@@ -68,7 +68,7 @@ fn ggx_energy(roughness: f32, mu: f32) -> f32 {
 
 // `m` unchanged.
 fn unclamped(m: Material) -> Clamped {
-    return Clamped(m, 1.0, 0u, vec3<f32>(1.0));
+    return Clamped(m, 1.0, 0u, 1.0);
 }
 
 // §5: the material with its GGX α raised to √(m/(π·d̂)) (no change when off), where
@@ -92,7 +92,7 @@ fn clamped(m_in: Material, dhat: f32, cos_o: f32) -> Clamped {
     let mu = abs(cos_o);
     let k = ggx_energy(m.roughness, mu) / max(ggx_energy(r, mu), 1e-3);
     m.roughness = r;
-    return Clamped(m, k, 0u, vec3<f32>(1.0));
+    return Clamped(m, k, 0u, mu);
 }
 
 // f(wo, wi) of a clamped material: its diffuse part as is, its (widened) specular lobe
@@ -104,8 +104,7 @@ fn eval_clamped(c: Clamped, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec3<
     return eval_uber(c, n, wo, wi);
 }
 
-// `eval_clamped` of an uber material (`c.model` 0), for the vertices that never carry a
-// model (a VPL's, a bundle hit's): the model's code is not compiled in there.
+// `eval_clamped` of an uber material (`c.model` 0).
 fn eval_uber(c: Clamped, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
     let f = bsdf_eval(c.m, n, wo, wi);
     if c.k == 1.0 {

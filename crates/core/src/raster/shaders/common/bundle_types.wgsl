@@ -33,7 +33,9 @@ struct Node {
     next: u32,
     ns: u32,
     ng: u32,
-    // diffuse rg, diffuse b + roughness, specular rg, specular b + fresnel flag.
+    // diffuse rg, diffuse b + roughness, specular rg (2×16-bit floats each); specular b
+    // (16-bit float) + the material word (16 bits: the Fresnel flag, the material's index
+    // + 1 above it).
     m0: u32,
     m1: u32,
     m2: u32,
