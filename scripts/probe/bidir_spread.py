@@ -5,6 +5,7 @@ mean) of seeds 1–4, of 1–8 (the test's) and of 1–N, and σ over N seeds. P
 table.
 
     python scripts/probe/bidir_spread.py [--seeds 16] [--build LABEL=PYTHONPATH ...]
+        [--set vpls_per_light=128 ...]
 """
 
 import argparse
@@ -24,17 +25,23 @@ BOXES = {
 }
 
 
-def means(seeds: int) -> dict:
+def means(seeds: int, settings: dict) -> dict:
     import gi
 
     out = {}
     for name, path in BOXES.items():
         scene = gi.load_scene(path)
         out[name] = [
-            float(gi.render(scene, "bidir", size=(48, 48), seed=s).radiance.mean())
+            float(gi.render(scene, "bidir", size=(48, 48), seed=s, **settings).radiance.mean())
             for s in range(1, seeds + 1)
         ]
     return out
+
+
+def setting(text: str) -> tuple:
+    """`key=value` of `--set`, the value an int where it reads as one."""
+    key, value = text.split("=", 1)
+    return key, int(value) if value.lstrip("-").isdigit() else value
 
 
 def spread(m: np.ndarray) -> float:
@@ -46,16 +53,18 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--seeds", type=int, default=16)
     ap.add_argument("--build", action="append", default=[], help="LABEL=PYTHONPATH")
+    ap.add_argument("--set", action="append", default=[], help="KEY=VALUE render setting")
     ap.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
     a = ap.parse_args()
     if a.child:
-        print(json.dumps(means(a.seeds)))
+        print(json.dumps(means(a.seeds, dict(setting(t) for t in a.set))))
         return
     builds = [b.split("=", 1) for b in a.build] or [["this", os.pathsep.join(sys.path)]]
     print(f"| build | scene | seeds 1–4 spread | seeds 1–8 spread | seeds 1–{a.seeds} spread | σ |")
     print("|---|---|---|---|---|---|")
     for label, path in builds:
         cmd = [sys.executable, __file__, "--child", "--seeds", str(a.seeds)]
+        cmd += [f"--set={t}" for t in a.set]
         env = {**os.environ, "PYTHONPATH": path}
         run = subprocess.run(cmd, env=env, check=True, capture_output=True, text=True)
         got = json.loads(run.stdout.splitlines()[-1])

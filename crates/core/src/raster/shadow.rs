@@ -242,6 +242,25 @@ impl ShadowPass {
         masks: Option<&wgpu::BindGroup>,
         timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) {
+        let tile = Tile {
+            viewport: None,
+            view_offset,
+            draws,
+        };
+        let target = (layer, bind_group, geometry, masks);
+        self.record_tiles(encoder, target, &[tile], timestamps);
+    }
+
+    /// Records one layer's pass drawing several views, each into its own rectangle of the
+    /// layer (an atlas of shadow maps: the lookup's matrix maps into the rectangle, see
+    /// `raster::vpl::tile_matrix`). The layer is cleared once.
+    pub fn record_tiles(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        (layer, bind_group, geometry, masks): TileTarget<'_>,
+        tiles: &[Tile<'_>],
+        timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
+    ) {
         let ops = (wgpu::LoadOp::Clear(1.0), wgpu::StoreOp::Store);
         let mut pass = super::depth_pass(encoder, "shadow pass", layer, ops, timestamps);
         match masks {
@@ -251,10 +270,33 @@ impl ShadowPass {
             }
             None => pass.set_pipeline(&self.pipeline),
         }
-        pass.set_bind_group(0, bind_group, &[view_offset]);
-        geometry.draw(&mut pass, draws);
+        for t in tiles {
+            if let Some([x, y, w, h]) = t.viewport {
+                pass.set_viewport(x, y, w, h, 0.0, 1.0);
+                pass.set_scissor_rect(x as u32, y as u32, w as u32, h as u32);
+            }
+            pass.set_bind_group(0, bind_group, &[t.view_offset]);
+            geometry.draw(&mut pass, t.draws);
+        }
     }
 }
+
+/// One view of a shadow-map layer's pass: its rectangle of the layer (x, y, width, height
+/// in texels; `None`: the whole layer), its view record's offset and its draws.
+pub struct Tile<'a> {
+    pub viewport: Option<[f32; 4]>,
+    pub view_offset: u32,
+    pub draws: Option<&'a [Draw]>,
+}
+
+/// What a shadow-map layer's pass draws into and with: the layer, the views' bind group,
+/// the scene's geometry and its alpha masks (if any).
+pub type TileTarget<'a> = (
+    &'a wgpu::TextureView,
+    &'a wgpu::BindGroup,
+    &'a super::Geometry,
+    Option<&'a wgpu::BindGroup>,
+);
 
 /// Whether the box `lo..hi` may reach into the view of clip matrix `m` (world -> clip, depth
 /// 0..1): false only when all eight corners lie outside one clip plane, so every triangle

@@ -120,6 +120,44 @@ pub fn cube_views(p: Vec3, lo: Vec3, hi: Vec3, size: u32) -> ([Mat4; 6], f32) {
     (m, 2.0 * t / size as f32)
 }
 
+/// VPL cube faces a shadow-map layer holds (an atlas of 2×2 faces, each `size`² in a
+/// `2·size`² layer): a GPU's array-layer limit (2048 on lavapipe) then holds four times the
+/// VPLs (1365 instead of 341), and a layer's four faces are drawn in one pass (issue 48).
+/// `VPL_FACES_A_LAYER` of `bidir.wgsl` (a unit test checks that the two agree).
+pub const FACES_A_LAYER: u32 = 4;
+
+/// Faces a side of a layer's atlas.
+pub const TILES_A_SIDE: u32 = 2;
+
+/// The rectangle (x, y, width, height in texels) of cube face `face` (counted over all
+/// VPLs) in its layer of `size`² faces.
+pub fn tile_rect(face: u32, size: u32) -> [f32; 4] {
+    let t = face % FACES_A_LAYER;
+    let (tx, ty) = (t % TILES_A_SIDE, t / TILES_A_SIDE);
+    let s = size as f32;
+    [tx as f32 * s, ty as f32 * s, s, s]
+}
+
+/// World -> clip of face `face` for the lookup in its layer: the face's own matrix `m`
+/// (which renders it, through the viewport of [`tile_rect`]) followed by the map of its
+/// NDC square onto the face's quarter of the layer's (depth unchanged), so that the
+/// lighting pass's ordinary shadow lookup reads the atlas.
+pub fn tile_matrix(face: u32, m: Mat4) -> Mat4 {
+    let t = face % FACES_A_LAYER;
+    let (tx, ty) = ((t % TILES_A_SIDE) as f32, (t / TILES_A_SIDE) as f32);
+    let k = 1.0 / TILES_A_SIDE as f32;
+    // uv = ndc·(½, −½) + ½ over the layer; the face's uv square starts at (tx, ty)·k.
+    let ox = (2.0 * tx + 1.0) * k - 1.0;
+    let oy = 1.0 - (2.0 * ty + 1.0) * k;
+    let atlas = Mat4::from_cols(
+        glam::Vec4::new(k, 0.0, 0.0, 0.0),
+        glam::Vec4::new(0.0, k, 0.0, 0.0),
+        glam::Vec4::new(0.0, 0.0, 1.0, 0.0),
+        glam::Vec4::new(ox, oy, 0.0, 1.0),
+    );
+    atlas * m
+}
+
 /// The VPL lighting pipeline and its layouts.
 pub struct VplPass {
     /// The pass without the exact models' code (`MODELS` off: no scene material is one),
@@ -274,5 +312,57 @@ impl crate::gpu::Pipelines for VplPass {
             &ctx.device,
             &super::direct::DirectPass::get(ctx).gbuffer_layout,
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A point seen by a cube face lands, through the face's atlas matrix, on the layer's
+    /// texel where the face's own matrix and its viewport rectangle draw it (the render and
+    /// the lookup agree), with the same depth; every face's rectangle lies in the layer and
+    /// the faces of a layer do not overlap.
+    #[test]
+    fn atlas_lookup_matches_the_tile_viewport() {
+        let size = 64;
+        let (m, _) = cube_views(Vec3::new(0.2, 0.3, 0.1), Vec3::splat(-1.0), Vec3::ONE, size);
+        let side = (size * TILES_A_SIDE) as f32;
+        let points = [Vec3::new(0.9, 0.5, 0.2), Vec3::new(-0.7, 0.1, 0.6)];
+        let mut seen = 0;
+        for face in 0..12u32 {
+            let [x, y, w, h] = tile_rect(face, size);
+            assert!(x + w <= side && y + h <= side);
+            let others = (0..FACES_A_LAYER).filter(|&g| g != face % FACES_A_LAYER);
+            for g in others {
+                assert_ne!(tile_rect(g, size)[..2], [x, y]);
+            }
+            let fm = m[face as usize % 6];
+            for p in points {
+                let c = fm * p.extend(1.0);
+                let ndc = c.truncate() / c.w;
+                if c.w <= 0.0 || ndc.x.abs() > 1.0 || ndc.y.abs() > 1.0 {
+                    continue;
+                }
+                // The viewport transform: NDC y = +1 at the rectangle's top.
+                let drawn =
+                    glam::Vec2::new(x + (ndc.x + 1.0) * 0.5 * w, y + (1.0 - ndc.y) * 0.5 * h);
+                let a = tile_matrix(face, fm) * p.extend(1.0);
+                let andc = a.truncate() / a.w;
+                let uv = glam::Vec2::new(andc.x * 0.5 + 0.5, -andc.y * 0.5 + 0.5) * side;
+                assert!((uv - drawn).length() < 1e-3, "face {face}: {uv} vs {drawn}");
+                assert!((andc.z - ndc.z).abs() < 1e-6);
+                seen += 1;
+            }
+        }
+        assert!(seen >= 4, "{seen} point-face pairs checked");
+    }
+
+    #[test]
+    fn faces_a_layer_match_the_lighting_pass() {
+        let wgsl = include_str!("shaders/bidir.wgsl");
+        let line = format!("const VPL_FACES_A_LAYER: u32 = {FACES_A_LAYER}u;");
+        assert!(wgsl.contains(&line), "bidir.wgsl lacks `{line}`");
+        assert_eq!(TILES_A_SIDE * TILES_A_SIDE, FACES_A_LAYER);
     }
 }

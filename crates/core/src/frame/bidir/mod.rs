@@ -387,7 +387,9 @@ fn state<'a>(
     let layers = rsm_layers(scene, options.rsm_size);
     let lights = vpl_groups(scene);
     let first = options.vpls_per_light * lights;
-    let max_slots = ctx.device.limits().max_texture_array_layers / 6;
+    // Six cube faces a VPL, `FACES_A_LAYER` a shadow-map layer.
+    let faces = ctx.device.limits().max_texture_array_layers * crate::raster::vpl::FACES_A_LAYER;
+    let max_slots = faces / 6;
     let (n1, bundles) = (options.vpls_per_light, options.bundles);
     let capacity =
         first + subpaths::slots(lights, n1, bundles, options.max_depth, first, max_slots);

@@ -115,9 +115,9 @@ struct Subpaths {
 
 /// Slots for subpath vertices: one per (light, VPL) for the first vertex y2 (every VPL is
 /// continued: `n1` subpaths a light), and [`EXTRA_PER_SUBPATH`] per subpath for the rest, as
-/// far as `max_slots` (the GPU's layer limit over 6) leaves room after the `first` slots of
-/// the first VPLs. Zero when `max_depth` asks for no vertex after y1 (depth < 3: strategy B
-/// of depth d takes y_{d−1}) or there are no bundles.
+/// far as `max_slots` (the VPLs the GPU's shadow-map layers hold) leaves room after the
+/// `first` slots of the first VPLs. Zero when `max_depth` asks for no vertex after y1
+/// (depth < 3: strategy B of depth d takes y_{d−1}) or there are no bundles.
 pub(super) fn slots(
     lights: u32,
     n1: u32,

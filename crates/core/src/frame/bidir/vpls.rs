@@ -10,8 +10,8 @@ use crate::gpu::timer::Timer;
 use crate::gpu::{self, GpuContext, Pipelines};
 use crate::raster::exact_models::material_word;
 use crate::raster::rsm::RsmTexel;
-use crate::raster::shadow::{self, ShadowPass};
-use crate::raster::vpl::{cube_views, VplRaw};
+use crate::raster::shadow::{self, ShadowPass, Tile};
+use crate::raster::vpl::{cube_views, tile_matrix, tile_rect, VplRaw, FACES_A_LAYER, TILES_A_SIDE};
 use crate::sampling::Rng;
 use crate::scene::light_views;
 use crate::scene::Scene;
@@ -137,7 +137,9 @@ pub(super) fn mark_models(records: &mut Records, heads: &[Vec<Option<Head>>], pe
 /// The VPLs' GPU resources for `capacity` VPLs with `size`² cube faces: the records as a
 /// texture (7 texels per VPL in a row, a row per VPL; a texture, not a storage buffer: the
 /// lighting pass loops over the VPLs, and lavapipe reads textures in loops many times
-/// faster), the cube faces' matrices and views, and the shadow maps.
+/// faster), the cube faces' matrices (for the lookup, into the atlas) and views (for
+/// drawing), and the shadow maps: [`FACES_A_LAYER`] faces a layer, face f of the VPLs in
+/// layer f / [`FACES_A_LAYER`] (`raster::vpl::tile_rect`).
 pub(super) struct VplMaps {
     pub capacity: u32,
     pub size: u32,
@@ -155,7 +157,8 @@ impl VplMaps {
     /// shadow maps.
     pub fn new(ctx: &GpuContext, capacity: u32, size: u32) -> Result<Self> {
         let device = &ctx.device;
-        let n_layers = capacity.max(1) * 6;
+        let n_faces = capacity.max(1) * 6;
+        let n_layers = n_faces.div_ceil(FACES_A_LAYER);
         let max_layers = device.limits().max_texture_array_layers;
         if n_layers > max_layers {
             return Err(Error::setting(
@@ -166,13 +169,14 @@ impl VplMaps {
             ));
         }
         let max_dim = device.limits().max_texture_dimension_2d;
-        if size > max_dim {
+        let side = size * TILES_A_SIDE;
+        if side > max_dim {
             return Err(Error::setting(
                 "vpl_shadow_map_size",
-                format!("the GPU allows at most {max_dim}"),
+                format!("the GPU allows at most {}", max_dim / TILES_A_SIDE),
             ));
         }
-        let bytes = n_layers as u64 * size as u64 * size as u64 * 4;
+        let bytes = n_layers as u64 * side as u64 * side as u64 * 4;
         crate::memory::check(|| "the VPL shadow maps".to_string(), bytes)?;
         let records = gpu::texture_2d(
             device,
@@ -186,18 +190,18 @@ impl VplMaps {
         let matrices = buffer_init(
             ctx,
             "vpl shadow matrices",
-            &vec![0u8; n_layers as usize * 64],
+            &vec![0u8; n_faces as usize * 64],
             storage,
         );
         let views = buffer_init(
             ctx,
             "vpl shadow views",
-            &vec![0u8; n_layers as usize * VIEW_SIZE as usize],
+            &vec![0u8; n_faces as usize * VIEW_SIZE as usize],
             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         );
         let view_group = ShadowPass::get(ctx).view_group(device, "vpl shadow bind group", &views);
         let (layer_views, array, _) =
-            shadow::layered_maps(device, "vpl shadow maps", size, n_layers);
+            shadow::layered_maps(device, "vpl shadow maps", side, n_layers);
         Ok(VplMaps {
             capacity,
             size,
@@ -232,7 +236,10 @@ impl VplMaps {
                 depth_or_array_layers: 1,
             },
         );
-        let m: Vec<[f32; 16]> = matrices.iter().map(|m| m.to_cols_array()).collect();
+        let m: Vec<[f32; 16]> = (0u32..)
+            .zip(matrices)
+            .map(|(face, m)| tile_matrix(face, *m).to_cols_array())
+            .collect();
         gpu::write_buffer(
             q,
             "vpl shadow matrices",
@@ -255,7 +262,7 @@ impl VplMaps {
 
     /// Records the cube shadow maps of the VPLs `records` (`lit` of them drawn from texels;
     /// zero-flux slots are skipped when some are lit), each face drawing only the triangle
-    /// runs that reach into its view.
+    /// runs that reach into its view, the [`FACES_A_LAYER`] faces of a layer in one pass.
     pub fn record_shadows(
         &self,
         ctx: &GpuContext,
@@ -268,24 +275,23 @@ impl VplMaps {
         let (raws, matrices) = (&records.raws, &records.matrices);
         let pass = ShadowPass::get(ctx);
         let draws = gs.cull.draws(matrices);
-        for (slot, chunk) in self.layer_views.chunks(6).take(raws.len()).enumerate() {
-            if raws[slot].flux == [0.0; 3] && lit < raws.len() {
+        let faces = raws.len() * 6;
+        let per_layer = FACES_A_LAYER as usize;
+        for (layer, view) in self.layer_views.iter().enumerate() {
+            let tiles: Vec<Tile> = (layer * per_layer..((layer + 1) * per_layer).min(faces))
+                .filter(|&f| raws[f / 6].flux != [0.0; 3] || lit >= raws.len())
+                .map(|f| Tile {
+                    viewport: Some(tile_rect(f as u32, self.size)),
+                    view_offset: (f as u64 * VIEW_SIZE) as u32,
+                    draws: draws.get(f).map(|d| d.as_slice()),
+                })
+                .collect();
+            if tiles.is_empty() {
                 continue;
             }
-            for (face, view) in chunk.iter().enumerate() {
-                let offset = ((slot * 6 + face) as u64 * VIEW_SIZE) as u32;
-                let ts = timer.pass("vpl shadow maps");
-                pass.record(
-                    encoder,
-                    view,
-                    &self.view_group,
-                    offset,
-                    &gs.geometry,
-                    draws.get(slot * 6 + face).map(|d| d.as_slice()),
-                    gs.shadow_masks(),
-                    ts,
-                );
-            }
+            let ts = timer.pass("vpl shadow maps");
+            let target = (view, &self.view_group, &gs.geometry, gs.shadow_masks());
+            pass.record_tiles(encoder, target, &tiles, ts);
         }
     }
 }

@@ -145,7 +145,7 @@ pub const MAX_LIGHT_PATHS: u64 = 1 << 36;
 pub const MAX_PHOTONS: u64 = 1_000_000_000;
 pub const MAX_K: u32 = 1 << 16;
 pub const MAX_TEMPORAL_FRAMES: u32 = 64;
-/// VPLs per light (each takes six shadow-map layers).
+/// VPLs per light (each takes six shadow-map faces, four a layer).
 pub const MAX_VPLS_PER_LIGHT: u32 = 1024;
 /// Most points drawn on the emitters per frame (six shadow layers each).
 pub const MAX_AREA_SAMPLES: u32 = 128;

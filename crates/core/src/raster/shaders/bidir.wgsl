@@ -168,14 +168,18 @@ fn vpl_material(v: Vpl) -> Material {
     return m;
 }
 
+// Cube faces a layer of `vpl_maps` holds (a 2×2 atlas, `raster::vpl::FACES_A_LAYER`): face f
+// lies in layer f / VPL_FACES_A_LAYER, its matrix mapping into its quarter.
+const VPL_FACES_A_LAYER: u32 = 4u;
+
 // Visibility of `p` (geometric normal `ng`, towards the VPL) from VPL `v`.
 fn vpl_visibility(v: Vpl, p: vec3<f32>, ng: vec3<f32>) -> f32 {
     let d = v.position - p;
     let dist = length(d);
     let c = dot(d / dist, ng);
     let q = p + ng * (v.texel_scale * dist * (1.0 - c) + 1e-4 * dist);
-    let layer = shadow_layer_of(v.first_layer, 6u, q - v.position);
-    return shadow_tap(vpl_maps, shadow_sampler, vpl_views[layer], layer, q);
+    let face = shadow_layer_of(v.first_layer, 6u, q - v.position);
+    return shadow_tap(vpl_maps, shadow_sampler, vpl_views[face], face / VPL_FACES_A_LAYER, q);
 }
 
 fn light_visibility(l: Light, p: vec3<f32>, ng: vec3<f32>) -> f32 {
