@@ -42,8 +42,6 @@ pub struct Focus {
     pub maps: Vec<ProjectionMap>,
     /// Specular objects of the scene (each light's map has a cone per object it can aim at).
     pub objects: usize,
-    /// The sky's photons aimed at the openings they enter through (`None`: as emitted).
-    pub sky: Option<super::sky_guide::SkyGuide>,
 }
 
 /// Bounding spheres (centre, radius) of the scene's objects with a delta lobe.
@@ -127,7 +125,6 @@ impl Focus {
             fraction: fraction.clamp(0.0, 1.0),
             maps,
             objects: spheres.len(),
-            sky: None,
         }
     }
 
@@ -278,7 +275,6 @@ mod tests {
             intensity: Vec3::ONE,
         };
         let focus = Focus {
-            sky: None,
             fraction: 0.5,
             maps: vec![ProjectionMap {
                 cones: vec![

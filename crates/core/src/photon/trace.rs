@@ -33,8 +33,6 @@ const STREAM_EMIT: u64 = 0x9407_0000;
 const STREAM_CONTINUE: u64 = 0x9407_0001;
 /// Random stream of photon paths aimed at the specular objects for ISPM.
 const STREAM_AIMED: u64 = 0x9407_0002;
-/// Random stream of the sky's pilot photons (`super::sky_guide`).
-const STREAM_SKY_PILOT: u64 = 0x9407_0003;
 
 /// Photon tracer settings.
 #[derive(Clone, Copy, Debug)]
@@ -144,57 +142,6 @@ pub fn emit_and_trace_sources(
     Ok(set)
 }
 
-/// `n` of the sky's photons of `scene` emitted as [`Sources::emit`] would and traced: the
-/// rays (towards the sky, crossing of the centre's plane) of those whose paths stored a
-/// photon, in index order (the pilot of [`super::sky_guide::SkyGuide`]; its photons are
-/// not kept).
-pub fn sky_pilot(
-    scene: &Scene,
-    bvh: &SceneBvh,
-    n: u64,
-    s: &PhotonTraceSettings,
-    seed: u64,
-    control: &dyn TraceControl,
-) -> Result<Vec<super::sky_guide::SkyRay>> {
-    let bounds = scene.bounds();
-    let Some(env) = scene.environment.as_deref() else {
-        return Ok(Vec::new());
-    };
-    let marked = std::sync::Mutex::new(Vec::new());
-    trace_chunks(n, control, |i, out| {
-        let mut rng = Rng::new(seed, STREAM_SKY_PILOT, i);
-        let Some(e) = env.emit(&mut rng, bounds) else {
-            return;
-        };
-        let before = out.photons.len();
-        let ray = PhotonRay::new(e.origin, e.direction, e.power, 1.0, 0);
-        follow(
-            scene,
-            bvh,
-            &ray,
-            Differentials::emitted(e.direction),
-            None,
-            s,
-            &mut rng,
-            out,
-        );
-        if out.photons.len() > before {
-            out.photons.truncate(before);
-            let towards = -e.direction;
-            let c = bounds.centre;
-            let point = e.origin - towards * (e.origin - c).dot(towards);
-            let ray = super::sky_guide::SkyRay { towards, point };
-            marked
-                .lock()
-                .unwrap_or_else(|p| p.into_inner())
-                .push((i, ray));
-        }
-    })?;
-    let mut marked = marked.into_inner().unwrap_or_else(|p| p.into_inner());
-    marked.sort_by_key(|(i, _)| *i);
-    Ok(marked.into_iter().map(|(_, r)| r).collect())
-}
-
 /// How one photon's neighbours lie at its emission: a point light's photons `spacing`
 /// radians apart (√(1/(n q(ω))) for a density q per steradian), or the area a photon
 /// stands for on an emitting surface or the bounding disc (see [`Spread`]).
@@ -233,11 +180,6 @@ fn emit_photon(
                 power,
             };
             (e, Neighbours::Angular((1.0 / (n_s * q.max(1e-12))).sqrt()))
-        }
-        Source::Environment if focus.sky.is_some() => {
-            let guide = focus.sky.as_ref()?;
-            let (e, area) = guide.emit(scene.environment.as_deref()?, rng)?;
-            (e, Neighbours::Area(area / n_s, e.direction, false))
         }
         _ => {
             let (e, spread) = sources.emit_spread_from(scene, source, rng)?;
