@@ -11,6 +11,7 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
     if BACKGROUND && g.position.w == 0.0 {
         g.ray = view_ray(frag.xy);
     }
+    sky_quad_prepare(frag.xy, g);
     let sum = shade(g);
     return vec4<f32>(sum * view.weight, view.weight);
 }
@@ -30,5 +31,6 @@ fn fs_centre(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
     fp.dndx = dpdxFine(ns);
     fp.dndy = dpdyFine(ns);
     fp.taps = penumbra_taps.x;
+    sky_quad_prepare(frag.xy, g);
     return vec4<f32>(shade_pixel(g, fp), 1.0);
 }

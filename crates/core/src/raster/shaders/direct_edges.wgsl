@@ -151,6 +151,7 @@ fn shade_edges(@builtin(global_invocation_id) id: vec3<u32>) {
             g.emission = bitcast<vec4<f32>>(cache[base + 3u]);
         }
         g.ray = ray;
+        sky_edge_sample(s);
         sum += shade(g);
     }
     // Equal weights: the box filter of the full supersampling (direct.wgsl `fs_main`).

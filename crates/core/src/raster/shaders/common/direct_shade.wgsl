@@ -445,14 +445,8 @@ fn shade_pixel(g: GSample, fp: Footprint) -> vec3<f32> {
     let p = g.position.xyz;
     let ns = oct_decode(g.normals.xy);
     let ng = oct_decode(g.normals.zw);
-    var m: Material;
-    m.diffuse = g.diffuse.xyz;
-    m.roughness = gbuffer_roughness(g.diffuse.w);
-    m.specular = g.specular.xyz;
-    m.fresnel = u32(g.specular.w > 0.5);
+    let m = sample_material(g);
     let wo = normalize(view.eye - p);
-    // Mitsuba's exact models in place of the uber stand-in (exact_models.wgsl).
-    exact_load(g.emission.w);
     var sum = g.emission.xyz;
     if SAMPLED_LIGHTS {
         // A sub-pixel sample (one tap) of a pixel of `taps`² samples draws its share of the
@@ -501,6 +495,18 @@ fn shade_pixel(g: GSample, fp: Footprint) -> vec3<f32> {
         sum += term * v;
     }
     return sum;
+}
+
+// The uber material of sample `g`, with Mitsuba's exact model in its place where it has
+// one (exact_models.wgsl: loaded here for the lobes' evaluations that follow).
+fn sample_material(g: GSample) -> Material {
+    var m: Material;
+    m.diffuse = g.diffuse.xyz;
+    m.roughness = gbuffer_roughness(g.diffuse.w);
+    m.specular = g.specular.xyz;
+    m.fresnel = u32(g.specular.w > 0.5);
+    exact_load(g.emission.w);
+    return m;
 }
 
 // World -> clip of sampled-light shadow layer `layer`.
@@ -761,9 +767,9 @@ fn sampled_light(p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, wo: ve
     if direct_params.sky_count == 0u {
         return sum;
     }
-    // The sky's sums (sky_cone.wgsl; in ordinary frames a per-pixel share of the directions,
-    // each visibility over its cone).
-    let sky = sky_sums(p, ns, ng, m, glossy, wo, has_glossy);
+    // The sky's sums (sky_cone.wgsl; in ordinary frames each direction's visibility over
+    // its cone, shared over the pixel's 2×2 quad where it lies on one plane).
+    let sky = sky_pixel_sums(p, ns, ng, m, glossy, wo, has_glossy);
     let lit = sky.lit;
     let unshadowed = sky.unshadowed;
     let glit = sky.glit;

@@ -75,6 +75,19 @@ fn sky_cone_frame(p: vec3<f32>, ng: vec3<f32>) -> SkyCone {
     return SkyCone(noise, t1, t2, clip, ct1, ct2, size, phase);
 }
 
+// The edge passes (direct_edges.wgsl `shade_edges`) shade every sub-pixel sample of a pixel
+// on a geometric edge (no quad to share with): sub-pixel sample `s` looks up only the
+// directions k ≡ s (mod `SKY_PHASES`), each with its cone (`sky_share_sums`), so that the
+// pixel's mean over its samples (4 by default) has every direction, at a quarter of the
+// cost. The phase is the same for every pixel of a dispatch: lanes that skip different
+// directions would each wait for the others' (SIMD on the CPU's lavapipe). Bias: each
+// sample's ratio estimators are over its quarter of the directions (on edge pixels alone).
+var<private> sky_edge_phase: u32;
+
+fn sky_edge_sample(s: u32) {
+    sky_edge_phase = 1u + s % SKY_PHASES;
+}
+
 // The window position (pixels) of clip-space point `clip` in the eye view.
 fn sky_cone_window(clip: vec4<f32>, size: vec2<i32>) -> vec2<f32> {
     return (clip.xy / clip.w * vec2<f32>(0.5, -0.5) + 0.5) * vec2<f32>(size);
@@ -231,10 +244,11 @@ struct SkySums {
     cun: vec3<f32>,
 }
 
-// One sampled sky direction's terms at a shading point: f_d·cos·E, f_s·cos·E, cos·E, its
-// shadow layer, the lookup point and the drawn direction's tap; `used` false where it does
-// not light the point.
+// One sampled sky direction's terms at a shading point: its record `i`, f_d·cos·E,
+// f_s·cos·E, cos·E, its shadow layer, the lookup point and the drawn direction's tap
+// (`sky_tapped`); `used` false where it does not light the point.
 struct SkyTerm {
+    i: u32,
     fd: vec3<f32>,
     fs: vec3<f32>,
     e: vec3<f32>,
@@ -244,8 +258,24 @@ struct SkyTerm {
     used: bool,
 }
 
+// Adds term `t` seen with visibility `v` to the shadowed sums of `s`.
+fn sky_add_lit(s: ptr<function, SkySums>, t: SkyTerm, v: f32) {
+    (*s).lit += t.fd * v;
+    (*s).glit += t.fs * v;
+    (*s).clit += t.e * v;
+}
+
+// Adds term `t` with visibility `v` to the sums of `s`, shadowed and not.
+fn sky_add(s: ptr<function, SkySums>, t: SkyTerm, v: f32) {
+    sky_add_lit(s, t, v);
+    (*s).unshadowed += t.fd;
+    (*s).gun += t.fs;
+    (*s).cun += t.e;
+}
+
 fn sky_term(i: u32, p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, glossy: Material, wo: vec3<f32>, has_glossy: bool) -> SkyTerm {
     var t: SkyTerm;
+    t.i = i;
     let t0 = textureLoad(sample_records, vec2<u32>(0u, i), 0);
     let wi = t0.xyz;
     let cos_g = dot(wi, ng);
@@ -266,6 +296,16 @@ fn sky_term(i: u32, p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, glo
     return t;
 }
 
+// The term of direction `k` of subset `sub` (`sky_subset`) at a shading point, with its
+// drawn direction's tap where it lights the point.
+fn sky_tapped(k: u32, sub: vec3<u32>, p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, glossy: Material, wo: vec3<f32>, has_glossy: bool) -> SkyTerm {
+    var t = sky_term(direct_params.area_count + sub.x + k * sub.y, p, ns, ng, m, glossy, wo, has_glossy);
+    if t.used {
+        t.tap = shadow_tap(sample_maps, shadow_sampler, sample_view(t.layer), t.layer, t.q);
+    }
+    return t;
+}
+
 // The sums over the sky directions a shading point looks up (`sky_subset`) in two passes:
 // every direction with its drawn direction's tap, noting those of the pixel's share
 // (`SkyCone::phase`) whose cone may differ from it (`sky_cone_penumbra`) with their tap and
@@ -280,22 +320,17 @@ fn sky_sums(p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, glossy: Mat
     var taps: array<f32, SKY_PIXEL_DIRECTIONS>;
     var depths: array<f32, SKY_PIXEL_DIRECTIONS>;
     for (var k = 0u; k < sub.z; k++) {
-        let i = direct_params.area_count + sub.x + k * sub.y;
-        let t = sky_term(i, p, ns, ng, m, glossy, wo, has_glossy);
+        let t = sky_tapped(k, sub, p, ns, ng, m, glossy, wo, has_glossy);
         if !t.used {
             continue;
         }
-        let mv = sample_view(t.layer);
-        let tap = shadow_tap(sample_maps, shadow_sampler, mv, t.layer, t.q);
-        s.lit += t.fd * tap;
-        s.unshadowed += t.fd;
-        s.glit += t.fs * tap;
-        s.gun += t.fs;
-        s.clit += t.e * tap;
-        s.cun += t.e;
-        let b = sky_cone_penumbra(i, t.layer, c, sky_cone_site(i, mv, t.q), tap);
-        if b.y > 0.0 && k % SKY_CONE_SHARE == c.phase {
-            taps[k] = tap;
+        sky_add(&s, t, t.tap);
+        if k % SKY_CONE_SHARE != c.phase {
+            continue;
+        }
+        let b = sky_cone_penumbra(t.i, t.layer, c, sky_cone_site(t.i, sample_view(t.layer), t.q), t.tap);
+        if b.y > 0.0 {
+            taps[k] = t.tap;
             depths[k] = b.x;
             todo |= select(vec2<u32>(0u, 1u << (k - 32u)), vec2<u32>(1u << k, 0u), k < 32u);
         }
@@ -313,9 +348,115 @@ fn sky_sums(p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, glossy: Mat
         let tap = taps[k];
         let cone = sky_cone_visibility(i, t.layer, sample_view(t.layer), c, p, ng, t.q, tap, depths[k]);
         let dv = clamp(tap + f32(SKY_CONE_SHARE) * (cone - tap), 0.0, 1.0) - tap;
-        s.lit += t.fd * dv;
-        s.glit += t.fs * dv;
-        s.clit += t.e * dv;
+        sky_add_lit(&s, t, dv);
     }
     return s;
+}
+
+// Half resolution: the full-screen passes share the cones over each 2×2 quad of pixels
+// (`sky_quad_prepare`, called by the entry points before shading; quad values are exchanged
+// by fine derivatives, so no extra pass, target or binding). Where the quad's four samples
+// lie on one plane, each pixel looks up only the directions k ≡ its quad position (mod 4)
+// of `sky_subset`, every one of them with its cone where a penumbra is near, and the quad's
+// four partial sums are added: each pixel's visibility ratios are over every direction, each
+// direction's cone taken at one of the quad's pixels (an estimate of the cone's visibility
+// at a point at most a pixel away, on the same plane: the cone's disc is many pixels wide
+// wherever it differs from the tap). A quad across a plane break (and the edge passes, and
+// progressive passes: no cones there) shades each pixel with all its directions
+// (`sky_sums`). Bias, beyond the cones' own (header): the visibility ratios are constant over
+// a quad (a shadow sharper than two pixels is blurred to the quad: contact shadows), and
+// the quad's samples' lobes weight their directions in one ratio.
+var<private> sky_quad_on: bool;
+var<private> sky_quad: SkySums;
+// The quad's phases (and the edge passes' samples', above).
+const SKY_PHASES: u32 = 4u;
+
+// The sum of `v` over the pixel's 2×2 quad (`s`: +1 on even, −1 on odd columns and rows).
+fn sky_quad_sum(v: vec3<f32>, s: vec2<f32>) -> vec3<f32> {
+    let row = 2.0 * v + s.x * dpdxFine(v);
+    return 2.0 * row + s.y * dpdyFine(row);
+}
+
+// Whether every sample of the pixel's quad has a surface on the plane of this one's
+// (`p`, geometric normal `ng`, coverage `w`): exchanged by fine derivatives.
+fn sky_quad_flat(p: vec3<f32>, ng: vec3<f32>, w: f32, s: vec2<f32>) -> bool {
+    let pos = vec4<f32>(p, w);
+    let px = pos + s.x * dpdxFine(pos);
+    let py = pos + s.y * dpdyFine(pos);
+    let pd = py + s.x * dpdxFine(py);
+    let nx = ng + s.x * dpdxFine(ng);
+    let ny = ng + s.y * dpdyFine(ng);
+    let nd = ny + s.x * dpdxFine(ny);
+    var level = w > 0.0 && on_plane(p, ng, px) && on_plane(p, ng, py) && on_plane(p, ng, pd);
+    level = level && min(dot(ng, nx), min(dot(ng, ny), dot(ng, nd))) > 0.95;
+    let count = sky_quad_sum(vec3<f32>(select(0.0, 1.0, level)), s).x;
+    return count > 3.5;
+}
+
+// The sums over the directions k ≡ `phase` (mod `SKY_PHASES`) of `sky_subset`, each with its cone's
+// visibility where a penumbra is near (else its tap).
+fn sky_share_sums(p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, glossy: Material, wo: vec3<f32>, has_glossy: bool, phase: u32) -> SkySums {
+    var s: SkySums;
+    let c = sky_cone_frame(p, ng);
+    let sub = sky_subset(c);
+    for (var k = phase; k < sub.z; k += SKY_PHASES) {
+        let t = sky_tapped(k, sub, p, ns, ng, m, glossy, wo, has_glossy);
+        if !t.used {
+            continue;
+        }
+        let mv = sample_view(t.layer);
+        var v = t.tap;
+        let b = sky_cone_penumbra(t.i, t.layer, c, sky_cone_site(t.i, mv, t.q), v);
+        if b.y > 0.0 {
+            v = sky_cone_visibility(t.i, t.layer, mv, c, p, ng, t.q, v, b.x);
+        }
+        sky_add(&s, t, v);
+    }
+    return s;
+}
+
+// Sets the quad's sky sums (`sky_quad`, `sky_quad_on`) for the sample `g` of the pixel at
+// window position `frag`; called in uniform control flow by the full-screen entry points
+// before they shade (see above).
+fn sky_quad_prepare(frag: vec2<f32>, g: GSample) {
+    sky_quad_on = false;
+    if !SAMPLED_LIGHTS || direct_params.sky_count == 0u || direct_params.ratio == 0u {
+        return;
+    }
+    let ip = vec2<u32>(max(frag, vec2<f32>(0.0)));
+    let odd = vec2<f32>(ip & vec2<u32>(1u));
+    let s = 1.0 - 2.0 * odd;
+    let p = g.position.xyz;
+    let ng = oct_decode(g.normals.zw);
+    let flat = sky_quad_flat(p, ng, g.position.w, s);
+    var own: SkySums;
+    if flat {
+        let m = sample_material(g);
+        var glossy = m;
+        glossy.diffuse = vec3<f32>(0.0);
+        let has_glossy = GLOSSY && max3(m.specular) > 0.0;
+        let ns = oct_decode(g.normals.xy);
+        let phase = (ip.x & 1u) + 2u * (ip.y & 1u);
+        own = sky_share_sums(p, ns, ng, m, glossy, normalize(view.eye - p), has_glossy, phase);
+    }
+    sky_quad.lit = sky_quad_sum(own.lit, s);
+    sky_quad.unshadowed = sky_quad_sum(own.unshadowed, s);
+    sky_quad.glit = sky_quad_sum(own.glit, s);
+    sky_quad.gun = sky_quad_sum(own.gun, s);
+    sky_quad.clit = sky_quad_sum(own.clit, s);
+    sky_quad.cun = sky_quad_sum(own.cun, s);
+    sky_quad_on = flat;
+}
+
+// The sky's sums at a shading point: its quad's (`sky_quad_prepare`) where they were shared,
+// an edge sample's phase of the directions (`sky_edge_sample`), else its own over every
+// direction (`sky_sums`).
+fn sky_pixel_sums(p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, glossy: Material, wo: vec3<f32>, has_glossy: bool) -> SkySums {
+    if sky_quad_on {
+        return sky_quad;
+    }
+    if sky_edge_phase > 0u && direct_params.ratio != 0u {
+        return sky_share_sums(p, ns, ng, m, glossy, wo, has_glossy, sky_edge_phase - 1u);
+    }
+    return sky_sums(p, ns, ng, m, glossy, wo, has_glossy);
 }
