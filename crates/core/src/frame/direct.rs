@@ -91,7 +91,11 @@ pub(super) fn redo(
         gpu.finish(encoder, &names, None, fc)
     })?;
     let (w, h) = (targets.width, targets.height);
-    out.radiance = rgb_image(w, h, &data["radiance"]);
+    if let Some(r) = data.get("radiance") {
+        out.radiance = rgb_image(w, h, r);
+    }
+    out.display = data.display.clone();
+    out.radiance_half = data.half.clone();
     if let Some(a) = data.get("accum") {
         let direct = normalized(targets, a);
         for (name, img) in &mut out.aovs {

@@ -2,8 +2,11 @@
 //! direct light (G-buffers, edge-adaptive supersampling, accumulation), the composite and
 //! the readback of what a frame asks for.
 
+use super::encode::Encodings;
+use super::frame::Readback;
 use super::scene::GpuScene;
 use crate::error::{Error, Result};
+use crate::frame::readout::{Precision, Readout};
 use crate::gpu::layout::{buffer, texture};
 use crate::gpu::raw::ViewRaw;
 use crate::gpu::timer::Timer;
@@ -90,6 +93,10 @@ pub(crate) struct Targets {
     direct_gbuffer_group: wgpu::BindGroup,
     composite_group: Option<wgpu::BindGroup>,
     readback: HashMap<&'static str, wgpu::Buffer>,
+    /// The radiance's encodings for readback ([`super::encode`]).
+    encodings: Encodings,
+    /// What the frames hand back of the radiance ([`Targets::set_readout`]).
+    readout: Readout,
 }
 
 fn target(
@@ -321,6 +328,8 @@ impl Targets {
             model_materials,
             composite_group: None,
             readback: HashMap::new(),
+            encodings: Encodings::new(ctx, w, h),
+            readout: Readout::default(),
         })
     }
 
@@ -698,6 +707,54 @@ impl Targets {
         }
     }
 
+    /// Sets what the next frames hand back of the radiance: a method whose composite is
+    /// its final radiance reads back only that ([`Targets::readout_names`]).
+    pub fn set_readout(&mut self, readout: Readout) {
+        self.readout = readout;
+    }
+
+    /// The textures to read back for `names` (a method's list): "radiance" replaced by
+    /// what the readout asks for ("radiance" in 32-bit floats, "radiance16" in half
+    /// floats, "display" the display image).
+    pub fn readout_names(&self, names: &[&'static str]) -> Vec<&'static str> {
+        let r = self.readout;
+        let mut out = Vec::new();
+        for &name in names {
+            if name != "radiance" {
+                out.push(name);
+                continue;
+            }
+            match r.radiance {
+                Some(Precision::Float32) => out.push("radiance"),
+                Some(Precision::Float16) => out.push("radiance16"),
+                None => {}
+            }
+            if r.display.is_some() {
+                out.push("display");
+            }
+        }
+        out
+    }
+
+    /// Records the encodings of the radiance that `names` ([`Targets::readout_names`])
+    /// read back, after the composite.
+    pub fn record_encodings(
+        &mut self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        names: &[&'static str],
+        timer: &mut Timer,
+    ) {
+        let radiance = &self.radiance_view;
+        if let (true, Some(d)) = (names.contains(&"display"), self.readout.display) {
+            self.encodings
+                .record_display(ctx, encoder, radiance, d, timer);
+        }
+        if names.contains(&"radiance16") {
+            self.encodings.record_half(ctx, encoder, radiance, timer);
+        }
+    }
+
     /// The texture read back under `name`.
     fn texture_of<'a>(
         &'a self,
@@ -711,8 +768,23 @@ impl Targets {
             "normals" => &self.gbuf.textures[1],
             "albedo" => &self.gbuf.textures[4],
             "indirect" => indirect?,
+            "display" => &self.encodings.display.as_ref()?.texture,
+            "radiance16" => &self.encodings.half.as_ref()?.texture,
             _ => return None,
         })
+    }
+
+    /// Bytes of a texel of the texture read back under `name`, and of its rows in the
+    /// readback buffer (padded to wgpu's copy alignment).
+    fn row_bytes(&self, name: &str) -> (usize, usize) {
+        let texel = match name {
+            "display" => 4,
+            "radiance16" => 8,
+            _ => 16,
+        };
+        let row = (self.width as usize * texel)
+            .next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT as usize);
+        (texel, row)
     }
 
     /// Records copies of the named textures into their readback buffers (created on first
@@ -724,11 +796,11 @@ impl Targets {
         names: &[&'static str],
         indirect: Option<&wgpu::Texture>,
     ) {
-        let (w, h) = (self.width, self.height);
-        let row = (w * 16).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+        let h = self.height;
         for &name in names {
             if !self.readback.contains_key(name) {
-                let buffer = gpu::readback_buffer(&ctx.device, "readback", row as u64 * h as u64);
+                let row = self.row_bytes(name).1 as u64;
+                let buffer = gpu::readback_buffer(&ctx.device, "readback", row * h as u64);
                 self.readback.insert(name, buffer);
             }
         }
@@ -742,7 +814,7 @@ impl Targets {
                     buffer: &self.readback[name],
                     layout: wgpu::TexelCopyBufferLayout {
                         offset: 0,
-                        bytes_per_row: Some(row),
+                        bytes_per_row: Some(self.row_bytes(name).1 as u32),
                         rows_per_image: Some(h),
                     },
                 },
@@ -752,26 +824,44 @@ impl Targets {
     }
 
     /// Maps the readback buffers of `names` (after all submitted work) and returns their
-    /// texels, rows unpadded.
-    pub fn read(
-        &self,
-        ctx: &GpuContext,
-        names: &[&'static str],
-    ) -> Result<HashMap<&'static str, Vec<Vec4>>> {
+    /// texels, rows unpadded: the float textures as texels, the display image as RGB
+    /// bytes and the half-float radiance as RGB halves (alpha dropped).
+    pub fn read(&self, ctx: &GpuContext, names: &[&'static str]) -> Result<Readback> {
         let (w, h) = (self.width as usize, self.height as usize);
-        let row = (w * 16).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT as usize);
         let buffers: Vec<&wgpu::Buffer> = names.iter().map(|n| &self.readback[n]).collect();
+        let mut out = Readback::default();
         // The rows are copied out of the mapped buffers directly (one copy, not two).
-        let texels = ctx.read_buffers_with(&buffers, None, |_, b| {
-            let mut out: Vec<Vec4> = Vec::with_capacity(w * h);
-            for y in 0..h {
-                out.extend_from_slice(bytemuck::cast_slice::<u8, Vec4>(
-                    &b[y * row..y * row + w * 16],
-                ));
+        let mut texels = HashMap::new();
+        ctx.read_buffers_with(&buffers, None, |i, b| {
+            let name = names[i];
+            let (texel, row) = self.row_bytes(name);
+            let rows = (0..h).map(|y| &b[y * row..y * row + w * texel]);
+            match name {
+                "display" => {
+                    let rgb = rows.flat_map(|r| r.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]));
+                    out.display = Some(rgb.collect());
+                }
+                "radiance16" => {
+                    let rgb = rows.flat_map(|r| {
+                        let halves: &[u16] = bytemuck::cast_slice(r);
+                        let half = half::f16::from_bits;
+                        halves
+                            .chunks_exact(4)
+                            .flat_map(move |p| [half(p[0]), half(p[1]), half(p[2])])
+                    });
+                    out.half = Some(rgb.collect());
+                }
+                _ => {
+                    let mut v: Vec<Vec4> = Vec::with_capacity(w * h);
+                    for r in rows {
+                        v.extend_from_slice(bytemuck::cast_slice::<u8, Vec4>(r));
+                    }
+                    texels.insert(name, v);
+                }
             }
-            out
         })?;
-        Ok(names.iter().copied().zip(texels).collect())
+        out.texels = texels;
+        Ok(out)
     }
 }
 
