@@ -151,3 +151,52 @@ fn cpu_finished_radiance_is_encoded_on_the_cpu() {
         assert_ne!(out.radiance, Image::new(0, 0));
     }
 }
+
+/// A still frame (nothing changed since the last) records no GPU pass, not even the
+/// composite: it reads the last frame's readback buffers again, so its images are the last
+/// frame's bit for bit and equal a serial frame (`FrameDesc::serial`) of the same state on
+/// a renderer of its own. A new readout in a still view (another exposure) composites and
+/// encodes again. Methods `direct` and `ispm`.
+#[test]
+fn still_frames_run_no_pass_and_equal_the_serial_frame() {
+    let scene = builtin::load("cornell").expect("scene");
+    let readout = |exposure| Readout {
+        radiance: Some(Precision::Float32),
+        display: Some(Display {
+            tonemap: Tonemap::Clip,
+            exposure,
+        }),
+    };
+    for method in [Method::Direct, Method::Ispm] {
+        let s = settings(method);
+        let mut r = Renderer::new(&scene, &s).expect("renderer");
+        let first = frame(&mut r, readout(0.0));
+        let still = frame(&mut r, readout(0.0));
+        assert!(
+            encoded_on_gpu(&first, "composite"),
+            "{:?}",
+            first.stats.stages
+        );
+        for pass in ["composite", "display encode"] {
+            assert!(
+                !encoded_on_gpu(&still, pass),
+                "{method:?}: {pass} in a still frame"
+            );
+        }
+        assert_eq!(still.radiance, first.radiance, "{method:?}");
+        assert_eq!(still.display, first.display, "{method:?}");
+        let brighter = frame(&mut r, readout(1.0));
+        assert!(encoded_on_gpu(&brighter, "display encode"), "{method:?}");
+        assert_eq!(brighter.radiance, first.radiance, "{method:?}");
+        assert_ne!(brighter.display, first.display, "{method:?}");
+        let mut serial = Renderer::new(&scene, &s).expect("renderer");
+        let desc = FrameDesc {
+            serial: true,
+            readout: readout(0.0),
+            ..Default::default()
+        };
+        let reference = serial.render(&desc, &Silent).expect("serial frame");
+        assert_eq!(still.radiance, reference.radiance, "{method:?}");
+        assert_eq!(still.display, reference.display, "{method:?}");
+    }
+}

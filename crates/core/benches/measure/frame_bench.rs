@@ -186,7 +186,9 @@ fn bidir_table(
 /// with each readout of the radiance in the same run, interleaved frame by frame on
 /// renderers of their own: a still frame (nothing changed: the composite, the encoding and
 /// the readback) and a frame after the light moved, wall-clock medians and their
-/// "readback" stage (the wait for the GPU and the copy out of the mapped buffers).
+/// "readback" stage (the wait for the GPU and the copy out of the mapped buffers); and the
+/// first still frame with each readout after a float32 frame, which compiles the
+/// encoding's pipeline (the cold compile with `MESA_SHADER_CACHE_DISABLE=true`).
 fn readback_table(
     scenes: &[(&str, Scene)],
     (w, h): (u32, u32),
@@ -219,10 +221,11 @@ fn readback_table(
         ),
     ];
     println!(
-        "| scene | size | photons | radiance read back | bytes/pixel | still frame (ms) | \
-         still: readback (ms) | light moved: frame (ms) | light moved: readback (ms) |"
+        "| scene | size | photons | radiance read back | bytes/pixel | first still frame \
+         with it (ms) | still frame (ms) | still: readback (ms) | light moved: frame (ms) | \
+         light moved: readback (ms) |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|");
     let settings = ispm_settings(w, h, photons, Estimator::Auto, d);
     for (name, scene) in scenes {
         let mut renderers = readouts
@@ -231,12 +234,19 @@ fn readback_table(
             .collect::<Result<Vec<_>, _>>()?;
         // [readout] -> (still wall, still readback, moved wall, moved readback) samples.
         let mut samples = vec![[Vec::new(), Vec::new(), Vec::new(), Vec::new()]; readouts.len()];
+        // A frame reading back float32, then a still frame with the renderer's readout:
+        // its first, which compiles the encoding's pipeline (cold with
+        // MESA_SHADER_CACHE_DISABLE=true).
+        let mut first = Vec::new();
         for (r, (_, _, readout)) in renderers.iter_mut().zip(&readouts) {
+            r.render(&FrameDesc::default(), &Silent)?;
             let desc = FrameDesc {
                 readout: *readout,
                 ..Default::default()
             };
+            let t = Instant::now();
             r.render(&desc, &Silent)?;
+            first.push(t.elapsed().as_secs_f64() * 1e3);
         }
         for i in 0..runs {
             let u = nudge(scene, 0.01 * (i + 1) as f32);
@@ -255,10 +265,10 @@ fn readback_table(
                 }
             }
         }
-        for ((label, bytes, _), s) in readouts.iter().zip(samples) {
+        for (((label, bytes, _), s), first) in readouts.iter().zip(samples).zip(first) {
             let [a, b, c, e] = s.map(|v| median(v) * 1e3);
             println!(
-                "| {name} | {w}×{h} | {photons} | {label} | {bytes} | {a:.1} | {b:.2} | {c:.0} | {e:.2} |"
+                "| {name} | {w}×{h} | {photons} | {label} | {bytes} | {first:.1} | {a:.1} | {b:.2} | {c:.0} | {e:.2} |"
             );
         }
     }

@@ -98,7 +98,7 @@ impl<'g> GpuFrame<'g> {
     }
 
     /// Ends the frame's GPU work: the composite, the radiance's encodings and the readback
-    /// of `names` (`indirect`: the method's indirect-light texture; "radiance" read back in
+    /// of `names` (none of them in a still frame, [`Targets::output_kept`]) (`indirect`: the method's indirect-light texture; "radiance" read back in
     /// the form the frame asks for, [`Targets::readout_names`]) recorded after what
     /// `encoder` holds, the timestamps resolved, submitted and read back (stage
     /// "readback"); the GPU passes' times added to the stages.
@@ -110,12 +110,15 @@ impl<'g> GpuFrame<'g> {
         fc: &mut FrameCtx,
     ) -> Result<Readback> {
         let ctx = &self.ctx;
-        self.targets.record_composite(ctx, &mut encoder, self.timer);
         let names = self.targets.readout_names(names);
-        self.targets
-            .record_encodings(ctx, &mut encoder, &names, self.timer);
-        self.targets
-            .record_readback(ctx, &mut encoder, &names, indirect);
+        // A still frame reads the buffers of the last again: no pass at all.
+        if !self.targets.output_kept(&names) {
+            self.targets.record_composite(ctx, &mut encoder, self.timer);
+            self.targets
+                .record_encodings(ctx, &mut encoder, &names, self.timer);
+            self.targets
+                .record_readback(ctx, &mut encoder, &names, indirect);
+        }
         self.timer.resolve(&mut encoder);
         ctx.queue.submit([encoder.finish()]);
         let targets = &*self.targets;

@@ -97,6 +97,10 @@ pub(crate) struct Targets {
     encodings: Encodings,
     /// What the frames hand back of the radiance ([`Targets::set_readout`]).
     readout: Readout,
+    /// The frame's method found nothing changed since the last frame ([`Targets::set_still`]).
+    still: bool,
+    /// The readout and the textures that the last frame's readback buffers hold.
+    last_output: Option<(Readout, Vec<&'static str>)>,
 }
 
 fn target(
@@ -330,6 +334,8 @@ impl Targets {
             readback: HashMap::new(),
             encodings: Encodings::new(ctx, w, h),
             readout: Readout::default(),
+            still: false,
+            last_output: None,
         })
     }
 
@@ -713,6 +719,27 @@ impl Targets {
         self.readout = readout;
     }
 
+    /// The method of this frame found that nothing its composite reads changed since the
+    /// last frame (a still frame: the same photons, estimate, direct and specular light).
+    /// Reset by the frame's [`Targets::output_kept`].
+    pub fn set_still(&mut self, still: bool) {
+        self.still = still;
+    }
+
+    /// Whether the readback buffers already hold what this frame would copy into them
+    /// (a still frame asking for the same `names` in the same readout as the last): then
+    /// the frame records no composite, encoding or copy and reads them again. Otherwise
+    /// notes `names` as what the frame is about to copy and returns false.
+    pub fn output_kept(&mut self, names: &[&'static str]) -> bool {
+        let still = std::mem::take(&mut self.still);
+        let now = (self.readout, names.to_vec());
+        if still && self.last_output.as_ref() == Some(&now) {
+            return true;
+        }
+        self.last_output = Some(now);
+        false
+    }
+
     /// The textures to read back for `names` (a method's list): "radiance" replaced by
     /// what the readout asks for ("radiance" in 32-bit floats, "radiance16" in half
     /// floats, "display" the display image).
@@ -768,27 +795,36 @@ impl Targets {
             "normals" => &self.gbuf.textures[1],
             "albedo" => &self.gbuf.textures[4],
             "indirect" => indirect?,
-            "display" => &self.encodings.display.as_ref()?.texture,
-            "radiance16" => &self.encodings.half.as_ref()?.texture,
             _ => return None,
         })
     }
 
-    /// Bytes of a texel of the texture read back under `name`, and of its rows in the
-    /// readback buffer (padded to wgpu's copy alignment).
-    fn row_bytes(&self, name: &str) -> (usize, usize) {
-        let texel = match name {
-            "display" => 4,
-            "radiance16" => 8,
-            _ => 16,
-        };
-        let row = (self.width as usize * texel)
-            .next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT as usize);
-        (texel, row)
+    /// The radiance's encoding read back under `name` (a storage buffer, rows unpadded).
+    fn encoded(&self, name: &str) -> Option<&wgpu::Buffer> {
+        let e = &self.encodings;
+        match name {
+            "display" => e.display.as_ref().map(|t| &t.buffer),
+            "radiance16" => e.half.as_ref().map(|t| &t.buffer),
+            _ => None,
+        }
     }
 
-    /// Records copies of the named textures into their readback buffers (created on first
-    /// use at this size).
+    /// Bytes of a texel read back under `name`, and of its rows in the readback buffer
+    /// (a texture's padded to wgpu's copy alignment; an encoding's as they are).
+    fn row_bytes(&self, name: &str) -> (usize, usize) {
+        let w = self.width as usize;
+        match name {
+            "display" => (4, w * 4),
+            "radiance16" => (8, w * 8),
+            _ => (
+                16,
+                (w * 16).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT as usize),
+            ),
+        }
+    }
+
+    /// Records copies of the named textures and encodings into their readback buffers
+    /// (created on first use at this size).
     pub fn record_readback(
         &mut self,
         ctx: &GpuContext,
@@ -805,6 +841,11 @@ impl Targets {
             }
         }
         for &name in names {
+            if let Some(encoded) = self.encoded(name) {
+                let dst = &self.readback[name];
+                encoder.copy_buffer_to_buffer(encoded, 0, dst, 0, encoded.size());
+                continue;
+            }
             let Some(texture) = self.texture_of(name, indirect) else {
                 continue;
             };
@@ -837,19 +878,23 @@ impl Targets {
             let (texel, row) = self.row_bytes(name);
             let rows = (0..h).map(|y| &b[y * row..y * row + w * texel]);
             match name {
+                // The encodings' rows are unpadded: RGBA per pixel, alpha dropped.
                 "display" => {
-                    let rgb = rows.flat_map(|r| r.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]));
-                    out.display = Some(rgb.collect());
+                    let mut rgb = vec![0u8; w * h * 3];
+                    for (o, p) in rgb.chunks_exact_mut(3).zip(b.chunks_exact(4)) {
+                        o.copy_from_slice(&p[..3]);
+                    }
+                    out.display = Some(rgb);
                 }
                 "radiance16" => {
-                    let rgb = rows.flat_map(|r| {
-                        let halves: &[u16] = bytemuck::cast_slice(r);
-                        let half = half::f16::from_bits;
-                        halves
-                            .chunks_exact(4)
-                            .flat_map(move |p| [half(p[0]), half(p[1]), half(p[2])])
-                    });
-                    out.half = Some(rgb.collect());
+                    let halves: &[u16] = bytemuck::cast_slice(&b[..w * h * 8]);
+                    let mut rgb = vec![half::f16::ZERO; w * h * 3];
+                    for (o, p) in rgb.chunks_exact_mut(3).zip(halves.chunks_exact(4)) {
+                        for (o, p) in o.iter_mut().zip(p) {
+                            *o = half::f16::from_bits(*p);
+                        }
+                    }
+                    out.half = Some(rgb);
                 }
                 _ => {
                     let mut v: Vec<Vec4> = Vec::with_capacity(w * h);

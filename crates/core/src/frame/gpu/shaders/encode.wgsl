@@ -1,7 +1,8 @@
-// The frame's radiance encoded for readback (`frame::gpu::encode`), the same formulas as
-// `frame::readout` (CPU) and `gi.display` (Python): `fs_display` writes the tone-mapped
-// 8-bit sRGB image (exposure, then `clip` or `agx`, then round(255·v)/255 so that the
-// Rgba8Unorm store is exact), `fs_half` the radiance for an Rgba16Float target.
+// The frame's radiance encoded for readback (`frame::gpu::encode`) into a storage buffer,
+// one thread a pixel, rows top first, the same formulas as `frame::readout` (CPU) and
+// `gi.display` (Python): `cs_display` writes the tone-mapped 8-bit sRGB image (exposure,
+// then `clip` or `agx`, then round(255·v), as numpy rounds: half to even) as RGBA8 words,
+// `cs_half` the radiance as RGBA half floats (two words a pixel).
 
 struct Encode {
     // 2^exposure.
@@ -13,6 +14,7 @@ struct Encode {
 
 @group(0) @binding(0) var radiance: texture_2d<f32>;
 @group(0) @binding(1) var<uniform> encode: Encode;
+@group(0) @binding(2) var<storage, read_write> encoded: array<u32>;
 
 fn srgb_encode(v: vec3<f32>) -> vec3<f32> {
     let x = clamp(v, vec3<f32>(0.0), vec3<f32>(1.0));
@@ -56,18 +58,31 @@ fn finite(v: vec3<f32>) -> vec3<f32> {
     return select(v, vec3<f32>(0.0), bad);
 }
 
-@fragment
-fn fs_display(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
-    let c = textureLoad(radiance, vec2<i32>(frag.xy), 0).xyz;
+@compute @workgroup_size(8, 8)
+fn cs_display(@builtin(global_invocation_id) id: vec3<u32>) {
+    let size = textureDimensions(radiance);
+    if id.x >= size.x || id.y >= size.y {
+        return;
+    }
+    let c = textureLoad(radiance, vec2<i32>(id.xy), 0).xyz;
     let x = max(finite(c), vec3<f32>(0.0)) * encode.scale;
     var v = srgb_encode(x);
     if encode.tonemap == 1u {
         v = agx(x);
     }
-    return vec4<f32>(round(clamp(v, vec3<f32>(0.0), vec3<f32>(1.0)) * 255.0) / 255.0, 1.0);
+    // round() first: pack4x8unorm rounds half up, numpy half to even.
+    let q = round(clamp(v, vec3<f32>(0.0), vec3<f32>(1.0)) * 255.0) / 255.0;
+    encoded[id.y * size.x + id.x] = pack4x8unorm(vec4<f32>(q, 1.0));
 }
 
-@fragment
-fn fs_half(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
-    return vec4<f32>(textureLoad(radiance, vec2<i32>(frag.xy), 0).xyz, 1.0);
+@compute @workgroup_size(8, 8)
+fn cs_half(@builtin(global_invocation_id) id: vec3<u32>) {
+    let size = textureDimensions(radiance);
+    if id.x >= size.x || id.y >= size.y {
+        return;
+    }
+    let c = textureLoad(radiance, vec2<i32>(id.xy), 0).xyz;
+    let i = 2u * (id.y * size.x + id.x);
+    encoded[i] = pack2x16float(c.xy);
+    encoded[i + 1u] = pack2x16float(vec2<f32>(c.z, 1.0));
 }
