@@ -32,116 +32,86 @@ fn layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     })
 }
 
-/// The pipeline of one encoding: compute entry `entry`.
-fn pipeline(
-    device: &wgpu::Device,
-    layout: &wgpu::BindGroupLayout,
-    entry: &str,
-) -> wgpu::ComputePipeline {
-    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some("encode pipeline layout"),
-        bind_group_layouts: &[Some(layout)],
-        immediate_size: 0,
-    });
-    let module = shaders::module(device, "encode shader", &[ENCODE]);
-    gpu::create_compute_pipeline(
-        device,
-        &wgpu::ComputePipelineDescriptor {
-            label: Some(entry),
-            layout: Some(&pipeline_layout),
-            module: &module,
-            entry_point: Some(entry),
-            compilation_options: Default::default(),
-            cache: None,
-        },
-    )
-}
-
-/// An encoding of the radiance: its entry point and bytes a pixel.
-pub(crate) trait Encoding: Send + Sync + 'static {
-    const ENTRY: &'static str;
-    const BYTES: u64;
-    /// Its stage name (GPU timestamps).
-    const STAGE: &'static str;
-}
-
-/// The tone-mapped 8-bit sRGB display image (RGBA8 words).
-pub(crate) struct DisplayEncoding;
-
-impl Encoding for DisplayEncoding {
-    const ENTRY: &'static str = "cs_display";
-    const BYTES: u64 = 4;
-    const STAGE: &'static str = "display encode";
-}
-
-/// The radiance in half floats (RGBA).
-pub(crate) struct HalfEncoding;
-
-impl Encoding for HalfEncoding {
-    const ENTRY: &'static str = "cs_half";
-    const BYTES: u64 = 8;
-    const STAGE: &'static str = "half encode";
-}
-
-/// The pipeline of encoding `E`, compiled when a frame first asks for it.
-pub(crate) struct EncodePass<E: Encoding> {
+/// The encodings' pipeline (one entry point for both: one compile), compiled when a
+/// frame first asks for an encoding.
+pub(crate) struct EncodePass {
     layout: wgpu::BindGroupLayout,
     pipeline: wgpu::ComputePipeline,
-    encoding: std::marker::PhantomData<E>,
 }
 
-impl<E: Encoding> Pipelines for EncodePass<E> {
+impl Pipelines for EncodePass {
     fn create(ctx: &GpuContext) -> Self {
-        let layout = layout(&ctx.device);
-        let pipeline = pipeline(&ctx.device, &layout, E::ENTRY);
-        EncodePass {
-            layout,
-            pipeline,
-            encoding: std::marker::PhantomData,
+        let device = &ctx.device;
+        let layout = layout(device);
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("encode pipeline layout"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let module = shaders::module(device, "encode shader", &[ENCODE]);
+        let pipeline = gpu::compute_pipeline_of(device, &pipeline_layout, &module, "cs_encode");
+        EncodePass { layout, pipeline }
+    }
+}
+
+/// An encoding of the radiance: its bytes a pixel and its stage.
+#[derive(Clone, Copy)]
+enum Encoding {
+    Display,
+    Half,
+}
+
+impl Encoding {
+    fn bytes(self) -> u64 {
+        match self {
+            Encoding::Display => 4,
+            Encoding::Half => 8,
+        }
+    }
+
+    /// Its stage name (GPU timestamps).
+    fn stage(self) -> &'static str {
+        match self {
+            Encoding::Display => "display encode",
+            Encoding::Half => "half encode",
         }
     }
 }
 
-/// One encoding's output at the frame's size, and the bind group that writes it.
+/// One encoding's output at the frame's size, its uniform and the bind group of both.
 pub(crate) struct EncodeTarget {
     pub buffer: wgpu::Buffer,
+    uniform: wgpu::Buffer,
     group: wgpu::BindGroup,
 }
 
-/// The encodings' outputs of one image size (made when first asked for) and the uniform.
+/// The encodings' outputs of one image size (made when first asked for).
 pub(crate) struct Encodings {
     width: u32,
     height: u32,
-    uniform: wgpu::Buffer,
     pub display: Option<EncodeTarget>,
     pub half: Option<EncodeTarget>,
 }
 
 impl Encodings {
-    pub fn new(ctx: &GpuContext, width: u32, height: u32) -> Self {
-        let uniform = buffer_init(
-            ctx,
-            "encode uniform",
-            &[0u8; UNIFORM_SIZE as usize],
-            wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-        );
+    pub fn new(width: u32, height: u32) -> Self {
         Encodings {
             width,
             height,
-            uniform,
             display: None,
             half: None,
         }
     }
 
-    /// The output of encoding `E` of `radiance`, with the group of `layout`.
-    fn target<E: Encoding>(
+    /// The output of encoding `e` of `radiance`, with the group of `layout`.
+    fn target(
         &self,
         ctx: &GpuContext,
         radiance: &wgpu::TextureView,
+        e: Encoding,
         layout: &wgpu::BindGroupLayout,
     ) -> EncodeTarget {
-        let size = self.width as u64 * self.height as u64 * E::BYTES;
+        let size = self.width as u64 * self.height as u64 * e.bytes();
         let out = gpu::create_buffer(
             &ctx.device,
             &wgpu::BufferDescriptor {
@@ -151,22 +121,28 @@ impl Encodings {
                 mapped_at_creation: false,
             },
         );
-        let group = gpu::create_bind_group(
-            &ctx.device,
-            &wgpu::BindGroupDescriptor {
-                label: Some("encode bind group"),
-                layout,
-                entries: &[
-                    texture(0, radiance),
-                    buffer(1, &self.uniform),
-                    buffer(2, &out),
-                ],
-            },
+        let half = matches!(e, Encoding::Half) as u32;
+        let uniform = buffer_init(
+            ctx,
+            "encode uniform",
+            bytemuck::cast_slice(&[1f32.to_bits(), 0, half, 0]),
+            wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         );
-        EncodeTarget { buffer: out, group }
+        let entries = [texture(0, radiance), buffer(1, &uniform), buffer(2, &out)];
+        let desc = wgpu::BindGroupDescriptor {
+            label: Some("encode bind group"),
+            layout,
+            entries: &entries,
+        };
+        let group = gpu::create_bind_group(&ctx.device, &desc);
+        EncodeTarget {
+            buffer: out,
+            uniform,
+            group,
+        }
     }
 
-    /// Records the display encoding of `radiance` with `d`'s tone map and exposure (the
+    /// Records the display encoding of `radiance` with `d`'s tone map and exposure (its
     /// uniform written now, before the frame's submission).
     pub fn record_display(
         &mut self,
@@ -176,11 +152,11 @@ impl Encodings {
         d: Display,
         timer: &mut Timer,
     ) {
+        let mut slot = self.display.take();
+        let t = self.record(ctx, encoder, radiance, Encoding::Display, &mut slot, timer);
         let uniform: [u32; 4] = [2f32.powf(d.exposure).to_bits(), d.tonemap.code(), 0, 0];
         let bytes: &[u8] = bytemuck::cast_slice(&uniform);
-        gpu::write_buffer(&ctx.queue, "encode uniform", &self.uniform, 0, bytes);
-        let mut slot = self.display.take();
-        self.record::<DisplayEncoding>(ctx, encoder, radiance, &mut slot, timer);
+        gpu::write_buffer(&ctx.queue, "encode uniform", &t.uniform, 0, bytes);
         self.display = slot;
     }
 
@@ -193,27 +169,31 @@ impl Encodings {
         timer: &mut Timer,
     ) {
         let mut slot = self.half.take();
-        self.record::<HalfEncoding>(ctx, encoder, radiance, &mut slot, timer);
+        self.record(ctx, encoder, radiance, Encoding::Half, &mut slot, timer);
         self.half = slot;
     }
 
-    /// Records encoding `E` of `radiance` into the output in `slot` (made if empty).
-    fn record<E: Encoding>(
+    /// Records encoding `e` of `radiance` into the output in `slot` (made if empty);
+    /// returns that output.
+    fn record<'s>(
         &self,
         ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
         radiance: &wgpu::TextureView,
-        slot: &mut Option<EncodeTarget>,
+        e: Encoding,
+        slot: &'s mut Option<EncodeTarget>,
         timer: &mut Timer,
-    ) {
-        let p = EncodePass::<E>::get(ctx);
-        let t = slot.get_or_insert_with(|| self.target::<E>(ctx, radiance, &p.layout));
+    ) -> &'s EncodeTarget {
+        let p = EncodePass::get(ctx);
+        let t = slot.get_or_insert_with(|| self.target(ctx, radiance, e, &p.layout));
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some(E::STAGE),
-            timestamp_writes: timer.compute_pass(E::STAGE),
+            label: Some(e.stage()),
+            timestamp_writes: timer.compute_pass(e.stage()),
         });
         pass.set_pipeline(&p.pipeline);
         pass.set_bind_group(0, &t.group, &[]);
-        pass.dispatch_workgroups(self.width.div_ceil(GROUP), self.height.div_ceil(GROUP), 1);
+        let (w, h) = (self.width, self.height);
+        pass.dispatch_workgroups(w.div_ceil(GROUP), h.div_ceil(GROUP), 1);
+        t
     }
 }

@@ -332,7 +332,7 @@ impl Targets {
             model_materials,
             composite_group: None,
             readback: HashMap::new(),
-            encodings: Encodings::new(ctx, w, h),
+            encodings: Encodings::new(w, h),
             readout: Readout::default(),
             still: false,
             last_output: None,

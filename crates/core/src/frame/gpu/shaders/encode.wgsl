@@ -1,15 +1,17 @@
 // The frame's radiance encoded for readback (`frame::gpu::encode`) into a storage buffer,
 // one thread a pixel, rows top first, the same formulas as `frame::readout` (CPU) and
-// `gi.display` (Python): `cs_display` writes the tone-mapped 8-bit sRGB image (exposure,
-// then `clip` or `agx`, then round(255·v), as numpy rounds: half to even) as RGBA8 words,
-// `cs_half` the radiance as RGBA half floats (two words a pixel).
+// `gi.display` (Python): the tone-mapped 8-bit sRGB image (exposure, then `clip` or
+// `agx`, then round(255·v), as numpy rounds: half to even) as RGBA8 words, or the
+// radiance as RGBA half floats (two words a pixel), as the uniform says.
 
 struct Encode {
     // 2^exposure.
     scale: f32,
     // 0: clip, 1: agx.
     tonemap: u32,
-    _pad: vec2<u32>,
+    // 1: the half-float encoding; 0: the display image.
+    half: u32,
+    _pad: u32,
 }
 
 @group(0) @binding(0) var radiance: texture_2d<f32>;
@@ -58,13 +60,17 @@ fn finite(v: vec3<f32>) -> vec3<f32> {
     return select(v, vec3<f32>(0.0), bad);
 }
 
-@compute @workgroup_size(8, 8)
-fn cs_display(@builtin(global_invocation_id) id: vec3<u32>) {
+// The index of thread `id`'s pixel, rows top first; -1 outside the image.
+fn pixel_index(id: vec3<u32>) -> i32 {
     let size = textureDimensions(radiance);
     if id.x >= size.x || id.y >= size.y {
-        return;
+        return -1;
     }
-    let c = textureLoad(radiance, vec2<i32>(id.xy), 0).xyz;
+    return i32(id.y * size.x + id.x);
+}
+
+// The display image's RGBA8 word of radiance `c`.
+fn display_word(c: vec3<f32>) -> u32 {
     let x = max(finite(c), vec3<f32>(0.0)) * encode.scale;
     var v = srgb_encode(x);
     if encode.tonemap == 1u {
@@ -72,17 +78,20 @@ fn cs_display(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     // round() first: pack4x8unorm rounds half up, numpy half to even.
     let q = round(clamp(v, vec3<f32>(0.0), vec3<f32>(1.0)) * 255.0) / 255.0;
-    encoded[id.y * size.x + id.x] = pack4x8unorm(vec4<f32>(q, 1.0));
+    return pack4x8unorm(vec4<f32>(q, 1.0));
 }
 
 @compute @workgroup_size(8, 8)
-fn cs_half(@builtin(global_invocation_id) id: vec3<u32>) {
-    let size = textureDimensions(radiance);
-    if id.x >= size.x || id.y >= size.y {
+fn cs_encode(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = pixel_index(id);
+    if i < 0 {
         return;
     }
     let c = textureLoad(radiance, vec2<i32>(id.xy), 0).xyz;
-    let i = 2u * (id.y * size.x + id.x);
-    encoded[i] = pack2x16float(c.xy);
-    encoded[i + 1u] = pack2x16float(vec2<f32>(c.z, 1.0));
+    if encode.half == 1u {
+        encoded[2 * i] = pack2x16float(c.xy);
+        encoded[2 * i + 1] = pack2x16float(vec2<f32>(c.z, 1.0));
+    } else {
+        encoded[i] = display_word(c);
+    }
 }
