@@ -148,7 +148,7 @@ class Renderer:
         extras: bool = False,
         seed: int | None = None,
         progress: Callable[[str, float], bool | None] | None = None,
-        radiance: str | None = "float32",
+        radiance: str | None = ...,
         tonemap: str | None = None,
         exposure: float = 0.0,
     ) -> dict[str, Any]: ...
