@@ -148,6 +148,9 @@ class Renderer:
         extras: bool = False,
         seed: int | None = None,
         progress: Callable[[str, float], bool | None] | None = None,
+        radiance: str | None = ...,
+        tonemap: str | None = None,
+        exposure: float = 0.0,
     ) -> dict[str, Any]: ...
     def update(self, target: str, key: int | str | None, fields: dict[str, Any]) -> None: ...
     def set_lighting(

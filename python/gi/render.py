@@ -20,6 +20,7 @@ from gi._gi import RenderWarning, Scene, SceneError, SettingError
 from gi.animation import animation_updates, render_frames
 from gi.denoising import INSTALL_HINT, available
 from gi.denoising import denoise as run_denoiser
+from gi.display import check_tonemap, to_srgb8
 from gi.meshes import scene_error
 from gi.progress import ProgressBar
 from gi.result import RenderResult
@@ -123,8 +124,9 @@ def _progress(progress: bool | ProgressCallback) -> ProgressCallback | None:
 
 
 def _result(out: dict[str, Any]) -> RenderResult:
+    half = out.get("radiance_half")
     return RenderResult(
-        radiance=out["radiance"],
+        radiance=out["radiance"] if half is None else half.view(np.float16),
         albedo=out["albedo"],
         normal=out["normal"],
         position=out["position"],
@@ -132,7 +134,25 @@ def _result(out: dict[str, Any]) -> RenderResult:
         caustics=out["caustics"],
         stats=out["stats"],
         extra=dict(out["extra"]),
+        display8=out.get("display", np.zeros((0, 0, 3), np.uint8)),
     )
+
+
+#: ``radiance=`` of :meth:`Renderer.render`.
+RADIANCE_FORMATS = ("float32", "float16", None)
+#: Tone maps the core applies (on the GPU where the frame allows); the rest in Python.
+_CORE_TONEMAPS = ("clip", "filmic", "agx")
+
+
+def _readout(radiance: Any, tonemap: Any, exposure: Any) -> tuple[str | None, str | None, float]:
+    """Checked ``radiance``, ``tonemap`` and ``exposure`` of :meth:`Renderer.render`."""
+    if not (radiance is None or (isinstance(radiance, str) and radiance in RADIANCE_FORMATS)):
+        raise _checks.setting_error(
+            "radiance", f"must be 'float32', 'float16' or None, got {radiance!r}"
+        )
+    if tonemap is not None:
+        check_tonemap(tonemap)
+    return radiance, tonemap, _checks.exposure_setting(exposure)
 
 
 class Renderer:
@@ -387,18 +407,50 @@ class Renderer:
         extras: bool = False,
         seed: int | None = None,
         progress: bool | ProgressCallback = False,
+        radiance: str | None = "float32",
+        tonemap: str | None = None,
+        exposure: float = 0.0,
     ) -> RenderResult:
         """Renders one frame. Only the radiance is read back unless ``aovs`` (albedo,
         normal, position, depth) or ``extras`` (the method's own images) are asked for;
         images not asked for are empty arrays, left out of ``aov_names()``. ``seed`` (in
-        0..=2**64-1) overrides the frame's random seed. A progressive renderer's result is
+        0..=2**64-1) overrides the frame's random seed.
+
+        ``radiance`` is the radiance's form: ``"float32"``, ``"float16"`` (a float16 array,
+        half the readback) or ``None`` (an empty array). ``tonemap`` (``"clip"``,
+        ``"filmic"``/``"agx"``, ``"aces"``; :mod:`gi.display`) with ``exposure`` adds the
+        8-bit sRGB image ``display8``: methods ``direct`` and ``ispm`` tone-map it on the GPU
+        and read back 4 bytes a pixel instead of 16 (with ``radiance=None`` nothing else);
+        the other methods, progressive passes and ``aces`` encode it on the CPU from the
+        float radiance, as :func:`gi.display.to_srgb8` does. A progressive renderer's result is
         the mean of its passes: ``stats.passes`` counts them and ``stats.total_seconds`` is
         their time together (the stages are the last pass's, and ``earlier passes``)."""
         report = _progress(progress)
+        radiance, tonemap, exposure = _readout(radiance, tonemap, exposure)
+        # ACES runs in Python (OpenColorIO): from the 32-bit radiance.
+        in_core = tonemap in _CORE_TONEMAPS
         out = self._native.render(
-            aovs=_flag("aovs", aovs), extras=_flag("extras", extras), seed=seed, progress=report
+            aovs=_flag("aovs", aovs),
+            extras=_flag("extras", extras),
+            seed=seed,
+            progress=report,
+            radiance=radiance if in_core or tonemap is None else "float32",
+            tonemap=tonemap if in_core else None,
+            exposure=exposure,
         )
         result = _result(out)
+        if tonemap is not None:
+            if not in_core:
+                result = dataclasses.replace(
+                    result, display8=to_srgb8(result.radiance, exposure, tonemap)
+                )
+                if radiance is None:
+                    result = dataclasses.replace(result, radiance=np.zeros((0, 0, 3), np.float32))
+                elif radiance == "float16":
+                    result = dataclasses.replace(
+                        result, radiance=result.radiance.astype(np.float16)
+                    )
+            result = dataclasses.replace(result, display_settings=(tonemap, exposure))
         if self._native.progressive:
             if result.stats.passes <= 1:
                 self._pass_seconds = 0.0

@@ -29,6 +29,11 @@ class RenderResult:
     caustics: np.ndarray
     stats: RenderStats
     extra: dict[str, np.ndarray] = field(default_factory=dict)
+    #: The tone-mapped 8-bit sRGB image (H×W×3 uint8) when the frame was rendered with
+    #: ``tonemap=`` (:meth:`gi.Renderer.render`), else empty; ``display_settings`` is its
+    #: ``(tonemap, exposure)``.
+    display8: np.ndarray = field(default_factory=lambda: np.zeros((0, 0, 3), np.uint8))
+    display_settings: tuple[str, float] | None = None
 
     BASE = aovs.BASE
 
@@ -79,7 +84,16 @@ class RenderResult:
 
     def display(self, tonemap: str = "clip", exposure: float = 0.0) -> np.ndarray:
         """The beauty as 8-bit sRGB (H×W×3 uint8) through a display transform
-        (:mod:`gi.display`: "clip", "filmic"/"agx" or "aces")."""
+        (:mod:`gi.display`: "clip", "filmic"/"agx" or "aces"): the frame's own ``display8``
+        when it was rendered with these settings, else encoded from ``radiance``."""
+        if self.display8.size and self.display_settings == (tonemap, float(exposure)):
+            return self.display8
+        if self.radiance.size == 0:
+            raise _checks.setting_error(
+                "radiance",
+                "this frame has no radiance (rendered with radiance=None); its display image"
+                f" is {self.display_settings!r}",
+            )
         return to_srgb8(self.radiance, exposure, tonemap)
 
     def _repr_png_(self) -> bytes:

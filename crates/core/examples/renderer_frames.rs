@@ -22,6 +22,7 @@ fn main() -> gi_core::Result<()> {
             extras: false,
         },
         serial: false,
+        readout: Default::default(),
     };
     for frame in 0..4 {
         // Move the first light a little (a point or spot light; a sun turns).

@@ -551,6 +551,7 @@ fn ispm_reads_the_scene_extent_once_a_frame() {
         seed: None,
         images: Images::default(),
         serial: false,
+        readout: Default::default(),
     };
     for f in 0..3 {
         let light = LightDesc::Point {

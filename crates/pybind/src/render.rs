@@ -2,6 +2,7 @@
 
 use crate::errors::to_py;
 use crate::scene::PyScene;
+use gi_core::frame::readout::{Display, Precision, Readout, Tonemap};
 use gi_core::frame::{FrameDesc, Images, Renderer};
 use gi_core::scene::update::UpdateTarget;
 use gi_core::{Image, Method, MethodOptions, RenderOptions};
@@ -55,11 +56,25 @@ fn integer<T: TryFrom<i128>>(v: &Bound<'_, PyAny>) -> Result<T, impl Fn(&str) ->
 }
 
 /// A frame as a dict of float32 arrays (radiance, albedo, normal, position, caustics:
-/// H×W×3, empty when not read back; depth: H×W), `extra` and `stats`.
-fn output_dict<'py>(py: Python<'py>, out: gi_core::RenderOutput) -> PyResult<Bound<'py, PyDict>> {
+/// H×W×3, empty when not read back; depth: H×W), `radiance_half` (H×W×3 uint16: the bits
+/// of half floats) and `display` (H×W×3 uint8) when asked for (else absent), `extra` and
+/// `stats`. `size`: the frame's width and height.
+fn output_dict<'py>(
+    py: Python<'py>,
+    out: gi_core::RenderOutput,
+    size: (usize, usize),
+) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     let (w, h) = (out.albedo.width as usize, out.albedo.height as usize);
     d.set_item("radiance", image_array(py, out.radiance)?)?;
+    let (fw, fh) = size;
+    if let Some(half) = out.radiance_half {
+        let bits: Vec<u16> = half.into_iter().map(|v| v.to_bits()).collect();
+        d.set_item("radiance_half", bits.into_pyarray(py).reshape([fh, fw, 3])?)?;
+    }
+    if let Some(display) = out.display {
+        d.set_item("display", display.into_pyarray(py).reshape([fh, fw, 3])?)?;
+    }
     d.set_item("albedo", image_array(py, out.albedo)?)?;
     d.set_item("normal", image_array(py, out.normal)?)?;
     d.set_item("position", image_array(py, out.position)?)?;
@@ -73,6 +88,39 @@ fn output_dict<'py>(py: Python<'py>, out: gi_core::RenderOutput) -> PyResult<Bou
     let stats = crate::stats::PyStats(out.stats);
     d.set_item("stats", stats)?;
     Ok(d)
+}
+
+/// The readout of `Renderer.render`'s `radiance`, `tonemap` and `exposure`.
+fn readout(
+    py: Python<'_>,
+    radiance: Option<&str>,
+    tonemap: Option<&str>,
+    exposure: f32,
+) -> PyResult<Readout> {
+    let radiance = match radiance {
+        None => None,
+        Some("float32") => Some(Precision::Float32),
+        Some("float16") => Some(Precision::Float16),
+        Some(other) => {
+            let message = format!("must be 'float32', 'float16' or None, got {other:?}");
+            return Err(setting_error(py, "radiance", message));
+        }
+    };
+    let display = match tonemap {
+        None => None,
+        Some(name) => {
+            let tonemap = Tonemap::parse(name).ok_or_else(|| {
+                let message =
+                    format!("the core encodes 'clip' and 'agx' (or 'filmic'), got {name:?}");
+                setting_error(py, "tonemap", message)
+            })?;
+            if !exposure.is_finite() {
+                return Err(setting_error(py, "exposure", "must be finite"));
+            }
+            Some(Display { tonemap, exposure })
+        }
+    };
+    Ok(Readout { radiance, display })
 }
 
 /// A persistent renderer (`gi_core::Renderer`): made once, then `render()` per frame with
@@ -121,8 +169,12 @@ impl PyRenderer {
     }
 
     /// Renders one frame; `aovs` adds albedo/normal/position/depth, `extras` the method's
-    /// own images. Returns the dict of `render()`.
-    #[pyo3(signature = (aovs = false, extras = false, seed = None, progress = None))]
+    /// own images; `radiance` is "float32", "float16" or None (not handed back), `tonemap`
+    /// ("clip", "agx"/"filmic") asks for the 8-bit display image at `exposure`. Returns the
+    /// dict of `render()`.
+    #[pyo3(signature = (aovs = false, extras = false, seed = None, progress = None,
+        radiance = Some("float32"), tonemap = None, exposure = 0.0))]
+    #[allow(clippy::too_many_arguments)]
     fn render<'py>(
         &mut self,
         py: Python<'py>,
@@ -130,7 +182,11 @@ impl PyRenderer {
         extras: bool,
         seed: Option<&Bound<'py, PyAny>>,
         progress: Option<Py<PyAny>>,
+        radiance: Option<&str>,
+        tonemap: Option<&str>,
+        exposure: f32,
     ) -> PyResult<Bound<'py, PyDict>> {
+        let readout = readout(py, radiance, tonemap, exposure)?;
         let seed = match seed {
             Some(v) if !v.is_none() => Some(integer::<u64>(v).map_err(|message| {
                 setting_error(py, "seed", message(&format!("in 0..={}", u64::MAX)))
@@ -141,12 +197,15 @@ impl PyRenderer {
             seed,
             images: Images { aovs, extras },
             serial: false,
+            readout,
         };
+        let camera = &self.inner.scene().camera;
+        let size = (camera.width as usize, camera.height as usize);
         let inner = &mut self.inner;
         let out = crate::guard::run(py, "Renderer.render", progress.as_ref(), |reporter| {
             inner.render(&desc, reporter)
         })?;
-        output_dict(py, out)
+        output_dict(py, out, size)
     }
 
     /// Applies a scene update given as Python values (a dict of the fields that change, in

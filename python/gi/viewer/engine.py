@@ -492,14 +492,22 @@ class Engine:
             seqs = dict(self._seqs)
         if not progressive:
             self._dirty = False
-        aov = self._display.aov
+        d = self._display
+        aov = d.aov
         base = set(gi.RenderResult.BASE) - {"radiance"}
+        # The beauty of an interactive frame: its 8-bit display image alone (tone-mapped on
+        # the GPU by `direct` and `ispm`); a progressive pass keeps the float radiance, so
+        # that a display change re-shows the refined image without a new pass.
+        display_only = aov == "radiance" and not progressive
         try:
             r = self._sync(slot)
             result = r.render(
                 aovs=aov in base or aov == "position",
                 extras=aov not in gi.RenderResult.BASE,
                 progress=lambda _stage, _f: not self._cancel_requested(progressive),
+                radiance=None if display_only else "float32",
+                tonemap=d.tonemap if display_only else None,
+                exposure=d.exposure,
             )
         except gi.RenderCancelled:
             if not progressive:
@@ -570,12 +578,14 @@ class Engine:
         self._result, self._result_meta = result, meta
         start = time.perf_counter()
         d = self._display
-        if d.aov == "radiance" or not _has_image(result, d.aov):
-            shown = to_display(result.radiance, d.tonemap, d.exposure)
+        if result.display8.size and result.display_settings == (d.tonemap, d.exposure):
+            pixels = result.display8
+        elif d.aov == "radiance" or not _has_image(result, d.aov):
+            pixels = quantize8(to_display(result.radiance, d.tonemap, d.exposure))
         else:
             depth = result.depth if result.depth.size else None
             shown = aov_display(d.aov, result.aov(d.aov), depth, d.tonemap, d.exposure)
-        pixels = quantize8(shown)
+            pixels = quantize8(shown)
         png = png_bytes(pixels, compression=1)
         s = result.stats
         h, w = pixels.shape[:2]

@@ -48,6 +48,7 @@ fn warm_frame(
                 seed: Some(seed),
                 images: Images::default(),
                 serial: false,
+                readout: Default::default(),
             },
             &Silent,
         )
@@ -115,6 +116,7 @@ fn stage_table(scene: &Scene, frames: u32) {
                         seed: Some(100 + f as u64),
                         images: Images::default(),
                         serial: false,
+                        readout: Default::default(),
                     },
                     &Silent,
                 )

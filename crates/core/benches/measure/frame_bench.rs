@@ -38,6 +38,11 @@
 //! direct light's options above, the light moving): engine frame, still frame and its stages
 //! per scene and size (`scripts/ci/gpu_check.sh` runs these).
 //!
+//! `--readback`: the readback table instead (`readback_table`): the radiance read back as
+//! 32-bit floats (what every frame read before issue 45), half floats, and the 8-bit
+//! display image tone-mapped on the GPU alone, a still frame and a frame after the light
+//! moved each, with their "readback" stage (`docs/bench/frame.md`).
+//!
 //! `--instancing`: the GPU instancing table instead (`common/instancing.rs`: instanced
 //! against flattened geometry, triangles per pass before and after culling, GPU geometry
 //! bytes, `ispm` frame and its stages; `docs/bench/instancing.md` section 7).
@@ -171,6 +176,99 @@ fn bidir_table(
                 frame * 1e3,
                 still * 1e3,
                 stage_list(&frames)
+            );
+        }
+    }
+    Ok(())
+}
+
+/// `--readback`: method `ispm` (`--photons`, 20k; `--scene`, cornell; `--size`, 640×480)
+/// with each readout of the radiance in the same run, interleaved frame by frame on
+/// renderers of their own: a still frame (nothing changed: the composite, the encoding and
+/// the readback) and a frame after the light moved, wall-clock medians and their
+/// "readback" stage (the wait for the GPU and the copy out of the mapped buffers); and the
+/// first still frame with each readout after a float32 frame, which compiles the
+/// encoding's pipeline (the cold compile with `MESA_SHADER_CACHE_DISABLE=true`).
+fn readback_table(
+    scenes: &[(&str, Scene)],
+    (w, h): (u32, u32),
+    photons: u64,
+    runs: usize,
+    d: DirectOptions,
+) -> Result<(), Box<dyn std::error::Error>> {
+    use gi_core::frame::readout::{Display, Precision, Readout, Tonemap};
+    let display = Some(Display {
+        tonemap: Tonemap::Clip,
+        exposure: 0.0,
+    });
+    let readouts = [
+        ("float32 (before)", 16, Readout::default()),
+        (
+            "float16",
+            8,
+            Readout {
+                radiance: Some(Precision::Float16),
+                display: None,
+            },
+        ),
+        (
+            "8-bit display (clip) only",
+            4,
+            Readout {
+                radiance: None,
+                display,
+            },
+        ),
+    ];
+    println!(
+        "| scene | size | photons | radiance read back | bytes/pixel | first still frame \
+         with it (ms) | still frame (ms) | still: readback (ms) | light moved: frame (ms) | \
+         light moved: readback (ms) |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|---|");
+    let settings = ispm_settings(w, h, photons, Estimator::Auto, d);
+    for (name, scene) in scenes {
+        let mut renderers = readouts
+            .iter()
+            .map(|_| Renderer::new(scene, &settings))
+            .collect::<Result<Vec<_>, _>>()?;
+        // [readout] -> (still wall, still readback, moved wall, moved readback) samples.
+        let mut samples = vec![[Vec::new(), Vec::new(), Vec::new(), Vec::new()]; readouts.len()];
+        // A frame reading back float32, then a still frame with the renderer's readout:
+        // its first, which compiles the encoding's pipeline (cold with
+        // MESA_SHADER_CACHE_DISABLE=true).
+        let mut first = Vec::new();
+        for (r, (_, _, readout)) in renderers.iter_mut().zip(&readouts) {
+            r.render(&FrameDesc::default(), &Silent)?;
+            let desc = FrameDesc {
+                readout: *readout,
+                ..Default::default()
+            };
+            let t = Instant::now();
+            r.render(&desc, &Silent)?;
+            first.push(t.elapsed().as_secs_f64() * 1e3);
+        }
+        for i in 0..runs {
+            let u = nudge(scene, 0.01 * (i + 1) as f32);
+            for (k, (r, (_, _, readout))) in renderers.iter_mut().zip(&readouts).enumerate() {
+                let desc = FrameDesc {
+                    readout: *readout,
+                    ..Default::default()
+                };
+                r.update(&u)?;
+                // The frame after the light moved (slots 2, 3), then a still frame (0, 1).
+                for slot in [2, 0] {
+                    let t = Instant::now();
+                    let out = r.render(&desc, &Silent)?;
+                    samples[k][slot].push(t.elapsed().as_secs_f64());
+                    samples[k][slot + 1].push(stage(&out, &["readback"]));
+                }
+            }
+        }
+        for (((label, bytes, _), s), first) in readouts.iter().zip(samples).zip(first) {
+            let [a, b, c, e] = s.map(|v| median(v) * 1e3);
+            println!(
+                "| {name} | {w}×{h} | {photons} | {label} | {bytes} | {first:.1} | {a:.1} | {b:.2} | {c:.0} | {e:.2} |"
             );
         }
     }
@@ -464,6 +562,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     if method == "bidir" {
         return bidir_table(&scenes, &sizes, runs, direct);
+    }
+    if flag("--readback") {
+        let scenes = if only.is_none() {
+            &scenes[..1]
+        } else {
+            &scenes[..]
+        };
+        return readback_table(scenes, sizes[0], budgets[0], runs, direct);
     }
     let (stage_head, stage_rule) = if stages {
         (

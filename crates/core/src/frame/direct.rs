@@ -23,6 +23,8 @@ pub(super) fn frame(
     let mut gpu = GpuFrame::begin(&g.ctx, &mut g.scene, &mut g.targets, &mut g.timer, &mut fc);
     let mut encoder = gpu.encoder("direct frame");
     gpu.record_shadows(&mut encoder, &fc, draw);
+    // Nothing to redraw: the composite and the readback of the last frame are this one's.
+    let still = gpu.targets.direct_current();
     // Before the direct light is recorded (and marked current): a frame cancelled while
     // tracing leaves both to be redone.
     if !gpu.targets.direct_current() {
@@ -30,6 +32,7 @@ pub(super) fn frame(
     }
     let encoder = gpu.record_direct(encoder, &fc)?;
     let names = readback_names(images, false);
+    gpu.targets.set_still(still);
     let data = gpu.finish(encoder, &names, None, &mut fc)?;
     let mut out = gpu.output(&data, fc);
     if images.extras {
@@ -162,7 +165,11 @@ pub(super) fn redo(
         gpu.finish(encoder, &names, None, fc)
     })?;
     let (w, h) = (targets.width, targets.height);
-    out.radiance = rgb_image(w, h, &data["radiance"]);
+    if let Some(r) = data.get("radiance") {
+        out.radiance = rgb_image(w, h, r);
+    }
+    out.display = data.display.clone();
+    out.radiance_half = data.half.clone();
     if let Some(a) = data.get("accum") {
         let direct = normalized(targets, a);
         for (name, img) in &mut out.aovs {

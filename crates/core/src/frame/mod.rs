@@ -20,6 +20,7 @@ pub mod output;
 mod path;
 mod photon;
 mod progressive;
+pub mod readout;
 
 use crate::cancel::Progress;
 use crate::error::{Error, Result};
@@ -69,6 +70,10 @@ pub struct FrameDesc {
     /// devices whose timestamps cannot place compute passes (lavapipe). Slower: the CPU
     /// trace no longer overlaps the GPU's direct light. Method `ispm` only.
     pub serial: bool,
+    /// In what form the radiance is handed back (32-bit floats by default; half floats, a
+    /// tone-mapped 8-bit display image, or both; see [`readout`]). Methods `direct` and
+    /// `ispm` encode on the GPU and read back only what is asked for.
+    pub readout: readout::Readout,
 }
 
 /// What varies from frame to frame beyond the scene: the frame's seed, the kernel scale
@@ -372,7 +377,13 @@ impl Renderer {
             MethodOptions::Gather(o) => {
                 gather::render(&self.scene, self.cpu_bvh()?, o, &frame, progress)?
             }
-            _ => self.gpu_frame(&frame, desc.images, progress)?,
+            _ => {
+                // The composite is the final radiance of a frame of `direct` and `ispm`
+                // (progressive passes are summed, and `bidir` spreads spikes, on the CPU).
+                let last = matches!(self.method(), Method::Direct | Method::Ispm);
+                let on_gpu = readout::on_gpu(desc.readout, last && !common.progressive);
+                self.gpu_frame(&frame, desc.images, on_gpu, progress)?
+            }
         };
         out.stats.method = self.method().name().to_string();
         stages.append(&mut out.stats.stages);
@@ -387,6 +398,7 @@ impl Renderer {
         } else {
             out.stats.passes = 1;
         }
+        readout::complete(&mut out, desc.readout);
         self.changes = Changes::default();
         self.moved.clear();
         self.lights_changed.clear();
@@ -441,6 +453,7 @@ impl Renderer {
         &mut self,
         frame: &FrameParams,
         images: Images,
+        readout: readout::Readout,
         progress: &dyn Progress,
     ) -> Result<RenderOutput> {
         let Some(direct) = self.options.method.direct_light() else {
@@ -454,6 +467,9 @@ impl Renderer {
         let ispm = self.method() == Method::Ispm;
         ctx.scoped("frame", || {
             self.sync_gpu(&ctx, &direct)?;
+            if let Some(g) = self.gpu.as_mut() {
+                g.targets.set_readout(readout);
+            }
             let mut out = self.gpu_method_frame(frame, images, progress)?;
             let g = self.gpu.as_mut().ok_or_else(no_gpu_state)?;
             if g.targets.grow_edges(&ctx)? {
@@ -656,6 +672,7 @@ pub fn render(
             seed: None,
             images: Images::ALL,
             serial: false,
+            readout: Default::default(),
         },
         progress,
     )

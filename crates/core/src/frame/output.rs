@@ -55,11 +55,18 @@ pub struct RenderStats {
     pub bundle_overflow: u64,
 }
 
-/// A rendered frame: radiance and auxiliary images, all `width × height`.
+/// A rendered frame: radiance and auxiliary images, all `width × height`; an image not
+/// asked for is empty (0 × 0, or no pixels).
 #[derive(Clone, Debug)]
 pub struct RenderOutput {
-    /// Pixel radiance, W·sr⁻¹·m⁻² per channel (the box-filtered mean over each pixel).
+    /// Pixel radiance, W·sr⁻¹·m⁻² per channel (the box-filtered mean over each pixel); empty
+    /// unless the frame's [`super::readout::Readout`] asks for 32-bit floats.
     pub radiance: Image,
+    /// The radiance as half floats (RGB, 3 a pixel, rows top first), when asked for.
+    pub radiance_half: Option<Vec<half::f16>>,
+    /// The tone-mapped 8-bit sRGB display image (RGB, 3 bytes a pixel, rows top first),
+    /// when asked for ([`super::readout::Display`]).
+    pub display: Option<Vec<u8>>,
     /// First-hit scatter probability (reflectance) as seen from the camera.
     pub albedo: Image,
     /// First-hit shading normal, facing the camera; zero on a miss.
@@ -97,6 +104,8 @@ impl RenderOutput {
     ) -> RenderOutput {
         RenderOutput {
             radiance,
+            radiance_half: None,
+            display: None,
             albedo: first.albedo,
             normal: first.normal,
             position: first.position,

@@ -507,6 +507,27 @@ pub fn create_compute_pipeline(
     device.create_compute_pipeline(desc)
 }
 
+/// The compute pipeline of `module`'s entry point `entry` over `layout`, with default
+/// compilation options (counted; labelled `entry`).
+pub fn compute_pipeline_of(
+    device: &wgpu::Device,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    entry: &str,
+) -> wgpu::ComputePipeline {
+    create_compute_pipeline(
+        device,
+        &wgpu::ComputePipelineDescriptor {
+            label: Some(entry),
+            layout: Some(layout),
+            module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            cache: None,
+        },
+    )
+}
+
 /// `Queue::write_buffer`, counted as an upload of `label`.
 pub fn write_buffer(
     queue: &wgpu::Queue,

@@ -21,6 +21,7 @@ pub fn all() -> FrameDesc {
         seed: None,
         images: Images::ALL,
         serial: false,
+        readout: Default::default(),
     }
 }
 

@@ -15,8 +15,23 @@ use glam::Vec4;
 use std::collections::HashMap;
 use std::sync::Arc;
 
-/// The read-back textures of a frame, by name.
-pub(crate) type Readback = HashMap<&'static str, Vec<Vec4>>;
+/// What a frame read back: the float textures by name, and the radiance's encodings
+/// ([`super::encode`]) where asked for.
+#[derive(Default)]
+pub(crate) struct Readback {
+    pub texels: HashMap<&'static str, Vec<Vec4>>,
+    /// The display image: RGB, 3 bytes a pixel.
+    pub display: Option<Vec<u8>>,
+    /// The radiance in half floats: RGB, 3 a pixel.
+    pub half: Option<Vec<half::f16>>,
+}
+
+impl Readback {
+    /// The texels of float texture `name`, if read back.
+    pub fn get(&self, name: &str) -> Option<&Vec<Vec4>> {
+        self.texels.get(name)
+    }
+}
 
 /// One GPU frame (see the module).
 pub(crate) struct GpuFrame<'g> {
@@ -82,10 +97,11 @@ impl<'g> GpuFrame<'g> {
             .record_direct(ctx, self.scene, encoder, timer, fc.progress)
     }
 
-    /// Ends the frame's GPU work: the composite and the readback of `names` (`indirect`:
-    /// the method's indirect-light texture) recorded after what `encoder` holds, the
-    /// timestamps resolved, submitted and read back (stage "readback"); the GPU passes'
-    /// times added to the stages.
+    /// Ends the frame's GPU work: the composite, the radiance's encodings and the readback
+    /// of `names` (none of them in a still frame, [`Targets::output_kept`]) (`indirect`: the method's indirect-light texture; "radiance" read back in
+    /// the form the frame asks for, [`Targets::readout_names`]) recorded after what
+    /// `encoder` holds, the timestamps resolved, submitted and read back (stage
+    /// "readback"); the GPU passes' times added to the stages.
     pub fn finish(
         &mut self,
         mut encoder: wgpu::CommandEncoder,
@@ -94,13 +110,19 @@ impl<'g> GpuFrame<'g> {
         fc: &mut FrameCtx,
     ) -> Result<Readback> {
         let ctx = &self.ctx;
-        self.targets.record_composite(ctx, &mut encoder, self.timer);
-        self.targets
-            .record_readback(ctx, &mut encoder, names, indirect);
+        let names = self.targets.readout_names(names);
+        // A still frame reads the buffers of the last again: no pass at all.
+        if !self.targets.output_kept(&names) {
+            self.targets.record_composite(ctx, &mut encoder, self.timer);
+            self.targets
+                .record_encodings(ctx, &mut encoder, &names, self.timer);
+            self.targets
+                .record_readback(ctx, &mut encoder, &names, indirect);
+        }
         self.timer.resolve(&mut encoder);
         ctx.queue.submit([encoder.finish()]);
         let targets = &*self.targets;
-        let data = fc.timed("readback", |_| targets.read(ctx, names))?;
+        let data = fc.timed("readback", |_| targets.read(ctx, &names))?;
         self.timer.collect(ctx)?;
         for (name, seconds) in self.timer.totals.drain(..) {
             fc.add_stage(&name, seconds);

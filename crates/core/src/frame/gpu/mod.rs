@@ -3,6 +3,7 @@
 //! frame writes only what changed ([`crate::scene::Changes`]) and records passes, the same
 //! way in every GPU method ([`frame`]).
 
+mod encode;
 mod frame;
 mod readback;
 mod samples;

@@ -2,13 +2,12 @@
 //! for, and the frame's output assembled from them (radiance and the first-hit AOVs), the
 //! same for `direct`, `ispm` and `bidir`.
 
-use super::{rgb_image, Targets};
+use super::{rgb_image, Readback, Targets};
 use crate::frame::{Images, RenderOutput, RenderStats};
 use crate::image::Image;
 use crate::raster::oct_decode;
 use crate::scene::Scene;
 use glam::{Vec2, Vec3, Vec4};
-use std::collections::HashMap;
 
 /// The textures to read back for `images` (`accum` for the ISPM direct AOV; `indirect`
 /// when the method has one).
@@ -26,11 +25,11 @@ pub(crate) fn readback_names(images: Images, indirect: bool) -> Vec<&'static str
     names
 }
 
-/// Radiance and the first-hit AOVs from the read-back textures.
+/// Radiance (in the forms read back) and the first-hit AOVs from the read-back textures.
 pub(crate) fn assemble(
     scene: &Scene,
     t: &Targets,
-    data: &HashMap<&'static str, Vec<Vec4>>,
+    data: &Readback,
     stats: RenderStats,
 ) -> RenderOutput {
     let (w, h) = (t.width, t.height);
@@ -47,6 +46,8 @@ pub(crate) fn assemble(
         caustics: empty(),
         aovs: Vec::new(),
         stats,
+        display: data.display.clone(),
+        radiance_half: data.half.clone(),
     };
     if let (Some(position), Some(normals), Some(albedo)) = (
         data.get("position"),

@@ -2,8 +2,11 @@
 //! direct light (G-buffers, edge-adaptive supersampling, accumulation), the composite and
 //! the readback of what a frame asks for.
 
+use super::encode::Encodings;
+use super::frame::Readback;
 use super::scene::GpuScene;
 use crate::error::{Error, Result};
+use crate::frame::readout::{Precision, Readout};
 use crate::gpu::layout::{buffer, texture};
 use crate::gpu::raw::ViewRaw;
 use crate::gpu::timer::Timer;
@@ -90,6 +93,14 @@ pub(crate) struct Targets {
     direct_gbuffer_group: wgpu::BindGroup,
     composite_group: Option<wgpu::BindGroup>,
     readback: HashMap<&'static str, wgpu::Buffer>,
+    /// The radiance's encodings for readback ([`super::encode`]).
+    encodings: Encodings,
+    /// What the frames hand back of the radiance ([`Targets::set_readout`]).
+    readout: Readout,
+    /// The frame's method found nothing changed since the last frame ([`Targets::set_still`]).
+    still: bool,
+    /// The readout and the textures that the last frame's readback buffers hold.
+    last_output: Option<(Readout, Vec<&'static str>)>,
 }
 
 fn target(
@@ -321,6 +332,10 @@ impl Targets {
             model_materials,
             composite_group: None,
             readback: HashMap::new(),
+            encodings: Encodings::new(w, h),
+            readout: Readout::default(),
+            still: false,
+            last_output: None,
         })
     }
 
@@ -699,6 +714,75 @@ impl Targets {
         }
     }
 
+    /// Sets what the next frames hand back of the radiance: a method whose composite is
+    /// its final radiance reads back only that ([`Targets::readout_names`]).
+    pub fn set_readout(&mut self, readout: Readout) {
+        self.readout = readout;
+    }
+
+    /// The method of this frame found that nothing its composite reads changed since the
+    /// last frame (a still frame: the same photons, estimate, direct and specular light).
+    /// Reset by the frame's [`Targets::output_kept`].
+    pub fn set_still(&mut self, still: bool) {
+        self.still = still;
+    }
+
+    /// Whether the readback buffers already hold what this frame would copy into them
+    /// (a still frame asking for the same `names` in the same readout as the last): then
+    /// the frame records no composite, encoding or copy and reads them again. Otherwise
+    /// notes `names` as what the frame is about to copy and returns false.
+    pub fn output_kept(&mut self, names: &[&'static str]) -> bool {
+        let still = std::mem::take(&mut self.still);
+        let now = (self.readout, names.to_vec());
+        if still && self.last_output.as_ref() == Some(&now) {
+            return true;
+        }
+        self.last_output = Some(now);
+        false
+    }
+
+    /// The textures to read back for `names` (a method's list): "radiance" replaced by
+    /// what the readout asks for ("radiance" in 32-bit floats, "radiance16" in half
+    /// floats, "display" the display image).
+    pub fn readout_names(&self, names: &[&'static str]) -> Vec<&'static str> {
+        let r = self.readout;
+        let mut out = Vec::new();
+        for &name in names {
+            if name != "radiance" {
+                out.push(name);
+                continue;
+            }
+            match r.radiance {
+                Some(Precision::Float32) => out.push("radiance"),
+                Some(Precision::Float16) => out.push("radiance16"),
+                None => {}
+            }
+            if r.display.is_some() {
+                out.push("display");
+            }
+        }
+        out
+    }
+
+    /// Records the encodings of the radiance that `names` ([`Targets::readout_names`])
+    /// read back, after the composite.
+    pub fn record_encodings(
+        &mut self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        names: &[&'static str],
+        timer: &mut Timer,
+    ) {
+        let radiance = &self.radiance_view;
+        if let (true, Some(d)) = (names.contains(&"display"), self.readout.display) {
+            self.encodings
+                .record_display(ctx, encoder, radiance, d, timer);
+        }
+        if names.contains(&"radiance16") {
+            self.encodings.record_half(ctx, encoder, radiance, timer);
+        }
+    }
+
     /// The texture read back under `name`.
     fn texture_of<'a>(
         &'a self,
@@ -716,8 +800,32 @@ impl Targets {
         })
     }
 
-    /// Records copies of the named textures into their readback buffers (created on first
-    /// use at this size).
+    /// The radiance's encoding read back under `name` (a storage buffer, rows unpadded).
+    fn encoded(&self, name: &str) -> Option<&wgpu::Buffer> {
+        let e = &self.encodings;
+        match name {
+            "display" => e.display.as_ref().map(|t| &t.buffer),
+            "radiance16" => e.half.as_ref().map(|t| &t.buffer),
+            _ => None,
+        }
+    }
+
+    /// Bytes of a texel read back under `name`, and of its rows in the readback buffer
+    /// (a texture's padded to wgpu's copy alignment; an encoding's as they are).
+    fn row_bytes(&self, name: &str) -> (usize, usize) {
+        let w = self.width as usize;
+        match name {
+            "display" => (4, w * 4),
+            "radiance16" => (8, w * 8),
+            _ => (
+                16,
+                (w * 16).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT as usize),
+            ),
+        }
+    }
+
+    /// Records copies of the named textures and encodings into their readback buffers
+    /// (created on first use at this size).
     pub fn record_readback(
         &mut self,
         ctx: &GpuContext,
@@ -725,15 +833,20 @@ impl Targets {
         names: &[&'static str],
         indirect: Option<&wgpu::Texture>,
     ) {
-        let (w, h) = (self.width, self.height);
-        let row = (w * 16).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+        let h = self.height;
         for &name in names {
             if !self.readback.contains_key(name) {
-                let buffer = gpu::readback_buffer(&ctx.device, "readback", row as u64 * h as u64);
+                let row = self.row_bytes(name).1 as u64;
+                let buffer = gpu::readback_buffer(&ctx.device, "readback", row * h as u64);
                 self.readback.insert(name, buffer);
             }
         }
         for &name in names {
+            if let Some(encoded) = self.encoded(name) {
+                let dst = &self.readback[name];
+                encoder.copy_buffer_to_buffer(encoded, 0, dst, 0, encoded.size());
+                continue;
+            }
             let Some(texture) = self.texture_of(name, indirect) else {
                 continue;
             };
@@ -743,7 +856,7 @@ impl Targets {
                     buffer: &self.readback[name],
                     layout: wgpu::TexelCopyBufferLayout {
                         offset: 0,
-                        bytes_per_row: Some(row),
+                        bytes_per_row: Some(self.row_bytes(name).1 as u32),
                         rows_per_image: Some(h),
                     },
                 },
@@ -753,26 +866,48 @@ impl Targets {
     }
 
     /// Maps the readback buffers of `names` (after all submitted work) and returns their
-    /// texels, rows unpadded.
-    pub fn read(
-        &self,
-        ctx: &GpuContext,
-        names: &[&'static str],
-    ) -> Result<HashMap<&'static str, Vec<Vec4>>> {
+    /// texels, rows unpadded: the float textures as texels, the display image as RGB
+    /// bytes and the half-float radiance as RGB halves (alpha dropped).
+    pub fn read(&self, ctx: &GpuContext, names: &[&'static str]) -> Result<Readback> {
         let (w, h) = (self.width as usize, self.height as usize);
-        let row = (w * 16).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT as usize);
         let buffers: Vec<&wgpu::Buffer> = names.iter().map(|n| &self.readback[n]).collect();
+        let mut out = Readback::default();
         // The rows are copied out of the mapped buffers directly (one copy, not two).
-        let texels = ctx.read_buffers_with(&buffers, None, |_, b| {
-            let mut out: Vec<Vec4> = Vec::with_capacity(w * h);
-            for y in 0..h {
-                out.extend_from_slice(bytemuck::cast_slice::<u8, Vec4>(
-                    &b[y * row..y * row + w * 16],
-                ));
+        let mut texels = HashMap::new();
+        ctx.read_buffers_with(&buffers, None, |i, b| {
+            let name = names[i];
+            let (texel, row) = self.row_bytes(name);
+            let rows = (0..h).map(|y| &b[y * row..y * row + w * texel]);
+            match name {
+                // The encodings' rows are unpadded: RGBA per pixel, alpha dropped.
+                "display" => {
+                    let mut rgb = vec![0u8; w * h * 3];
+                    for (o, p) in rgb.chunks_exact_mut(3).zip(b.chunks_exact(4)) {
+                        o.copy_from_slice(&p[..3]);
+                    }
+                    out.display = Some(rgb);
+                }
+                "radiance16" => {
+                    let halves: &[u16] = bytemuck::cast_slice(&b[..w * h * 8]);
+                    let mut rgb = vec![half::f16::ZERO; w * h * 3];
+                    for (o, p) in rgb.chunks_exact_mut(3).zip(halves.chunks_exact(4)) {
+                        for (o, p) in o.iter_mut().zip(p) {
+                            *o = half::f16::from_bits(*p);
+                        }
+                    }
+                    out.half = Some(rgb);
+                }
+                _ => {
+                    let mut v: Vec<Vec4> = Vec::with_capacity(w * h);
+                    for r in rows {
+                        v.extend_from_slice(bytemuck::cast_slice::<u8, Vec4>(r));
+                    }
+                    texels.insert(name, v);
+                }
             }
-            out
         })?;
-        Ok(names.iter().copied().zip(texels).collect())
+        out.texels = texels;
+        Ok(out)
     }
 }
 

@@ -115,6 +115,9 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         first_hits.prepare(ctx, scene, gs, &layers, params.seed, reuse)
     })?;
     let mut gpu = GpuFrame::begin(ctx, gs, targets, timer, &mut fc);
+    // A still frame (the same photons and estimate, nothing moved, the direct light kept)
+    // reads back the last frame's output again ([`Targets::output_kept`]).
+    let still = reuse && !changes.any() && was_current && gpu.targets.direct_current();
 
     // 1. Bounce maps, submitted first with their readback copies.
     let bounce = first_hits.submit(&mut gpu, &mut fc, &layers, reuse)?;
@@ -176,6 +179,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         serial: fc.serial,
         radius,
     };
+    gpu.targets.set_still(still);
     let data = state.indirect.render(&mut gpu, &mut fc, &indirect)?;
     let parts = Parts {
         data: &data,
