@@ -22,7 +22,9 @@ one (LTC is invariant under scaling of M), n and the Fresnel moment.
 
 Written from the paper's description; no published table or code is used. Checked by
 `tests/test_ltc_table.py` (the closed form against a numeric integral over square lights).
-Not yet used by the GPU direct light (issue 44 item 2 is open).
+Evaluated by `crates/core/src/raster/ltc.rs` (CPU) and `shaders/common/ltc.wgsl` (GPU, the
+table as `ltc_table.wgsl`: regenerate it after a refit with
+`GI_WRITE_LTC_TABLE=1 cargo test -p gi-core --lib ltc`).
 """
 
 from __future__ import annotations

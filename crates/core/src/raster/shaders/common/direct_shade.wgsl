@@ -727,11 +727,18 @@ fn sampled_light(p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, wo: ve
             let range = direct_params.group_ranges[g];
             var lit = vec3<f32>(0.0);
             var unshadowed = vec3<f32>(0.0);
+            var glit = vec3<f32>(0.0);
+            var gun = vec3<f32>(0.0);
             for (var i = range.x; i < range.y; i++) {
                 let l = point_light(i, p, ns, ng, m, glossy, wo);
                 lit += l.fd * l.v;
                 unshadowed += l.fd;
-                sum += l.fs * l.v;
+                glit += l.fs * l.v;
+                gun += l.fs;
+            }
+            if has_glossy {
+                // The glossy lobe in closed form, ratio-estimated (ltc_direct.wgsl).
+                sum += ltc_group_glossy(p, ns, m, wo, range, glit, gun, lit, unshadowed);
             }
             if max3(m.diffuse) > 0.0 {
                 sum += polygons_diffuse(p, ns, m, wo, range.z, range.w) * visible_ratio(lit, unshadowed);
