@@ -1,5 +1,5 @@
 //! CPU/GPU parity of the linearly transformed cosines: `shaders/common/ltc.wgsl`'s
-//! `ltc_glossy` (with the committed table `shaders/common/ltc_table.wgsl`) against
+//! `ltc_glossy` (with the committed table as its texture, `raster::ltc::texture`) against
 //! `raster::ltc::glossy_integral` on random polygons (triangles and quads, partly below the
 //! horizon or not) seen from random normals, views and roughnesses.
 //!
@@ -13,7 +13,7 @@
 
 use gi_core::gpu::{self, layout};
 use gi_core::raster::ltc::{glossy_integral, table};
-use gi_core::raster::wgsl::{LTC, LTC_TABLE};
+use gi_core::raster::wgsl::LTC;
 use gi_core::sampling::{uniform_sphere, Rng};
 use glam::Vec3;
 
@@ -30,6 +30,7 @@ const KERNEL: &str = "
 struct Case { n: vec4<f32>, v: vec4<f32>, a: vec4<f32>, b: vec4<f32>, c: vec4<f32>, d: vec4<f32> }
 @group(0) @binding(0) var<storage, read> cases: array<Case>;
 @group(0) @binding(1) var<storage, read_write> results: array<vec2<f32>>;
+@group(0) @binding(2) var ltc_table: texture_2d<f32>;
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x >= arrayLength(&cases) { return; }
@@ -68,7 +69,7 @@ fn cases(count: usize) -> Vec<Case> {
 }
 
 fn cpu(c: &Case) -> [f32; 2] {
-    glossy_integral(c.n, c.v, c.roughness, c.corners)
+    glossy_integral(c.n, c.v, c.roughness, &c.corners)
 }
 
 /// The largest change of the CPU value when an input moves by 1e-6.
@@ -125,7 +126,8 @@ fn gpu_values(cases: &[Case]) -> Vec<[f32; 2]> {
         },
     );
     let readback = gpu::readback_buffer(device, "ltc readback", size);
-    let module = gpu::shaders::module(device, "ltc parity", &[LTC_TABLE, LTC, KERNEL]);
+    let module = gpu::shaders::module(device, "ltc parity", &[LTC, KERNEL]);
+    let table_view = gi_core::raster::ltc::texture(&ctx).create_view(&Default::default());
     let pipeline = gpu::create_compute_pipeline(
         device,
         &wgpu::ComputePipelineDescriptor {
@@ -142,7 +144,14 @@ fn gpu_values(cases: &[Case]) -> Vec<[f32; 2]> {
         &wgpu::BindGroupDescriptor {
             label: Some("ltc parity"),
             layout: &pipeline.get_bind_group_layout(0),
-            entries: &[layout::buffer(0, &input), layout::buffer(1, &output)],
+            entries: &[
+                layout::buffer(0, &input),
+                layout::buffer(1, &output),
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: wgpu::BindingResource::TextureView(&table_view),
+                },
+            ],
         },
     );
     let mut encoder = device.create_command_encoder(&Default::default());

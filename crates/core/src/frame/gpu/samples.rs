@@ -282,6 +282,18 @@ impl LightSamples {
         self.drawn = None;
     }
 
+    /// Whether the emitters found so far form polygon groups (their light in closed form).
+    pub fn has_polygon_groups(&self) -> bool {
+        self.emitters.as_ref().is_some_and(|(_, g)| g.groups > 0)
+    }
+
+    /// Whether some polygon group found so far is round (a sphere).
+    pub fn has_round_groups(&self) -> bool {
+        self.emitters
+            .as_ref()
+            .is_some_and(|(_, g)| g.polygons.iter().any(|p| p.round.is_some()))
+    }
+
     /// The samples are to be drawn again at the next frame (the lights, the geometry or the
     /// materials changed); `emitters`: the emitting triangles may have changed too.
     pub fn invalidate(&mut self, emitters: bool) {
@@ -542,10 +554,14 @@ impl LightSamples {
 
 /// A polygon's row of the polygons texture ([`POLYGON_TEXELS`] texels): three corners (w
 /// of the first: 1 when two-sided; of the second: 1 for a quad; of the third: its
-/// [`EmitterPolygon::in_plane_bound`]), the radiance, and a quad's fourth corner.
+/// [`EmitterPolygon::in_plane_bound`]), the radiance, and a quad's fourth corner; a round
+/// emitter's as `raster::direct::round_texels` writes it.
 fn polygon_texels(t: &EmitterPolygon) -> [[f32; 4]; POLYGON_TEXELS as usize] {
     let [a, b, c] = t.corners;
     let side = t.two_sided as u32 as f32;
+    if let Some(r) = t.round {
+        return crate::raster::direct::round_texels(r, side, t.radiance);
+    }
     let quad = t.fourth.is_some() as u32 as f32;
     [
         a.extend(side).to_array(),

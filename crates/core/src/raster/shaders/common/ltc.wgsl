@@ -1,8 +1,11 @@
 // Linearly transformed cosines (Heitz, Dupuy, Hill & Neubelt 2016): the GGX lobe's integral
 // over a polygon in closed form (raster/ltc.rs, the CPU reference of these functions, step
-// by step). Joined after the table's constants raster/ltc.rs writes: `LTC_CELLS` (two vec4 a
-// cell, roughness-major: M⁻¹'s entries [m00, m02, m20, m22], then the lobe's albedo n and
-// its Schlick moment s), `LTC_SIZE`, `LTC_R0`, `LTC_R1` (roughness range), `LTC_THETA_MAX`.
+// by step). The fitted table is a texture, `ltc_table` (declared by the includer: the
+// direct pass binds it in group 0), laid out by raster/ltc.rs `LtcTable::texels`: texel
+// (0, 0) holds (roughness at row 0, at the last row, θ_o at the last column, size), row
+// i + 1 the cells of roughness i, two texels per θ_o: M⁻¹'s entries [m00, m02, m20, m22],
+// then the lobe's albedo n and its Schlick moment s. A texture, not a WGSL array: lavapipe
+// compiled the direct pipeline with the table as a private array ~3.5x slower.
 
 // One interpolated cell.
 struct LtcCell {
@@ -12,8 +15,9 @@ struct LtcCell {
 }
 
 fn ltc_node(i: u32, j: u32) -> LtcCell {
-    let k = 2u * (i * LTC_SIZE + j);
-    return LtcCell(LTC_CELLS[k], LTC_CELLS[k + 1u].xy);
+    let minv = textureLoad(ltc_table, vec2<u32>(2u * j, i + 1u), 0);
+    let moments = textureLoad(ltc_table, vec2<u32>(2u * j + 1u, i + 1u), 0).xy;
+    return LtcCell(minv, moments);
 }
 
 fn ltc_mix(a: LtcCell, b: LtcCell, t: f32) -> LtcCell {
@@ -22,12 +26,14 @@ fn ltc_mix(a: LtcCell, b: LtcCell, t: f32) -> LtcCell {
 
 // The cell at `roughness` and view cosine `cos_o`, bilinear between the nodes (clamped).
 fn ltc_lookup(roughness: f32, cos_o: f32) -> LtcCell {
-    let last = f32(LTC_SIZE - 1u);
+    let range = textureLoad(ltc_table, vec2<u32>(0u, 0u), 0);
+    let size = u32(range.w);
+    let last = range.w - 1.0;
     let theta = acos(clamp(cos_o, 0.0, 1.0));
-    let fi = clamp((roughness - LTC_R0) / (LTC_R1 - LTC_R0) * last, 0.0, last);
-    let fj = clamp(theta / LTC_THETA_MAX * last, 0.0, last);
-    let i = min(u32(fi), LTC_SIZE - 2u);
-    let j = min(u32(fj), LTC_SIZE - 2u);
+    let fi = clamp((roughness - range.x) / (range.y - range.x) * last, 0.0, last);
+    let fj = clamp(theta / range.z * last, 0.0, last);
+    let i = min(u32(fi), size - 2u);
+    let j = min(u32(fj), size - 2u);
     let u = fi - f32(i);
     let w = fj - f32(j);
     let lo = ltc_mix(ltc_node(i, j), ltc_node(i, j + 1u), w);
