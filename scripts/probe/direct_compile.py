@@ -3,11 +3,14 @@
 DIR a ``python/`` directory holding a built ``gi`` package) and scene: each case in a fresh
 process with Mesa's shader cache off (``MESA_SHADER_CACHE_DISABLE=true``), the first
 `direct` frame (pipelines compiled on first use) minus the second (warm, another seed) at
-48×48. Rounds alternate the builds so that they share the machine's load; prints every
-round and the medians as a Markdown table.
+48×48, in wall time and in the process's CPU time (every thread's: lavapipe compiles on
+its own threads), which a machine loaded by other work changes far less. Rounds alternate
+the builds so that they share the machine's load; prints every round and the medians as a
+Markdown table.
 
     python scripts/probe/direct_compile.py --build main=/tmp/main/python --build new=python \\
-        [--scene glossy-quad] [--scene cornell] [--scene tests/scenes/third_party/veach-mis/scene.xml]
+        [--scene glossy-quad] [--scene cornell] \\
+        [--scene tests/scenes/third_party/veach-mis/scene.xml]
 
 ``glossy-quad``: a GGX floor (roughness 0.3) under a one-sided emitting quad and a black
 box (`crates/core/tests/gpu_ltc.rs`'s highlight scene): a glossy area-lit scene.
@@ -18,6 +21,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -55,12 +59,15 @@ def worker(scene: str) -> None:
 
     warnings.simplefilter("ignore")
     s = gi.load_scene(scene)
-    times = []
+    times, cpu = [], []
     for seed in (1, 2):
+        u = resource.getrusage(resource.RUSAGE_SELF)
         t = time.perf_counter()
         gi.render(s, "direct", size=(48, 48), seed=seed)
         times.append(time.perf_counter() - t)
-    print(json.dumps({"first": times[0], "warm": times[1]}))
+        v = resource.getrusage(resource.RUSAGE_SELF)
+        cpu.append(v.ru_utime - u.ru_utime + v.ru_stime - u.ru_stime)
+    print(json.dumps({"first": times[0], "warm": times[1], "cpu": cpu[0] - cpu[1]}))
 
 
 def run(path: str, scene: str) -> dict:
@@ -89,7 +96,7 @@ def main() -> None:
     (tmp / "glossy-quad.json").write_text(json.dumps(GLOSSY_QUAD))
     scenes = a.scene or ["glossy-quad", "cornell"]
     builds = [b.partition("=")[::2] for b in a.build]
-    rows: dict[tuple[str, str], list[float]] = {}
+    rows: dict[tuple[str, str], list[tuple[float, float]]] = {}
     for r in range(a.rounds):
         order = builds[r % len(builds) :] + builds[: r % len(builds)]
         for scene in scenes:
@@ -97,13 +104,24 @@ def main() -> None:
             for name, path in order:
                 t = run(path, file)
                 cold = t["first"] - t["warm"]
-                rows.setdefault((scene, name), []).append(cold)
-                print(f"round {r}: {scene} {name}: first {t['first']:.2f} s, warm {t['warm']:.2f} s")
-    print("\n| scene | build | cold compile (first − warm frame), s, per round | median |")
-    print("|---|---|---|---:|")
+                rows.setdefault((scene, name), []).append((cold, t["cpu"]))
+                print(
+                    f"round {r}: {scene} {name}: first {t['first']:.2f} s, warm {t['warm']:.2f} s,"
+                    f" CPU first − warm {t['cpu']:.1f} s",
+                    flush=True,
+                )
+    head = "| scene | build | wall, first − warm frame (s), per round | median |"
+    head += " CPU s, per round | median |"
+    print("\n" + head)
+    print("|---|---|---|---:|---|---:|")
     for (scene, name), v in rows.items():
-        vals = ", ".join(f"{x:.1f}" for x in v)
-        print(f"| {Path(scene).stem} | {name} | {vals} | {statistics.median(v):.1f} |")
+        wall, cpu = [x[0] for x in v], [x[1] for x in v]
+        w = ", ".join(f"{x:.1f}" for x in wall)
+        c = ", ".join(f"{x:.1f}" for x in cpu)
+        print(
+            f"| {Path(scene).stem} | {name} | {w} | {statistics.median(wall):.1f} | {c} |"
+            f" {statistics.median(cpu):.1f} |"
+        )
 
 
 if __name__ == "__main__":

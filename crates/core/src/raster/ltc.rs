@@ -73,7 +73,7 @@ pub struct LtcTable {
     pub cells: Vec<LtcCell>,
 }
 
-/// The committed table (parsed once).
+/// The committed GGX table (parsed once).
 pub fn table() -> &'static LtcTable {
     static TABLE: OnceLock<LtcTable> = OnceLock::new();
     TABLE.get_or_init(|| parse(TABLE_JSON).expect("the committed LTC table parses"))

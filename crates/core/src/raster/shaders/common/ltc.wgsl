@@ -4,8 +4,8 @@
 // direct pass binds it in group 0), laid out by raster/ltc.rs `LtcTable::texels`: texel
 // (0, 0) holds (roughness at row 0, at the last row, θ_o at the last column, size), row
 // i + 1 the cells of roughness i, two texels per θ_o: M⁻¹'s entries [m00, m02, m20, m22],
-// then the lobe's albedo n and its Schlick moment s. A texture, not a WGSL array: lavapipe
-// compiled the direct pipeline with the table as a private array ~3.5x slower.
+// then the lobe's albedo n and its Schlick moment s. A texture, not a WGSL array: lavapipe compiled the
+// direct pipeline with the table as a private array ~3.5x slower.
 
 // One interpolated cell.
 struct LtcCell {
@@ -58,23 +58,24 @@ fn ltc_edge_z(a: vec3<f32>, b: vec3<f32>) -> f32 {
 }
 
 // The part of edge `p` → `q` above z = 0, its edge term added to `sum`; where the polygon
-// leaves the hemisphere the crossing goes to `exit`, where it re-enters to `entry`.
+// leaves the hemisphere the crossing goes to `exit`, where it re-enters to `entry`. One
+// edge term for every case: each is inlined where it is called, and lavapipe's compile
+// time grows with the code.
 fn ltc_clip_edge(p: vec3<f32>, q: vec3<f32>, sum: ptr<function, f32>, exit: ptr<function, vec3<f32>>, entry: ptr<function, vec3<f32>>) {
     let up = p.z > 0.0;
     let uq = q.z > 0.0;
     if !up && !uq {
         return;
     }
-    if up && uq {
-        *sum += ltc_edge_z(normalize(p), normalize(q));
-        return;
+    var x = vec3<f32>(0.0);
+    if up != uq {
+        x = normalize(p + (q - p) * (p.z / (p.z - q.z)));
     }
-    let x = normalize(p + (q - p) * (p.z / (p.z - q.z)));
-    if up {
-        *sum += ltc_edge_z(normalize(p), x);
+    *sum += ltc_edge_z(select(x, normalize(p), up), select(x, normalize(q), uq));
+    if up && !uq {
         *exit = x;
-    } else {
-        *sum += ltc_edge_z(x, normalize(q));
+    }
+    if uq && !up {
         *entry = x;
     }
 }
@@ -82,15 +83,23 @@ fn ltc_clip_edge(p: vec3<f32>, q: vec3<f32>, sum: ptr<function, f32>, exit: ptr<
 // The form factor of the polygon a, b, c, d (a triangle repeats its first corner) clipped to
 // z > 0: |Σ θᵢ·(n̂ᵢ)_z| / 2π, the horizon's arc from the exit to the entry included. No
 // arrays: a private array of the clipped corners cost lavapipe ~3x (direct_shade.wgsl's
-// `polygon_vector`).
+// `polygon_vector`); the corners turn through one edge's code.
 fn ltc_form_factor(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>, d: vec3<f32>) -> f32 {
     var sum = 0.0;
     var exit = vec3<f32>(0.0);
     var entry = vec3<f32>(0.0);
-    ltc_clip_edge(a, b, &sum, &exit, &entry);
-    ltc_clip_edge(b, c, &sum, &exit, &entry);
-    ltc_clip_edge(c, d, &sum, &exit, &entry);
-    ltc_clip_edge(d, a, &sum, &exit, &entry);
+    var p = a;
+    var q = b;
+    var r = c;
+    var s = d;
+    for (var k = 0u; k < 4u; k++) {
+        ltc_clip_edge(p, q, &sum, &exit, &entry);
+        let t = p;
+        p = q;
+        q = r;
+        r = s;
+        s = t;
+    }
     sum += ltc_edge_z(exit, entry);
     return abs(sum) / 6.28318530718;
 }

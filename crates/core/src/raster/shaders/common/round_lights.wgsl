@@ -16,6 +16,9 @@ struct RoundPolygon {
     // (cos θ, sin θ).
     step: vec2<f32>,
     ok: bool,
+    // The disc's own radius (the polygon's over its scale) and its solid angle.
+    radius: f32,
+    solid_angle: f32,
 }
 
 fn round_polygon(p: vec3<f32>, t: u32) -> RoundPolygon {
@@ -25,7 +28,7 @@ fn round_polygon(p: vec3<f32>, t: u32) -> RoundPolygon {
     let d = t0.xyz - p;
     let d2 = dot(d, d);
     let r2 = t2.x * t2.x;
-    var out = RoundPolygon(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), u32(t2.y + 0.5), t4.xy, d2 > r2);
+    var out = RoundPolygon(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), u32(t2.y + 0.5), t4.xy, d2 > r2, 0.0, 0.0);
     if !out.ok {
         return out;
     }
@@ -33,10 +36,12 @@ fn round_polygon(p: vec3<f32>, t: u32) -> RoundPolygon {
     let w = d * inverseSqrt(d2);
     let a = select(vec3<f32>(0.0, 1.0, 0.0), vec3<f32>(1.0, 0.0, 0.0), abs(w.x) < 0.9);
     let u = normalize(cross(a, w));
-    let radius = t2.x * sqrt(1.0 - k) * t2.z;
+    out.radius = t2.x * sqrt(1.0 - k);
+    // 2π(1 − cos ρ), sin²ρ = k, in a form exact for small k.
+    out.solid_angle = 6.28318530718 * k / (1.0 + sqrt(1.0 - k));
     out.centre = d * (1.0 - k);
-    out.u = u * radius;
-    out.v = cross(w, u) * radius;
+    out.u = u * (out.radius * t2.z);
+    out.v = cross(w, u) * (out.radius * t2.z);
     return out;
 }
 
