@@ -518,6 +518,36 @@ pub fn write_buffer(
     queue.write_buffer(buffer, offset, bytes);
 }
 
+/// A `w`×`h` `Rgba32Float` texture (sampled, counted) holding `texels` (row-major), their
+/// upload counted as `label`'s.
+pub fn float_texture_of(
+    ctx: &GpuContext,
+    label: &str,
+    (w, h): (u32, u32),
+    texels: &[[f32; 4]],
+) -> wgpu::Texture {
+    let texture = texture_2d(
+        &ctx.device,
+        label,
+        w,
+        h,
+        wgpu::TextureFormat::Rgba32Float,
+        wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+    );
+    alloc::note_upload(label, texels.len() as u64 * 16);
+    ctx.queue.write_texture(
+        texture.as_image_copy(),
+        bytemuck::cast_slice(texels),
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(w * 16),
+            rows_per_image: Some(h),
+        },
+        texture.size(),
+    );
+    texture
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -265,32 +265,8 @@ impl LtcTable {
 /// when called (the direct pass makes it once per device).
 pub fn texture(ctx: &crate::gpu::GpuContext) -> wgpu::Texture {
     let t = table();
-    let (w, h) = (CELL_TEXELS * t.size as u32, t.size as u32 + 1);
-    let texture = crate::gpu::texture_2d(
-        &ctx.device,
-        "ltc table",
-        w,
-        h,
-        wgpu::TextureFormat::Rgba32Float,
-        wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-    );
-    let texels = t.texels();
-    crate::gpu::alloc::note_upload("ltc table", texels.len() as u64 * 16);
-    ctx.queue.write_texture(
-        texture.as_image_copy(),
-        bytemuck::cast_slice(&texels),
-        wgpu::TexelCopyBufferLayout {
-            offset: 0,
-            bytes_per_row: Some(w * 16),
-            rows_per_image: Some(h),
-        },
-        wgpu::Extent3d {
-            width: w,
-            height: h,
-            depth_or_array_layers: 1,
-        },
-    );
-    texture
+    let size = (CELL_TEXELS * t.size as u32, t.size as u32 + 1);
+    crate::gpu::float_texture_of(ctx, "ltc table", size, &t.texels())
 }
 
 #[cfg(test)]
