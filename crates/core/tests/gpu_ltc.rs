@@ -3,13 +3,16 @@
 //! `raster::ltc::glossy_integral` on random polygons (triangles and quads, partly below the
 //! horizon or not) seen from random normals, views and roughnesses.
 //!
-//! Tolerance per value: |gpu − cpu| ≤ 2e-4·|cpu| + 1e-3·n + 4·s, n the lobe's albedo at the
+//! Tolerance per value: |gpu − cpu| ≤ 2e-4·|cpu| + 3e-3·n + 4·s, n the lobe's albedo at the
 //! case and s the case's f32 sensitivity: the largest change of the CPU value when a
 //! corner, the normal or the view moves by 1e-6 (near the clipping of a corner at the
 //! horizon, or a sharp lobe's edge, one ULP moves the result by more than 2e-4). The floor
 //! 1e-3·n: Vulkan lets acos and atan2 be off by thousands of ULPs (lavapipe's are), and the
 //! edge terms θᵢ·(n̂ᵢ)_z of a polygon partly cancel (each up to π, their sum ≤ 2π·E); with
 //! 1e-5·n, 2000 random cases differed by up to 5e-4 of the albedo (0.17% of the value).
+//! With the 32×32 table (3× finer in θo, so steeper between nodes) the GPU's acos error
+//! moves the lookup by more: two of the 2000 cases differed by 2.3e-3 of the albedo (0.5%
+//! of the value), hence 3e-3·n.
 
 use gi_core::gpu::{self, layout};
 use gi_core::raster::ltc::{glossy_integral, table};
@@ -185,7 +188,7 @@ fn wgsl_ltc_matches_cpu() {
         }
         for k in 0..2 {
             worst = worst.max(((g[k] - want[k]).abs() - 4.0 * s).max(0.0) / norm);
-            let tol = 2e-4 * want[k].abs() + 1e-3 * norm + 4.0 * s;
+            let tol = 2e-4 * want[k].abs() + 3e-3 * norm + 4.0 * s;
             if !g[k].is_finite() || (g[k] - want[k]).abs() > tol {
                 failures.push(format!("case {i}: gpu {g:?} cpu {want:?} (tol {tol})"));
                 break;
@@ -232,7 +235,8 @@ fn lum(c: Vec3) -> f64 {
 /// error in the lobe, ≤ 4.3% by `raster::ltc`'s test, plus the ratio estimator's
 /// visibility from the group's points, 1 in the unshadowed highlight, and the reference's
 /// noise) and the image means within 5%. Measured (lavapipe): highlight 1.004–1.013, image
-/// 1.004–1.008 over the four seeds. Not measured: the same frames before the LTC call site.
+/// 1.004–1.008 over the four seeds (10×10 table); with the 32×32 table 1.016–1.025 and
+/// 1.005–1.009. Not measured: the same frames before the LTC call site.
 #[test]
 fn glossy_highlight_of_an_area_light_matches_path() {
     use gi_core::scene::Scene;
