@@ -534,18 +534,38 @@ pub fn float_texture_of(
         wgpu::TextureFormat::Rgba32Float,
         wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
     );
-    alloc::note_upload(label, texels.len() as u64 * 16);
+    write_rows(ctx, &texture, label, w, texels);
+    texture
+}
+
+/// Writes `data` into the first rows of `texture` (`w` texels a row), counted as an upload
+/// of `label`.
+pub fn write_rows(
+    ctx: &GpuContext,
+    texture: &wgpu::Texture,
+    label: &str,
+    w: u32,
+    data: &[[f32; 4]],
+) {
+    if data.is_empty() {
+        return;
+    }
+    let rows = data.len() as u32 / w;
+    alloc::note_upload(label, data.len() as u64 * 16);
     ctx.queue.write_texture(
         texture.as_image_copy(),
-        bytemuck::cast_slice(texels),
+        bytemuck::cast_slice(data),
         wgpu::TexelCopyBufferLayout {
             offset: 0,
             bytes_per_row: Some(w * 16),
-            rows_per_image: Some(h),
+            rows_per_image: Some(rows),
         },
-        texture.size(),
+        wgpu::Extent3d {
+            width: w,
+            height: rows,
+            depth_or_array_layers: 1,
+        },
     );
-    texture
 }
 
 #[cfg(test)]

@@ -118,32 +118,9 @@ fn float_texture(
         wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
     );
     if let Some(data) = data {
-        write_rows(ctx, &texture, label, w, data);
+        gpu::write_rows(ctx, &texture, label, w, data);
     }
     texture
-}
-
-/// Writes `data` into the first rows of `texture` (`w` texels a row).
-fn write_rows(ctx: &GpuContext, texture: &wgpu::Texture, label: &str, w: u32, data: &[[f32; 4]]) {
-    if data.is_empty() {
-        return;
-    }
-    let rows = data.len() as u32 / w;
-    crate::gpu::alloc::note_upload(label, data.len() as u64 * 16);
-    ctx.queue.write_texture(
-        texture.as_image_copy(),
-        bytemuck::cast_slice(data),
-        wgpu::TexelCopyBufferLayout {
-            offset: 0,
-            bytes_per_row: Some(w * 16),
-            rows_per_image: Some(rows),
-        },
-        wgpu::Extent3d {
-            width: w,
-            height: rows,
-            depth_or_array_layers: 1,
-        },
-    );
 }
 
 /// The environment's radiance table and its irradiance table (1×1 black without one).
@@ -330,13 +307,13 @@ impl LightSamples {
         self.sky_records(scene, seed, &mut records);
         let sky = records.len() as u32 - area;
         let texels: Vec<[f32; 4]> = records.iter().flat_map(|r| r.texels()).collect();
-        write_rows(ctx, &self.records, "sampled lights", SAMPLE_TEXELS, &texels);
+        gpu::write_rows(ctx, &self.records, "sampled lights", SAMPLE_TEXELS, &texels);
         let columns: Vec<[f32; 4]> = self
             .clip
             .iter()
             .flat_map(|m| m.to_cols_array_2d())
             .collect();
-        write_rows(ctx, &self.matrices, "sampled light matrices", 4, &columns);
+        gpu::write_rows(ctx, &self.matrices, "sampled light matrices", 4, &columns);
         let views: Vec<ViewRaw> = self
             .clip
             .iter()
@@ -383,7 +360,7 @@ impl LightSamples {
         let emitters = Emitters::of(scene);
         let groups = emitters.polygon_groups(scene, (MAX_POLYGONS, MAX_GROUPS), area);
         let texels: Vec<[f32; 4]> = groups.polygons.iter().flat_map(polygon_texels).collect();
-        write_rows(
+        gpu::write_rows(
             ctx,
             &self.polygons,
             "emitter polygons",
@@ -506,7 +483,7 @@ impl LightSamples {
         let mut texels = tree.texels;
         let row = (TREE_ROW * TREE_ENTRY_TEXELS) as usize;
         texels.resize(texels.len().next_multiple_of(row), [0.0; 4]);
-        write_rows(
+        gpu::write_rows(
             ctx,
             &self.tree,
             "emitter tree",
