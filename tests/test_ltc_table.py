@@ -4,8 +4,8 @@ above a surface point, the closed form n·E(M⁻¹P) (E: Lambert's form factor o
 transformed by the table's M⁻¹ and clipped to the horizon, n the lobe's albedo) against
 ∫ f(wo, wi)·cos θi dω over the square, summed on an 800² grid of its area (GGX, α =
 roughness², height-correlated Smith G2, Fresnel 1, written here apart from the fit).
-This is the CPU reference of the formula the GPU is to evaluate (not yet ported: the GPU
-direct light does not use the table)."""
+The Rust reference of the GPU's evaluation is `crates/core/src/raster/ltc.rs` (its own
+numeric test against `Material::eval`, and CPU/GPU parity in `crates/core/tests/gpu_ltc.rs`)."""
 
 import json
 import math

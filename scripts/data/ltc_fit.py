@@ -18,11 +18,13 @@ by Nelder–Mead from the previous cell's fit (smooth to rough, normal to grazin
 paper describes. The table holds M⁻¹'s four non-trivial entries normalized by its middle
 one (LTC is invariant under scaling of M), n and the Fresnel moment.
 
-    python scripts/data/ltc_fit.py --size 10 --samples 32   # the committed table (~25 s CPU)
+    python scripts/data/ltc_fit.py --size 32 --samples 32   # the committed table (~5 min CPU)
 
 Written from the paper's description; no published table or code is used. Checked by
 `tests/test_ltc_table.py` (the closed form against a numeric integral over square lights).
-Not yet used by the GPU direct light (issue 44 item 2 is open).
+Evaluated by `crates/core/src/raster/ltc.rs` (CPU) and `shaders/common/ltc.wgsl` (GPU, the
+table as `ltc_table.wgsl`: regenerate it after a refit with
+`GI_WRITE_LTC_TABLE=1 cargo test -p gi-core --lib ltc`).
 """
 
 from __future__ import annotations
@@ -202,15 +204,14 @@ def fit(size: int, samples: int) -> dict:
             wo = np.array([np.sin(t), 0.0, np.cos(t)])
             norm, fres, mean = moments(wo, alpha, u)
             lobe_samples = sample_lobe(wo, alpha, u)
-            # From the previous θ's fit; a row's first from the rougher row's, the very
-            # first from a cosine narrowed about the lobe's mean direction.
-            if prev is not None:
-                x0 = prev
-            elif i < size - 1:
-                x0 = table[(i + 1, j)][0]
-            else:
-                x0 = initial(alpha, mean)
+            # From the best of the previous θ's fit, the rougher row's at this θ and a
+            # cosine narrowed about the lobe's mean direction (one start alone left the
+            # smoothest row's grazing cells in a poor local minimum).
             args = (wo, alpha, norm, u, lobe_samples)
+            starts = [initial(alpha, mean)]
+            starts += [prev] if prev is not None else []
+            starts += [table[(i + 1, j)][0]] if i < size - 1 else []
+            x0 = min(starts, key=lambda q, args=args: objective(q, *args))
             p = nelder_mead(lambda q, args=args: objective(q, *args), x0, 0.1)
             prev = p
             table[(i, j)] = (p, norm, fres)
@@ -246,7 +247,7 @@ def fit(size: int, samples: int) -> dict:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--size", type=int, default=10)
+    ap.add_argument("--size", type=int, default=32)
     ap.add_argument("--samples", type=int, default=32, help="stratified samples per axis")
     ap.add_argument("--out", type=Path, default=OUT)
     a = ap.parse_args()

@@ -540,6 +540,56 @@ pub fn write_buffer(
     queue.write_buffer(buffer, offset, bytes);
 }
 
+/// A `w`×`h` `Rgba32Float` texture (sampled, counted) holding `texels` (row-major), their
+/// upload counted as `label`'s.
+pub fn float_texture_of(
+    ctx: &GpuContext,
+    label: &str,
+    (w, h): (u32, u32),
+    texels: &[[f32; 4]],
+) -> wgpu::Texture {
+    let texture = texture_2d(
+        &ctx.device,
+        label,
+        w,
+        h,
+        wgpu::TextureFormat::Rgba32Float,
+        wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+    );
+    write_rows(ctx, &texture, label, w, texels);
+    texture
+}
+
+/// Writes `data` into the first rows of `texture` (`w` texels a row), counted as an upload
+/// of `label`.
+pub fn write_rows(
+    ctx: &GpuContext,
+    texture: &wgpu::Texture,
+    label: &str,
+    w: u32,
+    data: &[[f32; 4]],
+) {
+    if data.is_empty() {
+        return;
+    }
+    let rows = data.len() as u32 / w;
+    alloc::note_upload(label, data.len() as u64 * 16);
+    ctx.queue.write_texture(
+        texture.as_image_copy(),
+        bytemuck::cast_slice(data),
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(w * 16),
+            rows_per_image: Some(rows),
+        },
+        wgpu::Extent3d {
+            width: w,
+            height: rows,
+            depth_or_array_layers: 1,
+        },
+    );
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

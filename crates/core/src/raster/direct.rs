@@ -131,6 +131,26 @@ pub struct DirectParamsRaw {
 /// fourth corner.
 pub const POLYGON_TEXELS: u32 = 5;
 
+/// A round emitter's row of the polygons texture (`round_lights.wgsl`): its centre (w: 1
+/// when two-sided), the flag 2 in the second texel's w, (radius, corners of the polygon
+/// that stands for its disc, that polygon's radius over the disc's), the radiance, and the
+/// cosine and sine of the angle between the polygon's corners.
+pub fn round_texels(
+    r: crate::scene::emitters::round::Round,
+    two_sided: f32,
+    radiance: Vec3,
+) -> [[f32; 4]; POLYGON_TEXELS as usize] {
+    use crate::scene::emitters::round::{polygon_scale, EDGES};
+    let step = std::f32::consts::TAU / EDGES as f32;
+    [
+        r.centre.extend(two_sided).to_array(),
+        [0.0, 0.0, 0.0, 2.0],
+        [r.radius, EDGES as f32, polygon_scale(), 0.0],
+        radiance.extend(0.0).to_array(),
+        [step.cos(), step.sin(), 0.0, 0.0],
+    ]
+}
+
 /// Most emitting triangles whose unshadowed diffuse light the direct pass sums in closed
 /// form per pixel (beyond, their light is sampled only).
 pub const MAX_POLYGONS: usize = 64;
@@ -159,12 +179,16 @@ pub struct DirectPass {
     /// Group 0: view, lights, shadow matrices, shadow maps, comparison sampler, the
     /// penumbra taps per axis of the pixel-centre pass ([`penumbra_taps`]), the sampled
     /// lights' records, shadow matrices (a texture) and maps, the environment's radiance and
-    /// irradiance tables, the [`DirectParamsRaw`] and the emitting polygons.
+    /// irradiance tables, the [`DirectParamsRaw`], the emitting polygons, the emitter tree
+    /// and the LTC table.
     pub scene_layout: wgpu::BindGroupLayout,
     /// Group 1: the G-buffer's position, normals, diffuse, specular and emission textures,
     /// and the materials' exact models (`exact_models`).
     pub gbuffer_layout: wgpu::BindGroupLayout,
     pub shadow_sampler: wgpu::Sampler,
+    /// The LTC table (group 0, binding 14; `raster::ltc`), uploaded once per device and
+    /// read only by the pipelines of variants with `ltc`.
+    pub ltc_table: wgpu::TextureView,
 }
 
 /// Visibility taps per axis of the pixel-centre pass in shadow penumbrae: the grid of `spp`
@@ -174,7 +198,8 @@ pub fn penumbra_taps(spp: u32) -> u32 {
 }
 
 impl DirectPass {
-    pub fn new(device: &wgpu::Device) -> Self {
+    pub fn new(ctx: &crate::gpu::GpuContext) -> Self {
+        let device = &ctx.device;
         let frag = wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE;
         let mut view = super::view_entry(0);
         view.visibility |= wgpu::ShaderStages::COMPUTE;
@@ -194,6 +219,7 @@ impl DirectPass {
                 texture_entry(10, frag),
                 texture_entry(12, frag),
                 texture_entry(13, frag),
+                texture_entry(14, frag),
                 wgpu::BindGroupLayoutEntry {
                     binding: 11,
                     visibility: frag,
@@ -250,6 +276,7 @@ impl DirectPass {
             scene_layout,
             gbuffer_layout,
             shadow_sampler,
+            ltc_table: super::ltc::texture(ctx).create_view(&Default::default()),
         }
     }
 
@@ -338,6 +365,6 @@ impl DirectPass {
 
 impl crate::gpu::Pipelines for DirectPass {
     fn create(ctx: &crate::gpu::GpuContext) -> Self {
-        DirectPass::new(&ctx.device)
+        DirectPass::new(ctx)
     }
 }

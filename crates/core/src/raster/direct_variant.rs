@@ -41,6 +41,11 @@ pub struct DirectVariant {
     /// Specular lobes or Fresnel-weighted diffuse lobes (`GLOSSY`): without, Lambert's
     /// lobe alone.
     pub glossy: bool,
+    /// The polygon groups' glossy lobe by linearly transformed cosines (`LTC_LIGHTS`): some
+    /// polygon group and some glossy material.
+    pub ltc: bool,
+    /// Round emitters (spheres) among the polygon groups (`ROUND_LIGHTS`).
+    pub round: bool,
 }
 
 impl DirectVariant {
@@ -51,10 +56,12 @@ impl DirectVariant {
         background: true,
         emission: true,
         glossy: true,
+        ltc: true,
+        round: true,
     };
 
     /// The pipeline-overridable constants of this variant.
-    pub fn constants(&self) -> [(&'static str, f64); 5] {
+    pub fn constants(&self) -> [(&'static str, f64); 7] {
         let f = |b: bool| if b { 1.0 } else { 0.0 };
         [
             ("SAMPLED_LIGHTS", f(self.sampled)),
@@ -62,6 +69,8 @@ impl DirectVariant {
             ("BACKGROUND", f(self.background)),
             ("EMISSION", f(self.emission)),
             ("GLOSSY", f(self.glossy)),
+            ("LTC_LIGHTS", f(self.ltc)),
+            ("ROUND_LIGHTS", f(self.round)),
         ]
     }
 }
@@ -191,6 +200,8 @@ mod tests {
             background: false,
             emission: false,
             glossy: false,
+            ltc: false,
+            round: false,
         };
         for v in [DirectVariant::ALL, none, DirectVariant::ALL] {
             cache.get(v, |_| {

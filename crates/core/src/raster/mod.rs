@@ -13,6 +13,7 @@ pub mod exact_models;
 pub mod gbuffer;
 pub mod instances;
 pub mod layers;
+pub mod ltc;
 pub mod model_energy;
 pub mod rsm;
 pub mod shadow;

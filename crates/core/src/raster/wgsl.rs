@@ -19,9 +19,16 @@ pub const SKY_CONE: &str = include_str!("shaders/common/sky_cone.wgsl");
 pub const EXACT_MODELS: &str = include_str!("shaders/common/exact_models.wgsl");
 /// The direct passes' binding of the records `EXACT_MODELS` reads.
 pub const EXACT_MODELS_DIRECT: &str = include_str!("shaders/common/exact_models_direct.wgsl");
+/// Linearly transformed cosines: the GGX lobe over a polygon (its includer declares the
+/// table texture `ltc_table`).
+pub const LTC: &str = include_str!("shaders/common/ltc.wgsl");
+/// The polygon groups' glossy lobe by LTC for `DIRECT_SHADE` (after it, `ENV_GLOSSY`, `LTC`).
+pub const LTC_DIRECT: &str = include_str!("shaders/common/ltc_direct.wgsl");
+/// Round emitters (spheres) as the polygons of their discs, for `DIRECT_SHADE` (after it).
+pub const ROUND_LIGHTS: &str = include_str!("shaders/common/round_lights.wgsl");
 /// The deferred direct light's sources in order, for a pass that shades with it (after
 /// `gpu::shaders::COMMON` and `BSDF`, before the pass's own entry points).
-pub const DIRECT_SHADING: [&str; 8] = [
+pub const DIRECT_SHADING: [&str; 11] = [
     crate::gpu::shaders::MODELS,
     SHADOW_LOOKUP,
     DIRECT_SHADE,
@@ -30,6 +37,9 @@ pub const DIRECT_SHADING: [&str; 8] = [
     EMITTER_TREE,
     ENV_GLOSSY,
     SKY_CONE,
+    LTC,
+    LTC_DIRECT,
+    ROUND_LIGHTS,
 ];
 
 pub const GBUFFER: &str = include_str!("shaders/gbuffer.wgsl");

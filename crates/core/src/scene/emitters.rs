@@ -6,6 +6,7 @@
 
 mod groups;
 pub mod quads;
+pub mod round;
 mod tree;
 
 pub use groups::PolygonGroups;

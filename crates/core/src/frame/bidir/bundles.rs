@@ -41,26 +41,7 @@ pub(super) fn env_tables(ctx: &GpuContext, env: Option<&Environment>) -> EnvTabl
 /// A `w`×`h` `Rgba32Float` texture of `texels`.
 fn float_table(ctx: &GpuContext, label: &str, w: u32, h: u32, texels: &[Vec3]) -> wgpu::Texture {
     let data: Vec<[f32; 4]> = texels.iter().map(|t| t.extend(1.0).to_array()).collect();
-    let texture = gpu::texture_2d(
-        &ctx.device,
-        label,
-        w,
-        h,
-        wgpu::TextureFormat::Rgba32Float,
-        wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-    );
-    crate::gpu::alloc::note_upload(label, data.len() as u64 * 16);
-    ctx.queue.write_texture(
-        texture.as_image_copy(),
-        bytemuck::cast_slice(&data),
-        wgpu::TexelCopyBufferLayout {
-            offset: 0,
-            bytes_per_row: Some(w * 16),
-            rows_per_image: Some(h),
-        },
-        texture.size(),
-    );
-    texture
+    gpu::float_texture_of(ctx, label, (w, h), &data)
 }
 
 /// The environment's radiance table as an `Rgba32Float` texture (1×1 black without one),

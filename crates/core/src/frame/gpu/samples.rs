@@ -118,32 +118,9 @@ fn float_texture(
         wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
     );
     if let Some(data) = data {
-        write_rows(ctx, &texture, label, w, data);
+        gpu::write_rows(ctx, &texture, label, w, data);
     }
     texture
-}
-
-/// Writes `data` into the first rows of `texture` (`w` texels a row).
-fn write_rows(ctx: &GpuContext, texture: &wgpu::Texture, label: &str, w: u32, data: &[[f32; 4]]) {
-    if data.is_empty() {
-        return;
-    }
-    let rows = data.len() as u32 / w;
-    crate::gpu::alloc::note_upload(label, data.len() as u64 * 16);
-    ctx.queue.write_texture(
-        texture.as_image_copy(),
-        bytemuck::cast_slice(data),
-        wgpu::TexelCopyBufferLayout {
-            offset: 0,
-            bytes_per_row: Some(w * 16),
-            rows_per_image: Some(rows),
-        },
-        wgpu::Extent3d {
-            width: w,
-            height: rows,
-            depth_or_array_layers: 1,
-        },
-    );
 }
 
 /// The environment's radiance table and its irradiance table (1×1 black without one).
@@ -282,6 +259,18 @@ impl LightSamples {
         self.drawn = None;
     }
 
+    /// Whether the emitters found so far form polygon groups (their light in closed form).
+    pub fn has_polygon_groups(&self) -> bool {
+        self.emitters.as_ref().is_some_and(|(_, g)| g.groups > 0)
+    }
+
+    /// Whether some polygon group found so far is round (a sphere).
+    pub fn has_round_groups(&self) -> bool {
+        self.emitters
+            .as_ref()
+            .is_some_and(|(_, g)| g.polygons.iter().any(|p| p.round.is_some()))
+    }
+
     /// The samples are to be drawn again at the next frame (the lights, the geometry or the
     /// materials changed); `emitters`: the emitting triangles may have changed too.
     pub fn invalidate(&mut self, emitters: bool) {
@@ -318,13 +307,13 @@ impl LightSamples {
         self.sky_records(scene, seed, &mut records);
         let sky = records.len() as u32 - area;
         let texels: Vec<[f32; 4]> = records.iter().flat_map(|r| r.texels()).collect();
-        write_rows(ctx, &self.records, "sampled lights", SAMPLE_TEXELS, &texels);
+        gpu::write_rows(ctx, &self.records, "sampled lights", SAMPLE_TEXELS, &texels);
         let columns: Vec<[f32; 4]> = self
             .clip
             .iter()
             .flat_map(|m| m.to_cols_array_2d())
             .collect();
-        write_rows(ctx, &self.matrices, "sampled light matrices", 4, &columns);
+        gpu::write_rows(ctx, &self.matrices, "sampled light matrices", 4, &columns);
         let views: Vec<ViewRaw> = self
             .clip
             .iter()
@@ -371,7 +360,7 @@ impl LightSamples {
         let emitters = Emitters::of(scene);
         let groups = emitters.polygon_groups(scene, (MAX_POLYGONS, MAX_GROUPS), area);
         let texels: Vec<[f32; 4]> = groups.polygons.iter().flat_map(polygon_texels).collect();
-        write_rows(
+        gpu::write_rows(
             ctx,
             &self.polygons,
             "emitter polygons",
@@ -494,7 +483,7 @@ impl LightSamples {
         let mut texels = tree.texels;
         let row = (TREE_ROW * TREE_ENTRY_TEXELS) as usize;
         texels.resize(texels.len().next_multiple_of(row), [0.0; 4]);
-        write_rows(
+        gpu::write_rows(
             ctx,
             &self.tree,
             "emitter tree",
@@ -542,10 +531,14 @@ impl LightSamples {
 
 /// A polygon's row of the polygons texture ([`POLYGON_TEXELS`] texels): three corners (w
 /// of the first: 1 when two-sided; of the second: 1 for a quad; of the third: its
-/// [`EmitterPolygon::in_plane_bound`]), the radiance, and a quad's fourth corner.
+/// [`EmitterPolygon::in_plane_bound`]), the radiance, and a quad's fourth corner; a round
+/// emitter's as `raster::direct::round_texels` writes it.
 fn polygon_texels(t: &EmitterPolygon) -> [[f32; 4]; POLYGON_TEXELS as usize] {
     let [a, b, c] = t.corners;
     let side = t.two_sided as u32 as f32;
+    if let Some(r) = t.round {
+        return crate::raster::direct::round_texels(r, side, t.radiance);
+    }
     let quad = t.fourth.is_some() as u32 as f32;
     [
         a.extend(side).to_array(),

@@ -208,6 +208,8 @@ impl GpuScene {
             background: c.background,
             emission: self.material_kinds.emission,
             glossy: self.material_kinds.glossy,
+            ltc: self.material_kinds.glossy && self.samples.has_polygon_groups(),
+            round: self.samples.has_round_groups(),
         }
     }
 

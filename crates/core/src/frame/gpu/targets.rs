@@ -173,6 +173,7 @@ fn direct_scene_group(
                 buffer(11, &gs.samples.params),
                 texture(12, &gs.samples.polygons_view),
                 texture(13, &gs.samples.tree_view),
+                texture(14, &direct_pass.ltc_table),
             ],
         },
     )

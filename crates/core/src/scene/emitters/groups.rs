@@ -5,15 +5,18 @@
 //! has points for its ratio and every emitter its share of the points.
 
 use super::quads::{self, EmitterPolygon};
+use super::round::{self, Round};
 use super::{EmitterPoint, EmitterTriangle, Emitters};
 use crate::sampling::AliasTable;
 use crate::scene::Scene;
+use glam::Vec3;
 
 /// The emitting objects whose light the GPU direct pass sums in closed form, each a group
 /// of triangles (see [`Emitters::polygon_groups`]).
 #[derive(Clone, Debug, Default)]
 pub struct PolygonGroups {
-    /// Their triangles, group by group.
+    /// Their triangles, group by group (none of a round group's: its one polygon is the
+    /// sphere, [`super::round`]).
     pub triangles: Vec<EmitterTriangle>,
     /// The same light as polygons, group by group: the triangles with coplanar pairs merged
     /// into quads ([`quads::merge`]). The GPU direct pass sums these.
@@ -118,30 +121,50 @@ impl Emitters {
         let emitting = self.weights.iter().filter(|&&w| w > 0.0).count();
         objects.retain(|o| o.3 && o.2 > 0.0);
         objects.sort_by(|a, b| b.2.total_cmp(&a.2));
-        let mut chosen: Vec<Vec<usize>> = Vec::new();
-        let mut polygons = 0;
+        // Each chosen object's slots and, for a tessellated sphere, its one round polygon.
+        let mut chosen: Vec<(Vec<usize>, Option<Round>)> = Vec::new();
+        let (mut polygons, mut in_groups) = (0, 0);
         for (_, slots, _, _) in objects {
-            if chosen.len() < max_groups && polygons + slots.len() <= max_polygons {
-                polygons += slots.len();
-                chosen.push(slots);
+            let corners: Vec<[Vec3; 3]> = slots.iter().map(|&i| self.corners[i].0).collect();
+            let round = round::sphere(&corners);
+            let cost = if round.is_some() { 1 } else { slots.len() };
+            if chosen.len() < max_groups && polygons + cost <= max_polygons {
+                polygons += cost;
+                in_groups += slots.len();
+                chosen.push((slots, round));
             }
         }
         // At most `points` strata: the weakest groups join the other emitters.
-        while let Some(last) = chosen.last() {
-            let rest = polygons < emitting;
+        while let Some((last, _)) = chosen.last() {
+            let rest = in_groups < emitting;
             if chosen.len() + rest as usize <= points as usize {
                 break;
             }
-            polygons -= last.len();
+            in_groups -= last.len();
             chosen.pop();
         }
+        let mut rounds = Vec::new();
         let mut triangles = Vec::new();
         let mut in_group = vec![false; self.triangles.len()];
         let mut strata: Vec<(Option<u32>, Vec<u32>)> = Vec::new();
-        for (g, slots) in chosen.into_iter().enumerate() {
+        for (g, (slots, round)) in chosen.into_iter().enumerate() {
+            if round.is_some() {
+                let m = scene.material_of(self.triangles[slots[0]] as usize);
+                rounds.push(EmitterPolygon {
+                    corners: [Vec3::ZERO; 3],
+                    fourth: None,
+                    radiance: m.emission,
+                    two_sided: m.two_sided,
+                    group: g as u32,
+                    round,
+                });
+            }
             for &slot in &slots {
-                let m = scene.material_of(self.triangles[slot] as usize);
                 in_group[slot] = true;
+                if round.is_some() {
+                    continue;
+                }
+                let m = scene.material_of(self.triangles[slot] as usize);
                 triangles.push(EmitterTriangle {
                     corners: self.corners[slot].0,
                     radiance: m.emission,
@@ -177,9 +200,12 @@ impl Emitters {
                 })
             })
             .collect();
+        let mut polygons = quads::merge(&triangles);
+        polygons.append(&mut rounds);
+        polygons.sort_by_key(|p| p.group);
         PolygonGroups {
-            groups: triangles.last().map_or(0, |t| t.group + 1),
-            polygons: quads::merge(&triangles),
+            groups: polygons.last().map_or(0, |t| t.group + 1),
+            polygons,
             triangles,
             strata,
         }
@@ -275,29 +301,41 @@ mod tests {
             let r = g.triangles_of(k);
             g.triangles[r.start as usize].radiance
         };
-        // The sphere's 320 triangles exceed 64: the panel, then the box.
+        // The panel, the box, then the sphere: round (`round::sphere`), one polygon and no
+        // triangles of its own.
         let g = e.polygon_groups(&scene, (64, 8), 16);
-        assert_eq!(g.groups, 2);
+        assert_eq!(g.groups, 3);
         assert_eq!(g.triangles_of(0), 0..2);
         assert_eq!(g.triangles_of(1), 2..14);
-        // As polygons: the panel one quad, the box six.
+        assert_eq!(g.triangles_of(2), 14..14);
+        // As polygons: the panel one quad, the box six, the sphere one.
         assert_eq!(g.polygons_of(0), 0..1);
         assert_eq!(g.polygons_of(1), 1..7);
+        assert_eq!(g.polygons_of(2), 7..8);
         assert_eq!(g.polygons[0].radiance, Vec3::splat(8.0));
         assert_eq!(radiance(&g, 0), Vec3::splat(8.0));
         assert_eq!(radiance(&g, 1), Vec3::new(6.0, 3.0, 1.0));
-        // 12 polygons: the box does not fit after the panel; one group.
-        assert_eq!(e.polygon_groups(&scene, (12, 8), 16).groups, 1);
+        let sphere = g.polygons[7];
+        assert_eq!(sphere.radiance, Vec3::new(1.0, 2.0, 4.0));
+        let r = sphere.round.expect("the sphere is round");
+        assert!(
+            (r.centre - Vec3::new(-1.0, 0.2, 0.0)).length() < 1e-5,
+            "{r:?}"
+        );
+        assert!(r.radius < 0.2 && r.radius > 0.198, "{r:?}");
+        // 12 triangles: the box does not fit after the panel, the sphere does.
+        let g = e.polygon_groups(&scene, (12, 8), 16);
+        assert_eq!(g.groups, 2);
+        assert!(g.polygons[1].round.is_some());
         // One group at most.
         assert_eq!(e.polygon_groups(&scene, (64, 1), 16).groups, 1);
         // Two points: one group and the other emitters; one point: no group.
         assert_eq!(e.polygon_groups(&scene, (64, 8), 2).groups, 1);
         assert_eq!(e.polygon_groups(&scene, (64, 8), 1).groups, 0);
-        // Room for the sphere: three groups, nothing else emits.
+        // Three points: every object a group, nothing else emits.
         let all = e.polygon_groups(&scene, (400, 8), 3);
-        assert_eq!((all.groups, all.triangles.len()), (3, 334));
-        // The sphere's faces are not coplanar: 1 + 6 + 320 polygons.
-        assert_eq!(all.polygons.len(), 327);
+        assert_eq!((all.groups, all.triangles.len()), (3, 14));
+        assert_eq!(all.polygons.len(), 8);
     }
 
     /// Each stratum's points carry its light exactly: within a stratum of one radiance a

@@ -19,6 +19,8 @@ pub struct EmitterPolygon {
     pub two_sided: bool,
     /// Its polygon group.
     pub group: u32,
+    /// A sphere in place of the corners (its group's one polygon: [`super::round`]).
+    pub round: Option<super::round::Round>,
 }
 
 impl EmitterPolygon {
@@ -29,6 +31,7 @@ impl EmitterPolygon {
             radiance: t.radiance,
             two_sided: t.two_sided,
             group: t.group,
+            round: None,
         }
     }
 
@@ -150,6 +153,7 @@ fn quad_of(
         radiance: t.radiance,
         two_sided: t.two_sided,
         group: t.group,
+        round: None,
     })
 }
 

@@ -96,7 +96,8 @@ mod tests {
     use super::*;
     use std::collections::HashMap;
 
-    /// A quad panel (a group) and a 320-triangle sphere (not): the tree holds the sphere's
+    /// A quad panel (a group) and a 320-triangle sphere (not: one group at most; it would
+    /// be a round group, `round::sphere`, with room for two): the tree holds the sphere's
     /// triangles alone, 2n − 1 nodes over them, every leaf naming one triangle once, every
     /// interior node's second child after its first; the triangles' radiance and area.
     #[test]
@@ -110,7 +111,7 @@ mod tests {
             {"shape": {"type": "sphere", "radius": 0.2, "subdivisions": 2}, "material": "globe"}]}"#;
         let scene = Scene::from_json(json, "t", &HashMap::new()).unwrap();
         let e = Emitters::of(&scene);
-        let groups = e.polygon_groups(&scene, (64, 8), 16);
+        let groups = e.polygon_groups(&scene, (64, 1), 16);
         assert_eq!(groups.groups, 1);
         let tree = e.pixel_tree(&scene, &groups).expect("a tree");
         assert_eq!(tree.triangles, 320);
@@ -137,8 +138,9 @@ mod tests {
         // A geodesic sphere of radius 0.2 has a little less area than the sphere.
         let sphere = 4.0 * PI * 0.04;
         assert!(area < sphere && area > 0.95 * sphere, "{area}");
-        // Only the panel: no tree.
-        let panel_only = e.polygon_groups(&scene, (400, 8), 16);
-        assert!(e.pixel_tree(&scene, &panel_only).is_none());
+        // Both groups (the sphere round): no tree.
+        let both = e.polygon_groups(&scene, (64, 8), 16);
+        assert_eq!(both.groups, 2);
+        assert!(e.pixel_tree(&scene, &both).is_none());
     }
 }

@@ -103,6 +103,11 @@ override EMISSION: bool = true;
 // Some material has a specular lobe or a Fresnel-weighted diffuse lobe (else every G-buffer
 // sample has specular 0 and no Fresnel flag, and the BSDF is Lambert's alone).
 override GLOSSY: bool = true;
+// The polygon groups' glossy lobe in closed form (ltc_direct.wgsl; else their points' sum):
+// the scene has polygon groups and glossy materials.
+override LTC_LIGHTS: bool = true;
+// Round emitters (spheres) among the polygon groups (round_lights.wgsl).
+override ROUND_LIGHTS: bool = true;
 
 // Most polygon groups (`MAX_GROUPS` of raster/direct.rs).
 const MAX_GROUPS: u32 = 8u;
@@ -644,25 +649,31 @@ fn polygons_diffuse(p: vec3<f32>, ns: vec3<f32>, m: Material, wo: vec3<f32>, fir
     for (var t = first; t < end; t++) {
         let t0 = textureLoad(emitter_polygons, vec2<u32>(0u, t), 0);
         let t1 = textureLoad(emitter_polygons, vec2<u32>(1u, t), 0);
-        let a = t0.xyz - p;
-        let b = t1.xyz - p;
-        let t2 = textureLoad(emitter_polygons, vec2<u32>(2u, t), 0);
-        let c = t2.xyz - p;
-        // A one-sided emitter lights its front side only. A receiver in the polygon's plane
-        // (within the bound in t2.w: the plane 1e-4 of the polygon's size thick) gets no
-        // light from it, every direction to it grazing: its own face, or one flush with it,
-        // which rounding would put just in front, lit as if the polygon filled its
-        // hemisphere.
-        let height = dot(a, cross(b - a, c - a));
-        if (t0.w < 0.5 && height >= 0.0) || abs(height) <= t2.w {
-            continue;
+        var phi = vec3<f32>(0.0);
+        if ROUND_LIGHTS && t1.w > 1.5 {
+            // A sphere (round_lights.wgsl).
+            phi = round_vector(p, t, ns);
+        } else {
+            let a = t0.xyz - p;
+            let b = t1.xyz - p;
+            let t2 = textureLoad(emitter_polygons, vec2<u32>(2u, t), 0);
+            let c = t2.xyz - p;
+            // A one-sided emitter lights its front side only. A receiver in the polygon's
+            // plane (within the bound in t2.w: the plane 1e-4 of the polygon's size thick)
+            // gets no light from it, every direction to it grazing: its own face, or one
+            // flush with it, which rounding would put just in front, lit as if the polygon
+            // filled its hemisphere.
+            let height = dot(a, cross(b - a, c - a));
+            if (t0.w < 0.5 && height >= 0.0) || abs(height) <= t2.w {
+                continue;
+            }
+            let quad = t1.w > 0.5;
+            var d = c;
+            if quad {
+                d = textureLoad(emitter_polygons, vec2<u32>(4u, t), 0).xyz - p;
+            }
+            phi = polygon_vector(a, b, c, d, quad, ns);
         }
-        let quad = t1.w > 0.5;
-        var d = c;
-        if quad {
-            d = textureLoad(emitter_polygons, vec2<u32>(4u, t), 0).xyz - p;
-        }
-        let phi = polygon_vector(a, b, c, d, quad, ns);
         let en = dot(ns, phi);
         let l = textureLoad(emitter_polygons, vec2<u32>(3u, t), 0).xyz;
         e += l * abs(en);
@@ -733,11 +744,20 @@ fn sampled_light(p: vec3<f32>, ns: vec3<f32>, ng: vec3<f32>, m: Material, wo: ve
             let range = direct_params.group_ranges[g];
             var lit = vec3<f32>(0.0);
             var unshadowed = vec3<f32>(0.0);
+            var glit = vec3<f32>(0.0);
+            var gun = vec3<f32>(0.0);
             for (var i = range.x; i < range.y; i++) {
                 let l = point_light(i, p, ns, ng, m, glossy, wo);
                 lit += l.fd * l.v;
                 unshadowed += l.fd;
-                sum += l.fs * l.v;
+                glit += l.fs * l.v;
+                gun += l.fs;
+            }
+            if LTC_LIGHTS && has_glossy {
+                // The glossy lobe in closed form, ratio-estimated (ltc_direct.wgsl).
+                sum += ltc_group_glossy(p, ns, m, wo, range, glit, gun, lit, unshadowed);
+            } else {
+                sum += glit;
             }
             if max3(m.diffuse) > 0.0 {
                 sum += polygons_diffuse(p, ns, m, wo, range.z, range.w) * visible_ratio(lit, unshadowed);
