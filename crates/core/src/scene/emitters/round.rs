@@ -24,10 +24,10 @@ pub fn polygon_scale() -> f32 {
 
 /// Fewest triangles of a tessellated sphere taken as round (a geodesic sphere of 2
 /// subdivisions, 320 triangles, has 1.2% less area than its sphere; of 4, 5120, 0.08%).
-const MIN_TRIANGLES: usize = 320;
+pub const MIN_TRIANGLES: usize = 320;
 
 /// Largest relative spread of the corners' distances from the centre.
-const ROUNDNESS: f32 = 1e-3;
+pub const ROUNDNESS: f32 = 1e-3;
 
 /// A sphere that emits (from outside).
 #[derive(Clone, Copy, Debug, PartialEq)]
