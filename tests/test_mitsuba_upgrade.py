@@ -192,37 +192,6 @@ def test_blackbody_matches_mitsubas_spectral_film(tmp_path, temperature, expecte
     assert light["emission"] == pytest.approx(expected, rel=5e-3)
 
 
-ONE_SIDED = """<sensor type="perspective"><float name="fov" value="30"/>
-<transform name="to_world"><lookat origin="0, 0, CAM" target="0, 0, 0" up="0, 1, 0"/></transform>
-</sensor>
-<emitter type="point"><point name="position" x="0" y="0" z="LIGHT"/></emitter>
-<shape type="rectangle">BSDF</shape>"""
-
-
-@pytest.mark.parametrize(
-    "cam, light, bsdf, refused",
-    [
-        (3, 3, '<bsdf type="diffuse"/>', False),
-        (-3, 3, '<bsdf type="diffuse"/>', True),
-        (3, -3, "", True),  # no BSDF: Mitsuba's default, a one-sided diffuse
-        (-3, -3, '<bsdf type="twosided"><bsdf type="diffuse"/></bsdf>', False),
-    ],
-)
-def test_one_sided_bsdf_seen_from_behind_is_refused(tmp_path, cam, light, bsdf, refused):
-    """Mitsuba 3.9.1 (`scalar_rgb`, `path`) renders a rectangle with a plain `diffuse` lit
-    and seen from behind (z = -3) black (image mean 0.0; 0.165 from the front, and from
-    behind with `twosided`); gi's surfaces reflect on both sides, so the camera or a light
-    behind a one-sided planar shape is a SceneError naming the shape (gi.mitsuba.sides)."""
-    body = ONE_SIDED.replace("CAM", str(cam)).replace("LIGHT", str(light))
-    path = write(tmp_path, body.replace("BSDF", bsdf), sensor="")
-    if not refused:
-        gi.load_scene(path)
-        return
-    with pytest.raises(gi.SceneError, match="one-sided BSDF") as e:
-        gi.load_scene(path)
-    assert e.value.field == '<shape type="rectangle"> (line 7)', e.value.field
-
-
 def test_include_inside_an_element(tmp_path):
     """An `<include>` inside a shape gives the shape the included file's elements (its BSDF
     here), as Mitsuba 3.9.1 reads it (`mi.load_file` of these two files gives the sphere a

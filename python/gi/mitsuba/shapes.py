@@ -12,7 +12,6 @@ import numpy as np
 
 from gi._placement import first_bad_placement
 from gi.meshes import load_mesh
-from gi.mitsuba import sides
 from gi.mitsuba.bsdfs import bsdf
 from gi.mitsuba.elements import Element
 from gi.mitsuba.emitters import area_emitter
@@ -50,11 +49,11 @@ def shape(t: Translator, el: Element, parent: np.ndarray | None = None) -> None:
     if parent is not None:
         xf = parent @ xf
     key, smooth, local = shape_mesh(t, el, kind, props)
-    material, emitter, bsdf_el = None, None, None
+    material, emitter = None, None
     for c in el.children:
         target = t.resolve(c) if c.tag == "ref" else c
         if target.tag == "bsdf":
-            material, bsdf_el = bsdf(t, target), target
+            material = bsdf(t, target)
         elif target.tag == "emitter":
             if target.attrs.get("type") != "area":
                 raise t.error(target, "a shape's emitter must be an `area` emitter")
@@ -67,7 +66,6 @@ def shape(t: Translator, el: Element, parent: np.ndarray | None = None) -> None:
         material = area_emitter(t, el, emitter, material)
     m = xf @ local
     check_matrix(t, props.get("to_world", el), m)
-    sides.note(t, el, kind, bsdf_el, t.boolean(props, "flip_normals", False), m)
     if material in t.bumps:
         from gi.mitsuba.layers import bake_bump
 

@@ -17,8 +17,6 @@ from gi.mitsuba.emitters import emitter
 from gi.mitsuba.includes import expand_includes
 from gi.mitsuba.sensor import check_clip, sensor
 from gi.mitsuba.shapes import check_group, shape
-from gi.mitsuba.sides import OneSided
-from gi.mitsuba.sides import check as check_sides
 from gi.mitsuba.upgrade import upgrade
 from gi.mitsuba.values import Reader
 
@@ -48,8 +46,6 @@ class Translator(Reader):
         self.normal_maps: dict[str, np.ndarray] = {}
         # The sensor element, its near and far clip distances and its properties.
         self.clip: tuple[Element, float, float, dict[str, Element]] | None = None
-        # Planar shapes with a one-sided BSDF (gi.mitsuba.sides).
-        self.one_sided: list[OneSided] = []
 
     def run(self, root: Element) -> None:
         if root.tag != "scene":
@@ -79,7 +75,6 @@ class Translator(Reader):
         if self.camera is None:
             raise scene_error(self.file, "<sensor>", "the scene has no sensor")
         check_clip(self)
-        check_sides(self)
 
     def collect(self, root: Element) -> None:
         """The scene's `<default>` parameters and every element with an `id`."""
