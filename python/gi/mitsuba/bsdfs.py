@@ -64,6 +64,10 @@ KNOWN = {
     "roughplastic": _PLASTIC | _ROUGH,
 }
 COSMETIC = frozenset({"sample_visible"})
+# Mitsuba's BSDFs that scatter on both sides by nature; every other one is black seen or lit
+# from behind (the side away from the shape's normal) unless wrapped in `twosided`: gi's
+# `one_sided` material flag.
+TWO_SIDED_BY_NATURE = frozenset({"dielectric", "thindielectric", "roughdielectric"})
 
 
 def ior(r: Reader, props: Props, name: str, default: float) -> float:
@@ -245,6 +249,8 @@ def bsdf(t: Translator, el: Element, name: str | None = None) -> str:
     if ext_eta is not None and t.float(ext_eta, {"ext_eta": ext_eta}, "ext_eta", 1.0) != 1.0:
         raise t.error(ext_eta, "property `ext_eta` other than 1 is not supported")
     desc = translate(t, el, props)
+    if kind not in TWO_SIDED_BY_NATURE:
+        desc["one_sided"] = True
     t.refuse_unknown(props, KNOWN[kind or ""], COSMETIC)
     name = el.attrs.get("id") or name or f"bsdf@{el.line}"
     while name in t.materials:
@@ -258,11 +264,26 @@ def bsdf(t: Translator, el: Element, name: str | None = None) -> str:
 
 
 def twosided(t: Translator, el: Element, name: str | None) -> str:
-    """``twosided``: its inner BSDF (gi's opaque surfaces are two-sided already)."""
+    """``twosided``: its inner BSDF on both faces (gi's material without ``one_sided``).
+    The inner BSDF keeps its one-sided material for any other use of it."""
     inner = [c for c in el.children if c.tag in ("bsdf", "ref")]
     if len(inner) != 1:
-        raise t.error(el, "gi's opaque surfaces are two-sided: give one inner BSDF")
+        raise t.error(el, "give one inner BSDF (one BSDF a side is not supported)")
     target = t.resolve(inner[0]) if inner[0].tag == "ref" else inner[0]
-    name = bsdf(t, target, el.attrs.get("id") or name)
+    fresh = id(target) not in t.material_of
+    base = bsdf(t, target, el.attrs.get("id") or name)
+    if not t.materials[base].get("one_sided"):
+        t.material_of[id(el)] = base
+        return base
+    desc = {k: v for k, v in t.materials[base].items() if k != "one_sided"}
+    if fresh:  # only this wrapper uses the inner BSDF so far: its material becomes two-sided
+        t.materials[base] = desc
+        del t.material_of[id(target)]
+        t.material_of[id(el)] = base
+        return base
+    name = el.attrs.get("id") or name or f"bsdf@{el.line}"
+    while name in t.materials:
+        name += "'"
+    t.materials[name] = desc
     t.material_of[id(el)] = name
     return name

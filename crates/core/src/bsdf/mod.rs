@@ -65,6 +65,10 @@ pub struct Material {
     /// ([`thin_reflectance`]: reflection R' = 2R/(1 + R), times these factors; the rest,
     /// times `transmission`, passes straight through, not bent).
     pub thin: Option<Vec3>,
+    /// Mitsuba's BSDFs without `twosided`: the back face (the side away from the winding's
+    /// normal) reflects and transmits nothing. A ray that meets it there sees
+    /// [`Material::seen_from`]'s black material (`emission` still applies).
+    pub one_sided: bool,
 }
 
 /// The reflectance of a thin slab of index `ior` seen at cosine `cos`: R' = R + T²R/(1 − R²)
@@ -111,6 +115,7 @@ impl Default for Material {
             conductor: None,
             rough_glass: false,
             thin: None,
+            one_sided: false,
         }
     }
 }
@@ -278,6 +283,35 @@ impl Material {
     /// normal agrees (`photon` 2× too bright in front of the roughdielectric sphere).
     pub fn stores_photons(&self) -> bool {
         !self.is_purely_specular() && !self.rough_glass
+    }
+
+    /// The material that a ray travelling along `dir` meets on a surface whose winding's
+    /// side is `n` (geometric or shading normal on that side): itself, or for a
+    /// [`Material::one_sided`] material met from behind (`dir` along `n`) one that reflects
+    /// and transmits nothing (Mitsuba's one-sided BSDFs are black seen or lit from behind),
+    /// with its emission.
+    pub fn seen_from(&self, n: Vec3, dir: Vec3) -> Material {
+        if self.one_sided && dir.dot(n) > 0.0 {
+            self.back()
+        } else {
+            *self
+        }
+    }
+
+    /// A [`Material::one_sided`] material's back: no lobe, the same emission (its own uber
+    /// equivalent, so no pass shades an exact model there).
+    pub fn back(&self) -> Material {
+        Material {
+            diffuse: Vec3::ZERO,
+            specular: Vec3::ZERO,
+            transmission: Vec3::ZERO,
+            coating: None,
+            conductor: None,
+            rough_glass: false,
+            thin: None,
+            distribution: Distribution::Ggx,
+            ..*self
+        }
     }
 
     /// Whether the surface emits light.

@@ -350,3 +350,33 @@ fn eval_matches_mitsuba() {
         );
     }
 }
+
+/// A one-sided material met from behind (Mitsuba's BSDFs without `twosided`) reflects and
+/// transmits nothing and keeps its emission; met from the front, or two-sided, it is itself.
+#[test]
+fn one_sided_back_is_black() {
+    let n = Vec3::Z;
+    let (towards_front, towards_back) = (-Vec3::new(0.3, 0.1, 1.0).normalize(), Vec3::Z);
+    let wo = dir(0.6, 0.4);
+    let wi = dir(0.8, 2.0);
+    for base in models() {
+        let m = Material {
+            one_sided: true,
+            emission: Vec3::new(1.0, 2.0, 3.0),
+            ..base
+        };
+        assert_eq!(m.seen_from(n, towards_front), m);
+        let two_sided = Material { one_sided: false, ..m };
+        assert_eq!(two_sided.seen_from(n, towards_back), two_sided);
+        let back = m.seen_from(n, towards_back);
+        assert_eq!(back.emission, m.emission);
+        assert_eq!(back.uber_equivalent(), back, "{m:?}: no exact model on the back");
+        let mut rng = Rng::new(3, 1, 0);
+        for (o, i) in [(wo, wi), (-wo, -wi), (wo, -wi)] {
+            assert_eq!(back.eval(o, i), Vec3::ZERO, "{m:?}");
+            assert_eq!(back.pdf(o, i), 0.0, "{m:?}");
+            assert!(back.sample(o, &mut rng).is_none(), "{m:?}");
+        }
+        assert!(!back.stores_photons() && back.lambertian().is_none_or(|f| f == Vec3::ZERO));
+    }
+}

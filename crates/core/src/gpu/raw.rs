@@ -18,7 +18,8 @@ pub struct MaterialRaw {
     pub ior: f32,
     /// Emitted radiance of the front face (W·sr⁻¹·m⁻²).
     pub emission: [f32; 3],
-    /// 1: the back face emits too.
+    /// Bit 0: the back face emits too; bit 1: the back face reflects and transmits nothing
+    /// ([`Material::one_sided`]; `MATERIAL_*` in `types.wgsl`).
     pub two_sided: u32,
 }
 
@@ -39,7 +40,7 @@ impl Material {
             transmission: self.transmission.into(),
             ior: self.ior,
             emission: self.emission.into(),
-            two_sided: self.two_sided as u32,
+            two_sided: self.two_sided as u32 | (self.one_sided as u32) << 1,
         }
     }
 }

@@ -50,16 +50,14 @@ pub fn records_of(materials: &[Material], maps: &[MaterialMaps]) -> Vec<ModelMat
 
 /// The record index + 1 of the material of `scene`'s `triangle` where it is shaded exactly
 /// ([`shades_exactly`]), 0 where its uber parameters are shaded: `bidir`'s VPL records
-/// carry it ([`material_word`]; `shaders/bidir_models.wgsl`).
-pub fn model_of(scene: &Scene, triangle: u32) -> u32 {
+/// carry it ([`material_word`]; `shaders/bidir_models.wgsl`). `met` is the material as a
+/// ray met it (`trace::Interaction::material`): a one-sided material's black back
+/// ([`Material::seen_from`]) is shaded by its (zero) uber parameters.
+pub fn model_of(scene: &Scene, triangle: u32, met: &Material) -> u32 {
     let i = scene.triangle_material(triangle as usize) as usize;
     let none = MaterialMaps::default();
     let maps = scene.material_maps.get(i).unwrap_or(&none);
-    let exact = scene
-        .materials
-        .get(i)
-        .is_some_and(|m| shades_exactly(m, maps));
-    if exact {
+    if i < scene.materials.len() && shades_exactly(met, maps) {
         i as u32 + 1
     } else {
         0

@@ -282,6 +282,7 @@ pub(crate) fn material_from_desc(m: &MaterialDesc) -> std::result::Result<Materi
         conductor,
         rough_glass: m.rough_glass,
         thin: m.thin_glass.map(Into::into),
+        one_sided: m.one_sided,
     })
 }
 

@@ -172,6 +172,10 @@ pub struct MaterialDesc {
     /// factors (Mitsuba's `specular_reflectance`) multiply its reflection.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub thin_glass: Option<V3>,
+    /// Only the front face (the side the triangles' winding faces) reflects and transmits
+    /// light; the back is black (Mitsuba's BSDFs without `twosided`). Default: both faces.
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub one_sided: bool,
 }
 
 /// `"ggx"` or `"beckmann"`.

@@ -343,6 +343,7 @@ impl Scene {
             conductor_k: m.conductor.map(|c| c.k.into()),
             rough_glass: m.rough_glass,
             thin_glass: m.thin.map(Into::into),
+            one_sided: m.one_sided,
         })
     }
 }

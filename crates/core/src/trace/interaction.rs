@@ -7,7 +7,8 @@ use crate::scene::{surface, Scene};
 use glam::{Vec2, Vec3};
 
 /// Geometry and material at a ray hit. The material is the triangle's with its textures
-/// looked up at the hit (finest level), the shading normal includes its normal map.
+/// looked up at the hit (finest level), black where the ray meets a one-sided material's
+/// back ([`Material::seen_from`]); the shading normal includes its normal map.
 #[derive(Clone, Copy, Debug)]
 pub struct Interaction {
     pub position: Vec3,
@@ -23,14 +24,16 @@ pub struct Interaction {
 
 impl Interaction {
     pub fn new(scene: &Scene, hit: &Hit, dir: Vec3) -> Self {
-        let (position, ng, ns, uv) = Self::surface(scene, hit, dir);
+        let (position, [ng, ns, front], uv) = Self::surface(scene, hit, dir);
         Interaction {
             position,
             ng,
             frame: Frame::new(ns),
             // Point samples read the finest level (as the bounce maps do); only the eye
             // passes filter by screen footprint.
-            material: scene.material_at(hit.triangle as usize, uv, 0.0),
+            material: scene
+                .material_at(hit.triangle as usize, uv, 0.0)
+                .seen_from(front, dir),
             triangle: hit.triangle,
             uv,
         }
@@ -40,12 +43,15 @@ impl Interaction {
     /// texture coordinates, without the material: for tests that need only the surface's
     /// orientation.
     pub fn normals(scene: &Scene, hit: &Hit, dir: Vec3) -> (Vec3, Vec3, Vec2) {
-        let (_, ng, ns, uv) = Self::surface(scene, hit, dir);
+        let (_, [ng, ns, _], uv) = Self::surface(scene, hit, dir);
         (ng, ns, uv)
     }
 
-    /// The position, geometric and shading normals and texture coordinates of a hit.
-    fn surface(scene: &Scene, hit: &Hit, dir: Vec3) -> (Vec3, Vec3, Vec3, Vec2) {
+    /// The position, the geometric, shading and front normals and the texture coordinates
+    /// of a hit. The front normal tells a one-sided material's front as Mitsuba does: the
+    /// interpolated vertex normal (before it is turned to `ng`'s side), or `ng` where the
+    /// mesh has none.
+    fn surface(scene: &Scene, hit: &Hit, dir: Vec3) -> (Vec3, [Vec3; 3], Vec2) {
         let t = hit.triangle as usize;
         let ([p0, p1, p2], [n0, n1, n2]) = scene.corners(t);
         let ng = (p1 - p0).cross(p2 - p0).normalize_or_zero();
@@ -53,7 +59,9 @@ impl Interaction {
         let mut ns = (n0 * w + n1 * hit.u + n2 * hit.v).normalize_or_zero();
         if ns == Vec3::ZERO || !ns.is_finite() {
             ns = ng;
-        } else if ns.dot(ng) < 0.0 {
+        }
+        let front = ns;
+        if ns.dot(ng) < 0.0 {
             ns = -ns;
         }
         let uv = scene.uv_at(t, hit.u, hit.v);
@@ -72,7 +80,7 @@ impl Interaction {
         if dir.dot(ns) * dir.dot(ng) <= 0.0 {
             ns = ng;
         }
-        (p0 * w + p1 * hit.u + p2 * hit.v, ng, ns, uv)
+        (p0 * w + p1 * hit.u + p2 * hit.v, [ng, ns, front], uv)
     }
 
     /// Ray origin for leaving the surface towards `dir` without re-hitting it.

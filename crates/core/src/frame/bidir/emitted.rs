@@ -184,7 +184,7 @@ fn hit_head(scene: &Scene, bvh: &SceneBvh, e: Emission, share: f32) -> Option<He
         ns: it.frame.n,
         to_light,
         material: it.material,
-        model: model_of(scene, it.triangle),
+        model: model_of(scene, it.triangle, &it.material),
         alpha: power * ratio,
     })
 }

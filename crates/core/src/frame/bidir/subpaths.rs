@@ -219,7 +219,7 @@ fn exact_material(
     let tol = 1e-3 * dist + 1e-4;
     let hit = bvh.intersect(from, dir, dist + tol)?;
     let it = Interaction::new(scene, &hit, dir);
-    ((it.position - point).length() <= tol).then_some((it.material, model_of(scene, it.triangle)))
+    ((it.position - point).length() <= tol).then_some((it.material, model_of(scene, it.triangle, &it.material)))
 }
 
 /// The first vertex after `h`'s and the ones after it, up to `max_len` (orders 2 … ≤
@@ -295,7 +295,7 @@ fn trace(
             ng: ng_f,
             to_prev,
             material: it.material,
-            model: model_of(scene, it.triangle),
+            model: model_of(scene, it.triangle, &it.material),
             flux,
             density,
             continuation,

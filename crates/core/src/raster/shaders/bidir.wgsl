@@ -395,7 +395,9 @@ fn node_material(n: Node) -> Material {
     let d = unpack2x16float(n.m3);
     var m: Material;
     m.diffuse = vec3<f32>(a, b.x);
-    m.roughness = gbuffer_roughness(b.y);
+    // Negative: a one-sided material (bundles.wgsl), black met from behind (`one_sided_back`).
+    m.roughness = gbuffer_roughness(abs(b.y));
+    m.two_sided = select(0u, MATERIAL_ONE_SIDED, b.y < 0.0);
     m.specular = vec3<f32>(c, d.x);
     // The high half of m3: the Fresnel flag, the model's record index + 1 above it
     // (`node_model`).
@@ -596,8 +598,12 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
             if dot(ns2, ng2) < 0.0 {
                 ns2 = -ns2;
             }
-            let m2 = node_material(hit.node);
-            let model2 = node_model(hit.node);
+            var m2 = node_material(hit.node);
+            var model2 = node_model(hit.node);
+            if one_sided_back(m2, oct_decode(unpack2x16snorm(hit.node.ng)), -dir) {
+                m2 = without_lobes(m2);
+                model2 = 0u;
+            }
             // Per bundle sample: |n3·ω|/p_r / n2, times f3 (clamped per path below).
             let weight = abs(dot(ns, dir)) * bv.inv_density;
             let cos23 = -dot(ng2, dir);

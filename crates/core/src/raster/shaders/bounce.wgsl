@@ -90,8 +90,13 @@ fn bounce(in: VertexOut, textured: bool) -> BounceOut {
     if textured {
         m = textured_material(maps, m, uv, point, point);
     }
+    // A one-sided material lit from behind scatters nothing.
+    let back = one_sided_back(m, front_normal(in.normal, in.geometric_normal), wo);
+    if back {
+        m = without_lobes(m);
+    }
     // Mitsuba's exact model of the material, if it has one (common/exact_models.wgsl).
-    exact_load(f32(in.material + 1u));
+    exact_load(select(f32(in.material + 1u), 0.0, back));
     var o: BounceOut;
     o.incident = vec4<f32>(phi, 1.0);
     o.expected = vec4<f32>(phi * exact_scatter(scatter_probability(m, dot(wo, ns)), dot(wo, ns)), 1.0);

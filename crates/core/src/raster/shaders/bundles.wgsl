@@ -52,7 +52,11 @@ fn insert(in: VertexOut, textured: bool) {
     node.ns = pack2x16snorm(oct_encode(ns));
     node.ng = pack2x16snorm(oct_encode(ng));
     node.m0 = pack2x16float(m.diffuse.xy);
-    node.m1 = pack2x16float(vec2<f32>(m.diffuse.z, m.roughness));
+    // A one-sided material's roughness is stored negative (at least the smallest normal
+    // half float, so that its sign survives): bidir.wgsl's `node_material` reads it back.
+    let one_sided = (m.two_sided & MATERIAL_ONE_SIDED) != 0u;
+    let roughness = select(m.roughness, -max(m.roughness, 6.2e-5), one_sided);
+    node.m1 = pack2x16float(vec2<f32>(m.diffuse.z, roughness));
     node.m2 = pack2x16float(m.specular.xy);
     // Specular b (16-bit float) and, above it, the material word: the Fresnel flag and the
     // material's index + 1 for bidir_models.wgsl's exact models (0 past 2^15 − 1 materials:

@@ -21,7 +21,7 @@ struct GBufferOut {
     // Scatter probability towards the viewer (the albedo AOV).
     @location(4) albedo: vec4<f32>,
     // Radiance emitted towards the viewer; w = the material's index + 1 (its exact model:
-    // common/exact_models.wgsl).
+    // common/exact_models.wgsl), 0 on a one-sided material's back.
     @location(5) emission: vec4<f32>,
 }
 
@@ -59,7 +59,12 @@ fn gbuffer(in: VertexOut, textured: bool, duvdx: vec2<f32>, duvdy: vec2<f32>) ->
     let wo = normalize(view.eye - in.world);
     var ng = in.geometric_normal;
     // `Material::emitted`: the front face (the winding's side) emits, both when two-sided.
-    let emits = m.two_sided != 0u || dot(wo, ng) > 0.0;
+    let emits = (m.two_sided & MATERIAL_EMITS_BACK) != 0u || dot(wo, ng) > 0.0;
+    // A one-sided material's back is black, shaded by no exact model (index 0).
+    let back = one_sided_back(m, front_normal(in.normal, ng), wo);
+    if back {
+        m = without_lobes(m);
+    }
     // Shading normal as in trace::Interaction::new: on the side of ng, and replaced by ng
     // where the two disagree about the side the view ray comes from.
     var ns = shading_normal(in.normal, ng);
@@ -75,6 +80,6 @@ fn gbuffer(in: VertexOut, textured: bool, duvdx: vec2<f32>, duvdy: vec2<f32>) ->
     o.diffuse = vec4<f32>(m.diffuse, m.roughness);
     o.specular = vec4<f32>(m.specular, f32(m.fresnel));
     o.albedo = vec4<f32>(scatter_probability(m, dot(wo, ns)), 1.0);
-    o.emission = vec4<f32>(select(vec3<f32>(0.0), m.emission, emits), f32(in.material + 1u));
+    o.emission = vec4<f32>(select(vec3<f32>(0.0), m.emission, emits), select(f32(in.material + 1u), 0.0, back));
     return o;
 }

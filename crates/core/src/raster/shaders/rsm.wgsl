@@ -43,7 +43,11 @@ fn rsm(in: VertexOut, textured: bool) -> RsmOut {
     let duvdy = dpdy(in.uv);
     let wo = normalize(view.light_position - in.world);
     let surface = fragment_surface(in, materials[in.material], textured, duvdx, duvdy);
-    let m = surface.m;
+    var m = surface.m;
+    // A one-sided material lit from behind reflects nothing.
+    if one_sided_back(m, front_normal(in.normal, in.geometric_normal), wo) {
+        m = without_lobes(m);
+    }
     let facing = facing_normals(wo, surface.ns, in.geometric_normal);
     var o: RsmOut;
     o.position = vec4<f32>(in.world, 1.0);

@@ -80,6 +80,12 @@ fn shading_normal(n: vec3<f32>, ng: vec3<f32>) -> vec3<f32> {
     return ns;
 }
 
+// The normal of a fragment's front face (`trace::Interaction`'s `front`): the interpolated
+// vertex normal `n` as it is, else the winding's normal `ng`.
+fn front_normal(n: vec3<f32>, ng: vec3<f32>) -> vec3<f32> {
+    return select(ng, n, dot(n, n) > 0.0);
+}
+
 // A fragment's normals seen from direction `wo` (towards the viewer or the light).
 struct FacingNormals {
     shading: vec3<f32>,

@@ -8,9 +8,31 @@ struct Material {
     transmission: vec3<f32>,
     ior: f32,
     // Radiance emitted by the front face (the side of the winding's normal); both faces
-    // when `two_sided` is 1.
+    // when bit 0 of `two_sided` is set (MATERIAL_EMITS_BACK); bit 1 (MATERIAL_ONE_SIDED):
+    // the back face reflects and transmits nothing (`one_sided_back`).
     emission: vec3<f32>,
     two_sided: u32,
+}
+
+// Bits of `Material::two_sided` (gpu/raw.rs `MaterialRaw::two_sided`).
+const MATERIAL_EMITS_BACK: u32 = 1u;
+const MATERIAL_ONE_SIDED: u32 = 2u;
+
+// Whether `wo` (pointing away from the surface, towards the viewer or the light) sees the
+// back of a one-sided material `m`, the side away from `front` (`front_normal` in
+// scene_vertex.wgsl: as Mitsuba, the interpolated vertex normal, else the winding's):
+// `bsdf::Material::seen_from`, which makes it black there (`without_lobes`).
+fn one_sided_back(m: Material, front: vec3<f32>, wo: vec3<f32>) -> bool {
+    return (m.two_sided & MATERIAL_ONE_SIDED) != 0u && dot(wo, front) < 0.0;
+}
+
+// `bsdf::Material::back`: no lobe, the same emission.
+fn without_lobes(m: Material) -> Material {
+    var o = m;
+    o.diffuse = vec3<f32>(0.0);
+    o.specular = vec3<f32>(0.0);
+    o.transmission = vec3<f32>(0.0);
+    return o;
 }
 
 // kind: 0 = point, 1 = spot, 2 = directional (`intensity` its irradiance, `direction` the
