@@ -304,6 +304,8 @@ impl Material {
         Material {
             diffuse: Vec3::ZERO,
             specular: Vec3::ZERO,
+            // Schlick's term of a zero F0 still rises at grazing angles.
+            fresnel: false,
             transmission: Vec3::ZERO,
             coating: None,
             conductor: None,

@@ -366,11 +366,18 @@ fn one_sided_back_is_black() {
             ..base
         };
         assert_eq!(m.seen_from(n, towards_front), m);
-        let two_sided = Material { one_sided: false, ..m };
+        let two_sided = Material {
+            one_sided: false,
+            ..m
+        };
         assert_eq!(two_sided.seen_from(n, towards_back), two_sided);
         let back = m.seen_from(n, towards_back);
         assert_eq!(back.emission, m.emission);
-        assert_eq!(back.uber_equivalent(), back, "{m:?}: no exact model on the back");
+        assert_eq!(
+            back.uber_equivalent(),
+            back,
+            "{m:?}: no exact model on the back"
+        );
         let mut rng = Rng::new(3, 1, 0);
         for (o, i) in [(wo, wi), (-wo, -wi), (wo, -wi)] {
             assert_eq!(back.eval(o, i), Vec3::ZERO, "{m:?}");

@@ -219,7 +219,8 @@ fn exact_material(
     let tol = 1e-3 * dist + 1e-4;
     let hit = bvh.intersect(from, dir, dist + tol)?;
     let it = Interaction::new(scene, &hit, dir);
-    ((it.position - point).length() <= tol).then_some((it.material, model_of(scene, it.triangle, &it.material)))
+    ((it.position - point).length() <= tol)
+        .then_some((it.material, model_of(scene, it.triangle, &it.material)))
 }
 
 /// The first vertex after `h`'s and the ones after it, up to `max_len` (orders 2 … ≤

@@ -31,6 +31,7 @@ fn without_lobes(m: Material) -> Material {
     var o = m;
     o.diffuse = vec3<f32>(0.0);
     o.specular = vec3<f32>(0.0);
+    o.fresnel = 0u;
     o.transmission = vec3<f32>(0.0);
     return o;
 }
