@@ -566,3 +566,48 @@ fn ispm_reads_the_scene_extent_once_a_frame() {
         assert_eq!(SceneExtent::passes() - before, 1, "frame {f}");
     }
 }
+
+/// A still `ispm` frame does no photon work: it collects, traces, compensates and uploads
+/// no photon (stages "photon collect", "cpu trace" and "boundary compensation" exactly 0,
+/// against a first frame that timed its collection) and hands back the last frame's image
+/// bitwise; the CPU estimator on `cornell-glass` (with its specular paths) and the tiled one
+/// over rasterized bounce maps on `cornell`. A camera move keeps the ring's collection too
+/// (the photons did not change) and equals a new renderer of the moved camera bitwise on
+/// `cornell` (not on `cornell-glass`: the estimators keep the caustic kernels widened to
+/// a pixel of the camera they were uploaded for until the photons change,
+/// `indirect::at_least_a_pixel`, so a camera-only move differs there, as before).
+#[test]
+fn still_ispm_frames_do_no_photon_work() {
+    let glass = builtin::load("cornell-glass").expect("scene");
+    let cornell = builtin::load("cornell").expect("scene");
+    let tiled = settings(Method::Ispm)
+        .with("first_bounce", gi_core::frame::options::FirstBounce::Raster)
+        .with("estimator", Estimator::Tiled);
+    let stage = |o: &RenderOutput, name: &str| {
+        let found = o.stats.stages.iter().find(|(n, _)| n == name);
+        found.map(|(_, s)| *s)
+    };
+    for (scene, s) in [(&cornell, tiled), (&glass, settings(Method::Ispm))] {
+        let mut r = Renderer::new(scene, &s).expect("renderer");
+        let first = r.render(&all(), &Silent).expect("frame 0");
+        assert!(stage(&first, "photon collect") > Some(0.0), "frame 0");
+        let still = r.render(&all(), &Silent).expect("still frame");
+        for name in ["photon collect", "cpu trace", "boundary compensation"] {
+            assert_eq!(stage(&still, name), Some(0.0), "{name}: {:?}", still.stats);
+        }
+        assert_eq!(still.radiance.pixels, first.radiance.pixels);
+        assert_eq!(still.stats.photons_stored, first.stats.photons_stored);
+        if std::ptr::eq(scene, &glass) {
+            continue;
+        }
+        let camera = pose(scene, 1.0)[0].clone();
+        r.update(&camera).expect("camera");
+        let turned = r.render(&all(), &Silent).expect("camera frame");
+        assert_eq!(stage(&turned, "photon collect"), Some(0.0));
+        let mut posed = scene.clone();
+        posed.apply(&camera).expect("valid update");
+        let one_shot = render(&posed, &s, &Silent).expect("one-shot");
+        let d = max_difference(&turned.radiance, &one_shot.radiance);
+        assert_eq!(d, 0.0, "{}: camera frame differs by {d}", s.method().name());
+    }
+}

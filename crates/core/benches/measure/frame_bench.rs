@@ -621,12 +621,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 let bounce = m(&["bounce maps (wall)", "bounce readback"]);
                 let upsample = m(&["upsample (wall)"]);
                 let rest = serial - trace - specular - splat - direct - bounce - upsample;
-                // A still frame: nothing changed since the last one.
+                // Still frames: nothing changed since the last one (median of `runs`).
                 let mut r = Renderer::new(scene, &settings)?;
                 r.render(&FrameDesc::default(), &Silent)?;
-                let t = Instant::now();
-                r.render(&FrameDesc::default(), &Silent)?;
-                let still = t.elapsed().as_secs_f64();
+                let mut wall = Vec::new();
+                for _ in 0..runs {
+                    let t = Instant::now();
+                    r.render(&FrameDesc::default(), &Silent)?;
+                    wall.push(t.elapsed().as_secs_f64());
+                }
+                let still = median(wall);
                 let ms = |x: f64| {
                     if x.is_nan() {
                         "–".to_string()

@@ -32,6 +32,9 @@ struct Entry {
 pub struct PhotonRing {
     frames: usize,
     entries: VecDeque<Entry>,
+    /// A number unique in the process, new at every change of the photons held
+    /// ([`PhotonRing::generation`]).
+    generation: u64,
 }
 
 /// The photons to use this frame, weighted.
@@ -52,10 +55,26 @@ impl RingPhotons {
 impl PhotonRing {
     /// Keeps the photons of the last `frames` frames (at least 1).
     pub fn new(frames: usize) -> Self {
-        PhotonRing {
+        let mut ring = PhotonRing {
             frames: frames.max(1),
             entries: VecDeque::new(),
-        }
+            generation: 0,
+        };
+        ring.touch();
+        ring
+    }
+
+    /// Which photons the ring holds: equal generations (of any ring of the process) hold
+    /// the same photons, so what [`PhotonRing::collect`] made of one generation can be kept
+    /// until the next (a still frame collects nothing).
+    pub fn generation(&self) -> u64 {
+        self.generation
+    }
+
+    /// The photons held are about to change: a new generation.
+    fn touch(&mut self) {
+        static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+        self.generation = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     }
 
     pub fn frames(&self) -> usize {
@@ -63,16 +82,19 @@ impl PhotonRing {
     }
 
     pub fn clear(&mut self) {
+        self.touch();
         self.entries.clear();
     }
 
     /// Drops the photons of light `light`.
     pub fn invalidate_light(&mut self, light: usize) {
+        self.touch();
         self.entries.retain(|e| e.light != light);
     }
 
     /// Marks the photons inside `region` invalid in every frame held so far.
     pub fn invalidate_region(&mut self, region: Aabb) {
+        self.touch();
         for e in &mut self.entries {
             e.invalid.push(region);
         }
@@ -94,6 +116,7 @@ impl PhotonRing {
         compensated: Vec<Photon>,
     ) {
         debug_assert!(compensated.is_empty() || photons.len() == compensated.len());
+        self.touch();
         self.entries.push_back(Entry {
             frame,
             light,
@@ -241,6 +264,32 @@ mod tests {
             .map(|p| p.power[0])
             .sum();
         assert!((splat_near - 2.0).abs() < 1e-6);
+    }
+
+    /// Every change of the photons held is a new generation, unique across rings; reading
+    /// is not a change.
+    #[test]
+    fn generations_change_with_the_photons() {
+        let mut ring = PhotonRing::new(2);
+        let other = PhotonRing::new(2);
+        let mut seen = vec![ring.generation(), other.generation()];
+        let _ = (ring.collect(), ring.held(0), ring.frames());
+        assert_eq!(ring.generation(), seen[0]);
+        ring.push(0, 0, vec![photon(0.0, 1.0)], Vec::new());
+        seen.push(ring.generation());
+        ring.invalidate_region(Aabb {
+            min: Vec3::splat(-1.0),
+            max: Vec3::splat(1.0),
+        });
+        seen.push(ring.generation());
+        ring.invalidate_light(0);
+        seen.push(ring.generation());
+        ring.clear();
+        seen.push(ring.generation());
+        let mut unique = seen.clone();
+        unique.sort();
+        unique.dedup();
+        assert_eq!(unique.len(), seen.len(), "{seen:?}");
     }
 
     #[test]

@@ -36,6 +36,8 @@ pub(super) struct Indirect {
     reason: String,
     /// Whether the estimator's output is this scene's and camera's.
     current: bool,
+    /// The photons the last upload drew as quads (volumes; the frame's statistic).
+    quads: u64,
 }
 
 /// What the estimate of a frame splats and reads back.
@@ -73,6 +75,7 @@ impl Indirect {
             caustics,
             reason,
             current: false,
+            quads: 0,
         }
     }
 
@@ -111,10 +114,14 @@ impl Indirect {
         }
         fc.stats.estimator = self.estimate.kind().name().into();
         fc.stats.estimator_reason = self.reason.clone();
-        self.upload(&gpu.ctx, gpu.targets, f, radius, fc)?;
-        fc.stats.estimator_memory = self.memory();
-        // A still frame (same photons, nothing moved) keeps last frame's estimate.
+        // A still frame (same photons, nothing moved) keeps last frame's estimate, and
+        // with it the photons and parameters uploaded for it: no photon is touched.
         let splat = f.photons_changed || f.changes.any() || !f.was_current;
+        if splat {
+            self.quads = self.upload(&gpu.ctx, gpu.targets, f, radius)?;
+        }
+        fc.stats.volume_quads = self.quads;
+        fc.stats.estimator_memory = self.memory();
         if splat && self.estimate.kind() == Estimator::Cpu {
             // Waits for the eye G-buffer (and the direct light submitted before it) when it
             // was redrawn; in serial frames, whose direct light was waited on, this is part
@@ -208,28 +215,26 @@ impl Indirect {
 
     /// Uploads the photons (when they or, for the volumes' order, the camera changed) and
     /// the view-dependent parameters: the caustic photons to their own estimator where
-    /// they are splatted apart.
+    /// they are splatted apart. Returns the photons drawn as quads (volumes).
     fn upload(
         &mut self,
         ctx: &GpuContext,
         targets: &Targets,
         f: &IndirectFrame,
         radius: VolumeRadius,
-        fc: &mut FrameCtx,
-    ) -> Result<()> {
-        let stats = &mut fc.stats;
+    ) -> Result<u64> {
         let (mut caustic, mut rest): (Vec<Photon>, Vec<Photon>) =
             f.photons.splat.iter().partition(|p| is_caustic(p));
         at_least_a_pixel(&mut caustic, &f.scene.camera, targets.height);
         let k = f.options.subsample.max(1);
         let Some(caustics) = &mut self.caustics else {
             rest.append(&mut caustic);
-            stats.volume_quads = upload(&mut self.estimate, ctx, targets, f, &rest, k, radius)?;
-            return Ok(());
+            return upload(&mut self.estimate, ctx, targets, f, &rest, k, radius);
         };
-        stats.volume_quads = upload(&mut self.estimate, ctx, targets, f, &rest, k, radius)?
-            + upload(caustics, ctx, targets, f, &caustic, 1, radius)?;
-        Ok(())
+        Ok(
+            upload(&mut self.estimate, ctx, targets, f, &rest, k, radius)?
+                + upload(caustics, ctx, targets, f, &caustic, 1, radius)?,
+        )
     }
 }
 

@@ -45,6 +45,9 @@ pub(super) struct IspmState {
     /// The seed of the photons in the ring, when they are those of the current scene: a
     /// still scene with frame-coherent random numbers re-traces nothing.
     traced_seed: Option<u64>,
+    /// The ring's photons as last collected, with the ring's generation then
+    /// ([`PhotonRing::generation`]): a frame whose ring did not change collects nothing.
+    collected: Option<(u64, RingPhotons)>,
 }
 
 impl IspmState {
@@ -55,6 +58,7 @@ impl IspmState {
             specular: Specular::new(scene),
             indirect: Indirect::new(ctx, targets, o),
             traced_seed: None,
+            collected: None,
         }
     }
 }
@@ -150,7 +154,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     // Progressive mode: the direct light ray traced on the CPU (the GPU rendered the eye
     // G-buffer alone), added to the composite below; shadow maps are a bias no pass removes.
     let traced_direct = traced_direct_light(&mut fc, options)?;
-    let photons = ring.collect();
+    let photons = collect(&mut state.collected, ring, &mut fc);
     fc.stats.photons_stored = photons.splat.len() as u64;
     // 5. Mirrors and glass seen by the camera; their gather uses the photons as traced.
     let specular = state
@@ -171,7 +175,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     let indirect = IndirectFrame {
         scene,
         options,
-        photons: &photons,
+        photons,
         photons_changed: !reuse,
         changes,
         was_current,
@@ -187,7 +191,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         query_side,
         traced_direct,
         specular,
-        photons: &photons,
+        photons,
     };
     let out = output(&gpu, parts, images, fc)?;
     state.traced_seed = Some(params.seed);
@@ -242,6 +246,25 @@ fn trace_or_reuse(
     Ok(())
 }
 
+/// The ring's valid photons, weighted (stage "photon collect"): collected again only when
+/// the ring changed since the collection kept in `kept` (a still frame, or a camera move
+/// that reuses its photons, collects nothing: the stage is 0).
+fn collect<'a>(
+    kept: &'a mut Option<(u64, RingPhotons)>,
+    ring: &PhotonRing,
+    fc: &mut FrameCtx,
+) -> &'a RingPhotons {
+    let generation = ring.generation();
+    let photons = match kept.take() {
+        Some((g, photons)) if g == generation => {
+            fc.add_stage("photon collect", 0.0);
+            photons
+        }
+        _ => fc.timed("photon collect", |_| ring.collect()),
+    };
+    &kept.insert((generation, photons)).1
+}
+
 /// The direct light ray traced on the CPU, in progressive mode.
 fn traced_direct_light(fc: &mut FrameCtx, options: &IspmOptions) -> Result<Option<Image>> {
     if !fc.params.progressive {
@@ -261,7 +284,7 @@ struct Parts<'a> {
     radius: VolumeRadius,
     query_side: bool,
     traced_direct: Option<Image>,
-    specular: Option<Image>,
+    specular: Option<&'a Image>,
     photons: &'a RingPhotons,
 }
 
@@ -313,7 +336,7 @@ fn output(gpu: &GpuFrame, parts: Parts, images: Images, mut fc: FrameCtx) -> Res
         let indirect = indirect.unwrap_or_else(empty);
         let hits = photon_hits(scene, &out.position, parts.photons.traced());
         out.aovs.push(("direct".into(), direct));
-        let specular = parts.specular.unwrap_or_else(empty);
+        let specular = parts.specular.cloned().unwrap_or_else(empty);
         out.aovs.push(("specular".into(), specular));
         out.aovs.push(("indirect".into(), indirect));
         out.aovs.push(("photons".into(), hits));

@@ -43,7 +43,8 @@ impl Specular {
     }
 
     /// The frame's specular image, traced (and uploaded) when the `photons` changed or no
-    /// image is kept; `None` for a scene without mirrors or glass.
+    /// image is kept (else the kept one, not copied); `None` for a scene without mirrors or
+    /// glass.
     pub fn render(
         &mut self,
         gpu: &GpuFrame,
@@ -51,14 +52,10 @@ impl Specular {
         options: &IspmOptions,
         photons: &[Photon],
         photons_changed: bool,
-    ) -> Result<Option<Image>> {
-        let image = fc.timed("specular paths", |fc| {
-            if self.enabled && self.image.is_some() && !photons_changed {
-                return Ok(self.image.clone());
-            }
-            if !self.enabled {
-                return Ok(None);
-            }
+    ) -> Result<Option<&Image>> {
+        let t = std::time::Instant::now();
+        if self.enabled && (self.image.is_none() || photons_changed) {
+            self.image = None;
             let (scene, bvh, params, progress) = (fc.scene, fc.bvh()?, fc.params, fc.progress);
             let paths = SpecularPaths {
                 samples: super::super::options::derived::camera_samples(
@@ -75,13 +72,15 @@ impl Specular {
                 ),
                 precompute: !params.progressive,
             };
-            let (img, camera_paths) =
-                specular_paths(scene, bvh, &paths, photons, &mut self.landings, progress)?;
+            let traced = specular_paths(scene, bvh, &paths, photons, &mut self.landings, progress);
+            fc.add_stage("specular paths", t.elapsed().as_secs_f64());
+            let (img, camera_paths) = traced?;
             fc.stats.camera_paths = camera_paths;
             gpu.targets.write_specular(&gpu.ctx, &img);
-            Ok::<_, crate::error::Error>(Some(img))
-        })?;
-        self.image = image.clone();
-        Ok(image)
+            self.image = Some(img);
+        } else {
+            fc.add_stage("specular paths", t.elapsed().as_secs_f64());
+        }
+        Ok(self.image.as_ref().filter(|_| self.enabled))
     }
 }
