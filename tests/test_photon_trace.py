@@ -26,13 +26,6 @@ def test_photon_trace_bad_values_are_setting_errors():
     with pytest.raises(gi.SettingError, match="photon_trace"):
         gi.render(scene, "ispm", spp=1, size=(16, 16), photon_trace="cuda")
     # The GPU trace carries no photon differentials: refused, not silently different.
+    footprints = {"footprint_volumes": True, "photons": 2_000, "size": (16, 16)}
     with pytest.raises(gi.SettingError, match="photon_trace"):
-        gi.render(
-            scene,
-            "ispm",
-            spp=1,
-            size=(16, 16),
-            photons=2_000,
-            footprint_volumes=True,
-            photon_trace="gpu",
-        )
+        gi.render(scene, "ispm", spp=1, photon_trace="gpu", **footprints)

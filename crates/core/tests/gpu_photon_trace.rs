@@ -262,8 +262,6 @@ fn photon_trace_names_parse_and_gpu_refuses_footprints() {
     assert!(e.contains("photon_trace"), "{e}");
     let scene = builtin::load("cornell").unwrap();
     let settings = gi_core::options!(Ispm, photons: 2_000, spp: 1, footprint_volumes: true, photon_trace: PhotonTrace::Gpu);
-    let e = gi_core::render(&scene, &settings, &Silent)
-        .err()
-        .expect("refused");
+    let e = gi_core::render(&scene, &settings, &Silent).expect_err("refused");
     assert!(e.to_string().contains("photon_trace"), "{e}");
 }

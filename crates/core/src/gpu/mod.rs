@@ -249,7 +249,6 @@ impl GpuContext {
     }
 
     /// Runs `f` inside a validation and out-of-memory error scope; a GPU error becomes `Error::Gpu`.
-
     pub fn scoped<T>(&self, what: &str, f: impl FnOnce() -> Result<T>) -> Result<T> {
         let oom = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
         let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);

@@ -9,7 +9,6 @@ const LOBE_GLOSSY: u32 = 1u;
 const LOBE_MIRROR: u32 = 2u;
 const LOBE_GLASS_REFLECT: u32 = 3u;
 const LOBE_GLASS_REFRACT: u32 = 4u;
-const LOBE_NONE: u32 = 0xffffffffu;
 
 fn avg3(v: vec3<f32>) -> f32 {
     return (v.x + v.y + v.z) / 3.0;

@@ -7,6 +7,9 @@
 // `types.wgsl`, `bsdf.wgsl` and `common/sample.wgsl`. Not here: Mitsuba's exact models, rough and thin glass,
 // textures (the GPU trace refuses scenes with them, `gpu::photon::unsupported`).
 
+// No lobe: the photon is absorbed.
+const LOBE_NONE: u32 = 0xffffffffu;
+
 // A sampled direction with `weight` = f·|cos θi|/pdf (the delta lobe's weight for those);
 // lobe LOBE_NONE: absorbed.
 struct BsdfSample {
