@@ -561,6 +561,8 @@ def _print_choices(args: argparse.Namespace, result: gi.RenderResult) -> None:
         print(f"estimator {s.estimator}: {s.estimator_reason}", file=sys.stderr)
     if args.verbose and s.first_bounce:
         print(f"first bounce {s.first_bounce}: {s.first_bounce_reason}", file=sys.stderr)
+    if args.verbose and s.photon_trace:
+        print(f"photon trace {s.photon_trace}: {s.photon_trace_reason}", file=sys.stderr)
 
 
 def _progressive_settings(args: argparse.Namespace) -> dict[str, object]:

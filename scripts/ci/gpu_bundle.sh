@@ -40,6 +40,8 @@ WHEELS=(trimesh OpenImageIO charset-normalizer tqdm flip-evaluator)
 SMOKE_TESTS="gpu_direct *
 gpu_bsdf_parity *
 gpu_texture_parity *
+gpu_photon_scatter *
+gpu_photon_lazy *
 estimators estimator_setting_parses_and_auto_reports_its_choice
 frame steady_state_creates_nothing_and_uploads_what_changed serial_frames_equal_overlapped_frames
 bidir furnace_matches_analytic"
@@ -117,6 +119,10 @@ done
 "$PY" -m pip download -q --no-deps --only-binary=:all: --python-version 3.12 --implementation cp \
   "${plat[@]}" -d .whl "${pins[@]}"
 "$PY" -m pip download -q --no-deps --only-binary=:all: -d target/gpu-smoke/whl "${pins[@]}"
+# The GPU photon trace's table (docs/bench/gpu-photon.md), part (c) of the check.
+cargo build -q --release -p gi-core --example gpu_photon_bench
+cp target/release/examples/gpu_photon_bench .gpu/ && strip .gpu/gpu_photon_bench
+
 # Every wheel installs on CPython 3.12 / x86-64 with glibc 2.39 (the GPU machine's; pip
 # matches each manylinux_2_N tag exactly, so all N up to 39): a dry run.
 tags=(--platform linux_x86_64 --platform manylinux2014_x86_64 --platform manylinux1_x86_64)

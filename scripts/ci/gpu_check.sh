@@ -224,6 +224,8 @@ if has c; then
     # The direct light per kind of light (issue 28: area, sun and sky against a point light).
     jobs+=("lights-$s|--lights --size $s")
     jobs+=("ispm-tiled-$s|--estimator tiled --size $s --stages --table-only")
+    # Issue 45 item 1: the photons traced on the CPU and on the GPU, side by side.
+    jobs+=("ispm-trace-$s|--estimator tiled --size $s --stages --table-only --no-one-shot --photon-trace cpu --photon-trace gpu")
     jobs+=("instancing-$s|--instancing --size $s") # issue 33: instanced vs flattened, culling
     jobs+=("bidir-$s|--method bidir --size $s")
     for e in volumes cluster directional cpu; do
@@ -231,6 +233,15 @@ if has c; then
     done
   done
   failed=0 timedout=0 notrun=0 t0=$SECONDS
+  # The GPU photon trace against the CPU's, with its cold compile (docs/bench/gpu-photon.md).
+  if [ -x "$bundle/gpu_photon_bench" ]; then
+    pb=$([ "$smoke" = 1 ] && echo 5000 || echo 200000)
+    timed "$(( 60 < $(left) ? 60 : $(left) ))" "$out/frame/gpu-photon.md" --err "$out/logs/gpu-photon.err" \
+      env MESA_SHADER_CACHE_DISABLE=true __GL_SHADER_DISK_CACHE=0 "$bundle/gpu_photon_bench" --photons "$pb"
+    echo "<!-- rc $rc, ${took}s: $(verdict_of $rc) -->" >>"$out/frame/gpu-photon.md"
+    log "gpu_photon_bench: $(verdict_of $rc) (${took}s)"
+    case $rc in 0) ;; 124 | 137) timedout=$((timedout + 1)) ;; *) failed=$((failed + 1)) ;; esac
+  fi
   for j in "${jobs[@]}"; do echo "${j%%|*}"; done >"$out/frame/jobs.txt"
   for j in "${jobs[@]}"; do
     name=${j%%|*} jargs=${j#*|}

@@ -89,6 +89,8 @@ stats_class!(
     estimator_reason: String,
     first_bounce: String,
     first_bounce_reason: String,
+    photon_trace: String,
+    photon_trace_reason: String,
     estimator_memory: Vec<(String, u64)>,
     list_entries: u64,
     trivial_accepts: u64,

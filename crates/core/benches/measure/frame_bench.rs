@@ -38,6 +38,10 @@
 //! direct light's options above, the light moving): engine frame, still frame and its stages
 //! per scene and size (`scripts/ci/gpu_check.sh` runs these).
 //!
+//! `--photon-trace cpu|gpu|auto ...`: `photon_trace` (each given value a row of the first
+//! table, its scene cell naming the trace; the "CPU photon trace" column then holds the
+//! GPU trace's stages, "gpu trace" and its upload, where it ran on the GPU).
+//!
 //! `--readback`: the readback table instead (`readback_table`): the radiance read back as
 //! 32-bit floats (what every frame read before issue 45), half floats, and the 8-bit
 //! display image tone-mapped on the GPU alone, a still frame and a frame after the light
@@ -59,7 +63,7 @@ mod common;
 
 use common::{median, nudge};
 use gi_core::estimate::Estimator;
-use gi_core::frame::options::FirstBounce;
+use gi_core::frame::options::{FirstBounce, PhotonTrace};
 use gi_core::frame::{FrameDesc, Renderer};
 use gi_core::scene::{bench::dense_cornell, builtin, SceneUpdate};
 use gi_core::Silent;
@@ -521,6 +525,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         return Err(format!("--method {method}: ispm or bidir").into());
     }
     let estimator: Estimator = args.value("--estimator").unwrap_or("auto").parse()?;
+    let traces: Vec<PhotonTrace> = match args.values("--photon-trace") {
+        v if v.is_empty() => vec![PhotonTrace::Auto],
+        v => v.into_iter().map(str::parse).collect::<Result<_, _>>()?,
+    };
     let direct = DirectOptions::get(&args)?;
     common::print_adapter()?;
     let only = args.value("--scene");
@@ -589,8 +597,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|{stage_rule}");
     for (name, scene) in &scenes {
         for &(w, h) in &sizes {
-            for &photons in budgets {
-                let settings = ispm_settings(w, h, photons, estimator, direct);
+            for (&photons, &trace) in budgets
+                .iter()
+                .flat_map(|p| traces.iter().map(move |t| (p, t)))
+            {
+                let settings =
+                    ispm_settings(w, h, photons, estimator, direct).with("photon_trace", trace);
+                // Several traces: each row's scene names its trace.
+                let name = match traces.len() {
+                    1 => name.to_string(),
+                    _ => format!("{name} [{} trace]", trace.name()),
+                };
                 // One-shot: a new renderer per frame, every image read back.
                 let mut old = f64::NAN;
                 if one_shot {
@@ -609,12 +626,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 let stage_cell = if stages {
                     let s = &engine[0].stats;
                     let list = stage_list(&engine);
-                    format!(" {}/{}: {list} |", s.estimator, s.first_bounce)
+                    let t = &s.photon_trace;
+                    format!(" {}/{}/{t} trace: {list} |", s.estimator, s.first_bounce)
                 } else {
                     String::new()
                 };
                 let m = |names: &[&str]| median(frames.iter().map(|o| stage(o, names)).collect());
-                let trace = m(&["bounce trace", "cpu trace", "boundary compensation"]);
+                let trace = m(&[
+                    "bounce trace",
+                    "cpu trace",
+                    "gpu trace",
+                    "gpu trace upload",
+                    "boundary compensation",
+                ]);
                 let specular = m(&["specular paths"]);
                 let splat = m(&["splat (wall)"]);
                 let direct = m(&["direct light (wall)"]);

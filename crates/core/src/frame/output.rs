@@ -40,6 +40,9 @@ pub struct RenderStats {
     /// Method `ispm`: where the first hits were found ("raster", "traced"), and why.
     pub first_bounce: String,
     pub first_bounce_reason: String,
+    /// Method `ispm`: where the later bounces were traced ("cpu", "gpu"), and why.
+    pub photon_trace: String,
+    pub photon_trace_reason: String,
     /// Method `ispm`: GPU memory of the estimator beyond its targets (bytes by part).
     pub estimator_memory: Vec<(String, u64)>,
     /// Method `ispm`, estimators `tiled` and `cluster`: photon-list entries written, and of

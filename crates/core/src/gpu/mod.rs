@@ -9,6 +9,7 @@
 pub mod alloc;
 pub mod bvh;
 pub mod layout;
+pub mod photon;
 pub mod pipeline;
 pub mod raw;
 pub mod shaders;
@@ -238,6 +239,13 @@ impl GpuContext {
         // Created without the lock held: `create` may ask for the pipelines it builds on.
         let made: Arc<dyn Any + Send + Sync> = Arc::new(P::create(self));
         downcast(lock().entry(key).or_insert(made).clone())
+    }
+
+    /// Whether the pipelines `P` were created on this device (a scene that does not use a
+    /// feature must not compile its pipelines).
+    pub fn has_pipelines<P: Pipelines>(&self) -> bool {
+        let lock = self.pipelines.lock().unwrap_or_else(|p| p.into_inner());
+        lock.contains_key(&TypeId::of::<P>())
     }
 
     /// Runs `f` inside a validation and out-of-memory error scope; a GPU error becomes `Error::Gpu`.

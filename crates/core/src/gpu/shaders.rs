@@ -10,6 +10,9 @@ pub const BSDF: &str = include_str!("shaders/common/bsdf.wgsl");
 /// Mitsuba's models (coated plastics, conductors, Beckmann) as the CPU evaluates them; after
 /// [`BSDF`].
 pub const MODELS: &str = include_str!("shaders/common/models.wgsl");
+/// The uber BSDF's sampling helpers (lobe probabilities, densities, direction samples,
+/// dielectric Fresnel, path density); after [`BSDF`].
+pub const SAMPLE: &str = include_str!("shaders/common/sample.wgsl");
 /// Texture lookups and textured materials (group 1 of the passes that rasterize the scene).
 pub const TEXTURE: &str = include_str!("shaders/common/texture.wgsl");
 /// Order-independent (fixed-point) sums of non-negative RGB terms.

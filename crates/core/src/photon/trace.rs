@@ -629,7 +629,7 @@ fn follow(
 }
 
 /// A photon's scattering that survived Russian roulette.
-pub(crate) struct Scattered {
+pub struct Scattered {
     /// Unit direction of the scattered photon.
     pub wi: glam::Vec3,
     /// Its power after the roulette (Φ·w/q).
@@ -640,17 +640,36 @@ pub(crate) struct Scattered {
 }
 
 /// Scatters a photon of `power` arriving at `it` from direction `wo` (pointing away from the
-/// surface): samples the BSDF (reflections must stay on the arrival side, refractions
-/// cross), then Russian roulette with q = min(1, max(Φ·w)/max(Φ)). `None`: absorbed.
+/// surface): [`scatter_local`] in the interaction's shading frame. `None`: absorbed.
 pub(crate) fn scatter(
     it: &Interaction,
     wo: glam::Vec3,
     power: glam::Vec3,
     rng: &mut Rng,
 ) -> Option<Scattered> {
-    let bs = it.material.sample_adjoint(it.frame.to_local(wo), rng)?;
-    let wi = it.frame.to_world(bs.wi);
-    let same_side = wi.dot(it.ng) * wo.dot(it.ng) > 0.0;
+    let f = &it.frame;
+    let sc = scatter_local(&it.material, f.to_local(wo), f.to_local(it.ng), power, rng)?;
+    Some(Scattered {
+        wi: f.to_world(sc.wi),
+        ..sc
+    })
+}
+
+/// A photon's scattering in a shading frame (+z = the shading normal; `wo` and `wi` local,
+/// `ng` the geometric normal in it): samples the BSDF (reflections must stay on the
+/// arrival side of `ng`, refractions cross), then Russian roulette with
+/// q = min(1, max(Φ·w)/max(Φ)). `None`: absorbed. The GPU trace runs the same formulas on
+/// the same random numbers (`gpu/shaders/photon/scatter.wgsl`, parity test
+/// `tests/gpu_photon_scatter.rs`).
+pub fn scatter_local(
+    m: &crate::bsdf::Material,
+    wo: glam::Vec3,
+    ng: glam::Vec3,
+    power: glam::Vec3,
+    rng: &mut Rng,
+) -> Option<Scattered> {
+    let bs = m.sample_adjoint(wo, rng)?;
+    let same_side = bs.wi.dot(ng) * wo.dot(ng) > 0.0;
     if same_side == bs.lobe.crosses() {
         return None;
     }
@@ -660,7 +679,7 @@ pub(crate) fn scatter(
         return None;
     }
     Some(Scattered {
-        wi,
+        wi: bs.wi,
         power: scattered / q,
         q,
         lobe: bs.lobe,

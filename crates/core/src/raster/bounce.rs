@@ -59,6 +59,7 @@ impl Pipelines for BouncePass {
                 shaders::COMMON,
                 shaders::BSDF,
                 shaders::MODELS,
+                shaders::SAMPLE,
                 wgsl::EXACT_MODELS,
                 shaders::TEXTURE,
                 shaders::SCENE_VERTEX,

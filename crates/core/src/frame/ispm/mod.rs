@@ -14,6 +14,7 @@
 //!    and the readback of the images asked for.
 
 mod first_hits;
+mod gpu_trace;
 mod indirect;
 mod photons;
 mod specular;
@@ -33,6 +34,7 @@ use crate::scene::light_views::light_views;
 use crate::scene::{Changes, Scene};
 use first_hits::FirstHits;
 use glam::Vec3;
+use gpu_trace::GpuTrace;
 use indirect::{Indirect, IndirectFrame};
 pub(super) use photons::Invalidation;
 use specular::Specular;
@@ -40,6 +42,8 @@ use specular::Specular;
 /// What `ispm` keeps from one frame to the next beyond the direct light's resources.
 pub(super) struct IspmState {
     first_hits: FirstHits,
+    /// Where the later bounces are traced (`photon_trace`).
+    gpu_trace: GpuTrace,
     specular: Specular,
     indirect: Indirect,
     /// The seed of the photons in the ring, when they are those of the current scene: a
@@ -51,15 +55,21 @@ pub(super) struct IspmState {
 }
 
 impl IspmState {
-    fn new(ctx: &GpuContext, targets: &mut Targets, scene: &Scene, o: &IspmOptions) -> Self {
+    fn new(
+        ctx: &GpuContext,
+        targets: &mut Targets,
+        scene: &Scene,
+        o: &IspmOptions,
+    ) -> Result<Self> {
         let (bounce, reason) = o.first_bounce.resolve(&ctx.info);
-        IspmState {
+        Ok(IspmState {
             first_hits: FirstHits::new(bounce, reason),
+            gpu_trace: GpuTrace::new(ctx, scene, o)?,
             specular: Specular::new(scene),
             indirect: Indirect::new(ctx, targets, o),
             traced_seed: None,
             collected: None,
-        }
+        })
     }
 }
 
@@ -108,7 +118,10 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     let radius = VolumeRadius::of_extent(extent, options.photons, options.kernel_scale)
         .scaled(params.radius_scale);
     let layers = light_views(scene, budget.maps);
-    let state = ispm.get_or_insert_with(|| IspmState::new(ctx, targets, scene, options));
+    let state = match ispm {
+        Some(s) => s,
+        None => ispm.insert(IspmState::new(ctx, targets, scene, options)?),
+    };
     let traced_seed = state.traced_seed.take();
     let was_current = state.indirect.take_current();
     state.specular.invalidate(changes);
@@ -138,7 +151,13 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     // against 0.0072 with the photon-side compensation; subsample 1: 0.0012 against 0.0022).
     let query_side =
         params.progressive && options.refine.boundary_compensation && options.subsample <= 1;
+    let tracing = !reuse && options.max_depth >= 2;
+    let gpu_scene = match tracing {
+        true => state.gpu_trace.scene(ctx, &mut fc, changes)?,
+        false => None,
+    };
     let trace = photons::Trace {
+        gpu: gpu_scene.map(|scene| photons::OnGpu { ctx, scene }),
         scene,
         bvh: fc.bvh()?,
         options,
@@ -163,6 +182,8 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     // 6. The indirect estimate, upsampling, composite, readback.
     fc.stats.first_bounce = first_hits.bounce.name().into();
     fc.stats.first_bounce_reason = first_hits.reason.clone();
+    fc.stats.photon_trace = state.gpu_trace.choice.name().into();
+    fc.stats.photon_trace_reason = state.gpu_trace.reason.clone();
     crate::cancel::check(fc.progress)?;
     let mut names = readback_names(images, true);
     if query_side {

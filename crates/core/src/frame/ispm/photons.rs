@@ -11,6 +11,8 @@ use super::super::options::IspmOptions;
 use super::super::{FrameParams, RenderStats};
 use crate::cancel::Progress;
 use crate::error::{Error, Result};
+use crate::gpu::photon::scene::GpuPhotonScene;
+use crate::gpu::GpuContext;
 use crate::photon::bounce::BounceMap;
 use crate::photon::focus::Focus;
 use crate::photon::lbvh::Aabb;
@@ -63,8 +65,17 @@ pub(super) fn invalidate(
     }
 }
 
-/// The CPU photon trace of a frame: its inputs and where it puts its photons.
+/// The GPU trace's device and scene (`photon_trace` resolved to `gpu`).
+#[derive(Clone, Copy)]
+pub(super) struct OnGpu<'a> {
+    pub ctx: &'a GpuContext,
+    pub scene: &'a GpuPhotonScene,
+}
+
+/// The photon trace of a frame: its inputs and where it puts its photons.
 pub(super) struct Trace<'a> {
+    /// Continue the bounce maps' rays on the GPU; `None`: on the CPU.
+    pub gpu: Option<OnGpu<'a>>,
     pub scene: &'a Scene,
     pub bvh: &'a SceneBvh,
     pub options: &'a IspmOptions,
@@ -108,11 +119,13 @@ impl Trace<'_> {
     }
 
     /// Traces the rays of `bm` on per light and pushes each light's photons into `ring`;
-    /// adds the stages "cpu trace" and "boundary compensation" (when compensating).
+    /// adds the stages "cpu trace", "gpu trace" (the continuation on the GPU, with its
+    /// upload and readback) and "boundary compensation" (when compensating).
     pub fn run(&self, bm: &BounceMap, ring: &mut PhotonRing, fc: &mut FrameCtx) -> Result<()> {
         let stats = &mut fc.stats;
         let t = Instant::now();
         let mut compensation = 0.0;
+        let gpu_seconds = std::cell::Cell::new(0.0);
         let pts = self.settings();
         // Photon focusing: lights whose projection maps hold every specular object get
         // their mirror and glass first hits from aimed CPU photons instead of the bounce
@@ -133,7 +146,8 @@ impl Trace<'_> {
                     .iter()
                     .take_while(|&&l| l == light)
                     .count();
-            let mut photons = self.trace_light(bm, start..end, &pts, &focus, stats)?;
+            let mut photons =
+                self.trace_light(bm, start..end, &pts, &focus, stats, &gpu_seconds)?;
             self.size(ring, light as usize, &mut photons);
             let tc = Instant::now();
             let compensated = self.compensated(light, &photons)?;
@@ -156,8 +170,12 @@ impl Trace<'_> {
             ring.push(self.frame, key, photons, compensated);
             crate::cancel::check(self.progress)?;
         }
-        // The trace's time less the compensation's, which it interleaves.
-        fc.add_stage("cpu trace", t.elapsed().as_secs_f64() - compensation);
+        // The trace's time less the compensation's and the GPU's, which it interleaves.
+        let gpu = gpu_seconds.get();
+        fc.add_stage("cpu trace", t.elapsed().as_secs_f64() - compensation - gpu);
+        if self.gpu.is_some() {
+            fc.add_stage("gpu trace", gpu);
+        }
         if self.compensate {
             fc.add_stage("boundary compensation", compensation);
         }
@@ -178,6 +196,7 @@ impl Trace<'_> {
         pts: &PhotonTraceSettings,
         focus: &Focus,
         stats: &mut RenderStats,
+        gpu_seconds: &std::cell::Cell<f64>,
     ) -> Result<Vec<Photon>> {
         let (scene, bvh) = (self.scene, self.bvh);
         let light = bm.ray_lights[range.start];
@@ -199,8 +218,16 @@ impl Trace<'_> {
             .options
             .footprint_volumes
             .then(|| first_segment(scene, self.layers, light as usize));
-        let mut photons =
-            continue_paths_from(scene, bvh, &rays, pts, seed, &control, first)?.photons;
+        let mut photons = match self.gpu {
+            Some(g) => {
+                let tg = Instant::now();
+                let set =
+                    crate::gpu::photon::trace::continue_paths(g.ctx, g.scene, &rays, pts, seed);
+                gpu_seconds.set(gpu_seconds.get() + tg.elapsed().as_secs_f64());
+                set?.photons
+            }
+            None => continue_paths_from(scene, bvh, &rays, pts, seed, &control, first)?.photons,
+        };
         if aimed {
             let texels: u64 = self
                 .layers

@@ -2,7 +2,10 @@
 //! ([`Common`]), the narrow groups several methods share, and one struct per method.
 
 use super::values::Values;
-use super::{BidirStrategy, Estimator, FirstBounce, Kernel, Method, SpecularSampling, VolumeShape};
+use super::{
+    BidirStrategy, Estimator, FirstBounce, Kernel, Method, PhotonTrace, SpecularSampling,
+    VolumeShape,
+};
 
 /// The options of every method: the image, the seed and the progressive mode.
 #[derive(Clone, Debug, PartialEq)]
@@ -156,6 +159,7 @@ pub struct IspmOptions {
     pub volume_shape: VolumeShape,
     pub estimator: Estimator,
     pub first_bounce: FirstBounce,
+    pub photon_trace: PhotonTrace,
     pub temporal_frames: u32,
     pub specular_sampling: SpecularSampling,
 }
@@ -229,6 +233,7 @@ impl MethodOptions {
                 volume_shape: v.choice("volume_shape"),
                 estimator: v.choice("estimator"),
                 first_bounce: v.choice("first_bounce"),
+                photon_trace: v.choice("photon_trace"),
                 temporal_frames: v.u32("temporal_frames"),
                 specular_sampling: v.choice("specular_sampling"),
             }),

@@ -23,6 +23,7 @@ pub use values::{Value, Values};
 use crate::error::{named, Error, Result};
 pub use crate::estimate::volume_shape::VolumeShape;
 pub use crate::estimate::Estimator;
+pub use crate::gpu::photon::PhotonTrace;
 pub use crate::photon::bounce::FirstBounce;
 pub use crate::photon::delta_paths::SpecularSampling;
 pub use crate::photon::Kernel;
@@ -136,6 +137,7 @@ named!(
     VolumeShape,
     Estimator,
     FirstBounce,
+    PhotonTrace,
     SpecularSampling
 );
 
@@ -393,6 +395,7 @@ impl RenderOptions {
                 out.push(("volume_shape", name(o.volume_shape.name())));
                 out.push(("estimator", name(o.estimator.name())));
                 out.push(("first_bounce", name(o.first_bounce.name())));
+                out.push(("photon_trace", name(o.photon_trace.name())));
                 out.push(("temporal_frames", int(o.temporal_frames as u64)));
                 out.push(("specular_sampling", name(o.specular_sampling.name())));
             }
@@ -496,6 +499,7 @@ mod tests {
         assert_eq!(IspmOptions::default().estimator, Estimator::default());
         assert_eq!(IspmOptions::default().volume_shape, VolumeShape::default());
         assert_eq!(IspmOptions::default().first_bounce, FirstBounce::default());
+        assert_eq!(IspmOptions::default().photon_trace, PhotonTrace::default());
         assert_eq!(IspmOptions::default().kernel.kernel, Kernel::default());
         assert_eq!(BidirOptions::default().strategy, BidirStrategy::default());
     }

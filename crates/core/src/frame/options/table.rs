@@ -3,9 +3,9 @@
 
 use super::values::Value;
 use super::{
-    BidirStrategy, Estimator, FirstBounce, Kernel, Method, SpecularSampling, VolumeShape,
-    MAX_AREA_SAMPLES, MAX_BUNDLES, MAX_IMAGE_SIDE, MAX_K, MAX_LIGHT_PATHS, MAX_PHOTONS,
-    MAX_SKY_SAMPLES, MAX_SPP, MAX_TEMPORAL_FRAMES, MAX_VPLS_PER_LIGHT,
+    BidirStrategy, Estimator, FirstBounce, Kernel, Method, PhotonTrace, SpecularSampling,
+    VolumeShape, MAX_AREA_SAMPLES, MAX_BUNDLES, MAX_IMAGE_SIDE, MAX_K, MAX_LIGHT_PATHS,
+    MAX_PHOTONS, MAX_SKY_SAMPLES, MAX_SPP, MAX_TEMPORAL_FRAMES, MAX_VPLS_PER_LIGHT,
 };
 use crate::error::{Error, Named, Result};
 
@@ -346,6 +346,13 @@ pub const OPTIONS: &[OptionSpec] = &[
         Default::Str("auto"),
         &[Ispm],
         "where photons' first hits are found: bounce maps or the CPU BVH (auto: per adapter)",
+    ),
+    row(
+        "photon_trace",
+        Kind::Choice(names::<PhotonTrace>),
+        Default::Str("auto"),
+        &[Ispm],
+        "where photons are traced after their first scatter: cpu or gpu (auto: CPU on CPU devices)",
     ),
     row(
         "temporal_frames",

@@ -1,7 +1,10 @@
 //! Option values: what callers give, and the checked values of one method's options.
 
 use super::table::{check, spec, OptionSpec, OPTIONS};
-use super::{BidirStrategy, Estimator, FirstBounce, Kernel, Method, SpecularSampling, VolumeShape};
+use super::{
+    BidirStrategy, Estimator, FirstBounce, Kernel, Method, PhotonTrace, SpecularSampling,
+    VolumeShape,
+};
 use crate::error::{Error, Named, Result};
 use std::cell::RefCell;
 
@@ -57,6 +60,7 @@ value_from_named!(
     VolumeShape,
     Estimator,
     FirstBounce,
+    PhotonTrace,
     SpecularSampling
 );
 

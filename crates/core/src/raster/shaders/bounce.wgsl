@@ -166,46 +166,6 @@ fn rng_next() -> f32 {
     return f32(w >> 8u) * (1.0 / 16777216.0);
 }
 
-fn avg3(v: vec3<f32>) -> f32 {
-    return (v.x + v.y + v.z) / 3.0;
-}
-
-// (specular, diffuse, glass) choice probabilities for viewing cosine `cos_o` ≥ 0.
-fn lobe_probabilities(m: Material, cos_o: f32) -> vec3<f32> {
-    let f = fresnel_spec(m, cos_o);
-    let w = vec3<f32>(
-        avg3(f),
-        avg3((vec3<f32>(1.0) - f) * m.diffuse),
-        avg3((vec3<f32>(1.0) - f) * m.transmission)
-    );
-    let total = w.x + w.y + w.z;
-    if total <= 0.0 {
-        return vec3<f32>(0.0);
-    }
-    return w / total;
-}
-
-// Local frame (+z = normal): density of the non-delta sample `wi`.
-fn bsdf_pdf(m: Material, wo_in: vec3<f32>, wi_in: vec3<f32>) -> f32 {
-    if wo_in.z * wi_in.z <= 0.0 {
-        return 0.0;
-    }
-    let s = sign(wo_in.z);
-    let wo = wo_in * s;
-    let wi = wi_in * s;
-    let p = lobe_probabilities(m, wo.z);
-    var pdf = p.y * wi.z / PI;
-    if m.roughness >= MIRROR_ROUGHNESS && p.x > 0.0 {
-        let h = normalize(wo + wi);
-        let oh = abs(dot(wo, h));
-        if oh > 0.0 {
-            let alpha = m.roughness * m.roughness;
-            pdf += p.x * ggx_d(h.z, alpha) * h.z / (4.0 * oh);
-        }
-    }
-    return pdf;
-}
-
 struct BsdfSample {
     wi: vec3<f32>,
     weight: vec3<f32>,
@@ -235,26 +195,18 @@ fn sample_bsdf(m: Material, wo: vec3<f32>) -> BsdfSample {
         }
         var wi_up: vec3<f32>;
         if u < p.x {
-            let alpha = m.roughness * m.roughness;
-            let a2 = alpha * alpha;
-            let cos2 = (1.0 - u2.x) / (1.0 + (a2 - 1.0) * u2.x);
-            let cos_t = sqrt(max(cos2, 0.0));
-            let sin_t = sqrt(max(1.0 - cos2, 0.0));
-            let phi = 2.0 * PI * u2.y;
-            let h = vec3<f32>(sin_t * cos(phi), sin_t * sin(phi), cos_t);
+            let h = ggx_sample_h(u2, m.roughness * m.roughness);
             wi_up = 2.0 * dot(wo_up, h) * h - wo_up;
             s.lobe = 1u;
         } else {
-            let r = sqrt(u2.x);
-            let phi = 2.0 * PI * u2.y;
-            wi_up = vec3<f32>(r * cos(phi), r * sin(phi), sqrt(max(1.0 - u2.x, 0.0)));
+            wi_up = cosine_hemisphere(u2);
             s.lobe = 0u;
         }
         if wi_up.z <= 0.0 {
             return s;
         }
         let wi = wi_up * sgn;
-        let pdf = bsdf_pdf(m, wo, wi);
+        let pdf = bsdf_pdf_local(m, wo, wi);
         if pdf <= 0.0 {
             return s;
         }
@@ -269,16 +221,9 @@ fn sample_bsdf(m: Material, wo: vec3<f32>) -> BsdfSample {
     // Smooth glass: the geometric side decides whether we enter or leave.
     s.weight = m.transmission * (vec3<f32>(1.0) - fresnel_spec(m, wo_up.z)) / p.z;
     let eta = select(m.ior, 1.0 / m.ior, flip);
-    let cos_i = clamp(wo_up.z, 0.0, 1.0);
-    let sin2_t = (1.0 - cos_i * cos_i) / (eta * eta);
-    var fr = 1.0;
-    var cos_t = 0.0;
-    if sin2_t < 1.0 {
-        cos_t = sqrt(1.0 - sin2_t);
-        let rs = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
-        let rp = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
-        fr = 0.5 * (rs * rs + rp * rp);
-    }
+    let f = fresnel_dielectric(wo_up.z, eta);
+    let fr = f.x;
+    let cos_t = f.y;
     if u2.x < fr {
         s.wi = vec3<f32>(-wo.x, -wo.y, wo.z);
         s.lobe = 3u;
@@ -291,20 +236,3 @@ fn sample_bsdf(m: Material, wo: vec3<f32>) -> BsdfSample {
     return s;
 }
 
-// `photon::path_density_factor`.
-fn path_density_factor(m: Material, lobe: u32) -> f32 {
-    switch lobe {
-        case 0u: {
-            return avg3(m.diffuse) / 1000.0;
-        }
-        case 1u: {
-            return avg3(m.specular) / 10.0;
-        }
-        case 2u: {
-            return avg3(m.specular);
-        }
-        default: {
-            return avg3(m.transmission);
-        }
-    }
-}

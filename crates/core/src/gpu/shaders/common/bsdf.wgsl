@@ -80,3 +80,16 @@ fn scatter_probability(m: Material, cos_o: f32) -> vec3<f32> {
     let f = fresnel_spec(m, abs(cos_o));
     return f + (vec3<f32>(1.0) - f) * (m.diffuse + m.transmission);
 }
+
+// `fresnel::dielectric`: (reflectance, cos θt) of a smooth boundary of relative index `eta`.
+fn fresnel_dielectric(cos_in: f32, eta: f32) -> vec2<f32> {
+    let cos_i = clamp(cos_in, 0.0, 1.0);
+    let sin2_t = (1.0 - cos_i * cos_i) / (eta * eta);
+    if sin2_t >= 1.0 {
+        return vec2<f32>(1.0, 0.0);
+    }
+    let cos_t = sqrt(1.0 - sin2_t);
+    let rs = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    let rp = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    return vec2<f32>(0.5 * (rs * rs + rp * rp), cos_t);
+}

@@ -1,0 +1,188 @@
+//! The photon continuation pass: the bounce maps' first-scatter rays followed on the GPU
+//! (`gpu/shaders/photon/continue.wgsl`) into photon records of the CPU trace's layout
+//! ([`Photon`]), the same counts of absorbed, escaped and truncated paths as
+//! `photon::trace::continue_paths`. The records are read back here (the `ispm` ring, the
+//! volume radii and the boundary compensation are CPU code); the GPU estimators could bind
+//! the record buffer instead. Not carried: photon differentials (`footprint_radius` 0).
+
+use super::scene::GpuPhotonScene;
+use super::{output_buffer, Binding, ComputePass};
+use crate::error::{Error, Result};
+use crate::gpu::layout::buffer_init;
+use crate::gpu::{self, GpuContext, Pipelines};
+use crate::photon::{Photon, PhotonRay, PhotonSet, PhotonTraceSettings};
+
+/// The continuation pass's pipeline, compiled on first use.
+struct ContinuePass(ComputePass);
+
+impl Pipelines for ContinuePass {
+    fn create(ctx: &GpuContext) -> Self {
+        let parts = [
+            crate::gpu::bvh::WGSL,
+            include_str!("../shaders/photon/continue.wgsl"),
+        ];
+        let bindings = [
+            Binding::Read,
+            Binding::Read,
+            Binding::Read,
+            Binding::Uniform(16),
+            Binding::ReadWrite,
+            Binding::ReadWrite,
+        ];
+        ContinuePass(ComputePass::new(
+            ctx,
+            "continue_paths",
+            &bindings,
+            &parts,
+            true,
+        ))
+    }
+}
+
+/// Compiles the pass now (for the cold-compile measurement; otherwise on first use).
+pub fn compile(ctx: &GpuContext) {
+    ContinuePass::get(ctx);
+}
+
+/// Whether the pass was compiled on `ctx`.
+pub fn compiled(ctx: &GpuContext) -> bool {
+    ctx.has_pipelines::<ContinuePass>()
+}
+
+/// Records a path stores on average before the first try's buffer overflows (the pass
+/// counts every record, so an overflow is retried once at the exact size).
+const RECORDS_PER_PATH: u64 = 3;
+/// Bytes of the counters (stored, absorbed, escaped, truncated, overflows, 3 spare).
+const COUNTS: u64 = 32;
+/// Rays per dispatch (workgroups of 64 within one dimension's 65535).
+const CHUNK: usize = 64 * 65535;
+
+/// Follows `rays` over `scene` on the GPU with `s.max_bounces` and `s.store_direct`
+/// (differentials are not traced: an error when `s` asks for them). The photons come in
+/// the CPU trace's order (by path, then bounce), not the same photons: the random numbers
+/// are the GPU's own stream of `seed`.
+pub fn continue_paths(
+    ctx: &GpuContext,
+    scene: &GpuPhotonScene,
+    rays: &[PhotonRay],
+    s: &PhotonTraceSettings,
+    seed: u64,
+) -> Result<PhotonSet> {
+    if s.differentials.is_some() {
+        return Err(Error::setting(
+            "photon_trace",
+            "`gpu` traces no photon differentials (footprint_volumes)",
+        ));
+    }
+    let mut set = PhotonSet::default();
+    for (k, chunk) in rays.chunks(CHUNK).enumerate() {
+        let seed =
+            (seed ^ (k as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)) as u32 ^ (seed >> 32) as u32;
+        let mut part = trace_chunk(
+            ctx,
+            scene,
+            chunk,
+            s,
+            seed,
+            chunk.len() as u64 * RECORDS_PER_PATH,
+        )?;
+        if let Err(needed) = part {
+            part = trace_chunk(ctx, scene, chunk, s, seed, needed)?;
+        }
+        let part = part.map_err(|_| Error::Internal("GPU photon count changed on retry".into()))?;
+        set.append(part);
+    }
+    set.emitted = rays.len() as u64;
+    Ok(set)
+}
+
+/// One dispatch over `rays` with room for `capacity` records: the photons, or `Err(n)`
+/// when `n` records did not fit.
+fn trace_chunk(
+    ctx: &GpuContext,
+    scene: &GpuPhotonScene,
+    rays: &[PhotonRay],
+    s: &PhotonTraceSettings,
+    seed: u32,
+    capacity: u64,
+) -> Result<std::result::Result<PhotonSet, u64>> {
+    let p = ContinuePass::get(ctx);
+    let record = std::mem::size_of::<Photon>() as u64;
+    let bytes = capacity.max(1) * record;
+    ctx.check_buffer("the GPU-traced photons", bytes)?;
+    let storage = wgpu::BufferUsages::STORAGE;
+    let params = [s.max_bounces, s.store_direct as u32, seed, capacity as u32];
+    let rays_buf = buffer_init(
+        ctx,
+        "photon trace rays",
+        bytemuck::cast_slice(rays),
+        storage,
+    );
+    let params_buf = buffer_init(
+        ctx,
+        "photon trace params",
+        bytemuck::cast_slice(&params),
+        wgpu::BufferUsages::UNIFORM,
+    );
+    let records = output_buffer(ctx, "photon trace records", bytes);
+    let counts = buffer_init(
+        ctx,
+        "photon trace counts",
+        &[0; COUNTS as usize],
+        storage | wgpu::BufferUsages::COPY_SRC,
+    );
+    let records_rb = gpu::readback_buffer(&ctx.device, "photon records readback", bytes);
+    let counts_rb = gpu::readback_buffer(&ctx.device, "photon counts readback", COUNTS);
+    let buffers = [
+        &rays_buf,
+        &scene.tris,
+        &scene.materials,
+        &params_buf,
+        &records,
+        &counts,
+    ];
+    let copies = [
+        (&records, &records_rb, bytes),
+        (&counts, &counts_rb, COUNTS),
+    ];
+    let index = ctx.scoped("GPU photon trace", || {
+        Ok(p.0.run(
+            ctx,
+            &buffers,
+            Some(&scene.bvh.group),
+            rays.len() as u32,
+            &copies,
+        ))
+    })?;
+    let counts: Vec<u32> = ctx.read_buffers_with(&[&counts_rb], Some(index), |_, b| {
+        bytemuck::pod_read_unaligned::<[u32; 8]>(&b[..32]).to_vec()
+    })?[0]
+        .clone();
+    let stored = counts[0] as u64;
+    if counts[4] > 0 {
+        return Err(Error::Gpu(format!(
+            "the BVH traversal stack overflowed on {} photon rays",
+            counts[4]
+        )));
+    }
+    if stored > capacity {
+        return Ok(Err(stored));
+    }
+    let mut photons: Vec<Photon> = ctx.read_buffers_with(&[&records_rb], None, |_, b| {
+        bytemuck::cast_slice::<u8, Photon>(&b[..(stored * record) as usize]).to_vec()
+    })?[0]
+        .clone();
+    // The CPU trace's order: by path (the pad word), then bounce.
+    photons.sort_unstable_by_key(|p| (p._pad0, p.bounce));
+    let mut set = PhotonSet {
+        absorbed: counts[1] as u64,
+        escaped: counts[2] as u64,
+        truncated: counts[3] as u64,
+        ..Default::default()
+    };
+    for mut p in photons {
+        p._pad0 = 0;
+        set.store(p);
+    }
+    Ok(Ok(set))
+}
