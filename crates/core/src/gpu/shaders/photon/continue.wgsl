@@ -104,12 +104,14 @@ fn to_world(f: ShadingFrame, v: vec3<f32>) -> vec3<f32> {
 
 // `trace::Interaction` without textures: the hit point, geometric normal, shading normal
 // (interpolated, on the winding's side, the geometric one where they disagree about the
-// side `d` came from) and material.
+// side `d` came from), material, and the front a one-sided material faces (`front_normal`:
+// the interpolated vertex normal before any flip, else the winding's).
 struct Surface {
     position: vec3<f32>,
     material: u32,
     ng: vec3<f32>,
     ns: vec3<f32>,
+    front: vec3<f32>,
 }
 
 fn safe_normalize(v: vec3<f32>) -> vec3<f32> {
@@ -122,6 +124,7 @@ fn surface_at(h: BvhHit, d: vec3<f32>) -> Surface {
     let w = 1.0 - h.u - h.v;
     let ng = safe_normalize(cross(tri.p1.xyz - tri.p0.xyz, tri.p2.xyz - tri.p0.xyz));
     var ns = safe_normalize(tri.n0.xyz * w + tri.n1.xyz * h.u + tri.n2.xyz * h.v);
+    let front = select(ns, ng, all(ns == vec3<f32>(0.0)));
     if all(ns == vec3<f32>(0.0)) {
         ns = ng;
     } else if dot(ns, ng) < 0.0 {
@@ -131,7 +134,7 @@ fn surface_at(h: BvhHit, d: vec3<f32>) -> Surface {
         ns = ng;
     }
     let p = tri.p0.xyz * w + tri.p1.xyz * h.u + tri.p2.xyz * h.v;
-    return Surface(p, bitcast<u32>(tri.p0.w), ng, ns);
+    return Surface(p, bitcast<u32>(tri.p0.w), ng, ns, front);
 }
 
 // Rust's signum: +1 for +0.
@@ -181,8 +184,12 @@ fn continue_paths(@builtin(global_invocation_id) id: vec3<u32>) {
             return;
         }
         let s = surface_at(h, d);
-        let m = trace_materials[s.material];
+        var m = trace_materials[s.material];
         let wo = -d;
+        // A one-sided material seen from behind stores and scatters nothing (Interaction::new).
+        if one_sided_back(m, s.front, wo) {
+            m = without_lobes(m);
+        }
         if stores_photons(m) && (bounce > 0u || trace_params.store_direct != 0u) {
             let normal = s.ns * signum(dot(s.ng, wo));
             store_photon(PhotonRecord(s.position, bounce, wo, density, power, path, normal, 0.0));
