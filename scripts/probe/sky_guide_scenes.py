@@ -72,7 +72,8 @@ def report(label: str, m: dict) -> None:
             f"| {sh.min():.3f}–{sh.max():.3f} ({lit.min():.3f}–{lit.max():.3f}) | |"
         )
     if "path" in m:
-        print(f"| path 256 spp | ground: shadow (lit) | {m['path'][0]:.3f} ({m['path'][1]:.3f}) | |")
+        shadow, lit = m["path"]
+        print(f"| path 256 spp | ground: shadow (lit) | {shadow:.3f} ({lit:.3f}) | |")
 
 
 def main() -> None:
@@ -86,7 +87,7 @@ def main() -> None:
         print(json.dumps(measure(a.seeds, a.path)))
         return
     builds = [b.split("=", 1) for b in a.build] or [["this", str(ROOT / "python")]]
-    print("| build | quantity | seeds 1–%d | spread |" % a.seeds)
+    print(f"| build | quantity | seeds 1–{a.seeds} | spread |")
     print("|---|---|---|---|")
     for i, (label, path) in enumerate(builds):
         env = dict(os.environ, PYTHONPATH=path)

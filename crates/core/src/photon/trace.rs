@@ -133,13 +133,7 @@ pub fn emit_and_trace_sources(
             out.absorbed += 1;
             return;
         };
-        let ray = PhotonRay::new(e.origin, e.direction, e.power, 1.0, 0);
-        let diff = s
-            .differentials
-            .map_or(Differentials::emitted(e.direction), |ds| {
-                emitted_differentials(&e, spread, ds.spacing)
-            });
-        follow(scene, bvh, &ray, diff, None, s, &mut rng, out);
+        follow_emitted(scene, bvh, &e, spread, s, &mut rng, out);
     })?;
     set.emitted = n_photons;
     finish_footprints(&mut set, s);
@@ -224,17 +218,32 @@ pub fn emit_aimed_sky(
             out.absorbed += 1;
             return;
         };
-        let ray = PhotonRay::new(e.origin, e.direction, e.power, 1.0, 0);
-        let diff = s
-            .differentials
-            .map_or(Differentials::emitted(e.direction), |ds| {
-                emitted_differentials(&e, Neighbours::Area(area, e.direction, false), ds.spacing)
-            });
-        follow(scene, bvh, &ray, diff, None, s, &mut rng, out);
+        let spread = Neighbours::Area(area, e.direction, false);
+        follow_emitted(scene, bvh, &e, spread, s, &mut rng, out);
     })?;
     set.emitted = guide.aimed();
     finish_footprints(&mut set, s);
     Ok(set)
+}
+
+/// Traces the emitted photon `e` whose neighbours lie as `spread` (its differentials when
+/// `s` asks for them) into `out`.
+fn follow_emitted(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    e: &Emission,
+    spread: Neighbours,
+    s: &PhotonTraceSettings,
+    rng: &mut Rng,
+    out: &mut PhotonSet,
+) {
+    let ray = PhotonRay::new(e.origin, e.direction, e.power, 1.0, 0);
+    let diff = s
+        .differentials
+        .map_or(Differentials::emitted(e.direction), |ds| {
+            emitted_differentials(e, spread, ds.spacing)
+        });
+    follow(scene, bvh, &ray, diff, None, s, rng, out);
 }
 
 /// How one photon's neighbours lie at its emission: a point light's photons `spacing`
