@@ -42,6 +42,8 @@ pub struct Focus {
     pub maps: Vec<ProjectionMap>,
     /// Specular objects of the scene (each light's map has a cone per object it can aim at).
     pub objects: usize,
+    /// The sky's photons aimed at the openings they enter through (`None`: as emitted).
+    pub sky: Option<super::sky_guide::SkyGuide>,
 }
 
 /// Bounding spheres (centre, radius) of the scene's objects with a delta lobe.
@@ -125,6 +127,7 @@ impl Focus {
             fraction: fraction.clamp(0.0, 1.0),
             maps,
             objects: spheres.len(),
+            sky: None,
         }
     }
 
@@ -275,6 +278,7 @@ mod tests {
             intensity: Vec3::ONE,
         };
         let focus = Focus {
+            sky: None,
             fraction: 0.5,
             maps: vec![ProjectionMap {
                 cones: vec![

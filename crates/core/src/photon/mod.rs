@@ -24,6 +24,7 @@ pub mod knn;
 pub mod lbvh;
 pub mod radius;
 pub mod ring;
+pub mod sky_guide;
 pub mod specular;
 pub mod trace;
 

@@ -33,6 +33,10 @@ const STREAM_EMIT: u64 = 0x9407_0000;
 const STREAM_CONTINUE: u64 = 0x9407_0001;
 /// Random stream of photon paths aimed at the specular objects for ISPM.
 const STREAM_AIMED: u64 = 0x9407_0002;
+/// Random stream of the sky's pilot photons (`super::sky_guide`).
+const STREAM_SKY_PILOT: u64 = 0x9407_0003;
+/// Random stream of the sky's aimed photons (`super::sky_guide`).
+const STREAM_SKY_AIMED: u64 = 0x9407_0004;
 
 /// Photon tracer settings.
 #[derive(Clone, Copy, Debug)]
@@ -129,17 +133,117 @@ pub fn emit_and_trace_sources(
             out.absorbed += 1;
             return;
         };
-        let ray = PhotonRay::new(e.origin, e.direction, e.power, 1.0, 0);
-        let diff = s
-            .differentials
-            .map_or(Differentials::emitted(e.direction), |ds| {
-                emitted_differentials(&e, spread, ds.spacing)
-            });
-        follow(scene, bvh, &ray, diff, None, s, &mut rng, out);
+        follow_emitted(scene, bvh, &e, spread, s, &mut rng, out);
     })?;
     set.emitted = n_photons;
     finish_footprints(&mut set, s);
     Ok(set)
+}
+
+/// `n` of the sky's photons of `scene` emitted as [`Sources::emit`] would and traced: the
+/// rays (towards the sky, crossing of the centre's plane) of those whose paths stored a
+/// photon, in index order (the pilot of [`super::sky_guide::SkyGuide`]; its photons are
+/// not kept).
+pub fn sky_pilot(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    n: u64,
+    s: &PhotonTraceSettings,
+    seed: u64,
+    control: &dyn TraceControl,
+) -> Result<Vec<super::sky_guide::SkyRay>> {
+    let bounds = scene.bounds();
+    let Some(env) = scene.environment.as_deref() else {
+        return Ok(Vec::new());
+    };
+    let marked = std::sync::Mutex::new(Vec::new());
+    trace_chunks(n, control, |i, out| {
+        let mut rng = Rng::new(seed, STREAM_SKY_PILOT, i);
+        let Some(e) = env.emit(&mut rng, bounds) else {
+            return;
+        };
+        let before = out.photons.len();
+        let ray = PhotonRay::new(e.origin, e.direction, e.power, 1.0, 0);
+        follow(
+            scene,
+            bvh,
+            &ray,
+            Differentials::emitted(e.direction),
+            None,
+            s,
+            &mut rng,
+            out,
+        );
+        if out.photons.len() > before {
+            out.photons.truncate(before);
+            let towards = -e.direction;
+            let c = bounds.centre;
+            let point = e.origin - towards * (e.origin - c).dot(towards);
+            let ray = super::sky_guide::SkyRay { towards, point };
+            marked
+                .lock()
+                .unwrap_or_else(|p| p.into_inner())
+                .push((i, ray));
+        }
+    })?;
+    let mut marked = marked.into_inner().unwrap_or_else(|p| p.into_inner());
+    marked.sort_by_key(|(i, _)| *i);
+    Ok(marked.into_iter().map(|(_, r)| r).collect())
+}
+
+/// The aimed photons of the sky's `guide` ([`super::sky_guide`]) traced, stored from
+/// their second hit as the plain ones; their footprints (`s.differentials`) are the plain
+/// photons' (the bounding disc's area over the plain count), so that a surface's light is
+/// smoothed as with the plain photons alone, over more of them.
+pub fn emit_aimed_sky(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    guide: &super::sky_guide::SkyGuide,
+    plain: u64,
+    s: &PhotonTraceSettings,
+    seed: u64,
+    control: &dyn TraceControl,
+) -> Result<PhotonSet> {
+    let Some(env) = scene.environment.as_deref() else {
+        return Ok(PhotonSet::default());
+    };
+    let b = scene.bounds();
+    let area = std::f32::consts::PI * b.radius * b.radius / plain.max(1) as f32;
+    let mut set = trace_chunks(guide.aimed(), control, |i, out| {
+        let mut rng = Rng::new(seed, STREAM_SKY_AIMED, i);
+        let Some(e) = guide
+            .emit_aimed(env, &mut rng)
+            .filter(|e| e.power.max_element() > 0.0)
+        else {
+            out.absorbed += 1;
+            return;
+        };
+        let spread = Neighbours::Area(area, e.direction, false);
+        follow_emitted(scene, bvh, &e, spread, s, &mut rng, out);
+    })?;
+    set.emitted = guide.aimed();
+    finish_footprints(&mut set, s);
+    Ok(set)
+}
+
+/// Traces the emitted photon `e` whose neighbours lie as `spread` (its differentials when
+/// `s` asks for them) into `out`.
+fn follow_emitted(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    e: &Emission,
+    spread: Neighbours,
+    s: &PhotonTraceSettings,
+    rng: &mut Rng,
+    out: &mut PhotonSet,
+) {
+    let ray = PhotonRay::new(e.origin, e.direction, e.power, 1.0, 0);
+    let diff = s
+        .differentials
+        .map_or(Differentials::emitted(e.direction), |ds| {
+            emitted_differentials(e, spread, ds.spacing)
+        });
+    follow(scene, bvh, &ray, diff, None, s, rng, out);
 }
 
 /// How one photon's neighbours lie at its emission: a point light's photons `spacing`
@@ -194,6 +298,10 @@ fn emit_photon(
             (e, neighbours)
         }
     };
+    if let (Source::Environment, Some(guide)) = (source, &focus.sky) {
+        // The plain technique's balance-heuristic weight (1 off the guide's kernels).
+        e.power *= guide.plain_weight(scene.environment.as_deref()?, &e);
+    }
     e.power /= p * n as f32;
     Some((e, neighbours))
 }

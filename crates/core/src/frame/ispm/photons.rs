@@ -18,8 +18,10 @@ use crate::photon::focus::Focus;
 use crate::photon::lbvh::Aabb;
 use crate::photon::radius::{SceneExtent, VolumeRadius, Z_RATIO};
 use crate::photon::ring::PhotonRing;
+use crate::photon::sky_guide::SkyGuide;
 use crate::photon::trace::{
-    continue_paths_from, emit_aimed_caustics, emit_and_trace_sources, Checked, FirstSegment,
+    continue_paths_from, emit_aimed_caustics, emit_aimed_sky, emit_and_trace_sources, sky_pilot,
+    Checked, FirstSegment,
 };
 use crate::photon::{boundary, Photon, PhotonRay, PhotonTraceSettings};
 use crate::scene::light_views::LightView;
@@ -28,6 +30,11 @@ use crate::trace::SceneBvh;
 use glam::Vec3;
 use std::borrow::Cow;
 use std::time::Instant;
+
+/// Fewest pilot photons of the sky (`SkyGuide`), whatever its share of the frame's.
+const PILOT_MIN: u64 = 4096;
+/// The sky's aimed photons per plain one where a pilot found openings (`SkyGuide`).
+const AIMED_PER_PLAIN: u64 = 1;
 
 /// What changed since the photons in the ring were traced.
 pub(in crate::frame) struct Invalidation<'a> {
@@ -277,16 +284,22 @@ impl Trace<'_> {
         let only = Sources::filtered(self.scene, |s| s == source);
         let key = ring_key(self.scene, source);
         let control = Checked::new(self.progress, "cpu trace");
-        let set = emit_and_trace_sources(
-            self.scene,
-            self.bvh,
-            &only,
-            n,
-            pts,
-            self.seed(key as u32),
-            &control,
-            &Focus::default(),
-        )?;
+        let seed = self.seed(key as u32);
+        let mut focus = Focus::default();
+        if source == Source::Environment {
+            // The sky's photons, plain and aimed at the openings a pilot of as many found
+            // (photon/sky_guide.rs: the balance heuristic of the two, unbiased).
+            let pilot = n.max(PILOT_MIN);
+            let rays = sky_pilot(self.scene, self.bvh, pilot, pts, seed, &control)?;
+            focus.sky = SkyGuide::new(rays, pilot, self.scene.bounds(), n, n * AIMED_PER_PLAIN);
+        }
+        let mut set =
+            emit_and_trace_sources(self.scene, self.bvh, &only, n, pts, seed, &control, &focus)?;
+        if let Some(guide) = &focus.sky {
+            let aimed = emit_aimed_sky(self.scene, self.bvh, guide, n, pts, seed, &control)?;
+            stats.photons_emitted += guide.aimed();
+            set.photons.extend(aimed.photons);
+        }
         stats.photons_emitted += n;
         stats.caustic_photons += set
             .photons
