@@ -72,7 +72,7 @@ def indirect_max(scene: gi.Scene, method: str, size, **settings) -> float:
 
 SPREAD_XFAIL = pytest.mark.xfail(
     strict=True,
-    reason="issue 48: one frame's mean varies by σ 1.7–2.0% between seeds (32 seeds)",
+    reason="issue 48: one frame's mean varies by σ 1.3–1.5% between seeds (16 seeds)",
 )
 
 
@@ -95,9 +95,13 @@ def test_one_frame_is_steady(name):
     # (mitsuba.cornell_box()); seeds 1–8 spread 4.5%, 2.8% and 4.4%. Seeds 1–4, the bound's
     # seeds before, spread 0.4%, 2.5% and 3.3%: `cornell` passed by luck (its 32 seeds
     # spread 7.8%). Most of σ is the light of two and more bounces (σ at `max_depth` 2:
-    # 0.8% and 0.9%). The issue's 3% over 8 seeds needs σ under about 1% (the range of 8
-    # normal draws is about 2.8σ): not met on `cornell` and mitsuba.cornell_box() (strict
-    # xfail: the test fails once it passes).
+    # 0.8% and 0.9%). Session 14: each pixel's own bundle-to-VPL pairing offset
+    # (`pixel_pair_offset`, `bidir.wgsl`; before, strategy A of every pixel took the same
+    # 16 of the 64 subpaths, 0.74% of σ on `cornell` alone): σ over 16 seeds 1.73% →
+    # 1.51%, 1.15% → 0.95%, 1.63% → 1.34%; seeds 1–8 spread 4.4%, 2.6%, 3.5%. The issue's
+    # 3% over 8 seeds needs σ under about 1% (the range of 8 normal draws is about 2.8σ):
+    # not met on `cornell` and mitsuba.cornell_box() (strict xfail: the test fails once
+    # it passes).
     scene = gi.load_scene(name)
     means = [
         float(gi.render(scene, "bidir", size=(48, 48), seed=s).radiance.mean()) for s in range(1, 9)

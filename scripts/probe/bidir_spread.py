@@ -2,10 +2,10 @@
 Mitsuba 3's `cbox` and mitsuba.cornell_box(), 48×48 at the defaults, for one or more builds
 (each in its own process, `--build LABEL=PYTHONPATH`): the spread (max − min over the
 mean) of seeds 1–4, of 1–8 (the test's) and of 1–N, and σ over N seeds. Prints a Markdown
-table.
+table; with `--per-seed`, a second table of each seed's image mean.
 
     python scripts/probe/bidir_spread.py [--seeds 16] [--build LABEL=PYTHONPATH ...]
-        [--set vpls_per_light=128 ...]
+        [--set vpls_per_light=128 ...] [--per-seed]
 """
 
 import argparse
@@ -54,6 +54,7 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, default=16)
     ap.add_argument("--build", action="append", default=[], help="LABEL=PYTHONPATH")
     ap.add_argument("--set", action="append", default=[], help="KEY=VALUE render setting")
+    ap.add_argument("--per-seed", action="store_true", help="also print each seed's mean")
     ap.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
     a = ap.parse_args()
     if a.child:
@@ -62,6 +63,7 @@ def main() -> None:
     builds = [b.split("=", 1) for b in a.build] or [["this", os.pathsep.join(sys.path)]]
     print(f"| build | scene | seeds 1–4 spread | seeds 1–8 spread | seeds 1–{a.seeds} spread | σ |")
     print("|---|---|---|---|---|---|")
+    rows = []
     for label, path in builds:
         cmd = [sys.executable, __file__, "--child", "--seeds", str(a.seeds)]
         cmd += [f"--set={t}" for t in a.set]
@@ -73,6 +75,11 @@ def main() -> None:
             sp4, sp8, sp = (spread(m[:k]) for k in (4, 8, len(m)))
             sd = m.std(ddof=1) / m.mean()
             print(f"| {label} | {name} | {sp4:.1%} | {sp8:.1%} | {sp:.1%} | {sd:.2%} |", flush=True)
+            rows.append((label, name, m))
+    if a.per_seed:
+        print(f"\n| build | scene | image mean, seeds 1–{a.seeds} |\n|---|---|---|")
+        for label, name, m in rows:
+            print(f"| {label} | {name} | {' '.join(f'{x:.4f}' for x in m)} |")
 
 
 if __name__ == "__main__":

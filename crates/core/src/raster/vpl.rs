@@ -77,7 +77,8 @@ pub struct BidirParamsRaw {
     /// Lower bound of ‖x2 − y‖² of the bundles' connections in modes 1 and 2.
     pub min_dist2: f32,
     pub max_walk: u32,
-    /// Random offset in [0, 1) of the two-bounce term's bundle-to-VPL pairing.
+    /// Random offset in [0, 1) of the two-bounce term's bundle-to-VPL pairing (a pixel adds
+    /// its entry of `bidir.wgsl`'s 4×4 Bayer matrix over 16, mod 1).
     pub pair_offset: f32,
     /// Roughness clamping (§5): 1 on, 0 off.
     pub clamp_roughness: u32,

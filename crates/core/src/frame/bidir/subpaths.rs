@@ -143,8 +143,9 @@ pub(super) fn slots(
     heads + extra.min(room - heads)
 }
 
-/// The VPL the lighting pass pairs bundle `b` with: ⌊(b + u)·n1/n2⌋ (`bidir.wgsl`; its
-/// subpath is the one strategy A of that bundle continues).
+/// The VPL the lighting pass pairs bundle `b` with: ⌊(b + u)·n1/n2⌋, u the pixel's offset
+/// (`bidir.wgsl`'s `pixel_pair_offset`; its subpath is the one strategy A of that bundle
+/// continues at that pixel).
 #[cfg(test)]
 fn paired_vpl(b: u32, pair_offset: f32, n1: u32, n2: u32) -> u32 {
     (((b as f32 + pair_offset) * n1 as f32 / n2 as f32) as u32).min(n1.saturating_sub(1))
@@ -434,6 +435,44 @@ mod tests {
         assert_eq!(slots(2, 16, 4, 7, 32, 1000), 32 * (1 + EXTRA_PER_SUBPATH));
         // The extra slots shrink to what the GPU holds.
         assert_eq!(slots(1, 16, 4, 64, 64, 100), 36);
+    }
+
+    /// `bidir.wgsl`'s 4×4 Bayer matrix of the pixels' pairing offsets.
+    fn pixel_offsets() -> Vec<u32> {
+        let wgsl = include_str!("../../raster/shaders/bidir.wgsl");
+        let start = wgsl.find("array<u32, 16>(").expect("the Bayer matrix") + 15;
+        let end = start + wgsl[start..].find(')').expect("its end");
+        wgsl[start..end]
+            .split(',')
+            .map(|v| v.trim().trim_end_matches('u').parse().expect("an integer"))
+            .collect()
+    }
+
+    #[test]
+    fn every_2x2_block_pairs_the_bundles_with_all_vpls() {
+        // Issue 48: with one pairing offset for the image, every pixel's strategy A took the
+        // same n2 of the n1 subpaths. The pixels' offsets u + bayer/16 (mod 1): a 4×4 block
+        // takes all 16 offsets, and at n1/n2 = 4 (the defaults, 64 VPLs and 16 bundles)
+        // every aligned 2×2 block pairs bundle b with all of VPLs 4b … 4b + 3.
+        let bayer = pixel_offsets();
+        let mut sorted = bayer.clone();
+        sorted.sort_unstable();
+        assert_eq!(sorted, (0..16).collect::<Vec<u32>>());
+        for u in [0.0, 0.1, 0.37, 0.9999] {
+            for (bx, by) in [(0, 0), (2, 0), (0, 2), (2, 2)] {
+                for b in 0..16 {
+                    let mut ks: Vec<u32> = [(0, 0), (1, 0), (0, 1), (1, 1)]
+                        .iter()
+                        .map(|(x, y)| {
+                            let o = (u + bayer[(by + y) * 4 + bx + x] as f32 / 16.0).fract();
+                            paired_vpl(b, o, 64, 16)
+                        })
+                        .collect();
+                    ks.sort_unstable();
+                    assert_eq!(ks, (4 * b..4 * b + 4).collect::<Vec<u32>>(), "u {u} b {b}");
+                }
+            }
+        }
     }
 
     #[test]

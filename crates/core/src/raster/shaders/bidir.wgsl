@@ -447,6 +447,19 @@ fn interleave(px: vec2<i32>, start: u32) -> vec2<u32> {
     return vec2<u32>(start + (cell + n - start % n) % n, n);
 }
 
+// The pixel's offset of the bundle-to-VPL pairing (issue 48): the frame's offset u plus
+// the pixel's entry of a 4×4 Bayer matrix over 16, mod 1. Each pixel's offset is uniform
+// over [0, 1) (its estimate unbiased, as with u alone), and every 2×2 block takes u + {0,
+// ¼, ½, ¾}, every 4×4 block u + j/16: at n1/n2 = 4 a 2×2 block's pixels pair the bundles
+// with all the VPLs and their subpaths instead of the same quarter of them. With one offset
+// for the whole image, strategy A connected every pixel to the same n2 of the n1 subpaths,
+// and which n2 they were moved the frame's image mean by 0.74% (σ, `cornell`).
+fn pixel_pair_offset(px: vec2<i32>) -> f32 {
+    let q = vec2<u32>(px) % 4u;
+    let bayer = array<u32, 16>(0u, 8u, 2u, 10u, 12u, 4u, 14u, 6u, 3u, 11u, 1u, 9u, 15u, 7u, 13u, 5u);
+    return fract(params.pair_offset + f32(bayer[q.y * 4u + q.x]) / 16.0);
+}
+
 @fragment
 fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
     let px = vec2<i32>(frag.xy);
@@ -477,6 +490,7 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
     let wo = normalize(params.eye - p);
     let n1 = f32(params.vpls_per_light);
     let n2 = f32(params.bundles);
+    let pair_u = pixel_pair_offset(px);
     var sum = vec3<f32>(0.0);
 
     // One bounce through the VPLs (in mode 2 only those without a bundle strategy).
@@ -649,10 +663,11 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
                 }
             }
             // Two bounces: one VPL of every light lights x2, bundle b taking VPL
-            // ⌊(b + u)·n1/n2⌋ (the VPLs are in stratified order over the RSM, so every part
-            // of it is paired; each VPL is picked n2/n1 times in expectation).
+            // ⌊(b + u)·n1/n2⌋, u the pixel's offset (`pixel_pair_offset`; the VPLs are in
+            // stratified order over the RSM, so every part of it is paired; each VPL is
+            // picked n2/n1 times in expectation).
             if params.bounces >= 2u && params.vpls_per_light > 0u {
-                let k = min(u32((f32(b) + params.pair_offset) * n1 / n2), params.vpls_per_light - 1u);
+                let k = min(u32((f32(b) + pair_u) * n1 / n2), params.vpls_per_light - 1u);
                 // Strategy A's area density of x2 (MIS against B; no clamp with MIS).
                 let pa = max(cos23, 0.0) / (bv.inv_density * d23_2);
                 let min_d2 = select(params.min_dist2, tiny_d2, mis);
