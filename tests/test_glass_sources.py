@@ -67,9 +67,6 @@ UNSTABLE = {
     "window-sky": "bidir's VPLs of the sky through a glazed window: its 64 photons land "
     "outside but in rare frames (region 2.87, 0.37 of path's at 64x48; at 160x120 the VPL "
     "part 2.43, 0, 0, 0 over seeds 1-4 while the rest stays at 0.37-0.39)",
-    "window-sun": "bidir's VPLs of the sun through a glazed window: ~2 of the sun's 64 "
-    "photons enter (indirect part 0.15-0.52 of path's region, the sunlit patch 0.74-0.76 "
-    "steady; 160x120 seeds 1-4)",
 }
 
 
@@ -126,3 +123,16 @@ def test_bidir_sky_through_glazing_is_steady():
     print(ratios)
     assert np.all(np.abs(np.array(ratios) - 1) < 0.25), ratios
     assert max(ratios) - min(ratios) < 0.2, ratios
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="bidir's VPLs of the sun through a glazed window: ~2 of the sun's 64 photons "
+    "enter (the VPL part 0.15-0.52 of path's region, the sunlit patch 0.74-0.76 steady; "
+    "160x120 seeds 1-4); at 64x48 seeds 1-2 0.977, 0.889",
+)
+def test_bidir_sun_through_glazing_is_steady():
+    # Per-seed region means within 5% of each other (seeds 1-2): the 2% for a frame,
+    # loosened for a region. The means pass test_bidir_light_through_glass_matches_path.
+    ratios = np.array(region_ratios("window-sun", "bidir"))
+    assert ratios.max() - ratios.min() < 0.05 * ratios.mean(), ratios
