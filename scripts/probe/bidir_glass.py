@@ -7,6 +7,11 @@ floor under the slab's mean and median pixel ratio, seeds 1-2. glazed: window_ro
 
     python scripts/probe/bidir_glass.py glass_room
     python scripts/probe/bidir_glass.py glazed [both|sun|sky]
+
+parts: a scene of tests/glass_scenes.py (160x120), per seed (1-4) the region lit only through
+the glass: each AOV's mean over `path`'s (256 spp) region mean, and the frame's.
+
+    python scripts/probe/bidir_glass.py parts window-sky [method]
 """
 
 import json
@@ -16,6 +21,9 @@ from pathlib import Path
 import numpy as np
 
 import gi
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "tests"))
+import glass_scenes  # noqa: E402
 
 DIR = Path(__file__).resolve().parents[2] / "tests" / "scenes" / "openings"
 PARTS = ("direct", "specular", "indirect")
@@ -61,8 +69,24 @@ def glazed(keep: str) -> None:
         print(f"seed {seed} frame {img.mean() / ref.mean():.3f} | {parts(r, ref.mean())}")
 
 
+def region_parts(kind: str, method: str) -> None:
+    scene = glass_scenes.scene(kind)
+    ref = gi.render(scene, "path", spp=256, seed=7)
+    region = glass_scenes.behind(kind, ref)
+    b = ref.radiance[..., :3][region].mean()
+    for seed in (1, 2, 3, 4):
+        r = gi.render(scene, method, seed=seed)
+        line = " ".join(
+            f"{n} {np.asarray(r.aov(n))[..., :3][region].mean() / b:.3f}" for n in PARTS
+        )
+        total = r.radiance[..., :3][region].mean() / b
+        print(f"seed {seed} behind {total:.3f} | {line}", flush=True)
+
+
 if __name__ == "__main__":
-    if sys.argv[1] == "glass_room":
+    if sys.argv[1] == "parts":
+        region_parts(sys.argv[2], sys.argv[3] if len(sys.argv) > 3 else "bidir")
+    elif sys.argv[1] == "glass_room":
         glass_room()
     else:
         glazed(sys.argv[2] if len(sys.argv) > 2 else "both")

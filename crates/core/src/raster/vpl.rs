@@ -100,6 +100,10 @@ pub struct BidirParamsRaw {
     /// of strategy B of the three-and-more-bounce light, MIS-weighted against the bundles'
     /// connections (`frame::bidir::subpaths`).
     pub sub_count: u32,
+    /// β of the sky's control variate (`frame::bidir::sky_share`): 1 in the open, the share
+    /// of the sky the visible surfaces see otherwise.
+    pub sky_cv: f32,
+    pub _pad: [u32; 3],
 }
 
 /// Extra field of view of a VPL's cube faces, in shadow texels on each side (as the lights').

@@ -27,6 +27,7 @@
 mod bundles;
 mod emitted;
 mod interleave;
+mod sky_share;
 mod specular_paths;
 mod spikes;
 mod subpaths;
@@ -249,6 +250,7 @@ fn lighting_params(
     v: &FrameVpls,
     n_env: u32,
     env_pdf_scale: f32,
+    sky_cv: f32,
 ) -> BidirParamsRaw {
     let (vpl_count, sub_count) = (v.count, v.used);
     let (lo, hi) = light_views::bounds(scene);
@@ -285,6 +287,8 @@ fn lighting_params(
         env_pdf_scale,
         alone_min_dist2: (emitted::ALONE_MIN_DIST * (hi - lo).length()).powi(2),
         sub_count,
+        sky_cv,
+        _pad: [0; 3],
     }
 }
 
@@ -461,10 +465,20 @@ pub(super) fn frame(
 
     // 2. VPLs and their shadow maps.
     let v = frame_vpls(&mut fc, options, &texels, &state.vpls)?;
+    let bvh = fc.bvh()?;
+    let sky_cv = fc.timed("sky share", |_| sky_share::coefficient(scene, bvh));
     fc.timed("upload", |_| {
         let (raws, matrices) = (&v.records.raws, &v.records.matrices);
         state.vpls.upload(&ctx, raws, matrices);
-        let p = lighting_params(scene, options, params, &v, n_env, state.env_pdf_scale);
+        let p = lighting_params(
+            scene,
+            options,
+            params,
+            &v,
+            n_env,
+            state.env_pdf_scale,
+            sky_cv,
+        );
         gpu::write_buffer(
             &ctx.queue,
             "bidir params",

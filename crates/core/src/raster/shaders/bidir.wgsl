@@ -96,6 +96,8 @@ struct Params {
     alone_min_dist2: f32,
     // Records of the light subpaths' vertices after the `vpl_count` first VPLs.
     sub_count: u32,
+    // β of the sky's control variate (`frame/bidir/sky_share.rs`).
+    sky_cv: f32,
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
@@ -553,7 +555,7 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
     // open scene's frame then no longer varies with how its few bundle directions fall on
     // the sky (`docs/bench/bidir-depth.md`).
     if params.has_env != 0u && params.bundles > 0u {
-        sum += sky_diffuse_unshadowed(m, ns, wo);
+        sum += params.sky_cv * sky_diffuse_unshadowed(m, ns, wo);
     }
 
     // The glossy lobe's share of the sky's light (issue 47), from the bundles' directions.
@@ -593,7 +595,7 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
                 // times the visibility these directions give it (`sky_share_add`).
                 let l_env = env_radiance(dir) * (abs(dot(ns, dir)) * bv.inv_density);
                 let fd = pixel_diffuse(m, ns, wo, dir);
-                sum -= fd * l_env;
+                sum -= params.sky_cv * fd * l_env;
                 if !hit.found {
                     sum += fd * l_env;
                 }
