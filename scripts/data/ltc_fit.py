@@ -1,6 +1,10 @@
 #!/usr/bin/env python3
 """Fits the linearly transformed cosines (Heitz, Dupuy, Hill & Neubelt 2016) of the GPU
-uber material's GGX lobe and writes the table ``crates/core/src/raster/ltc_ggx.json``.
+uber material's GGX lobe and writes the table ``crates/core/src/raster/ltc_ggx.json``; with
+``--distribution beckmann``, of the Beckmann lobe of Mitsuba's exact models
+(``ltc_beckmann.json``: separable Smith G1(wo)·G1(wi) with Walter et al.'s rational Λ, as
+`models.wgsl` `mf_lambda` and Mitsuba's conductors evaluate it; D(h) = exp(−tan²θh/α²) /
+(π·α²·cos⁴θh), normals drawn by tan²θh = −α²·ln(1 − u)).
 
 The lobe fitted is f(wo, wi)·cos θi of GGX with α = roughness² and the height-correlated
 Smith G2 = 1/(1 + Λo + Λi) (`bsdf/microfacet.rs`, the GPU's `bsdf_eval`), Fresnel = 1. For
@@ -19,6 +23,7 @@ paper describes. The table holds M⁻¹'s four non-trivial entries normalized by
 one (LTC is invariant under scaling of M), n and the Fresnel moment.
 
     python scripts/data/ltc_fit.py --size 32 --samples 32   # the committed table (~5 min CPU)
+    python scripts/data/ltc_fit.py --size 32 --samples 32 --distribution beckmann
 
 Written from the paper's description; no published table or code is used. Checked by
 `tests/test_ltc_table.py` (the closed form against a numeric integral over square lights).
@@ -35,7 +40,7 @@ from pathlib import Path
 
 import numpy as np
 
-OUT = Path(__file__).resolve().parents[2] / "crates" / "core" / "src" / "raster" / "ltc_ggx.json"
+RASTER = Path(__file__).resolve().parents[2] / "crates" / "core" / "src" / "raster"
 MAX_THETA = np.radians(89.0)
 MIN_ROUGHNESS = 0.05
 
@@ -60,14 +65,45 @@ def ggx_lambda(cos_t: np.ndarray, alpha: float) -> np.ndarray:
     return 0.5 * (np.sqrt(1.0 + alpha * alpha * tan2) - 1.0)
 
 
+def beckmann_d(cos_h: np.ndarray, alpha: float) -> np.ndarray:
+    c2 = np.maximum(cos_h * cos_h, 1e-12)
+    tan2 = (1.0 - c2) / c2
+    return np.where(cos_h > 0, np.exp(-tan2 / (alpha * alpha)) / (np.pi * alpha**2 * c2 * c2), 0.0)
+
+
+def beckmann_lambda(cos_t: np.ndarray, alpha: float) -> np.ndarray:
+    """Walter et al.'s rational approximation (`models.wgsl` `mf_lambda`)."""
+    c2 = np.clip(cos_t * cos_t, 1e-12, 1.0)
+    a = 1.0 / np.maximum(alpha * np.sqrt((1.0 - c2) / c2), 1e-12)
+    g1 = (3.535 * a + 2.181 * a * a) / (1.0 + 2.276 * a + 2.577 * a * a)
+    return np.where(a >= 1.6, 0.0, 1.0 / np.maximum(g1, 1e-12) - 1.0)
+
+
+# The distribution fitted (`main` sets it): its D, its masking G2(cos θo, cos θi) and
+# tan²θh of a normal drawn from D·cos θh for a uniform u.
+DIST = {
+    "d": ggx_d,
+    "g2": lambda co, ci, a: 1.0 / (1.0 + ggx_lambda(co, a) + ggx_lambda(ci, a)),
+    "tan2": lambda u, a: a * a * u / np.maximum(1.0 - u, 1e-12),
+    "about": "LTC fit of GGX (height-correlated Smith, Fresnel 1), scripts/data/ltc_fit.py",
+}
+BECKMANN = {
+    "d": beckmann_d,
+    "g2": lambda co, ci, a: 1.0 / ((1.0 + beckmann_lambda(co, a)) * (1.0 + beckmann_lambda(ci, a))),
+    "tan2": lambda u, a: -a * a * np.log(np.maximum(1.0 - u, 1e-12)),
+    "about": "LTC fit of Beckmann (separable Smith, Walter's rational Lambda, Fresnel 1), "
+    "scripts/data/ltc_fit.py --distribution beckmann",
+}
+
+
 def lobe(wo: np.ndarray, wi: np.ndarray, alpha: float) -> tuple[np.ndarray, np.ndarray]:
     """f·cos θi (Fresnel 1) and the Schlick weight (1 − wi·h)⁵ for directions `wi` (k×3)."""
     h = wi + wo
     h = h / np.maximum(np.linalg.norm(h, axis=1, keepdims=True), 1e-12)
     ci = wi[:, 2]
     co = wo[2]
-    g2 = 1.0 / (1.0 + ggx_lambda(np.array(co), alpha) + ggx_lambda(ci, alpha))
-    f = ggx_d(h[:, 2], alpha) * g2 / (4.0 * co)
+    g2 = DIST["g2"](np.array(co), ci, alpha)
+    f = DIST["d"](h[:, 2], alpha) * g2 / (4.0 * co)
     f = np.where(ci > 0, f, 0.0)
     return f, (1.0 - np.clip((wi * h).sum(axis=1), 0.0, 1.0)) ** 5
 
@@ -81,14 +117,14 @@ def stratified(k: int) -> np.ndarray:
 
 def sample_lobe(wo: np.ndarray, alpha: float, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Directions reflected about normals drawn from D(h)·cos θh, and their density."""
-    tan2 = alpha * alpha * u[:, 0] / np.maximum(1.0 - u[:, 0], 1e-12)
+    tan2 = DIST["tan2"](u[:, 0], alpha)
     cos_h = 1.0 / np.sqrt(1.0 + tan2)
     sin_h = np.sqrt(np.maximum(1.0 - cos_h * cos_h, 0.0))
     phi = 2.0 * np.pi * u[:, 1]
     h = np.stack([sin_h * np.cos(phi), sin_h * np.sin(phi), cos_h], axis=1)
     d = (h * wo).sum(axis=1, keepdims=True)
     wi = 2.0 * d * h - wo
-    pdf = ggx_d(cos_h, alpha) * cos_h / (4.0 * np.abs(d[:, 0]))
+    pdf = DIST["d"](cos_h, alpha) * cos_h / (4.0 * np.abs(d[:, 0]))
     return wi, pdf
 
 
@@ -150,7 +186,7 @@ def sample_lobe_pdf(wo: np.ndarray, alpha: float, wi: np.ndarray) -> np.ndarray:
     h = h / np.maximum(np.linalg.norm(h, axis=1, keepdims=True), 1e-12)
     d = np.abs((h * wo).sum(axis=1))
     return np.where(
-        h[:, 2] > 0, ggx_d(h[:, 2], alpha) * h[:, 2] / (4.0 * np.maximum(d, 1e-12)), 0.0
+        h[:, 2] > 0, DIST["d"](h[:, 2], alpha) * h[:, 2] / (4.0 * np.maximum(d, 1e-12)), 0.0
     )
 
 
@@ -236,7 +272,7 @@ def fit(size: int, samples: int) -> dict:
                 }
             )
     return {
-        "about": "LTC fit of GGX (height-correlated Smith, Fresnel 1), scripts/data/ltc_fit.py",
+        "about": DIST["about"],
         "roughness": [float(r) for r in roughness],
         "theta": [float(t) for t in theta],
         "layout": "cells[i * size + j]: roughness i, theta j; minv = M^-1 entries "
@@ -249,8 +285,12 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--size", type=int, default=32)
     ap.add_argument("--samples", type=int, default=32, help="stratified samples per axis")
-    ap.add_argument("--out", type=Path, default=OUT)
+    ap.add_argument("--distribution", choices=("ggx", "beckmann"), default="ggx")
+    ap.add_argument("--out", type=Path, help="default: raster/ltc_<distribution>.json")
     a = ap.parse_args()
+    if a.distribution == "beckmann":
+        DIST.update(BECKMANN)
+    a.out = a.out or RASTER / f"ltc_{a.distribution}.json"
     table = fit(a.size, a.samples)
     a.out.write_text(json.dumps(table, indent=None, separators=(",", ":")) + "\n")
     print(f"wrote {a.out} ({a.out.stat().st_size} bytes)")

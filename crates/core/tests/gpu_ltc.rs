@@ -1,7 +1,8 @@
 //! CPU/GPU parity of the linearly transformed cosines: `shaders/common/ltc.wgsl`'s
-//! `ltc_glossy` (with the committed table as its texture, `raster::ltc::texture`) against
-//! `raster::ltc::glossy_integral` on random polygons (triangles and quads, partly below the
-//! horizon or not) seen from random normals, views and roughnesses.
+//! `ltc_glossy` (with the committed tables as its texture, `raster::ltc::texture`) against
+//! `raster::ltc::glossy_integral_of` on random polygons (triangles and quads, partly below
+//! the horizon or not) seen from random normals, views and roughnesses, every third case
+//! through the Beckmann table (the texture's second).
 //!
 //! Tolerance per value: |gpu − cpu| ≤ 2e-4·|cpu| + 3e-3·n + 4·s, n the lobe's albedo at the
 //! case and s the case's f32 sensitivity: the largest change of the CPU value when a
@@ -14,8 +15,9 @@
 //! moves the lookup by more: two of the 2000 cases differed by 2.3e-3 of the albedo (0.5%
 //! of the value), hence 3e-3·n.
 
+use gi_core::bsdf::microfacet::Distribution;
 use gi_core::gpu::{self, layout};
-use gi_core::raster::ltc::{glossy_integral, table};
+use gi_core::raster::ltc::{glossy_integral_of, table_of};
 use gi_core::raster::wgsl::LTC;
 use gi_core::sampling::{uniform_sphere, Rng};
 use glam::Vec3;
@@ -27,6 +29,7 @@ struct Case {
     v: Vec3,
     roughness: f32,
     corners: [Vec3; 4],
+    dist: Distribution,
 }
 
 const KERNEL: &str = "
@@ -38,7 +41,7 @@ struct Case { n: vec4<f32>, v: vec4<f32>, a: vec4<f32>, b: vec4<f32>, c: vec4<f3
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x >= arrayLength(&cases) { return; }
     let k = cases[id.x];
-    results[id.x] = ltc_glossy(k.n.xyz, k.v.xyz, k.n.w, k.a.xyz, k.b.xyz, k.c.xyz, k.d.xyz);
+    results[id.x] = ltc_glossy(u32(k.v.w), k.n.xyz, k.v.xyz, k.n.w, k.a.xyz, k.b.xyz, k.c.xyz, k.d.xyz);
 }
 ";
 
@@ -66,13 +69,18 @@ fn cases(count: usize) -> Vec<Case> {
                 v,
                 roughness,
                 corners: [a, b, c, d],
+                dist: if k % 3 == 1 {
+                    Distribution::Beckmann
+                } else {
+                    Distribution::Ggx
+                },
             }
         })
         .collect()
 }
 
 fn cpu(c: &Case) -> [f32; 2] {
-    glossy_integral(c.n, c.v, c.roughness, &c.corners)
+    glossy_integral_of(c.dist, c.n, c.v, c.roughness, &c.corners)
 }
 
 /// The largest change of the CPU value when an input moves by 1e-6.
@@ -111,7 +119,8 @@ fn gpu_values(cases: &[Case]) -> Vec<[f32; 2]> {
     let device = &ctx.device;
     let mut bytes = Vec::new();
     for c in cases {
-        let mut rows = vec![c.n.extend(c.roughness), c.v.extend(0.0)];
+        let table = (c.dist == Distribution::Beckmann) as u32 as f32;
+        let mut rows = vec![c.n.extend(c.roughness), c.v.extend(table)];
         rows.extend(c.corners.iter().map(|p| p.extend(0.0)));
         for r in rows {
             bytes.extend_from_slice(bytemuck::bytes_of(&r.to_array()));
@@ -178,7 +187,7 @@ fn wgsl_ltc_matches_cpu() {
     let mut worst = 0.0f32;
     for (i, (c, g)) in cases.iter().zip(&gpu).enumerate() {
         let want = cpu(c);
-        let norm = table().lookup(c.roughness, c.n.dot(c.v)).norm;
+        let norm = table_of(c.dist).lookup(c.roughness, c.n.dot(c.v)).norm;
         let s = sensitivity(c);
         if want[0] > 1e-4 {
             lit += 1;

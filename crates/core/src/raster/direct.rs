@@ -132,9 +132,10 @@ pub struct DirectParamsRaw {
 pub const POLYGON_TEXELS: u32 = 5;
 
 /// A round emitter's row of the polygons texture (`round_lights.wgsl`): its centre (w: 1
-/// when two-sided), the flag 2 in the second texel's w, (radius, corners of the polygon
-/// that stands for its disc, that polygon's radius over the disc's), the radiance, and the
-/// cosine and sine of the angle between the polygon's corners.
+/// when two-sided), a flat disc's normal (zero for a sphere) with the flag 2 in w,
+/// (radius, corners of the polygon that stands for its disc, that polygon's radius over
+/// the disc's), the radiance, and the cosine and sine of the angle between the polygon's
+/// corners.
 pub fn round_texels(
     r: crate::scene::emitters::round::Round,
     two_sided: f32,
@@ -144,7 +145,7 @@ pub fn round_texels(
     let step = std::f32::consts::TAU / EDGES as f32;
     [
         r.centre.extend(two_sided).to_array(),
-        [0.0, 0.0, 0.0, 2.0],
+        r.normal.unwrap_or(Vec3::ZERO).extend(2.0).to_array(),
         [r.radius, EDGES as f32, polygon_scale(), 0.0],
         radiance.extend(0.0).to_array(),
         [step.cos(), step.sin(), 0.0, 0.0],

@@ -1,6 +1,7 @@
 //! Linearly transformed cosines (Heitz, Dupuy, Hill & Neubelt 2016): the GGX lobe's
 //! integral over a polygon in closed form, from the fitted table `ltc_ggx.json`
-//! (`scripts/data/ltc_fit.py`). This is the CPU reference of `shaders/common/ltc.wgsl`,
+//! (`scripts/data/ltc_fit.py`), and the Beckmann lobe's (Mitsuba's exact models, separable
+//! masking) from `ltc_beckmann.json` (`ltc_fit.py --distribution beckmann`). This is the CPU reference of `shaders/common/ltc.wgsl`,
 //! written with the same steps in f32 (the parity test `tests/gpu_ltc.rs` holds the two
 //! together), and the source of the table texture the shader reads ([`texture`]).
 //!
@@ -14,12 +15,14 @@
 //! Schlick Fresnel of reflectance F0 (n the lobe's albedo, s its Schlick moment; F0 = 1:
 //! no Fresnel).
 
+use crate::bsdf::microfacet::Distribution;
 use glam::Vec3;
 use std::f32::consts::TAU;
 use std::sync::OnceLock;
 
-/// The committed fit.
+/// The committed fits.
 const TABLE_JSON: &str = include_str!("ltc_ggx.json");
+const BECKMANN_JSON: &str = include_str!("ltc_beckmann.json");
 
 #[derive(serde::Deserialize)]
 struct CellJson {
@@ -77,6 +80,16 @@ pub struct LtcTable {
 pub fn table() -> &'static LtcTable {
     static TABLE: OnceLock<LtcTable> = OnceLock::new();
     TABLE.get_or_init(|| parse(TABLE_JSON).expect("the committed LTC table parses"))
+}
+
+/// The committed table of `dist`'s lobe (parsed once).
+pub fn table_of(dist: Distribution) -> &'static LtcTable {
+    static BECKMANN: OnceLock<LtcTable> = OnceLock::new();
+    match dist {
+        Distribution::Ggx => table(),
+        Distribution::Beckmann => BECKMANN
+            .get_or_init(|| parse(BECKMANN_JSON).expect("the committed Beckmann LTC table parses")),
+    }
 }
 
 /// Parses a table written by `ltc_fit.py`. Each cell's M⁻¹ is taken with m00 ≥ 0: the fit
@@ -202,7 +215,18 @@ pub fn view_tangent(n: Vec3, v: Vec3) -> Vec3 {
 /// first corner) seen from unit normal `n` and unit view direction `v`, and the same with
 /// the Schlick weight (1 − wi·h)⁵: (E·n, E·s) of the module's header.
 pub fn glossy_integral(n: Vec3, v: Vec3, roughness: f32, corners: &[Vec3]) -> [f32; 2] {
-    let cell = table().lookup(roughness, n.dot(v));
+    glossy_integral_of(Distribution::Ggx, n, v, roughness, corners)
+}
+
+/// [`glossy_integral`] of `dist`'s lobe (Beckmann: Mitsuba's, separable masking).
+pub fn glossy_integral_of(
+    dist: Distribution,
+    n: Vec3,
+    v: Vec3,
+    roughness: f32,
+    corners: &[Vec3],
+) -> [f32; 2] {
+    let cell = table_of(dist).lookup(roughness, n.dot(v));
     let t1 = view_tangent(n, v);
     let t2 = n.cross(t1);
     let local: Vec<Vec3> = corners
@@ -261,12 +285,21 @@ impl LtcTable {
     }
 }
 
-/// The committed table as a texture on `ctx`'s device ([`LtcTable::texels`]), uploaded
-/// when called (the direct pass makes it once per device).
+/// The committed tables as the texels of one texture: GGX's rows ([`LtcTable::texels`]),
+/// then Beckmann's (the shader's table 1 from row size + 1: the two are fitted on one grid
+/// size, which the test of the tables checks).
+pub fn all_texels() -> Vec<[f32; 4]> {
+    let mut out = table().texels();
+    out.extend(table_of(Distribution::Beckmann).texels());
+    out
+}
+
+/// The committed tables as a texture on `ctx`'s device ([`all_texels`]), uploaded when
+/// called (the direct pass makes it once per device).
 pub fn texture(ctx: &crate::gpu::GpuContext) -> wgpu::Texture {
     let t = table();
-    let size = (CELL_TEXELS * t.size as u32, t.size as u32 + 1);
-    crate::gpu::float_texture_of(ctx, "ltc table", size, &t.texels())
+    let size = (CELL_TEXELS * t.size as u32, 2 * (t.size as u32 + 1));
+    crate::gpu::float_texture_of(ctx, "ltc table", size, &all_texels())
 }
 
 #[cfg(test)]

@@ -311,3 +311,7 @@ pub(crate) fn check_limits(
     }
     Ok(())
 }
+
+#[cfg(test)]
+#[path = "scene_tests.rs"]
+mod tests;

@@ -126,7 +126,7 @@ impl Emitters {
         let (mut polygons, mut in_groups) = (0, 0);
         for (_, slots, _, _) in objects {
             let corners: Vec<[Vec3; 3]> = slots.iter().map(|&i| self.corners[i].0).collect();
-            let round = round::sphere(&corners);
+            let round = round::round(&corners);
             let cost = if round.is_some() { 1 } else { slots.len() };
             if chosen.len() < max_groups && polygons + cost <= max_polygons {
                 polygons += cost;

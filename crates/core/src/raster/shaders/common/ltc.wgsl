@@ -1,10 +1,11 @@
-// Linearly transformed cosines (Heitz, Dupuy, Hill & Neubelt 2016): the GGX lobe's integral
-// over a polygon in closed form (raster/ltc.rs, the CPU reference of these functions, step
-// by step). The fitted table is a texture, `ltc_table` (declared by the includer: the
-// direct pass binds it in group 0), laid out by raster/ltc.rs `LtcTable::texels`: texel
-// (0, 0) holds (roughness at row 0, at the last row, θ_o at the last column, size), row
-// i + 1 the cells of roughness i, two texels per θ_o: M⁻¹'s entries [m00, m02, m20, m22],
-// then the lobe's albedo n and its Schlick moment s. A texture, not a WGSL array: lavapipe compiled the
+// Linearly transformed cosines (Heitz, Dupuy, Hill & Neubelt 2016): the GGX or Beckmann
+// lobe's integral over a polygon in closed form (raster/ltc.rs, the CPU reference of these
+// functions, step by step). The fitted tables are a texture, `ltc_table` (declared by the
+// includer: the direct pass binds it in group 0), laid out by raster/ltc.rs
+// `LtcTable::texels`, table 0 (GGX) then table 1 (Beckmann) from row size + 1: a table's
+// first row's texel 0 holds (roughness at its row 0, at the last row, θ_o at the last
+// column, size), its row i + 1 the cells of roughness i, two texels per θ_o: M⁻¹'s entries
+// [m00, m02, m20, m22], then the lobe's albedo n and its Schlick moment s. A texture, not a WGSL array: lavapipe compiled the
 // direct pipeline with the table as a private array ~3.5x slower.
 
 // One interpolated cell.
@@ -14,9 +15,10 @@ struct LtcCell {
     moments: vec2<f32>,
 }
 
-fn ltc_node(i: u32, j: u32) -> LtcCell {
-    let minv = textureLoad(ltc_table, vec2<u32>(2u * j, i + 1u), 0);
-    let moments = textureLoad(ltc_table, vec2<u32>(2u * j + 1u, i + 1u), 0).xy;
+// Cell (i, j) of the table whose first row is `base`.
+fn ltc_node(base: u32, i: u32, j: u32) -> LtcCell {
+    let minv = textureLoad(ltc_table, vec2<u32>(2u * j, base + i + 1u), 0);
+    let moments = textureLoad(ltc_table, vec2<u32>(2u * j + 1u, base + i + 1u), 0).xy;
     return LtcCell(minv, moments);
 }
 
@@ -24,9 +26,11 @@ fn ltc_mix(a: LtcCell, b: LtcCell, t: f32) -> LtcCell {
     return LtcCell(mix(a.minv, b.minv, t), mix(a.moments, b.moments, t));
 }
 
-// The cell at `roughness` and view cosine `cos_o`, bilinear between the nodes (clamped).
-fn ltc_lookup(roughness: f32, cos_o: f32) -> LtcCell {
-    let range = textureLoad(ltc_table, vec2<u32>(0u, 0u), 0);
+// The cell of table `table` (0: GGX, 1: Beckmann) at `roughness` and view cosine `cos_o`,
+// bilinear between the nodes (clamped).
+fn ltc_lookup(table: u32, roughness: f32, cos_o: f32) -> LtcCell {
+    let base = table * (u32(textureLoad(ltc_table, vec2<u32>(0u, 0u), 0).w) + 1u);
+    let range = textureLoad(ltc_table, vec2<u32>(0u, base), 0);
     let size = u32(range.w);
     let last = range.w - 1.0;
     let theta = acos(clamp(cos_o, 0.0, 1.0));
@@ -36,8 +40,8 @@ fn ltc_lookup(roughness: f32, cos_o: f32) -> LtcCell {
     let j = min(u32(fj), size - 2u);
     let u = fi - f32(i);
     let w = fj - f32(j);
-    let lo = ltc_mix(ltc_node(i, j), ltc_node(i, j + 1u), w);
-    let hi = ltc_mix(ltc_node(i + 1u, j), ltc_node(i + 1u, j + 1u), w);
+    let lo = ltc_mix(ltc_node(base, i, j), ltc_node(base, i, j + 1u), w);
+    let hi = ltc_mix(ltc_node(base, i + 1u, j), ltc_node(base, i + 1u, j + 1u), w);
     return ltc_mix(lo, hi, u);
 }
 
@@ -115,12 +119,13 @@ fn ltc_view_tangent(n: vec3<f32>, v: vec3<f32>) -> vec3<f32> {
     return normalize(a - n * dot(n, a));
 }
 
-// ∫ f·cos θi dω of the GGX lobe of `roughness` (α = roughness², Fresnel 1) over the polygon
-// a, b, c, d (relative to the shading point; a triangle repeats its first corner) seen from
-// unit normal `n` and unit view direction `v`, and the same with the Schlick weight
-// (1 − wi·h)⁵: a Schlick Fresnel of reflectance F0 gives F0·x + (1 − F0)·y.
-fn ltc_glossy(n: vec3<f32>, v: vec3<f32>, roughness: f32, a: vec3<f32>, b: vec3<f32>, c: vec3<f32>, d: vec3<f32>) -> vec2<f32> {
-    let cell = ltc_lookup(roughness, dot(n, v));
+// ∫ f·cos θi dω of the GGX (`table` 0) or Beckmann (1) lobe of `roughness` (α =
+// roughness², Fresnel 1) over the polygon a, b, c, d (relative to the shading point; a
+// triangle repeats its first corner) seen from unit normal `n` and unit view direction
+// `v`, and the same with the Schlick weight (1 − wi·h)⁵: a Schlick Fresnel of reflectance
+// F0 gives F0·x + (1 − F0)·y.
+fn ltc_glossy(table: u32, n: vec3<f32>, v: vec3<f32>, roughness: f32, a: vec3<f32>, b: vec3<f32>, c: vec3<f32>, d: vec3<f32>) -> vec2<f32> {
+    let cell = ltc_lookup(table, roughness, dot(n, v));
     let t1 = ltc_view_tangent(n, v);
     let t2 = cross(n, t1);
     let ta = ltc_apply(cell, vec3<f32>(dot(a, t1), dot(a, t2), dot(a, n)));

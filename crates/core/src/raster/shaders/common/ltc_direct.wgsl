@@ -3,13 +3,14 @@
 // one call site is `sampled_light`'s group loop, compiled only where LTC_LIGHTS is (the
 // scene has polygon groups and glossy materials: raster/direct_variant.rs).
 //
-// Per group: the unshadowed light of the uber GGX lobe Σ L·∫_P f·cos dω by linearly
-// transformed cosines (Schlick's Fresnel through the table's moment), times the ratio
+// Per group: the unshadowed light of the uber GGX lobe (an exact model's GGX or Beckmann
+// lobe) Σ L·∫_P f·cos dω by linearly transformed cosines (Schlick's Fresnel through the
+// table's moment), times the ratio
 // estimator's visibility Σ f_s·G·V / Σ f_s·G over the points drawn on the group (Heitz,
 // Hill & McGuire 2018; the diffuse lobe's ratio where no point lights the glossy lobe).
-// Round emitters (spheres) by their disc's polygon (round_lights.wgsl).
+// Round emitters (spheres, flat discs) by their disc's polygon (round_lights.wgsl).
 
-// The LTC table (raster/ltc.rs `texture`, made once per device).
+// The LTC tables, GGX and Beckmann (raster/ltc.rs `texture`, made once per device).
 @group(0) @binding(14) var ltc_table: texture_2d<f32>;
 
 // Σ L·(x, y) of `ltc_glossy` over the polygons [`first`, `end`) of `emitter_polygons`, per
@@ -19,14 +20,15 @@ struct LtcSums {
     y: vec3<f32>,
 }
 
-fn ltc_polygons(p: vec3<f32>, ns: vec3<f32>, wo: vec3<f32>, roughness: f32, first: u32, end: u32) -> LtcSums {
+// `table`: the lobe's (ltc.wgsl: 0 GGX, 1 Beckmann).
+fn ltc_polygons(table: u32, p: vec3<f32>, ns: vec3<f32>, wo: vec3<f32>, roughness: f32, first: u32, end: u32) -> LtcSums {
     var out = LtcSums(vec3<f32>(0.0), vec3<f32>(0.0));
     for (var t = first; t < end; t++) {
         let t0 = textureLoad(emitter_polygons, vec2<u32>(0u, t), 0);
         let t1 = textureLoad(emitter_polygons, vec2<u32>(1u, t), 0);
         var g = vec2<f32>(0.0);
         if ROUND_LIGHTS && t1.w > 1.5 {
-            g = ltc_round(ns, wo, roughness, p, t);
+            g = ltc_round(table, ns, wo, roughness, p, t);
         } else {
             let t2 = textureLoad(emitter_polygons, vec2<u32>(2u, t), 0);
             let a = t0.xyz - p;
@@ -42,7 +44,7 @@ fn ltc_polygons(p: vec3<f32>, ns: vec3<f32>, wo: vec3<f32>, roughness: f32, firs
             if t1.w > 0.5 {
                 d = textureLoad(emitter_polygons, vec2<u32>(4u, t), 0).xyz - p;
             }
-            g = ltc_glossy(ns, wo, roughness, a, b, c, d);
+            g = ltc_glossy(table, ns, wo, roughness, a, b, c, d);
         }
         let l = textureLoad(emitter_polygons, vec2<u32>(3u, t), 0).xyz;
         out.x += l * g.x;
@@ -93,23 +95,26 @@ fn round_quadrature(q: RoundPolygon, n: vec3<f32>, v: vec3<f32>, alpha: f32) -> 
 // A disc small against the lobe (its angular radius ρ under α, the lobe's half width
 // about 2α in directions) by quadrature of the lobe itself: LTC's clamped cosine is wider
 // than a sharp GGX or Beckmann peak, and blurred small lights' highlights; a larger one by
-// LTC, blended between ρ = α and 2α.
-fn ltc_round(n: vec3<f32>, v: vec3<f32>, roughness: f32, p: vec3<f32>, t: u32) -> vec2<f32> {
-    let q = round_polygon(p, t);
-    if !q.ok {
+// LTC, blended between ρ = α and 2α; a disc much larger than the lobe as a polygon of more
+// corners (`round_sides`: a sharp highlight showed the 12-gon's straight edges).
+fn ltc_round(table: u32, n: vec3<f32>, v: vec3<f32>, roughness: f32, p: vec3<f32>, t: u32) -> vec2<f32> {
+    let disc = round_polygon(p, t);
+    if !disc.ok {
         return vec2<f32>(0.0);
     }
     let alpha = roughness * roughness;
-    let rho = q.radius / length(q.centre);
+    let rho = disc.radius / length(disc.centre);
     let blend = clamp(rho / alpha - 1.0, 0.0, 1.0);
     var small = vec2<f32>(0.0);
     if blend < 1.0 {
-        small = round_quadrature(q, n, v, alpha);
+        small = round_quadrature(disc, n, v, alpha);
         if blend <= 0.0 {
             return small;
         }
     }
-    let cell = ltc_lookup(roughness, dot(n, v));
+    // A disc large against the lobe: more corners (`round_sides`).
+    let q = round_sides(disc, rho / alpha);
+    let cell = ltc_lookup(table, roughness, dot(n, v));
     let t1 = ltc_view_tangent(n, v);
     let t2 = cross(n, t1);
     var sum = 0.0;
@@ -133,13 +138,14 @@ fn ltc_round(n: vec3<f32>, v: vec3<f32>, roughness: f32, p: vec3<f32>, t: u32) -
 // points' shadowed and unshadowed glossy sums (`glit`, `gun`) and diffuse ones (`dlit`,
 // `dun`).
 fn ltc_group_glossy(p: vec3<f32>, ns: vec3<f32>, m: Material, wo: vec3<f32>, range: vec4<u32>, glit: vec3<f32>, gun: vec3<f32>, dlit: vec3<f32>, dun: vec3<f32>) -> vec3<f32> {
-    // Mitsuba's exact models: the table's GGX lobe at the model's roughness (Beckmann's
-    // taken as GGX of the same α where LTC integrates; `round_quadrature` evaluates the
-    // model's own lobe), weighted by the model's mirror reflectance at the view (its
-    // Fresnel term at the half vector of a narrow lobe's mirror direction).
+    // Mitsuba's exact models: the table of the model's distribution (GGX or Beckmann) at
+    // its roughness, weighted by the model's mirror reflectance at the view (its Fresnel
+    // term at the half vector of a narrow lobe's mirror direction).
     var roughness = m.roughness;
     var specular = m.specular;
+    var table = 0u;
     if exact_on {
+        table = select(0u, 1u, has_flag(exact_model, MODEL_BECKMANN));
         roughness = exact_model.roughness;
         specular = exact_model.specular;
         if has_flag(exact_model, MODEL_COATED) && !has_flag(exact_model, MODEL_ROUGH_COAT) {
@@ -149,7 +155,7 @@ fn ltc_group_glossy(p: vec3<f32>, ns: vec3<f32>, m: Material, wo: vec3<f32>, ran
     if max3(specular) <= 0.0 || roughness < MIRROR_ROUGHNESS {
         return glit;
     }
-    let s = ltc_polygons(p, ns, wo, roughness, range.z, range.w);
+    let s = ltc_polygons(table, p, ns, wo, roughness, range.z, range.w);
     var u = m.specular * s.x;
     if exact_on {
         u = exact_mirror(vec3<f32>(0.0), abs(dot(ns, wo))) * s.x;
