@@ -282,8 +282,9 @@ impl Trace<'_> {
             .collect()
     }
 
-    /// `n` photons of `source` emitted and traced on the CPU, stored from their second hit
-    /// on (the first is direct light) as the bounce maps' photons are.
+    /// `n` photons of `source` emitted on the CPU and traced on the CPU or the GPU (the
+    /// sky's pilot on the CPU), stored from their second hit on (the first is direct
+    /// light) as the bounce maps' photons are.
     fn trace_source(
         &self,
         source: Source,
