@@ -246,6 +246,53 @@ fn follow_emitted(
     follow(scene, bvh, &ray, diff, None, s, rng, out);
 }
 
+/// The rays of [`emit_and_trace_sources`]'s `n` paths as it emits them (the same
+/// generator and draws, so the same first segments), for a tracer elsewhere that draws its
+/// own numbers after emission (the GPU continuation, `gpu::photon::emitted`): photon `i` at
+/// index `i`, bounce 0; a zero-power ray where the emission absorbs the path (a tracer
+/// counts it absorbed, as this one does). No differentials.
+pub fn emitted_rays(
+    scene: &Scene,
+    sources: &Sources,
+    n: u64,
+    seed: u64,
+    focus: &Focus,
+) -> Vec<PhotonRay> {
+    (0..n)
+        .into_par_iter()
+        .map(|i| {
+            let mut rng = Rng::new(seed, STREAM_EMIT, i);
+            ray_of(emit_photon(scene, sources, n, focus, &mut rng).map(|(e, _)| e))
+        })
+        .collect()
+}
+
+/// The rays of [`emit_aimed_sky`]'s paths as it emits them (see [`emitted_rays`]).
+pub fn aimed_sky_rays(
+    scene: &Scene,
+    guide: &super::sky_guide::SkyGuide,
+    seed: u64,
+) -> Vec<PhotonRay> {
+    let Some(env) = scene.environment.as_deref() else {
+        return Vec::new();
+    };
+    (0..guide.aimed())
+        .into_par_iter()
+        .map(|i| {
+            let mut rng = Rng::new(seed, STREAM_SKY_AIMED, i);
+            ray_of(guide.emit_aimed(env, &mut rng))
+        })
+        .collect()
+}
+
+/// An emitted photon's ray at bounce 0, or a zero-power one for none.
+fn ray_of(e: Option<Emission>) -> PhotonRay {
+    match e.filter(|e| e.power.max_element() > 0.0) {
+        Some(e) => PhotonRay::new(e.origin, e.direction, e.power, 1.0, 0),
+        None => PhotonRay::new(Vec3::ZERO, Vec3::Z, Vec3::ZERO, 1.0, 0),
+    }
+}
+
 /// How one photon's neighbours lie at its emission: a point light's photons `spacing`
 /// radians apart (√(1/(n q(ω))) for a density q per steradian), or the area a photon
 /// stands for on an emitting surface or the bounding disc (see [`Spread`]).
@@ -381,6 +428,45 @@ pub fn emit_aimed_caustics(
     set.emitted = n;
     finish_footprints(&mut set, s);
     Ok(set)
+}
+
+/// The rays of [`emit_aimed_caustics`]'s paths as it emits them (see [`emitted_rays`]): a
+/// zero-power ray where it absorbs the path (no power, or a first hit without a delta
+/// lobe), the ray itself where it escapes (a tracer finds it escaping too).
+pub fn aimed_caustic_rays(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    li: usize,
+    n: u64,
+    seed: u64,
+    focus: &Focus,
+) -> Vec<PhotonRay> {
+    let light = &scene.lights[li];
+    let origin = light.position();
+    (0..n)
+        .into_par_iter()
+        .map(|i| {
+            let mut rng = Rng::new(seed, STREAM_AIMED, i);
+            let (direction, q) = focus.sample(light, li, &mut rng);
+            let power = light.intensity_towards(direction) / (q * n as f32);
+            if q.is_nan() || q <= 0.0 || power.max_element() <= 0.0 {
+                return ray_of(None);
+            }
+            let specular = bvh
+                .intersect(origin, direction, f32::INFINITY)
+                .is_none_or(|hit| {
+                    Interaction::new(scene, &hit, direction)
+                        .material
+                        .is_specular_traced()
+                });
+            let e = Emission {
+                origin,
+                direction,
+                power,
+            };
+            ray_of(specular.then_some(e))
+        })
+        .collect()
 }
 
 /// Continues photons that already scattered elsewhere (e.g. in the GPU bounce map): each

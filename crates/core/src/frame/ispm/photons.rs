@@ -3,14 +3,15 @@
 //! frame's changes made stale; each light's first-scatter rays are traced on, sized
 //! (volume radii, the caustic density bound), compensated at boundaries and pushed. The
 //! sources the bounce maps cannot see (emitting surfaces, directional lights, the sky: the
-//! paper's §7 limitation) get their share of the photons by power, emitted and traced whole
-//! on the CPU, and are kept in the ring after the lights.
+//! paper's §7 limitation) get their share of the photons by power, emitted on the CPU and
+//! traced where the bounce maps' rays are, and are kept in the ring after the lights.
 
 use super::super::context::FrameCtx;
 use super::super::options::IspmOptions;
 use super::super::{FrameParams, RenderStats};
 use crate::cancel::Progress;
 use crate::error::{Error, Result};
+use crate::gpu::photon::emitted;
 use crate::gpu::photon::scene::GpuPhotonScene;
 use crate::gpu::GpuContext;
 use crate::photon::bounce::BounceMap;
@@ -169,7 +170,7 @@ impl Trace<'_> {
         // The sources the bounce maps do not see, emitted and traced on the CPU.
         for (source, n) in self.cpu_sources() {
             let key = ring_key(self.scene, source);
-            let mut photons = self.trace_source(source, n, &pts, stats)?;
+            let mut photons = self.trace_source(source, n, &pts, stats, &gpu_seconds)?;
             self.size(ring, key, &mut photons);
             let tc = Instant::now();
             let compensated = self.compensated(key as u32, &photons)?;
@@ -244,8 +245,17 @@ impl Trace<'_> {
                 .sum();
             let share = self.options.refine.photon_focus as f64;
             let n = ((texels as f64 * share).round() as u64).max(1);
-            let set =
-                emit_aimed_caustics(scene, bvh, light as usize, n, pts, seed, &control, focus)?;
+            let li = light as usize;
+            let tg = Instant::now();
+            let set = match self.gpu {
+                Some(g) => emitted::trace_aimed_caustics(
+                    g.ctx, g.scene, scene, bvh, li, n, pts, seed, focus,
+                )?,
+                None => emit_aimed_caustics(scene, bvh, li, n, pts, seed, &control, focus)?,
+            };
+            if self.gpu.is_some() {
+                gpu_seconds.set(gpu_seconds.get() + tg.elapsed().as_secs_f64());
+            }
             stats.photons_emitted += n;
             photons.extend(set.photons);
         }
@@ -272,14 +282,16 @@ impl Trace<'_> {
             .collect()
     }
 
-    /// `n` photons of `source` emitted and traced on the CPU, stored from their second hit
-    /// on (the first is direct light) as the bounce maps' photons are.
+    /// `n` photons of `source` emitted on the CPU and traced on the CPU or the GPU (the
+    /// sky's pilot on the CPU), stored from their second hit on (the first is direct
+    /// light) as the bounce maps' photons are.
     fn trace_source(
         &self,
         source: Source,
         n: u64,
         pts: &PhotonTraceSettings,
         stats: &mut RenderStats,
+        gpu_seconds: &std::cell::Cell<f64>,
     ) -> Result<Vec<Photon>> {
         let only = Sources::filtered(self.scene, |s| s == source);
         let key = ring_key(self.scene, source);
@@ -293,12 +305,21 @@ impl Trace<'_> {
             let rays = sky_pilot(self.scene, self.bvh, pilot, pts, seed, &control)?;
             focus.sky = SkyGuide::new(rays, pilot, self.scene.bounds(), n, n * AIMED_PER_PLAIN);
         }
-        let mut set =
-            emit_and_trace_sources(self.scene, self.bvh, &only, n, pts, seed, &control, &focus)?;
+        let (scene, tg) = (self.scene, Instant::now());
+        let mut set = match self.gpu {
+            Some(g) => emitted::trace_sources(g.ctx, g.scene, scene, &only, n, pts, seed, &focus)?,
+            None => emit_and_trace_sources(scene, self.bvh, &only, n, pts, seed, &control, &focus)?,
+        };
         if let Some(guide) = &focus.sky {
-            let aimed = emit_aimed_sky(self.scene, self.bvh, guide, n, pts, seed, &control)?;
+            let aimed = match self.gpu {
+                Some(g) => emitted::trace_aimed_sky(g.ctx, g.scene, scene, guide, pts, seed)?,
+                None => emit_aimed_sky(scene, self.bvh, guide, n, pts, seed, &control)?,
+            };
             stats.photons_emitted += guide.aimed();
             set.photons.extend(aimed.photons);
+        }
+        if self.gpu.is_some() {
+            gpu_seconds.set(gpu_seconds.get() + tg.elapsed().as_secs_f64());
         }
         stats.photons_emitted += n;
         stats.caustic_photons += set

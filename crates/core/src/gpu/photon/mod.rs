@@ -1,10 +1,13 @@
 //! The photon trace on the GPU (issue #45 item 1): the uber BSDF's sampling and Russian
 //! roulette in WGSL ([`SCATTER`], the formulas of `photon::trace::scatter_local`), and the
 //! continuation pass ([`trace`]) that follows the bounce maps' first-scatter rays over the
-//! scene's BVH ([`super::bvh`]) and writes photon records in the CPU trace's layout.
+//! scene's BVH ([`super::bvh`]) and writes photon records in the CPU trace's layout; it
+//! also follows the photons of area lights, the sun and the sky from their emission
+//! ([`emitted`]: emitted on the CPU as the CPU trace emits them).
 //! [`PhotonTrace`] is the `photon_trace` setting. Pipelines are made on first use: a scene
 //! not traced on the GPU compiles none of this.
 
+pub mod emitted;
 pub mod scatter_query;
 pub mod scene;
 pub mod trace;
