@@ -100,10 +100,10 @@ pub fn textured_model(m: &Material, maps: &MaterialMaps, sample_diffuse: Vec3) -
 }
 
 /// The uber stand-in a `bidir` VPL record carries for material `met` (as a ray met it,
-/// textures applied) of `scene`'s `triangle`, whose exact model is record `model` (index
-/// + 1, [`model_of`]): `met`'s own ([`Material::uber_equivalent`]) but that a diffuse
-/// texture multiplies the untextured stand-in's diffuse albedo, as on the G-buffer and the
-/// RSMs, so that the shader gives the texel back ([`textured_model`]).
+/// textures applied) whose exact model is record `model` ([`model_of`]: index + 1):
+/// `met`'s own ([`Material::uber_equivalent`]) but that a diffuse texture multiplies the
+/// untextured stand-in's diffuse albedo, as on the G-buffer and the RSMs, so that the
+/// shader gives the texel back ([`textured_model`]).
 pub fn record_stand_in(scene: &Scene, model: u32, met: &Material) -> Material {
     let i = model as usize;
     if i == 0 || i > scene.materials.len() {
