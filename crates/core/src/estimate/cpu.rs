@@ -307,7 +307,7 @@ impl CpuEstimate {
                     transmission: Vec3::ZERO,
                     ..Default::default()
                 };
-                let exact = exact_material(scene, f32x4(4, x, y).w);
+                let exact = exact_material(scene, f32x4(4, x, y).w, uber.diffuse);
                 let material = exact.unwrap_or(uber);
                 let plain = exact.is_none() && material.specular == Vec3::ZERO && !material.fresnel;
                 Some(ViewSample {
@@ -323,12 +323,14 @@ impl CpuEstimate {
 }
 
 /// The material of G-buffer index `w` (its index + 1) where the GPU passes shade its exact
-/// model ([`crate::raster::exact_models::shades_exactly`]).
-fn exact_material(scene: &Scene, w: f32) -> Option<Material> {
+/// model ([`crate::raster::exact_models::shades_exactly`]), with the diffuse texel of the
+/// sample's stand-in albedo `diffuse` applied ([`crate::raster::exact_models::textured_model`]).
+fn exact_material(scene: &Scene, w: f32, diffuse: Vec3) -> Option<Material> {
+    use crate::raster::exact_models::{shades_exactly, textured_model};
     let i = (w.max(0.0) + 0.5) as usize;
     let m = scene.materials.get(i.checked_sub(1)?)?;
     let maps = scene.material_maps.get(i - 1).copied().unwrap_or_default();
-    crate::raster::exact_models::shades_exactly(m, &maps).then_some(*m)
+    shades_exactly(m, &maps).then(|| textured_model(m, &maps, diffuse))
 }
 
 /// A photon in a tile's list: its index and the tile's texels under its screen rectangle

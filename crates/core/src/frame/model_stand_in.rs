@@ -1,8 +1,9 @@
 //! The RenderWarning of the GPU methods (`direct`, `ispm`, `bidir`) for Mitsuba's material
 //! models (coatings, conductors of complex index, Beckmann's distribution). Their direct
 //! light and `ispm`'s photon estimates and rasterized first bounce shade the exact models
-//! (`raster::exact_models`) unless a texture varies the BSDF's parameters, and so do
-//! `bidir`'s pixels, VPLs and ray bundles' hits (`bidir_models.wgsl`); the textured ones
+//! (`raster::exact_models`, a diffuse texture's texel included) unless a specular or
+//! roughness texture varies the BSDF's parameters, and so do `bidir`'s pixels, VPLs and
+//! ray bundles' hits (`bidir_models.wgsl`); those
 //! are shaded as the uber stand-in ([`crate::bsdf::Material::uber_equivalent`]), and said
 //! so.
 
@@ -37,8 +38,8 @@ pub(super) fn warning(scene: &Scene, method: Method) -> Option<String> {
         return None;
     }
     Some(format!(
-        "method `{}` shades the Mitsuba models of materials {} (a texture varies their BSDF's \
-         parameters) as uber stand-ins (Schlick's Fresnel for coatings and conductors, GGX for \
+        "method `{}` shades the Mitsuba models of materials {} (a specular or roughness texture \
+         varies their BSDF's parameters) as uber stand-ins (Schlick's Fresnel for coatings and conductors, GGX for \
          Beckmann; docs/scene-format.md); `path`, `photon` and `gather` render them exactly",
         method.name(),
         textured.join(", ")

@@ -48,11 +48,12 @@ impl Material {
 /// `ModelMaterial` of `shaders/common/models.wgsl`: a material as the CPU's
 /// [`Material`] holds it (Mitsuba's coated plastics and conductors, Beckmann), for the
 /// passes that shade the exact models; one per scene material, beside the uber stand-in
-/// [`MaterialRaw`]. 224 bytes.
+/// [`MaterialRaw`]. 240 bytes.
 ///
 /// Layout (each row 16 bytes): `diffuse` + `flags`, `specular` + `roughness`,
 /// `transmission` + `ior`, `conductor_eta` + `coat_eta`, `conductor_k` + `coat_internal`,
-/// `conductor_average` + `coat_external_mean`, then the coating's transmittance table.
+/// `conductor_average` + `coat_external_mean`, then the coating's transmittance table,
+/// then `stand_in_diffuse` + a pad.
 /// A new model (e.g. a rough dielectric) takes the next bit of [`model_flags`] and reuses
 /// `roughness`, `ior` and the distribution bit; fields it needs beyond those are appended
 /// as whole rows after the table (and `ModelMaterial` in WGSL gains the same).
@@ -74,6 +75,12 @@ pub struct ModelMaterialRaw {
     pub coat_external_mean: f32,
     /// The rough coating's T(μ) at μ = i/([`coated::TABLE`] − 1), 4 entries a row.
     pub coat_t: [[f32; 4]; coated::TABLE / 4],
+    /// Where a texture varies the diffuse reflectance ([`model_flags::TEX_DIFFUSE`]): the
+    /// untextured uber stand-in's diffuse albedo, whose textured value (the stand-in's times
+    /// the texel: the G-buffer's, an RSM's, a VPL record's) it divides to give the texel
+    /// back (`model_textured` in `models.wgsl`).
+    pub stand_in_diffuse: [f32; 3],
+    pub _pad: u32,
 }
 
 /// Bits of [`ModelMaterialRaw::flags`] (`MODEL_*` in `models.wgsl`).
@@ -90,6 +97,8 @@ pub mod model_flags {
     pub const NONLINEAR: u32 = 16;
     /// A rough coating (its transmittance from the table).
     pub const ROUGH_COAT: u32 = 32;
+    /// A texture varies `diffuse` (`stand_in_diffuse` recovers the texel per sample).
+    pub const TEX_DIFFUSE: u32 = 64;
 }
 
 impl Material {

@@ -81,6 +81,6 @@ fn view_sample(
     s.wo = normalize(eye - pos.xyz);
     // Mitsuba's exact model of the sample's material, if it has one (its index + 1 in the
     // G-buffer's emission.w; raster/shaders/common/exact_models.wgsl): `exact_eval`.
-    exact_load(textureLoad(g_emission, px, 0).w);
+    exact_load(textureLoad(g_emission, px, 0).w, dm.xyz);
     return s;
 }

@@ -19,7 +19,7 @@
 
 use super::subpaths::Head;
 use super::vpls::{Records, VplMaps};
-use crate::raster::exact_models::{material_word, model_of};
+use crate::raster::exact_models::{material_word, model_of, record_stand_in};
 use crate::raster::vpl::{cube_views, VplRaw};
 use crate::sampling::Rng;
 use crate::scene::light::{Emission, Light};
@@ -219,7 +219,7 @@ pub(super) fn append_records(
             } else {
                 h.alpha
             };
-            let uber = h.material.uber_equivalent();
+            let uber = record_stand_in(scene, h.model, &h.material);
             raw = VplRaw {
                 position: p.into(),
                 first_layer: 0,

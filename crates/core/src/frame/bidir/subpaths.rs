@@ -38,7 +38,7 @@ use super::super::options::BidirOptions;
 use super::super::FrameParams;
 use super::vpls::{Records, Vpl, VplMaps};
 use crate::bsdf::Material;
-use crate::raster::exact_models::{material_word, model_of};
+use crate::raster::exact_models::{material_word, model_of, record_stand_in};
 use crate::raster::vpl::{cube_views, VplRaw};
 use crate::sampling::{Frame, Rng};
 use crate::scene::light_views;
@@ -398,7 +398,7 @@ fn subpaths(
             let (m, texel_scale) = cube_views(pos, lo, hi, size);
             out.matrices[slot * 6..slot * 6 + 6].copy_from_slice(&m);
             let next = s.get(j + 1).map_or(0.0, |&n| (first as usize + n) as f32);
-            let uber = v.material.uber_equivalent();
+            let uber = record_stand_in(scene, v.model, &v.material);
             out.raws[slot] = VplRaw {
                 position: pos.into(),
                 first_layer: 0,

@@ -488,7 +488,7 @@ fn fs_main(@builtin(position) frag: vec4<f32>) -> @location(0) vec4<f32> {
     m.roughness = gbuffer_roughness(d.w);
     m.specular = s.xyz;
     m.fresnel = u32(s.w > 0.5);
-    let model = pixel_model(textureLoad(g_emission, px, 0).w);
+    let model = pixel_model(textureLoad(g_emission, px, 0).w, m.diffuse);
     let wo = normalize(params.eye - p);
     let n1 = f32(params.vpls_per_light);
     let n2 = f32(params.bundles);

@@ -69,13 +69,14 @@ fn model_lobe_energy(r: ModelMaterial, roughness: f32, mu: f32) -> vec3<f32> {
 }
 
 // Loads the record of a G-buffer sample's material (its `emission.w`: index + 1) for the
-// pixel's `exact_*` functions (the sky's light); returns the record's index + 1 where it
-// is shaded exactly, 0 elsewhere.
-fn pixel_model(index: f32) -> u32 {
+// pixel's `exact_*` functions (the sky's light), `diffuse` the sample's stand-in albedo
+// (a diffuse map's texel: `model_textured`); returns the record's index + 1 where it is
+// shaded exactly, 0 elsewhere.
+fn pixel_model(index: f32, diffuse: vec3<f32>) -> u32 {
     if !MODELS {
         return 0u;
     }
-    exact_load(index);
+    exact_load(index, diffuse);
     return select(0u, u32(index + 0.5), exact_on);
 }
 
@@ -117,8 +118,11 @@ fn unclamped_model(m: Material, model: u32) -> Clamped {
 // f(wo, wi) of a clamped model: its diffuse part as is (a coating's base under the coating
 // of its own roughness), its glossy lobe at the widened roughness times the model's own
 // E(α, μ)/E(α', μ).
+// The record's diffuse map texel is the vertex's stand-in albedo over the record's
+// (`model_textured`: the G-buffer's, the RSM's and the VPL records' are the stand-in's
+// times the texel, `raster::exact_models::record_stand_in`).
 fn eval_clamped_model(c: Clamped, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
-    var r = model_materials[c.model - 1u];
+    var r = model_textured(model_materials[c.model - 1u], c.m.diffuse);
     var km = vec3<f32>(1.0);
     if c.m.roughness > r.roughness {
         let widened = model_lobe_energy(r, c.m.roughness, c.mu);

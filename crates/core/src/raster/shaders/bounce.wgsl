@@ -96,7 +96,7 @@ fn bounce(in: VertexOut, textured: bool) -> BounceOut {
         m = without_lobes(m);
     }
     // Mitsuba's exact model of the material, if it has one (common/exact_models.wgsl).
-    exact_load(select(f32(in.material + 1u), 0.0, back));
+    exact_load(select(f32(in.material + 1u), 0.0, back), m.diffuse);
     var o: BounceOut;
     o.incident = vec4<f32>(phi, 1.0);
     o.expected = vec4<f32>(phi * exact_scatter(scatter_probability(m, dot(wo, ns)), dot(wo, ns)), 1.0);

@@ -12,6 +12,7 @@ const MODEL_COATED: u32 = 4u;
 const MODEL_CONDUCTOR: u32 = 8u;
 const MODEL_NONLINEAR: u32 = 16u;
 const MODEL_ROUGH_COAT: u32 = 32u;
+const MODEL_TEX_DIFFUSE: u32 = 64u;
 // `coated::TABLE`: entries of the rough coating's transmittance table.
 const COAT_TABLE: u32 = 32u;
 
@@ -20,6 +21,8 @@ const COAT_TABLE: u32 = 32u;
 // tint s; for a conductor: the tint of its Fresnel term). `conductor_*`: the complex index
 // η + ik and 2∫F(μ)μ dμ. `coat_*`: relative index η, internal diffuse reflectance R,
 // 2∫T(μ)μ dμ and the transmittance T(μ) at μ = i/31 (rough coatings; 4 entries a vec4).
+// `stand_in_diffuse`: where a texture varies `diffuse` (MODEL_TEX_DIFFUSE), the untextured
+// uber stand-in's diffuse albedo (`model_textured`).
 struct ModelMaterial {
     diffuse: vec3<f32>,
     flags: u32,
@@ -34,6 +37,25 @@ struct ModelMaterial {
     conductor_average: vec3<f32>,
     coat_external_mean: f32,
     coat_t: array<vec4<f32>, 8>,
+    stand_in_diffuse: vec3<f32>,
+    _pad: u32,
+}
+
+// Record `r` at a sample whose uber stand-in has diffuse albedo `sample_diffuse` (the
+// G-buffer's, an RSM's, a VPL record's: the untextured stand-in's times the texel, as
+// `textured_material` applies a map): where a texture varies the diffuse reflectance, the
+// texel is that over `r.stand_in_diffuse` (per channel; 0 where the stand-in's is) and the
+// model's ρ is its own times the texel (`Scene::material_at` on the CPU).
+// `raster::exact_models::textured_model` is the same on the CPU.
+fn model_textured(r: ModelMaterial, sample_diffuse: vec3<f32>) -> ModelMaterial {
+    if !has_flag(r, MODEL_TEX_DIFFUSE) {
+        return r;
+    }
+    var out = r;
+    let s = r.stand_in_diffuse;
+    let texel = select(vec3<f32>(0.0), sample_diffuse / max(s, vec3<f32>(1e-30)), s > vec3<f32>(0.0));
+    out.diffuse = r.diffuse * texel;
+    return out;
 }
 
 fn has_flag(m: ModelMaterial, flag: u32) -> bool {

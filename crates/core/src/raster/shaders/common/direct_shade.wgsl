@@ -510,7 +510,7 @@ fn sample_material(g: GSample) -> Material {
     m.roughness = gbuffer_roughness(g.diffuse.w);
     m.specular = g.specular.xyz;
     m.fresnel = u32(g.specular.w > 0.5);
-    exact_load(g.emission.w);
+    exact_load(g.emission.w, m.diffuse);
     return m;
 }
 

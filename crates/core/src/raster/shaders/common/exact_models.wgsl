@@ -2,7 +2,8 @@
 // light (issue 42): the G-buffer holds each sample's material index + 1 in `emission.w`,
 // and group 1 binds one `ModelMaterial` record per scene material (raster/exact_models.rs:
 // flags 0 where the uber parameters the G-buffer holds are exact already, or where
-// textures vary them per pixel). `exact_load` reads the sample's record once per shading
+// specular or roughness textures vary them per pixel; a diffuse texture's texel is the
+// G-buffer's diffuse over the record's untextured stand-in's: `model_textured`). `exact_load` reads the sample's record once per shading
 // point; the `exact_*` functions evaluate it in place of the uber BSDF where it is one of
 // Mitsuba's models (a coating, a conductor of complex index, Beckmann's distribution), and
 // fall back to the uber evaluation of the G-buffer's `Material` elsewhere. The
@@ -19,8 +20,10 @@ const EXACT_MODEL_FLAGS: u32 = MODEL_BECKMANN | MODEL_COATED | MODEL_CONDUCTOR;
 var<private> exact_on: bool;
 var<private> exact_model: ModelMaterial;
 
-// Reads the record of a sample's material: `index` its index + 1 (a G-buffer's `emission.w`; 0: none).
-fn exact_load(index: f32) {
+// Reads the record of a sample's material: `index` its index + 1 (a G-buffer's `emission.w`; 0: none),
+// `diffuse` its uber stand-in's (textured) diffuse albedo, which gives a diffuse map's
+// texel back (models.wgsl `model_textured`).
+fn exact_load(index: f32, diffuse: vec3<f32>) {
     exact_on = false;
     let i = u32(max(index, 0.0) + 0.5);
     if i == 0u || i > arrayLength(&model_materials) {
@@ -30,7 +33,7 @@ fn exact_load(index: f32) {
     if (model_materials[i - 1u].flags & EXACT_MODEL_FLAGS) == 0u {
         return;
     }
-    exact_model = model_materials[i - 1u];
+    exact_model = model_textured(model_materials[i - 1u], diffuse);
     exact_on = true;
 }
 
