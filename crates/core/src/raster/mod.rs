@@ -77,7 +77,7 @@ pub(crate) fn camera_view(scene: &Scene, jitter: Vec2, weight: f32) -> ViewRaw {
     let proj = light_views::perspective(
         cam.fov_y.to_radians(),
         cam.aspect(),
-        near(cam.position, (lo, hi), far),
+        near(cam.position, cam.forward, (lo, hi), far),
         far,
     );
     let shift = Vec3::new(
@@ -93,21 +93,32 @@ pub(crate) fn camera_view(scene: &Scene, jitter: Vec2, weight: f32) -> ViewRaw {
     )
 }
 
-/// The eye views' near plane: just before the scene's bounding box when the camera is outside
-/// it (nothing nearer can be seen), else `far` · 1e-5. Depth32Float with a standard
-/// projection resolves Δz ≈ z² · 6e-8 / near at distance z: at `far` · 1e-5 a surface 0.5
-/// units in front of another 1100 units away (Mitsuba's Cornell box: its luminaire under the
-/// ceiling, seen from 800 units outside the box) z-fought with it, and the luminaire vanished
-/// from whole frames of some sub-pixel offsets (the `direct` light 22% dark at 64×64 over
-/// 16 progressive passes, 8% dark in one frame at 128×128; issue 42). Just before the box,
+/// The eye views' near plane: just before the scene's bounding box when all of the box is in
+/// front of the camera (nothing nearer can be seen), else `far` · 1e-5. Depth32Float with a
+/// standard projection resolves Δz ≈ z² · 6e-8 / near at distance z: at `far` · 1e-5 a surface
+/// 0.5 units in front of another 1100 units away (Mitsuba's Cornell box: its luminaire under
+/// the ceiling, seen from 800 units outside the box) z-fought with it, and the luminaire
+/// vanished from whole frames of some sub-pixel offsets (the `direct` light 22% dark at 64×64
+/// over 16 progressive passes, 8% dark in one frame at 128×128; issue 42). Just before the box,
 /// Δz ≈ 1e-4 there.
-fn near(eye: Vec3, (lo, hi): (Vec3, Vec3), far: f32) -> f32 {
+///
+/// The plane is at a view *depth* (distance along `forward`), so it is the box's least depth:
+/// the least over its corners of `(corner − eye) · forward` (a linear function's minimum over a
+/// box is at a corner). The Euclidean distance to the box is larger off the axis and clipped
+/// the nearest part of a floor seen obliquely (a floor lit by a point light: `direct` lost the
+/// image's near rows, 0.94 of `path`).
+fn near(eye: Vec3, forward: Vec3, (lo, hi): (Vec3, Vec3), far: f32) -> f32 {
     if lo.x > hi.x {
         return far * 1e-5;
     }
-    let outside = (lo - eye).max(eye - hi).max(Vec3::ZERO).length();
+    let depth = |x: f32, y: f32, z: f32| (Vec3::new(x, y, z) - eye).dot(forward);
+    let least = [lo.x, hi.x]
+        .into_iter()
+        .flat_map(|x| [lo.y, hi.y].into_iter().map(move |y| (x, y)))
+        .flat_map(|(x, y)| [lo.z, hi.z].into_iter().map(move |z| depth(x, y, z)))
+        .fold(f32::INFINITY, f32::min);
     // max/min, not clamp: no panic on a NaN `far`.
-    (0.99 * outside).max(far * 1e-5).min(far * 0.5)
+    (0.99 * least).max(far * 1e-5).min(far * 0.5)
 }
 
 /// The camera's world -> clip transform for culling the eye passes: a sample's jitter
@@ -224,9 +235,9 @@ mod tests {
         let bounds = (Vec3::new(0.0, 0.0, 0.0), Vec3::new(556.0, 549.0, 560.0));
         let eye = Vec3::new(278.0, 273.0, -800.0);
         let far = 2000.0;
-        let n = near(eye, bounds, far);
+        let n = near(eye, Vec3::Z, bounds, far);
         assert!((n - 792.0).abs() < 1.0, "{n}");
-        assert_eq!(near(Vec3::splat(100.0), bounds, far), far * 1e-5);
+        assert_eq!(near(Vec3::splat(100.0), Vec3::Z, bounds, far), far * 1e-5);
         let proj = light_views::perspective(0.7, 1.0, n, far);
         let depth = |z: f32| {
             let c = proj * glam::Vec4::new(0.0, 0.0, -z, 1.0);
@@ -240,6 +251,42 @@ mod tests {
         };
         // At far · 1e-5 the two depths are a float's spacing apart at most.
         assert!((old_depth(1100.0) - old_depth(1099.5)).abs() <= 2.0 * f32::EPSILON);
+    }
+
+    /// No point of the scene's box lies nearer than the near plane, for eyes all around it
+    /// and looking every way: the box's corners (where the least depth is) project into
+    /// [0, 1] depth or behind the far plane, never in front of the near plane. Before, the
+    /// plane sat at the Euclidean distance to the box and clipped an obliquely seen floor.
+    #[test]
+    fn near_plane_clips_nothing_of_the_box() {
+        let mut rng = crate::sampling::Rng::new(7, 8, 9);
+        let bounds = (Vec3::new(-2.0, -1.0, -2.0), Vec3::new(2.0, -1.0, 2.0));
+        // The floor seen from (0, 2.2, 3.4): its near corners are 3.17 deep, 3.49 away.
+        let eye = Vec3::new(0.0, 2.2, 3.4);
+        let forward = Vec3::new(0.0, -3.2, -3.6).normalize();
+        let n = near(eye, forward, bounds, 100.0);
+        assert!(n <= 3.17 && n > 3.0, "{n}");
+        let mut placed = 0;
+        for _ in 0..2000 {
+            let eye = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 20.0 - 10.0;
+            let forward = crate::sampling::uniform_sphere(rng.next_2d());
+            let (lo, hi) = (Vec3::new(-1.0, -2.0, -0.5), Vec3::new(1.5, 0.5, 3.0));
+            let n = near(eye, forward, (lo, hi), 50.0);
+            if n == 50.0 * 1e-5 {
+                continue; // part of the box beside or behind the eye: the fallback plane
+            }
+            placed += 1;
+            for k in 0..8 {
+                let c = Vec3::new(
+                    if k & 1 == 0 { lo.x } else { hi.x },
+                    if k & 2 == 0 { lo.y } else { hi.y },
+                    if k & 4 == 0 { lo.z } else { hi.z },
+                );
+                let d = (c - eye).dot(forward);
+                assert!(d >= n, "corner depth {d} < near {n}");
+            }
+        }
+        assert!(placed > 200, "{placed} eyes with the box wholly in front");
     }
 
     #[test]
