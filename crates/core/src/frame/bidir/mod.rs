@@ -26,6 +26,7 @@
 
 mod bundles;
 mod emitted;
+mod glass_aim;
 mod interleave;
 mod sky_share;
 mod specular_paths;

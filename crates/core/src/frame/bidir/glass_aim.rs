@@ -1,0 +1,294 @@
+//! The light subpaths of the sun, the sky and area lights aimed at glass (issue 44 item 4).
+//! Their subpaths start from the photons of [`super::emitted`], emitted by power over the
+//! scene's bounding disc (sun, sky) or from the emitters by cosine: behind a glazed window
+//! about 2 of the sun's 64 enter the room, so the light that reaches the room through the
+//! pane and reflects on (the subpath's vertices y2, y3, … as VPLs) rested on a handful of
+//! photons and one frame's mean moved by a factor of two with the seed.
+//!
+//! Every slot of that group starts its subpath from one sample of a two-technique mixture
+//! (a one-sample MIS with the balance heuristic, Veach 1997 §9.2.4): with probability
+//! 1 − f the slot's own photon (the head of its VPL record, as before), with probability f a
+//! photon of the same source aimed at the bounding sphere of an object with a delta lobe
+//! (`photon::focus::specular_spheres`, the spheres `ispm`'s photon focusing aims at):
+//!
+//! - sun and sky: the direction drawn as the source draws it, the point on the plane
+//!   through the bounds' centre facing it uniform in the disc under which a sphere (chosen
+//!   uniformly among the m) projects there, instead of in the bounding disc (radius R);
+//!   over (direction, point) the plain density is p(ω)/(πR²) and the aimed one
+//!   p(ω)·a(x), a(x) = (1/m)·Σⱼ 1[x in disc j]/(π rⱼ²);
+//! - emitters: the point drawn as the emitters draw it (its side too), the direction
+//!   uniform in the cone under which that point sees a sphere (`focus::Cone`, none from
+//!   inside one or wider than π sr), instead of by cosine: directional densities cos θ/π
+//!   and a(ω) = (1/m)·Σⱼ 1[ω in cone j]/Ωⱼ.
+//!
+//! With p and a over the same measure, the slot's subpath carries the plain photon's power
+//! times p/((1 − f)·p + f·a) (its own photon) or the source's radiance over
+//! ((1 − f)·p + f·a) (an aimed one): unbiased, and a plain photon that no sphere's disc or
+//! cone covers (a = 0) carries its power over 1 − f. The slot's VPL record y1 stays the
+//! plain photon's hit (the one-bounce light is unchanged); an aimed subpath's y1 is no
+//! record. MIS with the bundles is unchanged: the weights of a path depend on the densities
+//! of the vertices next to x3, which the subpath's own vertices carry (`subpaths::trace`),
+//! so they still sum to one. A source whose spheres' discs cover more than
+//! [`MAX_DISC_SHARE`] of the bounding disc (glass all around) is not aimed.
+//!
+//! Bias: for an emitter's own photon, cos θ at y0 is found by a ray back from y1 to the
+//! emitter; where that ray misses (grazing) the weight takes cos θ = 0 (the aimed photons
+//! then carry that light alone: a bias only on a set of grazing directions).
+
+use super::emitted::{self, hit_head, slot_sources};
+use super::subpaths::Head;
+use crate::photon::focus::{specular_spheres, Cone};
+use crate::sampling::{uniform_cone, Frame, Rng};
+use crate::scene::light::{Bounds, Emission};
+use crate::scene::sources::{Source, Sources};
+use crate::scene::Scene;
+use crate::trace::{Interaction, SceneBvh};
+use glam::Vec3;
+use std::f32::consts::PI;
+
+/// The share f of a slot's subpaths aimed at the spheres (ispm's focusing default).
+pub(super) const FRACTION: f32 = 0.5;
+
+/// The largest share of the bounding disc's area that the spheres' discs may cover for the
+/// sun's and the sky's photons to be aimed.
+const MAX_DISC_SHARE: f32 = 0.25;
+
+/// The spheres to aim at and the sources of the emitted group.
+struct Aim {
+    sources: Sources,
+    spheres: Vec<(Vec3, f32)>,
+    /// Whether the distant sources (sun, sky) are aimed.
+    distant: bool,
+}
+
+/// The VPL groups with the last one (the emitted sources', [`super::emitted`]) replaced by
+/// the heads its subpaths start from (see the module); `None` where nothing is aimed (no
+/// such group, no object with a delta lobe).
+pub(super) fn aimed_groups(
+    scene: &Scene,
+    bvh: &SceneBvh,
+    groups: &[Vec<Option<Head>>],
+    seed: u64,
+) -> Option<Vec<Vec<Option<Head>>>> {
+    if groups.len() <= scene.lights.len() {
+        return None;
+    }
+    let spheres = specular_spheres(scene);
+    if spheres.is_empty() {
+        return None;
+    }
+    let sources = emitted::sources(scene)?;
+    let r2 = sources.bounds.radius * sources.bounds.radius;
+    let covered: f32 = spheres.iter().map(|&(_, r)| r * r).sum();
+    let aim = Aim {
+        distant: covered <= MAX_DISC_SHARE * r2,
+        sources,
+        spheres,
+    };
+    let own = groups.last()?;
+    let n = own.len() as u32;
+    let (_, chosen) = slot_sources(&aim.sources, n, seed);
+    let heads = own
+        .iter()
+        .zip(&chosen)
+        .enumerate()
+        .map(|(k, (head, c))| {
+            let (source, p) = (*c)?;
+            let mut rng = Rng::new(seed, 0x61a5, k as u64);
+            aim.head(scene, bvh, source, p * n as f32, *head, &mut rng)
+        })
+        .collect();
+    let mut out = groups.to_vec();
+    *out.last_mut()? = heads;
+    Some(out)
+}
+
+impl Aim {
+    /// Whether `source`'s photons are aimed.
+    fn aims(&self, scene: &Scene, source: Source) -> bool {
+        match source {
+            Source::Emitters => true,
+            Source::Environment => self.distant,
+            Source::Light(i) => self.distant && scene.lights.get(i).is_some_and(|l| !l.is_local()),
+        }
+    }
+
+    /// Slot's subpath head: `own` (its VPL's photon) reweighted, or an aimed photon of
+    /// `source` (`share`: the photon count times the source's probability).
+    fn head(
+        &self,
+        scene: &Scene,
+        bvh: &SceneBvh,
+        source: Source,
+        share: f32,
+        own: Option<Head>,
+        rng: &mut Rng,
+    ) -> Option<Head> {
+        if !self.aims(scene, source) {
+            return own;
+        }
+        if rng.next_f32() < FRACTION {
+            let e = match source {
+                Source::Emitters => self.aimed_emitter(scene, rng),
+                _ => self.aimed_distant(scene, source, rng),
+            }?;
+            return hit_head(scene, bvh, e, share);
+        }
+        let mut h = own?;
+        let (p, a) = match source {
+            Source::Emitters => {
+                let cos = emitter_cos(scene, bvh, &h);
+                (cos / PI, self.cone_density(h.origin, -h.to_light))
+            }
+            _ => {
+                let x = crossing(self.sources.bounds, h.to_light, h.origin);
+                (
+                    bounding_disc_density(self.sources.bounds, x),
+                    self.disc_density(h.to_light, x),
+                )
+            }
+        };
+        h.alpha *= mixture_share(p, a);
+        Some(h)
+    }
+
+    /// (1/m)·Σⱼ 1[`x` in sphere j's disc]/(π rⱼ²) on the centre's plane facing `towards`.
+    fn disc_density(&self, towards: Vec3, x: Vec3) -> f32 {
+        let b = self.sources.bounds;
+        let sum: f32 = self
+            .spheres
+            .iter()
+            .filter(|&&(c, r)| (crossing(b, towards, c) - x).length_squared() <= r * r)
+            .map(|&(_, r)| 1.0 / (PI * r * r))
+            .sum();
+        sum / self.spheres.len() as f32
+    }
+
+    /// (1/m)·Σⱼ 1[`d` in cone j from `apex`]/Ωⱼ.
+    fn cone_density(&self, apex: Vec3, d: Vec3) -> f32 {
+        let sum: f32 = self
+            .spheres
+            .iter()
+            .filter_map(|&(c, r)| Cone::around(apex, c, r))
+            .filter(|cone| cone.contains(d))
+            .map(|cone| 1.0 / cone.solid_angle())
+            .sum();
+        sum / self.spheres.len() as f32
+    }
+
+    /// A photon of the sun or the sky through a sphere's disc, its power over the mixture.
+    fn aimed_distant(&self, scene: &Scene, source: Source, rng: &mut Rng) -> Option<Emission> {
+        let b = self.sources.bounds;
+        // The source's own photon: its direction, and its power L/p(ω)·πR².
+        let e = self.sources.emit_from(scene, source, rng)?;
+        let towards = -e.direction;
+        let (c, r) = self.spheres[pick(rng, self.spheres.len())];
+        let f = Frame::new(towards);
+        let u = rng.next_2d();
+        let (rho, phi) = (r * u.x.sqrt(), 2.0 * PI * u.y);
+        let x = crossing(b, towards, c) + f.t * (rho * phi.cos()) + f.b * (rho * phi.sin());
+        let p = bounding_disc_density(b, x);
+        let q = (1.0 - FRACTION) * p + FRACTION * self.disc_density(towards, x);
+        let power = e.power / (PI * b.radius * b.radius) / q;
+        (q > 0.0).then_some(Emission {
+            origin: x + towards * b.radius,
+            direction: e.direction,
+            power,
+        })
+    }
+
+    /// A photon of the emitters towards a sphere, its power over the mixture.
+    fn aimed_emitter(&self, scene: &Scene, rng: &mut Rng) -> Option<Emission> {
+        // The point and side as the emitters draw them; the direction aimed instead.
+        let (e, s) = self.sources.emitters.emit_sample(scene, rng)?;
+        let apex = e.origin;
+        let side = if (apex - s.point).dot(s.normal) < 0.0 {
+            -s.normal
+        } else {
+            s.normal
+        };
+        let (c, r) = self.spheres[pick(rng, self.spheres.len())];
+        let cone = Cone::around(apex, c, r)?;
+        let d = Frame::new(cone.axis).to_world(uniform_cone(rng.next_2d(), cone.cos_max));
+        let cos = d.dot(side);
+        if cos <= 0.0 {
+            return None;
+        }
+        let m = scene.material_at(s.triangle as usize, s.uv, 0.0);
+        let sides = if m.two_sided { 2.0 } else { 1.0 };
+        let q = (1.0 - FRACTION) * cos / PI + FRACTION * self.cone_density(apex, d);
+        let l = self.sources.emitters.radiance(scene, &s, d);
+        // L cos θ / (p_A · q(ω)/sides).
+        let power = l * (cos * sides / (s.pdf_area * q));
+        (q > 0.0).then_some(Emission {
+            origin: apex,
+            direction: d,
+            power,
+        })
+    }
+}
+
+/// The factor p/((1 − f)·p + f·a) of a slot's own photon (1/(1 − f) where `a` is 0).
+fn mixture_share(p: f32, a: f32) -> f32 {
+    let q = (1.0 - FRACTION) * p + FRACTION * a;
+    if q > 0.0 && q.is_finite() {
+        p / q
+    } else {
+        0.0
+    }
+}
+
+/// A uniform index below `n` (≥ 1).
+fn pick(rng: &mut Rng, n: usize) -> usize {
+    ((rng.next_f32() * n as f32) as usize).min(n - 1)
+}
+
+/// Where the line through `x` along `towards` crosses the plane through the bounds' centre
+/// facing `towards`.
+fn crossing(b: Bounds, towards: Vec3, x: Vec3) -> Vec3 {
+    x - towards * (x - b.centre).dot(towards)
+}
+
+/// The plain photons' density over the centre's plane: uniform in the bounding disc.
+fn bounding_disc_density(b: Bounds, x: Vec3) -> f32 {
+    if (x - b.centre).length_squared() <= b.radius * b.radius * (1.0 + 1e-5) {
+        1.0 / (PI * b.radius * b.radius)
+    } else {
+        0.0
+    }
+}
+
+/// |cos θ| at the emitter point a head's photon left from: the normal of the emitter that
+/// the ray from y1 back towards its origin meets (0 where it meets none).
+fn emitter_cos(scene: &Scene, bvh: &SceneBvh, h: &Head) -> f32 {
+    let to = h.origin - h.position;
+    let dist = to.length();
+    if !(dist > 0.0 && dist.is_finite()) {
+        return 0.0;
+    }
+    let dir = to / dist;
+    let eps = 1e-4 * (1.0 + h.position.abs().max_element());
+    let start = h.position + h.ng * eps * dir.dot(h.ng).signum();
+    match bvh.intersect(start, dir, dist * 1.01 + eps) {
+        Some(hit) => Interaction::new(scene, &hit, dir).ng.dot(dir).abs(),
+        None => 0.0,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mixture_shares_sum_to_one_over_the_techniques() {
+        // The balance heuristic's one-sample weights: (1 − f)·p/q + f·a/q = 1.
+        for (p, a) in [(1.0, 0.0), (0.3, 2.0), (0.0, 5.0), (2.0, 2.0)] {
+            let q = (1.0 - FRACTION) * p + FRACTION * a;
+            let plain = (1.0 - FRACTION) * mixture_share(p, a);
+            let aimed = FRACTION * a / q;
+            assert!((plain + aimed - 1.0).abs() < 1e-6, "{p} {a}");
+        }
+        assert_eq!(mixture_share(0.0, 0.0), 0.0);
+        assert!((mixture_share(1.0, 0.0) - 1.0 / (1.0 - FRACTION)).abs() < 1e-6);
+    }
+}
