@@ -64,6 +64,20 @@ pub struct Focus {
 
 /// Bounding spheres (centre, radius) of the scene's objects with a delta lobe.
 pub(crate) fn specular_spheres(scene: &Scene) -> Vec<(Vec3, f32)> {
+    specular_bounds(scene).iter().map(|b| b.sphere).collect()
+}
+
+/// The bounds of an object with a delta lobe: its vertices' box and a sphere around them.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct SpecularBounds {
+    pub lo: Vec3,
+    pub hi: Vec3,
+    /// Centre and radius.
+    pub sphere: (Vec3, f32),
+}
+
+/// [`SpecularBounds`] of each of the scene's objects with a delta lobe.
+pub(crate) fn specular_bounds(scene: &Scene) -> Vec<SpecularBounds> {
     // Per object its materials, not per placed triangle (O(objects) for single-material
     // objects; a face table's distinct offsets found once per shared table).
     let delta = |m: u32| scene.materials[m as usize].is_specular_traced();
@@ -97,7 +111,11 @@ pub(crate) fn specular_spheres(scene: &Scene) -> Vec<(Vec3, f32)> {
             });
         let c = 0.5 * (lo + hi);
         let r = ps.iter().map(|p| (*p - c).length()).fold(0.0f32, f32::max);
-        out.push((c, r * 1.001 + 1e-5));
+        out.push(SpecularBounds {
+            lo,
+            hi,
+            sphere: (c, r * 1.001 + 1e-5),
+        });
     }
     out
 }

@@ -11,11 +11,13 @@
 //! photon of the same source aimed at the bounding sphere of an object with a delta lobe
 //! (`photon::focus::specular_spheres`, the spheres `ispm`'s photon focusing aims at):
 //!
-//! - sun and sky: the direction drawn as the source draws it, the point on the plane
-//!   through the bounds' centre facing it uniform in the disc under which a sphere (chosen
-//!   uniformly among the m) projects there, instead of in the bounding disc (radius R);
-//!   over (direction, point) the plain density is p(ω)/(πR²) and the aimed one
-//!   p(ω)·a(x), a(x) = (1/m)·Σⱼ 1[x in disc j]/(π rⱼ²);
+//! - sun and sky: the direction drawn as the source draws it, the ray uniform over the
+//!   projection along it of the bounding box of an object (chosen uniformly among the m:
+//!   a point on one of the box's faces turned to the light, chosen by projected area)
+//!   instead of over the bounding disc (radius R); over (direction, point on the plane
+//!   through the bounds' centre facing it) the plain density is p(ω)/(πR²) and the aimed
+//!   one p(ω)·a(x), a(x) = (1/m)·Σⱼ 1[the ray meets box j]/Aⱼ(ω), Aⱼ the box's projected
+//!   area (a box, not the sphere `ispm` aims at: a pane's sphere's disc is mostly wall);
 //! - emitters: the point drawn as the emitters draw it (its side too), the direction
 //!   uniform in the cone under which that point sees a sphere (`focus::Cone`, none from
 //!   inside one or wider than π sr), instead of by cosine: directional densities cos θ/π
@@ -37,7 +39,7 @@
 
 use super::emitted::{self, hit_head, slot_sources};
 use super::subpaths::Head;
-use crate::photon::focus::{specular_spheres, Cone};
+use crate::photon::focus::{specular_bounds, Cone};
 use crate::sampling::{uniform_cone, Frame, Rng};
 use crate::scene::light::{Bounds, Emission};
 use crate::scene::sources::{Source, Sources};
@@ -57,6 +59,8 @@ const MAX_DISC_SHARE: f32 = 0.25;
 struct Aim {
     sources: Sources,
     spheres: Vec<(Vec3, f32)>,
+    /// The objects' boxes, grown by 1e-4 of their diagonal.
+    boxes: Vec<(Vec3, Vec3)>,
     /// Whether the distant sources (sun, sky) are aimed.
     distant: bool,
 }
@@ -73,17 +77,18 @@ pub(super) fn aimed_groups(
     if groups.len() <= scene.lights.len() {
         return None;
     }
-    let spheres = specular_spheres(scene);
-    if spheres.is_empty() {
+    let bounds = specular_bounds(scene);
+    if bounds.is_empty() {
         return None;
     }
     let sources = emitted::sources(scene)?;
     let r2 = sources.bounds.radius * sources.bounds.radius;
-    let covered: f32 = spheres.iter().map(|&(_, r)| r * r).sum();
+    let covered: f32 = bounds.iter().map(|b| b.sphere.1 * b.sphere.1).sum();
     let aim = Aim {
         distant: covered <= MAX_DISC_SHARE * r2,
         sources,
-        spheres,
+        spheres: bounds.iter().map(|b| b.sphere).collect(),
+        boxes: bounds.iter().map(|b| grown(b.lo, b.hi)).collect(),
     };
     let own = groups.last()?;
     let n = own.len() as u32;
@@ -144,7 +149,7 @@ impl Aim {
                 let x = crossing(self.sources.bounds, h.to_light, h.origin);
                 (
                     bounding_disc_density(self.sources.bounds, x),
-                    self.disc_density(h.to_light, x),
+                    self.box_density(h.to_light, x),
                 )
             }
         };
@@ -152,16 +157,17 @@ impl Aim {
         Some(h)
     }
 
-    /// (1/m)·Σⱼ 1[`x` in sphere j's disc]/(π rⱼ²) on the centre's plane facing `towards`.
-    fn disc_density(&self, towards: Vec3, x: Vec3) -> f32 {
-        let b = self.sources.bounds;
+    /// (1/m)·Σⱼ 1[the line through `x` along `towards` meets box j]/Aⱼ(towards).
+    fn box_density(&self, towards: Vec3, x: Vec3) -> f32 {
         let sum: f32 = self
-            .spheres
+            .boxes
             .iter()
-            .filter(|&&(c, r)| (crossing(b, towards, c) - x).length_squared() <= r * r)
-            .map(|&(_, r)| 1.0 / (PI * r * r))
+            .filter(|&&(lo, hi)| line_meets(lo, hi, x, towards))
+            .map(|&(lo, hi)| projected_area(lo, hi, towards))
+            .filter(|&a| a > 0.0)
+            .map(|a| 1.0 / a)
             .sum();
-        sum / self.spheres.len() as f32
+        sum / self.boxes.len() as f32
     }
 
     /// (1/m)·Σⱼ 1[`d` in cone j from `apex`]/Ωⱼ.
@@ -182,13 +188,10 @@ impl Aim {
         // The source's own photon: its direction, and its power L/p(ω)·πR².
         let e = self.sources.emit_from(scene, source, rng)?;
         let towards = -e.direction;
-        let (c, r) = self.spheres[pick(rng, self.spheres.len())];
-        let f = Frame::new(towards);
-        let u = rng.next_2d();
-        let (rho, phi) = (r * u.x.sqrt(), 2.0 * PI * u.y);
-        let x = crossing(b, towards, c) + f.t * (rho * phi.cos()) + f.b * (rho * phi.sin());
+        let (lo, hi) = self.boxes[pick(rng, self.boxes.len())];
+        let x = crossing(b, towards, point_in_projection(lo, hi, towards, rng)?);
         let p = bounding_disc_density(b, x);
-        let q = (1.0 - FRACTION) * p + FRACTION * self.disc_density(towards, x);
+        let q = (1.0 - FRACTION) * p + FRACTION * self.box_density(towards, x);
         let power = e.power / (PI * b.radius * b.radius) / q;
         (q > 0.0).then_some(Emission {
             origin: x + towards * b.radius,
@@ -238,6 +241,72 @@ fn mixture_share(p: f32, a: f32) -> f32 {
     }
 }
 
+/// The box (`lo`, `hi`) grown by 1e-4 of its diagonal (a flat object's box keeps a
+/// thickness).
+fn grown(lo: Vec3, hi: Vec3) -> (Vec3, Vec3) {
+    let e = Vec3::splat(1e-4 * (hi - lo).length().max(1e-6));
+    (lo - e, hi + e)
+}
+
+/// The area of the box's projection along the unit `t`: its faces turned to `t`, which do
+/// not overlap there.
+fn projected_area(lo: Vec3, hi: Vec3, t: Vec3) -> f32 {
+    face_weights(hi - lo, t).iter().sum()
+}
+
+/// The projected areas of the box's faces turned to `t` (extents `e`), by axis.
+fn face_weights(e: Vec3, t: Vec3) -> [f32; 3] {
+    [
+        e.y * e.z * t.x.abs(),
+        e.x * e.z * t.y.abs(),
+        e.x * e.y * t.z.abs(),
+    ]
+}
+
+/// A point uniform over the projection of the box along `t`: on a face turned to `t`,
+/// chosen by its projected area, uniform on it.
+fn point_in_projection(lo: Vec3, hi: Vec3, t: Vec3, rng: &mut Rng) -> Option<Vec3> {
+    let e = hi - lo;
+    let w = face_weights(e, t);
+    let total: f32 = w.iter().sum();
+    if !(total > 0.0 && total.is_finite()) {
+        return None;
+    }
+    let mut u = rng.next_f32() * total;
+    let mut axis = 2;
+    for (i, wi) in w.iter().enumerate() {
+        if u < *wi {
+            axis = i;
+            break;
+        }
+        u -= wi;
+    }
+    let uv = rng.next_2d();
+    let (a, b) = ((axis + 1) % 3, (axis + 2) % 3);
+    let mut p = lo;
+    p[axis] = if t[axis] > 0.0 { hi[axis] } else { lo[axis] };
+    p[a] += e[a] * uv.x;
+    p[b] += e[b] * uv.y;
+    Some(p)
+}
+
+/// Whether the line through `x` along `t` meets the box (`lo`, `hi`).
+fn line_meets(lo: Vec3, hi: Vec3, x: Vec3, t: Vec3) -> bool {
+    let (mut t0, mut t1) = (f32::NEG_INFINITY, f32::INFINITY);
+    for i in 0..3 {
+        if t[i].abs() < 1e-12 {
+            if x[i] < lo[i] || x[i] > hi[i] {
+                return false;
+            }
+        } else {
+            let (a, b) = ((lo[i] - x[i]) / t[i], (hi[i] - x[i]) / t[i]);
+            t0 = t0.max(a.min(b));
+            t1 = t1.min(a.max(b));
+        }
+    }
+    t0 <= t1
+}
+
 /// A uniform index below `n` (≥ 1).
 fn pick(rng: &mut Rng, n: usize) -> usize {
     ((rng.next_f32() * n as f32) as usize).min(n - 1)
@@ -278,6 +347,34 @@ fn emitter_cos(scene: &Scene, bvh: &SceneBvh, h: &Head) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn box_projections_are_sampled_uniformly_with_their_area() {
+        // A pane-like box seen from several directions: every sampled ray meets it, and the
+        // share of rays through a square around it that meet it is its projected area over
+        // the square's (uniform points: 40,000, standard error under 1%).
+        let (lo, hi) = (Vec3::new(2.0, 0.9, -0.6), Vec3::new(2.02, 1.9, 0.6));
+        let mut rng = Rng::new(3, 1, 0);
+        for t in [Vec3::X, Vec3::new(1.0, 0.8, -0.3), Vec3::new(-0.2, 1.0, 0.5)] {
+            let t = t.normalize();
+            for _ in 0..1000 {
+                let p = point_in_projection(lo, hi, t, &mut rng).expect("a point");
+                assert!(line_meets(lo, hi, p + t * 3.0, t), "{t} {p}");
+            }
+            let f = Frame::new(t);
+            let (c, side) = (0.5 * (lo + hi), 2.0);
+            let n = 40_000;
+            let hits = (0..n)
+                .filter(|_| {
+                    let u = rng.next_2d() * 2.0 - glam::Vec2::ONE;
+                    line_meets(lo, hi, c + f.t * (u.x * side) + f.b * (u.y * side), t)
+                })
+                .count();
+            let share = hits as f32 / n as f32;
+            let expected = projected_area(lo, hi, t) / (4.0 * side * side);
+            assert!((share / expected - 1.0).abs() < 0.04, "{t}: {share} vs {expected}");
+        }
+    }
 
     #[test]
     fn mixture_shares_sum_to_one_over_the_techniques() {
