@@ -168,7 +168,7 @@ fn directional(scene: &Scene, source: Source) -> Option<&Light> {
 
 /// Point `j` of `n` of a Fibonacci lattice in [0, 1)², moved by `offset` (mod 1):
 /// stratified in both coordinates.
-fn lattice(j: u32, n: u32, offset: Vec2) -> Vec2 {
+pub(super) fn lattice(j: u32, n: u32, offset: Vec2) -> Vec2 {
     let golden = 0.618_034f32;
     Vec2::new(
         ((j as f32 + 0.5) / n as f32 + offset.x).fract(),

@@ -23,6 +23,9 @@
 //!   inside one or wider than π sr), instead of by cosine: directional densities cos θ/π
 //!   and a(ω) = (1/m)·Σⱼ 1[ω in cone j]/Ωⱼ.
 //!
+//! Which slots are aimed and where in their disc or cone they aim are stratified over the
+//! frame (`branches`): each slot is aimed with probability f, as the mixture needs.
+//!
 //! With p and a over the same measure, the slot's subpath carries the plain photon's power
 //! times p/((1 − f)·p + f·a) (its own photon) or the source's radiance over
 //! ((1 − f)·p + f·a) (an aimed one): unbiased, and a plain photon that no sphere's disc or
@@ -37,7 +40,7 @@
 //! emitter; where that ray misses (grazing) the weight takes cos θ = 0 (the aimed photons
 //! then carry that light alone: a bias only on a set of grazing directions).
 
-use super::emitted::{self, hit_head, slot_sources};
+use super::emitted::{self, hit_head, lattice, slot_sources};
 use super::subpaths::Head;
 use crate::photon::focus::{specular_bounds, Cone};
 use crate::sampling::{uniform_cone, Frame, Rng};
@@ -45,7 +48,7 @@ use crate::scene::light::{Bounds, Emission};
 use crate::scene::sources::{Source, Sources};
 use crate::scene::Scene;
 use crate::trace::{Interaction, SceneBvh};
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
 
 /// The share f of a slot's subpaths aimed at the spheres (ispm's focusing default).
@@ -93,19 +96,45 @@ pub(super) fn aimed_groups(
     let own = groups.last()?;
     let n = own.len() as u32;
     let (_, chosen) = slot_sources(&aim.sources, n, seed);
+    let branches = branches(&chosen, seed);
     let heads = own
         .iter()
         .zip(&chosen)
+        .zip(&branches)
         .enumerate()
-        .map(|(k, (head, c))| {
+        .map(|(k, ((head, c), aimed))| {
             let (source, p) = (*c)?;
             let mut rng = Rng::new(seed, 0x61a5, k as u64);
-            aim.head(scene, bvh, source, p * n as f32, *head, &mut rng)
+            aim.head(scene, bvh, (source, p * n as f32), *head, *aimed, &mut rng)
         })
         .collect();
     let mut out = groups.to_vec();
     *out.last_mut()? = heads;
     Some(out)
+}
+
+/// Per slot, whether its subpath is aimed (`Some`, with the 2D sample it is aimed by)
+/// or starts from its own photon: slot k aimed where (ξ + k·φ) mod 1 < f (φ the golden
+/// ratio's fraction, ξ uniform a frame: each slot aimed with probability f, about f·n
+/// slots in all), the j-th of a source's h aimed slots by point j of a Fibonacci lattice
+/// of h under a random offset (`emitted::lattice`: each point uniform, together spread).
+fn branches(chosen: &[Option<(Source, f32)>], seed: u64) -> Vec<Option<Vec2>> {
+    let mut rng = Rng::new(seed, 0x61a6, 0);
+    let (xi, offset) = (rng.next_f32(), rng.next_2d());
+    let aimed: Vec<bool> = (0..chosen.len())
+        .map(|k| (xi + k as f32 * 0.618_034).fract() < FRACTION)
+        .collect();
+    let count = |s: Source, upto: usize| {
+        (0..upto)
+            .filter(|&i| aimed[i] && chosen[i].is_some_and(|c| c.0 == s))
+            .count() as u32
+    };
+    (0..chosen.len())
+        .map(|k| {
+            let (s, _) = chosen[k]?;
+            aimed[k].then(|| lattice(count(s, k), count(s, chosen.len()), offset))
+        })
+        .collect()
 }
 
 impl Aim {
@@ -118,24 +147,25 @@ impl Aim {
         }
     }
 
-    /// Slot's subpath head: `own` (its VPL's photon) reweighted, or an aimed photon of
-    /// `source` (`share`: the photon count times the source's probability).
+    /// Slot's subpath head: `own` (its VPL's photon) reweighted, or (`aimed`: its 2D
+    /// sample) an aimed photon of `source` (`share`: the photon count times the source's
+    /// probability).
     fn head(
         &self,
         scene: &Scene,
         bvh: &SceneBvh,
-        source: Source,
-        share: f32,
+        (source, share): (Source, f32),
         own: Option<Head>,
+        aimed: Option<Vec2>,
         rng: &mut Rng,
     ) -> Option<Head> {
         if !self.aims(scene, source) {
             return own;
         }
-        if rng.next_f32() < FRACTION {
+        if let Some(u) = aimed {
             let e = match source {
-                Source::Emitters => self.aimed_emitter(scene, rng),
-                _ => self.aimed_distant(scene, source, rng),
+                Source::Emitters => self.aimed_emitter(scene, u, rng),
+                _ => self.aimed_distant(scene, source, u, rng),
             }?;
             return hit_head(scene, bvh, e, share);
         }
@@ -183,13 +213,19 @@ impl Aim {
     }
 
     /// A photon of the sun or the sky through a sphere's disc, its power over the mixture.
-    fn aimed_distant(&self, scene: &Scene, source: Source, rng: &mut Rng) -> Option<Emission> {
+    fn aimed_distant(
+        &self,
+        scene: &Scene,
+        source: Source,
+        u: Vec2,
+        rng: &mut Rng,
+    ) -> Option<Emission> {
         let b = self.sources.bounds;
         // The source's own photon: its direction, and its power L/p(ω)·πR².
         let e = self.sources.emit_from(scene, source, rng)?;
         let towards = -e.direction;
         let (lo, hi) = self.boxes[pick(rng, self.boxes.len())];
-        let x = crossing(b, towards, point_in_projection(lo, hi, towards, rng)?);
+        let x = crossing(b, towards, point_in_projection(lo, hi, towards, u, rng)?);
         let p = bounding_disc_density(b, x);
         let q = (1.0 - FRACTION) * p + FRACTION * self.box_density(towards, x);
         let power = e.power / (PI * b.radius * b.radius) / q;
@@ -201,7 +237,7 @@ impl Aim {
     }
 
     /// A photon of the emitters towards a sphere, its power over the mixture.
-    fn aimed_emitter(&self, scene: &Scene, rng: &mut Rng) -> Option<Emission> {
+    fn aimed_emitter(&self, scene: &Scene, u: Vec2, rng: &mut Rng) -> Option<Emission> {
         // The point and side as the emitters draw them; the direction aimed instead.
         let (e, s) = self.sources.emitters.emit_sample(scene, rng)?;
         let apex = e.origin;
@@ -212,7 +248,7 @@ impl Aim {
         };
         let (c, r) = self.spheres[pick(rng, self.spheres.len())];
         let cone = Cone::around(apex, c, r)?;
-        let d = Frame::new(cone.axis).to_world(uniform_cone(rng.next_2d(), cone.cos_max));
+        let d = Frame::new(cone.axis).to_world(uniform_cone(u, cone.cos_max));
         let cos = d.dot(side);
         if cos <= 0.0 {
             return None;
@@ -264,8 +300,8 @@ fn face_weights(e: Vec3, t: Vec3) -> [f32; 3] {
 }
 
 /// A point uniform over the projection of the box along `t`: on a face turned to `t`,
-/// chosen by its projected area, uniform on it.
-fn point_in_projection(lo: Vec3, hi: Vec3, t: Vec3, rng: &mut Rng) -> Option<Vec3> {
+/// chosen by its projected area, at `uv` on it.
+fn point_in_projection(lo: Vec3, hi: Vec3, t: Vec3, uv: Vec2, rng: &mut Rng) -> Option<Vec3> {
     let e = hi - lo;
     let w = face_weights(e, t);
     let total: f32 = w.iter().sum();
@@ -281,7 +317,6 @@ fn point_in_projection(lo: Vec3, hi: Vec3, t: Vec3, rng: &mut Rng) -> Option<Vec
         }
         u -= wi;
     }
-    let uv = rng.next_2d();
     let (a, b) = ((axis + 1) % 3, (axis + 2) % 3);
     let mut p = lo;
     p[axis] = if t[axis] > 0.0 { hi[axis] } else { lo[axis] };
@@ -355,10 +390,15 @@ mod tests {
         // the square's (uniform points: 40,000, standard error under 1%).
         let (lo, hi) = (Vec3::new(2.0, 0.9, -0.6), Vec3::new(2.02, 1.9, 0.6));
         let mut rng = Rng::new(3, 1, 0);
-        for t in [Vec3::X, Vec3::new(1.0, 0.8, -0.3), Vec3::new(-0.2, 1.0, 0.5)] {
+        for t in [
+            Vec3::X,
+            Vec3::new(1.0, 0.8, -0.3),
+            Vec3::new(-0.2, 1.0, 0.5),
+        ] {
             let t = t.normalize();
             for _ in 0..1000 {
-                let p = point_in_projection(lo, hi, t, &mut rng).expect("a point");
+                let uv = rng.next_2d();
+                let p = point_in_projection(lo, hi, t, uv, &mut rng).expect("a point");
                 assert!(line_meets(lo, hi, p + t * 3.0, t), "{t} {p}");
             }
             let f = Frame::new(t);
@@ -372,7 +412,10 @@ mod tests {
                 .count();
             let share = hits as f32 / n as f32;
             let expected = projected_area(lo, hi, t) / (4.0 * side * side);
-            assert!((share / expected - 1.0).abs() < 0.04, "{t}: {share} vs {expected}");
+            assert!(
+                (share / expected - 1.0).abs() < 0.04,
+                "{t}: {share} vs {expected}"
+            );
         }
     }
 
