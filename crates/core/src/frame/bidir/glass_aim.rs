@@ -105,12 +105,29 @@ pub(super) fn aimed_groups(
         .map(|(k, ((head, c), aimed))| {
             let (source, p) = (*c)?;
             let mut rng = Rng::new(seed, 0x61a5, k as u64);
-            aim.head(scene, bvh, (source, p * n as f32), *head, *aimed, &mut rng)
+            let slot = Slot {
+                source,
+                share: p * n as f32,
+                own: *head,
+                aimed: *aimed,
+            };
+            aim.head(scene, bvh, slot, &mut rng)
         })
         .collect();
     let mut out = groups.to_vec();
     *out.last_mut()? = heads;
     Some(out)
+}
+
+/// One slot of the emitted group.
+struct Slot {
+    source: Source,
+    /// The photon count times the source's probability.
+    share: f32,
+    /// The head of its VPL record (its own photon's first hit).
+    own: Option<Head>,
+    /// Aimed, by this 2D sample (`branches`), or not.
+    aimed: Option<Vec2>,
 }
 
 /// Per slot, whether its subpath is aimed (`Some`, with the 2D sample it is aimed by)
@@ -147,18 +164,14 @@ impl Aim {
         }
     }
 
-    /// Slot's subpath head: `own` (its VPL's photon) reweighted, or (`aimed`: its 2D
-    /// sample) an aimed photon of `source` (`share`: the photon count times the source's
-    /// probability).
-    fn head(
-        &self,
-        scene: &Scene,
-        bvh: &SceneBvh,
-        (source, share): (Source, f32),
-        own: Option<Head>,
-        aimed: Option<Vec2>,
-        rng: &mut Rng,
-    ) -> Option<Head> {
+    /// The slot's subpath head: its own photon reweighted, or an aimed photon.
+    fn head(&self, scene: &Scene, bvh: &SceneBvh, slot: Slot, rng: &mut Rng) -> Option<Head> {
+        let Slot {
+            source,
+            share,
+            own,
+            aimed,
+        } = slot;
         if !self.aims(scene, source) {
             return own;
         }
