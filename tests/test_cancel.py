@@ -61,8 +61,17 @@ def read_rest(fd: int) -> str:
 # The CLI (`gi.cli.main`) with its progress bar replaced by a marker on stderr at the first
 # progress report: the bar draws only on a terminal, and the test needs to know when the
 # render is running. Everything else (Ctrl-C handling, exit status) is the CLI's own.
+#
+# The child first takes Python's own SIGINT handler, as an interpreter started from a
+# terminal has it: one started with SIGINT ignored (pytest run from `cmd &` in a script,
+# `setsid nohup` under a launcher that ignores it) inherits SIG_IGN, which Python and gi's
+# CLI keep (such a process is a background job, meant to be immune to the terminal's
+# Ctrl-C), so the child would never see the test's Ctrl-C.
 CLI_WITH_MARKER = """
+import signal
 import sys
+
+signal.signal(signal.SIGINT, signal.default_int_handler)
 
 import gi  # noqa: F401  (`gi.render` is the function; the module is in sys.modules)
 

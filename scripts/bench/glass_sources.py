@@ -12,7 +12,8 @@ glass); the mean over the seeds, then min–max.
 
     .venv/bin/python scripts/bench/glass_sources.py --out docs/bench/glass-sources.md
 
-`--depth N` renders every method and `path` at `max_depth` N instead of the defaults (64).
+`--depth N` renders every method and `path` at `max_depth` N instead of the defaults (64);
+`--methods bidir` renders that method alone (with `path`).
 """
 
 from __future__ import annotations
@@ -53,7 +54,7 @@ def row(kind: str, args) -> list[str]:
     ref1 = gi.render(scene, "path", spp=args.ref_spp // 4, seed=7, max_depth=1)
     full, at1 = mean(ref, region), mean(ref1, region) / mean(ref, region)
     cells = [kind, f"{full:.4f}", f"{mean(ref):.4f}", f"{at1:.3f}"]
-    for method in METHODS:
+    for method in args.methods.split(","):
         kw = {} if method == "direct" else depth
         frames = [gi.render(scene, method, seed=s, **kw) for s in range(1, args.seeds + 1)]
         below = [mean(f, region) / full for f in frames]
@@ -73,11 +74,12 @@ def main() -> None:
     ap.add_argument("--ref-spp", type=int, default=1024)
     ap.add_argument("--seeds", type=int, default=4)
     ap.add_argument("--depth", type=int, default=0, help="max_depth (0: defaults)")
+    ap.add_argument("--methods", default=",".join(METHODS), help="e.g. bidir")
     ap.add_argument("--out", type=Path)
     args = ap.parse_args()
     start = time.time()
     head = ["scene", "path behind", "path frame", "path@1 behind"]
-    for m in METHODS:
+    for m in args.methods.split(","):
         head += [f"{m} behind", f"{m} frame"]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for kind in args.kinds.split(","):

@@ -605,6 +605,9 @@ impl Renderer {
         let c = self.changes;
         if c.camera || c.geometry || c.materials {
             g.delta_light.invalidate();
+            if let Some(b) = g.bidir.as_mut() {
+                b.view_changed();
+            }
         }
         if c.geometry {
             for (object, _) in &self.moved {

@@ -21,10 +21,26 @@ pub struct Cone {
 }
 
 impl Cone {
-    fn contains(&self, d: Vec3) -> bool {
+    /// The cone under which `from` sees the sphere (`centre`, `radius`); `None` from inside
+    /// it, or where the cone holds too large a share of the sphere of directions (a solid
+    /// angle of π or more, a quarter): aiming there gains little.
+    pub(crate) fn around(from: Vec3, centre: Vec3, radius: f32) -> Option<Cone> {
+        let to = centre - from;
+        let d = to.length();
+        if d <= radius || !d.is_finite() {
+            return None;
+        }
+        let sin = radius / d;
+        let cone = Cone {
+            axis: to / d,
+            cos_max: (1.0 - sin * sin).max(0.0).sqrt(),
+        };
+        (cone.solid_angle() < PI).then_some(cone)
+    }
+    pub(crate) fn contains(&self, d: Vec3) -> bool {
         d.dot(self.axis) >= self.cos_max
     }
-    fn solid_angle(&self) -> f32 {
+    pub(crate) fn solid_angle(&self) -> f32 {
         2.0 * PI * (1.0 - self.cos_max)
     }
 }
@@ -47,7 +63,21 @@ pub struct Focus {
 }
 
 /// Bounding spheres (centre, radius) of the scene's objects with a delta lobe.
-fn specular_spheres(scene: &Scene) -> Vec<(Vec3, f32)> {
+pub(crate) fn specular_spheres(scene: &Scene) -> Vec<(Vec3, f32)> {
+    specular_bounds(scene).iter().map(|b| b.sphere).collect()
+}
+
+/// The bounds of an object with a delta lobe: its vertices' box and a sphere around them.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct SpecularBounds {
+    pub lo: Vec3,
+    pub hi: Vec3,
+    /// Centre and radius.
+    pub sphere: (Vec3, f32),
+}
+
+/// [`SpecularBounds`] of each of the scene's objects with a delta lobe.
+pub(crate) fn specular_bounds(scene: &Scene) -> Vec<SpecularBounds> {
     // Per object its materials, not per placed triangle (O(objects) for single-material
     // objects; a face table's distinct offsets found once per shared table).
     let delta = |m: u32| scene.materials[m as usize].is_specular_traced();
@@ -81,7 +111,11 @@ fn specular_spheres(scene: &Scene) -> Vec<(Vec3, f32)> {
             });
         let c = 0.5 * (lo + hi);
         let r = ps.iter().map(|p| (*p - c).length()).fold(0.0f32, f32::max);
-        out.push((c, r * 1.001 + 1e-5));
+        out.push(SpecularBounds {
+            lo,
+            hi,
+            sphere: (c, r * 1.001 + 1e-5),
+        });
     }
     out
 }
@@ -106,19 +140,7 @@ impl Focus {
                 let spheres = if l.is_local() { &spheres[..] } else { &[] };
                 let cones: Vec<Cone> = spheres
                     .iter()
-                    .filter_map(|&(c, r)| {
-                        let to = c - p;
-                        let d = to.length();
-                        if d <= r {
-                            return None;
-                        }
-                        let sin = r / d;
-                        let cone = Cone {
-                            axis: to / d,
-                            cos_max: (1.0 - sin * sin).max(0.0).sqrt(),
-                        };
-                        (cone.solid_angle() < PI).then_some(cone)
-                    })
+                    .filter_map(|&(c, r)| Cone::around(p, c, r))
                     .collect();
                 ProjectionMap { cones }
             })

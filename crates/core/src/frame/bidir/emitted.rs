@@ -69,12 +69,7 @@ pub(super) fn heads(
     n: u32,
     seed: u64,
 ) -> Vec<Option<Head>> {
-    let mut rngs: Vec<Rng> = (0..n).map(|k| Rng::new(seed, 0xe3d1, k as u64)).collect();
-    let chosen: Vec<Option<(Source, f32)>> = rngs
-        .iter_mut()
-        .enumerate()
-        .map(|(k, rng)| sources.choose((k as f32 + rng.next_f32()) / n as f32))
-        .collect();
+    let (mut rngs, chosen) = slot_sources(sources, n, seed);
     let mut offset_rng = Rng::new(seed, 0xe3d2, 0);
     let offset = offset_rng.next_2d();
     let slots_of = |s: Source| {
@@ -147,6 +142,22 @@ pub(super) fn heads(
     out
 }
 
+/// The source of each of `n` slots, drawn by power with u = (k + ξ)/n, its probability,
+/// and the slots' generators after that draw (which [`heads`] goes on with).
+pub(super) fn slot_sources(
+    sources: &Sources,
+    n: u32,
+    seed: u64,
+) -> (Vec<Rng>, Vec<Option<(Source, f32)>>) {
+    let mut rngs: Vec<Rng> = (0..n).map(|k| Rng::new(seed, 0xe3d1, k as u64)).collect();
+    let chosen = rngs
+        .iter_mut()
+        .enumerate()
+        .map(|(k, rng)| sources.choose((k as f32 + rng.next_f32()) / n as f32))
+        .collect();
+    (rngs, chosen)
+}
+
 /// The directional light of `source`, if it is one.
 fn directional(scene: &Scene, source: Source) -> Option<&Light> {
     match source {
@@ -157,7 +168,7 @@ fn directional(scene: &Scene, source: Source) -> Option<&Light> {
 
 /// Point `j` of `n` of a Fibonacci lattice in [0, 1)², moved by `offset` (mod 1):
 /// stratified in both coordinates.
-fn lattice(j: u32, n: u32, offset: Vec2) -> Vec2 {
+pub(super) fn lattice(j: u32, n: u32, offset: Vec2) -> Vec2 {
     let golden = 0.618_034f32;
     Vec2::new(
         ((j as f32 + 0.5) / n as f32 + offset.x).fract(),
@@ -168,7 +179,7 @@ fn lattice(j: u32, n: u32, offset: Vec2) -> Vec2 {
 /// The first hit of photon `e` as a subpath head, its power divided by `share` (the
 /// photons' count times the source's probability), or `None` where it leaves the scene or
 /// carries nothing.
-fn hit_head(scene: &Scene, bvh: &SceneBvh, e: Emission, share: f32) -> Option<Head> {
+pub(super) fn hit_head(scene: &Scene, bvh: &SceneBvh, e: Emission, share: f32) -> Option<Head> {
     let power = e.power / share;
     if !(power.is_finite() && power.max_element() > 0.0) {
         return None;
@@ -179,6 +190,7 @@ fn hit_head(scene: &Scene, bvh: &SceneBvh, e: Emission, share: f32) -> Option<He
     let cos_g = it.ng.dot(to_light).abs().max(1e-6);
     let ratio = (it.frame.n.dot(to_light).abs() / cos_g).min(10.0);
     Some(Head {
+        origin: e.origin,
         position: it.position,
         ng: it.ng,
         ns: it.frame.n,

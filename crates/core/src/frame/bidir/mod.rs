@@ -26,6 +26,7 @@
 
 mod bundles;
 mod emitted;
+mod glass_aim;
 mod interleave;
 mod sky_share;
 mod specular_paths;
@@ -73,6 +74,9 @@ pub(super) struct BidirState {
     /// Whether the specular target holds an image of mirrors and glass (to be cleared when
     /// the materials no longer have delta lobes).
     specular_written: bool,
+    /// β of the sky's control variate, kept while the view, the geometry and the
+    /// materials stay ([`BidirState::view_changed`]).
+    sky_share: sky_share::SkyShare,
 }
 
 /// The RSM layers: the light views with `rsm_size`² texels per view for a light of average
@@ -136,7 +140,14 @@ impl BidirState {
             group,
             indirect: indirect_target(ctx, w, h),
             specular_written: false,
+            sky_share: Default::default(),
         })
+    }
+
+    /// The camera, the geometry or the materials changed since the last frame (the
+    /// environment and the image size make a new state).
+    pub(super) fn view_changed(&mut self) {
+        self.sky_share.invalidate();
     }
 
     /// Uploads the RSM views and the frame's bundle views; returns how many bundles are
@@ -466,7 +477,7 @@ pub(super) fn frame(
     // 2. VPLs and their shadow maps.
     let v = frame_vpls(&mut fc, options, &texels, &state.vpls)?;
     let bvh = fc.bvh()?;
-    let sky_cv = fc.timed("sky share", |_| sky_share::coefficient(scene, bvh));
+    let sky_cv = state.sky_share.get(&mut fc, bvh);
     fc.timed("upload", |_| {
         let (raws, matrices) = (&v.records.raws, &v.records.matrices);
         state.vpls.upload(&ctx, raws, matrices);

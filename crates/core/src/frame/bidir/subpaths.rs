@@ -155,6 +155,8 @@ fn paired_vpl(b: u32, pair_offset: f32, n1: u32, n2: u32) -> u32 {
 /// emitted by a source the RSM does not see ([`super::emitted`]).
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Head {
+    /// Where its light left the source (y0: the light's position, the emission's origin).
+    pub origin: Vec3,
     pub position: Vec3,
     /// Geometric and shading normals (any side).
     pub ng: Vec3,
@@ -191,6 +193,7 @@ impl Head {
         let (material, model) =
             exact_material(scene, bvh, light.position(), t.position).unwrap_or((uber, 0));
         Head {
+            origin: light.position(),
             position: t.position,
             ng: t.ng,
             ns: t.ns,
@@ -359,6 +362,9 @@ fn subpaths(
         return out;
     }
     let max_len = max_depth.saturating_sub(2);
+    // The sun's, sky's and emitters' subpaths partly aimed at glass (issue 44 item 4).
+    let aimed = super::glass_aim::aimed_groups(scene, bvh, groups, seed);
+    let groups = aimed.as_deref().unwrap_or(groups);
     let mut paths: Vec<Vec<Vertex>> = vec![Vec::new(); heads];
     for (light, own) in groups.iter().enumerate() {
         for k in 0..n1 as usize {
