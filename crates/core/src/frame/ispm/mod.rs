@@ -17,6 +17,7 @@ mod first_hits;
 mod gpu_trace;
 mod indirect;
 mod photons;
+mod resident;
 mod specular;
 
 use super::context::FrameCtx;
@@ -25,6 +26,7 @@ use super::gpu::{GpuFrame, LightDraw, Readback, Targets};
 use super::options::IspmOptions;
 use super::{GpuState, Images, RenderOutput};
 use crate::error::{Error, Result};
+use crate::gpu::photon::resident::{ResidentPhotons, Sizing};
 use crate::gpu::GpuContext;
 use crate::image::Image;
 use crate::photon::bounce::BounceMap;
@@ -52,6 +54,10 @@ pub(super) struct IspmState {
     /// The ring's photons as last collected, with the ring's generation then
     /// ([`PhotonRing::generation`]): a frame whose ring did not change collects nothing.
     collected: Option<(u64, RingPhotons)>,
+    /// The last traced frame's photons when they stayed on the GPU (`resident`), and the
+    /// stat `photon_records` of that trace.
+    resident: Option<ResidentPhotons>,
+    records: String,
 }
 
 impl IspmState {
@@ -69,6 +75,8 @@ impl IspmState {
             indirect: Indirect::new(ctx, targets, o),
             traced_seed: None,
             collected: None,
+            resident: None,
+            records: String::new(),
         })
     }
 }
@@ -156,8 +164,30 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         true => state.gpu_trace.scene(ctx, &mut fc, changes)?,
         false => None,
     };
+    let compensate = options.refine.boundary_compensation && !query_side;
+    let records = gpu_scene.map(|_| {
+        resident::readback_reason(&resident::Need {
+            scene,
+            options,
+            params,
+            estimator: state.indirect.kind(),
+            images,
+            ring_frames: ring.frames(),
+            cpu_photons: budget.cpu,
+            compensate,
+        })
+    });
+    let sizing = match &records {
+        Some(None) => Some(Sizing {
+            radius,
+            eye: scene.camera.position.into(),
+            pixel_per_metre: indirect::pixel_per_metre(&scene.camera, gpu.targets.height),
+        }),
+        _ => None,
+    };
     let trace = photons::Trace {
         gpu: gpu_scene.map(|scene| photons::OnGpu { ctx, scene }),
+        resident: sizing,
         scene,
         bvh: fc.bvh()?,
         options,
@@ -166,15 +196,22 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         budget,
         extent,
         frame,
-        compensate: options.refine.boundary_compensation && !query_side,
+        compensate,
         progress: fc.progress,
     };
-    trace_or_reuse(&trace, &bm, reuse, ring, &mut fc)?;
+    let kept = trace_or_reuse(&trace, &bm, reuse, ring, &mut fc)?;
+    if tracing {
+        state.resident = kept;
+        state.records = records.as_ref().map(resident::stat).unwrap_or_default();
+    }
     // Progressive mode: the direct light ray traced on the CPU (the GPU rendered the eye
     // G-buffer alone), added to the composite below; shadow maps are a bias no pass removes.
     let traced_direct = traced_direct_light(&mut fc, options)?;
     let photons = collect(&mut state.collected, ring, &mut fc);
-    fc.stats.photons_stored = photons.splat.len() as u64;
+    fc.stats.photons_stored = match &state.resident {
+        Some(r) => r.count as u64,
+        None => photons.splat.len() as u64,
+    };
     // 5. Mirrors and glass seen by the camera; their gather uses the photons as traced.
     let specular = state
         .specular
@@ -184,6 +221,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     fc.stats.first_bounce_reason = first_hits.reason.clone();
     fc.stats.photon_trace = state.gpu_trace.choice.name().into();
     fc.stats.photon_trace_reason = state.gpu_trace.reason.clone();
+    fc.stats.photon_records = state.records.clone();
     crate::cancel::check(fc.progress)?;
     let mut names = readback_names(images, true);
     if query_side {
@@ -197,6 +235,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         scene,
         options,
         photons,
+        resident: state.resident.as_ref(),
         photons_changed: !reuse,
         changes,
         was_current,
@@ -249,14 +288,14 @@ fn record_direct_light(gpu: &mut GpuFrame, fc: &mut FrameCtx, draw: LightDraw) -
 }
 
 /// Step 4's trace, unless the frame reuses the photons it has (or traces no later bounce):
-/// then the stage is empty.
+/// then the stage is empty. Returns the photons the trace left on the GPU.
 fn trace_or_reuse(
     trace: &photons::Trace,
     bm: &BounceMap,
     reuse: bool,
     ring: &mut PhotonRing,
     fc: &mut FrameCtx,
-) -> Result<()> {
+) -> Result<Option<ResidentPhotons>> {
     if !reuse && trace.options.max_depth >= 2 {
         return trace.run(bm, ring, fc);
     }
@@ -264,7 +303,7 @@ fn trace_or_reuse(
     if trace.compensate {
         fc.add_stage("boundary compensation", 0.0);
     }
-    Ok(())
+    Ok(None)
 }
 
 /// The ring's valid photons, weighted (stage "photon collect"): collected again only when

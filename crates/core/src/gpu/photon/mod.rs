@@ -5,6 +5,7 @@
 //! [`PhotonTrace`] is the `photon_trace` setting. Pipelines are made on first use: a scene
 //! not traced on the GPU compiles none of this.
 
+pub mod resident;
 pub mod scatter_query;
 pub mod scene;
 pub mod trace;
