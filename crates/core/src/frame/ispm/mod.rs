@@ -26,7 +26,8 @@ use super::gpu::{GpuFrame, LightDraw, Readback, Targets};
 use super::options::IspmOptions;
 use super::{GpuState, Images, RenderOutput};
 use crate::error::{Error, Result};
-use crate::gpu::photon::resident::{ResidentPhotons, Sizing};
+use crate::gpu::photon::resident::ResidentPhotons;
+use crate::gpu::photon::PhotonTrace;
 use crate::gpu::GpuContext;
 use crate::image::Image;
 use crate::photon::bounce::BounceMap;
@@ -54,10 +55,8 @@ pub(super) struct IspmState {
     /// The ring's photons as last collected, with the ring's generation then
     /// ([`PhotonRing::generation`]): a frame whose ring did not change collects nothing.
     collected: Option<(u64, RingPhotons)>,
-    /// The last traced frame's photons when they stayed on the GPU (`resident`), and the
-    /// stat `photon_records` of that trace.
+    /// The last traced frame's photons when they stayed on the GPU (`resident`).
     resident: Option<ResidentPhotons>,
-    records: String,
 }
 
 impl IspmState {
@@ -76,7 +75,6 @@ impl IspmState {
             traced_seed: None,
             collected: None,
             resident: None,
-            records: String::new(),
         })
     }
 }
@@ -160,31 +158,24 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     let query_side =
         params.progressive && options.refine.boundary_compensation && options.subsample <= 1;
     let tracing = !reuse && options.max_depth >= 2;
+    let compensate = options.refine.boundary_compensation && !query_side;
+    let need = resident::Need {
+        fc: &fc,
+        options,
+        estimator: state.indirect.kind(),
+        images,
+        ring_frames: ring.frames(),
+        cpu_photons: budget.cpu,
+        compensate,
+    };
+    let records =
+        (state.gpu_trace.choice == PhotonTrace::Gpu).then(|| resident::readback_reason(&need));
+    fc.stats.photon_records = records.as_ref().map(resident::stat).unwrap_or_default();
     let gpu_scene = match tracing {
         true => state.gpu_trace.scene(ctx, &mut fc, changes)?,
         false => None,
     };
-    let compensate = options.refine.boundary_compensation && !query_side;
-    let records = gpu_scene.map(|_| {
-        resident::readback_reason(&resident::Need {
-            scene,
-            options,
-            params,
-            estimator: state.indirect.kind(),
-            images,
-            ring_frames: ring.frames(),
-            cpu_photons: budget.cpu,
-            compensate,
-        })
-    });
-    let sizing = match &records {
-        Some(None) => Some(Sizing {
-            radius,
-            eye: scene.camera.position.into(),
-            pixel_per_metre: indirect::pixel_per_metre(&scene.camera, gpu.targets.height),
-        }),
-        _ => None,
-    };
+    let sizing = resident::sizing(&records, scene, radius, gpu.targets.height);
     let trace = photons::Trace {
         gpu: gpu_scene.map(|scene| photons::OnGpu { ctx, scene }),
         resident: sizing,
@@ -199,19 +190,12 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         compensate,
         progress: fc.progress,
     };
-    let kept = trace_or_reuse(&trace, &bm, reuse, ring, &mut fc)?;
-    if tracing {
-        state.resident = kept;
-        state.records = records.as_ref().map(resident::stat).unwrap_or_default();
-    }
+    trace_or_reuse(&trace, &bm, reuse, ring, &mut state.resident, &mut fc)?;
     // Progressive mode: the direct light ray traced on the CPU (the GPU rendered the eye
     // G-buffer alone), added to the composite below; shadow maps are a bias no pass removes.
     let traced_direct = traced_direct_light(&mut fc, options)?;
     let photons = collect(&mut state.collected, ring, &mut fc);
-    fc.stats.photons_stored = match &state.resident {
-        Some(r) => r.count as u64,
-        None => photons.splat.len() as u64,
-    };
+    fc.stats.photons_stored = resident::stored(&state.resident, photons);
     // 5. Mirrors and glass seen by the camera; their gather uses the photons as traced.
     let specular = state
         .specular
@@ -221,7 +205,6 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     fc.stats.first_bounce_reason = first_hits.reason.clone();
     fc.stats.photon_trace = state.gpu_trace.choice.name().into();
     fc.stats.photon_trace_reason = state.gpu_trace.reason.clone();
-    fc.stats.photon_records = state.records.clone();
     crate::cancel::check(fc.progress)?;
     let mut names = readback_names(images, true);
     if query_side {
@@ -288,22 +271,24 @@ fn record_direct_light(gpu: &mut GpuFrame, fc: &mut FrameCtx, draw: LightDraw) -
 }
 
 /// Step 4's trace, unless the frame reuses the photons it has (or traces no later bounce):
-/// then the stage is empty. Returns the photons the trace left on the GPU.
+/// then the stage is empty. A trace replaces `kept` with the photons it left on the GPU.
 fn trace_or_reuse(
     trace: &photons::Trace,
     bm: &BounceMap,
     reuse: bool,
     ring: &mut PhotonRing,
+    kept: &mut Option<ResidentPhotons>,
     fc: &mut FrameCtx,
-) -> Result<Option<ResidentPhotons>> {
+) -> Result<()> {
     if !reuse && trace.options.max_depth >= 2 {
-        return trace.run(bm, ring, fc);
+        *kept = trace.run(bm, ring, fc)?;
+        return Ok(());
     }
     fc.add_stage("cpu trace", 0.0);
     if trace.compensate {
         fc.add_stage("boundary compensation", 0.0);
     }
-    Ok(None)
+    Ok(())
 }
 
 /// The ring's valid photons, weighted (stage "photon collect"): collected again only when

@@ -3,17 +3,20 @@
 //! the record and caustic counts come back), or read back into the CPU ring when a CPU step
 //! needs the photons themselves. The stat `photon_records` says which ran and why.
 
+use super::super::context::FrameCtx;
 use super::super::options::{Estimator, IspmOptions};
-use super::super::{FrameParams, Images};
+use super::super::Images;
 use crate::gpu::photon::resident::{forced, RECORDS_ENV};
+use crate::gpu::photon::resident::{ResidentPhotons, Sizing};
 use crate::photon::focus::Focus;
+use crate::photon::radius::VolumeRadius;
+use crate::photon::ring::RingPhotons;
 use crate::scene::Scene;
 
 /// What a frame decides the photons need.
 pub(super) struct Need<'a> {
-    pub scene: &'a Scene,
+    pub fc: &'a FrameCtx<'a>,
     pub options: &'a IspmOptions,
-    pub params: &'a FrameParams,
     pub estimator: Estimator,
     pub images: Images,
     /// The ring keeps more than this frame's photons.
@@ -27,7 +30,7 @@ pub(super) struct Need<'a> {
 /// Why the GPU-traced photons must be read back, `None` when the estimator can take them
 /// on the GPU.
 pub(super) fn readback_reason(n: &Need) -> Option<String> {
-    let (o, scene) = (n.options, n.scene);
+    let (o, scene) = (n.options, n.fc.scene);
     let why = if forced() {
         format!("{RECORDS_ENV}=readback or force_readback")
     } else if !matches!(
@@ -48,7 +51,7 @@ pub(super) fn readback_reason(n: &Need) -> Option<String> {
         "temporal_frames > 1 keeps the photons in the CPU ring".into()
     } else if n.cpu_photons > 0 {
         "area lights, sun and sky are traced on the CPU".into()
-    } else if n.params.progressive {
+    } else if n.fc.params.progressive {
         "progressive passes gather on the CPU".into()
     } else if scene.has_specular_traced() {
         "mirrors and glass seen by the camera gather the photons on the CPU".into()
@@ -71,4 +74,25 @@ pub(super) fn stat(reason: &Option<String>) -> String {
         None => "gpu".into(),
         Some(why) => format!("readback: {why}"),
     }
+}
+
+/// How the photons left on the GPU are sized (`records` is `Some(None)`: they stay there):
+/// the frame's volume radii, caustic kernels widened to a pixel of an image `height` high.
+pub(super) fn sizing(
+    records: &Option<Option<String>>,
+    scene: &Scene,
+    radius: VolumeRadius,
+    height: u32,
+) -> Option<Sizing> {
+    matches!(records, Some(None)).then(|| Sizing {
+        radius,
+        eye: scene.camera.position.into(),
+        pixel_per_metre: super::indirect::pixel_per_metre(&scene.camera, height),
+    })
+}
+
+/// The frame's stored photons: those kept on the GPU, else the ring's.
+pub(super) fn stored(kept: &Option<ResidentPhotons>, ring: &RingPhotons) -> u64 {
+    kept.as_ref()
+        .map_or(ring.splat.len() as u64, |r| r.count as u64)
 }
