@@ -130,14 +130,16 @@ fn the_sizing_pass_gives_the_cpus_radii() {
     let mut photons = Vec::new();
     for i in 0..1000u32 {
         let t = i as f32 / 1000.0;
-        let mut p = Photon::default();
-        p.position = [t * 4.0 - 2.0, (t * 37.0).sin(), -(t * 11.0).cos() * 5.0];
-        p.bounce = i % 4;
         // Path densities from 1e-9 (widened to the largest) to 10 (caustic).
-        p.path_density = 10f32.powf(-9.0 + 10.0 * t);
-        p.power = [t, 1.0, 2.0];
-        p._pad0 = i;
-        p.footprint_radius = if i % 7 == 0 { 0.05 + t } else { 0.0 };
+        let p = Photon {
+            position: [t * 4.0 - 2.0, (t * 37.0).sin(), -(t * 11.0).cos() * 5.0],
+            bounce: i % 4,
+            path_density: 10f32.powf(-9.0 + 10.0 * t),
+            power: [t, 1.0, 2.0],
+            _pad0: i,
+            footprint_radius: if i % 7 == 0 { 0.05 + t } else { 0.0 },
+            ..Default::default()
+        };
         photons.push(p);
     }
     let (sized, caustic) = resident::sized_on_gpu(&ctx, &photons, sizing).expect("sized");
