@@ -563,6 +563,8 @@ def _print_choices(args: argparse.Namespace, result: gi.RenderResult) -> None:
         print(f"first bounce {s.first_bounce}: {s.first_bounce_reason}", file=sys.stderr)
     if args.verbose and s.photon_trace:
         print(f"photon trace {s.photon_trace}: {s.photon_trace_reason}", file=sys.stderr)
+        if s.photon_records:
+            print(f"photon records {s.photon_records}", file=sys.stderr)
 
 
 def _progressive_settings(args: argparse.Namespace) -> dict[str, object]:

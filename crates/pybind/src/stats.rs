@@ -91,6 +91,7 @@ stats_class!(
     first_bounce_reason: String,
     photon_trace: String,
     photon_trace_reason: String,
+    photon_records: String,
     estimator_memory: Vec<(String, u64)>,
     list_entries: u64,
     trivial_accepts: u64,

@@ -42,6 +42,12 @@
 //! table, its scene cell naming the trace; the "CPU photon trace" column then holds the
 //! GPU trace's stages, "gpu trace" and its upload, where it ran on the GPU).
 //!
+//! `--photon-records gpu|readback ...`: each value a row (after `--photon-trace`'s): the
+//! GPU-traced photons kept on the GPU for the binned estimator (`gpu`) or read back into the
+//! CPU ring and uploaded again (`readback`, `gpu::photon::resident::force_readback`), under
+//! the options that let them stay there (`subsample` 1, no boundary compensation, no caustic
+//! density bound, no photon focus); the stage cell names the path (`photon_records`).
+//!
 //! `--readback`: the readback table instead (`readback_table`): the radiance read back as
 //! 32-bit floats (what every frame read before issue 45), half floats, and the 8-bit
 //! display image tone-mapped on the GPU alone, a still frame and a frame after the light
@@ -312,6 +318,14 @@ fn ispm_settings(
     gi_core::options!(Ispm, width: w, height: h, spp: d.spp, shadow_map_size: d.shadow_map_size, photons: photons, estimator: estimator)
 }
 
+/// `s` under the options that let GPU-traced photons stay on the GPU (`--photon-records`).
+fn resident_settings(s: gi_core::RenderOptions) -> gi_core::RenderOptions {
+    s.with("subsample", 1)
+        .with("boundary_compensation", false)
+        .with("caustic_density_bound", false)
+        .with("photon_focus", 0.0)
+}
+
 fn direct_settings(w: u32, h: u32, edges: bool) -> gi_core::RenderOptions {
     gi_core::options!(Direct, width: w, height: h, spp: 16, edge_supersampling: edges)
 }
@@ -529,6 +543,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         v if v.is_empty() => vec![PhotonTrace::Auto],
         v => v.into_iter().map(str::parse).collect::<Result<_, _>>()?,
     };
+    let records: Vec<Option<bool>> = match args.values("--photon-records") {
+        v if v.is_empty() => vec![None],
+        v => v
+            .into_iter()
+            .map(|r| match r {
+                "gpu" => Ok(Some(false)),
+                "readback" => Ok(Some(true)),
+                o => Err(format!("--photon-records {o}: gpu or readback")),
+            })
+            .collect::<Result<_, _>>()?,
+    };
     let direct = DirectOptions::get(&args)?;
     common::print_adapter()?;
     let only = args.value("--scene");
@@ -597,17 +622,26 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|{stage_rule}");
     for (name, scene) in &scenes {
         for &(w, h) in &sizes {
-            for (&photons, &trace) in budgets
-                .iter()
-                .flat_map(|p| traces.iter().map(move |t| (p, t)))
-            {
-                let settings =
+            let rows = budgets.iter().flat_map(|p| {
+                let records = &records;
+                traces
+                    .iter()
+                    .flat_map(move |t| records.iter().map(move |r| (p, t, r)))
+            });
+            for (&photons, &trace, &readback) in rows {
+                let mut settings =
                     ispm_settings(w, h, photons, estimator, direct).with("photon_trace", trace);
-                // Several traces: each row's scene names its trace.
-                let name = match traces.len() {
+                // Several traces: each row's scene names its trace (and records path).
+                let mut name = match traces.len() {
                     1 => name.to_string(),
                     _ => format!("{name} [{} trace]", trace.name()),
                 };
+                if let Some(readback) = readback {
+                    gi_core::gpu::photon::resident::force_readback(readback);
+                    settings = resident_settings(settings);
+                    let path = if readback { "readback" } else { "gpu" };
+                    name = format!("{name} [records {path}]");
+                }
                 // One-shot: a new renderer per frame, every image read back.
                 let mut old = f64::NAN;
                 if one_shot {
@@ -627,7 +661,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     let s = &engine[0].stats;
                     let list = stage_list(&engine);
                     let t = &s.photon_trace;
-                    format!(" {}/{}/{t} trace: {list} |", s.estimator, s.first_bounce)
+                    let records = match s.photon_records.as_str() {
+                        "" => String::new(),
+                        r => format!(" (records {r})"),
+                    };
+                    let (e, b) = (&s.estimator, &s.first_bounce);
+                    format!(" {e}/{b}/{t} trace{records}: {list} |")
                 } else {
                     String::new()
                 };

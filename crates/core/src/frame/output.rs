@@ -43,6 +43,10 @@ pub struct RenderStats {
     /// Method `ispm`: where the later bounces were traced ("cpu", "gpu"), and why.
     pub photon_trace: String,
     pub photon_trace_reason: String,
+    /// Method `ispm`, GPU-traced photons: "gpu" when the estimator took the record buffer on
+    /// the GPU (no photon readback), "readback: why" when a CPU step needed the photons;
+    /// empty when traced on the CPU.
+    pub photon_records: String,
     /// Method `ispm`: GPU memory of the estimator beyond its targets (bytes by part).
     pub estimator_memory: Vec<(String, u64)>,
     /// Method `ispm`, estimators `tiled` and `cluster`: photon-list entries written, and of

@@ -15,9 +15,9 @@ pub fn base_radius(scene: &Scene, photons: u64, kernel_scale: f32) -> f32 {
 }
 
 /// Photon-volume radius ∝ ρp^(−α) ([`VolumeRadius::of`]).
-const DENSITY_EXPONENT: f32 = 0.35;
+pub(crate) const DENSITY_EXPONENT: f32 = 0.35;
 /// Largest widening of a photon volume over the base radius ([`VolumeRadius::of`]).
-const MAX_WIDENING: f32 = 12.0;
+pub(crate) const MAX_WIDENING: f32 = 12.0;
 
 /// The radii of the photon volumes. Method `ispm` stores each photon's radius in
 /// `Photon::footprint_radius` before the splat, so `volume.wgsl` reads it from there.

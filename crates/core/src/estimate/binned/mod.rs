@@ -280,6 +280,63 @@ impl Binned {
         Ok(())
     }
 
+    /// [`Self::write_photons`] from `n` photon records already on the GPU (`buffer`, e.g.
+    /// GPU-traced photons: `gpu::photon::resident`), copied into the photon texture on the
+    /// GPU. With no photons on the CPU to estimate the lists from, they are sized from the
+    /// last frame's lists (scaled by the photon count) and, on a first frame, grown after an
+    /// overflow ([`Self::overflowed`]).
+    pub fn copy_photons(
+        &mut self,
+        ctx: &GpuContext,
+        gbuf: &GBuffer,
+        buffer: &wgpu::Buffer,
+        n: u32,
+    ) -> Result<()> {
+        let scale = |v: u64| match self.count {
+            0 => 0,
+            c => (v as f64 * n as f64 / c as f64) as u64,
+        };
+        let (entries, jobs) = (scale(self.entries.0), scale(self.capacity.jobs as u64));
+        self.grow(
+            ctx,
+            gbuf,
+            Capacity::for_photons(self.mode, n, entries, jobs),
+        )?;
+        self.count = n;
+        if n == 0 {
+            return Ok(());
+        }
+        let record = std::mem::size_of::<Photon>() as u64;
+        let (rows, rest) = (n / PHOTON_ROW, n % PHOTON_ROW);
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        let mut copy = |first_row: u32, width: u32, height: u32| {
+            let source = wgpu::TexelCopyBufferInfo {
+                buffer,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: first_row as u64 * PHOTON_ROW as u64 * record,
+                    bytes_per_row: Some(4 * PHOTON_ROW * 16),
+                    rows_per_image: Some(height),
+                },
+            };
+            let mut target = self.res.photons.as_image_copy();
+            target.origin.y = first_row;
+            let size = wgpu::Extent3d {
+                width: 4 * width,
+                height,
+                depth_or_array_layers: 1,
+            };
+            encoder.copy_buffer_to_texture(source, target, size);
+        };
+        if rows > 0 {
+            copy(0, PHOTON_ROW, rows);
+        }
+        if rest > 0 {
+            copy(rows, rest, 1);
+        }
+        ctx.queue.submit([encoder.finish()]);
+        Ok(())
+    }
+
     /// List entries and walk jobs (per job list) the photons will need, estimated on the
     /// CPU from the tiles and the level-1 nodes under each photon's projected kernel
     /// ([`Grid::photon_bins`]): lists sized from it are rarely redone

@@ -18,6 +18,7 @@ use super::super::options::IspmOptions;
 use crate::error::{Error, Result};
 use crate::estimate::volume_shape::partition;
 use crate::estimate::{Binned, CpuEstimate, Estimator, IndirectEstimate, Mode, Volumes};
+use crate::gpu::photon::resident::ResidentPhotons;
 use crate::gpu::GpuContext;
 use crate::photon::density::is_caustic;
 use crate::photon::radius::VolumeRadius;
@@ -45,6 +46,8 @@ pub(super) struct IndirectFrame<'a> {
     pub scene: &'a Scene,
     pub options: &'a IspmOptions,
     pub photons: &'a RingPhotons,
+    /// The frame's photons when they stayed on the GPU (then `photons` holds none).
+    pub resident: Option<&'a ResidentPhotons>,
     /// The photons are not last frame's.
     pub photons_changed: bool,
     pub changes: Changes,
@@ -77,6 +80,11 @@ impl Indirect {
             current: false,
             quads: 0,
         }
+    }
+
+    /// The estimator that runs (the caustic photons' too, if apart).
+    pub fn kind(&self) -> Estimator {
+        self.estimate.kind()
     }
 
     /// The estimators: the main one, then the caustic photons' (if apart).
@@ -223,6 +231,15 @@ impl Indirect {
         f: &IndirectFrame,
         radius: VolumeRadius,
     ) -> Result<u64> {
+        // Photons left on the GPU (`super::resident`: a binned estimator at subsample 1,
+        // already sized there) are copied into the photon texture on the GPU.
+        if let (Some(r), IndirectEstimate::Binned(tl)) = (f.resident, &mut self.estimate) {
+            if f.photons_changed {
+                tl.copy_photons(ctx, &targets.gbuf, &r.buffer, r.count)?;
+            }
+            tl.write_params(ctx, f.scene, radius);
+            return Ok(0);
+        }
         let (mut caustic, mut rest): (Vec<Photon>, Vec<Photon>) =
             f.photons.splat.iter().partition(|p| is_caustic(p));
         at_least_a_pixel(&mut caustic, &f.scene.camera, targets.height);
@@ -251,11 +268,17 @@ impl Indirect {
 /// normalised, so no light is added or lost. The footprint is from this frame's camera
 /// (the binned and CPU estimators keep it until the photons change).
 fn at_least_a_pixel(photons: &mut [Photon], cam: &crate::scene::Camera, height: u32) {
-    let per_metre = 2.0 * (cam.fov_y.to_radians() / 2.0).tan() / height.max(1) as f32;
+    let per_metre = pixel_per_metre(cam, height);
     for p in photons {
         let pixel = (p.position() - cam.position).length() * per_metre;
-        p.footprint_radius = p.footprint_radius.max(PIXEL_RADII * pixel);
+        p.footprint_radius = p.footprint_radius.max(pixel);
     }
+}
+
+/// The least caustic kernel radius per metre from `cam` in an image `height` pixels high
+/// ([`at_least_a_pixel`]; the GPU-kept photons are widened by it on the GPU).
+pub(super) fn pixel_per_metre(cam: &crate::scene::Camera, height: u32) -> f32 {
+    PIXEL_RADII * 2.0 * (cam.fov_y.to_radians() / 2.0).tan() / height.max(1) as f32
 }
 
 /// The least caustic kernel radius, in pixel footprints ([`at_least_a_pixel`]).

@@ -17,6 +17,7 @@ mod first_hits;
 mod gpu_trace;
 mod indirect;
 mod photons;
+mod resident;
 mod specular;
 
 use super::context::FrameCtx;
@@ -25,6 +26,8 @@ use super::gpu::{GpuFrame, LightDraw, Readback, Targets};
 use super::options::IspmOptions;
 use super::{GpuState, Images, RenderOutput};
 use crate::error::{Error, Result};
+use crate::gpu::photon::resident::ResidentPhotons;
+use crate::gpu::photon::PhotonTrace;
 use crate::gpu::GpuContext;
 use crate::image::Image;
 use crate::photon::bounce::BounceMap;
@@ -52,6 +55,8 @@ pub(super) struct IspmState {
     /// The ring's photons as last collected, with the ring's generation then
     /// ([`PhotonRing::generation`]): a frame whose ring did not change collects nothing.
     collected: Option<(u64, RingPhotons)>,
+    /// The last traced frame's photons when they stayed on the GPU (`resident`).
+    resident: Option<ResidentPhotons>,
 }
 
 impl IspmState {
@@ -69,6 +74,7 @@ impl IspmState {
             indirect: Indirect::new(ctx, targets, o),
             traced_seed: None,
             collected: None,
+            resident: None,
         })
     }
 }
@@ -152,12 +158,27 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     let query_side =
         params.progressive && options.refine.boundary_compensation && options.subsample <= 1;
     let tracing = !reuse && options.max_depth >= 2;
+    let compensate = options.refine.boundary_compensation && !query_side;
+    let need = resident::Need {
+        fc: &fc,
+        options,
+        estimator: state.indirect.kind(),
+        images,
+        ring_frames: ring.frames(),
+        cpu_photons: budget.cpu,
+        compensate,
+    };
+    let records =
+        (state.gpu_trace.choice == PhotonTrace::Gpu).then(|| resident::readback_reason(&need));
+    fc.stats.photon_records = records.as_ref().map(resident::stat).unwrap_or_default();
     let gpu_scene = match tracing {
         true => state.gpu_trace.scene(ctx, &mut fc, changes)?,
         false => None,
     };
+    let sizing = resident::sizing(&records, scene, radius, gpu.targets.height);
     let trace = photons::Trace {
         gpu: gpu_scene.map(|scene| photons::OnGpu { ctx, scene }),
+        resident: sizing,
         scene,
         bvh: fc.bvh()?,
         options,
@@ -166,15 +187,15 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         budget,
         extent,
         frame,
-        compensate: options.refine.boundary_compensation && !query_side,
+        compensate,
         progress: fc.progress,
     };
-    trace_or_reuse(&trace, &bm, reuse, ring, &mut fc)?;
+    trace_or_reuse(&trace, &bm, reuse, ring, &mut state.resident, &mut fc)?;
     // Progressive mode: the direct light ray traced on the CPU (the GPU rendered the eye
     // G-buffer alone), added to the composite below; shadow maps are a bias no pass removes.
     let traced_direct = traced_direct_light(&mut fc, options)?;
     let photons = collect(&mut state.collected, ring, &mut fc);
-    fc.stats.photons_stored = photons.splat.len() as u64;
+    fc.stats.photons_stored = resident::stored(&state.resident, photons);
     // 5. Mirrors and glass seen by the camera; their gather uses the photons as traced.
     let specular = state
         .specular
@@ -197,6 +218,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         scene,
         options,
         photons,
+        resident: state.resident.as_ref(),
         photons_changed: !reuse,
         changes,
         was_current,
@@ -249,16 +271,18 @@ fn record_direct_light(gpu: &mut GpuFrame, fc: &mut FrameCtx, draw: LightDraw) -
 }
 
 /// Step 4's trace, unless the frame reuses the photons it has (or traces no later bounce):
-/// then the stage is empty.
+/// then the stage is empty. A trace replaces `kept` with the photons it left on the GPU.
 fn trace_or_reuse(
     trace: &photons::Trace,
     bm: &BounceMap,
     reuse: bool,
     ring: &mut PhotonRing,
+    kept: &mut Option<ResidentPhotons>,
     fc: &mut FrameCtx,
 ) -> Result<()> {
     if !reuse && trace.options.max_depth >= 2 {
-        return trace.run(bm, ring, fc);
+        *kept = trace.run(bm, ring, fc)?;
+        return Ok(());
     }
     fc.add_stage("cpu trace", 0.0);
     if trace.compensate {

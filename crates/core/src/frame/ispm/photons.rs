@@ -12,6 +12,7 @@ use super::super::{FrameParams, RenderStats};
 use crate::cancel::Progress;
 use crate::error::{Error, Result};
 use crate::gpu::photon::emitted;
+use crate::gpu::photon::resident::{self, ResidentPhotons, Sizing};
 use crate::gpu::photon::scene::GpuPhotonScene;
 use crate::gpu::GpuContext;
 use crate::photon::bounce::BounceMap;
@@ -84,6 +85,9 @@ pub(super) struct OnGpu<'a> {
 pub(super) struct Trace<'a> {
     /// Continue the bounce maps' rays on the GPU; `None`: on the CPU.
     pub gpu: Option<OnGpu<'a>>,
+    /// With `gpu`: leave the photons on the GPU, sized so (`super::resident`); `None`: read
+    /// them back into the ring.
+    pub resident: Option<Sizing>,
     pub scene: &'a Scene,
     pub bvh: &'a SceneBvh,
     pub options: &'a IspmOptions,
@@ -128,8 +132,17 @@ impl Trace<'_> {
 
     /// Traces the rays of `bm` on per light and pushes each light's photons into `ring`;
     /// adds the stages "cpu trace", "gpu trace" (the continuation on the GPU, with its
-    /// upload and readback) and "boundary compensation" (when compensating).
-    pub fn run(&self, bm: &BounceMap, ring: &mut PhotonRing, fc: &mut FrameCtx) -> Result<()> {
+    /// upload and readback) and "boundary compensation" (when compensating). With
+    /// `resident`, the photons stay on the GPU: returned, and the ring gets none.
+    pub fn run(
+        &self,
+        bm: &BounceMap,
+        ring: &mut PhotonRing,
+        fc: &mut FrameCtx,
+    ) -> Result<Option<ResidentPhotons>> {
+        if let (Some(g), Some(sizing)) = (self.gpu, self.resident) {
+            return self.run_resident(g, sizing, bm, ring, fc).map(Some);
+        }
         let stats = &mut fc.stats;
         let t = Instant::now();
         let mut compensation = 0.0;
@@ -187,7 +200,41 @@ impl Trace<'_> {
         if self.compensate {
             fc.add_stage("boundary compensation", compensation);
         }
-        Ok(())
+        Ok(None)
+    }
+
+    /// [`Self::run`] with the photons left on the GPU (the checks of
+    /// `super::resident::readback_reason` passed: bounce-map photons only, nothing aimed,
+    /// no compensation): each light's rays continued on the GPU, the records joined and
+    /// sized there; the ring gets each light's entry without photons (a new generation).
+    fn run_resident(
+        &self,
+        g: OnGpu,
+        sizing: Sizing,
+        bm: &BounceMap,
+        ring: &mut PhotonRing,
+        fc: &mut FrameCtx,
+    ) -> Result<ResidentPhotons> {
+        let t = Instant::now();
+        let pts = self.settings();
+        let mut traced = Vec::new();
+        let mut start = 0;
+        while start < bm.rays.len() {
+            let light = bm.ray_lights[start];
+            let n = bm.ray_lights[start..].iter().take_while(|&&l| l == light);
+            let end = start + n.count();
+            let rays = &bm.rays[start..end];
+            let seed = self.seed(light);
+            traced.push(resident::continue_paths(g.ctx, g.scene, rays, &pts, seed)?);
+            ring.push(self.frame, light as usize, Vec::new(), Vec::new());
+            start = end;
+            crate::cancel::check(self.progress)?;
+        }
+        let photons = resident::join(g.ctx, &traced, sizing)?;
+        fc.stats.caustic_photons += photons.caustic as u64;
+        fc.add_stage("cpu trace", 0.0);
+        fc.add_stage("gpu trace", t.elapsed().as_secs_f64());
+        Ok(photons)
     }
 
     /// The random seed of `light`'s photons.

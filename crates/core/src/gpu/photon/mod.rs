@@ -8,6 +8,7 @@
 //! not traced on the GPU compiles none of this.
 
 pub mod emitted;
+pub mod resident;
 pub mod scatter_query;
 pub mod scene;
 pub mod trace;
