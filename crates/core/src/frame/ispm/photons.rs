@@ -180,7 +180,7 @@ impl Trace<'_> {
                 return Err(Error::Cancelled);
             }
         }
-        // The sources the bounce maps do not see, emitted and traced on the CPU.
+        // The sources the bounce maps do not see: emitted on the CPU, traced where `photon_trace` says.
         for (source, n) in self.cpu_sources() {
             let key = ring_key(self.scene, source);
             let mut photons = self.trace_source(source, n, &pts, stats, &gpu_seconds)?;

@@ -21,7 +21,9 @@ pub(super) struct Need<'a> {
     pub images: Images,
     /// The ring keeps more than this frame's photons.
     pub ring_frames: usize,
-    /// Photons emitted on the CPU (area lights, sun, sky).
+    /// Photons emitted on the CPU (area lights, sun, sky): traced on the GPU with
+    /// `photon_trace=gpu` (`gpu::photon::emitted`), but not yet joined into the resident
+    /// buffer (their traces come back as records).
     pub cpu_photons: u64,
     /// The photon side of the boundary compensation runs.
     pub compensate: bool,
@@ -50,7 +52,7 @@ pub(super) fn readback_reason(n: &Need) -> Option<String> {
     } else if n.ring_frames > 1 {
         "temporal_frames > 1 keeps the photons in the CPU ring".into()
     } else if n.cpu_photons > 0 {
-        "area lights, sun and sky are traced on the CPU".into()
+        "area, sun and sky photons are not joined on the GPU yet".into()
     } else if n.fc.params.progressive {
         "progressive passes gather on the CPU".into()
     } else if scene.has_specular_traced() {
