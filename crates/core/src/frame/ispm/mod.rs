@@ -30,6 +30,7 @@ use crate::image::Image;
 use crate::photon::bounce::BounceMap;
 use crate::photon::radius::{SceneExtent, VolumeRadius};
 use crate::photon::ring::{PhotonRing, RingPhotons};
+use crate::photon::sky_pilot::KeptPilot;
 use crate::scene::light_views::light_views;
 use crate::scene::{Changes, Scene};
 use first_hits::FirstHits;
@@ -52,6 +53,8 @@ pub(super) struct IspmState {
     /// The ring's photons as last collected, with the ring's generation then
     /// ([`PhotonRing::generation`]): a frame whose ring did not change collects nothing.
     collected: Option<(u64, RingPhotons)>,
+    /// The sky's pilot (`photon/sky_pilot.rs`), dropped when geometry or materials change.
+    sky_pilot: KeptPilot,
 }
 
 impl IspmState {
@@ -69,6 +72,7 @@ impl IspmState {
             indirect: Indirect::new(ctx, targets, o),
             traced_seed: None,
             collected: None,
+            sky_pilot: KeptPilot::default(),
         })
     }
 }
@@ -125,6 +129,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     let traced_seed = state.traced_seed.take();
     let was_current = state.indirect.take_current();
     state.specular.invalidate(changes);
+    state.sky_pilot.invalidate(changes);
     // A still scene with frame-coherent random numbers has this frame's photons already.
     let reuse = ring.frames() == 1 && !changes.lighting() && traced_seed == Some(params.seed);
     let first_hits = &mut state.first_hits;
@@ -167,6 +172,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         extent,
         frame,
         compensate: options.refine.boundary_compensation && !query_side,
+        sky_pilot: &state.sky_pilot,
         progress: fc.progress,
     };
     trace_or_reuse(&trace, &bm, reuse, ring, &mut fc)?;
