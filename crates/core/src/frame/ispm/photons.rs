@@ -37,10 +37,10 @@ const PILOT_MIN: u64 = 4096;
 /// The sky's plain photons per aimed one where a pilot found openings (`SkyGuide`; any
 /// split is unbiased). The aimed photons nearly all enter (window room, 200k plain photons:
 /// 2.5k of theirs stored, 180k of as many aimed ones'), so they set the frame's cost. Window
-/// room, seeds 1-8, 200k photons, by plain per aimed 1/4/8/16: stored photons 230k/60k/31k/
-/// 17k, the indirect light's spread 3.7/4.9/5.5/7.7% (22% without aimed photons), the
-/// frame's 3.6/3.3/3.5/3.6% (the direct light's, seeds 5-6), over seeds 1-4 1.27/1.45/1.43/
-/// 1.62% (docs/bench/sky-openings.md).
+/// room, 200k photons, seeds 1-8, three pilot seeds: stored photons 230k at 1, 60k at 4;
+/// with every marked pilot ray a kernel the indirect light's spread is 1.9-2.7% at 1 and
+/// 1.9-3.0% at 4 (22% without aimed photons), the frame's over seeds 1-4 1.3-1.7% and
+/// 1.0-1.7% (docs/bench/sky-openings.md).
 const PLAIN_PER_AIMED: u64 = 4;
 
 /// What changed since the photons in the ring were traced.
