@@ -598,6 +598,7 @@ PIPELINE = (
     "bounce maps",
     "bounce trace",
     "photon trace",
+    "sky pilot",
     "cpu trace",
     "gpu trace upload",
     "gpu trace",

@@ -389,7 +389,7 @@ fn gpu_trace_matches_the_cpu_from_the_sky_through_a_window() {
         ..SOURCE_TRACE
     };
     let rays = sky_pilot(&scene, &bvh, pilot, &pts, 7, &control).expect("pilot");
-    let guide = SkyGuide::new(rays, pilot, scene.bounds(), n, n).expect("the window aims");
+    let guide = SkyGuide::new(&rays, pilot, scene.bounds(), n, n).expect("the window aims");
     let (mut cpu, mut gpu_sets) = (Vec::new(), Vec::new());
     for k in 0..BATCHES as u64 {
         let seed = 100 + k;

@@ -25,6 +25,7 @@ pub mod lbvh;
 pub mod radius;
 pub mod ring;
 pub mod sky_guide;
+pub mod sky_pilot;
 pub mod specular;
 pub mod trace;
 

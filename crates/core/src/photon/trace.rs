@@ -620,7 +620,7 @@ pub trait TraceControl: Sync {
 }
 
 /// No progress, no cancellation, no memory budget.
-struct Unchecked;
+pub(crate) struct Unchecked;
 impl TraceControl for Unchecked {
     fn advance(&self, _: f64) {}
     fn stopped(&self) -> bool {

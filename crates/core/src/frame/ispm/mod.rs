@@ -33,6 +33,7 @@ use crate::image::Image;
 use crate::photon::bounce::BounceMap;
 use crate::photon::radius::{SceneExtent, VolumeRadius};
 use crate::photon::ring::{PhotonRing, RingPhotons};
+use crate::photon::sky_pilot::KeptPilot;
 use crate::scene::light_views::light_views;
 use crate::scene::{Changes, Scene};
 use first_hits::FirstHits;
@@ -57,6 +58,8 @@ pub(super) struct IspmState {
     collected: Option<(u64, RingPhotons)>,
     /// The last traced frame's photons when they stayed on the GPU (`resident`).
     resident: Option<ResidentPhotons>,
+    /// The sky's pilot (`photon/sky_pilot.rs`), dropped when geometry or materials change.
+    sky_pilot: KeptPilot,
 }
 
 impl IspmState {
@@ -75,6 +78,7 @@ impl IspmState {
             traced_seed: None,
             collected: None,
             resident: None,
+            sky_pilot: KeptPilot::default(),
         })
     }
 }
@@ -131,6 +135,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     let traced_seed = state.traced_seed.take();
     let was_current = state.indirect.take_current();
     state.specular.invalidate(changes);
+    state.sky_pilot.invalidate(changes);
     // A still scene with frame-coherent random numbers has this frame's photons already.
     let reuse = ring.frames() == 1 && !changes.lighting() && traced_seed == Some(params.seed);
     let first_hits = &mut state.first_hits;
@@ -188,6 +193,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
         extent,
         frame,
         compensate,
+        sky_pilot: &state.sky_pilot,
         progress: fc.progress,
     };
     trace_or_reuse(&trace, &bm, reuse, ring, &mut state.resident, &mut fc)?;
