@@ -212,14 +212,7 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     fc.stats.photon_trace = state.gpu_trace.choice.name().into();
     fc.stats.photon_trace_reason = state.gpu_trace.reason.clone();
     crate::cancel::check(fc.progress)?;
-    let mut names = readback_names(images, true);
-    if query_side {
-        for n in ["position", "normals", "indirect"] {
-            if !names.contains(&n) {
-                names.push(n);
-            }
-        }
-    }
+    let names = names_to_read(images, query_side);
     let indirect = IndirectFrame {
         scene,
         options,
@@ -246,6 +239,20 @@ pub(super) fn frame(f: FrameInputs) -> Result<RenderOutput> {
     state.traced_seed = Some(params.seed);
     state.indirect.mark_current();
     Ok(out)
+}
+
+/// The images the frame reads back: those asked for, and with the query-side boundary
+/// compensation (progressive mode) the position, normals and indirect estimate it needs.
+fn names_to_read(images: Images, query_side: bool) -> Vec<&'static str> {
+    let mut names = readback_names(images, true);
+    if query_side {
+        for n in ["position", "normals", "indirect"] {
+            if !names.contains(&n) {
+                names.push(n);
+            }
+        }
+    }
+    names
 }
 
 /// Step 2: the direct light (shadow maps, eye G-buffers, deferred shading) or, in
