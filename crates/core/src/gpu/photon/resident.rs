@@ -1,5 +1,5 @@
 //! GPU-traced photons that stay on the GPU: the continuation pass's record buffers
-//! ([`super::trace::dispatch`], only their counts read back) joined into one buffer of
+//! (`super::trace::dispatch`, only their counts read back) joined into one buffer of
 //! [`Photon`] records and sized in place (`gpu/shaders/photon/resident.wgsl`: the volume
 //! radius of `VolumeRadius::of`, caustic records widened to a pixel as the `ispm` upload
 //! does), which the binned estimators copy into their photon texture. Only the record

@@ -3,7 +3,7 @@
 //! ([`Photon`]), the same counts of absorbed, escaped and truncated paths as
 //! `photon::trace::continue_paths`. [`continue_paths`] reads the records back (for the
 //! `ispm` ring, the CPU's volume radii, boundary compensation and specular gathers);
-//! [`dispatch`] leaves them on the GPU for `super::resident`, whose buffer the binned
+//! `dispatch` leaves them on the GPU for `super::resident`, whose buffer the binned
 //! estimators copy from. Not carried: photon differentials (`footprint_radius` 0).
 
 use super::scene::GpuPhotonScene;
