@@ -107,12 +107,7 @@ pub fn continue_paths(
     s: &PhotonTraceSettings,
     seed: u64,
 ) -> Result<Traced> {
-    if s.differentials.is_some() {
-        return Err(Error::setting(
-            "photon_trace",
-            "`gpu` traces no photon differentials (footprint_volumes)",
-        ));
-    }
+    super::trace::refuse_differentials(s)?;
     let mut out = Traced::default();
     for (k, chunk) in rays.chunks(super::trace::CHUNK).enumerate() {
         let seed = super::trace::chunk_seed(seed, k);

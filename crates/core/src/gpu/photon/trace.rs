@@ -58,6 +58,17 @@ const COUNTS: u64 = 32;
 /// Rays per dispatch (workgroups of 64 within one dimension's 65535).
 pub(crate) const CHUNK: usize = 64 * 65535;
 
+/// `gpu` traces no photon differentials: a `SettingError` when `s` asks for them.
+pub(crate) fn refuse_differentials(s: &PhotonTraceSettings) -> Result<()> {
+    match s.differentials {
+        Some(_) => Err(Error::setting(
+            "photon_trace",
+            "`gpu` traces no photon differentials (footprint_volumes)",
+        )),
+        None => Ok(()),
+    }
+}
+
 /// The seed of dispatch `k` of a trace seeded `seed`.
 pub(crate) fn chunk_seed(seed: u64, k: usize) -> u32 {
     (seed ^ (k as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)) as u32 ^ (seed >> 32) as u32
@@ -74,12 +85,7 @@ pub fn continue_paths(
     s: &PhotonTraceSettings,
     seed: u64,
 ) -> Result<PhotonSet> {
-    if s.differentials.is_some() {
-        return Err(Error::setting(
-            "photon_trace",
-            "`gpu` traces no photon differentials (footprint_volumes)",
-        ));
-    }
+    refuse_differentials(s)?;
     let mut set = PhotonSet::default();
     for (k, chunk) in rays.chunks(CHUNK).enumerate() {
         let seed = chunk_seed(seed, k);
